@@ -1,0 +1,89 @@
+//! `robocal fk`: forward kinematics of one joint vector or of a CSV batch.
+
+use super::output::{emit, num, parse_list};
+use crate::data::{POSE_COLUMNS, Table, joint_columns};
+use crate::kinematics::{pose_to_file, tool_pose};
+use crate::model::read_robot;
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args)]
+#[command(group = clap::ArgGroup::new("input").required(true))]
+pub struct FkArgs {
+    /// Robot file (TOML; mm, deg).
+    #[arg(long)]
+    robot: PathBuf,
+    /// One joint vector "j1,...,jN" (deg; mm for prismatic joints).
+    #[arg(long, group = "input", allow_hyphen_values = true)]
+    q: Option<String>,
+    /// CSV with columns q1..qN (deg); other columns are carried through.
+    #[arg(long, group = "input")]
+    joints: Option<PathBuf>,
+    /// Output file (CSV, or JSON with --json); stdout when absent. Written atomically.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// JSON instead of CSV: an array of objects keyed by column name.
+    #[arg(long)]
+    json: bool,
+    /// Round output numbers to this many decimals (default: shortest exact form).
+    #[arg(long)]
+    decimals: Option<usize>,
+}
+
+pub fn run(a: FkArgs) -> Result<()> {
+    let robot = read_robot(&a.robot)?;
+    let n = robot.dof();
+    let qcols = joint_columns(n);
+    let (mut headers, rows, joints): (Vec<String>, Vec<Vec<String>>, Vec<Vec<f64>>) =
+        match (&a.q, &a.joints) {
+            (Some(q), _) => {
+                let q = parse_list(q, "--q", n)?;
+                let cells = q.iter().map(|v| num(*v, None)).collect();
+                (qcols, vec![cells], vec![q])
+            }
+            (None, Some(path)) => {
+                let t = Table::read(path)?;
+                let idx: Vec<usize> = qcols
+                    .iter()
+                    .map(|c| t.require(c))
+                    .collect::<Result<_, _>>()?;
+                for c in POSE_COLUMNS {
+                    if t.column(c).is_some() {
+                        bail!(
+                            "{}: the input already has a column `{c}`, which fk would write; \
+                             rename or drop it",
+                            path.display()
+                        );
+                    }
+                }
+                let joints = (0..t.rows.len())
+                    .map(|r| t.numbers(r, &idx))
+                    .collect::<Result<Vec<_>, _>>()?;
+                (t.headers.clone(), t.rows.clone(), joints)
+            }
+            (None, None) => unreachable!("clap requires one input"),
+        };
+    headers.extend(POSE_COLUMNS.iter().map(|s| s.to_string()));
+    let mut out_rows = Vec::with_capacity(rows.len());
+    let mut outside = Vec::new();
+    for (k, (cells, q)) in rows.into_iter().zip(&joints).enumerate() {
+        let qi = robot.joints_to_internal(q);
+        if !robot.joints_outside_limits(&qi).is_empty() {
+            outside.push(k + 1);
+        }
+        let pose = tool_pose(&robot, &qi);
+        let mut row = cells;
+        row.extend(pose_to_file(&pose).iter().map(|v| num(*v, a.decimals)));
+        out_rows.push(row);
+    }
+    if !outside.is_empty() {
+        eprintln!(
+            "warning: {} row(s) have joints outside the robot's limits (data rows {:?}); their poses are written anyway",
+            outside.len(),
+            outside
+        );
+    }
+    emit(&headers, &out_rows, a.json, a.out.as_deref())
+        .with_context(|| "writing the FK output".to_string())
+}

@@ -1,0 +1,273 @@
+//! `robocal ik`: inverse kinematics of one pose or of a CSV batch.
+//!
+//! Method, per target: the closed form when the robot has one (every solution within the
+//! limits); else the nominal model's closed form (`--nominal`) refined numerically on the
+//! robot; else numerical IK from a seed (`--seed`, or the row's own q1..qN columns).
+
+use super::output::{emit, num, parse_list};
+use crate::data::{POSE_COLUMNS, Table, joint_columns};
+use crate::kinematics::{
+    IkOptions, IkTarget, IkWorkspace, Pose, SphericalWristIk, pose_from_file, solve_numeric,
+};
+use crate::model::{Robot, read_robot};
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args)]
+#[command(group = clap::ArgGroup::new("input").required(true))]
+pub struct IkArgs {
+    /// Robot file (TOML; mm, deg).
+    #[arg(long)]
+    robot: PathBuf,
+    /// One pose "x,y,z,rz,ry,rx" (mm, deg; R = Rz Ry Rx).
+    #[arg(long, group = "input", allow_hyphen_values = true)]
+    pose: Option<String>,
+    /// CSV with columns x,y,z,rz,ry,rx; other columns are carried through. Columns q1..qN,
+    /// when present, seed the numerical solve of their row and are renamed seed_q1..seed_qN.
+    #[arg(long, group = "input")]
+    poses: Option<PathBuf>,
+    /// Write every solution (default: the one nearest the seed, or the middle of the ranges).
+    #[arg(long)]
+    all: bool,
+    /// Seed joints "j1,...,jN" (deg) for the numerical solve, and for choosing one solution.
+    #[arg(long, allow_hyphen_values = true)]
+    seed: Option<String>,
+    /// Nominal robot whose closed form seeds the numerical solve (for calibrated models).
+    #[arg(long)]
+    nominal: Option<PathBuf>,
+    /// Output file (CSV, or JSON with --json); stdout when absent. Written atomically.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// JSON instead of CSV.
+    #[arg(long)]
+    json: bool,
+    /// Round output numbers to this many decimals (default: shortest exact form).
+    #[arg(long)]
+    decimals: Option<usize>,
+}
+
+/// How solutions are found for this robot.
+enum Method {
+    Closed(SphericalWristIk),
+    Nominal(SphericalWristIk),
+    Seeded,
+}
+
+struct Solver<'a> {
+    robot: &'a Robot,
+    method: Method,
+    ws: IkWorkspace,
+    opts: IkOptions,
+}
+
+impl Solver<'_> {
+    /// Solutions (internal units) for one target, or the reason there are none.
+    fn solve(&mut self, target: &Pose, seed: Option<&[f64]>) -> Result<Vec<Vec<f64>>, String> {
+        let candidates: Vec<Vec<f64>> = match &self.method {
+            Method::Closed(ik) => {
+                let mut out = Vec::new();
+                ik.solve(target, &mut out);
+                if out.is_empty() {
+                    return Err("unreachable: no solution within the joint limits".into());
+                }
+                out.into_iter().map(|q| q.to_vec()).collect()
+            }
+            Method::Nominal(ik) => {
+                let mut seeds = Vec::new();
+                ik.solve_unlimited(target, &mut seeds);
+                let mut seeds: Vec<Vec<f64>> = seeds.into_iter().map(|q| q.to_vec()).collect();
+                if let Some(s) = seed {
+                    seeds.insert(0, s.to_vec());
+                }
+                self.refine(target, &seeds)?
+            }
+            Method::Seeded => {
+                let s = seed.ok_or("no seed: give --seed or q1..qN columns")?;
+                self.refine(target, &[s.to_vec()])?
+            }
+        };
+        Ok(candidates)
+    }
+
+    /// Numerical solves from each seed; converged, within-limit, distinct solutions.
+    fn refine(&mut self, target: &Pose, seeds: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, String> {
+        let mut sols: Vec<Vec<f64>> = Vec::new();
+        let mut last_err =
+            String::from("unreachable: the closed form of the nominal model has no solution");
+        for s in seeds {
+            match solve_numeric(
+                self.robot,
+                &IkTarget::Pose(*target),
+                s,
+                &self.opts,
+                &mut self.ws,
+            ) {
+                Ok(sol) if sol.outside_limits.is_empty() => {
+                    let dup = sols
+                        .iter()
+                        .any(|o| o.iter().zip(&sol.q).all(|(a, b)| (a - b).abs() < 1e-7));
+                    if !dup {
+                        sols.push(sol.q);
+                    }
+                }
+                Ok(sol) => {
+                    last_err = format!(
+                        "solution outside the limits of joint(s) {:?}",
+                        sol.outside_limits.iter().map(|j| j + 1).collect::<Vec<_>>()
+                    )
+                }
+                Err(e) => last_err = e.to_string(),
+            }
+        }
+        if sols.is_empty() {
+            Err(last_err)
+        } else {
+            Ok(sols)
+        }
+    }
+}
+
+/// Index of the solution nearest `reference` (internal units).
+fn nearest(sols: &[Vec<f64>], reference: &[f64]) -> usize {
+    let dist =
+        |q: &Vec<f64>| -> f64 { q.iter().zip(reference).map(|(a, b)| (a - b).powi(2)).sum() };
+    (0..sols.len())
+        .min_by(|&i, &j| dist(&sols[i]).total_cmp(&dist(&sols[j])))
+        .unwrap_or(0)
+}
+
+pub fn run(a: IkArgs) -> Result<()> {
+    let robot = read_robot(&a.robot)?;
+    let n = robot.dof();
+    let qcols = joint_columns(n);
+    let global_seed = match &a.seed {
+        Some(s) => Some(robot.joints_to_internal(&parse_list(s, "--seed", n)?)),
+        None => None,
+    };
+    let method = match SphericalWristIk::new(&robot) {
+        Ok(ik) => Method::Closed(ik),
+        Err(why) => match &a.nominal {
+            Some(p) => {
+                let nominal = read_robot(p)?;
+                if nominal.dof() != n {
+                    bail!(
+                        "{}: {} joints, the robot has {n}",
+                        p.display(),
+                        nominal.dof()
+                    );
+                }
+                let ik = SphericalWristIk::new(&nominal).with_context(|| {
+                    format!("{}: the nominal model has no closed form", p.display())
+                })?;
+                Method::Nominal(ik)
+            }
+            None => {
+                eprintln!("note: {why}; solving numerically from the seed");
+                Method::Seeded
+            }
+        },
+    };
+
+    // Inputs: headers, cells, target pose (file units), per-row seed (internal units).
+    let (mut headers, rows, targets, row_seeds, lines) = match (&a.pose, &a.poses) {
+        (Some(p), _) => {
+            let v = parse_list(p, "--pose", 6)?;
+            let headers: Vec<String> = POSE_COLUMNS.iter().map(|s| s.to_string()).collect();
+            let cells = v.iter().map(|x| num(*x, None)).collect();
+            (headers, vec![cells], vec![v], vec![None], vec![0])
+        }
+        (None, Some(path)) => {
+            let t = Table::read(path)?;
+            let idx: Vec<usize> = POSE_COLUMNS
+                .iter()
+                .map(|c| t.require(c))
+                .collect::<Result<_, _>>()?;
+            let seed_idx: Option<Vec<usize>> = qcols.iter().map(|c| t.column(c)).collect();
+            let mut targets = Vec::new();
+            let mut seeds = Vec::new();
+            for r in 0..t.rows.len() {
+                let v = t.numbers(r, &idx)?;
+                targets.push(v);
+                seeds.push(match &seed_idx {
+                    Some(si) => Some(robot.joints_to_internal(&t.numbers(r, si)?)),
+                    None => None,
+                });
+            }
+            let mut headers = t.headers.clone();
+            if seed_idx.is_some() {
+                for h in headers.iter_mut() {
+                    if qcols.contains(h) {
+                        *h = format!("seed_{h}");
+                    }
+                }
+            }
+            (headers, t.rows.clone(), targets, seeds, t.lines.clone())
+        }
+        (None, None) => unreachable!("clap requires one input"),
+    };
+    headers.push("solution".into());
+    headers.extend(qcols.iter().cloned());
+    headers.push("status".into());
+
+    let mid: Vec<f64> = robot
+        .joints()
+        .iter()
+        .map(|j| {
+            let [lo, hi] = j.limits_internal();
+            0.5 * (lo + hi)
+        })
+        .collect();
+    let mut solver = Solver {
+        robot: &robot,
+        method,
+        ws: IkWorkspace::new(&robot),
+        opts: IkOptions::default(),
+    };
+    let mut out_rows = Vec::new();
+    let mut failed = Vec::new();
+    for (k, (cells, v)) in rows.iter().zip(&targets).enumerate() {
+        let target = pose_from_file([v[0], v[1], v[2], v[3], v[4], v[5]]);
+        let seed = row_seeds[k].as_deref().or(global_seed.as_deref());
+        match solver.solve(&target, seed) {
+            Ok(sols) => {
+                let chosen: Vec<usize> = if a.all {
+                    (0..sols.len()).collect()
+                } else {
+                    vec![nearest(&sols, seed.unwrap_or(&mid))]
+                };
+                for (s, &i) in chosen.iter().enumerate() {
+                    let mut row = cells.clone();
+                    row.push((s + 1).to_string());
+                    let q = robot.joints_to_file(&sols[i]);
+                    row.extend(q.iter().map(|x| num(*x, a.decimals)));
+                    row.push("ok".into());
+                    out_rows.push(row);
+                }
+            }
+            Err(why) => {
+                let mut row = cells.clone();
+                row.push(String::new());
+                row.extend(std::iter::repeat_n(String::new(), n));
+                row.push(why.clone());
+                out_rows.push(row);
+                failed.push((lines[k], why));
+            }
+        }
+    }
+    if a.pose.is_some() {
+        if let Some((_, why)) = failed.first() {
+            bail!("no solution for the pose: {why}");
+        }
+    } else if !failed.is_empty() {
+        eprintln!(
+            "warning: {} of {} poses have no solution (marked in the status column):",
+            failed.len(),
+            rows.len()
+        );
+        for (line, why) in &failed {
+            eprintln!("  line {line}: {why}");
+        }
+    }
+    emit(&headers, &out_rows, a.json, a.out.as_deref())
+}

@@ -1,0 +1,97 @@
+//! Shared pieces of command output: numbers, parsing of lists, CSV or JSON to a file or stdout.
+
+use anyhow::{Context, Result, bail};
+use std::path::Path;
+
+/// Formats a number: shortest exact form, or rounded to `decimals` places.
+pub fn num(v: f64, decimals: Option<usize>) -> String {
+    match decimals {
+        Some(d) => {
+            let s = format!("{v:.d$}");
+            // Avoid "-0.000" for values that round to zero.
+            if s.trim_start_matches('-')
+                .chars()
+                .all(|c| c == '0' || c == '.')
+            {
+                s.trim_start_matches('-').to_string()
+            } else {
+                s
+            }
+        }
+        None => format!("{v}"),
+    }
+}
+
+/// Parses "a,b,c" into numbers; `what` names the option in messages.
+pub fn parse_list(s: &str, what: &str, expected: usize) -> Result<Vec<f64>> {
+    let vals: Vec<f64> = s
+        .split(',')
+        .enumerate()
+        .map(|(i, t)| {
+            let t = t.trim();
+            match t.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(v),
+                _ => bail!("{what}: value {} `{t}` is not a finite number", i + 1),
+            }
+        })
+        .collect::<Result<_>>()?;
+    if vals.len() != expected {
+        bail!("{what}: {} values given, {expected} expected", vals.len());
+    }
+    Ok(vals)
+}
+
+/// A cell as JSON: a number when it reads as one, else a string.
+pub fn json_cell(cell: &str) -> serde_json::Value {
+    match cell.parse::<f64>() {
+        Ok(v) if v.is_finite() => serde_json::json!(v),
+        _ => serde_json::Value::String(cell.to_string()),
+    }
+}
+
+/// Rows as JSON objects keyed by the headers.
+pub fn rows_to_json(headers: &[String], rows: &[Vec<String>]) -> serde_json::Value {
+    serde_json::Value::Array(
+        rows.iter()
+            .map(|r| {
+                let obj = headers
+                    .iter()
+                    .zip(r)
+                    .map(|(h, c)| (h.clone(), json_cell(c)))
+                    .collect();
+                serde_json::Value::Object(obj)
+            })
+            .collect(),
+    )
+}
+
+/// Writes rows as CSV (or JSON) to `out`, atomically, or to stdout when `out` is None.
+pub fn emit(
+    headers: &[String],
+    rows: &[Vec<String>],
+    json: bool,
+    out: Option<&Path>,
+) -> Result<()> {
+    let bytes = if json {
+        let mut b = serde_json::to_vec_pretty(&rows_to_json(headers, rows))?;
+        b.push(b'\n');
+        b
+    } else {
+        let mut w = crate::data::table::CsvOut::new(headers)?;
+        for r in rows {
+            w.row(r)?;
+        }
+        w.into_bytes()?
+    };
+    match out {
+        Some(p) => {
+            crate::io::write_atomic(p, &bytes).with_context(|| format!("writing {}", p.display()))
+        }
+        None => {
+            use std::io::Write;
+            std::io::stdout()
+                .write_all(&bytes)
+                .context("writing to stdout")
+        }
+    }
+}

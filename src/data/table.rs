@@ -1,0 +1,216 @@
+//! A CSV table read whole, with the line of every row, so that every error can name the file,
+//! the line and the column.
+
+use crate::error::{Error, Location, Result};
+use std::path::{Path, PathBuf};
+
+/// A CSV file: header row and text cells.
+#[derive(Debug, Clone)]
+pub struct Table {
+    pub path: PathBuf,
+    pub headers: Vec<String>,
+    pub rows: Vec<Vec<String>>,
+    /// 1-based file line of each row.
+    pub lines: Vec<usize>,
+}
+
+impl Table {
+    /// Reads a comma-separated file with one header row. Every row must have as many cells
+    /// as the header; header names must be unique; blank lines are skipped.
+    pub fn read(path: impl AsRef<Path>) -> Result<Table> {
+        let path = path.as_ref();
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        Table::parse(&bytes, path, b',')
+    }
+
+    /// Parses CSV bytes; `path` is used in messages.
+    pub fn parse(bytes: &[u8], path: &Path, delimiter: u8) -> Result<Table> {
+        let mut rdr = csv::ReaderBuilder::new()
+            .delimiter(delimiter)
+            .has_headers(true)
+            .flexible(true)
+            .trim(csv::Trim::All)
+            .from_reader(bytes);
+        let csv_err = |e: csv::Error| {
+            let line = e.position().map(|p| p.line() as usize);
+            Error::input(
+                Location {
+                    file: path.to_path_buf(),
+                    line,
+                    field: None,
+                },
+                format!("malformed CSV: {e}"),
+            )
+        };
+        let headers: Vec<String> = rdr
+            .headers()
+            .map_err(csv_err)?
+            .iter()
+            .map(|s| s.trim_start_matches('\u{feff}').to_string())
+            .collect();
+        if headers.iter().all(|h| h.is_empty()) {
+            return Err(Error::input(
+                Location::file(path),
+                "empty file: a header row is needed",
+            ));
+        }
+        for (i, h) in headers.iter().enumerate() {
+            if h.is_empty() {
+                return Err(Error::input(
+                    Location::at(path, 1, format!("#{}", i + 1)),
+                    "empty column name in the header",
+                ));
+            }
+            if headers[..i].contains(h) {
+                return Err(Error::input(
+                    Location::at(path, 1, h.clone()),
+                    "duplicate column name in the header",
+                ));
+            }
+        }
+        let mut rows = Vec::new();
+        let mut lines = Vec::new();
+        for rec in rdr.records() {
+            let rec = rec.map_err(csv_err)?;
+            let line = rec.position().map_or(0, |p| p.line() as usize);
+            if rec.len() == 1 && rec[0].is_empty() {
+                continue;
+            }
+            if rec.len() != headers.len() {
+                return Err(Error::input(
+                    Location {
+                        file: path.to_path_buf(),
+                        line: Some(line),
+                        field: None,
+                    },
+                    format!(
+                        "{} cells, but the header has {} columns",
+                        rec.len(),
+                        headers.len()
+                    ),
+                ));
+            }
+            rows.push(rec.iter().map(str::to_string).collect());
+            lines.push(line);
+        }
+        Ok(Table {
+            path: path.to_path_buf(),
+            headers,
+            rows,
+            lines,
+        })
+    }
+
+    /// Index of a column, if present.
+    pub fn column(&self, name: &str) -> Option<usize> {
+        self.headers.iter().position(|h| h == name)
+    }
+
+    /// Index of a column that must be present.
+    pub fn require(&self, name: &str) -> Result<usize> {
+        self.column(name).ok_or_else(|| {
+            Error::input(
+                Location::at(&self.path, 1, name),
+                format!(
+                    "missing column (the header has: {})",
+                    self.headers.join(", ")
+                ),
+            )
+        })
+    }
+
+    /// Location of a cell, for messages.
+    pub fn location(&self, row: usize, col: usize) -> Location {
+        Location::at(&self.path, self.lines[row], self.headers[col].clone())
+    }
+
+    /// A cell as a finite number.
+    pub fn number(&self, row: usize, col: usize) -> Result<f64> {
+        let cell = &self.rows[row][col];
+        match cell.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            Ok(_) => Err(Error::input(
+                self.location(row, col),
+                format!("`{cell}` is not finite"),
+            )),
+            Err(_) => Err(Error::input(
+                self.location(row, col),
+                format!("`{cell}` is not a number"),
+            )),
+        }
+    }
+
+    /// Several cells of one row as finite numbers.
+    pub fn numbers(&self, row: usize, cols: &[usize]) -> Result<Vec<f64>> {
+        cols.iter().map(|&c| self.number(row, c)).collect()
+    }
+}
+
+/// Builds CSV output in memory; see [`crate::io::write_atomic`] to put it in a file.
+pub struct CsvOut {
+    w: csv::Writer<Vec<u8>>,
+}
+
+impl CsvOut {
+    pub fn new(headers: &[String]) -> Result<Self> {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.write_record(headers)
+            .map_err(|e| Error::Invalid(format!("CSV output: {e}")))?;
+        Ok(CsvOut { w })
+    }
+
+    pub fn row(&mut self, cells: &[String]) -> Result<()> {
+        self.w
+            .write_record(cells)
+            .map_err(|e| Error::Invalid(format!("CSV output: {e}")))
+    }
+
+    pub fn into_bytes(self) -> Result<Vec<u8>> {
+        self.w
+            .into_inner()
+            .map_err(|e| Error::Invalid(format!("CSV output: {e}")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Result<Table> {
+        Table::parse(s.as_bytes(), Path::new("d.csv"), b',')
+    }
+
+    #[test]
+    fn rows_keep_their_file_lines() {
+        let t = parse("id,q1\na,1\n\nb,2\n").unwrap();
+        assert_eq!(t.rows.len(), 2);
+        assert_eq!(t.lines, vec![2, 4]);
+        assert_eq!(t.number(1, 1).unwrap(), 2.0);
+    }
+
+    #[test]
+    fn errors_name_file_line_and_column() {
+        let t = parse("id,q1\na,1\nb,x\n").unwrap();
+        let e = t.number(1, 1).unwrap_err().to_string();
+        assert!(
+            e.contains("d.csv:3") && e.contains("q1") && e.contains("`x`"),
+            "{e}"
+        );
+        let e = parse("id,q1\na,1\nb,inf\n")
+            .unwrap()
+            .number(1, 1)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("not finite"), "{e}");
+        let e = parse("id,q1\na,1,3\n").unwrap_err().to_string();
+        assert!(e.contains("d.csv:2") && e.contains("3 cells"), "{e}");
+        let e = parse("q1,q1\n1,2\n").unwrap_err().to_string();
+        assert!(e.contains("duplicate") && e.contains("q1"), "{e}");
+        let e = parse("id\n1\n")
+            .unwrap()
+            .require("q1")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("missing column") && e.contains("q1"), "{e}");
+    }
+}

@@ -1,0 +1,97 @@
+//! The library's error type.
+//!
+//! Every error that comes from user input names where it came from: the file, the line
+//! (1-based, as an editor shows it) and the field or column.
+
+use std::path::PathBuf;
+
+/// Where in an input file a problem sits.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Location {
+    /// The file that was read.
+    pub file: PathBuf,
+    /// 1-based line number, when known.
+    pub line: Option<usize>,
+    /// The field (robot files) or column (CSV files), when known.
+    pub field: Option<String>,
+}
+
+impl Location {
+    pub fn file(file: impl Into<PathBuf>) -> Self {
+        Location {
+            file: file.into(),
+            line: None,
+            field: None,
+        }
+    }
+
+    pub fn at(file: impl Into<PathBuf>, line: usize, field: impl Into<String>) -> Self {
+        Location {
+            file: file.into(),
+            line: Some(line),
+            field: Some(field.into()),
+        }
+    }
+}
+
+impl std::fmt::Display for Location {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.file.display())?;
+        if let Some(line) = self.line {
+            write!(f, ":{line}")?;
+        }
+        if let Some(field) = &self.field {
+            write!(f, ": field `{field}`")?;
+        }
+        Ok(())
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// Input that does not parse or does not make sense, with its location.
+    #[error("{location}: {message}")]
+    Input { location: Location, message: String },
+
+    /// A robot model that is inconsistent (not tied to a file).
+    #[error("invalid robot model: {0}")]
+    Model(String),
+
+    /// The robot's structure does not admit the requested closed-form solution.
+    #[error("no closed-form inverse kinematics for this robot: {0}")]
+    NoClosedForm(String),
+
+    /// A numerical solve did not reach its tolerance.
+    #[error("{0}")]
+    NotConverged(String),
+
+    /// Arguments that do not fit together (lengths, counts).
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl Error {
+    pub fn input(location: Location, message: impl Into<String>) -> Self {
+        Error::Input {
+            location,
+            message: message.into(),
+        }
+    }
+
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}
+
+pub type Result<T> = std::result::Result<T, Error>;

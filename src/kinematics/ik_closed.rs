@@ -1,0 +1,236 @@
+//! Closed-form inverse kinematics for 6R robots of the thesis robot's class (App. B): axes 2
+//! and 3 parallel, axes 4, 5 and 6 meeting in one point (a spherical wrist). Up to 8
+//! solutions: 2 for joint 1 x 2 elbows x 2 wrists.
+//!
+//! Thesis App. B solves the FANUC's equations symbolically; here the same decoupling is done
+//! on the product-of-exponentials form T(q) = e1(q1) ... e6(q6) M, with the joint axes read
+//! from the model at q = 0. Each step is a Paden-Kahan subproblem, so the solver works for
+//! any convention (MDH, Hayati, DH) and any base and tool that give this structure:
+//! 1. the wrist centre W = G W0 (G = T M^-1) depends on q1..q3 only;
+//! 2. q1: the arm plane (normal to axes 2 and 3) must hold W, `a cos q1 + b sin q1 = c`;
+//! 3. q3: subproblem 3, the distance from axis 2 to W fixes the elbow;
+//! 4. q2: subproblem 1 swings the elbow onto W;
+//! 5. q4, q5: subproblem 2 points axis 6 where the target needs it; q6: subproblem 1.
+
+use super::Pose;
+use super::fk::{Frames, frames};
+use super::subproblems::{cos_sin_equation, rotate_onto, rotate_to_distance, rotate_two_axes};
+use crate::error::{Error, Result};
+use crate::model::{JointType, Robot};
+use nalgebra::{Rotation3, Unit, Vector3};
+use std::f64::consts::PI;
+
+type V3 = Vector3<f64>;
+
+/// Tolerance (mm) for axes meeting in a point, and (unit-vector norm) for parallel axes.
+const STRUCTURE_TOL: f64 = 1e-7;
+
+/// A closed-form solver built once for a robot and reused for many poses.
+#[derive(Debug, Clone)]
+pub struct SphericalWristIk {
+    /// Joint axis directions at q = 0 (world, unit).
+    w: [V3; 6],
+    /// A point on each joint axis at q = 0 (world, mm).
+    p: [V3; 6],
+    /// Wrist centre at q = 0 (mm).
+    w0: V3,
+    /// Inverse of the tool pose at q = 0.
+    m_inv: Pose,
+    /// Joint limits (rad).
+    limits: [[f64; 2]; 6],
+}
+
+/// Closest points of two lines (point, unit direction); None when parallel.
+fn closest_points(p1: &V3, d1: &V3, p2: &V3, d2: &V3) -> Option<(V3, V3)> {
+    let r = p1 - p2;
+    let b = d1.dot(d2);
+    let denom = 1.0 - b * b;
+    if denom < 1e-12 {
+        return None;
+    }
+    let (d, e) = (d1.dot(&r), d2.dot(&r));
+    let s = (b * e - d) / denom;
+    let t = (e - b * d) / denom;
+    Some((p1 + d1 * s, p2 + d2 * t))
+}
+
+fn distance_to_line(x: &V3, p: &V3, d: &V3) -> f64 {
+    let r = x - p;
+    (r - d * d.dot(&r)).norm()
+}
+
+fn rot(w: &V3, angle: f64) -> Rotation3<f64> {
+    Rotation3::from_axis_angle(&Unit::new_unchecked(*w), angle)
+}
+
+/// Wraps an angle to [-pi, pi).
+fn wrap(a: f64) -> f64 {
+    (a + PI).rem_euclid(2.0 * PI) - PI
+}
+
+impl SphericalWristIk {
+    /// Checks the robot's structure at q = 0 and prepares the solver.
+    pub fn new(robot: &Robot) -> Result<Self> {
+        if robot.dof() != 6 {
+            return Err(Error::NoClosedForm(format!(
+                "it has {} joints, not 6",
+                robot.dof()
+            )));
+        }
+        if robot
+            .joints()
+            .iter()
+            .any(|j| j.joint_type != JointType::Revolute)
+        {
+            return Err(Error::NoClosedForm("not every joint is revolute".into()));
+        }
+        let mut f = Frames::new(robot);
+        frames(robot, &[0.0; 6], &mut f);
+        let mut w = [V3::zeros(); 6];
+        let mut p = [V3::zeros(); 6];
+        for i in 0..6 {
+            w[i] = f.joint[i].rotation.matrix().column(2).into();
+            p[i] = f.joint[i].translation.vector;
+        }
+        if w[1].cross(&w[2]).norm() > STRUCTURE_TOL {
+            return Err(Error::NoClosedForm("axes 2 and 3 are not parallel".into()));
+        }
+        if w[0].cross(&w[1]).norm() < 1e-6 {
+            return Err(Error::NoClosedForm("axes 1 and 2 are parallel".into()));
+        }
+        let (a, b) = closest_points(&p[3], &w[3], &p[4], &w[4])
+            .ok_or_else(|| Error::NoClosedForm("axes 4 and 5 are parallel".into()))?;
+        if (a - b).norm() > STRUCTURE_TOL {
+            return Err(Error::NoClosedForm(format!(
+                "axes 4 and 5 do not intersect (they pass {:.3e} mm apart): no spherical wrist",
+                (a - b).norm()
+            )));
+        }
+        let w0 = (a + b) * 0.5;
+        let off = distance_to_line(&w0, &p[5], &w[5]);
+        if off > STRUCTURE_TOL {
+            return Err(Error::NoClosedForm(format!(
+                "axis 6 misses the intersection of axes 4 and 5 by {off:.3e} mm: no spherical wrist"
+            )));
+        }
+        if w[4].cross(&w[5]).norm() < 1e-6 {
+            return Err(Error::NoClosedForm("axes 5 and 6 are parallel".into()));
+        }
+        let mut limits = [[0.0; 2]; 6];
+        for (l, j) in limits.iter_mut().zip(robot.joints()) {
+            *l = j.limits_internal();
+        }
+        Ok(SphericalWristIk {
+            w,
+            p,
+            w0,
+            m_inv: f.tool.inverse(),
+            limits,
+        })
+    }
+
+    /// Every solution for `target` (tool pose, mm), wrapped to [-pi, pi), ignoring limits.
+    /// Up to 8; none when the pose is out of reach. At a singularity (wrist centre on axis 1,
+    /// or q5 such that axes 4 and 6 align) one representative of the continuum is returned.
+    pub fn solve_unlimited(&self, target: &Pose, out: &mut Vec<[f64; 6]>) {
+        out.clear();
+        let [w1, w2, w3, w4, w5, w6] = &self.w;
+        let [p1, p2, p3, ..] = &self.p;
+        let g = target * self.m_inv;
+        let wc = g.rotation * self.w0 + g.translation.vector;
+
+        // q1: (Rot(w1, q1) w2) . (W - p1) = w2 . (W0 - p1).
+        let v = wc - p1;
+        let (w1u, w1v) = (w1.dot(w2), w1.dot(&v));
+        let a = w2.dot(&v) - w1u * w1v;
+        let b = w1.cross(w2).dot(&v);
+        let c = w2.dot(&(self.w0 - p1)) - w1u * w1v;
+        let q1s: &[f64] = &match cos_sin_equation(a, b, c) {
+            Some(s) => s,
+            None if a.hypot(b) < 1e-9 && c.abs() < 1e-9 => [0.0, 0.0],
+            None => return,
+        };
+        let dedup1 = (q1s[0] - q1s[1]).abs() < 1e-14;
+        for &q1 in &q1s[..if dedup1 { 1 } else { 2 }] {
+            let r1 = rot(w1, q1);
+            let wp = r1.inverse() * (wc - p1) + p1;
+            let delta = (wp - p2).norm();
+            let Some(q3s) = rotate_to_distance(w3, &(self.w0 - p3), &(p2 - p3), delta) else {
+                continue;
+            };
+            let dedup3 = (q3s[0] - q3s[1]).abs() < 1e-14;
+            for &q3 in &q3s[..if dedup3 { 1 } else { 2 }] {
+                let r3 = rot(w3, q3);
+                let elbow = r3 * (self.w0 - p3) + p3;
+                let q2 = rotate_onto(w2, &(elbow - p2), &(wp - p2));
+                let r123 = r1 * rot(w2, q2) * r3;
+                let rw = r123.inverse() * g.rotation;
+                let Some(wrists) = rotate_two_axes(w4, w5, w6, &(rw * w6)) else {
+                    continue;
+                };
+                let dedupw = (wrists[0][0] - wrists[1][0]).abs() < 1e-14
+                    && (wrists[0][1] - wrists[1][1]).abs() < 1e-14;
+                for &[q4, q5] in &wrists[..if dedupw { 1 } else { 2 }] {
+                    // Any vector off axis 6 fixes q6; axis 5 is perpendicular to it here.
+                    let x = w5 - w6 * w6.dot(w5);
+                    let y = (rot(w4, q4) * rot(w5, q5)).inverse() * (rw * x);
+                    let q6 = rotate_onto(w6, &x, &y);
+                    out.push([q1, q2, q3, q4, q5, q6].map(wrap));
+                }
+            }
+        }
+    }
+
+    /// Every solution within the joint limits, including the copies shifted by multiples of
+    /// 360 deg that the limits allow. Solutions within 1e-9 rad of each other are merged.
+    pub fn solve(&self, target: &Pose, out: &mut Vec<[f64; 6]>) {
+        let mut raw = Vec::with_capacity(8);
+        self.solve_unlimited(target, &mut raw);
+        out.clear();
+        for q in &raw {
+            self.push_copies(q, out);
+        }
+    }
+
+    /// Pushes every 2 pi copy of `q` within the limits (tolerance 1e-9 rad).
+    fn push_copies(&self, q: &[f64; 6], out: &mut Vec<[f64; 6]>) {
+        const TOL: f64 = 1e-9;
+        let tau = 2.0 * PI;
+        let mut ranges = [(0i64, -1i64); 6];
+        for j in 0..6 {
+            let [lo, hi] = self.limits[j];
+            let kmin = ((lo - TOL - q[j]) / tau).ceil() as i64;
+            let kmax = ((hi + TOL - q[j]) / tau).floor() as i64;
+            if kmin > kmax {
+                return;
+            }
+            ranges[j] = (kmin, kmax);
+        }
+        let mut k = ranges.map(|r| r.0);
+        loop {
+            let mut cand = *q;
+            for j in 0..6 {
+                cand[j] += k[j] as f64 * tau;
+            }
+            let dup = out
+                .iter()
+                .any(|s| s.iter().zip(&cand).all(|(a, b)| (a - b).abs() < TOL));
+            if !dup {
+                out.push(cand);
+            }
+            // Odometer over the copy indices.
+            let mut j = 0;
+            loop {
+                if j == 6 {
+                    return;
+                }
+                if k[j] < ranges[j].1 {
+                    k[j] += 1;
+                    break;
+                }
+                k[j] = ranges[j].0;
+                j += 1;
+            }
+        }
+    }
+}

@@ -1,0 +1,225 @@
+//! Numerical inverse kinematics for any model (calibrated ones have no closed form):
+//! Levenberg-Marquardt on the pose error, seeded from a given joint vector.
+//!
+//! Residual: e = [p_target - p(q); L * rotvec(R_target R(q)^T)] (mm), with L a length (mm per
+//! rad) that puts orientation on the scale of position. Step: (J^T J + lambda diag(J^T J))
+//! dq = J^T e with J the geometric Jacobian (orientation rows scaled by L). A solve either
+//! meets both tolerances or returns [`Error::NotConverged`] with the error it reached.
+
+use super::Pose;
+use super::fk::{Frames, frames};
+use super::jacobian::joint_jacobian;
+use crate::error::{Error, Result};
+use crate::model::{JointType, Robot};
+use crate::rotation::rotation_vector;
+use nalgebra::{DMatrix, DVector, Matrix6xX, Vector3, Vector6};
+use std::f64::consts::PI;
+
+/// What the tool must reach.
+#[derive(Debug, Clone, Copy)]
+pub enum IkTarget {
+    /// Position and orientation.
+    Pose(Pose),
+    /// Position only (mm); the orientation is left free.
+    Position(Vector3<f64>),
+}
+
+/// Tolerances and limits of a numerical solve.
+#[derive(Debug, Clone, Copy)]
+pub struct IkOptions {
+    /// Largest accepted position error (mm).
+    pub tol_position_mm: f64,
+    /// Largest accepted orientation error (rad).
+    pub tol_rotation_rad: f64,
+    /// Orientation weight L (mm per rad) in the least-squares residual.
+    pub length_scale_mm: f64,
+    /// Most LM iterations.
+    pub max_iterations: usize,
+}
+
+impl Default for IkOptions {
+    fn default() -> Self {
+        IkOptions {
+            tol_position_mm: 1e-9,
+            tol_rotation_rad: 1e-12,
+            length_scale_mm: 1000.0,
+            max_iterations: 100,
+        }
+    }
+}
+
+/// A converged solution.
+#[derive(Debug, Clone)]
+pub struct IkSolution {
+    /// Joints (rad or mm). Revolute joints are moved by multiples of 2 pi into their limits
+    /// where that is possible.
+    pub q: Vec<f64>,
+    pub iterations: usize,
+    /// Remaining position error (mm).
+    pub position_error_mm: f64,
+    /// Remaining orientation error (rad); 0 for position targets.
+    pub rotation_error_rad: f64,
+    /// 0-based joints that are outside their limits even after 2 pi shifts.
+    pub outside_limits: Vec<usize>,
+}
+
+/// Scratch space for numerical IK, reused across solves of one robot.
+#[derive(Debug, Clone)]
+pub struct IkWorkspace {
+    frames: Frames,
+    jac: Matrix6xX<f64>,
+    q: Vec<f64>,
+    trial: Vec<f64>,
+}
+
+impl IkWorkspace {
+    pub fn new(robot: &Robot) -> Self {
+        let n = robot.dof();
+        IkWorkspace {
+            frames: Frames::new(robot),
+            jac: Matrix6xX::zeros(n),
+            q: vec![0.0; n],
+            trial: vec![0.0; n],
+        }
+    }
+}
+
+/// Residual (6 components, mm; orientation scaled by L) at `q`; fills the frames.
+fn residual(
+    robot: &Robot,
+    target: &IkTarget,
+    q: &[f64],
+    scale: f64,
+    frames_ws: &mut Frames,
+) -> Vector6<f64> {
+    frames(robot, q, frames_ws);
+    let t = &frames_ws.tool;
+    match target {
+        IkTarget::Pose(g) => {
+            let dp = g.translation.vector - t.translation.vector;
+            let dr = rotation_vector(&(g.rotation * t.rotation.inverse())) * scale;
+            Vector6::new(dp.x, dp.y, dp.z, dr.x, dr.y, dr.z)
+        }
+        IkTarget::Position(p) => {
+            let dp = p - t.translation.vector;
+            Vector6::new(dp.x, dp.y, dp.z, 0.0, 0.0, 0.0)
+        }
+    }
+}
+
+/// Solves for joints that put the tool on `target`, starting from `seed` (rad or mm).
+pub fn solve_numeric(
+    robot: &Robot,
+    target: &IkTarget,
+    seed: &[f64],
+    opts: &IkOptions,
+    ws: &mut IkWorkspace,
+) -> Result<IkSolution> {
+    let n = robot.dof();
+    if seed.len() != n {
+        return Err(Error::Invalid(format!(
+            "seed has {} joints, the robot {n}",
+            seed.len()
+        )));
+    }
+    let position_only = matches!(target, IkTarget::Position(_));
+    let l = opts.length_scale_mm;
+    ws.q.copy_from_slice(seed);
+    let mut e = residual(robot, target, &ws.q, l, &mut ws.frames);
+    let mut cost = e.norm_squared();
+    let mut lambda = 1e-3;
+    let errors = |e: &Vector6<f64>| {
+        let pos = e.fixed_rows::<3>(0).norm();
+        let rot = e.fixed_rows::<3>(3).norm() / l;
+        (pos, rot)
+    };
+    let mut a = DMatrix::<f64>::zeros(n, n);
+    let mut g = DVector::<f64>::zeros(n);
+    for iter in 0..=opts.max_iterations {
+        let (pos, rot) = errors(&e);
+        if pos <= opts.tol_position_mm && rot <= opts.tol_rotation_rad {
+            return Ok(finish(robot, &ws.q, iter, pos, rot));
+        }
+        if iter == opts.max_iterations {
+            break;
+        }
+        joint_jacobian(robot, &ws.frames, &mut ws.jac);
+        if position_only {
+            ws.jac.fixed_rows_mut::<3>(3).fill(0.0);
+        } else {
+            ws.jac.fixed_rows_mut::<3>(3).scale_mut(l);
+        }
+        a.gemm_tr(1.0, &ws.jac, &ws.jac, 0.0);
+        g.gemv_tr(1.0, &ws.jac, &e, 0.0);
+        // Inner loop: raise lambda until a step lowers the cost.
+        let mut improved = false;
+        while lambda < 1e12 {
+            let mut m = a.clone();
+            for k in 0..n {
+                m[(k, k)] += lambda * a[(k, k)].max(1e-9);
+            }
+            let Some(chol) = m.cholesky() else {
+                lambda *= 10.0;
+                continue;
+            };
+            let dq = chol.solve(&g);
+            for k in 0..n {
+                ws.trial[k] = ws.q[k] + dq[k];
+            }
+            let e_new = residual(robot, target, &ws.trial, l, &mut ws.frames);
+            let c_new = e_new.norm_squared();
+            if c_new.is_finite() && c_new < cost {
+                std::mem::swap(&mut ws.q, &mut ws.trial);
+                e = e_new;
+                cost = c_new;
+                lambda = (lambda / 10.0).max(1e-12);
+                improved = true;
+                break;
+            }
+            lambda *= 10.0;
+        }
+        if !improved {
+            // Frames hold the last trial; the caller gets the error at the best point.
+            let (pos, rot) = errors(&e);
+            return Err(Error::NotConverged(format!(
+                "numerical IK stalled after {iter} iterations (no step lowers the error): \
+                 position error {pos:.3e} mm, orientation error {:.3e} deg; \
+                 the target may be out of reach",
+                rot.to_degrees()
+            )));
+        }
+    }
+    let (pos, rot) = errors(&e);
+    Err(Error::NotConverged(format!(
+        "numerical IK did not converge in {} iterations: position error {pos:.3e} mm, \
+         orientation error {:.3e} deg",
+        opts.max_iterations,
+        rot.to_degrees()
+    )))
+}
+
+fn finish(robot: &Robot, q: &[f64], iterations: usize, pos: f64, rot: f64) -> IkSolution {
+    let mut q = q.to_vec();
+    for (v, j) in q.iter_mut().zip(robot.joints()) {
+        if j.joint_type != JointType::Revolute {
+            continue;
+        }
+        let [lo, hi] = j.limits_internal();
+        if *v < lo || *v > hi {
+            // The copy nearest the middle of the range, if one fits.
+            let mid = 0.5 * (lo + hi);
+            let shifted = *v - ((*v - mid) / (2.0 * PI)).round() * 2.0 * PI;
+            if shifted >= lo - 1e-9 && shifted <= hi + 1e-9 {
+                *v = shifted;
+            }
+        }
+    }
+    let outside_limits = robot.joints_outside_limits(&q);
+    IkSolution {
+        q,
+        iterations,
+        position_error_mm: pos,
+        rotation_error_rad: rot,
+        outside_limits,
+    }
+}

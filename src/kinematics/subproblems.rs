@@ -1,0 +1,154 @@
+//! Paden-Kahan subproblems (Murray, Li and Sastry, "A Mathematical Introduction to Robotic
+//! Manipulation", 1994, sec. 3.2). Vectors are taken relative to a point on the axis (or on
+//! both axes); axis directions are unit vectors; angles in rad.
+
+use nalgebra::Vector3;
+
+type V3 = Vector3<f64>;
+
+/// Relative tolerance under which a cosine slightly outside [-1, 1] is taken as a tangent
+/// solution rather than as no solution.
+const TANGENT_TOL: f64 = 1e-10;
+
+fn project(w: &V3, v: &V3) -> V3 {
+    v - w * w.dot(v)
+}
+
+/// Subproblem 1: the angle theta with Rot(w, theta) u = v, judged on the parts of u and v
+/// perpendicular to w. Returns 0 when either part vanishes (the angle is then free).
+pub fn rotate_onto(w: &V3, u: &V3, v: &V3) -> f64 {
+    let up = project(w, u);
+    let vp = project(w, v);
+    w.dot(&up.cross(&vp)).atan2(up.dot(&vp))
+}
+
+/// Subproblem 3: the angles theta with |Rot(w, theta) u - v| = delta; none, or two (equal
+/// when tangent).
+pub fn rotate_to_distance(w: &V3, u: &V3, v: &V3, delta: f64) -> Option<[f64; 2]> {
+    let up = project(w, u);
+    let vp = project(w, v);
+    let along = w.dot(&(u - v));
+    let delta2 = delta * delta - along * along;
+    let (nu, nv) = (up.norm(), vp.norm());
+    if nu == 0.0 || nv == 0.0 {
+        return None;
+    }
+    let theta0 = w.dot(&up.cross(&vp)).atan2(up.dot(&vp));
+    let cos = (nu * nu + nv * nv - delta2) / (2.0 * nu * nv);
+    let cos = clamp_tangent(cos)?;
+    let phi = cos.acos();
+    Some([theta0 - phi, theta0 + phi])
+}
+
+/// Subproblem 2: the angle pairs (t1, t2) with Rot(w1, t1) Rot(w2, t2) p = q for two
+/// intersecting, non-parallel axes; none, or two (equal when tangent).
+pub fn rotate_two_axes(w1: &V3, w2: &V3, p: &V3, q: &V3) -> Option<[[f64; 2]; 2]> {
+    let c12 = w1.dot(w2);
+    let cross = w1.cross(w2);
+    let s2 = cross.norm_squared();
+    if s2 < 1e-24 {
+        return None;
+    }
+    let denom = c12 * c12 - 1.0;
+    let alpha = (c12 * w2.dot(p) - w1.dot(q)) / denom;
+    let beta = (c12 * w1.dot(q) - w2.dot(p)) / denom;
+    let rest = p.norm_squared() - alpha * alpha - beta * beta - 2.0 * alpha * beta * c12;
+    let gamma2 = rest / s2;
+    let scale = p.norm_squared().max(f64::MIN_POSITIVE);
+    if gamma2 < -TANGENT_TOL * scale {
+        return None;
+    }
+    let gamma = gamma2.max(0.0).sqrt();
+    let mut out = [[0.0; 2]; 2];
+    for (k, g) in [gamma, -gamma].into_iter().enumerate() {
+        let z = w1 * alpha + w2 * beta + cross * g;
+        let t2 = rotate_onto(w2, p, &z);
+        let t1 = rotate_onto(w1, &z, q);
+        out[k] = [t1, t2];
+    }
+    Some(out)
+}
+
+fn clamp_tangent(cos: f64) -> Option<f64> {
+    if cos.abs() <= 1.0 {
+        Some(cos)
+    } else if cos.abs() <= 1.0 + TANGENT_TOL {
+        Some(cos.signum())
+    } else {
+        None
+    }
+}
+
+/// Solutions q of `a cos q + b sin q = c`: none, or two (equal when tangent).
+/// `None` also when a = b = 0 (then any q or none solves it).
+pub fn cos_sin_equation(a: f64, b: f64, c: f64) -> Option<[f64; 2]> {
+    let r = a.hypot(b);
+    if r == 0.0 {
+        return None;
+    }
+    let phi = b.atan2(a);
+    let cos = clamp_tangent(c / r)?;
+    let d = cos.acos();
+    Some([phi - d, phi + d])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Rotation3, Unit};
+
+    fn rot(w: &V3, t: f64) -> Rotation3<f64> {
+        Rotation3::from_axis_angle(&Unit::new_normalize(*w), t)
+    }
+
+    #[test]
+    fn subproblem_one_recovers_the_angle() {
+        let w = V3::new(1.0, 2.0, -0.5).normalize();
+        let u = V3::new(0.3, -1.0, 2.0);
+        for &t in &[0.0, 0.7, -2.5, 3.1] {
+            let v = rot(&w, t) * u;
+            assert!((rotate_onto(&w, &u, &v) - t).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn subproblem_three_gives_the_distance() {
+        let w = V3::z();
+        let u = V3::new(2.0, 0.0, 1.0);
+        let v = V3::new(-1.0, 3.0, -2.0);
+        let truth = 0.9;
+        let delta = (rot(&w, truth) * u - v).norm();
+        let sols = rotate_to_distance(&w, &u, &v, delta).unwrap();
+        for t in sols {
+            assert!(((rot(&w, t) * u - v).norm() - delta).abs() < 1e-12);
+        }
+        assert!(sols.iter().any(|t| (t - truth).abs() < 1e-12));
+        assert!(rotate_to_distance(&w, &u, &v, 100.0).is_none());
+    }
+
+    #[test]
+    fn subproblem_two_reaches_the_point() {
+        let w1 = V3::z();
+        let w2 = V3::new(1.0, 0.0, 0.3).normalize();
+        let p = V3::new(0.2, 1.0, -0.4);
+        let (t1, t2) = (1.1, -0.6);
+        let q = rot(&w1, t1) * rot(&w2, t2) * p;
+        let sols = rotate_two_axes(&w1, &w2, &p, &q).unwrap();
+        for [a, b] in sols {
+            assert!((rot(&w1, a) * rot(&w2, b) * p - q).norm() < 1e-12);
+        }
+        assert!(
+            sols.iter()
+                .any(|[a, b]| (a - t1).abs() < 1e-12 && (b - t2).abs() < 1e-12)
+        );
+    }
+
+    #[test]
+    fn cos_sin_equation_solutions_satisfy_it() {
+        let (a, b, c) = (2.0, -1.0, 0.5);
+        for q in cos_sin_equation(a, b, c).unwrap() {
+            assert!((a * q.cos() + b * q.sin() - c).abs() < 1e-14);
+        }
+        assert!(cos_sin_equation(1.0, 1.0, 2.0).is_none());
+    }
+}

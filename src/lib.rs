@@ -1,0 +1,16 @@
+//! robocal: kinematic calibration of industrial robots.
+//!
+//! Units: files and the command line use mm and degrees; everything inside uses mm and
+//! radians. Poses are [`kinematics::Pose`] (a rotation matrix and a translation in mm).
+
+pub mod cli;
+pub mod data;
+pub mod error;
+pub mod io;
+pub mod kinematics;
+pub mod model;
+pub mod rotation;
+
+pub use error::{Error, Result};
+pub use kinematics::Pose;
+pub use model::Robot;

@@ -1,0 +1,422 @@
+//! Robot files: TOML, lengths in mm, angles in degrees.
+//!
+//! ```toml
+//! name = "example"
+//!
+//! [base]                    # any convention; usually mdh or transform
+//! convention = "transform"  # T = Trans(x, y, z) RotZ(rz) RotY(ry) RotX(rx)
+//! x = 0.0
+//! ...
+//!
+//! [[joint]]                 # one table per joint, in chain order
+//! convention = "mdh"        # mdh | hayati | dh
+//! type = "revolute"         # revolute (default) | prismatic
+//! alpha = 0.0
+//! a = 0.0
+//! theta = 0.0               # constant offset added to the joint variable
+//! d = 670.0
+//! limits = [-150.0, 150.0]  # deg (mm for prismatic)
+//!
+//! [tool]
+//! convention = "mdh"
+//! ...
+//! ```
+//!
+//! A field the convention has but the file omits is 0 (the thesis's "-"); a field the
+//! convention does not have is an error. Writing uses the shortest decimal form that reads
+//! back to the same bits, so write -> read is lossless.
+
+use super::robot::{Joint, JointType, Robot};
+use super::row::{Convention, Field, Row};
+use crate::error::{Error, Location, Result};
+use serde::Deserialize;
+use std::fmt::Write as _;
+use std::path::Path;
+use toml::Spanned;
+
+/// A TOML number: integers are accepted where a float is meant (`d = 670`).
+#[derive(Debug, Clone, Copy)]
+struct Number(f64);
+
+impl<'de> Deserialize<'de> for Number {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = Number;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number")
+            }
+            fn visit_f64<E>(self, v: f64) -> std::result::Result<Number, E> {
+                Ok(Number(v))
+            }
+            fn visit_i64<E>(self, v: i64) -> std::result::Result<Number, E> {
+                Ok(Number(v as f64))
+            }
+            fn visit_u64<E>(self, v: u64) -> std::result::Result<Number, E> {
+                Ok(Number(v as f64))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RobotFile {
+    name: Option<String>,
+    base: Option<Spanned<RowFile>>,
+    joint: Vec<Spanned<RowFile>>,
+    tool: Option<Spanned<RowFile>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RowFile {
+    convention: Spanned<String>,
+    #[serde(rename = "type")]
+    joint_type: Option<Spanned<String>>,
+    limits: Option<Spanned<Vec<Number>>>,
+    // Every field of every convention; which ones a row may have is checked after parsing.
+    // (Listed one by one: spans do not survive `#[serde(flatten)]`.)
+    a: Option<Spanned<Number>>,
+    alpha: Option<Spanned<Number>>,
+    d: Option<Spanned<Number>>,
+    theta: Option<Spanned<Number>>,
+    beta: Option<Spanned<Number>>,
+    x: Option<Spanned<Number>>,
+    y: Option<Spanned<Number>>,
+    z: Option<Spanned<Number>>,
+    rz: Option<Spanned<Number>>,
+    ry: Option<Spanned<Number>>,
+    rx: Option<Spanned<Number>>,
+}
+
+impl RowFile {
+    /// The numeric fields present in the file, with their spans.
+    fn values(&self) -> Vec<(Field, &Spanned<Number>)> {
+        let all = [
+            (Field::A, &self.a),
+            (Field::Alpha, &self.alpha),
+            (Field::D, &self.d),
+            (Field::Theta, &self.theta),
+            (Field::Beta, &self.beta),
+            (Field::X, &self.x),
+            (Field::Y, &self.y),
+            (Field::Z, &self.z),
+            (Field::Rz, &self.rz),
+            (Field::Ry, &self.ry),
+            (Field::Rx, &self.rx),
+        ];
+        all.into_iter()
+            .filter_map(|(f, v)| v.as_ref().map(|v| (f, v)))
+            .collect()
+    }
+}
+
+/// 1-based line of a byte offset.
+pub(crate) fn line_of(text: &str, offset: usize) -> usize {
+    text[..offset.min(text.len())]
+        .bytes()
+        .filter(|&b| b == b'\n')
+        .count()
+        + 1
+}
+
+/// Reads a robot file.
+pub fn read_robot(path: impl AsRef<Path>) -> Result<Robot> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_robot(&text, path)
+}
+
+/// Parses robot-file text; `path` is used in error messages.
+pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
+    let at = |span: std::ops::Range<usize>, field: &str| {
+        Location::at(path, line_of(text, span.start), field)
+    };
+    let file: RobotFile = toml::from_str(text).map_err(|e| {
+        let (line, field) = match e.span() {
+            Some(s) => {
+                let snippet = text.get(s.clone()).unwrap_or("").trim();
+                let field = if snippet.len() <= 40 && !snippet.contains('\n') {
+                    snippet.to_string()
+                } else {
+                    String::new()
+                };
+                (Some(line_of(text, s.start)), field)
+            }
+            None => (None, String::new()),
+        };
+        let location = Location {
+            file: path.to_path_buf(),
+            line,
+            field: (!field.is_empty()).then_some(field),
+        };
+        Error::input(location, e.message().trim().to_string())
+    })?;
+
+    let row_of = |rf: &RowFile, what: &str, is_joint: bool| -> Result<(Row, JointType, [f64; 2])> {
+        let conv_name = rf.convention.get_ref();
+        let conv = Convention::from_name(conv_name).ok_or_else(|| {
+            Error::input(
+                at(rf.convention.span(), "convention"),
+                format!("{what}: unknown convention `{conv_name}` (expected mdh, hayati, dh or transform)"),
+            )
+        })?;
+        let mut row = Row::zero(conv);
+        for (field, value) in rf.values() {
+            let key = field.name();
+            if !conv.fields().contains(&field) {
+                let allowed: Vec<_> = conv.fields().iter().map(|f| f.name()).collect();
+                return Err(Error::input(
+                    at(value.span(), key),
+                    format!(
+                        "{what}: a {} row has no field `{key}` (its fields: {})",
+                        conv.name(),
+                        allowed.join(", ")
+                    ),
+                ));
+            }
+            let v = value.get_ref().0;
+            if !v.is_finite() {
+                return Err(Error::input(
+                    at(value.span(), key),
+                    format!("{what}: {key} must be finite"),
+                ));
+            }
+            row.set_file_value(field, v);
+        }
+        let joint_type = match &rf.joint_type {
+            None => JointType::Revolute,
+            Some(t) if !is_joint => {
+                return Err(Error::input(
+                    at(t.span(), "type"),
+                    format!("{what}: only joints have a type"),
+                ));
+            }
+            Some(t) => match t.get_ref().as_str() {
+                "revolute" => JointType::Revolute,
+                "prismatic" => JointType::Prismatic,
+                other => {
+                    return Err(Error::input(
+                        at(t.span(), "type"),
+                        format!(
+                            "{what}: unknown joint type `{other}` (expected revolute or prismatic)"
+                        ),
+                    ));
+                }
+            },
+        };
+        let limits = match &rf.limits {
+            None if is_joint => {
+                return Err(Error::input(
+                    Location::at(path, line_of(text, rf.convention.span().start), "limits"),
+                    format!(
+                        "{what}: missing `limits = [min, max]` ({})",
+                        joint_type.file_unit()
+                    ),
+                ));
+            }
+            None => [0.0, 0.0],
+            Some(l) if !is_joint => {
+                return Err(Error::input(
+                    at(l.span(), "limits"),
+                    format!("{what}: only joints have limits"),
+                ));
+            }
+            Some(l) => match l.get_ref().as_slice() {
+                [lo, hi] if lo.0.is_finite() && hi.0.is_finite() && lo.0 <= hi.0 => [lo.0, hi.0],
+                _ => {
+                    return Err(Error::input(
+                        at(l.span(), "limits"),
+                        format!("{what}: limits must be [min, max] with finite min <= max"),
+                    ));
+                }
+            },
+        };
+        if is_joint {
+            match (conv, joint_type) {
+                (Convention::Transform, _) => {
+                    return Err(Error::input(
+                        at(rf.convention.span(), "convention"),
+                        format!(
+                            "{what}: a joint cannot be a 6-DOF transform; use mdh, hayati or dh"
+                        ),
+                    ));
+                }
+                (Convention::Hayati, JointType::Prismatic) => {
+                    return Err(Error::input(
+                        at(rf.convention.span(), "type"),
+                        format!("{what}: a Hayati row has no d, so it cannot be prismatic"),
+                    ));
+                }
+                _ => {}
+            }
+        }
+        Ok((row, joint_type, limits))
+    };
+
+    let fixed = |r: &Option<Spanned<RowFile>>, what: &str| -> Result<Row> {
+        match r {
+            None => Ok(Row::zero(Convention::Transform)),
+            Some(r) => row_of(r.get_ref(), what, false).map(|(row, _, _)| row),
+        }
+    };
+    let base = fixed(&file.base, "base")?;
+    let tool = fixed(&file.tool, "tool")?;
+    if file.joint.is_empty() {
+        return Err(Error::input(
+            Location::file(path),
+            "no joints: add one [[joint]] table per joint",
+        ));
+    }
+    let mut joints = Vec::with_capacity(file.joint.len());
+    for (i, j) in file.joint.iter().enumerate() {
+        let (row, joint_type, limits) = row_of(j.get_ref(), &format!("joint {}", i + 1), true)?;
+        joints.push(Joint {
+            row,
+            joint_type,
+            limits,
+        });
+    }
+    let name = file.name.unwrap_or_else(|| {
+        path.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    });
+    Robot::new(name, base, joints, tool)
+        .map_err(|e| Error::input(Location::file(path), e.to_string()))
+}
+
+/// Shortest decimal that reads back to the same f64, always with a decimal point or exponent
+/// so that TOML reads it as a float.
+pub(crate) fn float_text(v: f64) -> String {
+    let s = format!("{v:?}");
+    if s.contains('.') || s.contains('e') || s.contains("inf") || s.contains("NaN") {
+        s
+    } else {
+        format!("{s}.0")
+    }
+}
+
+/// The robot file text of a model.
+pub fn robot_to_toml(robot: &Robot) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# robocal robot model. Lengths in mm, angles in degrees."
+    );
+    let _ = writeln!(
+        s,
+        "name = {}",
+        toml::Value::String(robot.name().to_string())
+    );
+    let write_row = |s: &mut String, row: &Row| {
+        let conv = row.convention();
+        let _ = writeln!(s, "convention = \"{}\"  # {}", conv.name(), conv.formula());
+        for &f in conv.fields() {
+            let v = row.file_value(f).unwrap_or(0.0);
+            let _ = writeln!(s, "{} = {}", f.name(), float_text(v));
+        }
+    };
+    let _ = writeln!(s, "\n[base]");
+    write_row(&mut s, robot.base());
+    for (i, j) in robot.joints().iter().enumerate() {
+        let _ = writeln!(s, "\n[[joint]]  # joint {}", i + 1);
+        write_row(&mut s, &j.row);
+        let _ = writeln!(s, "type = \"{}\"", j.joint_type.name());
+        let _ = writeln!(
+            s,
+            "limits = [{}, {}]  # {}",
+            float_text(j.limits[0]),
+            float_text(j.limits[1]),
+            j.joint_type.file_unit()
+        );
+    }
+    let _ = writeln!(s, "\n[tool]");
+    write_row(&mut s, robot.tool());
+    s
+}
+
+/// Writes a robot file atomically (temporary file, then rename).
+pub fn write_robot(robot: &Robot, path: impl AsRef<Path>) -> Result<()> {
+    crate::io::write_atomic(path.as_ref(), robot_to_toml(robot).as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Robot> {
+        parse_robot(text, Path::new("r.toml"))
+    }
+
+    const ONE_JOINT: &str = "name = \"t\"\n[base]\nconvention = \"mdh\"\nd = 5\n\n[[joint]]\nconvention = \"mdh\"\nalpha = 90\na = 100\nlimits = [-90, 90]\n\n[tool]\nconvention = \"transform\"\nz = 10.5\n";
+
+    #[test]
+    fn integers_and_missing_fields_read_as_numbers_and_zero() {
+        let r = parse(ONE_JOINT).unwrap();
+        assert_eq!(r.dof(), 1);
+        assert_eq!(r.base().file_value(Field::D), Some(5.0));
+        assert_eq!(r.joints()[0].row.file_value(Field::Theta), Some(0.0));
+        assert_eq!(r.joints()[0].limits, [-90.0, 90.0]);
+        assert_eq!(r.tool().file_value(Field::Z), Some(10.5));
+    }
+
+    #[test]
+    fn write_then_read_is_bit_exact() {
+        let r = parse(ONE_JOINT).unwrap();
+        let mut r2 = r
+            .with_param(r.find_param("alpha1").unwrap(), 0.123456789012345678)
+            .unwrap();
+        r2 = r2
+            .with_param(r2.find_param("tool.z").unwrap(), 1.0 / 3.0)
+            .unwrap();
+        let text = robot_to_toml(&r2);
+        let back = parse(&text).unwrap();
+        assert_eq!(back, r2);
+        for id in r2.parameters() {
+            assert_eq!(
+                back.param(id).to_bits(),
+                r2.param(id).to_bits(),
+                "{}",
+                id.name()
+            );
+        }
+    }
+
+    fn err_text(text: &str) -> String {
+        parse(text).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn bad_files_name_line_and_field() {
+        // A field the convention does not have, on line 9.
+        let bad = ONE_JOINT.replace("a = 100", "a = 100\nbeta = 1");
+        let e = err_text(&bad);
+        assert!(e.contains("r.toml:9") && e.contains("beta"), "{e}");
+        // A misspelt key is an unknown field.
+        let e = err_text(&ONE_JOINT.replace("alpha = 90", "alpah = 90"));
+        assert!(e.contains("r.toml:7") && e.contains("alpah"), "{e}");
+        // A string where a number belongs.
+        let e = err_text(&ONE_JOINT.replace("a = 100", "a = \"x\""));
+        assert!(e.contains("r.toml:8"), "{e}");
+        // Limits out of order.
+        let e = err_text(&ONE_JOINT.replace("[-90, 90]", "[90, -90]"));
+        assert!(e.contains("r.toml:9") && e.contains("limits"), "{e}");
+        // Unknown convention.
+        let e = err_text(
+            &ONE_JOINT.replace("convention = \"mdh\"\nalpha", "convention = \"foo\"\nalpha"),
+        );
+        assert!(e.contains("r.toml:6") && e.contains("foo"), "{e}");
+        // Missing limits.
+        let e = err_text(&ONE_JOINT.replace("limits = [-90, 90]\n", ""));
+        assert!(e.contains("limits"), "{e}");
+        // TOML syntax error.
+        let e = err_text(&ONE_JOINT.replace("d = 5", "d = = 5"));
+        assert!(e.contains("r.toml:3"), "{e}");
+        // No joints.
+        let e = err_text("[base]\nconvention = \"mdh\"\n");
+        assert!(e.contains("no joints"), "{e}");
+    }
+}

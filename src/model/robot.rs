@@ -1,0 +1,371 @@
+//! The robot model: a base frame, N joints and a tool frame, in chain order
+//! (thesis eq. 3.12: T = T_R T_1 ... T_N T_T), with its named parameters.
+//!
+//! A [`Robot`] never changes during a solve. It keeps the rows as written (file units) and a
+//! compiled chain of constant transforms that forward kinematics runs through.
+
+use super::row::{Convention, Field, Row, apply_z};
+use crate::error::{Error, Result};
+use crate::kinematics::Pose;
+
+/// Revolute joints add their variable to theta; prismatic joints add it to d.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JointType {
+    Revolute,
+    Prismatic,
+}
+
+impl JointType {
+    pub fn name(self) -> &'static str {
+        match self {
+            JointType::Revolute => "revolute",
+            JointType::Prismatic => "prismatic",
+        }
+    }
+
+    /// The unit of the joint variable in files and on the command line.
+    pub fn file_unit(self) -> &'static str {
+        match self {
+            JointType::Revolute => "deg",
+            JointType::Prismatic => "mm",
+        }
+    }
+
+    /// Converts a joint value from file units (deg or mm) to internal units (rad or mm).
+    pub fn to_internal(self, v: f64) -> f64 {
+        match self {
+            JointType::Revolute => v.to_radians(),
+            JointType::Prismatic => v,
+        }
+    }
+
+    /// Converts a joint value from internal units (rad or mm) to file units (deg or mm).
+    pub fn to_file(self, v: f64) -> f64 {
+        match self {
+            JointType::Revolute => v.to_degrees(),
+            JointType::Prismatic => v,
+        }
+    }
+}
+
+/// One joint: its row, its type and its limits.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Joint {
+    pub row: Row,
+    pub joint_type: JointType,
+    /// Lower and upper limit of the joint variable, in file units (deg or mm).
+    pub limits: [f64; 2],
+}
+
+impl Joint {
+    /// Limits in internal units (rad or mm).
+    pub fn limits_internal(&self) -> [f64; 2] {
+        self.limits.map(|v| self.joint_type.to_internal(v))
+    }
+}
+
+/// Where a parameter sits in the chain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Slot {
+    Base,
+    /// Joint index, 0-based (joint 1 is `Joint(0)`).
+    Joint(usize),
+    Tool,
+}
+
+/// A named model parameter: a field of a row.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ParamId {
+    pub slot: Slot,
+    pub field: Field,
+}
+
+impl ParamId {
+    /// The parameter's name: `a3`, `alpha2`, `theta1`, `beta3`, `base.x`, `tool.rz`, ...
+    pub fn name(&self) -> String {
+        match self.slot {
+            Slot::Base => format!("base.{}", self.field.name()),
+            Slot::Tool => format!("tool.{}", self.field.name()),
+            Slot::Joint(i) => format!("{}{}", self.field.name(), i + 1),
+        }
+    }
+}
+
+/// Constant parts of one joint in the compiled chain.
+#[derive(Debug, Clone)]
+pub(crate) struct Link {
+    /// Constant theta (rad) and d (mm) of the row; the joint variable adds to one of them.
+    pub theta: f64,
+    pub d: f64,
+    pub prismatic: bool,
+    /// The part of the row after its RotZ TransZ (identity except for standard DH).
+    pub post: Pose,
+    /// Everything from this joint's RotZ TransZ to the next joint's RotZ TransZ:
+    /// `post_i * pre_{i+1}`, or `post_N * T_tool` for the last joint.
+    pub next: Pose,
+}
+
+/// The chain compiled into constant transforms.
+#[derive(Debug, Clone)]
+pub(crate) struct Chain {
+    /// `T_base * pre_1`.
+    pub head: Pose,
+    pub links: Vec<Link>,
+}
+
+/// A robot: base row, joints and tool row. Immutable during a solve; see [`Robot::with_param`]
+/// for changing one parameter.
+#[derive(Debug, Clone)]
+pub struct Robot {
+    name: String,
+    base: Row,
+    joints: Vec<Joint>,
+    tool: Row,
+    chain: Chain,
+}
+
+impl PartialEq for Robot {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+            && self.base == other.base
+            && self.joints == other.joints
+            && self.tool == other.tool
+    }
+}
+
+impl Robot {
+    /// Builds a robot and checks it: at least one joint, finite values, limits in order,
+    /// no 6-DOF transform as a joint row, no prismatic Hayati row (it has no d).
+    pub fn new(name: impl Into<String>, base: Row, joints: Vec<Joint>, tool: Row) -> Result<Self> {
+        if joints.is_empty() {
+            return Err(Error::Model("a robot needs at least one joint".into()));
+        }
+        for (i, j) in joints.iter().enumerate() {
+            let n = i + 1;
+            match (j.row.convention(), j.joint_type) {
+                (Convention::Transform, _) => {
+                    return Err(Error::Model(format!(
+                        "joint {n}: a 6-DOF transform cannot carry a joint variable; use mdh, hayati or dh"
+                    )));
+                }
+                (Convention::Hayati, JointType::Prismatic) => {
+                    return Err(Error::Model(format!(
+                        "joint {n}: a Hayati row has no d, so it cannot be prismatic"
+                    )));
+                }
+                _ => {}
+            }
+            let [lo, hi] = j.limits;
+            if !(lo.is_finite() && hi.is_finite()) || lo > hi {
+                return Err(Error::Model(format!(
+                    "joint {n}: limits [{lo}, {hi}] must be finite with min <= max"
+                )));
+            }
+        }
+        let robot_rows = std::iter::once(&base)
+            .chain(joints.iter().map(|j| &j.row))
+            .chain(std::iter::once(&tool));
+        for row in robot_rows {
+            for &f in row.convention().fields() {
+                let v = row.file_value(f).unwrap_or(0.0);
+                if !v.is_finite() {
+                    return Err(Error::Model(format!(
+                        "field {} is not finite: {v}",
+                        f.name()
+                    )));
+                }
+            }
+        }
+        let chain = compile(&base, &joints, &tool);
+        Ok(Robot {
+            name: name.into(),
+            base,
+            joints,
+            tool,
+            chain,
+        })
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    pub fn base(&self) -> &Row {
+        &self.base
+    }
+
+    pub fn tool(&self) -> &Row {
+        &self.tool
+    }
+
+    pub fn joints(&self) -> &[Joint] {
+        &self.joints
+    }
+
+    /// Number of joints N.
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    pub(crate) fn chain(&self) -> &Chain {
+        &self.chain
+    }
+
+    fn row(&self, slot: Slot) -> Option<&Row> {
+        match slot {
+            Slot::Base => Some(&self.base),
+            Slot::Tool => Some(&self.tool),
+            Slot::Joint(i) => self.joints.get(i).map(|j| &j.row),
+        }
+    }
+
+    /// Every parameter of the model, in chain order (base, joints 1..N, tool) and, within a
+    /// row, in the order of its transform product.
+    pub fn parameters(&self) -> Vec<ParamId> {
+        let mut out = Vec::new();
+        let mut push = |slot: Slot, row: &Row| {
+            for &field in row.convention().fields() {
+                out.push(ParamId { slot, field });
+            }
+        };
+        push(Slot::Base, &self.base);
+        for (i, j) in self.joints.iter().enumerate() {
+            push(Slot::Joint(i), &j.row);
+        }
+        push(Slot::Tool, &self.tool);
+        out
+    }
+
+    /// Finds a parameter by name: `a3`, `base.x`, `tool.rz`; the thesis's `dR`, `thetaR`
+    /// (base) and `aT`, `alphaT` (tool) are accepted too.
+    pub fn find_param(&self, name: &str) -> Option<ParamId> {
+        let (slot, field) = if let Some(f) = name.strip_prefix("base.") {
+            (Slot::Base, f)
+        } else if let Some(f) = name.strip_prefix("tool.") {
+            (Slot::Tool, f)
+        } else if let Some(f) = name
+            .strip_suffix('R')
+            .filter(|f| Field::from_name(f).is_some())
+        {
+            (Slot::Base, f)
+        } else if let Some(f) = name
+            .strip_suffix('T')
+            .filter(|f| Field::from_name(f).is_some())
+        {
+            (Slot::Tool, f)
+        } else {
+            let split = name.find(|c: char| c.is_ascii_digit())?;
+            let (f, num) = name.split_at(split);
+            let n: usize = num.parse().ok()?;
+            if n == 0 {
+                return None;
+            }
+            (Slot::Joint(n - 1), f)
+        };
+        let field = Field::from_name(field)?;
+        let id = ParamId { slot, field };
+        self.row(slot)?.file_value(field).map(|_| id)
+    }
+
+    /// A parameter's value in internal units (mm or rad).
+    pub fn param(&self, id: ParamId) -> f64 {
+        self.row(id.slot).map_or(0.0, |r| r.value(id.field))
+    }
+
+    /// A copy with one parameter set, in internal units (mm or rad).
+    pub fn with_param(&self, id: ParamId, value: f64) -> Result<Robot> {
+        self.with_params(&[(id, value)])
+    }
+
+    /// A copy with several parameters set, in internal units (mm or rad).
+    pub fn with_params(&self, values: &[(ParamId, f64)]) -> Result<Robot> {
+        let mut base = self.base.clone();
+        let mut joints = self.joints.clone();
+        let mut tool = self.tool.clone();
+        for &(id, v) in values {
+            let row = match id.slot {
+                Slot::Base => &mut base,
+                Slot::Tool => &mut tool,
+                Slot::Joint(i) => match joints.get_mut(i) {
+                    Some(j) => &mut j.row,
+                    None => return Err(Error::Invalid(format!("no parameter {}", id.name()))),
+                },
+            };
+            if !row.set_value(id.field, v) {
+                return Err(Error::Invalid(format!("no parameter {}", id.name())));
+            }
+        }
+        Robot::new(self.name.clone(), base, joints, tool)
+    }
+
+    /// Checks a joint vector (internal units) against the limits; returns the 0-based indices
+    /// of the joints outside, with a tolerance of 1e-9 (rad or mm).
+    pub fn joints_outside_limits(&self, q: &[f64]) -> Vec<usize> {
+        self.joints
+            .iter()
+            .zip(q)
+            .enumerate()
+            .filter(|(_, (j, v))| {
+                let [lo, hi] = j.limits_internal();
+                **v < lo - 1e-9 || **v > hi + 1e-9
+            })
+            .map(|(i, _)| i)
+            .collect()
+    }
+
+    /// Converts a joint vector from file units (deg/mm) to internal units (rad/mm).
+    pub fn joints_to_internal(&self, q: &[f64]) -> Vec<f64> {
+        self.joints
+            .iter()
+            .zip(q)
+            .map(|(j, &v)| j.joint_type.to_internal(v))
+            .collect()
+    }
+
+    /// Converts a joint vector from internal units (rad/mm) to file units (deg/mm).
+    pub fn joints_to_file(&self, q: &[f64]) -> Vec<f64> {
+        self.joints
+            .iter()
+            .zip(q)
+            .map(|(j, &v)| j.joint_type.to_file(v))
+            .collect()
+    }
+}
+
+fn compile(base: &Row, joints: &[Joint], tool: &Row) -> Chain {
+    let splits: Vec<_> = joints.iter().map(|j| j.row.split()).collect();
+    let head = base.transform() * splits[0].pre;
+    let tool_t = tool.transform();
+    let links = joints
+        .iter()
+        .enumerate()
+        .map(|(i, j)| {
+            let s = &splits[i];
+            let next = match splits.get(i + 1) {
+                Some(n) => s.post * n.pre,
+                None => s.post * tool_t,
+            };
+            Link {
+                theta: s.theta,
+                d: s.d,
+                prismatic: j.joint_type == JointType::Prismatic,
+                post: s.post,
+                next,
+            }
+        })
+        .collect();
+    Chain { head, links }
+}
+
+impl Chain {
+    /// Applies joint i's variable part to `t`: `t <- t * RotZ(theta) TransZ(d)`.
+    #[inline]
+    pub(crate) fn apply_joint(&self, t: &mut Pose, i: usize, q: f64) {
+        let l = &self.links[i];
+        if l.prismatic {
+            apply_z(t, l.theta, l.d + q);
+        } else {
+            apply_z(t, l.theta + q, l.d);
+        }
+    }
+}

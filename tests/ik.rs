@@ -1,0 +1,321 @@
+//! Inverse kinematics: closed-form round trips and numerical solves on perturbed models.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use robocal::kinematics::{
+    Frames, IkOptions, IkTarget, IkWorkspace, Pose, SphericalWristIk, frames, solve_numeric,
+    tool_pose,
+};
+use robocal::model::file::parse_robot;
+use robocal::model::{Robot, read_robot};
+use robocal::rotation::angle_between;
+use std::path::Path;
+
+fn robot_file(name: &str) -> Robot {
+    read_robot(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("datasets/robots")
+            .join(name),
+    )
+    .unwrap()
+}
+
+fn random_q(robot: &Robot, rng: &mut ChaCha8Rng) -> Vec<f64> {
+    robot
+        .joints()
+        .iter()
+        .map(|j| {
+            let [lo, hi] = j.limits_internal();
+            rng.random_range(lo..=hi)
+        })
+        .collect()
+}
+
+/// Largest joint difference, with angles compared modulo 2 pi (rad).
+fn joint_gap(a: &[f64], b: &[f64]) -> f64 {
+    let tau = std::f64::consts::TAU;
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| {
+            let d = (x - y).rem_euclid(tau);
+            d.min(tau - d)
+        })
+        .fold(0.0, f64::max)
+}
+
+fn pose_errors(a: &Pose, b: &Pose) -> (f64, f64) {
+    (
+        (a.translation.vector - b.translation.vector).norm(),
+        angle_between(&a.rotation, &b.rotation),
+    )
+}
+
+/// A standard-DH robot of the same class with +-360 deg limits on every joint, so the solver
+/// must return the 2 pi copies too.
+const DH_SPHERICAL: &str = r#"
+name = "6R spherical wrist in standard DH"
+[base]
+convention = "transform"
+x = 100.0
+rz = 30.0
+[[joint]]
+convention = "dh"
+d = 780
+a = 320
+alpha = -90
+limits = [-360, 360]
+[[joint]]
+convention = "dh"
+a = 1075
+theta = -90
+limits = [-360, 360]
+[[joint]]
+convention = "dh"
+a = 200
+alpha = -90
+limits = [-360, 360]
+[[joint]]
+convention = "dh"
+d = 1142.5
+alpha = 90
+limits = [-360, 360]
+[[joint]]
+convention = "dh"
+alpha = -90
+limits = [-360, 360]
+[[joint]]
+convention = "dh"
+d = 200
+limits = [-360, 360]
+[tool]
+convention = "transform"
+z = 150.0
+x = 20.0
+ry = 15.0
+"#;
+
+fn round_trip(robot: &Robot, samples: usize, seed: u64) -> usize {
+    let ik = SphericalWristIk::new(robot).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut sols = Vec::new();
+    let mut total = 0;
+    for _ in 0..samples {
+        let q = random_q(robot, &mut rng);
+        let target = tool_pose(robot, &q);
+        ik.solve(&target, &mut sols);
+        assert!(!sols.is_empty(), "no solution for {q:?}");
+        total += sols.len();
+        for s in &sols {
+            let (dp, dr) = pose_errors(&tool_pose(robot, s), &target);
+            assert!(dp < 1e-6 && dr < 1e-9, "{s:?} misses by {dp} mm, {dr} rad");
+            assert!(
+                robot.joints_outside_limits(s).is_empty(),
+                "{s:?} outside limits"
+            );
+        }
+        let found = sols
+            .iter()
+            .any(|s| s.iter().zip(&q).all(|(a, b)| (a - b).abs() < 1e-6));
+        assert!(
+            found,
+            "generating configuration {q:?} missing from {sols:?}"
+        );
+    }
+    total
+}
+
+#[test]
+fn closed_form_round_trip_fanuc_10000() {
+    let total = round_trip(&robot_file("fanuc_r2000ib_210f.toml"), 10_000, 1);
+    assert!(total >= 10_000);
+}
+
+#[test]
+fn closed_form_round_trip_dh_robot_with_360_copies() {
+    let robot = parse_robot(DH_SPHERICAL, Path::new("dh.toml")).unwrap();
+    let total = round_trip(&robot, 10_000, 2);
+    // Each of 8 branches has 2^6 copies within +-360 deg (less where a joint sits at +-180).
+    assert!(total > 10_000 * 8 * 32, "only {total} solutions");
+}
+
+#[test]
+fn closed_form_finds_all_eight_branches() {
+    // Limits wide enough for every branch; one copy per joint (+-180 deg).
+    let text = DH_SPHERICAL.replace("[-360, 360]", "[-180, 180]");
+    let robot = parse_robot(&text, Path::new("dh.toml")).unwrap();
+    let ik = SphericalWristIk::new(&robot).unwrap();
+    let q = [0.3, -0.2, 0.4, 0.5, 0.7, -0.3];
+    let mut sols = Vec::new();
+    ik.solve_unlimited(&tool_pose(&robot, &q), &mut sols);
+    assert_eq!(sols.len(), 8, "{sols:?}");
+    for s in &sols {
+        let (dp, dr) = pose_errors(&tool_pose(&robot, s), &tool_pose(&robot, &q));
+        assert!(dp < 1e-6 && dr < 1e-9);
+    }
+}
+
+#[test]
+fn closed_form_reports_unreachable_and_wrong_structure() {
+    let robot = robot_file("fanuc_r2000ib_210f.toml");
+    let ik = SphericalWristIk::new(&robot).unwrap();
+    let mut far = tool_pose(&robot, &[0.0; 6]);
+    far.translation.vector *= 10.0;
+    let mut sols = Vec::new();
+    ik.solve(&far, &mut sols);
+    assert!(sols.is_empty());
+    // The UR10 has no spherical wrist.
+    let e = SphericalWristIk::new(&robot_file("ur10.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("axes"), "{e}");
+    // A Hayati beta makes axes 2 and 3 non-parallel.
+    let bent = robot
+        .with_param(robot.find_param("beta3").unwrap(), 1e-3)
+        .unwrap();
+    let e = SphericalWristIk::new(&bent).unwrap_err().to_string();
+    assert!(e.contains("not parallel"), "{e}");
+}
+
+/// Thesis Table 6.1 deviations (mm; mrad), applied to the FANUC.
+fn fanuc_table_6_1() -> Robot {
+    let nominal = robot_file("fanuc_r2000ib_210f.toml");
+    let dev: &[(&str, f64)] = &[
+        ("base.d", -0.02),
+        ("base.theta", 1.31),
+        ("a1", 1.41),
+        ("alpha1", -1.72),
+        ("d1", 2.23),
+        ("theta1", -1.21),
+        ("a2", 0.42),
+        ("alpha2", -0.82),
+        ("d2", -0.32),
+        ("theta2", -3.64),
+        ("a3", -0.63),
+        ("alpha3", -1.32),
+        ("theta3", -1.44),
+        ("beta3", 0.37),
+        ("a4", 2.64),
+        ("alpha4", 1.63),
+        ("d4", -2.21),
+        ("theta4", 2.73),
+        ("a5", -0.85),
+        ("alpha5", -1.34),
+        ("d5", 1.63),
+        ("theta5", -3.82),
+        ("a6", 0.75),
+        ("alpha6", 3.11),
+        ("d6", 0.82),
+        ("theta6", 3.44),
+        ("tool.a", -0.44),
+        ("tool.alpha", -1.26),
+        ("tool.d", 0.52),
+        ("tool.theta", -2.11),
+    ];
+    let values: Vec<_> = dev
+        .iter()
+        .map(|&(name, v)| {
+            let id = nominal.find_param(name).unwrap_or_else(|| panic!("{name}"));
+            let v = if id.field.is_angle() { v * 1e-3 } else { v };
+            (id, nominal.param(id) + v)
+        })
+        .collect();
+    nominal.with_params(&values).unwrap()
+}
+
+#[test]
+fn numeric_ik_on_perturbed_fanuc_from_nominal_closed_form() {
+    let nominal = robot_file("fanuc_r2000ib_210f.toml");
+    let real = fanuc_table_6_1();
+    assert!(
+        SphericalWristIk::new(&real).is_err(),
+        "the perturbed model has no closed form"
+    );
+    let ik = SphericalWristIk::new(&nominal).unwrap();
+    let mut ws = IkWorkspace::new(&real);
+    let opts = IkOptions::default();
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let mut seeds = Vec::new();
+    let mut worst: f64 = 0.0;
+    let mut f = Frames::new(&nominal);
+    for _ in 0..500 {
+        let q = random_q(&nominal, &mut rng);
+        // Keep clear of the wrist singularity (q5 = 0) and the shoulder singularity (wrist
+        // centre on axis 1, the z axis here), where the branch is not unique and the
+        // nominal seed's q1 can be far off.
+        frames(&nominal, &q, &mut f);
+        let wc = f.joint[3].translation.vector;
+        if q[4].abs() < 0.05 || wc.x.hypot(wc.y) < 100.0 {
+            continue;
+        }
+        let target = tool_pose(&real, &q);
+        ik.solve_unlimited(&target, &mut seeds);
+        let seed = seeds
+            .iter()
+            .min_by(|a, b| joint_gap(*a, &q).total_cmp(&joint_gap(*b, &q)))
+            .expect("the nominal closed form reaches the target");
+        let sol = solve_numeric(&real, &IkTarget::Pose(target), seed, &opts, &mut ws)
+            .unwrap_or_else(|e| panic!("{e}: q {q:?} seed {seed:?}"));
+        let (dp, dr) = pose_errors(&tool_pose(&real, &sol.q), &target);
+        assert!(dp < 1e-6 && dr < 1e-9, "{dp} mm {dr} rad");
+        // It stays on the seed's branch: the generating configuration.
+        let dq = joint_gap(&sol.q, &q);
+        assert!(dq < 1e-6, "left the branch by {dq} rad");
+        worst = worst.max(dp);
+    }
+    assert!(worst < 1e-6);
+}
+
+#[test]
+fn numeric_ik_on_ur10_from_nearby_seed() {
+    let robot = robot_file("ur10.toml");
+    let mut ws = IkWorkspace::new(&robot);
+    let opts = IkOptions::default();
+    let mut rng = ChaCha8Rng::seed_from_u64(4);
+    for _ in 0..500 {
+        let q: Vec<f64> = (0..6).map(|_| rng.random_range(-3.0..3.0)).collect();
+        // Keep clear of singularities (wrist 2 aligned, elbow stretched).
+        if q[4].sin().abs() < 0.1 || q[2].sin().abs() < 0.1 {
+            continue;
+        }
+        let target = tool_pose(&robot, &q);
+        let seed: Vec<f64> = q.iter().map(|v| v + rng.random_range(-0.1..0.1)).collect();
+        let sol = solve_numeric(&robot, &IkTarget::Pose(target), &seed, &opts, &mut ws).unwrap();
+        let (dp, dr) = pose_errors(&tool_pose(&robot, &sol.q), &target);
+        assert!(dp < 1e-6 && dr < 1e-9, "{dp} mm {dr} rad");
+    }
+}
+
+#[test]
+fn numeric_ik_reports_unreachable_targets() {
+    let robot = robot_file("ur10.toml");
+    let mut ws = IkWorkspace::new(&robot);
+    let mut far = tool_pose(&robot, &[0.1, -1.0, 1.0, 0.3, 0.5, 0.2]);
+    far.translation.vector *= 5.0;
+    let r = solve_numeric(
+        &robot,
+        &IkTarget::Pose(far),
+        &[0.0; 6],
+        &IkOptions::default(),
+        &mut ws,
+    );
+    let e = r.unwrap_err().to_string();
+    assert!(e.contains("position error"), "{e}");
+}
+
+#[test]
+fn numeric_ik_position_only_leaves_orientation_free() {
+    let robot = robot_file("fanuc_r2000ib_210f.toml");
+    let mut ws = IkWorkspace::new(&robot);
+    let q = [0.2, 0.3, -0.1, 0.4, 0.8, 0.1];
+    let p = tool_pose(&robot, &q).translation.vector;
+    let seed = [0.25, 0.25, -0.05, 0.0, 0.7, 0.0];
+    let sol = solve_numeric(
+        &robot,
+        &IkTarget::Position(p),
+        &seed,
+        &IkOptions::default(),
+        &mut ws,
+    )
+    .unwrap();
+    assert!((tool_pose(&robot, &sol.q).translation.vector - p).norm() < 1e-6);
+}
