@@ -31,8 +31,17 @@ impl Table {
             .flexible(true)
             .trim(csv::Trim::All)
             .from_reader(bytes);
+        // The csv crate does not count the blank lines it skips, so lines come from offsets.
+        // A record after blank lines is reported at the first blank line: skip them.
+        let line_at = |byte: u64| {
+            let mut end = (byte as usize).min(bytes.len());
+            while end < bytes.len() && (bytes[end] == b'\n' || bytes[end] == b'\r') {
+                end += 1;
+            }
+            bytes[..end].iter().filter(|&&b| b == b'\n').count() + 1
+        };
         let csv_err = |e: csv::Error| {
-            let line = e.position().map(|p| p.line() as usize);
+            let line = e.position().map(|p| line_at(p.byte()));
             Error::input(
                 Location {
                     file: path.to_path_buf(),
@@ -72,7 +81,7 @@ impl Table {
         let mut lines = Vec::new();
         for rec in rdr.records() {
             let rec = rec.map_err(csv_err)?;
-            let line = rec.position().map_or(0, |p| p.line() as usize);
+            let line = rec.position().map_or(0, |p| line_at(p.byte()));
             if rec.len() == 1 && rec[0].is_empty() {
                 continue;
             }

@@ -17,7 +17,7 @@ use super::fk::{Frames, frames};
 use super::subproblems::{cos_sin_equation, rotate_onto, rotate_to_distance, rotate_two_axes};
 use crate::error::{Error, Result};
 use crate::model::{JointType, Robot};
-use nalgebra::{Rotation3, Unit, Vector3};
+use nalgebra::{Matrix3, Rotation3, Vector3};
 use std::f64::consts::PI;
 
 type V3 = Vector3<f64>;
@@ -59,13 +59,25 @@ fn distance_to_line(x: &V3, p: &V3, d: &V3) -> f64 {
     (r - d * d.dot(&r)).norm()
 }
 
+/// Rotation by `angle` (rad) about the unit axis `w` (Rodrigues' formula).
 fn rot(w: &V3, angle: f64) -> Rotation3<f64> {
-    Rotation3::from_axis_angle(&Unit::new_unchecked(*w), angle)
+    let (s, c) = libm::sincos(angle);
+    let k = w.cross_matrix();
+    Rotation3::from_matrix_unchecked(
+        Matrix3::identity() * c + w * w.transpose() * (1.0 - c) + k * s,
+    )
 }
 
-/// Wraps an angle to [-pi, pi).
-fn wrap(a: f64) -> f64 {
-    (a + PI).rem_euclid(2.0 * PI) - PI
+/// Wraps an angle to [-pi, pi). The solver's angles come from atan2 plus or minus acos, so
+/// a few steps of 2 pi suffice; this avoids `rem_euclid` (an fmod) on 48 values per pose.
+fn wrap(mut a: f64) -> f64 {
+    while a >= PI {
+        a -= 2.0 * PI;
+    }
+    while a < -PI {
+        a += 2.0 * PI;
+    }
+    a
 }
 
 impl SphericalWristIk {

@@ -65,6 +65,7 @@ impl<'de> Deserialize<'de> for Number {
 struct RobotFile {
     name: Option<String>,
     base: Option<Spanned<RowFile>>,
+    #[serde(default)]
     joint: Vec<Spanned<RowFile>>,
     tool: Option<Spanned<RowFile>>,
 }
@@ -122,6 +123,23 @@ pub(crate) fn line_of(text: &str, offset: usize) -> usize {
         + 1
 }
 
+/// The key an error span points at: the key itself, or the key of `key = value` when the span
+/// is the value.
+fn key_at(text: &str, span: std::ops::Range<usize>) -> Option<String> {
+    let start = span.start.min(text.len());
+    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+    let before = &text[line_start..start];
+    if let Some(eq) = before.find('=') {
+        let key = before[..eq].trim();
+        if !key.is_empty() {
+            return Some(key.to_string());
+        }
+    }
+    let snippet = text.get(span)?.trim();
+    (!snippet.is_empty() && snippet.len() <= 40 && !snippet.contains('\n'))
+        .then(|| snippet.to_string())
+}
+
 /// Reads a robot file.
 pub fn read_robot(path: impl AsRef<Path>) -> Result<Robot> {
     let path = path.as_ref();
@@ -136,21 +154,13 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
     };
     let file: RobotFile = toml::from_str(text).map_err(|e| {
         let (line, field) = match e.span() {
-            Some(s) => {
-                let snippet = text.get(s.clone()).unwrap_or("").trim();
-                let field = if snippet.len() <= 40 && !snippet.contains('\n') {
-                    snippet.to_string()
-                } else {
-                    String::new()
-                };
-                (Some(line_of(text, s.start)), field)
-            }
-            None => (None, String::new()),
+            Some(s) => (Some(line_of(text, s.start)), key_at(text, s)),
+            None => (None, None),
         };
         let location = Location {
             file: path.to_path_buf(),
             line,
-            field: (!field.is_empty()).then_some(field),
+            field,
         };
         Error::input(location, e.message().trim().to_string())
     })?;
@@ -367,7 +377,10 @@ mod tests {
     fn write_then_read_is_bit_exact() {
         let r = parse(ONE_JOINT).unwrap();
         let mut r2 = r
-            .with_param(r.find_param("alpha1").unwrap(), 0.123456789012345678)
+            .with_param(
+                r.find_param("alpha1").unwrap(),
+                0.1_f64.sqrt() * std::f64::consts::E,
+            )
             .unwrap();
         r2 = r2
             .with_param(r2.find_param("tool.z").unwrap(), 1.0 / 3.0)
@@ -394,27 +407,27 @@ mod tests {
         // A field the convention does not have, on line 9.
         let bad = ONE_JOINT.replace("a = 100", "a = 100\nbeta = 1");
         let e = err_text(&bad);
-        assert!(e.contains("r.toml:9") && e.contains("beta"), "{e}");
+        assert!(e.contains("r.toml:10") && e.contains("beta"), "{e}");
         // A misspelt key is an unknown field.
         let e = err_text(&ONE_JOINT.replace("alpha = 90", "alpah = 90"));
-        assert!(e.contains("r.toml:7") && e.contains("alpah"), "{e}");
+        assert!(e.contains("r.toml:8") && e.contains("alpah"), "{e}");
         // A string where a number belongs.
         let e = err_text(&ONE_JOINT.replace("a = 100", "a = \"x\""));
-        assert!(e.contains("r.toml:8"), "{e}");
+        assert!(e.contains("r.toml:9"), "{e}");
         // Limits out of order.
         let e = err_text(&ONE_JOINT.replace("[-90, 90]", "[90, -90]"));
-        assert!(e.contains("r.toml:9") && e.contains("limits"), "{e}");
+        assert!(e.contains("r.toml:10") && e.contains("limits"), "{e}");
         // Unknown convention.
         let e = err_text(
             &ONE_JOINT.replace("convention = \"mdh\"\nalpha", "convention = \"foo\"\nalpha"),
         );
-        assert!(e.contains("r.toml:6") && e.contains("foo"), "{e}");
+        assert!(e.contains("r.toml:7") && e.contains("foo"), "{e}");
         // Missing limits.
         let e = err_text(&ONE_JOINT.replace("limits = [-90, 90]\n", ""));
         assert!(e.contains("limits"), "{e}");
         // TOML syntax error.
         let e = err_text(&ONE_JOINT.replace("d = 5", "d = = 5"));
-        assert!(e.contains("r.toml:3"), "{e}");
+        assert!(e.contains("r.toml:4"), "{e}");
         // No joints.
         let e = err_text("[base]\nconvention = \"mdh\"\n");
         assert!(e.contains("no joints"), "{e}");

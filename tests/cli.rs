@@ -1,0 +1,238 @@
+//! The command line: batch FK and IK, carried-through columns, and errors with exit codes.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn robocal(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_robocal"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run robocal")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("robocal-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+#[test]
+fn fk_single_configuration() {
+    let o = robocal(&[
+        "fk",
+        "--robot",
+        FANUC,
+        "--q",
+        "0,0,0,0,0,0",
+        "--decimals",
+        "3",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        stdout(&o),
+        "q1,q2,q3,q4,q5,q6,x,y,z,rz,ry,rx\n0,0,0,0,0,0,2032.000,-182.000,1970.000,90.000,0.000,90.000\n"
+    );
+}
+
+#[test]
+fn fk_batch_carries_columns_and_ik_batch_round_trips() {
+    let fk_out = tmp("fk.csv");
+    let o = robocal(&[
+        "fk",
+        "--robot",
+        FANUC,
+        "--joints",
+        "datasets/joints/fanuc_demo.csv",
+        "--out",
+        fk_out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&fk_out).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), "id,q1,q2,q3,q4,q5,q6,x,y,z,rz,ry,rx");
+    assert!(lines.next().unwrap().starts_with("home,0,0,0,0,0,0,2032,"));
+    assert_eq!(text.lines().count(), 6);
+
+    // The FK output fed to IK: its q columns become per-row seeds; the nearest solution is
+    // the generating configuration.
+    let ik_out = tmp("ik.csv");
+    let o = robocal(&[
+        "ik",
+        "--robot",
+        FANUC,
+        "--poses",
+        fk_out.to_str().unwrap(),
+        "--out",
+        ik_out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let t = robocal::data::Table::read(&ik_out).unwrap();
+    assert_eq!(t.headers[0], "id");
+    assert_eq!(t.headers[1], "seed_q1");
+    let sol: Vec<usize> = (1..=6)
+        .map(|i| t.require(&format!("q{i}")).unwrap())
+        .collect();
+    let seed: Vec<usize> = (1..=6)
+        .map(|i| t.require(&format!("seed_q{i}")).unwrap())
+        .collect();
+    assert_eq!(t.rows.len(), 5);
+    for r in 0..t.rows.len() {
+        let a = t.numbers(r, &sol).unwrap();
+        let b = t.numbers(r, &seed).unwrap();
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() < 1e-6, "row {r}: {a:?} vs {b:?}");
+        }
+    }
+}
+
+#[test]
+fn ik_all_solutions_as_json() {
+    let o = robocal(&[
+        "ik",
+        "--robot",
+        FANUC,
+        "--pose",
+        "1842,0,1652,0,90,0",
+        "--all",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let rows = v.as_array().unwrap();
+    assert!(rows.len() >= 2, "{v}");
+    assert!(
+        rows.iter()
+            .all(|r| r["status"] == "ok" && r["q1"].is_number())
+    );
+}
+
+#[test]
+fn ik_without_closed_form_needs_a_seed_and_uses_it() {
+    let ur = "datasets/robots/ur10.toml";
+    let o = robocal(&["fk", "--robot", ur, "--q", "10,-80,70,-60,-80,20"]);
+    let line = stdout(&o).lines().nth(1).unwrap().to_string();
+    let pose: Vec<&str> = line.split(',').skip(6).collect();
+    let pose = pose.join(",");
+    let o = robocal(&["ik", "--robot", ur, "--pose", &pose]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("seed"), "{}", stderr(&o));
+    let o = robocal(&[
+        "ik",
+        "--robot",
+        ur,
+        "--pose",
+        &pose,
+        "--seed",
+        "12,-78,72,-61,-79,18",
+        "--decimals",
+        "6",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains(",1,10.000000,-80.000000,70.000000,-60.000000,-80.000000,20.000000,ok"),
+        "{}",
+        stdout(&o)
+    );
+}
+
+#[test]
+fn unreachable_pose_is_an_error_for_one_pose_and_marked_in_a_batch() {
+    let o = robocal(&["ik", "--robot", FANUC, "--pose", "9000,0,0,0,0,0"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("unreachable"), "{}", stderr(&o));
+    let input = tmp("far.csv");
+    std::fs::write(&input, "id,x,y,z,rz,ry,rx\nfar,9000,0,0,0,0,0\n").unwrap();
+    let o = robocal(&["ik", "--robot", FANUC, "--poses", input.to_str().unwrap()]);
+    assert!(o.status.success());
+    assert!(
+        stdout(&o).contains("far,9000,0,0,0,0,0,,,,,,,,unreachable"),
+        "{}",
+        stdout(&o)
+    );
+    assert!(stderr(&o).contains("line 2"), "{}", stderr(&o));
+}
+
+fn expect_failure(args: &[&str], needles: &[&str]) {
+    let o = robocal(args);
+    assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+    let e = stderr(&o);
+    for n in needles {
+        assert!(e.contains(n), "{args:?}: `{n}` not in: {e}");
+    }
+}
+
+#[test]
+fn bad_inputs_name_file_line_and_field() {
+    let bad_robot = tmp("bad.toml");
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(FANUC)).unwrap();
+    std::fs::write(&bad_robot, text.replacen("a = 312.0", "a = \"312\"", 1)).unwrap();
+    let bad = bad_robot.to_str().unwrap();
+    expect_failure(
+        &["fk", "--robot", bad, "--q", "0,0,0,0,0,0"],
+        &["bad.toml:", "a", "number"],
+    );
+
+    let csv = tmp("bad.csv");
+    std::fs::write(
+        &csv,
+        "id,q1,q2,q3,q4,q5,q6\nok,0,0,0,0,0,0\nbroken,0,0,abc,0,0,0\n",
+    )
+    .unwrap();
+    expect_failure(
+        &["fk", "--robot", FANUC, "--joints", csv.to_str().unwrap()],
+        &["bad.csv:3", "q3", "abc"],
+    );
+
+    let short = tmp("short.csv");
+    std::fs::write(&short, "q1,q2,q3,q4,q5,q6\n0,0,0,0,0\n").unwrap();
+    expect_failure(
+        &["fk", "--robot", FANUC, "--joints", short.to_str().unwrap()],
+        &["short.csv:2", "cells"],
+    );
+
+    let missing = tmp("missing.csv");
+    std::fs::write(&missing, "q1,q2,q3,q4,q5\n0,0,0,0,0\n").unwrap();
+    expect_failure(
+        &[
+            "fk",
+            "--robot",
+            FANUC,
+            "--joints",
+            missing.to_str().unwrap(),
+        ],
+        &["missing.csv", "q6", "missing column"],
+    );
+
+    expect_failure(
+        &["fk", "--robot", FANUC, "--q", "0,0,0"],
+        &["--q", "6 expected"],
+    );
+    expect_failure(
+        &["fk", "--robot", "nope.toml", "--q", "0,0,0,0,0,0"],
+        &["nope.toml"],
+    );
+
+    // A failed run leaves no output file behind.
+    let out = tmp("never.csv");
+    let _ = robocal(&[
+        "fk",
+        "--robot",
+        FANUC,
+        "--joints",
+        csv.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!out.exists());
+}
