@@ -10,6 +10,7 @@ pub mod io;
 pub mod kinematics;
 pub mod model;
 pub mod rotation;
+pub mod sim;
 
 pub use error::{Error, Result};
 pub use kinematics::Pose;

@@ -1,8 +1,11 @@
 //! The `robocal` command line: a thin layer over the library.
 
+mod data_args;
 mod fk;
 mod ik;
+mod import;
 mod output;
+mod simulate;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -24,6 +27,10 @@ enum Command {
     Fk(fk::FkArgs),
     /// Inverse kinematics: joints (deg) for a tool pose.
     Ik(ik::IkArgs),
+    /// Converts a foreign measurement export to canonical CSV through an import profile.
+    Import(import::ImportArgs),
+    /// Simulates measurements of a virtual robot (deviations, non-geometric errors, noise).
+    Simulate(simulate::SimulateArgs),
 }
 
 /// Runs the command line; errors are printed with their context and give exit code 1.
@@ -32,6 +39,8 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Fk(a) => fk::run(a),
         Command::Ik(a) => ik::run(a),
+        Command::Import(a) => import::run(a),
+        Command::Simulate(a) => simulate::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

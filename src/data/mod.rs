@@ -1,7 +1,15 @@
 //! Measurement and batch data in CSV files.
 
+pub mod measurement;
+pub mod pairs;
+pub mod profile;
 pub mod table;
 
+pub use measurement::{
+    JointInfo, Measurement, MeasurementSet, ReadOptions, ReadReport, read_measurements,
+    write_measurements,
+};
+pub use profile::Profile;
 pub use table::Table;
 
 /// Names of the joint columns `q1..qN` (deg, or mm for prismatic joints).

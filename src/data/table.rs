@@ -12,6 +12,8 @@ pub struct Table {
     pub rows: Vec<Vec<String>>,
     /// 1-based file line of each row.
     pub lines: Vec<usize>,
+    /// Numbers use a decimal comma (`1,5`), as European exports do.
+    pub decimal_comma: bool,
 }
 
 impl Table {
@@ -20,11 +22,18 @@ impl Table {
     pub fn read(path: impl AsRef<Path>) -> Result<Table> {
         let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        Table::parse(&bytes, path, b',')
+        Table::parse(&bytes, path, b',', false)
+    }
+
+    /// Reads a file with the given delimiter and decimal separator.
+    pub fn read_with(path: impl AsRef<Path>, delimiter: u8, decimal_comma: bool) -> Result<Table> {
+        let path = path.as_ref();
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        Table::parse(&bytes, path, delimiter, decimal_comma)
     }
 
     /// Parses CSV bytes; `path` is used in messages.
-    pub fn parse(bytes: &[u8], path: &Path, delimiter: u8) -> Result<Table> {
+    pub fn parse(bytes: &[u8], path: &Path, delimiter: u8, decimal_comma: bool) -> Result<Table> {
         let mut rdr = csv::ReaderBuilder::new()
             .delimiter(delimiter)
             .has_headers(true)
@@ -107,6 +116,7 @@ impl Table {
             headers,
             rows,
             lines,
+            decimal_comma,
         })
     }
 
@@ -133,10 +143,15 @@ impl Table {
         Location::at(&self.path, self.lines[row], self.headers[col].clone())
     }
 
-    /// A cell as a finite number.
+    /// A cell as a finite number (with a decimal comma when the table has one).
     pub fn number(&self, row: usize, col: usize) -> Result<f64> {
         let cell = &self.rows[row][col];
-        match cell.parse::<f64>() {
+        let parsed = if self.decimal_comma {
+            cell.replace(',', ".").parse::<f64>()
+        } else {
+            cell.parse::<f64>()
+        };
+        match parsed {
             Ok(v) if v.is_finite() => Ok(v),
             Ok(_) => Err(Error::input(
                 self.location(row, col),
@@ -146,6 +161,15 @@ impl Table {
                 self.location(row, col),
                 format!("`{cell}` is not a number"),
             )),
+        }
+    }
+
+    /// A cell that may be empty: None when empty, else a finite number.
+    pub fn optional_number(&self, row: usize, col: usize) -> Result<Option<f64>> {
+        if self.rows[row][col].is_empty() {
+            Ok(None)
+        } else {
+            self.number(row, col).map(Some)
         }
     }
 
@@ -186,7 +210,20 @@ mod tests {
     use super::*;
 
     fn parse(s: &str) -> Result<Table> {
-        Table::parse(s.as_bytes(), Path::new("d.csv"), b',')
+        Table::parse(s.as_bytes(), Path::new("d.csv"), b',', false)
+    }
+
+    #[test]
+    fn decimal_commas_and_semicolons() {
+        let t = Table::parse(
+            "a;b\n1,5;-2,25E+1\n".as_bytes(),
+            Path::new("e.csv"),
+            b';',
+            true,
+        )
+        .unwrap();
+        assert_eq!(t.number(0, 0).unwrap(), 1.5);
+        assert_eq!(t.number(0, 1).unwrap(), -22.5);
     }
 
     #[test]

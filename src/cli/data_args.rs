@@ -1,0 +1,69 @@
+//! Flags shared by every command that reads measurements.
+
+use crate::data::measurement::{list_lines, parse_measurements};
+use crate::data::{JointInfo, MeasurementSet, Profile, ReadOptions, ReadReport, Table};
+use anyhow::Result;
+use clap::Args;
+use std::path::{Path, PathBuf};
+
+#[derive(Args, Debug, Clone)]
+pub struct DataArgs {
+    /// Import profile (TOML) for a foreign CSV layout; default: canonical CSV.
+    #[arg(long)]
+    pub profile: Option<PathBuf>,
+    /// Joints outside the robot's limits are an error instead of a warning.
+    #[arg(long)]
+    pub strict: bool,
+    /// Drop rows that do not parse (listed on stderr) instead of stopping.
+    #[arg(long)]
+    pub skip_bad_rows: bool,
+}
+
+impl DataArgs {
+    pub fn profile(&self) -> Result<Profile> {
+        Ok(Profile::read_or_default(self.profile.as_deref())?)
+    }
+
+    pub fn options(&self) -> ReadOptions {
+        ReadOptions {
+            strict: self.strict,
+            skip_bad_rows: self.skip_bad_rows,
+        }
+    }
+
+    /// Reads a measurement file and prints what the read noticed.
+    pub fn read(&self, path: &Path, joints: &[JointInfo]) -> Result<MeasurementSet> {
+        let profile = self.profile()?;
+        let t = Table::read_with(path, profile.delimiter, profile.decimal_comma)?;
+        let (set, report) = parse_measurements(&t, joints, &profile, &self.options())?;
+        print_report(path, &report);
+        Ok(set)
+    }
+}
+
+/// Prints warnings and dropped rows to stderr.
+pub fn print_report(path: &Path, report: &ReadReport) {
+    for w in &report.warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    if !report.skipped.is_empty() {
+        let lines: Vec<usize> = report.skipped.iter().map(|(l, _)| *l).collect();
+        eprintln!(
+            "warning: {}: dropped {} bad row(s) (lines {}):",
+            path.display(),
+            lines.len(),
+            list_lines(&lines)
+        );
+        for (_, why) in report.skipped.iter().take(20) {
+            eprintln!("  {why}");
+        }
+    }
+}
+
+/// Reads an optional robot argument.
+pub fn joints_of(robot: Option<&PathBuf>, fallback: usize) -> Result<Vec<JointInfo>> {
+    Ok(match robot {
+        Some(p) => JointInfo::of(&crate::model::read_robot(p)?),
+        None => JointInfo::revolute(fallback),
+    })
+}

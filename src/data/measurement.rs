@@ -1,0 +1,486 @@
+//! Measurement sets: joint configurations with what a sensor observed there.
+//!
+//! One row is one configuration. It may carry a position (mm), an orientation, a ball-bar
+//! distance (mm, on the second row of a pair) and per-row standard deviations. How the rows are
+//! used (full pose, position, orientation, relative position, distance) is chosen by the
+//! consumer; [`pairs`](super::pairs) groups rows for relative and distance use.
+
+use super::joint_columns;
+use super::profile::{AngleUnit, Profile};
+use super::table::{CsvOut, Table};
+use crate::error::{Error, Location, Result};
+use crate::kinematics::Pose;
+use crate::model::{JointType, Robot};
+use crate::rotation::{EulerConvention, rotation_to_zyx};
+use nalgebra::{Rotation3, Translation3, Vector3};
+use std::path::{Path, PathBuf};
+
+/// One measured configuration (internal units: rad, mm).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measurement {
+    /// 1-based line in the source file (0 for generated rows).
+    pub line: usize,
+    pub id: Option<String>,
+    pub set: Option<String>,
+    pub pair: Option<String>,
+    /// Joints (rad, or mm for prismatic).
+    pub q: Vec<f64>,
+    /// Measured tool position (mm).
+    pub position: Option<Vector3<f64>>,
+    /// Measured tool orientation.
+    pub rotation: Option<Rotation3<f64>>,
+    /// Measured distance to the other row of its pair (mm), as a ball-bar gives.
+    pub distance: Option<f64>,
+    /// Standard deviation of each position coordinate (mm).
+    pub sigma_position: Option<Vector3<f64>>,
+    /// Standard deviation of each orientation component (rad).
+    pub sigma_rotation: Option<Vector3<f64>>,
+    /// Cells of the carried-through columns.
+    pub extra: Vec<String>,
+}
+
+impl Measurement {
+    /// A row with joints only.
+    pub fn new(q: Vec<f64>) -> Self {
+        Measurement {
+            line: 0,
+            id: None,
+            set: None,
+            pair: None,
+            q,
+            position: None,
+            rotation: None,
+            distance: None,
+            sigma_position: None,
+            sigma_rotation: None,
+            extra: Vec::new(),
+        }
+    }
+
+    /// The measured pose, when both position and orientation are present.
+    pub fn pose(&self) -> Option<Pose> {
+        Some(Pose::from_parts(
+            Translation3::from(self.position?),
+            self.rotation?,
+        ))
+    }
+}
+
+/// A measurement file's rows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeasurementSet {
+    pub source: PathBuf,
+    pub rows: Vec<Measurement>,
+    /// Names of the carried-through columns.
+    pub extra_columns: Vec<String>,
+}
+
+impl MeasurementSet {
+    pub fn has_position(&self) -> bool {
+        !self.rows.is_empty() && self.rows.iter().all(|r| r.position.is_some())
+    }
+
+    pub fn has_rotation(&self) -> bool {
+        !self.rows.is_empty() && self.rows.iter().all(|r| r.rotation.is_some())
+    }
+
+    pub fn has_distance(&self) -> bool {
+        self.rows.iter().any(|r| r.distance.is_some())
+    }
+}
+
+/// How strictly rows are read.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ReadOptions {
+    /// Joints outside the limits are an error instead of a warning.
+    pub strict: bool,
+    /// Rows that do not parse are dropped and listed instead of stopping the read.
+    pub skip_bad_rows: bool,
+}
+
+/// What a read noticed: warnings, and the rows it dropped (with `skip_bad_rows`).
+#[derive(Debug, Clone, Default)]
+pub struct ReadReport {
+    pub warnings: Vec<String>,
+    /// (line, reason) of each dropped row.
+    pub skipped: Vec<(usize, String)>,
+}
+
+/// Column indices of one group of three (x, y, z style); all present or all absent.
+fn group(t: &Table, names: &[String; 3], what: &str) -> Result<Option<[usize; 3]>> {
+    let idx: Vec<Option<usize>> = names.iter().map(|n| t.column(n)).collect();
+    match idx.iter().filter(|i| i.is_some()).count() {
+        0 => Ok(None),
+        3 => Ok(Some([
+            idx[0].unwrap_or(0),
+            idx[1].unwrap_or(0),
+            idx[2].unwrap_or(0),
+        ])),
+        _ => {
+            let missing: Vec<&str> = names
+                .iter()
+                .zip(&idx)
+                .filter(|(_, i)| i.is_none())
+                .map(|(n, _)| n.as_str())
+                .collect();
+            Err(Error::input(
+                Location::at(&t.path, 1, missing.join(", ")),
+                format!("{what} columns must come as a group of three; missing column(s)"),
+            ))
+        }
+    }
+}
+
+/// What reading and writing need to know of each joint.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointInfo {
+    pub joint_type: JointType,
+    /// Limits (rad or mm); None when no robot is known and limits cannot be checked.
+    pub limits: Option<[f64; 2]>,
+}
+
+impl JointInfo {
+    /// The joints of a robot, with their limits.
+    pub fn of(robot: &Robot) -> Vec<JointInfo> {
+        robot
+            .joints()
+            .iter()
+            .map(|j| JointInfo {
+                joint_type: j.joint_type,
+                limits: Some(j.limits_internal()),
+            })
+            .collect()
+    }
+
+    /// N revolute joints without limits (for reading without a robot file).
+    pub fn revolute(n: usize) -> Vec<JointInfo> {
+        vec![
+            JointInfo {
+                joint_type: JointType::Revolute,
+                limits: None,
+            };
+            n
+        ]
+    }
+
+    fn outside(joints: &[JointInfo], q: &[f64]) -> bool {
+        joints.iter().zip(q).any(|(j, v)| {
+            j.limits
+                .is_some_and(|[lo, hi]| *v < lo - 1e-9 || *v > hi + 1e-9)
+        })
+    }
+}
+
+/// Reads a measurement file for `robot` through `profile` ([`Profile::default`] reads
+/// canonical CSV).
+pub fn read_measurements(
+    path: &Path,
+    robot: &Robot,
+    profile: &Profile,
+    opts: &ReadOptions,
+) -> Result<(MeasurementSet, ReadReport)> {
+    let t = Table::read_with(path, profile.delimiter, profile.decimal_comma)?;
+    parse_measurements(&t, &JointInfo::of(robot), profile, opts)
+}
+
+/// Turns a table into measurements; see [`read_measurements`].
+pub fn parse_measurements(
+    t: &Table,
+    joints: &[JointInfo],
+    profile: &Profile,
+    opts: &ReadOptions,
+) -> Result<(MeasurementSet, ReadReport)> {
+    let n = joints.len();
+    let cols = &profile.columns;
+    let joint_names = cols.joints.clone().unwrap_or_else(|| joint_columns(n));
+    if joint_names.len() != n {
+        return Err(Error::input(
+            Location::file(&t.path),
+            format!(
+                "the profile names {} joint columns, the robot has {n} joints",
+                joint_names.len()
+            ),
+        ));
+    }
+    let jidx: Vec<usize> = joint_names
+        .iter()
+        .map(|c| t.require(c))
+        .collect::<Result<_>>()?;
+    let pidx = group(t, &cols.position, "position")?;
+    let aidx = group(t, &cols.angles, "orientation")?;
+    let spidx = group(t, &cols.sigma_position, "position sigma")?;
+    let saidx = group(t, &cols.sigma_angles, "orientation sigma")?;
+    let didx = t.column(&cols.distance);
+    let (id_i, set_i, pair_i) = (
+        t.column(&cols.id),
+        t.column(&cols.set),
+        t.column(&cols.pair),
+    );
+    if pidx.is_none() && aidx.is_none() && didx.is_none() {
+        return Err(Error::input(
+            Location::file(&t.path),
+            format!(
+                "no measurement columns: expected position ({}), orientation ({}) or distance ({})",
+                cols.position.join(", "),
+                cols.angles.join(", "),
+                cols.distance
+            ),
+        ));
+    }
+    let mut used: Vec<usize> = jidx.clone();
+    for g in [pidx, aidx, spidx, saidx].into_iter().flatten() {
+        used.extend(g);
+    }
+    used.extend([didx, id_i, set_i, pair_i].into_iter().flatten());
+    let extra_idx: Vec<usize> = (0..t.headers.len()).filter(|i| !used.contains(i)).collect();
+    let mut report = ReadReport::default();
+    if spidx.is_none() && cols.sigma_position[0] != "sx" {
+        report.warnings.push(format!(
+            "no position sigma columns ({}) in this file: the set-level sigma applies",
+            cols.sigma_position.join(", ")
+        ));
+    }
+
+    let lu = profile.length_unit;
+    let euler = profile.euler;
+    let au = profile.angle_unit;
+    let parse_row = |r: usize| -> Result<Measurement> {
+        let raw = t.numbers(r, &jidx)?;
+        let q: Vec<f64> = raw
+            .iter()
+            .zip(joints)
+            .map(|(&v, j)| match j.joint_type {
+                JointType::Revolute => profile.joint_unit.to_rad(v),
+                JointType::Prismatic => lu.to_mm(v),
+            })
+            .collect();
+        let vec3 = |idx: [usize; 3], f: &dyn Fn(f64) -> f64| -> Result<Vector3<f64>> {
+            let v = t.numbers(r, &idx)?;
+            Ok(Vector3::new(f(v[0]), f(v[1]), f(v[2])))
+        };
+        let mut m = Measurement::new(q);
+        m.line = t.lines[r];
+        if let Some(i) = pidx {
+            m.position = Some(vec3(i, &|v| lu.to_mm(v))?);
+        }
+        if let Some(i) = aidx {
+            let a = vec3(i, &|v| au.to_rad(v))?;
+            // Columns are the angles about x, y, z; each convention takes them in its order.
+            let ordered = match euler {
+                EulerConvention::Zyx => [a.z, a.y, a.x],
+                EulerConvention::XyzIntrinsic | EulerConvention::XyzExtrinsic => [a.x, a.y, a.z],
+            };
+            m.rotation = Some(euler.to_rotation(ordered));
+        }
+        if let Some(i) = spidx {
+            m.sigma_position = Some(vec3(i, &|v| lu.to_mm(v))?);
+        }
+        if let Some(i) = saidx {
+            m.sigma_rotation = Some(vec3(i, &|v| au.to_rad(v))?);
+        }
+        for (idx, v) in [spidx, saidx]
+            .iter()
+            .zip([m.sigma_position, m.sigma_rotation])
+            .filter_map(|(i, v)| i.zip(v))
+        {
+            if let Some(k) = (0..3).find(|&k| v[k] <= 0.0) {
+                return Err(Error::input(
+                    t.location(r, idx[k]),
+                    "a standard deviation must be positive",
+                ));
+            }
+        }
+        if let Some(i) = didx {
+            m.distance = t.optional_number(r, i)?;
+            if m.distance.is_some_and(|d| d < 0.0) {
+                return Err(Error::input(
+                    t.location(r, i),
+                    "a distance cannot be negative",
+                ));
+            }
+            m.distance = m.distance.map(|d| lu.to_mm(d));
+        }
+        let text = |i: Option<usize>| i.map(|i| t.rows[r][i].clone()).filter(|s| !s.is_empty());
+        m.id = text(id_i);
+        m.set = text(set_i);
+        m.pair = text(pair_i);
+        m.extra = extra_idx
+            .iter()
+            .map(|&i| {
+                let c = &t.rows[r][i];
+                // Numbers written with a decimal comma are carried as canonical numbers.
+                if t.decimal_comma && c.replace(',', ".").parse::<f64>().is_ok() {
+                    c.replace(',', ".")
+                } else {
+                    c.clone()
+                }
+            })
+            .collect();
+        Ok(m)
+    };
+
+    let mut rows = Vec::with_capacity(t.rows.len());
+    for r in 0..t.rows.len() {
+        match parse_row(r) {
+            Ok(m) => rows.push(m),
+            Err(e) if opts.skip_bad_rows => report.skipped.push((t.lines[r], e.to_string())),
+            Err(e) => return Err(e),
+        }
+    }
+    if rows.is_empty() {
+        return Err(Error::input(Location::file(&t.path), "no measurement rows"));
+    }
+
+    // Joint limits.
+    let outside: Vec<usize> = rows
+        .iter()
+        .filter(|m| JointInfo::outside(joints, &m.q))
+        .map(|m| m.line)
+        .collect();
+    if !outside.is_empty() {
+        let msg = format!(
+            "{} row(s) have joints outside the robot's limits (lines {})",
+            outside.len(),
+            list_lines(&outside)
+        );
+        if opts.strict {
+            return Err(Error::input(Location::file(&t.path), msg));
+        }
+        report.warnings.push(msg);
+    }
+    // Units that look wrong: the largest revolute joint value, in the file's unit.
+    let in_file_unit = |q: f64| match profile.joint_unit {
+        AngleUnit::Deg => q.to_degrees().abs(),
+        AngleUnit::Rad => q.abs(),
+    };
+    let max_joint = rows
+        .iter()
+        .flat_map(|m| m.q.iter().zip(joints))
+        .filter(|(_, j)| j.joint_type == JointType::Revolute)
+        .map(|(&q, _)| in_file_unit(q))
+        .fold(0.0, f64::max);
+    if profile.joint_unit == AngleUnit::Deg
+        && rows.len() >= 3
+        && max_joint > 0.0
+        && max_joint <= 6.3
+    {
+        report.warnings.push(
+            "every joint value is within +-6.3 although the file's joints are in degrees: \
+             are they radians? (set joint_unit = \"rad\" in a profile)"
+                .to_string(),
+        );
+    }
+    if profile.joint_unit == AngleUnit::Rad && max_joint > 7.0 {
+        report.warnings.push(format!(
+            "joint values reach {max_joint:.1} although the file's joints are in radians: are they degrees?"
+        ));
+    }
+    Ok((
+        MeasurementSet {
+            source: t.path.clone(),
+            rows,
+            extra_columns: extra_idx.iter().map(|&i| t.headers[i].clone()).collect(),
+        },
+        report,
+    ))
+}
+
+/// "2, 5, 9" (at most 20 lines, then "...").
+pub fn list_lines(lines: &[usize]) -> String {
+    let mut s: Vec<String> = lines.iter().take(20).map(|l| l.to_string()).collect();
+    if lines.len() > 20 {
+        s.push(format!("... ({} more)", lines.len() - 20));
+    }
+    s.join(", ")
+}
+
+/// The canonical CSV text of a set: `id`, `set`, `pair` (when used), `q1..qN` (deg),
+/// `x,y,z` (mm), `rz,ry,rx` (deg, Z-Y-X), `distance` (mm), `sx,sy,sz` (mm),
+/// `srx,sry,srz` (deg), then the carried-through columns. Numbers are written exactly.
+pub fn measurements_to_csv(set: &MeasurementSet, joints: &[JointInfo]) -> Result<Vec<u8>> {
+    let rows = &set.rows;
+    let any = |f: &dyn Fn(&Measurement) -> bool| rows.iter().any(f);
+    let (has_id, has_set, has_pair) = (
+        any(&|m| m.id.is_some()),
+        any(&|m| m.set.is_some()),
+        any(&|m| m.pair.is_some()),
+    );
+    let has_pos = any(&|m| m.position.is_some());
+    let has_rot = any(&|m| m.rotation.is_some());
+    let has_dist = any(&|m| m.distance.is_some());
+    let has_sp = any(&|m| m.sigma_position.is_some());
+    let has_sr = any(&|m| m.sigma_rotation.is_some());
+    let mut headers: Vec<String> = Vec::new();
+    let mut push = |on: bool, names: &[&str]| {
+        if on {
+            headers.extend(names.iter().map(|s| s.to_string()));
+        }
+    };
+    push(has_id, &["id"]);
+    push(has_set, &["set"]);
+    push(has_pair, &["pair"]);
+    headers.extend(joint_columns(joints.len()));
+    let mut push = |on: bool, names: &[&str]| {
+        if on {
+            headers.extend(names.iter().map(|s| s.to_string()));
+        }
+    };
+    push(has_pos, &["x", "y", "z"]);
+    push(has_rot, &["rz", "ry", "rx"]);
+    push(has_dist, &["distance"]);
+    push(has_sp, &["sx", "sy", "sz"]);
+    push(has_sr, &["srx", "sry", "srz"]);
+    headers.extend(set.extra_columns.iter().cloned());
+    let mut out = CsvOut::new(&headers)?;
+    let num = |v: f64| format!("{v}");
+    for m in rows {
+        let mut c: Vec<String> = Vec::with_capacity(headers.len());
+        let text = |o: &Option<String>| o.clone().unwrap_or_default();
+        if has_id {
+            c.push(text(&m.id));
+        }
+        if has_set {
+            c.push(text(&m.set));
+        }
+        if has_pair {
+            c.push(text(&m.pair));
+        }
+        c.extend(
+            m.q.iter()
+                .zip(joints)
+                .map(|(&v, j)| num(j.joint_type.to_file(v))),
+        );
+        let opt3 = |c: &mut Vec<String>, on: bool, v: Option<[f64; 3]>| {
+            if on {
+                match v {
+                    Some(v) => c.extend(v.map(num)),
+                    None => c.extend([String::new(), String::new(), String::new()]),
+                }
+            }
+        };
+        opt3(&mut c, has_pos, m.position.map(|p| [p.x, p.y, p.z]));
+        opt3(
+            &mut c,
+            has_rot,
+            m.rotation.map(|r| rotation_to_zyx(&r).map(f64::to_degrees)),
+        );
+        if has_dist {
+            c.push(m.distance.map(num).unwrap_or_default());
+        }
+        opt3(&mut c, has_sp, m.sigma_position.map(|s| [s.x, s.y, s.z]));
+        opt3(
+            &mut c,
+            has_sr,
+            m.sigma_rotation
+                .map(|s| [s.x, s.y, s.z].map(f64::to_degrees)),
+        );
+        c.extend(m.extra.iter().cloned());
+        out.row(&c)?;
+    }
+    out.into_bytes()
+}
+
+/// Writes a set as canonical CSV, atomically.
+pub fn write_measurements(set: &MeasurementSet, joints: &[JointInfo], path: &Path) -> Result<()> {
+    crate::io::write_atomic(path, &measurements_to_csv(set, joints)?)
+}

@@ -1,0 +1,76 @@
+//! Pairs of rows for relative-position and distance measurements (thesis 4.3.3).
+//!
+//! Without a `pair` column, consecutive rows pair up: (1, 2), (2, 3), ... so that n
+//! configurations give n - 1 relative measurements, as in the thesis's Case C. With a `pair`
+//! column, the two rows that share a label form a pair (the first in the file is a).
+
+use super::measurement::MeasurementSet;
+use crate::error::{Error, Location, Result};
+use nalgebra::Vector3;
+
+/// One pair: row indices a and b.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Pair {
+    pub a: usize,
+    pub b: usize,
+}
+
+/// The pairs of a set.
+pub fn pairs(set: &MeasurementSet) -> Result<Vec<Pair>> {
+    let labelled = set.rows.iter().filter(|m| m.pair.is_some()).count();
+    if labelled == 0 {
+        if set.rows.len() < 2 {
+            return Err(Error::input(
+                Location::file(&set.source),
+                "relative measurements need at least two rows",
+            ));
+        }
+        return Ok((0..set.rows.len() - 1)
+            .map(|k| Pair { a: k, b: k + 1 })
+            .collect());
+    }
+    if let Some(m) = set.rows.iter().find(|m| m.pair.is_none()) {
+        return Err(Error::input(
+            Location::at(&set.source, m.line, "pair"),
+            "some rows have a pair label and this one has none",
+        ));
+    }
+    let mut order: Vec<&str> = Vec::new();
+    let mut members: Vec<Vec<usize>> = Vec::new();
+    for (i, m) in set.rows.iter().enumerate() {
+        let label = m.pair.as_deref().unwrap_or_default();
+        match order.iter().position(|l| *l == label) {
+            Some(k) => members[k].push(i),
+            None => {
+                order.push(label);
+                members.push(vec![i]);
+            }
+        }
+    }
+    members
+        .iter()
+        .zip(&order)
+        .map(|(rows, label)| match rows.as_slice() {
+            [a, b] => Ok(Pair { a: *a, b: *b }),
+            _ => Err(Error::input(
+                Location::at(&set.source, set.rows[rows[0]].line, "pair"),
+                format!(
+                    "pair `{label}` has {} rows; a pair needs exactly 2",
+                    rows.len()
+                ),
+            )),
+        })
+        .collect()
+}
+
+/// Measured displacement p(a) - p(b) (mm) of a pair, when both rows have positions.
+pub fn displacement(set: &MeasurementSet, p: Pair) -> Option<Vector3<f64>> {
+    Some(set.rows[p.a].position? - set.rows[p.b].position?)
+}
+
+/// Measured distance |p(a) - p(b)| (mm): the ball-bar value on row b, else from positions.
+pub fn distance(set: &MeasurementSet, p: Pair) -> Option<f64> {
+    set.rows[p.b]
+        .distance
+        .or_else(|| displacement(set, p).map(|d| d.norm()))
+}

@@ -1,0 +1,300 @@
+//! Import profiles: how a foreign CSV export maps onto robocal's measurement fields.
+//!
+//! ```toml
+//! delimiter = ";"            # one character; default ","
+//! decimal_comma = true       # "1,5" means 1.5; default false
+//! joint_unit = "rad"         # deg | rad (prismatic joints: the length unit)
+//! length_unit = "mm"         # mm | m (positions and their sigmas)
+//! angle_unit = "deg"         # deg | rad (orientation angles and their sigmas)
+//! euler = "xyz_intrinsic"    # zyx (R = Rz Ry Rx) | xyz_intrinsic (R = Rx Ry Rz)
+//!                            # | xyz_extrinsic (R = Rz Ry Rx, roll-pitch-yaw about fixed axes)
+//! [columns]
+//! joints = ["j1", "j2", ...] # in chain order; default q1..qN
+//! x = "X"                    # positions; default x, y, z
+//! rx = "RX"                  # the angle about each axis; default rx, ry, rz
+//! sx = "SX"                  # sigmas (optional): sx sy sz srx sry srz
+//! id = "Timestamp"           # optional: id, set, pair, distance
+//! ```
+//!
+//! The default profile is the canonical form: comma, decimal point, deg, mm, Z-Y-X.
+
+use crate::error::{Error, Location, Result};
+use crate::rotation::EulerConvention;
+use serde::Deserialize;
+use std::path::Path;
+
+/// The unit of an angle column.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AngleUnit {
+    Deg,
+    Rad,
+}
+
+impl AngleUnit {
+    /// Converts to rad.
+    pub fn to_rad(self, v: f64) -> f64 {
+        match self {
+            AngleUnit::Deg => v.to_radians(),
+            AngleUnit::Rad => v,
+        }
+    }
+}
+
+/// The unit of a length column.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LengthUnit {
+    Mm,
+    M,
+}
+
+impl LengthUnit {
+    /// Converts to mm.
+    pub fn to_mm(self, v: f64) -> f64 {
+        match self {
+            LengthUnit::Mm => v,
+            LengthUnit::M => v * 1000.0,
+        }
+    }
+}
+
+/// Column names of each measurement field in the source file.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Columns {
+    /// Joint columns in chain order; None means `q1..qN`.
+    pub joints: Option<Vec<String>>,
+    pub position: [String; 3],
+    /// Angle about x, y and z (whatever the convention's order of composition).
+    pub angles: [String; 3],
+    pub sigma_position: [String; 3],
+    pub sigma_angles: [String; 3],
+    pub id: String,
+    pub set: String,
+    pub pair: String,
+    pub distance: String,
+}
+
+/// An import profile; [`Profile::default`] is the canonical form.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Profile {
+    pub delimiter: u8,
+    pub decimal_comma: bool,
+    pub joint_unit: AngleUnit,
+    pub length_unit: LengthUnit,
+    pub angle_unit: AngleUnit,
+    pub euler: EulerConvention,
+    pub columns: Columns,
+}
+
+impl Default for Profile {
+    fn default() -> Self {
+        let s = |v: [&str; 3]| v.map(String::from);
+        Profile {
+            delimiter: b',',
+            decimal_comma: false,
+            joint_unit: AngleUnit::Deg,
+            length_unit: LengthUnit::Mm,
+            angle_unit: AngleUnit::Deg,
+            euler: EulerConvention::Zyx,
+            columns: Columns {
+                joints: None,
+                position: s(["x", "y", "z"]),
+                angles: s(["rx", "ry", "rz"]),
+                sigma_position: s(["sx", "sy", "sz"]),
+                sigma_angles: s(["srx", "sry", "srz"]),
+                id: "id".into(),
+                set: "set".into(),
+                pair: "pair".into(),
+                distance: "distance".into(),
+            },
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ProfileFile {
+    delimiter: Option<String>,
+    decimal_comma: Option<bool>,
+    joint_unit: Option<String>,
+    length_unit: Option<String>,
+    angle_unit: Option<String>,
+    euler: Option<String>,
+    #[serde(default)]
+    columns: ColumnsFile,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct ColumnsFile {
+    joints: Option<Vec<String>>,
+    x: Option<String>,
+    y: Option<String>,
+    z: Option<String>,
+    rx: Option<String>,
+    ry: Option<String>,
+    rz: Option<String>,
+    sx: Option<String>,
+    sy: Option<String>,
+    sz: Option<String>,
+    srx: Option<String>,
+    sry: Option<String>,
+    srz: Option<String>,
+    id: Option<String>,
+    set: Option<String>,
+    pair: Option<String>,
+    distance: Option<String>,
+}
+
+impl Profile {
+    /// Reads a profile file; errors name the file, line and field.
+    pub fn read(path: impl AsRef<Path>) -> Result<Profile> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Profile::parse(&text, path)
+    }
+
+    /// Parses profile text; `path` is used in messages.
+    pub fn parse(text: &str, path: &Path) -> Result<Profile> {
+        let f: ProfileFile = toml::from_str(text).map_err(|e| {
+            let line = e.span().map(|s| crate::model::file::line_of(text, s.start));
+            Error::input(
+                Location {
+                    file: path.to_path_buf(),
+                    line,
+                    field: None,
+                },
+                e.message().trim().to_string(),
+            )
+        })?;
+        let bad = |field: &str, msg: String| {
+            let line = text
+                .lines()
+                .position(|l| l.trim_start().starts_with(field))
+                .map(|i| i + 1);
+            Error::input(
+                Location {
+                    file: path.to_path_buf(),
+                    line,
+                    field: Some(field.into()),
+                },
+                msg,
+            )
+        };
+        let angle = |v: &Option<String>, field: &str, default: AngleUnit| match v.as_deref() {
+            None => Ok(default),
+            Some("deg") => Ok(AngleUnit::Deg),
+            Some("rad") => Ok(AngleUnit::Rad),
+            Some(o) => Err(bad(
+                field,
+                format!("unknown unit `{o}` (expected deg or rad)"),
+            )),
+        };
+        let mut p = Profile::default();
+        if let Some(d) = &f.delimiter {
+            let b = d.as_bytes();
+            if b.len() != 1 {
+                return Err(bad(
+                    "delimiter",
+                    format!("`{d}` is not one ASCII character"),
+                ));
+            }
+            p.delimiter = b[0];
+        }
+        p.decimal_comma = f.decimal_comma.unwrap_or(false);
+        if p.decimal_comma && p.delimiter == b',' {
+            return Err(bad(
+                "decimal_comma",
+                "a decimal comma needs another delimiter (e.g. \";\")".into(),
+            ));
+        }
+        p.joint_unit = angle(&f.joint_unit, "joint_unit", AngleUnit::Deg)?;
+        p.angle_unit = angle(&f.angle_unit, "angle_unit", AngleUnit::Deg)?;
+        p.length_unit = match f.length_unit.as_deref() {
+            None | Some("mm") => LengthUnit::Mm,
+            Some("m") => LengthUnit::M,
+            Some(o) => {
+                return Err(bad(
+                    "length_unit",
+                    format!("unknown unit `{o}` (expected mm or m)"),
+                ));
+            }
+        };
+        p.euler = match f.euler.as_deref() {
+            None | Some("zyx") => EulerConvention::Zyx,
+            Some("xyz_intrinsic") => EulerConvention::XyzIntrinsic,
+            Some("xyz_extrinsic") => EulerConvention::XyzExtrinsic,
+            Some(o) => {
+                return Err(bad(
+                    "euler",
+                    format!(
+                        "unknown convention `{o}` (expected zyx, xyz_intrinsic or xyz_extrinsic)"
+                    ),
+                ));
+            }
+        };
+        let c = f.columns;
+        let set = |slot: &mut String, v: Option<String>| {
+            if let Some(v) = v {
+                *slot = v;
+            }
+        };
+        let cols = &mut p.columns;
+        cols.joints = c.joints;
+        for (slot, v) in cols.position.iter_mut().zip([c.x, c.y, c.z]) {
+            set(slot, v);
+        }
+        for (slot, v) in cols.angles.iter_mut().zip([c.rx, c.ry, c.rz]) {
+            set(slot, v);
+        }
+        for (slot, v) in cols.sigma_position.iter_mut().zip([c.sx, c.sy, c.sz]) {
+            set(slot, v);
+        }
+        for (slot, v) in cols.sigma_angles.iter_mut().zip([c.srx, c.sry, c.srz]) {
+            set(slot, v);
+        }
+        set(&mut cols.id, c.id);
+        set(&mut cols.set, c.set);
+        set(&mut cols.pair, c.pair);
+        set(&mut cols.distance, c.distance);
+        Ok(p)
+    }
+
+    /// Reads `path` if given, else the canonical profile.
+    pub fn read_or_default(path: Option<&Path>) -> Result<Profile> {
+        path.map_or_else(|| Ok(Profile::default()), Profile::read)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn profile_fields_and_errors() {
+        let p = Profile::parse(
+            "delimiter = \";\"\ndecimal_comma = true\njoint_unit = \"rad\"\nlength_unit = \"m\"\neuler = \"xyz_intrinsic\"\n[columns]\nx = \"X\"\nid = \"T\"\n",
+            Path::new("p.toml"),
+        )
+        .unwrap();
+        assert_eq!(p.delimiter, b';');
+        assert!(p.decimal_comma);
+        assert_eq!(p.joint_unit, AngleUnit::Rad);
+        assert_eq!(p.length_unit.to_mm(1.5), 1500.0);
+        assert_eq!(p.euler, EulerConvention::XyzIntrinsic);
+        assert_eq!(p.columns.position[0], "X");
+        assert_eq!(p.columns.position[1], "y");
+        assert_eq!(p.columns.id, "T");
+        let e = Profile::parse("joint_unit = \"grad\"\n", Path::new("p.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("p.toml:1") && e.contains("grad"), "{e}");
+        let e = Profile::parse("[columns]\nq = \"a\"\n", Path::new("p.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("p.toml:2") && e.contains("unknown field"), "{e}");
+        let e = Profile::parse("decimal_comma = true\n", Path::new("p.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("delimiter"), "{e}");
+    }
+}

@@ -1,0 +1,100 @@
+//! Parameter deviations of a virtual robot: a TOML table of the model's parameter names with
+//! lengths in mm and angles in mrad (as thesis Table 6.1).
+//!
+//! ```toml
+//! a1 = 1.41          # mm
+//! alpha1 = -1.72     # mrad
+//! "base.d" = -0.02   # or, as a table: [base] d = -0.02
+//! ```
+
+use crate::error::{Error, Location, Result};
+use crate::model::{ParamId, Robot};
+use std::path::Path;
+
+/// Deviations in internal units (mm, rad), one per named parameter.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Deviations(pub Vec<(ParamId, f64)>);
+
+fn flatten(prefix: &str, table: &toml::Table, out: &mut Vec<(String, toml::Value)>) {
+    for (k, v) in table {
+        let name = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        match v {
+            toml::Value::Table(t) => flatten(&name, t, out),
+            other => out.push((name, other.clone())),
+        }
+    }
+}
+
+impl Deviations {
+    /// Reads a deviations file for `robot`; an unknown parameter or a non-number is an error
+    /// naming the file, the line and the parameter.
+    pub fn read(path: impl AsRef<Path>, robot: &Robot) -> Result<Self> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Deviations::parse(&text, path, robot)
+    }
+
+    pub fn parse(text: &str, path: &Path, robot: &Robot) -> Result<Self> {
+        let table: toml::Table = toml::from_str(text).map_err(|e| {
+            let line = e.span().map(|s| crate::model::file::line_of(text, s.start));
+            Error::input(
+                Location {
+                    file: path.to_path_buf(),
+                    line,
+                    field: None,
+                },
+                e.message().trim().to_string(),
+            )
+        })?;
+        let mut flat = Vec::new();
+        flatten("", &table, &mut flat);
+        let line_of_key = |name: &str| {
+            let last = name.rsplit('.').next().unwrap_or(name);
+            text.lines()
+                .position(|l| {
+                    let l = l.trim_start().trim_start_matches('"');
+                    l.starts_with(name) || l.starts_with(last)
+                })
+                .map_or(0, |i| i + 1)
+        };
+        let mut out = Vec::with_capacity(flat.len());
+        for (name, value) in flat {
+            let at = || Location::at(path, line_of_key(&name), name.clone());
+            let id = robot.find_param(&name).ok_or_else(|| {
+                Error::input(
+                    at(),
+                    format!("the robot `{}` has no parameter `{name}`", robot.name()),
+                )
+            })?;
+            let v = match value {
+                toml::Value::Float(f) if f.is_finite() => f,
+                toml::Value::Integer(i) => i as f64,
+                _ => {
+                    return Err(Error::input(
+                        at(),
+                        "a deviation must be a finite number (mm or mrad)",
+                    ));
+                }
+            };
+            if out.iter().any(|(o, _)| *o == id) {
+                return Err(Error::input(at(), "this parameter is given twice"));
+            }
+            out.push((id, if id.field.is_angle() { v * 1e-3 } else { v }));
+        }
+        Ok(Deviations(out))
+    }
+
+    /// The robot with every deviation added to its parameter.
+    pub fn apply(&self, robot: &Robot) -> Result<Robot> {
+        let values: Vec<(ParamId, f64)> = self
+            .0
+            .iter()
+            .map(|&(id, d)| (id, robot.param(id) + d))
+            .collect();
+        robot.with_params(&values)
+    }
+}

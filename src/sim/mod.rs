@@ -1,0 +1,205 @@
+//! The virtual robot (thesis 5.2, 6.2): a true model (nominal + deviations) with non-geometric
+//! errors, measured at random configurations with Gaussian noise.
+
+pub mod deviations;
+pub mod nongeometric;
+
+pub use deviations::Deviations;
+pub use nongeometric::NonGeometric;
+
+use crate::data::{Measurement, MeasurementSet};
+use crate::error::{Error, Location, Result};
+use crate::kinematics::{Frames, tool_pose};
+use crate::model::Robot;
+use crate::rotation::from_rotation_vector;
+use nalgebra::Vector3;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// What the virtual sensor reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Observe {
+    /// Position and orientation.
+    Pose,
+    /// Position only.
+    Position,
+    /// Orientation only.
+    Orientation,
+}
+
+/// Joint ranges to draw configurations from, in internal units (rad or mm).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Region(pub Vec<[f64; 2]>);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RegionFile {
+    ranges: Vec<[f64; 2]>,
+}
+
+impl Region {
+    /// The robot's joint limits.
+    pub fn limits(robot: &Robot) -> Self {
+        Region(robot.joints().iter().map(|j| j.limits_internal()).collect())
+    }
+
+    /// Reads a region file: `ranges = [[min, max], ...]`, one per joint, deg (mm for
+    /// prismatic joints). Each range must lie within the joint's limits.
+    pub fn read(path: impl AsRef<Path>, robot: &Robot) -> Result<Self> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let f: RegionFile = toml::from_str(&text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|s| crate::model::file::line_of(&text, s.start));
+            Error::input(
+                Location {
+                    file: path.to_path_buf(),
+                    line,
+                    field: None,
+                },
+                e.message().trim().to_string(),
+            )
+        })?;
+        let bad = |m: String| Error::input(Location::at(path, 0, "ranges"), m);
+        if f.ranges.len() != robot.dof() {
+            return Err(bad(format!(
+                "{} ranges for a robot with {} joints",
+                f.ranges.len(),
+                robot.dof()
+            )));
+        }
+        let mut out = Vec::with_capacity(f.ranges.len());
+        for (i, (r, j)) in f.ranges.iter().zip(robot.joints()).enumerate() {
+            let [lo, hi] = *r;
+            if !(lo.is_finite() && hi.is_finite())
+                || lo > hi
+                || lo < j.limits[0]
+                || hi > j.limits[1]
+            {
+                return Err(bad(format!(
+                    "joint {}: range [{lo}, {hi}] must be ordered and within the limits [{}, {}]",
+                    i + 1,
+                    j.limits[0],
+                    j.limits[1]
+                )));
+            }
+            out.push([lo, hi].map(|v| j.joint_type.to_internal(v)));
+        }
+        Ok(Region(out))
+    }
+}
+
+/// A simulation run.
+#[derive(Debug, Clone)]
+pub struct Simulation<'a> {
+    /// The true robot (nominal model plus deviations).
+    pub truth: &'a Robot,
+    pub nongeometric: &'a NonGeometric,
+    pub region: &'a Region,
+    pub count: usize,
+    pub seed: u64,
+    /// Noise on each position coordinate (mm).
+    pub sigma_position_mm: f64,
+    /// Noise on each rotation-vector component (rad).
+    pub sigma_rotation_rad: f64,
+    pub observe: Observe,
+}
+
+/// Measured rows and their noise-free truth (same configurations, same order).
+#[derive(Debug, Clone)]
+pub struct SimOutput {
+    pub measured: MeasurementSet,
+    pub truth: MeasurementSet,
+}
+
+impl Simulation<'_> {
+    /// Draws the configurations (uniform in the region), applies the non-geometric joint
+    /// deflections, runs the true model's FK, and adds noise. Configurations and noise come
+    /// from separate streams of one seed, so changing the noise leaves the configurations.
+    pub fn run(&self, source: PathBuf) -> Result<SimOutput> {
+        let robot = self.truth;
+        let n = robot.dof();
+        if self.region.0.len() != n {
+            return Err(Error::Invalid("region does not match the robot".into()));
+        }
+        for s in [self.sigma_position_mm, self.sigma_rotation_rad] {
+            if !s.is_finite() || s < 0.0 {
+                return Err(Error::Invalid(format!(
+                    "noise sigma {s} must be finite and >= 0"
+                )));
+            }
+        }
+        let mut rng_q = ChaCha8Rng::seed_from_u64(self.seed);
+        let mut rng_noise = ChaCha8Rng::seed_from_u64(self.seed);
+        rng_noise.set_stream(1);
+        let configs: Vec<Vec<f64>> = (0..self.count)
+            .map(|_| {
+                self.region
+                    .0
+                    .iter()
+                    .map(|&[lo, hi]| {
+                        if lo < hi {
+                            rng_q.random_range(lo..hi)
+                        } else {
+                            lo
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let unit = Normal::new(0.0, 1.0).map_err(|e| Error::Invalid(e.to_string()))?;
+        let mut ws = Frames::new(robot);
+        let mut dq = vec![0.0; n];
+        let mut previous = vec![0.0; n];
+        let mut measured = Vec::with_capacity(self.count);
+        let mut truth = Vec::with_capacity(self.count);
+        for (k, q) in configs.into_iter().enumerate() {
+            self.nongeometric
+                .deflection(robot, &q, &previous, &mut ws, &mut dq);
+            let actual: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
+            let pose = tool_pose(robot, &actual);
+            let mut draw3 = |s: f64| {
+                Vector3::new(
+                    unit.sample(&mut rng_noise),
+                    unit.sample(&mut rng_noise),
+                    unit.sample(&mut rng_noise),
+                ) * s
+            };
+            let np = draw3(self.sigma_position_mm);
+            let nr = draw3(self.sigma_rotation_rad);
+            let mut t = Measurement::new(q.clone());
+            t.id = Some((k + 1).to_string());
+            let mut m = t.clone();
+            if self.observe != Observe::Orientation {
+                t.position = Some(pose.translation.vector);
+                m.position = Some(pose.translation.vector + np);
+                if self.sigma_position_mm > 0.0 {
+                    m.sigma_position = Some(Vector3::repeat(self.sigma_position_mm));
+                }
+            }
+            if self.observe != Observe::Position {
+                t.rotation = Some(pose.rotation);
+                m.rotation = Some(from_rotation_vector(&nr) * pose.rotation);
+                if self.sigma_rotation_rad > 0.0 {
+                    m.sigma_rotation = Some(Vector3::repeat(self.sigma_rotation_rad));
+                }
+            }
+            measured.push(m);
+            truth.push(t);
+            previous = q;
+        }
+        let set = |rows| MeasurementSet {
+            source: source.clone(),
+            rows,
+            extra_columns: Vec::new(),
+        };
+        Ok(SimOutput {
+            measured: set(measured),
+            truth: set(truth),
+        })
+    }
+}
