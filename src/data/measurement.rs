@@ -319,14 +319,24 @@ pub fn parse_measurements(
         Ok(m)
     };
 
+    if !opts.skip_bad_rows {
+        t.reject_malformed()?;
+    }
+    let mut bad: Vec<(usize, String)> = t
+        .malformed
+        .iter()
+        .map(|(line, msg)| (*line, format!("{}:{line}: {msg}", t.path.display())))
+        .collect();
     let mut rows = Vec::with_capacity(t.rows.len());
     for r in 0..t.rows.len() {
         match parse_row(r) {
             Ok(m) => rows.push(m),
-            Err(e) if opts.skip_bad_rows => report.skipped.push((t.lines[r], e.to_string())),
+            Err(e) if opts.skip_bad_rows => bad.push((t.lines[r], e.to_string())),
             Err(e) => return Err(e),
         }
     }
+    bad.sort_by_key(|(line, _)| *line);
+    report.skipped = bad;
     if rows.is_empty() {
         return Err(Error::input(Location::file(&t.path), "no measurement rows"));
     }

@@ -14,6 +14,10 @@ pub struct Table {
     pub lines: Vec<usize>,
     /// Numbers use a decimal comma (`1,5`), as European exports do.
     pub decimal_comma: bool,
+    /// Rows left out of `rows` because their cell count differs from the header's:
+    /// (line, message). [`Table::read`] makes the first one an error; measurement reading
+    /// either does the same or drops and lists them (`--skip-bad-rows`).
+    pub malformed: Vec<(usize, String)>,
 }
 
 impl Table {
@@ -22,7 +26,24 @@ impl Table {
     pub fn read(path: impl AsRef<Path>) -> Result<Table> {
         let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        Table::parse(&bytes, path, b',', false)
+        let t = Table::parse(&bytes, path, b',', false)?;
+        t.reject_malformed()?;
+        Ok(t)
+    }
+
+    /// The first malformed row as an error, if there is one.
+    pub fn reject_malformed(&self) -> Result<()> {
+        match self.malformed.first() {
+            Some((line, msg)) => Err(Error::input(
+                Location {
+                    file: self.path.clone(),
+                    line: Some(*line),
+                    field: None,
+                },
+                msg.clone(),
+            )),
+            None => Ok(()),
+        }
     }
 
     /// Reads a file with the given delimiter and decimal separator.
@@ -88,6 +109,7 @@ impl Table {
         }
         let mut rows = Vec::new();
         let mut lines = Vec::new();
+        let mut malformed = Vec::new();
         for rec in rdr.records() {
             let rec = rec.map_err(csv_err)?;
             let line = rec.position().map_or(0, |p| line_at(p.byte()));
@@ -95,18 +117,13 @@ impl Table {
                 continue;
             }
             if rec.len() != headers.len() {
-                return Err(Error::input(
-                    Location {
-                        file: path.to_path_buf(),
-                        line: Some(line),
-                        field: None,
-                    },
-                    format!(
-                        "{} cells, but the header has {} columns",
-                        rec.len(),
-                        headers.len()
-                    ),
-                ));
+                let msg = format!(
+                    "{} cells, but the header has {} columns",
+                    rec.len(),
+                    headers.len()
+                );
+                malformed.push((line, msg));
+                continue;
             }
             rows.push(rec.iter().map(str::to_string).collect());
             lines.push(line);
@@ -117,6 +134,7 @@ impl Table {
             rows,
             lines,
             decimal_comma,
+            malformed,
         })
     }
 
@@ -248,7 +266,11 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("not finite"), "{e}");
-        let e = parse("id,q1\na,1,3\n").unwrap_err().to_string();
+        let e = parse("id,q1\na,1,3\n")
+            .unwrap()
+            .reject_malformed()
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("d.csv:2") && e.contains("3 cells"), "{e}");
         let e = parse("q1,q1\n1,2\n").unwrap_err().to_string();
         assert!(e.contains("duplicate") && e.contains("q1"), "{e}");

@@ -1,0 +1,226 @@
+//! `robocal import` and `robocal simulate` from the command line: every bad-input kind gives its
+//! error (file, line, column) and exit code; warnings keep exit code 0.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn robocal(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_robocal"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run robocal")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("robocal-data-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
+const HEADER: &str = "id,q1,q2,q3,q4,q5,q6,x,y,z\n";
+
+/// Runs `import` of `body` (after the canonical header) and returns (exit code, stderr, out).
+fn import(name: &str, body: &str, extra: &[&str]) -> (i32, String, Option<String>) {
+    let input = tmp(&format!("{name}.csv"));
+    std::fs::write(&input, format!("{HEADER}{body}")).unwrap();
+    let out = tmp(&format!("{name}.out.csv"));
+    let _ = std::fs::remove_file(&out);
+    let mut args = vec![
+        "import",
+        input.to_str().unwrap(),
+        "--robot",
+        FANUC,
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let o = robocal(&args);
+    (
+        o.status.code().unwrap_or(-1),
+        stderr(&o),
+        std::fs::read_to_string(&out).ok(),
+    )
+}
+
+const GOOD: &str = "a,0,0,0,0,0,0,1,2,3\nb,10,10,10,10,10,10,4,5,6\nc,20,20,20,20,20,20,7,8,9\n";
+
+#[test]
+fn good_file_imports_silently() {
+    let (code, err, out) = import("good", GOOD, &[]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("warning"), "{err}");
+    assert!(
+        out.unwrap()
+            .starts_with("id,q1,q2,q3,q4,q5,q6,x,y,z\na,0,0,0,0,0,0,1,2,3\n")
+    );
+}
+
+#[test]
+fn each_bad_input_kind_gives_its_error() {
+    let cases: &[(&str, &str, &[&str])] = &[
+        (
+            "count",
+            "a,0,0,0,0,0,0,1,2\n",
+            &[":5", "9 cells", "10 columns"],
+        ),
+        (
+            "parse",
+            "a,0,0,zero,0,0,0,1,2,3\n",
+            &[":5", "q3", "`zero` is not a number"],
+        ),
+        ("nan", "a,0,0,0,0,0,0,1,NaN,3\n", &[":5", "y", "not finite"]),
+        ("inf", "a,0,0,0,0,0,0,1,2,inf\n", &[":5", "z", "not finite"]),
+    ];
+    for (name, body, needles) in cases {
+        // Three good rows (lines 2-4), then the bad one on line 5.
+        let (code, err, out) = import(name, &format!("{GOOD}{body}"), &[]);
+        assert_eq!(code, 1, "{name}: {err}");
+        for n in *needles {
+            assert!(err.contains(n), "{name}: `{n}` not in {err}");
+        }
+        assert!(out.is_none(), "{name}: no output file on error");
+    }
+}
+
+#[test]
+fn line_numbers_count_every_line() {
+    let (code, err, _) = import("lines", "a,0,0,0,0,0,0,1,2,3\n\nb,0,0,0,0,0,0,1,2,x\n", &[]);
+    assert_eq!(code, 1);
+    assert!(err.contains("lines.csv:4") && err.contains("`x`"), "{err}");
+}
+
+#[test]
+fn duplicate_header_is_an_error() {
+    let input = tmp("dup.csv");
+    std::fs::write(&input, "q1,q2,q3,q4,q5,q6,x,y,z,x\n0,0,0,0,0,0,1,2,3,4\n").unwrap();
+    let o = robocal(&[
+        "import",
+        input.to_str().unwrap(),
+        "--robot",
+        FANUC,
+        "--out",
+        tmp("dup.out").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("dup.csv:1") && stderr(&o).contains("duplicate"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn joints_outside_limits_warn_or_fail_with_strict() {
+    // J2 is limited to -50..70 deg: 80 is outside (line 3).
+    let body = "a,0,0,0,0,0,0,1,2,3\nb,0,80,0,0,0,0,1,2,3\n";
+    let (code, err, out) = import("limits", body, &[]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("outside the robot's limits (lines 3)"),
+        "{err}"
+    );
+    assert!(out.is_some());
+    let (code, err, out) = import("limits_strict", body, &["--strict"]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("limits_strict.csv") && err.contains("lines 3"),
+        "{err}"
+    );
+    assert!(out.is_none());
+}
+
+#[test]
+fn radians_in_a_degree_file_warn() {
+    let body = "a,0.1,0.2,-0.3,1.5,-1.2,3.1\n".replace(",3.1\n", ",3.1,1,2,3\n");
+    let body = format!("{body}{body}{body}");
+    let (code, err, _) = import("radians", &body, &[]);
+    assert_eq!(code, 0);
+    assert!(err.contains("are they radians"), "{err}");
+}
+
+#[test]
+fn skip_bad_rows_drops_and_lists_them() {
+    let body =
+        "a,0,0,0,0,0,0,1,2,3\nb,0,0,oops,0,0,0,1,2,3\nc,0,0,0,0,0,0,1,2\nd,1,1,1,1,1,1,1,2,3\n";
+    let (code, err, out) = import("skip", body, &["--skip-bad-rows"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("dropped 2 bad row(s) (lines 3, 4)"), "{err}");
+    let out = out.unwrap();
+    assert_eq!(out.lines().count(), 3, "{out}");
+    assert!(out.contains("\na,") && out.contains("\nd,"));
+}
+
+#[test]
+fn missing_position_group_member_is_an_error() {
+    let input = tmp("group.csv");
+    std::fs::write(&input, "q1,q2,q3,q4,q5,q6,x,y\n0,0,0,0,0,0,1,2\n").unwrap();
+    let o = robocal(&[
+        "import",
+        input.to_str().unwrap(),
+        "--robot",
+        FANUC,
+        "--out",
+        tmp("group.out").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("group.csv:1") && stderr(&o).contains("`z`"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn simulate_writes_measurements_truth_and_true_robot_reproducibly() {
+    let run = |tag: &str| {
+        let out = tmp(&format!("sim_{tag}.csv"));
+        let truth = tmp(&format!("sim_{tag}_truth.csv"));
+        let robot = tmp(&format!("sim_{tag}_true.toml"));
+        let o = robocal(&[
+            "simulate",
+            "--robot",
+            FANUC,
+            "--deviations",
+            "datasets/deviations/table_6_1.toml",
+            "--count",
+            "20",
+            "--seed",
+            "42",
+            "--sigma-pos",
+            "0.033",
+            "--sigma-rot",
+            "0.174",
+            "--measure",
+            "position",
+            "--out",
+            out.to_str().unwrap(),
+            "--truth-out",
+            truth.to_str().unwrap(),
+            "--true-robot",
+            robot.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (
+            std::fs::read(&out).unwrap(),
+            std::fs::read_to_string(&truth).unwrap(),
+            std::fs::read_to_string(&robot).unwrap(),
+        )
+    };
+    let (a, truth, true_robot) = run("a");
+    let (b, _, _) = run("b");
+    assert_eq!(a, b, "same seed, same bytes");
+    let text = String::from_utf8(a).unwrap();
+    assert!(
+        text.starts_with("id,q1,q2,q3,q4,q5,q6,x,y,z,sx,sy,sz\n"),
+        "{text}"
+    );
+    assert_eq!(text.lines().count(), 21);
+    assert!(truth.starts_with("id,q1,q2,q3,q4,q5,q6,x,y,z\n"));
+    assert!(true_robot.contains("beta = 0.0211994384"), "{true_robot}");
+}
