@@ -134,10 +134,10 @@ impl NonGeometric {
                 return Err(format!("gear: joint {} does not exist (1..{n})", g.joint));
             }
         }
-        if let Some(b) = &self.backlash {
-            if b.mrad.len() != n || b.mrad.iter().any(|v| !v.is_finite() || *v < 0.0) {
-                return Err(format!("backlash: mrad needs {n} non-negative values"));
-            }
+        if let Some(b) = &self.backlash
+            && (b.mrad.len() != n || b.mrad.iter().any(|v| !v.is_finite() || *v < 0.0))
+        {
+            return Err(format!("backlash: mrad needs {n} non-negative values"));
         }
         Ok(())
     }
