@@ -63,12 +63,13 @@ impl Table {
             .from_reader(bytes);
         // The csv crate does not count the blank lines it skips, so lines come from offsets.
         // A record after blank lines is reported at the first blank line: skip them.
+        let newlines: Vec<usize> = (0..bytes.len()).filter(|&i| bytes[i] == b'\n').collect();
         let line_at = |byte: u64| {
             let mut end = (byte as usize).min(bytes.len());
             while end < bytes.len() && (bytes[end] == b'\n' || bytes[end] == b'\r') {
                 end += 1;
             }
-            bytes[..end].iter().filter(|&&b| b == b'\n').count() + 1
+            newlines.partition_point(|&p| p < end) + 1
         };
         let csv_err = |e: csv::Error| {
             let line = e.position().map(|p| line_at(p.byte()));
