@@ -6,6 +6,8 @@
 pub mod cli;
 pub mod data;
 pub mod error;
+pub mod evaluate;
+pub mod identify;
 pub mod io;
 pub mod kinematics;
 pub mod model;

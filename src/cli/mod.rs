@@ -2,6 +2,7 @@
 
 mod data_args;
 mod fk;
+mod identify;
 mod ik;
 mod import;
 mod output;
@@ -31,6 +32,10 @@ enum Command {
     Import(import::ImportArgs),
     /// Simulates measurements of a virtual robot (deviations, non-geometric errors, noise).
     Simulate(simulate::SimulateArgs),
+    /// Identifies kinematic parameters from measurements and writes the calibrated robot.
+    Identify(identify::IdentifyArgs),
+    /// Reports the accuracy of a robot model on measurements.
+    Evaluate(identify::EvaluateArgs),
 }
 
 /// Runs the command line; errors are printed with their context and give exit code 1.
@@ -41,6 +46,8 @@ pub fn main() -> ExitCode {
         Command::Ik(a) => ik::run(a),
         Command::Import(a) => import::run(a),
         Command::Simulate(a) => simulate::run(a),
+        Command::Identify(a) => identify::run_identify(a),
+        Command::Evaluate(a) => identify::run_evaluate(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,5 +1,6 @@
 //! Robot models: rows, joints, named parameters and robot files.
 
+pub(crate) mod axes;
 pub mod file;
 pub mod robot;
 pub mod row;

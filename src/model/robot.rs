@@ -111,6 +111,34 @@ pub(crate) struct Chain {
     /// `T_base * pre_1`.
     pub head: Pose,
     pub links: Vec<Link>,
+    /// The base row's transform.
+    pub base: Pose,
+    /// The screw of every parameter, in the order of [`Robot::parameters`].
+    pub axes: Vec<ParamAxis>,
+}
+
+/// Which frame of a configuration a parameter's screw is fixed in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Anchor {
+    /// The world frame (base row).
+    World,
+    /// The frame before joint i's row (the base frame, or link frame i-1).
+    Entry(usize),
+    /// Joint i's frame after its RotZ TransZ.
+    Joint(usize),
+    /// The frame before the tool row (link frame N).
+    ToolEntry,
+}
+
+/// A parameter as an elementary motion: rotation about the line through `c` along `u`, or
+/// translation along `u`, both in the anchor frame's coordinates. Changing the parameter by
+/// dp moves every frame after it by that motion times dp.
+#[derive(Debug, Clone)]
+pub(crate) struct ParamAxis {
+    pub anchor: Anchor,
+    pub rotation: bool,
+    pub u: nalgebra::Vector3<f64>,
+    pub c: nalgebra::Vector3<f64>,
 }
 
 /// A robot: base row, joints and tool row. Immutable during a solve; see [`Robot::with_param`]
@@ -334,7 +362,13 @@ impl Robot {
 
 fn compile(base: &Row, joints: &[Joint], tool: &Row) -> Chain {
     let splits: Vec<_> = joints.iter().map(|j| j.row.split()).collect();
-    let head = base.transform() * splits[0].pre;
+    let base_t = base.transform();
+    let head = base_t * splits[0].pre;
+    let mut axes = super::axes::row_axes(base, None, Anchor::World);
+    for (i, j) in joints.iter().enumerate() {
+        axes.extend(super::axes::row_axes(&j.row, Some(i), Anchor::Entry(i)));
+    }
+    axes.extend(super::axes::row_axes(tool, None, Anchor::ToolEntry));
     let tool_t = tool.transform();
     let links = joints
         .iter()
@@ -354,7 +388,12 @@ fn compile(base: &Row, joints: &[Joint], tool: &Row) -> Chain {
             }
         })
         .collect();
-    Chain { head, links }
+    Chain {
+        head,
+        links,
+        base: base_t,
+        axes,
+    }
 }
 
 impl Chain {

@@ -1,0 +1,322 @@
+//! `robocal identify` and `robocal evaluate`.
+
+use super::data_args::DataArgs;
+use crate::data::{JointInfo, MeasurementSet};
+use crate::evaluate::{ErrorStats, evaluate_model};
+use crate::identify::identifiability::DropReason;
+use crate::identify::{
+    Identified, Measure, Method, Options, RobustLoss, Sigmas, SolveOptions, identify,
+};
+use crate::model::{Robot, read_robot, write_robot};
+use anyhow::{Context, Result};
+use clap::Args;
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+
+#[derive(Args)]
+pub struct IdentifyArgs {
+    /// Starting (nominal) robot file.
+    #[arg(long)]
+    robot: PathBuf,
+    /// Calibration measurements.
+    #[arg(long)]
+    data: PathBuf,
+    /// Validation measurements (e.g. another set, or a simulated set's truth file).
+    #[arg(long)]
+    validate: Option<PathBuf>,
+    #[command(flatten)]
+    read: DataArgs,
+    /// Parameters: offsets | full | base | tool | joints | names, comma-separated.
+    #[arg(long, default_value = "full")]
+    params: String,
+    /// How to compare measurements (default: pose if the data has orientations, else position).
+    #[arg(long, value_enum)]
+    measure: Option<Measure>,
+    #[arg(long, value_enum, default_value_t = Method::Lm)]
+    method: Method,
+    /// Set-level position sigma (mm) for rows without sx,sy,sz (default 0.033, the thesis's tracker).
+    #[arg(long)]
+    sigma_pos: Option<f64>,
+    /// Set-level orientation sigma (mrad) for rows without srx,sry,srz (default 0.174).
+    #[arg(long)]
+    sigma_rot: Option<f64>,
+    /// Robust loss by iteratively reweighted least squares.
+    #[arg(long, value_enum)]
+    robust: Option<RobustLoss>,
+    /// Do not register a 6-DOF base (and tool) to the measured positions before solving.
+    #[arg(long)]
+    no_register: bool,
+    /// Iteration limit.
+    #[arg(long, default_value_t = 200)]
+    max_iterations: usize,
+    /// Rows beyond this many robust sigmas are reported as outliers.
+    #[arg(long, default_value_t = 3.0)]
+    outlier_k: f64,
+    /// Calibrated robot file to write.
+    #[arg(long)]
+    out: PathBuf,
+    /// JSON report.
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+#[derive(Args)]
+pub struct EvaluateArgs {
+    /// Robot file to evaluate.
+    #[arg(long)]
+    robot: PathBuf,
+    /// Measurements to evaluate against.
+    #[arg(long)]
+    data: PathBuf,
+    #[command(flatten)]
+    read: DataArgs,
+    #[arg(long, value_enum)]
+    measure: Option<Measure>,
+    /// JSON report (`validation` holds the statistics).
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+fn fmt_stats(s: &ErrorStats) -> (String, String) {
+    let p = s.position_mm.map_or("-".into(), |p| {
+        format!("{:>9.4} {:>9.4} {:>9.4}", p.mean, p.rms, p.max)
+    });
+    let r = s.orientation_deg.map_or("-".into(), |r| {
+        format!("{:>8.4} {:>8.4} {:>8.4}", r.mean, r.rms, r.max)
+    });
+    (p, r)
+}
+
+/// Prints a before/after table of error statistics.
+pub fn print_stats(rows: &[(&str, &str, &ErrorStats)]) {
+    println!(
+        "{:<12} {:<7} {:>29}   {:>26}",
+        "set", "model", "position mm: mean rms max", "orientation deg: mean rms max"
+    );
+    for (set, model, s) in rows {
+        let (p, r) = fmt_stats(s);
+        println!("{set:<12} {model:<7} {p:>29}   {r:>26}");
+    }
+}
+
+fn stats_json(s: &ErrorStats) -> Value {
+    serde_json::to_value(s).unwrap_or(Value::Null)
+}
+
+fn write_json(path: &Path, v: &Value) -> Result<()> {
+    let mut b = serde_json::to_vec_pretty(v)?;
+    b.push(b'\n');
+    crate::io::write_atomic(path, &b).with_context(|| format!("writing {}", path.display()))
+}
+
+fn read_set(args: &DataArgs, path: &Path, robot: &Robot) -> Result<MeasurementSet> {
+    args.read(path, &JointInfo::of(robot))
+}
+
+pub fn run_identify(a: IdentifyArgs) -> Result<()> {
+    let nominal = read_robot(&a.robot)?;
+    let cal = read_set(&a.read, &a.data, &nominal)?;
+    let val = a
+        .validate
+        .as_ref()
+        .map(|p| read_set(&a.read, p, &nominal))
+        .transpose()?;
+    let mut sigmas = Sigmas::default();
+    if let Some(s) = a.sigma_pos {
+        sigmas.position_mm = s;
+    }
+    if let Some(s) = a.sigma_rot {
+        sigmas.rotation_rad = s * 1e-3;
+    }
+    let opts = Options {
+        params: a.params.clone(),
+        measure: a.measure,
+        sigmas,
+        solve: SolveOptions {
+            method: a.method,
+            max_iterations: a.max_iterations,
+            ..Default::default()
+        },
+        robust: a.robust,
+        register: !a.no_register,
+        outlier_k: a.outlier_k,
+    };
+    let id = identify(&nominal, &cal, &opts)?;
+    write_robot(&id.robot, &a.out).with_context(|| format!("writing {}", a.out.display()))?;
+    let m = id.measure;
+    let cal_before = evaluate_model(&nominal, &cal, m)?;
+    let cal_after = evaluate_model(&id.robot, &cal, m)?;
+    let val_stats = match &val {
+        Some(v) => Some((
+            evaluate_model(&nominal, v, m)?,
+            evaluate_model(&id.robot, v, m)?,
+        )),
+        None => None,
+    };
+    print_identified(&a, &nominal, &cal, &id);
+    let mut rows = vec![
+        ("calibration", "before", &cal_before),
+        ("calibration", "after", &cal_after),
+    ];
+    if let Some((b, af)) = &val_stats {
+        rows.push(("validation", "before", b));
+        rows.push(("validation", "after", af));
+    }
+    print_stats(&rows);
+    for w in &id.warnings {
+        eprintln!("warning: {w}");
+    }
+    println!("wrote {}", a.out.display());
+    if let Some(path) = &a.report {
+        let params = nominal.parameters();
+        let dropped: Vec<Value> = id
+            .identifiability
+            .dropped
+            .iter()
+            .map(|d| match &d.reason {
+                DropReason::NoEffect => json!({"name": params[d.param].name(), "reason": "no effect"}),
+                DropReason::Regroups(g) => json!({
+                    "name": params[d.param].name(),
+                    "reason": "regroups",
+                    "regroups_with": g.iter().map(|(p, c)| json!({"name": params[*p].name(), "coefficient": c})).collect::<Vec<_>>(),
+                }),
+            })
+            .collect();
+        let ident = &id.identifiability;
+        let v = json!({
+            "robot": a.robot, "data": a.data, "validation_data": a.validate,
+            "measure": m, "method": a.method, "params": a.params,
+            "calibration": stats_json(&cal_after),
+            "calibration_before": stats_json(&cal_before),
+            "validation": val_stats.as_ref().map(|(_, af)| stats_json(af)),
+            "validation_before": val_stats.as_ref().map(|(b, _)| stats_json(b)),
+            "parameters": id.parameters,
+            "dropped": dropped,
+            "condition_number": finite_or_null(ident.selected_condition_number),
+            "condition_number_all_candidates": finite_or_null(ident.condition_number),
+            "rank": ident.rank,
+            "rank_pivoted_qr": ident.rank_pivoted_qr,
+            "singular_values": ident.singular_values,
+            "iterations": id.solution.iterations,
+            "stop_reason": id.solution.stop,
+            "variance_factor": finite_or_null(id.variance_factor),
+            "correlations": id.correlations.iter().map(|(x, y, r)| json!({"a": x, "b": y, "correlation": r})).collect::<Vec<_>>(),
+            "outliers": id.outliers,
+            "robust": a.robust, "robust_rounds": id.robust_rounds,
+            "registration_rms_mm": id.registration.as_ref().map(|r| r.rms_mm),
+            "warnings": id.warnings,
+        });
+        write_json(path, &v)?;
+    }
+    Ok(())
+}
+
+fn finite_or_null(v: f64) -> Value {
+    if v.is_finite() { json!(v) } else { Value::Null }
+}
+
+fn print_identified(a: &IdentifyArgs, nominal: &Robot, cal: &MeasurementSet, id: &Identified) {
+    let params = nominal.parameters();
+    let ident = &id.identifiability;
+    println!(
+        "identify: {} rows of {}, measure {}, method {:?}, parameters `{}`",
+        cal.rows.len(),
+        a.data.display(),
+        id.measure.name(),
+        a.method,
+        a.params
+    );
+    if let Some(r) = &id.registration {
+        println!(
+            "registration of the base{}: RMS {:.4} mm",
+            if r.tool.is_some() { " and tool" } else { "" },
+            r.rms_mm
+        );
+    }
+    println!(
+        "identifiability: {} candidates, rank {} (SVD) / {} (pivoted QR), condition number {:.4e} \
+         (column-scaled); identifiable set: {} parameters, condition number {:.4e}",
+        ident.candidates.len(),
+        ident.rank,
+        ident.rank_pivoted_qr,
+        ident.condition_number,
+        ident.selected.len(),
+        ident.selected_condition_number
+    );
+    for d in &ident.dropped {
+        let why = match &d.reason {
+            DropReason::NoEffect => "no effect on these measurements".to_string(),
+            DropReason::Regroups(g) => format!(
+                "regroups with {}",
+                g.iter()
+                    .map(|(p, c)| format!("{:+.4} {}", c, params[*p].name()))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            ),
+        };
+        println!("  left out {:<12} {why}", params[d.param].name());
+    }
+    println!(
+        "solution: {} iterations, {}; variance factor s^2 = {:.4}",
+        id.solution.iterations,
+        id.solution.stop.describe(),
+        id.variance_factor
+    );
+    println!(
+        "{:<12} {:<4} {:>14} {:>14} {:>12}",
+        "parameter", "unit", "nominal", "estimate", "std"
+    );
+    for p in &id.parameters {
+        println!(
+            "{:<12} {:<4} {:>14.6} {:>14.6} {:>12.6}",
+            p.name, p.unit, p.nominal, p.estimate, p.std
+        );
+    }
+    if !id.correlations.is_empty() {
+        let list: Vec<String> = id
+            .correlations
+            .iter()
+            .map(|(x, y, r)| format!("{x}/{y} {r:+.3}"))
+            .collect();
+        println!("correlated (|r| > 0.9): {}", list.join(", "));
+    }
+    if id.outliers.is_empty() {
+        println!("outliers (> {} robust sigmas): none", a.outlier_k);
+    } else {
+        let lines: Vec<String> = id
+            .outliers
+            .iter()
+            .map(|o| format!("line {} ({:.1})", o.line, o.robust_sigmas))
+            .collect();
+        println!(
+            "outliers (> {} robust sigmas): {}",
+            a.outlier_k,
+            lines.join(", ")
+        );
+    }
+}
+
+pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
+    let robot = read_robot(&a.robot)?;
+    let set = read_set(&a.read, &a.data, &robot)?;
+    let m = a.measure.unwrap_or_else(|| Measure::default_for(&set));
+    let s = evaluate_model(&robot, &set, m)?;
+    println!(
+        "evaluate: {} on {} ({} rows, measure {})",
+        a.robot.display(),
+        a.data.display(),
+        set.rows.len(),
+        m.name()
+    );
+    print_stats(&[("data", "model", &s)]);
+    if let Some(c) = s.position_per_coordinate_mean_mm {
+        println!("mean per-coordinate position error |dx|,|dy|,|dz|: {c:.4} mm");
+    }
+    if let Some(path) = &a.report {
+        write_json(
+            path,
+            &json!({"robot": a.robot, "data": a.data, "measure": m, "validation": stats_json(&s)}),
+        )?;
+    }
+    Ok(())
+}

@@ -1,0 +1,181 @@
+//! What the data can identify (thesis 4.3.4): zero columns, rank, an identifiable subset
+//! chosen by priority, and what each left-out parameter regroups with.
+//!
+//! Method. The weighted observation matrix Phi_w (eq. 4.41, rows divided by their sigma) is
+//! reduced to its triangular factor R (Phi_w = Q R) block by block. Columns are then scaled to
+//! unit length, which makes mm and rad columns comparable (Hollerbach and Wampler's column
+//! scaling): the numbers below are properties of the scaled matrix.
+//! - A column shorter than `ZERO_TOL` times the longest is a zero column: no effect.
+//! - Singular values of the scaled matrix (SVD) give the condition number; the rank counts
+//!   singular values above `RANK_TOL` times the largest. QR with column pivoting gives the
+//!   same count as a cross-check.
+//! - The subset: columns in priority order (see `select`), each kept when the part of it
+//!   outside the span of the kept ones is longer than `RANK_TOL` (it is a unit vector, so this
+//!   is the sine of its angle to that span).
+//! - A dropped column's regrouping: the least-squares combination of kept columns that
+//!   reproduces it, in parameter units (`theta_R = 1.000 theta1`).
+
+use super::problem::{Observations, Workspace, observation_r};
+use crate::model::Robot;
+use nalgebra::{DMatrix, DVector};
+
+/// Columns shorter than this, relative to the longest, have no effect on the measurements.
+pub const ZERO_TOL: f64 = 1e-10;
+/// Relative singular value (and sine of angle to the kept span) under which a direction is
+/// taken as unidentifiable.
+pub const RANK_TOL: f64 = 1e-7;
+/// Condition number of the selected, column-scaled set above which identification warns.
+pub const CONDITION_WARNING: f64 = 1e4;
+
+/// Why a parameter is left out.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DropReason {
+    /// Its column is zero: it does not change what is measured.
+    NoEffect,
+    /// Its column is a combination of kept ones: `(parameter index, coefficient)`, with
+    /// coefficient in units of the kept parameter per unit of the dropped one.
+    Regroups(Vec<(usize, f64)>),
+}
+
+/// A parameter that the data cannot identify.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dropped {
+    /// Index into `Robot::parameters`.
+    pub param: usize,
+    pub reason: DropReason,
+}
+
+/// Result of the analysis.
+#[derive(Debug, Clone)]
+pub struct Identifiability {
+    /// Parameters analysed, in priority order (indices into `Robot::parameters`).
+    pub candidates: Vec<usize>,
+    /// Singular values of the column-scaled matrix of the non-zero candidate columns.
+    pub singular_values: Vec<f64>,
+    /// Condition number of that matrix (infinite when rank deficient).
+    pub condition_number: f64,
+    /// Its rank (SVD, `RANK_TOL`).
+    pub rank: usize,
+    /// Its rank by QR with column pivoting (cross-check).
+    pub rank_pivoted_qr: usize,
+    /// The identifiable subset, in priority order.
+    pub selected: Vec<usize>,
+    /// Condition number of the selected columns (scaled).
+    pub selected_condition_number: f64,
+    pub dropped: Vec<Dropped>,
+}
+
+fn condition(m: &DMatrix<f64>) -> (Vec<f64>, f64) {
+    if m.ncols() == 0 {
+        return (Vec::new(), 1.0);
+    }
+    let sv = m.clone().singular_values();
+    let mut s: Vec<f64> = sv.iter().copied().collect();
+    s.sort_by(|a, b| b.total_cmp(a));
+    // Fewer rows than columns: the missing singular values are zero.
+    s.resize(m.ncols(), 0.0);
+    let cond = if s[s.len() - 1] > 0.0 {
+        s[0] / s[s.len() - 1]
+    } else {
+        f64::INFINITY
+    };
+    (s, cond)
+}
+
+/// Analyses the candidate parameters (indices into `Robot::parameters`, in priority order).
+pub fn analyse(robot: &Robot, obs: &Observations, candidates: &[usize]) -> Identifiability {
+    let mut ws = Workspace::new(robot);
+    let r = observation_r(robot, obs, candidates, &mut ws);
+    let k = candidates.len();
+    let norms: Vec<f64> = (0..k).map(|j| r.column(j).norm()).collect();
+    let max_norm = norms.iter().cloned().fold(0.0, f64::max);
+    let nonzero: Vec<usize> = (0..k)
+        .filter(|&j| norms[j] > ZERO_TOL * max_norm && max_norm > 0.0)
+        .collect();
+    let mut dropped: Vec<Dropped> = (0..k)
+        .filter(|j| !nonzero.contains(j))
+        .map(|j| Dropped {
+            param: candidates[j],
+            reason: DropReason::NoEffect,
+        })
+        .collect();
+
+    // Unit columns (in the coordinates of R, which preserve lengths and angles).
+    let mut scaled = DMatrix::<f64>::zeros(r.nrows().max(1), nonzero.len());
+    for (c, &j) in nonzero.iter().enumerate() {
+        if r.nrows() > 0 {
+            scaled.column_mut(c).copy_from(&(r.column(j) / norms[j]));
+        }
+    }
+    let (singular_values, condition_number) = condition(&scaled);
+    let smax = singular_values.first().copied().unwrap_or(0.0);
+    let rank = singular_values
+        .iter()
+        .filter(|&&s| s > RANK_TOL * smax)
+        .count();
+    let rank_pivoted_qr = if nonzero.is_empty() {
+        0
+    } else {
+        let qr = scaled.clone().col_piv_qr();
+        let rr = qr.r();
+        let d0 = rr[(0, 0)].abs();
+        (0..rr.nrows().min(rr.ncols()))
+            .filter(|&i| rr[(i, i)].abs() > RANK_TOL * d0)
+            .count()
+    };
+
+    // Greedy selection in priority order against an orthonormal basis of the kept columns.
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    let mut kept: Vec<usize> = Vec::new(); // positions in `nonzero`
+    for (c, _) in nonzero.iter().enumerate() {
+        let mut v = scaled.column(c).into_owned();
+        for _ in 0..2 {
+            for b in &basis {
+                let proj = b.dot(&v);
+                v -= b * proj;
+            }
+        }
+        let rest = v.norm();
+        if rest > RANK_TOL {
+            basis.push(v / rest);
+            kept.push(c);
+        }
+    }
+    let kept_matrix = DMatrix::from_fn(scaled.nrows(), kept.len(), |i, c| scaled[(i, kept[c])]);
+    let (_, selected_condition_number) = condition(&kept_matrix);
+    for (c, &j) in nonzero.iter().enumerate() {
+        if kept.contains(&c) {
+            continue;
+        }
+        let target = scaled.column(c).into_owned();
+        let coeffs = kept_matrix
+            .clone()
+            .svd(true, true)
+            .solve(&target, 1e-12)
+            .unwrap_or_else(|_| DVector::zeros(kept.len()));
+        let max_c = coeffs.iter().map(|x| x.abs()).fold(0.0, f64::max);
+        let regroups = kept
+            .iter()
+            .zip(coeffs.iter())
+            .filter(|&(_, x)| x.abs() > 1e-3 * max_c && x.abs() > 1e-9)
+            // Column j = sum c_i * column_i in scaled units; in parameter units a change dp_j
+            // acts as c_i * norm_j / norm_i of parameter i.
+            .map(|(&ci, x)| (candidates[nonzero[ci]], x * norms[j] / norms[nonzero[ci]]))
+            .collect();
+        dropped.push(Dropped {
+            param: candidates[j],
+            reason: DropReason::Regroups(regroups),
+        });
+    }
+    let selected = kept.iter().map(|&c| candidates[nonzero[c]]).collect();
+    Identifiability {
+        candidates: candidates.to_vec(),
+        singular_values,
+        condition_number,
+        rank,
+        rank_pivoted_qr,
+        selected,
+        selected_condition_number,
+        dropped,
+    }
+}

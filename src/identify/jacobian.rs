@@ -1,0 +1,192 @@
+//! The identification Jacobian (thesis eq. 4.19-4.21): how the tool pose moves with each
+//! model parameter, analytic, from the frames of one forward-kinematics pass.
+//!
+//! Parameter k is an elementary motion of a frame of the chain (see `model::axes`): a rotation
+//! about the world line through c_k along w_k, or a translation along w_k. Its column is
+//! [w_k x (p - c_k); w_k] for a rotation and [w_k; 0] for a translation, p being the tool
+//! origin: rows 0-2 in mm per mm or mm per rad, rows 3-5 the tool's angular velocity
+//! (rad per unit), both in world coordinates.
+
+use crate::kinematics::{Frames, Pose};
+use crate::model::Robot;
+use crate::model::robot::Anchor;
+use nalgebra::{Matrix6xX, Point3, Vector3};
+
+/// Fills `out` (6 x cols.len()) with the columns of the parameters `cols` (indices into
+/// [`Robot::parameters`]) at the configuration whose frames are in `frames`. Does not allocate
+/// when `out` already has the right size.
+pub fn parameter_jacobian(
+    robot: &Robot,
+    frames: &Frames,
+    cols: &[usize],
+    out: &mut Matrix6xX<f64>,
+) {
+    if out.ncols() != cols.len() {
+        *out = Matrix6xX::zeros(cols.len());
+    }
+    let chain = robot.chain();
+    let n = robot.dof();
+    let identity = Pose::identity();
+    let p = frames.tool.translation.vector;
+    for (k, &col) in cols.iter().enumerate() {
+        let axis = &chain.axes[col];
+        let f: &Pose = match axis.anchor {
+            Anchor::World => &identity,
+            Anchor::Entry(0) => &chain.base,
+            Anchor::Entry(i) => &frames.link[i - 1],
+            Anchor::Joint(i) => &frames.joint[i],
+            Anchor::ToolEntry => &frames.link[n - 1],
+        };
+        let w: Vector3<f64> = f.rotation * axis.u;
+        let mut c = out.column_mut(k);
+        if axis.rotation {
+            let at = (f * Point3::from(axis.c)).coords;
+            c.fixed_rows_mut::<3>(0).copy_from(&w.cross(&(p - at)));
+            c.fixed_rows_mut::<3>(3).copy_from(&w);
+        } else {
+            c.fixed_rows_mut::<3>(0).copy_from(&w);
+            c.fixed_rows_mut::<3>(3).fill(0.0);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::{frames, tool_pose};
+    use crate::model::file::parse_robot;
+    use crate::rotation::rotation_vector;
+    use std::path::Path;
+
+    /// Every parameter kind: MDH (a, alpha, d, theta), Hayati (beta), standard DH, 6-DOF base
+    /// and tool, and an MDH base and tool row; with non-zero values everywhere so that no
+    /// column is special.
+    const MIXED: &str = r#"
+[base]
+convention = "transform"
+x = 120.0
+y = -40.0
+z = 300.0
+rz = 25.0
+ry = -10.0
+rx = 5.0
+[[joint]]
+convention = "mdh"
+alpha = 3.0
+a = 20.0
+theta = 4.0
+d = 400.0
+limits = [-180, 180]
+[[joint]]
+convention = "mdh"
+alpha = -88.0
+a = 300.0
+theta = -87.0
+d = 12.0
+limits = [-180, 180]
+[[joint]]
+convention = "hayati"
+beta = 0.7
+alpha = 1.5
+a = 900.0
+theta = 2.0
+limits = [-180, 180]
+[[joint]]
+convention = "dh"
+theta = 3.0
+d = 850.0
+a = 150.0
+alpha = -91.0
+limits = [-180, 180]
+[[joint]]
+convention = "dh"
+theta = -1.0
+d = 5.0
+a = 7.0
+alpha = 89.0
+type = "prismatic"
+limits = [-100, 100]
+[[joint]]
+convention = "mdh"
+alpha = 92.0
+a = 4.0
+theta = -93.0
+d = -210.0
+limits = [-180, 180]
+[tool]
+convention = "transform"
+x = 30.0
+y = 15.0
+z = 180.0
+rz = 40.0
+ry = 20.0
+rx = -30.0
+"#;
+
+    fn check(robot: &Robot, seed: u64) {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let params = robot.parameters();
+        let cols: Vec<usize> = (0..params.len()).collect();
+        let mut ws = Frames::new(robot);
+        let mut jac = Matrix6xX::zeros(cols.len());
+        for _ in 0..20 {
+            let q: Vec<f64> = (0..robot.dof())
+                .map(|_| rng.random_range(-2.5..2.5))
+                .collect();
+            frames(robot, &q, &mut ws);
+            parameter_jacobian(robot, &ws, &cols, &mut jac);
+            for (k, id) in params.iter().enumerate() {
+                let h = if id.field.is_angle() { 1e-6 } else { 1e-4 };
+                let v = robot.param(*id);
+                let plus = tool_pose(&robot.with_param(*id, v + h).unwrap(), &q);
+                let minus = tool_pose(&robot.with_param(*id, v - h).unwrap(), &q);
+                let dp = (plus.translation.vector - minus.translation.vector) / (2.0 * h);
+                let dr = rotation_vector(&(plus.rotation * minus.rotation.inverse())) / (2.0 * h);
+                let col = jac.column(k);
+                let (jp, jr) = (col.fixed_rows::<3>(0), col.fixed_rows::<3>(3));
+                // Relative to the column's size (and to 1 for columns that vanish).
+                let scale_p = dp.norm().max(1.0);
+                let scale_r = dr.norm().max(1e-3);
+                assert!(
+                    (jp - dp).norm() / scale_p < 1e-6,
+                    "{}: {jp:?} vs {dp:?}",
+                    id.name()
+                );
+                assert!(
+                    (jr - dr).norm() / scale_r < 1e-6,
+                    "{}: {jr:?} vs {dr:?}",
+                    id.name()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn analytic_jacobian_matches_central_differences_for_every_parameter_kind() {
+        let robot = parse_robot(MIXED, Path::new("mixed.toml")).unwrap();
+        check(&robot, 1);
+        // MDH base and tool rows (the thesis's frames R and T).
+        let fanuc = crate::model::read_robot(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/datasets/robots/fanuc_r2000ib_210f.toml"
+        ))
+        .unwrap();
+        let bent = fanuc
+            .with_params(&[
+                (fanuc.find_param("base.a").unwrap(), 3.0),
+                (fanuc.find_param("base.alpha").unwrap(), 0.01),
+                (fanuc.find_param("tool.theta").unwrap(), 3.0),
+                (fanuc.find_param("beta3").unwrap(), 0.002),
+            ])
+            .unwrap();
+        check(&bent, 2);
+        // Standard DH base and tool rows.
+        let dh_ends = MIXED
+            .replace("[base]\nconvention = \"transform\"\nx = 120.0\ny = -40.0\nz = 300.0\nrz = 25.0\nry = -10.0\nrx = 5.0", "[base]\nconvention = \"dh\"\ntheta = 10\nd = 50\na = 30\nalpha = 20")
+            .replace("[tool]\nconvention = \"transform\"\nx = 30.0\ny = 15.0\nz = 180.0\nrz = 40.0\nry = 20.0\nrx = -30.0", "[tool]\nconvention = \"hayati\"\nbeta = 5\nalpha = 10\na = 40\ntheta = 15");
+        let r = parse_robot(&dh_ends, Path::new("dh.toml")).unwrap();
+        assert_eq!(r.base().convention(), crate::model::Convention::Dh);
+        check(&r, 3);
+    }
+}

@@ -1,0 +1,416 @@
+//! The least-squares problem: residuals of measurements against a model, weighted by
+//! W = diag(1/sigma^2) (thesis eq. 4.29-4.31), and their Jacobian (eq. 4.22-4.23, 4.37).
+//!
+//! One *observation* is one measured row (pose, position, orientation) or one pair of rows
+//! (relative position: 3 components; distance: 1). Its residual is y - f(q, p):
+//! - pose: [p_meas - p_model (mm); rotvec(R_meas R_model^T) (rad)];
+//! - relative (thesis eq. 4.38): (p_a - p_b)_meas - (p_a - p_b)_model, Jacobian J_a - J_b;
+//! - distance: |p_a - p_b|_meas - |p_a - p_b|_model, Jacobian u^T (J_a - J_b).
+//!
+//! Each component is divided by its sigma (a robust weight w scales it by sqrt(w) more), so the
+//! problem is min sum r_w^2. Rows are processed in blocks: the normal equations (or the R of a
+//! QR factorisation) are accumulated, so memory grows with the parameter count, not the rows.
+
+use super::jacobian::parameter_jacobian;
+use crate::data::MeasurementSet;
+use crate::data::pairs::{Pair, pairs};
+use crate::error::{Error, Result};
+use crate::kinematics::{Frames, frames};
+use crate::model::Robot;
+use crate::rotation::rotation_vector;
+use nalgebra::{DMatrix, DVector, Matrix6xX, Vector3};
+
+/// How measurements are compared with the model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Measure {
+    /// Position and orientation of each row.
+    Pose,
+    /// Position of each row.
+    Position,
+    /// Orientation of each row.
+    Orientation,
+    /// Displacement p(a) - p(b) of each pair of rows.
+    Relative,
+    /// Length of that displacement (a ball-bar's distance).
+    Distance,
+}
+
+impl Measure {
+    /// The richest measure the set supports: pose, else position, else orientation, else
+    /// distance.
+    pub fn default_for(set: &MeasurementSet) -> Measure {
+        match (set.has_position(), set.has_rotation()) {
+            (true, true) => Measure::Pose,
+            (true, false) => Measure::Position,
+            (false, true) => Measure::Orientation,
+            (false, false) => Measure::Distance,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Measure::Pose => "pose",
+            Measure::Position => "position",
+            Measure::Orientation => "orientation",
+            Measure::Relative => "relative",
+            Measure::Distance => "distance",
+        }
+    }
+}
+
+/// Set-level noise, used where rows carry no sigma of their own.
+#[derive(Debug, Clone, Copy)]
+pub struct Sigmas {
+    /// Per position coordinate (mm).
+    pub position_mm: f64,
+    /// Per orientation component (rad).
+    pub rotation_rad: f64,
+}
+
+impl Default for Sigmas {
+    /// The thesis's Leica LTD500 + T-Mac: 0.033 mm, 0.174 mrad.
+    fn default() -> Self {
+        Sigmas {
+            position_mm: 0.033,
+            rotation_rad: 0.174e-3,
+        }
+    }
+}
+
+/// One observation: its row(s) and the inverse sigma of each residual component.
+#[derive(Debug, Clone)]
+pub struct Observation {
+    pub a: usize,
+    pub b: Option<usize>,
+    pub inv_sigma: [f64; 6],
+    /// Robust weight (IRLS), 1 by default.
+    pub weight: f64,
+}
+
+/// The observations of a measurement set under one measure.
+#[derive(Debug, Clone)]
+pub struct Observations<'a> {
+    pub set: &'a MeasurementSet,
+    pub measure: Measure,
+    pub items: Vec<Observation>,
+}
+
+impl<'a> Observations<'a> {
+    /// Builds the observations; an error when the set lacks what the measure needs.
+    pub fn new(set: &'a MeasurementSet, measure: Measure, sigmas: Sigmas) -> Result<Self> {
+        let need = |ok: bool, what: &str| {
+            if ok {
+                Ok(())
+            } else {
+                Err(Error::Invalid(format!(
+                    "{}: --measure {} needs {what} in every row",
+                    set.source.display(),
+                    measure.name()
+                )))
+            }
+        };
+        for s in [sigmas.position_mm, sigmas.rotation_rad] {
+            if !(s.is_finite() && s > 0.0) {
+                return Err(Error::Invalid(format!("sigma {s} must be positive")));
+            }
+        }
+        let sp = |i: usize| {
+            set.rows[i]
+                .sigma_position
+                .unwrap_or(Vector3::repeat(sigmas.position_mm))
+        };
+        let sr = |i: usize| {
+            set.rows[i]
+                .sigma_rotation
+                .unwrap_or(Vector3::repeat(sigmas.rotation_rad))
+        };
+        let mut items = Vec::new();
+        match measure {
+            Measure::Pose | Measure::Position | Measure::Orientation => {
+                match measure {
+                    Measure::Pose => need(
+                        set.has_position() && set.has_rotation(),
+                        "position and orientation",
+                    )?,
+                    Measure::Position => need(set.has_position(), "a position")?,
+                    _ => need(set.has_rotation(), "an orientation")?,
+                }
+                for i in 0..set.rows.len() {
+                    let (p, r) = (sp(i), sr(i));
+                    let inv = match measure {
+                        Measure::Pose => [p.x, p.y, p.z, r.x, r.y, r.z],
+                        Measure::Position => [p.x, p.y, p.z, 1.0, 1.0, 1.0],
+                        _ => [r.x, r.y, r.z, 1.0, 1.0, 1.0],
+                    }
+                    .map(|s| 1.0 / s);
+                    items.push(Observation {
+                        a: i,
+                        b: None,
+                        inv_sigma: inv,
+                        weight: 1.0,
+                    });
+                }
+            }
+            Measure::Relative | Measure::Distance => {
+                if measure == Measure::Relative {
+                    need(set.has_position(), "a position")?;
+                }
+                for Pair { a, b } in pairs(set)? {
+                    let s =
+                        (sp(a).component_mul(&sp(a)) + sp(b).component_mul(&sp(b))).map(f64::sqrt);
+                    let inv = if measure == Measure::Relative {
+                        [1.0 / s.x, 1.0 / s.y, 1.0 / s.z, 1.0, 1.0, 1.0]
+                    } else {
+                        if crate::data::pairs::distance(set, Pair { a, b }).is_none() {
+                            return Err(Error::Invalid(format!(
+                                "{}: line {}: pair has no distance (a `distance` column on its second row, or positions)",
+                                set.source.display(),
+                                set.rows[b].line
+                            )));
+                        }
+                        [
+                            1.0 / (s.norm_squared() / 3.0).sqrt(),
+                            1.0,
+                            1.0,
+                            1.0,
+                            1.0,
+                            1.0,
+                        ]
+                    };
+                    items.push(Observation {
+                        a,
+                        b: Some(b),
+                        inv_sigma: inv,
+                        weight: 1.0,
+                    });
+                }
+            }
+        }
+        Ok(Observations {
+            set,
+            measure,
+            items,
+        })
+    }
+
+    /// Number of residual components of one observation.
+    pub fn dim(&self) -> usize {
+        match self.measure {
+            Measure::Pose => 6,
+            Measure::Position | Measure::Orientation | Measure::Relative => 3,
+            Measure::Distance => 1,
+        }
+    }
+
+    /// Total number of residual components.
+    pub fn len(&self) -> usize {
+        self.items.len() * self.dim()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.items.is_empty()
+    }
+}
+
+/// Scratch space for evaluating observations.
+#[derive(Debug, Clone)]
+pub struct Workspace {
+    fa: Frames,
+    fb: Frames,
+    ja: Matrix6xX<f64>,
+    jb: Matrix6xX<f64>,
+}
+
+impl Workspace {
+    pub fn new(robot: &Robot) -> Self {
+        Workspace {
+            fa: Frames::new(robot),
+            fb: Frames::new(robot),
+            ja: Matrix6xX::zeros(0),
+            jb: Matrix6xX::zeros(0),
+        }
+    }
+}
+
+/// Unweighted residual (y - f) of observation `o` into `r[..dim]`; with `cols`, also the
+/// model Jacobian of the same components (dim x cols.len()) into `jac`'s first rows.
+pub fn residual(
+    robot: &Robot,
+    obs: &Observations,
+    o: &Observation,
+    cols: Option<&[usize]>,
+    ws: &mut Workspace,
+    r: &mut [f64; 6],
+    jac: &mut Matrix6xX<f64>,
+) {
+    let set = obs.set;
+    let ma = &set.rows[o.a];
+    frames(robot, &ma.q, &mut ws.fa);
+    if let Some(c) = cols {
+        parameter_jacobian(robot, &ws.fa, c, &mut ws.ja);
+    }
+    let pa = ws.fa.tool.translation.vector;
+    match obs.measure {
+        Measure::Pose | Measure::Position | Measure::Orientation => {
+            let dp = ma.position.map(|p| p - pa).unwrap_or_default();
+            let dr = ma
+                .rotation
+                .map(|m| rotation_vector(&(m * ws.fa.tool.rotation.inverse())))
+                .unwrap_or_default();
+            let (first, second) = match obs.measure {
+                Measure::Pose => (dp, Some(dr)),
+                Measure::Position => (dp, None),
+                _ => (dr, None),
+            };
+            r[..3].copy_from_slice(first.as_slice());
+            if let Some(s) = second {
+                r[3..6].copy_from_slice(s.as_slice());
+            }
+            if cols.is_some() {
+                if obs.measure == Measure::Orientation {
+                    let rot = ws.ja.fixed_rows::<3>(3).clone_owned();
+                    jac.copy_from(&ws.ja);
+                    jac.fixed_rows_mut::<3>(0).copy_from(&rot);
+                } else {
+                    jac.copy_from(&ws.ja);
+                }
+            }
+        }
+        Measure::Relative | Measure::Distance => {
+            let b = o.b.unwrap_or(o.a);
+            let mb = &set.rows[b];
+            frames(robot, &mb.q, &mut ws.fb);
+            if let Some(c) = cols {
+                parameter_jacobian(robot, &ws.fb, c, &mut ws.jb);
+            }
+            let d_model = pa - ws.fb.tool.translation.vector;
+            if obs.measure == Measure::Relative {
+                let d_meas = ma.position.unwrap_or_default() - mb.position.unwrap_or_default();
+                r[..3].copy_from_slice((d_meas - d_model).as_slice());
+                if cols.is_some() {
+                    jac.copy_from(&ws.ja);
+                    *jac -= &ws.jb;
+                }
+            } else {
+                let len = d_model.norm();
+                let meas = crate::data::pairs::distance(set, Pair { a: o.a, b }).unwrap_or(0.0);
+                r[0] = meas - len;
+                if cols.is_some() {
+                    let u = if len > 0.0 {
+                        d_model / len
+                    } else {
+                        Vector3::zeros()
+                    };
+                    let diff = ws.ja.fixed_rows::<3>(0) - ws.jb.fixed_rows::<3>(0);
+                    let row = u.transpose() * diff;
+                    jac.row_mut(0).copy_from(&row);
+                }
+            }
+        }
+    }
+}
+
+/// Rows per block when accumulating.
+const BLOCK: usize = 240;
+
+/// Runs over all observations, handing weighted blocks `(J_w, r_w, rows)` to `sink`.
+/// With `cols = None` only residuals are computed (the Jacobian block is empty).
+pub fn for_each_block(
+    robot: &Robot,
+    obs: &Observations,
+    cols: Option<&[usize]>,
+    ws: &mut Workspace,
+    mut sink: impl FnMut(&DMatrix<f64>, &DVector<f64>, usize),
+) {
+    let k = cols.map_or(0, |c| c.len());
+    let dim = obs.dim();
+    let mut jb = DMatrix::<f64>::zeros(BLOCK, k);
+    let mut rb = DVector::<f64>::zeros(BLOCK);
+    let mut jac = Matrix6xX::<f64>::zeros(k);
+    let mut r = [0.0; 6];
+    let mut fill = 0;
+    for o in &obs.items {
+        residual(robot, obs, o, cols, ws, &mut r, &mut jac);
+        let sw = o.weight.sqrt();
+        for c in 0..dim {
+            let w = o.inv_sigma[c] * sw;
+            rb[fill] = r[c] * w;
+            if k > 0 {
+                for j in 0..k {
+                    jb[(fill, j)] = jac[(c, j)] * w;
+                }
+            }
+            fill += 1;
+        }
+        if fill + dim > BLOCK {
+            sink(&jb, &rb, fill);
+            fill = 0;
+        }
+    }
+    if fill > 0 {
+        sink(&jb, &rb, fill);
+    }
+}
+
+/// Weighted sum of squares sum r_w^2 (chi-square when the sigmas are right).
+pub fn cost(robot: &Robot, obs: &Observations, ws: &mut Workspace) -> f64 {
+    let mut total = 0.0;
+    for_each_block(robot, obs, None, ws, |_, r, rows| {
+        total += r.rows(0, rows).norm_squared();
+    });
+    total
+}
+
+/// Normal equations of the weighted problem: A = J_w^T J_w, g = J_w^T r_w, and the cost.
+#[derive(Debug, Clone)]
+pub struct Normal {
+    pub a: DMatrix<f64>,
+    pub g: DVector<f64>,
+    pub cost: f64,
+}
+
+/// Accumulates the normal equations for the parameters `cols`.
+pub fn normal_equations(
+    robot: &Robot,
+    obs: &Observations,
+    cols: &[usize],
+    ws: &mut Workspace,
+) -> Normal {
+    let k = cols.len();
+    let mut a = DMatrix::<f64>::zeros(k, k);
+    let mut g = DVector::<f64>::zeros(k);
+    let mut total = 0.0;
+    for_each_block(robot, obs, Some(cols), ws, |jb, rb, rows| {
+        let j = jb.rows(0, rows);
+        let r = rb.rows(0, rows);
+        a.gemm_tr(1.0, &j, &j, 1.0);
+        g.gemv_tr(1.0, &j, &r, 1.0);
+        total += r.norm_squared();
+    });
+    Normal { a, g, cost: total }
+}
+
+/// The k x k triangular factor R of the weighted observation matrix (Phi_w = Q R), built
+/// block by block; its singular values are those of Phi_w, without squaring them.
+pub fn observation_r(
+    robot: &Robot,
+    obs: &Observations,
+    cols: &[usize],
+    ws: &mut Workspace,
+) -> DMatrix<f64> {
+    let k = cols.len();
+    let mut r = DMatrix::<f64>::zeros(0, k);
+    for_each_block(robot, obs, Some(cols), ws, |jb, _, rows| {
+        let mut stacked = DMatrix::<f64>::zeros(r.nrows() + rows, k);
+        stacked.rows_mut(0, r.nrows()).copy_from(&r);
+        stacked
+            .rows_mut(r.nrows(), rows)
+            .copy_from(&jb.rows(0, rows));
+        let qr = stacked.qr();
+        let full = qr.r();
+        let keep = full.nrows().min(k);
+        r = full.rows(0, keep).into_owned();
+    });
+    r
+}

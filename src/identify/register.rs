@@ -1,0 +1,184 @@
+//! Initial base (measurement frame) and tool estimates for data taken in an unknown frame,
+//! such as a laser tracker's: rigid point-set registration, then joint identification starts
+//! from there.
+//!
+//! With the base and tool rows as 6-DOF transforms, a measured position is
+//! m_i = R_b (P_i + R_i t_t) + t_b, where (R_i, P_i) is the flange pose of row i (the model
+//! with identity base and tool). Alternating, a few times:
+//! 1. Kabsch/Horn: the rotation R_b and translation t_b that best map the model's tool
+//!    positions P_i + R_i t_t onto the measured ones (SVD of the cross-covariance, with the
+//!    determinant fixed to +1);
+//! 2. with R_b fixed the model is linear in (t_t, t_b): least squares for both (when the tool
+//!    is free).
+//!
+//! With orientations, the tool rotation is then the chordal mean of (R_b R_i)^T R_meas,i, the
+//! rotation nearest (SVD projection) to their sum.
+
+use crate::data::MeasurementSet;
+use crate::error::{Error, Result};
+use crate::kinematics::{Pose, tool_pose};
+use crate::model::ParamId;
+use crate::model::{Convention, Field, Robot, Slot};
+use crate::rotation::rotation_to_zyx;
+use nalgebra::{Matrix3, Matrix6, Rotation3, Vector3, Vector6};
+
+/// What the registration found.
+#[derive(Debug, Clone)]
+pub struct Registration {
+    /// Base transform (mm, ZYX rad) written into the model.
+    pub base: Pose,
+    /// Tool transform, when the tool was registered too.
+    pub tool: Option<Pose>,
+    /// RMS position residual after registration (mm).
+    pub rms_mm: f64,
+}
+
+/// The rotation nearest to `m` (polar decomposition by SVD), with determinant +1.
+pub fn nearest_rotation(m: &Matrix3<f64>) -> Rotation3<f64> {
+    let svd = m.svd(true, true);
+    let (u, vt) = (
+        svd.u.unwrap_or_else(Matrix3::identity),
+        svd.v_t.unwrap_or_else(Matrix3::identity),
+    );
+    let d = (u * vt).determinant().signum();
+    let fix = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d));
+    Rotation3::from_matrix_unchecked(u * fix * vt)
+}
+
+/// Kabsch: R, t minimising sum |R a_i + t - b_i|^2.
+pub fn kabsch(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> (Rotation3<f64>, Vector3<f64>) {
+    let n = a.len() as f64;
+    let ca = a.iter().sum::<Vector3<f64>>() / n;
+    let cb = b.iter().sum::<Vector3<f64>>() / n;
+    let h: Matrix3<f64> = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (y - cb) * (x - ca).transpose())
+        .sum();
+    let r = nearest_rotation(&h);
+    (r, cb - r * ca)
+}
+
+fn set_transform(robot: &Robot, slot: Slot, p: &Pose) -> Result<Robot> {
+    let t = p.translation.vector;
+    let [rz, ry, rx] = rotation_to_zyx(&p.rotation);
+    let values = [
+        (Field::X, t.x),
+        (Field::Y, t.y),
+        (Field::Z, t.z),
+        (Field::Rz, rz),
+        (Field::Ry, ry),
+        (Field::Rx, rx),
+    ]
+    .map(|(field, v)| (ParamId { slot, field }, v));
+    robot.with_params(&values)
+}
+
+/// Registers the base (and, with `tool`, the tool) of `robot` to the positions of `set`.
+/// The base (and tool) must be 6-DOF transform rows; needs at least 3 rows with positions that
+/// are not collinear.
+pub fn register(robot: &Robot, set: &MeasurementSet, tool: bool) -> Result<(Robot, Registration)> {
+    if robot.base().convention() != Convention::Transform {
+        return Err(Error::Invalid(
+            "registration needs a 6-DOF transform base row".into(),
+        ));
+    }
+    let tool = tool && robot.tool().convention() == Convention::Transform;
+    let rows: Vec<_> = set.rows.iter().filter(|m| m.position.is_some()).collect();
+    if rows.len() < 3 {
+        return Err(Error::Invalid(
+            "registration needs at least 3 measured positions".into(),
+        ));
+    }
+    let measured: Vec<Vector3<f64>> = rows.iter().filter_map(|m| m.position).collect();
+    let mut model = set_transform(robot, Slot::Base, &Pose::identity())?;
+    let tool_t0 = if tool {
+        model = set_transform(&model, Slot::Tool, &Pose::identity())?;
+        Some(robot.tool().transform())
+    } else {
+        None
+    };
+    // Flange (or, without tool registration, tool) poses in the base frame.
+    let flange: Vec<Pose> = rows.iter().map(|m| tool_pose(&model, &m.q)).collect();
+    let mut t_tool = tool_t0.map_or(Vector3::zeros(), |t| t.translation.vector);
+    let mut base = Pose::identity();
+    for _ in 0..8 {
+        let pts: Vec<Vector3<f64>> = flange
+            .iter()
+            .map(|f| f.translation.vector + f.rotation * t_tool)
+            .collect();
+        let (r, t) = kabsch(&pts, &measured);
+        base = Pose::from_parts(t.into(), r);
+        if !tool {
+            break;
+        }
+        // Linear least squares for (t_tool, t_base) with R_b fixed.
+        let mut a = Matrix6::<f64>::zeros();
+        let mut g = Vector6::<f64>::zeros();
+        for (f, m) in flange.iter().zip(&measured) {
+            let rr = (r * f.rotation).into_inner();
+            let mut j = nalgebra::Matrix3x6::<f64>::zeros();
+            j.fixed_view_mut::<3, 3>(0, 0).copy_from(&rr);
+            j.fixed_view_mut::<3, 3>(0, 3)
+                .copy_from(&Matrix3::identity());
+            let rhs = m - r * f.translation.vector;
+            a += j.transpose() * j;
+            g += j.transpose() * rhs;
+        }
+        match a.cholesky() {
+            Some(c) => {
+                let s = c.solve(&g);
+                t_tool = s.fixed_rows::<3>(0).into();
+            }
+            None => break,
+        }
+    }
+    let rms = (flange
+        .iter()
+        .zip(&measured)
+        .map(|(f, m)| {
+            (base.rotation * (f.translation.vector + f.rotation * t_tool) + base.translation.vector
+                - m)
+                .norm_squared()
+        })
+        .sum::<f64>()
+        / measured.len() as f64)
+        .sqrt();
+    if !rms.is_finite() {
+        return Err(Error::NotConverged(
+            "registration failed: non-finite residual".into(),
+        ));
+    }
+    let mut out = set_transform(robot, Slot::Base, &base)?;
+    let mut tool_pose_out = None;
+    if let Some(t0) = tool_t0 {
+        let with_rot: Vec<_> = rows
+            .iter()
+            .zip(&flange)
+            .filter(|(m, _)| m.rotation.is_some())
+            .collect();
+        let rot = if with_rot.is_empty() {
+            t0.rotation
+        } else {
+            let sum: Matrix3<f64> = with_rot
+                .iter()
+                .filter_map(|(m, f)| {
+                    m.rotation
+                        .map(|rm| ((base.rotation * f.rotation).inverse() * rm).into_inner())
+                })
+                .sum();
+            nearest_rotation(&sum)
+        };
+        let tp = Pose::from_parts(t_tool.into(), rot);
+        out = set_transform(&out, Slot::Tool, &tp)?;
+        tool_pose_out = Some(tp);
+    }
+    Ok((
+        out,
+        Registration {
+            base,
+            tool: tool_pose_out,
+            rms_mm: rms,
+        },
+    ))
+}

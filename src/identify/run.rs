@@ -1,0 +1,281 @@
+//! One identification, end to end: select the parameters, register an unknown measurement
+//! frame, reduce to an identifiable subset, solve (optionally robustly), and report standard
+//! deviations, correlations and outliers.
+
+use super::identifiability::{CONDITION_WARNING, Identifiability, analyse};
+use super::nelder_mead::solve_nelder_mead;
+use super::problem::{Measure, Observations, Sigmas, Workspace, residual};
+use super::register::{Registration, register};
+use super::select::select;
+use super::solve::{Method, Solution, SolveOptions, StopReason, covariance, solve_gradient};
+use crate::data::MeasurementSet;
+use crate::error::{Error, Result};
+use crate::model::{Convention, ParamId, Robot, Slot};
+use nalgebra::Matrix6xX;
+
+/// Robust loss for iteratively reweighted least squares.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RobustLoss {
+    /// Quadratic within k robust sigmas, linear beyond (k = 1.345).
+    Huber,
+    /// Logarithmic: w = 1 / (1 + (u/k)^2) (k = 2.385).
+    Cauchy,
+}
+
+impl RobustLoss {
+    /// Weight of a residual of `u` robust sigmas (95% efficiency constants).
+    fn weight(self, u: f64) -> f64 {
+        match self {
+            RobustLoss::Huber => {
+                let k = 1.345;
+                if u <= k { 1.0 } else { k / u }
+            }
+            RobustLoss::Cauchy => {
+                let k = 2.385;
+                1.0 / (1.0 + (u / k).powi(2))
+            }
+        }
+    }
+}
+
+/// Everything an identification needs besides the model and the data.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Parameter selection (see `select`): `offsets`, `full`, names, ...
+    pub params: String,
+    /// How to compare measurements; None: the richest the data supports.
+    pub measure: Option<Measure>,
+    pub sigmas: Sigmas,
+    pub solve: SolveOptions,
+    pub robust: Option<RobustLoss>,
+    /// Register a 6-DOF transform base (and tool) to the measured positions first.
+    pub register: bool,
+    /// Rows whose residual exceeds this many robust sigmas are reported as outliers.
+    pub outlier_k: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            params: "full".into(),
+            measure: None,
+            sigmas: Sigmas::default(),
+            solve: SolveOptions::default(),
+            robust: None,
+            register: true,
+            outlier_k: 3.0,
+        }
+    }
+}
+
+/// One identified parameter, in file units (mm or deg).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ParamReport {
+    pub name: String,
+    pub unit: &'static str,
+    pub nominal: f64,
+    pub estimate: f64,
+    /// One standard deviation, s^2 (J^T W J)^-1.
+    pub std: f64,
+}
+
+/// A row whose residual is far out.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Outlier {
+    pub line: usize,
+    /// Its weighted residual in robust sigmas.
+    pub robust_sigmas: f64,
+}
+
+/// The outcome of an identification.
+#[derive(Debug, Clone)]
+pub struct Identified {
+    pub robot: Robot,
+    pub measure: Measure,
+    pub identifiability: Identifiability,
+    pub solution: Solution,
+    /// a-posteriori variance factor s^2 = cost / (m - n); near 1 when the sigmas are right.
+    pub variance_factor: f64,
+    pub parameters: Vec<ParamReport>,
+    /// Pairs of parameters with |correlation| > 0.9.
+    pub correlations: Vec<(String, String, f64)>,
+    pub outliers: Vec<Outlier>,
+    pub registration: Option<Registration>,
+    /// Robust reweighting rounds (0 without a robust loss).
+    pub robust_rounds: usize,
+    pub warnings: Vec<String>,
+}
+
+/// Weighted residual norm of every observation, divided by sqrt(dim).
+fn normalized_residuals(robot: &Robot, obs: &Observations) -> Vec<f64> {
+    let mut ws = Workspace::new(robot);
+    let mut r = [0.0; 6];
+    let mut jac = Matrix6xX::zeros(0);
+    let dim = obs.dim();
+    obs.items
+        .iter()
+        .map(|o| {
+            residual(robot, obs, o, None, &mut ws, &mut r, &mut jac);
+            ((0..dim)
+                .map(|c| (r[c] * o.inv_sigma[c]).powi(2))
+                .sum::<f64>()
+                / dim as f64)
+                .sqrt()
+        })
+        .collect()
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(|a, b| a.total_cmp(b));
+    let n = s.len();
+    if n == 0 {
+        0.0
+    } else if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        0.5 * (s[n / 2 - 1] + s[n / 2])
+    }
+}
+
+fn file_value(id: &ParamId, v: f64) -> f64 {
+    if id.field.is_angle() {
+        v.to_degrees()
+    } else {
+        v
+    }
+}
+
+/// Identifies `nominal`'s selected parameters from `set`.
+pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result<Identified> {
+    let measure = opts.measure.unwrap_or_else(|| Measure::default_for(set));
+    let mut obs = Observations::new(set, measure, opts.sigmas)?;
+    let params = nominal.parameters();
+    let candidates = select(nominal, &opts.params)?;
+    let mut warnings = Vec::new();
+
+    // An unknown measurement frame: register it (and the tool) first.
+    let base_free = candidates.iter().any(|&c| params[c].slot == Slot::Base);
+    let tool_free = candidates.iter().any(|&c| params[c].slot == Slot::Tool);
+    let uses_positions = matches!(measure, Measure::Pose | Measure::Position);
+    let mut start = nominal.clone();
+    let mut registration = None;
+    if opts.register
+        && base_free
+        && uses_positions
+        && nominal.base().convention() == Convention::Transform
+    {
+        let (r, reg) = register(nominal, set, tool_free)?;
+        start = r;
+        registration = Some(reg);
+    }
+
+    let ident = analyse(&start, &obs, &candidates);
+    let cols = ident.selected.clone();
+    if cols.is_empty() {
+        return Err(Error::Invalid(
+            "the data identify none of the selected parameters".into(),
+        ));
+    }
+    if obs.len() <= cols.len() {
+        return Err(Error::Invalid(format!(
+            "{} residual components for {} identifiable parameters: more measurements are needed",
+            obs.len(),
+            cols.len()
+        )));
+    }
+    if ident.selected_condition_number > CONDITION_WARNING {
+        warnings.push(format!(
+            "the identifiable set is ill-conditioned (condition number {:.3e} > {CONDITION_WARNING:.0e} \
+             on column-scaled data): estimates are sensitive to noise; add measurements spread over \
+             the workspace",
+            ident.selected_condition_number
+        ));
+    }
+
+    let run = |start: &Robot, obs: &Observations| -> Result<Solution> {
+        match opts.solve.method {
+            Method::Nm => solve_nelder_mead(start, obs, &cols, &opts.solve),
+            _ => solve_gradient(start, obs, &cols, &opts.solve),
+        }
+    };
+    let mut solution = run(&start, &obs)?;
+    let mut robust_rounds = 0;
+    if let Some(loss) = opts.robust {
+        for _ in 0..30 {
+            robust_rounds += 1;
+            let e = normalized_residuals(&solution.robot, &obs);
+            let scale = (1.4826 * median(&e)).max(1e-12);
+            let mut change: f64 = 0.0;
+            for (o, ei) in obs.items.iter_mut().zip(&e) {
+                let w = loss.weight(ei / scale);
+                change = change.max((w - o.weight).abs());
+                o.weight = w;
+            }
+            solution = run(&solution.robot, &obs)?;
+            if change < 1e-6 {
+                break;
+            }
+        }
+    }
+    if solution.stop == StopReason::MaxIterations {
+        warnings.push(format!(
+            "stopped at the iteration limit ({}) before any tolerance: the result may be unconverged",
+            solution.iterations
+        ));
+    }
+
+    let (cov, s2) = covariance(&solution.robot, &obs, &cols)?;
+    let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
+    let parameters = ids
+        .iter()
+        .enumerate()
+        .map(|(i, id)| ParamReport {
+            name: id.name(),
+            unit: id.field.file_unit(),
+            nominal: file_value(id, nominal.param(*id)),
+            estimate: file_value(id, solution.robot.param(*id)),
+            std: file_value(id, cov[(i, i)].sqrt()),
+        })
+        .collect();
+    let mut correlations = Vec::new();
+    for i in 0..ids.len() {
+        for j in i + 1..ids.len() {
+            let rho = cov[(i, j)] / (cov[(i, i)] * cov[(j, j)]).sqrt();
+            if rho.abs() > 0.9 {
+                correlations.push((ids[i].name(), ids[j].name(), rho));
+            }
+        }
+    }
+    // Outliers on the unweighted-by-robustness residuals.
+    let mut plain = obs.clone();
+    for o in plain.items.iter_mut() {
+        o.weight = 1.0;
+    }
+    let e = normalized_residuals(&solution.robot, &plain);
+    let scale = (1.4826 * median(&e)).max(1e-300);
+    let outliers = plain
+        .items
+        .iter()
+        .zip(&e)
+        .filter(|(_, ei)| **ei > opts.outlier_k * scale)
+        .map(|(o, ei)| Outlier {
+            line: set.rows[o.b.unwrap_or(o.a)].line,
+            robust_sigmas: ei / scale,
+        })
+        .collect();
+    Ok(Identified {
+        robot: solution.robot.clone(),
+        measure,
+        identifiability: ident,
+        solution,
+        variance_factor: s2,
+        parameters,
+        correlations,
+        outliers,
+        registration,
+        robust_rounds,
+        warnings,
+    })
+}

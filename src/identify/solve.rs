@@ -1,0 +1,325 @@
+//! Levenberg-Marquardt (default) and Gauss-Newton on the normal equations (thesis eq. 4.16-4.18,
+//! weighted as eq. 4.29): (J^T W J + lambda diag(J^T W J)) dp = J^T W r.
+//!
+//! Stopping, reported as [`StopReason`]: the gradient test (largest cosine between the
+//! residual and a Jacobian column, as MINPACK), the relative decrease of the cost, the size of
+//! the step against the parameters (mm, rad), or the iteration limit. A NaN, a factorisation
+//! that fails even with heavy damping (rank loss) and a Gauss-Newton step that no halving can
+//! make descend (divergence) are errors, never results.
+
+use super::problem::{Observations, Workspace, cost, normal_equations};
+use crate::error::{Error, Result};
+use crate::model::{ParamId, Robot};
+use nalgebra::{DMatrix, DVector};
+
+/// Identification method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Levenberg-Marquardt.
+    Lm,
+    /// Gauss-Newton with step halving.
+    Gn,
+    /// Nelder-Mead simplex (derivative free, thesis 4.1).
+    Nm,
+}
+
+/// Why a solve stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// The residual is orthogonal to every Jacobian column (gradient tolerance).
+    Gradient,
+    /// The cost stopped decreasing (function tolerance).
+    Function,
+    /// The step became negligible against the parameters (parameter tolerance).
+    Parameter,
+    /// No step lowers the cost any more: converged to machine precision.
+    Precision,
+    /// The simplex collapsed (Nelder-Mead).
+    Simplex,
+    /// The iteration limit was reached before any tolerance: the result may be unconverged.
+    MaxIterations,
+}
+
+impl StopReason {
+    pub fn describe(self) -> &'static str {
+        match self {
+            StopReason::Gradient => "gradient tolerance reached",
+            StopReason::Function => "function tolerance reached (cost no longer decreases)",
+            StopReason::Parameter => "parameter tolerance reached (step negligible)",
+            StopReason::Precision => "converged to machine precision",
+            StopReason::Simplex => "simplex collapsed to the tolerance",
+            StopReason::MaxIterations => "maximum iterations reached (may be unconverged)",
+        }
+    }
+}
+
+/// Tolerances and limits.
+#[derive(Debug, Clone, Copy)]
+pub struct SolveOptions {
+    pub method: Method,
+    pub max_iterations: usize,
+    /// Relative decrease of the cost below which the solve stops.
+    pub ftol: f64,
+    /// Step (mm or rad) below xtol * (1 + |p|) for every parameter stops the solve.
+    pub xtol: f64,
+    /// Largest cosine between residual and a Jacobian column below which the solve stops.
+    pub gtol: f64,
+}
+
+impl Default for SolveOptions {
+    fn default() -> Self {
+        SolveOptions {
+            method: Method::Lm,
+            max_iterations: 200,
+            ftol: 1e-12,
+            xtol: 1e-12,
+            gtol: 1e-12,
+        }
+    }
+}
+
+/// A finished solve.
+#[derive(Debug, Clone)]
+pub struct Solution {
+    pub robot: Robot,
+    pub iterations: usize,
+    pub stop: StopReason,
+    /// Final weighted sum of squares.
+    pub cost: f64,
+    /// Cost evaluations (for Nelder-Mead: function evaluations).
+    pub evaluations: usize,
+}
+
+/// The robot with the free parameters `ids` set to `x` (mm, rad).
+pub fn with_values(robot: &Robot, ids: &[ParamId], x: &DVector<f64>) -> Result<Robot> {
+    let values: Vec<(ParamId, f64)> = ids.iter().copied().zip(x.iter().copied()).collect();
+    robot.with_params(&values)
+}
+
+fn names(ids: &[ParamId]) -> String {
+    ids.iter().map(|i| i.name()).collect::<Vec<_>>().join(", ")
+}
+
+/// Runs LM or GN from `robot` on the parameters `cols` (indices into `Robot::parameters`).
+pub fn solve_gradient(
+    robot: &Robot,
+    obs: &Observations,
+    cols: &[usize],
+    opts: &SolveOptions,
+) -> Result<Solution> {
+    let params = robot.parameters();
+    let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
+    let mut x = DVector::from_iterator(ids.len(), ids.iter().map(|&id| robot.param(id)));
+    let mut ws = Workspace::new(robot);
+    let mut current = robot.clone();
+    let mut ne = normal_equations(&current, obs, cols, &mut ws);
+    let mut evaluations = 1;
+    if !ne.cost.is_finite() {
+        return Err(Error::NotConverged(format!(
+            "the cost at the starting model is {}: check the measurements and the model",
+            ne.cost
+        )));
+    }
+    let gn = opts.method == Method::Gn;
+    let mut lambda = 1e-3;
+    let k = ids.len();
+    for iter in 0..opts.max_iterations {
+        if ne.cost == 0.0 {
+            return Ok(Solution {
+                robot: current,
+                iterations: iter,
+                stop: StopReason::Gradient,
+                cost: 0.0,
+                evaluations,
+            });
+        }
+        let rnorm = ne.cost.sqrt();
+        let gmax = (0..k)
+            .map(|i| {
+                let d = ne.a[(i, i)].sqrt();
+                if d > 0.0 {
+                    ne.g[i].abs() / (d * rnorm)
+                } else {
+                    0.0
+                }
+            })
+            .fold(0.0, f64::max);
+        if gmax <= opts.gtol {
+            return Ok(Solution {
+                robot: current,
+                iterations: iter,
+                stop: StopReason::Gradient,
+                cost: ne.cost,
+                evaluations,
+            });
+        }
+        let diag: Vec<f64> = (0..k).map(|i| ne.a[(i, i)].max(1e-300)).collect();
+        let (step, new_robot, new_cost) = if gn {
+            let chol = ne.a.clone().cholesky().ok_or_else(|| {
+                Error::NotConverged(format!(
+                    "Gauss-Newton: J^T W J is singular at iteration {iter} (rank loss among {}); use --method lm",
+                    names(&ids)
+                ))
+            })?;
+            let full = chol.solve(&ne.g);
+            let mut t = 1.0;
+            let mut found = None;
+            for _ in 0..30 {
+                let step = &full * t;
+                let cand = with_values(robot, &ids, &(&x + &step))?;
+                let c = cost(&cand, obs, &mut ws);
+                evaluations += 1;
+                if c.is_finite() && c <= ne.cost {
+                    found = Some((step, cand, c));
+                    break;
+                }
+                t *= 0.5;
+            }
+            match found {
+                Some(f) => f,
+                None if full
+                    .iter()
+                    .zip(x.iter())
+                    .all(|(d, v)| d.abs() <= 1e3 * opts.xtol * (1.0 + v.abs())) =>
+                {
+                    return Ok(Solution {
+                        robot: current,
+                        iterations: iter,
+                        stop: StopReason::Precision,
+                        cost: ne.cost,
+                        evaluations,
+                    });
+                }
+                None => {
+                    return Err(Error::NotConverged(format!(
+                        "Gauss-Newton diverged at iteration {iter}: no fraction of its step lowers the cost \
+                         ({:.6e}); use --method lm",
+                        ne.cost
+                    )));
+                }
+            }
+        } else {
+            let mut found = None;
+            while lambda < 1e16 {
+                let mut m = ne.a.clone();
+                for (i, d) in diag.iter().enumerate() {
+                    m[(i, i)] += lambda * d;
+                }
+                let Some(chol) = m.cholesky() else {
+                    lambda *= 10.0;
+                    continue;
+                };
+                let step = chol.solve(&ne.g);
+                let cand = with_values(robot, &ids, &(&x + &step))?;
+                let c = cost(&cand, obs, &mut ws);
+                evaluations += 1;
+                if c.is_finite() && c < ne.cost {
+                    found = Some((step, cand, c));
+                    break;
+                }
+                lambda *= 10.0;
+            }
+            match found {
+                Some(f) => {
+                    lambda = (lambda / 10.0).max(1e-15);
+                    f
+                }
+                None => {
+                    return Ok(Solution {
+                        robot: current,
+                        iterations: iter,
+                        stop: StopReason::Precision,
+                        cost: ne.cost,
+                        evaluations,
+                    });
+                }
+            }
+        };
+        let decrease = ne.cost - new_cost;
+        let small_step = step
+            .iter()
+            .zip(x.iter())
+            .all(|(d, v)| d.abs() <= opts.xtol * (1.0 + v.abs()));
+        x += &step;
+        current = new_robot;
+        let old_cost = ne.cost;
+        ne = normal_equations(&current, obs, cols, &mut ws);
+        evaluations += 1;
+        if !ne.cost.is_finite() {
+            return Err(Error::NotConverged(format!(
+                "the cost became {} at iteration {}",
+                ne.cost,
+                iter + 1
+            )));
+        }
+        if decrease <= opts.ftol * old_cost {
+            return Ok(Solution {
+                robot: current,
+                iterations: iter + 1,
+                stop: StopReason::Function,
+                cost: ne.cost,
+                evaluations,
+            });
+        }
+        if small_step {
+            return Ok(Solution {
+                robot: current,
+                iterations: iter + 1,
+                stop: StopReason::Parameter,
+                cost: ne.cost,
+                evaluations,
+            });
+        }
+    }
+    Ok(Solution {
+        robot: current,
+        iterations: opts.max_iterations,
+        stop: StopReason::MaxIterations,
+        cost: ne.cost,
+        evaluations,
+    })
+}
+
+/// Covariance of the free parameters at `robot`: s^2 (J^T W J)^-1 with the a-posteriori
+/// variance factor s^2 = cost / (m - n) (1 when the sigmas are right). Returns the matrix
+/// (internal units) and s^2; an error when J^T W J is singular (rank loss at the solution).
+pub fn covariance(
+    robot: &Robot,
+    obs: &Observations,
+    cols: &[usize],
+) -> Result<(DMatrix<f64>, f64)> {
+    let mut ws = Workspace::new(robot);
+    let ne = normal_equations(robot, obs, cols, &mut ws);
+    let m = obs.len();
+    let n = cols.len();
+    let s2 = if m > n {
+        ne.cost / (m - n) as f64
+    } else {
+        f64::NAN
+    };
+    // Scale to unit diagonal before inverting: mm and rad columns differ by orders.
+    let d: Vec<f64> = (0..n).map(|i| ne.a[(i, i)].sqrt()).collect();
+    if d.iter().any(|v| *v == 0.0 || !v.is_finite()) {
+        return Err(Error::NotConverged(
+            "rank loss at the solution: a parameter has no effect".into(),
+        ));
+    }
+    let scaled = DMatrix::from_fn(n, n, |i, j| ne.a[(i, j)] / (d[i] * d[j]));
+    let inv = scaled.cholesky().ok_or_else(|| {
+        let params = robot.parameters();
+        Error::NotConverged(format!(
+            "rank loss at the solution: J^T W J is singular for {}",
+            cols.iter()
+                .map(|&c| params[c].name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
+    })?;
+    let inv = inv.inverse();
+    let cov = DMatrix::from_fn(n, n, |i, j| {
+        inv[(i, j)] / (d[i] * d[j]) * if s2.is_finite() { s2 } else { 1.0 }
+    });
+    Ok((cov, s2))
+}
