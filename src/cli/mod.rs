@@ -7,6 +7,7 @@ mod ik;
 mod import;
 mod output;
 mod simulate;
+mod split;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -32,6 +33,8 @@ enum Command {
     Import(import::ImportArgs),
     /// Simulates measurements of a virtual robot (deviations, non-geometric errors, noise).
     Simulate(simulate::SimulateArgs),
+    /// Splits measurements at random (seeded) into two files, e.g. calibration and validation.
+    Split(split::SplitArgs),
     /// Identifies kinematic parameters from measurements and writes the calibrated robot.
     Identify(identify::IdentifyArgs),
     /// Reports the accuracy of a robot model on measurements.
@@ -46,6 +49,7 @@ pub fn main() -> ExitCode {
         Command::Ik(a) => ik::run(a),
         Command::Import(a) => import::run(a),
         Command::Simulate(a) => simulate::run(a),
+        Command::Split(a) => split::run(a),
         Command::Identify(a) => identify::run_identify(a),
         Command::Evaluate(a) => identify::run_evaluate(a),
     };

@@ -494,3 +494,30 @@ pub fn measurements_to_csv(set: &MeasurementSet, joints: &[JointInfo]) -> Result
 pub fn write_measurements(set: &MeasurementSet, joints: &[JointInfo], path: &Path) -> Result<()> {
     crate::io::write_atomic(path, &measurements_to_csv(set, joints)?)
 }
+
+/// Splits a set into two by a seeded random draw: `fraction` of the rows (rounded) go to the
+/// first part; both keep file order.
+pub fn split(set: &MeasurementSet, fraction: f64, seed: u64) -> (MeasurementSet, MeasurementSet) {
+    use rand::SeedableRng;
+    use rand::seq::SliceRandom;
+    let n = set.rows.len();
+    let mut idx: Vec<usize> = (0..n).collect();
+    idx.shuffle(&mut rand_chacha::ChaCha8Rng::seed_from_u64(seed));
+    let k = ((n as f64) * fraction.clamp(0.0, 1.0)).round() as usize;
+    let mut first = vec![false; n];
+    for &i in &idx[..k] {
+        first[i] = true;
+    }
+    let part = |want: bool| MeasurementSet {
+        source: set.source.clone(),
+        rows: set
+            .rows
+            .iter()
+            .zip(&first)
+            .filter(|(_, f)| **f == want)
+            .map(|(m, _)| m.clone())
+            .collect(),
+        extra_columns: set.extra_columns.clone(),
+    };
+    (part(true), part(false))
+}

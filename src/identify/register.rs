@@ -87,7 +87,7 @@ pub fn register(robot: &Robot, set: &MeasurementSet, tool: bool) -> Result<(Robo
     let rows: Vec<_> = set.rows.iter().filter(|m| m.position.is_some()).collect();
     if rows.len() < 3 {
         return Err(Error::Invalid(
-            "registration needs at least 3 measured positions".into(),
+            "registration needs at least 3 measured positions: more measurements are needed".into(),
         ));
     }
     let measured: Vec<Vector3<f64>> = rows.iter().filter_map(|m| m.position).collect();

@@ -147,13 +147,61 @@ fn file_value(id: &ParamId, v: f64) -> f64 {
     }
 }
 
+/// A base or tool row in a DH-type convention, fully selected, becomes the equivalent 6-DOF
+/// transform: an MDH base row followed by joint 1's MDH row is singular at the usual nominal
+/// (alpha1 = a1 = 0: every base column repeats a joint-1 column), so no subset of them can
+/// express a base frame tilted about y; likewise an MDH tool row with alpha_T = pi. A 6-DOF
+/// transform can express any frame, so the identified family contains the true robot.
+fn complete_frames(robot: &Robot, chosen: &[usize]) -> Result<(Robot, Vec<String>)> {
+    let params = robot.parameters();
+    let mut out = robot.clone();
+    let mut notes = Vec::new();
+    for (slot, row, what) in [
+        (Slot::Base, robot.base(), "base"),
+        (Slot::Tool, robot.tool(), "tool"),
+    ] {
+        let all = params
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.slot == slot)
+            .all(|(k, _)| chosen.contains(&k));
+        if row.convention() != Convention::Transform && all {
+            out = out.with_frame_as_transform(slot)?;
+            notes.push(format!(
+                "the {what} row ({}) is identified as the equivalent 6-DOF transform, which can express any {what} frame",
+                row.convention().name()
+            ));
+        }
+    }
+    Ok((out, notes))
+}
+
 /// Identifies `nominal`'s selected parameters from `set`.
 pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result<Identified> {
     let measure = opts.measure.unwrap_or_else(|| Measure::default_for(set));
     let mut obs = Observations::new(set, measure, opts.sigmas)?;
+    let chosen = select(nominal, &opts.params)?;
+    let (completed, notes) = complete_frames(nominal, &chosen)?;
+    let mut warnings = notes;
+    // The selection in the completed model: converted rows contribute all their fields.
+    let candidates = if completed.parameters() == nominal.parameters() {
+        chosen
+    } else {
+        let old = nominal.parameters();
+        let names: Vec<String> = chosen.iter().map(|&c| old[c].name()).collect();
+        let mut spec: Vec<String> = names
+            .into_iter()
+            .filter(|n| !n.starts_with("base.") && !n.starts_with("tool."))
+            .collect();
+        for (slot, word) in [(Slot::Base, "base"), (Slot::Tool, "tool")] {
+            if chosen.iter().any(|&c| old[c].slot == slot) {
+                spec.push(word.into());
+            }
+        }
+        select(&completed, &spec.join(","))?
+    };
+    let nominal = &completed;
     let params = nominal.parameters();
-    let candidates = select(nominal, &opts.params)?;
-    let mut warnings = Vec::new();
 
     // An unknown measurement frame: register it (and the tool) first.
     let base_free = candidates.iter().any(|&c| params[c].slot == Slot::Base);

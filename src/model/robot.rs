@@ -326,6 +326,37 @@ impl Robot {
         Robot::new(self.name.clone(), base, joints, tool)
     }
 
+    /// A copy whose base or tool row is replaced by the 6-DOF transform with the same pose.
+    pub fn with_frame_as_transform(&self, slot: Slot) -> Result<Robot> {
+        let (row, is_base) = match slot {
+            Slot::Base => (&self.base, true),
+            Slot::Tool => (&self.tool, false),
+            Slot::Joint(_) => {
+                return Err(Error::Invalid("only base and tool rows are frames".into()));
+            }
+        };
+        let t = row.transform();
+        let [rz, ry, rx] = crate::rotation::rotation_to_zyx(&t.rotation);
+        let v = t.translation.vector;
+        let mut new = Row::zero(Convention::Transform);
+        for (f, val) in [
+            (Field::X, v.x),
+            (Field::Y, v.y),
+            (Field::Z, v.z),
+            (Field::Rz, rz),
+            (Field::Ry, ry),
+            (Field::Rx, rx),
+        ] {
+            new.set_value(f, val);
+        }
+        let (base, tool) = if is_base {
+            (new, self.tool.clone())
+        } else {
+            (self.base.clone(), new)
+        };
+        Robot::new(self.name.clone(), base, self.joints.clone(), tool)
+    }
+
     /// Checks a joint vector (internal units) against the limits; returns the 0-based indices
     /// of the joints outside, with a tolerance of 1e-9 (rad or mm).
     pub fn joints_outside_limits(&self, q: &[f64]) -> Vec<usize> {

@@ -1,0 +1,61 @@
+//! `robocal split`: a seeded random split of a measurement set (calibration / validation).
+
+use super::data_args::{DataArgs, joints_of};
+use crate::data::Table;
+use crate::data::measurement::{split, write_measurements};
+use anyhow::{Result, bail};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct SplitArgs {
+    /// Measurements to split.
+    input: PathBuf,
+    #[command(flatten)]
+    data: DataArgs,
+    /// Robot file (joint types and limits).
+    #[arg(long)]
+    robot: Option<PathBuf>,
+    /// Fraction of rows for the first output.
+    #[arg(long, default_value_t = 0.5)]
+    fraction: f64,
+    #[arg(long)]
+    seed: u64,
+    /// First part (canonical CSV).
+    #[arg(long)]
+    out_a: PathBuf,
+    /// The rest (canonical CSV).
+    #[arg(long)]
+    out_b: PathBuf,
+}
+
+pub fn run(a: SplitArgs) -> Result<()> {
+    if !(0.0..=1.0).contains(&a.fraction) {
+        bail!("--fraction must be within 0..1");
+    }
+    let profile = a.data.profile()?;
+    let n = match (&a.robot, &profile.columns.joints) {
+        (None, Some(j)) => j.len(),
+        (None, None) => {
+            let t = Table::read_with(&a.input, profile.delimiter, profile.decimal_comma)?;
+            (1..)
+                .take_while(|i| t.column(&format!("q{i}")).is_some())
+                .count()
+        }
+        _ => 0,
+    };
+    let joints = joints_of(a.robot.as_ref(), n)?;
+    let set = a.data.read(&a.input, &joints)?;
+    let (x, y) = split(&set, a.fraction, a.seed);
+    write_measurements(&x, &joints, &a.out_a)?;
+    write_measurements(&y, &joints, &a.out_b)?;
+    eprintln!(
+        "split {} rows: {} into {}, {} into {}",
+        set.rows.len(),
+        x.rows.len(),
+        a.out_a.display(),
+        y.rows.len(),
+        a.out_b.display()
+    );
+    Ok(())
+}
