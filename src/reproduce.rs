@@ -236,12 +236,46 @@ pub fn median_range(v: &[f64]) -> (f64, f64, f64) {
     (med, s[0], s[n - 1])
 }
 
-/// Headline figures of a case over seeds 1..=n.
-pub fn over_seeds(nominal: &Robot, datasets: &Path, case: Case, n: u64) -> Result<Vec<f64>> {
+/// Runs of a case over seeds 1..=n.
+pub fn runs_over_seeds(
+    nominal: &Robot,
+    datasets: &Path,
+    case: Case,
+    n: u64,
+) -> Result<Vec<CaseRun>> {
     (1..=n)
         .map(|s| {
             let data = simulate_case(nominal, datasets, case, s)?;
-            Ok(headline(&run_case(nominal, case, &data)?))
+            run_case(nominal, case, &data)
         })
         .collect()
+}
+
+/// Headline figures of a case over seeds 1..=n.
+pub fn over_seeds(nominal: &Robot, datasets: &Path, case: Case, n: u64) -> Result<Vec<f64>> {
+    Ok(runs_over_seeds(nominal, datasets, case, n)?
+        .iter()
+        .map(headline)
+        .collect())
+}
+
+/// The thesis's figures (thesis notes, "The thesis's results"): (what, before, after). They
+/// are means over the measurements of |difference| per coordinate (per component for
+/// orientation) against the (noisy) measurements; Case B's are of real FANUC data.
+pub fn thesis_figures(case: Case) -> &'static [(&'static str, f64, f64)] {
+    match case {
+        Case::A => &[
+            ("calibration position mm", 4.0715, 0.0179),
+            ("validation position mm", 4.3464, 0.0279),
+        ],
+        Case::BSim => &[
+            ("calibration position mm", 3.2970, 0.0182),
+            ("calibration orientation deg", 0.5503, 0.0039),
+        ],
+        Case::C => &[("validation RMS distance mm", 3.0457, 0.1079)],
+        Case::D => &[
+            ("position mm (offsets)", 6.7929, 0.2183),
+            ("orientation deg (offsets)", 0.8386, 0.2585),
+        ],
+    }
 }

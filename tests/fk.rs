@@ -213,3 +213,23 @@ fn prismatic_joint_moves_along_its_axis() {
     let t = tool_pose(&robot, &[100.0, 0.3]);
     assert_close(t.translation.vector, Vector3::new(0.0, 0.0, 110.0), 1e-12);
 }
+
+/// The shipped MDH + Hayati form of the UR10 is the same robot as the vendor's DH table.
+#[test]
+fn ur10_mdh_hayati_equals_vendor_dh() {
+    let dh = ur10();
+    let mdh = read_robot(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/datasets/robots/ur10_mdh_hayati.toml"
+    ))
+    .unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(12);
+    for _ in 0..1000 {
+        let q: Vec<f64> = (0..6).map(|_| rng.random_range(-6.0..6.0)).collect();
+        let (a, b) = (
+            tool_pose(&dh, &q).to_homogeneous(),
+            tool_pose(&mdh, &q).to_homogeneous(),
+        );
+        assert!((a - b).abs().max() < 1e-9);
+    }
+}

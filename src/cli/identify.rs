@@ -153,7 +153,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         )),
         None => None,
     };
-    print_identified(&a, &nominal, &cal, &id);
+    print_identified(&a, &cal, &id);
     let mut rows = vec![
         ("calibration", "before", &cal_before),
         ("calibration", "after", &cal_after),
@@ -163,12 +163,15 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         rows.push(("validation", "after", af));
     }
     print_stats(&rows);
+    for n in &id.notes {
+        println!("note: {n}");
+    }
     for w in &id.warnings {
         eprintln!("warning: {w}");
     }
     println!("wrote {}", a.out.display());
     if let Some(path) = &a.report {
-        let params = nominal.parameters();
+        let params = id.robot.parameters();
         let dropped: Vec<Value> = id
             .identifiability
             .dropped
@@ -204,6 +207,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
             "outliers": id.outliers,
             "robust": a.robust, "robust_rounds": id.robust_rounds,
             "registration_rms_mm": id.registration.as_ref().map(|r| r.rms_mm),
+            "notes": id.notes,
             "warnings": id.warnings,
         });
         write_json(path, &v)?;
@@ -215,8 +219,8 @@ fn finite_or_null(v: f64) -> Value {
     if v.is_finite() { json!(v) } else { Value::Null }
 }
 
-fn print_identified(a: &IdentifyArgs, nominal: &Robot, cal: &MeasurementSet, id: &Identified) {
-    let params = nominal.parameters();
+fn print_identified(a: &IdentifyArgs, cal: &MeasurementSet, id: &Identified) {
+    let params = id.robot.parameters();
     let ident = &id.identifiability;
     println!(
         "identify: {} rows of {}, measure {}, method {:?}, parameters `{}`",

@@ -6,6 +6,7 @@ mod identify;
 mod ik;
 mod import;
 mod output;
+mod reproduce;
 mod simulate;
 mod split;
 
@@ -39,6 +40,8 @@ enum Command {
     Identify(identify::IdentifyArgs),
     /// Reports the accuracy of a robot model on measurements.
     Evaluate(identify::EvaluateArgs),
+    /// Reproduces the thesis's case studies A-D (identification) beside the thesis's figures.
+    Reproduce(reproduce::ReproduceArgs),
 }
 
 /// Runs the command line; errors are printed with their context and give exit code 1.
@@ -52,6 +55,7 @@ pub fn main() -> ExitCode {
         Command::Split(a) => split::run(a),
         Command::Identify(a) => identify::run_identify(a),
         Command::Evaluate(a) => identify::run_evaluate(a),
+        Command::Reproduce(a) => reproduce::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -104,6 +104,9 @@ pub struct Identified {
     pub registration: Option<Registration>,
     /// Robust reweighting rounds (0 without a robust loss).
     pub robust_rounds: usize,
+    /// What was done that the user should know (frames re-expressed, ...).
+    pub notes: Vec<String>,
+    /// What may make the result unreliable (ill-conditioning, iteration limit).
     pub warnings: Vec<String>,
 }
 
@@ -182,7 +185,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
     let mut obs = Observations::new(set, measure, opts.sigmas)?;
     let chosen = select(nominal, &opts.params)?;
     let (completed, notes) = complete_frames(nominal, &chosen)?;
-    let mut warnings = notes;
+    let mut warnings = Vec::new();
     // The selection in the completed model: converted rows contribute all their fields.
     let candidates = if completed.parameters() == nominal.parameters() {
         chosen
@@ -324,6 +327,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         outliers,
         registration,
         robust_rounds,
+        notes,
         warnings,
     })
 }

@@ -1,0 +1,106 @@
+//! Identification speed: the analytic Jacobian (one and 1,000 configurations, every
+//! parameter), LM identification of Case D's 30 poses (`full` and `offsets`), and of the real
+//! UR10 Series A (11,911 poses, `full`).
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use nalgebra::Matrix6xX;
+use robocal::data::{Profile, read_measurements};
+use robocal::identify::{Options, identify, parameter_jacobian};
+use robocal::kinematics::{Frames, frames};
+use robocal::model::read_robot;
+use std::hint::black_box;
+use std::path::Path;
+
+fn path(p: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
+}
+
+fn jacobian(c: &mut Criterion) {
+    let robot = read_robot(path("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
+    let cols: Vec<usize> = (0..robot.parameters().len()).collect();
+    let mut ws = Frames::new(&robot);
+    let mut jac = Matrix6xX::zeros(cols.len());
+    let q = [0.3, 0.2, -0.4, 1.0, 0.8, -0.6];
+    c.bench_function("jacobian_full_one_configuration", |b| {
+        b.iter(|| {
+            frames(&robot, black_box(&q), &mut ws);
+            parameter_jacobian(&robot, &ws, &cols, &mut jac);
+            jac[(0, 0)]
+        })
+    });
+    let configs: Vec<[f64; 6]> = (0..1000)
+        .map(|k| {
+            let t = k as f64 * 0.001;
+            [t, 0.2 - t * 0.3, -0.4 + t * 0.5, 1.0 - t, 0.8, -0.6 + t]
+        })
+        .collect();
+    c.bench_function("jacobian_full_1000_configurations", |b| {
+        b.iter(|| {
+            let mut s = 0.0;
+            for q in &configs {
+                frames(&robot, q, &mut ws);
+                parameter_jacobian(&robot, &ws, &cols, &mut jac);
+                s += jac[(0, 0)];
+            }
+            s
+        })
+    });
+}
+
+fn case_d(c: &mut Criterion) {
+    let robot = read_robot(path("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
+    let (set, _) = read_measurements(
+        &path("datasets/case_d/calibration.csv"),
+        &robot,
+        &Profile::default(),
+        &Default::default(),
+    )
+    .unwrap();
+    for params in ["full", "offsets"] {
+        let opts = Options {
+            params: params.into(),
+            ..Default::default()
+        };
+        c.bench_function(&format!("identify_case_d_30_poses_{params}"), |b| {
+            b.iter(|| {
+                identify(&robot, black_box(&set), &opts)
+                    .unwrap()
+                    .solution
+                    .iterations
+            })
+        });
+    }
+}
+
+fn ur10_series_a(c: &mut Criterion) {
+    let robot = read_robot(path("datasets/robots/ur10.toml")).unwrap();
+    let profile = Profile::read(path("datasets/profiles/ipa_ur10.toml")).unwrap();
+    let (set, _) = read_measurements(
+        &path("datasets/ipa-ur10/Series_A/measurements_grid.csv"),
+        &robot,
+        &profile,
+        &Default::default(),
+    )
+    .unwrap();
+    let opts = Options::default();
+    let mut g = c.benchmark_group("slow");
+    g.sample_size(10);
+    g.bench_function("identify_ur10_series_a_11911_poses_full", |b| {
+        b.iter(|| {
+            identify(&robot, black_box(&set), &opts)
+                .unwrap()
+                .solution
+                .iterations
+        })
+    });
+    g.finish();
+}
+
+criterion_group! {
+    name = identification;
+    config = Criterion::default()
+        .warm_up_time(std::time::Duration::from_millis(500))
+        .measurement_time(std::time::Duration::from_secs(3));
+    targets = jacobian, case_d, ur10_series_a
+}
+criterion_main!(identification);
