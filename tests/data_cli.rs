@@ -1,26 +1,8 @@
 //! `robocal import` and `robocal simulate` from the command line: every bad-input kind gives its
 //! error (file, line, column) and exit code; warnings keep exit code 0.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
-
-fn robocal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_robocal"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run robocal")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("robocal-data-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
+mod common;
+use common::{robocal, stderr, tmp};
 
 const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
 const HEADER: &str = "id,q1,q2,q3,q4,q5,q6,x,y,z\n";

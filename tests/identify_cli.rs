@@ -1,27 +1,10 @@
 //! `robocal identify`, `evaluate`, `split` and `reproduce` from the command line.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
+use common::{robocal, stderr, stdout, tmp};
 
-fn robocal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_robocal"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run robocal")
-}
-
-fn text(o: &Output) -> (String, String) {
-    (
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-        String::from_utf8_lossy(&o.stderr).into_owned(),
-    )
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("robocal-id-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+fn text(o: &std::process::Output) -> (String, String) {
+    (stdout(o), stderr(o))
 }
 
 const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";

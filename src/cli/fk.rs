@@ -1,6 +1,6 @@
 //! `robocal fk`: forward kinematics of one joint vector or of a CSV batch.
 
-use super::output::{emit, num, parse_list};
+use super::output::{OutputArgs, num, parse_list};
 use crate::data::{POSE_COLUMNS, Table, joint_columns};
 use crate::kinematics::{pose_to_file, tool_pose};
 use crate::model::read_robot;
@@ -20,15 +20,8 @@ pub struct FkArgs {
     /// CSV with columns q1..qN (deg); other columns are carried through.
     #[arg(long, group = "input")]
     joints: Option<PathBuf>,
-    /// Output file (CSV, or JSON with --json); stdout when absent. Written atomically.
-    #[arg(long)]
-    out: Option<PathBuf>,
-    /// JSON instead of CSV: an array of objects keyed by column name.
-    #[arg(long)]
-    json: bool,
-    /// Round output numbers to this many decimals (default: shortest exact form).
-    #[arg(long)]
-    decimals: Option<usize>,
+    #[command(flatten)]
+    output: OutputArgs,
 }
 
 pub fn run(a: FkArgs) -> Result<()> {
@@ -74,7 +67,11 @@ pub fn run(a: FkArgs) -> Result<()> {
         }
         let pose = tool_pose(&robot, &qi);
         let mut row = cells;
-        row.extend(pose_to_file(&pose).iter().map(|v| num(*v, a.decimals)));
+        row.extend(
+            pose_to_file(&pose)
+                .iter()
+                .map(|v| num(*v, a.output.decimals)),
+        );
         out_rows.push(row);
     }
     if !outside.is_empty() {
@@ -84,6 +81,7 @@ pub fn run(a: FkArgs) -> Result<()> {
             outside
         );
     }
-    emit(&headers, &out_rows, a.json, a.out.as_deref())
+    a.output
+        .emit(&headers, &out_rows)
         .with_context(|| "writing the FK output".to_string())
 }

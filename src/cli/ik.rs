@@ -4,7 +4,7 @@
 //! limits); else the nominal model's closed form (`--nominal`) refined numerically on the
 //! robot; else numerical IK from a seed (`--seed`, or the row's own q1..qN columns).
 
-use super::output::{emit, num, parse_list};
+use super::output::{OutputArgs, num, parse_list};
 use crate::data::{POSE_COLUMNS, Table, joint_columns};
 use crate::kinematics::{
     IkOptions, IkTarget, IkWorkspace, Pose, SphericalWristIk, pose_from_file, solve_numeric,
@@ -36,15 +36,8 @@ pub struct IkArgs {
     /// Nominal robot whose closed form seeds the numerical solve (for calibrated models).
     #[arg(long)]
     nominal: Option<PathBuf>,
-    /// Output file (CSV, or JSON with --json); stdout when absent. Written atomically.
-    #[arg(long)]
-    out: Option<PathBuf>,
-    /// JSON instead of CSV.
-    #[arg(long)]
-    json: bool,
-    /// Round output numbers to this many decimals (default: shortest exact form).
-    #[arg(long)]
-    decimals: Option<usize>,
+    #[command(flatten)]
+    output: OutputArgs,
 }
 
 /// How solutions are found for this robot.
@@ -240,7 +233,7 @@ pub fn run(a: IkArgs) -> Result<()> {
                     let mut row = cells.clone();
                     row.push((s + 1).to_string());
                     let q = robot.joints_to_file(&sols[i]);
-                    row.extend(q.iter().map(|x| num(*x, a.decimals)));
+                    row.extend(q.iter().map(|x| num(*x, a.output.decimals)));
                     row.push("ok".into());
                     out_rows.push(row);
                 }
@@ -269,5 +262,5 @@ pub fn run(a: IkArgs) -> Result<()> {
             eprintln!("  line {line}: {why}");
         }
     }
-    emit(&headers, &out_rows, a.json, a.out.as_deref())
+    a.output.emit(&headers, &out_rows)
 }

@@ -1,7 +1,29 @@
 //! Shared pieces of command output: numbers, parsing of lists, CSV or JSON to a file or stdout.
 
 use anyhow::{Context, Result, bail};
-use std::path::Path;
+use clap::Args;
+use std::path::{Path, PathBuf};
+
+/// Output flags of the batch commands.
+#[derive(Args)]
+pub struct OutputArgs {
+    /// Output file (CSV, or JSON with --json); stdout when absent. Written atomically.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// JSON instead of CSV: an array of objects keyed by column name.
+    #[arg(long)]
+    pub json: bool,
+    /// Round output numbers to this many decimals (default: shortest exact form).
+    #[arg(long)]
+    pub decimals: Option<usize>,
+}
+
+impl OutputArgs {
+    /// Writes rows as CSV or JSON, to the file or stdout.
+    pub fn emit(&self, headers: &[String], rows: &[Vec<String>]) -> Result<()> {
+        emit(headers, rows, self.json, self.out.as_deref())
+    }
+}
 
 /// Formats a number: shortest exact form, or rounded to `decimals` places.
 pub fn num(v: f64, decimals: Option<usize>) -> String {

@@ -149,23 +149,12 @@ impl Profile {
     /// Reads a profile file; errors name the file, line and field.
     pub fn read(path: impl AsRef<Path>) -> Result<Profile> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Profile::parse(&text, path)
+        Profile::parse(&crate::io::read_text(path)?, path)
     }
 
     /// Parses profile text; `path` is used in messages.
     pub fn parse(text: &str, path: &Path) -> Result<Profile> {
-        let f: ProfileFile = toml::from_str(text).map_err(|e| {
-            let line = e.span().map(|s| crate::model::file::line_of(text, s.start));
-            Error::input(
-                Location {
-                    file: path.to_path_buf(),
-                    line,
-                    field: None,
-                },
-                e.message().trim().to_string(),
-            )
-        })?;
+        let f: ProfileFile = crate::io::parse_toml(text, path)?;
         let bad = |field: &str, msg: String| {
             let line = text
                 .lines()

@@ -123,28 +123,10 @@ pub(crate) fn line_of(text: &str, offset: usize) -> usize {
         + 1
 }
 
-/// The key an error span points at: the key itself, or the key of `key = value` when the span
-/// is the value.
-fn key_at(text: &str, span: std::ops::Range<usize>) -> Option<String> {
-    let start = span.start.min(text.len());
-    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
-    let before = &text[line_start..start];
-    if let Some(eq) = before.find('=') {
-        let key = before[..eq].trim();
-        if !key.is_empty() {
-            return Some(key.to_string());
-        }
-    }
-    let snippet = text.get(span)?.trim();
-    (!snippet.is_empty() && snippet.len() <= 40 && !snippet.contains('\n'))
-        .then(|| snippet.to_string())
-}
-
 /// Reads a robot file.
 pub fn read_robot(path: impl AsRef<Path>) -> Result<Robot> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    parse_robot(&text, path)
+    parse_robot(&crate::io::read_text(path)?, path)
 }
 
 /// Parses robot-file text; `path` is used in error messages.
@@ -152,18 +134,7 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
     let at = |span: std::ops::Range<usize>, field: &str| {
         Location::at(path, line_of(text, span.start), field)
     };
-    let file: RobotFile = toml::from_str(text).map_err(|e| {
-        let (line, field) = match e.span() {
-            Some(s) => (Some(line_of(text, s.start)), key_at(text, s)),
-            None => (None, None),
-        };
-        let location = Location {
-            file: path.to_path_buf(),
-            line,
-            field,
-        };
-        Error::input(location, e.message().trim().to_string())
-    })?;
+    let file: RobotFile = crate::io::parse_toml(text, path)?;
 
     let row_of = |rf: &RowFile, what: &str, is_joint: bool| -> Result<(Row, JointType, [f64; 2])> {
         let conv_name = rf.convention.get_ref();

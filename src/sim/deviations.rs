@@ -34,22 +34,11 @@ impl Deviations {
     /// naming the file, the line and the parameter.
     pub fn read(path: impl AsRef<Path>, robot: &Robot) -> Result<Self> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Deviations::parse(&text, path, robot)
+        Deviations::parse(&crate::io::read_text(path)?, path, robot)
     }
 
     pub fn parse(text: &str, path: &Path, robot: &Robot) -> Result<Self> {
-        let table: toml::Table = toml::from_str(text).map_err(|e| {
-            let line = e.span().map(|s| crate::model::file::line_of(text, s.start));
-            Error::input(
-                Location {
-                    file: path.to_path_buf(),
-                    line,
-                    field: None,
-                },
-                e.message().trim().to_string(),
-            )
-        })?;
+        let table: toml::Table = crate::io::parse_toml(text, path)?;
         let mut flat = Vec::new();
         flatten("", &table, &mut flat);
         let line_of_key = |name: &str| {

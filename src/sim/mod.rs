@@ -50,20 +50,7 @@ impl Region {
     /// prismatic joints). Each range must lie within the joint's limits.
     pub fn read(path: impl AsRef<Path>, robot: &Robot) -> Result<Self> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let f: RegionFile = toml::from_str(&text).map_err(|e| {
-            let line = e
-                .span()
-                .map(|s| crate::model::file::line_of(&text, s.start));
-            Error::input(
-                Location {
-                    file: path.to_path_buf(),
-                    line,
-                    field: None,
-                },
-                e.message().trim().to_string(),
-            )
-        })?;
+        let f: RegionFile = crate::io::parse_toml(&crate::io::read_text(path)?, path)?;
         let bad = |m: String| Error::input(Location::at(path, 0, "ranges"), m);
         if f.ranges.len() != robot.dof() {
             return Err(bad(format!(

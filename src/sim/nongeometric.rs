@@ -87,20 +87,7 @@ impl NonGeometric {
     /// Reads a non-geometric error file and checks it against the robot.
     pub fn read(path: impl AsRef<Path>, robot: &Robot) -> Result<Self> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let ng: NonGeometric = toml::from_str(&text).map_err(|e| {
-            let line = e
-                .span()
-                .map(|s| crate::model::file::line_of(&text, s.start));
-            Error::input(
-                Location {
-                    file: path.to_path_buf(),
-                    line,
-                    field: None,
-                },
-                e.message().trim().to_string(),
-            )
-        })?;
+        let ng: NonGeometric = crate::io::parse_toml(&crate::io::read_text(path)?, path)?;
         ng.check(robot)
             .map_err(|m| Error::input(Location::file(path), m))?;
         Ok(ng)
