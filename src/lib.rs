@@ -11,6 +11,7 @@ pub mod identify;
 pub mod io;
 pub mod kinematics;
 pub mod model;
+pub mod neural;
 pub mod reproduce;
 pub mod rotation;
 pub mod sim;

@@ -1,0 +1,234 @@
+//! A one-hidden-layer sigmoid MLP in f64 (nalgebra): y = W2 s(W1 x + b1) + b2, s the logistic
+//! sigmoid (thesis 3.2). Prediction and the Levenberg-Marquardt phase run here; burn trains the
+//! first phase and keeps the saved record (see `net`).
+
+use nalgebra::{DMatrix, DVector};
+
+/// Weights of the network.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Weights {
+    /// hidden x inputs.
+    pub w1: DMatrix<f64>,
+    /// hidden.
+    pub b1: DVector<f64>,
+    /// outputs x hidden.
+    pub w2: DMatrix<f64>,
+    /// outputs.
+    pub b2: DVector<f64>,
+}
+
+fn sigmoid(z: f64) -> f64 {
+    1.0 / (1.0 + (-z).exp())
+}
+
+impl Weights {
+    pub fn inputs(&self) -> usize {
+        self.w1.ncols()
+    }
+
+    pub fn hidden(&self) -> usize {
+        self.w1.nrows()
+    }
+
+    pub fn outputs(&self) -> usize {
+        self.w2.nrows()
+    }
+
+    /// Number of weights and biases.
+    pub fn len(&self) -> usize {
+        let (h, i, o) = (self.hidden(), self.inputs(), self.outputs());
+        h * i + h + o * h + o
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// All weights in one vector: W1 (row-major), b1, W2 (row-major), b2.
+    pub fn to_vector(&self) -> DVector<f64> {
+        let mut v = Vec::with_capacity(self.len());
+        v.extend(self.w1.transpose().iter());
+        v.extend(self.b1.iter());
+        v.extend(self.w2.transpose().iter());
+        v.extend(self.b2.iter());
+        DVector::from_vec(v)
+    }
+
+    /// The inverse of [`Weights::to_vector`] for the same shape.
+    pub fn from_vector(&self, v: &DVector<f64>) -> Weights {
+        let (h, i, o) = (self.hidden(), self.inputs(), self.outputs());
+        let mut k = 0;
+        let mut take = |n: usize| {
+            let s = v.rows(k, n).into_owned();
+            k += n;
+            s
+        };
+        let w1 = DMatrix::from_row_slice(h, i, take(h * i).as_slice());
+        let b1 = take(h);
+        let w2 = DMatrix::from_row_slice(o, h, take(o * h).as_slice());
+        let b2 = take(o);
+        Weights { w1, b1, w2, b2 }
+    }
+
+    /// Output for input `x`; `hidden` receives the hidden activations.
+    pub fn forward_into(&self, x: &[f64], hidden: &mut [f64], y: &mut [f64]) {
+        for (j, hj) in hidden.iter_mut().enumerate() {
+            let mut z = self.b1[j];
+            for (i, xi) in x.iter().enumerate() {
+                z += self.w1[(j, i)] * xi;
+            }
+            *hj = sigmoid(z);
+        }
+        for (k, yk) in y.iter_mut().enumerate() {
+            let mut s = self.b2[k];
+            for (j, hj) in hidden.iter().enumerate() {
+                s += self.w2[(k, j)] * hj;
+            }
+            *yk = s;
+        }
+    }
+
+    /// Output for input `x` (allocates; for tests and one-off use).
+    pub fn forward(&self, x: &[f64]) -> Vec<f64> {
+        let mut h = vec![0.0; self.hidden()];
+        let mut y = vec![0.0; self.outputs()];
+        self.forward_into(x, &mut h, &mut y);
+        y
+    }
+
+    /// Jacobian of the outputs at `x` with respect to every weight (outputs x len, in the order
+    /// of [`Weights::to_vector`]), written into `jac` rows `row0..row0 + outputs`.
+    ///
+    /// dy_k/dW2[k,j] = h_j, dy_k/db2[k] = 1, dy_k/dW1[j,i] = W2[k,j] h_j (1 - h_j) x_i,
+    /// dy_k/db1[j] = W2[k,j] h_j (1 - h_j).
+    pub fn jacobian_into(
+        &self,
+        x: &[f64],
+        hidden: &mut [f64],
+        jac: &mut DMatrix<f64>,
+        row0: usize,
+    ) {
+        let (h, i, o) = (self.hidden(), self.inputs(), self.outputs());
+        let mut y = vec![0.0; o];
+        self.forward_into(x, hidden, &mut y);
+        let (off_b1, off_w2, off_b2) = (h * i, h * i + h, h * i + h + o * h);
+        for k in 0..o {
+            let r = row0 + k;
+            for c in 0..self.len() {
+                jac[(r, c)] = 0.0;
+            }
+            for j in 0..h {
+                let d = self.w2[(k, j)] * hidden[j] * (1.0 - hidden[j]);
+                for (ii, xi) in x.iter().enumerate() {
+                    jac[(r, j * i + ii)] = d * xi;
+                }
+                jac[(r, off_b1 + j)] = d;
+                jac[(r, off_w2 + k * h + j)] = hidden[j];
+            }
+            jac[(r, off_b2 + k)] = 1.0;
+        }
+    }
+}
+
+/// Min-max normalisation of each feature to [-1, 1], fitted on training data and stored with
+/// the network.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MinMax {
+    pub min: Vec<f64>,
+    pub max: Vec<f64>,
+}
+
+impl MinMax {
+    /// Fits to rows of equal length; a constant feature maps to 0.
+    pub fn fit(rows: &[Vec<f64>]) -> MinMax {
+        let n = rows.first().map_or(0, |r| r.len());
+        let mut min = vec![f64::INFINITY; n];
+        let mut max = vec![f64::NEG_INFINITY; n];
+        for r in rows {
+            for k in 0..n {
+                min[k] = min[k].min(r[k]);
+                max[k] = max[k].max(r[k]);
+            }
+        }
+        MinMax { min, max }
+    }
+
+    fn half_range(&self, k: usize) -> f64 {
+        let h = 0.5 * (self.max[k] - self.min[k]);
+        if h > 0.0 { h } else { 1.0 }
+    }
+
+    /// Raw to [-1, 1].
+    pub fn apply(&self, v: &[f64], out: &mut [f64]) {
+        for k in 0..v.len() {
+            let mid = 0.5 * (self.max[k] + self.min[k]);
+            out[k] = (v[k] - mid) / self.half_range(k);
+        }
+    }
+
+    /// [-1, 1] back to raw.
+    pub fn invert(&self, v: &[f64], out: &mut [f64]) {
+        for k in 0..v.len() {
+            let mid = 0.5 * (self.max[k] + self.min[k]);
+            out[k] = v[k] * self.half_range(k) + mid;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> Weights {
+        let f = |r, c, s: f64| DMatrix::from_fn(r, c, |i, j| ((i * 7 + j * 3) as f64 * s).sin());
+        Weights {
+            w1: f(4, 3, 0.37),
+            b1: DVector::from_fn(4, |i, _| (i as f64 * 0.9).cos()),
+            w2: f(2, 4, 0.53),
+            b2: DVector::from_fn(2, |i, _| i as f64 * 0.1 - 0.2),
+        }
+    }
+
+    #[test]
+    fn weight_jacobian_matches_central_differences() {
+        let w = sample();
+        let x = [0.3, -0.7, 0.55];
+        let n = w.len();
+        let mut jac = DMatrix::zeros(2, n);
+        let mut h = vec![0.0; w.hidden()];
+        w.jacobian_into(&x, &mut h, &mut jac, 0);
+        let v = w.to_vector();
+        for c in 0..n {
+            let e = 1e-6;
+            let mut vp = v.clone();
+            vp[c] += e;
+            let mut vm = v.clone();
+            vm[c] -= e;
+            let (yp, ym) = (
+                w.from_vector(&vp).forward(&x),
+                w.from_vector(&vm).forward(&x),
+            );
+            for k in 0..2 {
+                let fd = (yp[k] - ym[k]) / (2.0 * e);
+                assert!(
+                    (fd - jac[(k, c)]).abs() < 1e-8 * (1.0 + fd.abs()),
+                    "weight {c}, output {k}: {fd} vs {}",
+                    jac[(k, c)]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn vector_round_trip_and_normalisation() {
+        let w = sample();
+        assert_eq!(w.from_vector(&w.to_vector()), w);
+        let m = MinMax::fit(&[vec![0.0, 5.0], vec![10.0, 5.0]]);
+        let mut out = [0.0; 2];
+        m.apply(&[10.0, 5.0], &mut out);
+        assert_eq!(out, [1.0, 0.0]);
+        let mut back = [0.0; 2];
+        m.invert(&out, &mut back);
+        assert_eq!(back, [10.0, 5.0]);
+    }
+}
