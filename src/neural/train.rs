@@ -156,6 +156,35 @@ fn lm_step(
     Ok(LmOutcome::MuMax)
 }
 
+/// The best weights by validation error, and how many epochs in a row failed to beat them.
+struct Best {
+    mse: f64,
+    weights: Weights,
+    fails: usize,
+}
+
+impl Best {
+    fn new(mse: f64, weights: Weights) -> Self {
+        Best {
+            mse,
+            weights,
+            fails: 0,
+        }
+    }
+
+    /// Records an epoch's validation error; returns the failures in a row.
+    fn record(&mut self, mse: f64, w: &Weights) -> usize {
+        if mse < self.mse {
+            self.mse = mse;
+            self.weights = w.clone();
+            self.fails = 0;
+        } else {
+            self.fails += 1;
+        }
+        self.fails
+    }
+}
+
 enum LmOutcome {
     Step(Weights, f64),
     MinGradient,
@@ -206,8 +235,7 @@ pub fn train(
     };
     let mut curve = Vec::new();
     let start = initial_weights(x[0].len(), opts.hidden, y[0].len(), opts.seed);
-    let mut best = (val(&start), start.clone());
-    let mut fails = 0;
+    let mut best = Best::new(val(&start), start.clone());
     let mut stop = None;
     let mut momentum_epochs = 0;
     // Phase 1 ends on the goal (training is done) or on its own validation failures (phase 2
@@ -224,12 +252,7 @@ pub fn train(
             curve.push((epoch, train_mse, v));
             bar.set_position(epoch as u64);
             bar.set_message(format!("train {train_mse:.3e} validation {v:.3e}"));
-            if v < best.0 {
-                best = (v, w.clone());
-                fails = 0;
-            } else {
-                fails += 1;
-            }
+            let fails = best.record(v, w);
             if train_mse <= opts.goal {
                 stop = Some(TrainStop::Goal);
             } else if fails >= opts.max_fail * 10 {
@@ -239,13 +262,12 @@ pub fn train(
             stop.is_none() && !phase1_done
         },
     )?;
-    let mut w = if best.0 < val(&after_momentum) {
-        best.1.clone()
+    let mut w = if best.mse < val(&after_momentum) {
+        best.weights.clone()
     } else {
         after_momentum
     };
-    best = (val(&w), w.clone());
-    fails = 0;
+    best = Best::new(val(&w), w.clone());
     let mut mu = 1e-3;
     let mut lm_epochs = 0;
     while stop.is_none() {
@@ -263,12 +285,7 @@ pub fn train(
                 curve.push((momentum_epochs + lm_epochs, train_mse, v));
                 bar.set_position((opts.momentum_epochs + lm_epochs) as u64);
                 bar.set_message(format!("train {train_mse:.3e} validation {v:.3e} (LM)"));
-                if v < best.0 {
-                    best = (v, w.clone());
-                    fails = 0;
-                } else {
-                    fails += 1;
-                }
+                let fails = best.record(v, &w);
                 if train_mse <= opts.goal {
                     stop = Some(TrainStop::Goal);
                 } else if !xv.is_empty() && fails >= opts.max_fail {
@@ -278,7 +295,7 @@ pub fn train(
         }
     }
     bar.finish_and_clear();
-    let w = best.1;
+    let w = best.weights;
     let report = TrainReport {
         stop: stop.unwrap_or(TrainStop::MaxEpochs),
         momentum_epochs,
