@@ -77,23 +77,34 @@ fn line_numbers_count_every_line() {
     assert!(err.contains("lines.csv:4") && err.contains("`x`"), "{err}");
 }
 
-#[test]
-fn duplicate_header_is_an_error() {
-    let input = tmp("dup.csv");
-    std::fs::write(&input, "q1,q2,q3,q4,q5,q6,x,y,z,x\n0,0,0,0,0,0,1,2,3,4\n").unwrap();
+/// Imports a whole file text (header included) and expects exit code 1 with `needles` in the
+/// message.
+fn import_fails(name: &str, text: &str, needles: &[&str]) {
+    let input = tmp(&format!("{name}.csv"));
+    std::fs::write(&input, text).unwrap();
+    let out = tmp(&format!("{name}.out"));
     let o = robocal(&[
         "import",
         input.to_str().unwrap(),
         "--robot",
         FANUC,
         "--out",
-        tmp("dup.out").to_str().unwrap(),
+        out.to_str().unwrap(),
     ]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(
-        stderr(&o).contains("dup.csv:1") && stderr(&o).contains("duplicate"),
-        "{}",
-        stderr(&o)
+    let err = stderr(&o);
+    for n in needles {
+        assert!(err.contains(n), "`{n}` not in {err}");
+    }
+    assert!(!out.exists());
+}
+
+#[test]
+fn duplicate_header_is_an_error() {
+    import_fails(
+        "dup",
+        "q1,q2,q3,q4,q5,q6,x,y,z,x\n0,0,0,0,0,0,1,2,3,4\n",
+        &["dup.csv:1", "duplicate"],
     );
 }
 
@@ -140,21 +151,10 @@ fn skip_bad_rows_drops_and_lists_them() {
 
 #[test]
 fn missing_position_group_member_is_an_error() {
-    let input = tmp("group.csv");
-    std::fs::write(&input, "q1,q2,q3,q4,q5,q6,x,y\n0,0,0,0,0,0,1,2\n").unwrap();
-    let o = robocal(&[
-        "import",
-        input.to_str().unwrap(),
-        "--robot",
-        FANUC,
-        "--out",
-        tmp("group.out").to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(
-        stderr(&o).contains("group.csv:1") && stderr(&o).contains("`z`"),
-        "{}",
-        stderr(&o)
+    import_fails(
+        "group",
+        "q1,q2,q3,q4,q5,q6,x,y\n0,0,0,0,0,0,1,2\n",
+        &["group.csv:1", "`z`"],
     );
 }
 

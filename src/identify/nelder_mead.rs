@@ -9,9 +9,9 @@
 //! simplex.
 
 use super::problem::{Observations, Workspace, cost};
-use super::solve::{Solution, SolveOptions, StopReason, with_values};
+use super::solve::{Solution, SolveOptions, StopReason, free_values, with_values};
 use crate::error::{Error, Result};
-use crate::model::{ParamId, Robot};
+use crate::model::Robot;
 use nalgebra::DVector;
 
 const REFLECT: f64 = 1.0;
@@ -26,9 +26,7 @@ pub fn solve_nelder_mead(
     cols: &[usize],
     opts: &SolveOptions,
 ) -> Result<Solution> {
-    let params = robot.parameters();
-    let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
-    let x0 = DVector::from_iterator(ids.len(), ids.iter().map(|&id| robot.param(id)));
+    let (ids, x0) = free_values(robot, cols);
     let scale = DVector::from_iterator(
         ids.len(),
         ids.iter()

@@ -98,6 +98,30 @@ pub fn with_values(robot: &Robot, ids: &[ParamId], x: &DVector<f64>) -> Result<R
     robot.with_params(&values)
 }
 
+/// The free parameters `cols` (indices into `Robot::parameters`) and their values (mm, rad).
+pub fn free_values(robot: &Robot, cols: &[usize]) -> (Vec<ParamId>, DVector<f64>) {
+    let params = robot.parameters();
+    let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
+    let x = DVector::from_iterator(ids.len(), ids.iter().map(|&id| robot.param(id)));
+    (ids, x)
+}
+
+fn finished(
+    robot: Robot,
+    iterations: usize,
+    stop: StopReason,
+    cost: f64,
+    evaluations: usize,
+) -> Solution {
+    Solution {
+        robot,
+        iterations,
+        stop,
+        cost,
+        evaluations,
+    }
+}
+
 fn names(ids: &[ParamId]) -> String {
     ids.iter().map(|i| i.name()).collect::<Vec<_>>().join(", ")
 }
@@ -109,9 +133,7 @@ pub fn solve_gradient(
     cols: &[usize],
     opts: &SolveOptions,
 ) -> Result<Solution> {
-    let params = robot.parameters();
-    let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
-    let mut x = DVector::from_iterator(ids.len(), ids.iter().map(|&id| robot.param(id)));
+    let (ids, mut x) = free_values(robot, cols);
     let mut ws = Workspace::new(robot);
     let mut current = robot.clone();
     let mut ne = normal_equations(&current, obs, cols, &mut ws);
@@ -127,13 +149,13 @@ pub fn solve_gradient(
     let k = ids.len();
     for iter in 0..opts.max_iterations {
         if ne.cost == 0.0 {
-            return Ok(Solution {
-                robot: current,
-                iterations: iter,
-                stop: StopReason::Gradient,
-                cost: 0.0,
+            return Ok(finished(
+                current,
+                iter,
+                StopReason::Gradient,
+                0.0,
                 evaluations,
-            });
+            ));
         }
         let rnorm = ne.cost.sqrt();
         let gmax = (0..k)
@@ -147,13 +169,13 @@ pub fn solve_gradient(
             })
             .fold(0.0, f64::max);
         if gmax <= opts.gtol {
-            return Ok(Solution {
-                robot: current,
-                iterations: iter,
-                stop: StopReason::Gradient,
-                cost: ne.cost,
+            return Ok(finished(
+                current,
+                iter,
+                StopReason::Gradient,
+                ne.cost,
                 evaluations,
-            });
+            ));
         }
         let diag: Vec<f64> = (0..k).map(|i| ne.a[(i, i)].max(1e-300)).collect();
         let (step, new_robot, new_cost) = if gn {
@@ -184,13 +206,13 @@ pub fn solve_gradient(
                     .zip(x.iter())
                     .all(|(d, v)| d.abs() <= 1e3 * opts.xtol * (1.0 + v.abs())) =>
                 {
-                    return Ok(Solution {
-                        robot: current,
-                        iterations: iter,
-                        stop: StopReason::Precision,
-                        cost: ne.cost,
+                    return Ok(finished(
+                        current,
+                        iter,
+                        StopReason::Precision,
+                        ne.cost,
                         evaluations,
-                    });
+                    ));
                 }
                 None => {
                     return Err(Error::NotConverged(format!(
@@ -227,13 +249,13 @@ pub fn solve_gradient(
                     f
                 }
                 None => {
-                    return Ok(Solution {
-                        robot: current,
-                        iterations: iter,
-                        stop: StopReason::Precision,
-                        cost: ne.cost,
+                    return Ok(finished(
+                        current,
+                        iter,
+                        StopReason::Precision,
+                        ne.cost,
                         evaluations,
-                    });
+                    ));
                 }
             }
         };
@@ -255,31 +277,31 @@ pub fn solve_gradient(
             )));
         }
         if decrease <= opts.ftol * old_cost {
-            return Ok(Solution {
-                robot: current,
-                iterations: iter + 1,
-                stop: StopReason::Function,
-                cost: ne.cost,
+            return Ok(finished(
+                current,
+                iter + 1,
+                StopReason::Function,
+                ne.cost,
                 evaluations,
-            });
+            ));
         }
         if small_step {
-            return Ok(Solution {
-                robot: current,
-                iterations: iter + 1,
-                stop: StopReason::Parameter,
-                cost: ne.cost,
+            return Ok(finished(
+                current,
+                iter + 1,
+                StopReason::Parameter,
+                ne.cost,
                 evaluations,
-            });
+            ));
         }
     }
-    Ok(Solution {
-        robot: current,
-        iterations: opts.max_iterations,
-        stop: StopReason::MaxIterations,
-        cost: ne.cost,
+    Ok(finished(
+        current,
+        opts.max_iterations,
+        StopReason::MaxIterations,
+        ne.cost,
         evaluations,
-    })
+    ))
 }
 
 /// Covariance of the free parameters at `robot`: s^2 (J^T W J)^-1 with the a-posteriori
