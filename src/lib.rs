@@ -3,6 +3,7 @@
 //! Units: files and the command line use mm and degrees; everything inside uses mm and
 //! radians. Poses are [`kinematics::Pose`] (a rotation matrix and a translation in mm).
 
+pub mod case_d;
 pub mod cli;
 pub mod data;
 pub mod error;

@@ -24,6 +24,32 @@ pub struct FkArgs {
     output: OutputArgs,
 }
 
+/// Headers, cells and joint values (file units) of a CSV with columns q1..qN; refuses a
+/// table that already has the pose columns the command would write.
+pub(super) fn joint_table(
+    path: &std::path::Path,
+    n: usize,
+) -> Result<(Vec<String>, Vec<Vec<String>>, Vec<Vec<f64>>)> {
+    let t = Table::read(path)?;
+    let idx: Vec<usize> = joint_columns(n)
+        .iter()
+        .map(|c| t.require(c))
+        .collect::<Result<_, _>>()?;
+    for c in POSE_COLUMNS {
+        if t.column(c).is_some() {
+            bail!(
+                "{}: the input already has a column `{c}`, which would be written; \
+                 rename or drop it",
+                path.display()
+            );
+        }
+    }
+    let joints = (0..t.rows.len())
+        .map(|r| t.numbers(r, &idx))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok((t.headers.clone(), t.rows.clone(), joints))
+}
+
 pub fn run(a: FkArgs) -> Result<()> {
     let robot = read_robot(&a.robot)?;
     let n = robot.dof();
@@ -35,26 +61,7 @@ pub fn run(a: FkArgs) -> Result<()> {
                 let cells = q.iter().map(|v| num(*v, None)).collect();
                 (qcols, vec![cells], vec![q])
             }
-            (None, Some(path)) => {
-                let t = Table::read(path)?;
-                let idx: Vec<usize> = qcols
-                    .iter()
-                    .map(|c| t.require(c))
-                    .collect::<Result<_, _>>()?;
-                for c in POSE_COLUMNS {
-                    if t.column(c).is_some() {
-                        bail!(
-                            "{}: the input already has a column `{c}`, which fk would write; \
-                             rename or drop it",
-                            path.display()
-                        );
-                    }
-                }
-                let joints = (0..t.rows.len())
-                    .map(|r| t.numbers(r, &idx))
-                    .collect::<Result<Vec<_>, _>>()?;
-                (t.headers.clone(), t.rows.clone(), joints)
-            }
+            (None, Some(path)) => joint_table(path, n)?,
             (None, None) => unreachable!("clap requires one input"),
         };
     headers.extend(POSE_COLUMNS.iter().map(|s| s.to_string()));

@@ -3,12 +3,14 @@
 use super::data_args::DataArgs;
 use crate::data::{JointInfo, MeasurementSet};
 use crate::evaluate::{ErrorStats, evaluate_model};
+use crate::evaluate::{row_errors, summarize};
 use crate::identify::identifiability::DropReason;
 use crate::identify::{
     Identified, Measure, Method, Options, RobustLoss, Sigmas, SolveOptions, identify,
 };
-use crate::model::{Robot, read_robot, write_robot};
-use anyhow::{Context, Result};
+use crate::model::{Robot, read_robot, robot_to_toml, write_robot};
+use crate::neural::compensator::{Compensator, PredictWorkspace};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -68,11 +70,15 @@ pub struct EvaluateArgs {
     /// Measurements to evaluate against.
     #[arg(long)]
     data: PathBuf,
+    /// A compensator (from `robocal train`) to evaluate beside the robot.
+    #[arg(long)]
+    compensator: Option<PathBuf>,
     #[command(flatten)]
     read: DataArgs,
     #[arg(long, value_enum)]
     measure: Option<Measure>,
-    /// JSON report (`validation` holds the statistics).
+    /// JSON report (`validation` holds the statistics, `compensated` those with the
+    /// compensator).
     #[arg(long)]
     report: Option<PathBuf>,
 }
@@ -99,17 +105,17 @@ pub fn print_stats(rows: &[(&str, &str, &ErrorStats)]) {
     }
 }
 
-fn stats_json(s: &ErrorStats) -> Value {
+pub(super) fn stats_json(s: &ErrorStats) -> Value {
     serde_json::to_value(s).unwrap_or(Value::Null)
 }
 
-fn write_json(path: &Path, v: &Value) -> Result<()> {
+pub(super) fn write_json(path: &Path, v: &Value) -> Result<()> {
     let mut b = serde_json::to_vec_pretty(v)?;
     b.push(b'\n');
     crate::io::write_atomic(path, &b).with_context(|| format!("writing {}", path.display()))
 }
 
-fn read_set(args: &DataArgs, path: &Path, robot: &Robot) -> Result<MeasurementSet> {
+pub(super) fn read_set(args: &DataArgs, path: &Path, robot: &Robot) -> Result<MeasurementSet> {
     args.read(path, &JointInfo::of(robot))
 }
 
@@ -302,6 +308,25 @@ fn print_identified(a: &IdentifyArgs, cal: &MeasurementSet, id: &Identified) {
 
 pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     let robot = read_robot(&a.robot)?;
+    let comp = a
+        .compensator
+        .as_ref()
+        .map(|p| Compensator::load(p))
+        .transpose()?;
+    if let Some(c) = &comp
+        && (c.robot.dof() != robot.dof()
+            || c.robot
+                .joints()
+                .iter()
+                .zip(robot.joints())
+                .any(|(x, y)| x.joint_type != y.joint_type))
+    {
+        bail!(
+            "{}: the compensator was trained for a robot with other joints than {}",
+            a.compensator.as_deref().unwrap_or(Path::new("")).display(),
+            a.robot.display()
+        );
+    }
     let set = read_set(&a.read, &a.data, &robot)?;
     let m = a.measure.unwrap_or_else(|| Measure::default_for(&set));
     let s = evaluate_model(&robot, &set, m)?;
@@ -312,15 +337,42 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         set.rows.len(),
         m.name()
     );
-    print_stats(&[("data", "model", &s)]);
-    if let Some(c) = s.position_per_coordinate_mean_mm {
-        println!("mean per-coordinate position error |dx|,|dy|,|dz|: {c:.4} mm");
+    let compensated = match &comp {
+        Some(c) => {
+            let mut ws = PredictWorkspace::default();
+            Some(summarize(&row_errors(&set, m, |q| c.predict(q, &mut ws))?))
+        }
+        None => None,
+    };
+    let mut table = vec![("data", "model", &s)];
+    if let Some(c) = &compensated {
+        table.push(("data", "+net", c));
+    }
+    print_stats(&table);
+    for (what, st) in [
+        ("model", Some(&s)),
+        ("with the compensator", compensated.as_ref()),
+    ] {
+        if let Some(c) = st.and_then(|st| st.position_per_coordinate_mean_mm) {
+            println!("mean per-coordinate position error |dx|,|dy|,|dz| ({what}): {c:.4} mm");
+        }
+    }
+    if let Some(c) = &comp
+        && robot_to_toml(&c.robot) != robot_to_toml(&robot)
+    {
+        println!(
+            "note: the compensator runs in series with its own model (embedded; refined in training), not with {}",
+            a.robot.display()
+        );
     }
     if let Some(path) = &a.report {
-        write_json(
-            path,
-            &json!({"robot": a.robot, "data": a.data, "measure": m, "validation": stats_json(&s)}),
-        )?;
+        let mut v =
+            json!({"robot": a.robot, "data": a.data, "measure": m, "validation": stats_json(&s)});
+        if let (Some(p), Some(c)) = (&a.compensator, &compensated) {
+            v["compensator"] = json!(p);
+            v["compensated"] = stats_json(c);
+        }
+        write_json(path, &v)?;
     }
     Ok(())
 }

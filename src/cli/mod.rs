@@ -1,5 +1,6 @@
 //! The `robocal` command line: a thin layer over the library.
 
+mod case_d;
 mod data_args;
 mod fk;
 mod identify;
@@ -9,6 +10,7 @@ mod output;
 mod reproduce;
 mod simulate;
 mod split;
+mod train;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -42,6 +44,12 @@ enum Command {
     Evaluate(identify::EvaluateArgs),
     /// Reproduces the thesis's case studies A-D (identification) beside the thesis's figures.
     Reproduce(reproduce::ReproduceArgs),
+    /// Trains a neural compensator (a model and an MLP in series) on measurements.
+    Train(train::TrainArgs),
+    /// Compensated tool poses for joint configurations.
+    Predict(train::PredictArgs),
+    /// Thesis Case D end to end (Table 6.6) and the non-geometric robot, beside the thesis.
+    CaseD(case_d::CaseDArgs),
 }
 
 /// Runs the command line; errors are printed with their context and give exit code 1.
@@ -56,6 +64,9 @@ pub fn main() -> ExitCode {
         Command::Identify(a) => identify::run_identify(a),
         Command::Evaluate(a) => identify::run_evaluate(a),
         Command::Reproduce(a) => reproduce::run(a),
+        Command::Train(a) => train::run_train(a),
+        Command::Predict(a) => train::run_predict(a),
+        Command::CaseD(a) => case_d::run_case_d(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

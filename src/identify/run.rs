@@ -142,7 +142,7 @@ fn median(v: &[f64]) -> f64 {
     }
 }
 
-fn file_value(id: &ParamId, v: f64) -> f64 {
+pub(crate) fn file_value(id: &ParamId, v: f64) -> f64 {
     if id.field.is_angle() {
         v.to_degrees()
     } else {

@@ -6,16 +6,21 @@
 //!   [dp (mm); dr (mrad, rotation vector)], composed as p = p_model + dp,
 //!   R = exp(dr) R_model (position-only training data: dp only);
 //! - joint-space: the network gives joint corrections dq (mrad, or um for prismatic joints)
-//!   added before the model's FK. Compliance and gear errors live in the joints. Training
-//!   targets are dq* = argmin |W^1/2 (J(q) dq - e)|^2 + lambda |dq|^2 per sample, from the
-//!   model's geometric Jacobian J and the measured error e weighted by the tracker sigmas.
+//!   added before the model's FK. Compliance and gear errors live in the joints. The training
+//!   residual maps the corrections through the model's joint Jacobian,
+//!   r = W (e - J(q) dq(q)), with e the measured error and W the tracker's 1 / sigma.
 
 use super::net::{record_bytes, weights_from_record};
-use super::train::{TrainOptions, TrainReport, train};
+use super::train::{Samples, TrainOptions, TrainReport, train};
 use super::weights::{MinMax, Weights};
 use crate::data::MeasurementSet;
 use crate::error::{Error, Location, Result};
-use crate::identify::Sigmas;
+use crate::identify::identifiability::analyse;
+use crate::identify::problem::Observations;
+use crate::identify::run::file_value;
+use crate::identify::select::select;
+use crate::identify::solve::{free_values, with_values};
+use crate::identify::{Measure, Sigmas, parameter_jacobian};
 use crate::kinematics::{Frames, Pose, frames, joint_jacobian, tool_pose};
 use crate::model::{JointType, Robot, robot_to_toml};
 use crate::rotation::{from_rotation_vector, rotation_vector};
@@ -59,56 +64,224 @@ pub fn features(robot: &Robot, q: &[f64], out: &mut Vec<f64>) {
     }
 }
 
-/// Training targets of one measured row for a form (None when the row lacks what it needs).
-fn target(
+/// What the model misses in one measured row: the position error (mm) and, when the row has
+/// an orientation, the rotation vector of R_measured R_model^T (rad). None without a position.
+fn model_error(
     robot: &Robot,
-    form: Form,
     m: &crate::data::Measurement,
-    sigmas: Sigmas,
     ws: &mut Frames,
-    jac: &mut Matrix6xX<f64>,
-) -> Option<Vec<f64>> {
+) -> Option<(Vector3<f64>, Option<Vector3<f64>>)> {
     frames(robot, &m.q, ws);
     let t = &ws.tool;
     let dp = m.position? - t.translation.vector;
     let dr = m
         .rotation
         .map(|r| rotation_vector(&(r * t.rotation.inverse())));
-    match form {
-        Form::Pose => {
-            let mut v = vec![dp.x, dp.y, dp.z];
-            if let Some(r) = dr {
-                v.extend((r * 1e3).iter());
-            }
-            Some(v)
+    Some((dp, dr))
+}
+
+/// Pose-form samples (thesis): targets [dp (mm); dr (mrad)] min-max normalised.
+fn pose_samples(robot: &Robot, set: &MeasurementSet, xs: Vec<Vec<f64>>) -> Result<Prepared> {
+    let mut ws = Frames::new(robot);
+    let mut ys = Vec::with_capacity(set.rows.len());
+    for m in &set.rows {
+        let (dp, dr) = model_error(robot, m, &mut ws).ok_or_else(|| no_position(set, m))?;
+        let mut v = vec![dp.x, dp.y, dp.z];
+        if let Some(r) = dr {
+            v.extend((r * 1e3).iter());
         }
-        Form::Joint => {
-            joint_jacobian(robot, ws, jac);
-            let n = robot.dof();
-            let (wp, wr) = (1.0 / sigmas.position_mm, 1.0 / sigmas.rotation_rad);
-            let rows = if dr.is_some() { 6 } else { 3 };
-            let mut a = DMatrix::<f64>::zeros(rows, n);
-            let mut e = DVector::<f64>::zeros(rows);
-            for r in 0..rows {
-                let w = if r < 3 { wp } else { wr };
-                for c in 0..n {
-                    a[(r, c)] = jac[(r, c)] * w;
-                }
-                e[r] = if r < 3 {
-                    dp[r]
-                } else {
-                    dr.unwrap_or_default()[r - 3]
-                } * w;
+        ys.push(v);
+    }
+    let norm = MinMax::fit(&ys);
+    let b = ys
+        .iter()
+        .map(|r| {
+            let mut o = vec![0.0; r.len()];
+            norm.apply(r, &mut o);
+            o
+        })
+        .collect();
+    // Target units per pose-error unit: mm -> normalised, rad -> mrad -> normalised.
+    let half: Vec<f64> = (0..norm.min.len())
+        .map(|r| {
+            let h = 0.5 * (norm.max[r] - norm.min[r]);
+            let unit = if r < 3 { 1.0 } else { 1e3 };
+            if h > 0.0 { unit / h } else { unit }
+        })
+        .collect();
+    Ok(Prepared {
+        samples: Samples {
+            x: xs,
+            b,
+            maps: None,
+            lin: None,
+        },
+        output_norm: norm,
+        row_scales: vec![half; set.rows.len()],
+    })
+}
+
+/// Samples of a form, their output normalisation, and for each sample and target row the
+/// factor from a pose-error component (mm, rad) to the target's unit.
+struct Prepared {
+    samples: Samples,
+    output_norm: MinMax,
+    row_scales: Vec<Vec<f64>>,
+}
+
+/// Joint-form samples: the network's joint corrections dq are seen through the model's joint
+/// Jacobian, r_k = W (e_k - J(q_k) dq(q_k)), W = diag(1 / sigma) (tracker sigmas of the row,
+/// else `sigmas`). dq_j = s_j y_j with s_j = sqrt(sum_k |W e_k|^2 / sum_k |W J_k e_j|^2), the
+/// correction joint j alone would need; residuals are divided by the RMS of W e so that the
+/// training works at unit scale like the pose form.
+fn joint_samples(
+    robot: &Robot,
+    set: &MeasurementSet,
+    xs: Vec<Vec<f64>>,
+    sigmas: Sigmas,
+) -> Result<Prepared> {
+    let n = robot.dof();
+    let mut ws = Frames::new(robot);
+    let mut jac = Matrix6xX::zeros(n);
+    let mut bs: Vec<Vec<f64>> = Vec::with_capacity(set.rows.len());
+    let mut maps: Vec<DMatrix<f64>> = Vec::with_capacity(set.rows.len());
+    let mut row_scales: Vec<Vec<f64>> = Vec::with_capacity(set.rows.len());
+    for m in &set.rows {
+        let (dp, dr) = model_error(robot, m, &mut ws).ok_or_else(|| no_position(set, m))?;
+        joint_jacobian(robot, &ws, &mut jac);
+        let rows = if dr.is_some() { 6 } else { 3 };
+        let (sp, sr) = (
+            m.sigma_position
+                .unwrap_or(Vector3::repeat(sigmas.position_mm)),
+            m.sigma_rotation
+                .unwrap_or(Vector3::repeat(sigmas.rotation_rad)),
+        );
+        let w = |r: usize| if r < 3 { 1.0 / sp[r] } else { 1.0 / sr[r - 3] };
+        let e = |r: usize| {
+            if r < 3 {
+                dp[r]
+            } else {
+                dr.unwrap_or_default()[r - 3]
             }
-            let mut ata = a.tr_mul(&a);
-            let scale = (0..n).map(|i| ata[(i, i)]).fold(0.0, f64::max);
-            for i in 0..n {
-                ata[(i, i)] += 1e-9 * scale;
-            }
-            let dq = ata.cholesky()?.solve(&a.tr_mul(&e));
-            Some(dq.iter().map(|v| v * 1e3).collect())
+        };
+        bs.push((0..rows).map(|r| w(r) * e(r)).collect());
+        row_scales.push((0..rows).map(w).collect());
+        maps.push(DMatrix::from_fn(rows, n, |r, c| w(r) * jac[(r, c)]));
+    }
+    let total: f64 = bs.iter().flatten().map(|v| v * v).sum();
+    let count = bs.iter().map(|b| b.len()).sum::<usize>().max(1);
+    let rms = (total / count as f64).sqrt();
+    if rms == 0.0 || !rms.is_finite() {
+        return Err(Error::Invalid(format!(
+            "{}: the model already fits every row exactly; there is nothing to train on",
+            set.source.display()
+        )));
+    }
+    let scale: Vec<f64> = (0..n)
+        .map(|j| {
+            let col: f64 = maps.iter().map(|a| a.column(j).norm_squared()).sum();
+            if col > 0.0 { (total / col).sqrt() } else { 0.0 }
+        })
+        .collect();
+    for (a, b) in maps.iter_mut().zip(bs.iter_mut()) {
+        for (j, s) in scale.iter().enumerate() {
+            a.column_mut(j).scale_mut(s / rms);
+        }
+        b.iter_mut().for_each(|v| *v /= rms);
+    }
+    row_scales.iter_mut().flatten().for_each(|v| *v /= rms);
+    // Output normalisation in the file's unit, mrad (um for prismatic joints).
+    let norm = MinMax {
+        min: scale.iter().map(|s| -s * 1e3).collect(),
+        max: scale.iter().map(|s| s * 1e3).collect(),
+    };
+    Ok(Prepared {
+        samples: Samples {
+            x: xs,
+            b: bs,
+            maps: Some(maps),
+            lin: None,
+        },
+        output_norm: norm,
+        row_scales,
+    })
+}
+
+/// Adds the model parameters `cols` (indices into `Robot::parameters`) as linear terms of
+/// the training: L_k = D_k J_p(q_k) S, D_k the row scales, J_p the parameter Jacobian and
+/// S = diag(s_j), s_j the change of parameter j alone that would explain the errors (mm or
+/// rad per unit of theta). Returns the s_j.
+fn add_linear(robot: &Robot, set: &MeasurementSet, cols: &[usize], p: &mut Prepared) -> Vec<f64> {
+    let mut ws = Frames::new(robot);
+    let mut jp = Matrix6xX::zeros(cols.len());
+    let mut lin: Vec<DMatrix<f64>> = Vec::with_capacity(set.rows.len());
+    for (m, d) in set.rows.iter().zip(&p.row_scales) {
+        frames(robot, &m.q, &mut ws);
+        parameter_jacobian(robot, &ws, cols, &mut jp);
+        lin.push(DMatrix::from_fn(d.len(), cols.len(), |r, c| {
+            d[r] * jp[(r, c)]
+        }));
+    }
+    let total: f64 = p.samples.b.iter().flatten().map(|v| v * v).sum();
+    let scale: Vec<f64> = (0..cols.len())
+        .map(|j| {
+            let col: f64 = lin.iter().map(|a| a.column(j).norm_squared()).sum();
+            if col > 0.0 { (total / col).sqrt() } else { 0.0 }
+        })
+        .collect();
+    for a in lin.iter_mut() {
+        for (j, s) in scale.iter().enumerate() {
+            a.column_mut(j).scale_mut(*s);
         }
     }
+    p.samples.lin = Some(lin);
+    scale
+}
+
+fn no_position(set: &MeasurementSet, m: &crate::data::Measurement) -> Error {
+    Error::input(
+        Location::at(&set.source, m.line, "x"),
+        "training needs a measured position in every row",
+    )
+}
+
+/// How to build a compensator.
+#[derive(Debug, Clone)]
+pub struct CompensatorOptions {
+    pub form: Form,
+    /// Tracker sigmas for rows that carry none (joint form weighting and refinement).
+    pub sigmas: Sigmas,
+    /// Model parameters re-estimated with the network (a selection as for `identify`,
+    /// e.g. "full"); None keeps the model as given.
+    pub refine: Option<String>,
+    pub train: TrainOptions,
+}
+
+impl Default for CompensatorOptions {
+    fn default() -> Self {
+        CompensatorOptions {
+            form: Form::Joint,
+            sigmas: Sigmas::default(),
+            refine: None,
+            train: TrainOptions::default(),
+        }
+    }
+}
+
+/// A model parameter re-estimated with the network (file units: mm or deg).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct RefinedParam {
+    pub name: String,
+    pub unit: &'static str,
+    pub before: f64,
+    pub after: f64,
+}
+
+/// What training did.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct CompensatorReport {
+    pub network: TrainReport,
+    pub refined: Vec<RefinedParam>,
 }
 
 /// Scratch space for prediction.
@@ -123,57 +296,76 @@ pub struct PredictWorkspace {
 }
 
 impl Compensator {
-    /// Trains a compensator of `form` for `robot` on the measured rows of `set`.
+    /// Trains a compensator for `robot` on the measured rows of `set`; with `opts.refine`,
+    /// the identifiable ones of those model parameters are re-estimated with the network
+    /// (linearised at `robot`) and the compensator runs in series with the refined model.
     pub fn train(
         robot: &Robot,
         set: &MeasurementSet,
-        form: Form,
-        sigmas: Sigmas,
-        opts: &TrainOptions,
-    ) -> Result<(Compensator, TrainReport)> {
-        let mut ws = Frames::new(robot);
-        let mut jac = Matrix6xX::zeros(robot.dof());
-        let mut xs = Vec::new();
-        let mut ys = Vec::new();
+        opts: &CompensatorOptions,
+    ) -> Result<(Compensator, CompensatorReport)> {
         let mut feat = Vec::new();
+        let mut xs = Vec::with_capacity(set.rows.len());
         for m in &set.rows {
-            let Some(t) = target(robot, form, m, sigmas, &mut ws, &mut jac) else {
-                return Err(Error::input(
-                    Location::at(&set.source, m.line, "x"),
-                    "training needs a position (and for 6 outputs an orientation) in every row",
-                ));
-            };
             features(robot, &m.q, &mut feat);
             xs.push(feat.clone());
-            ys.push(t);
         }
-        if ys.iter().any(|t| t.len() != ys[0].len()) {
+        let kinds = set.rows.iter().map(|m| m.rotation.is_some());
+        if kinds.clone().any(|k| k) && kinds.clone().any(|k| !k) {
             return Err(Error::Invalid(format!(
                 "{}: some rows have orientations and some not",
                 set.source.display()
             )));
         }
         let input_norm = MinMax::fit(&xs);
-        let output_norm = MinMax::fit(&ys);
-        let norm = |n: &MinMax, v: &Vec<Vec<f64>>| -> Vec<Vec<f64>> {
-            v.iter()
-                .map(|r| {
-                    let mut o = vec![0.0; r.len()];
-                    n.apply(r, &mut o);
-                    o
-                })
-                .collect()
+        for x in xs.iter_mut() {
+            let raw = x.clone();
+            input_norm.apply(&raw, x);
+        }
+        let mut prepared = match opts.form {
+            Form::Pose => pose_samples(robot, set, xs)?,
+            Form::Joint => joint_samples(robot, set, xs, opts.sigmas)?,
         };
-        let (weights, report) = train(&norm(&input_norm, &xs), &norm(&output_norm, &ys), opts)?;
+        let cols = match &opts.refine {
+            None => Vec::new(),
+            Some(spec) => {
+                let measure = Measure::default_for(set);
+                let obs = Observations::new(set, measure, opts.sigmas)?;
+                analyse(robot, &obs, &select(robot, spec)?).selected
+            }
+        };
+        let scale = if cols.is_empty() {
+            Vec::new()
+        } else {
+            add_linear(robot, set, &cols, &mut prepared)
+        };
+        let outputs = prepared.output_norm.min.len();
+        let (fit, network) = train(&prepared.samples, outputs, &opts.train)?;
+        let (ids, x0) = free_values(robot, &cols);
+        let x = DVector::from_iterator(
+            ids.len(),
+            (0..ids.len()).map(|j| x0[j] + fit.theta[j] * scale[j]),
+        );
+        let refined_robot = with_values(robot, &ids, &x)?;
+        let refined = ids
+            .iter()
+            .enumerate()
+            .map(|(j, id)| RefinedParam {
+                name: id.name(),
+                unit: id.field.file_unit(),
+                before: file_value(id, x0[j]),
+                after: file_value(id, x[j]),
+            })
+            .collect();
         Ok((
             Compensator {
-                form,
-                robot: robot.clone(),
-                weights,
+                form: opts.form,
+                robot: refined_robot,
+                weights: fit.weights,
                 input_norm,
-                output_norm,
+                output_norm: prepared.output_norm,
             },
-            report,
+            CompensatorReport { network, refined },
         ))
     }
 

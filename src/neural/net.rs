@@ -3,6 +3,7 @@
 //! Weights move to and from [`Weights`] (nalgebra) for the Levenberg-Marquardt phase and for
 //! fast prediction.
 
+use super::train::Samples;
 use super::weights::Weights;
 use crate::error::{Error, Result};
 use burn::module::Module;
@@ -154,20 +155,28 @@ pub fn weights_from_record(
 }
 
 /// Phase 1 (thesis 3.2): full-batch gradient descent with momentum 0.9 and learning rate
-/// 0.01 on the mean squared error, through burn's autodiff and SGD optimizer (heavy-ball
-/// momentum: v <- 0.9 v + g, w <- w - 0.01 v). Starts from `start`; calls `epoch_done` with
-/// (epoch, training MSE, weights) after each epoch and stops when it returns false.
+/// 0.01 on the mean squared residual of [`Samples`], through burn's autodiff and SGD
+/// optimizer (heavy-ball momentum: v <- 0.9 v + g, w <- w - 0.01 v). Starts from `start`;
+/// calls `epoch_done` with (epoch, training MSE, weights) after each epoch and stops when it
+/// returns false.
 pub fn train_momentum(
     start: &Weights,
-    x: &[Vec<f64>],
-    y: &[Vec<f64>],
+    s: &Samples,
     epochs: usize,
     mut epoch_done: impl FnMut(usize, f64, &Weights) -> bool,
 ) -> Result<Weights> {
     let d = device(true)?;
-    let (n, ni, no) = (x.len(), start.inputs(), start.outputs());
-    let xt = tensor2(x.iter().flatten().copied().collect(), n, ni, &d);
-    let yt = tensor2(y.iter().flatten().copied().collect(), n, no, &d);
+    let (n, ni, no, nr) = (s.len(), start.inputs(), start.outputs(), s.rows());
+    let xt = tensor2(s.x.iter().flatten().copied().collect(), n, ni, &d);
+    let bt = tensor2(s.b.iter().flatten().copied().collect(), n, nr, &d);
+    // A_k as one [n, rows, outputs] tensor; A_k y_k = sum over outputs of A_k * y_k broadcast.
+    let maps: Option<Tensor<3>> = s.maps.as_ref().map(|m| {
+        let data: Vec<f64> = m
+            .iter()
+            .flat_map(|a| (0..nr).flat_map(move |r| (0..no).map(move |c| a[(r, c)])))
+            .collect();
+        Tensor::from_data(TensorData::new(data, [n, nr, no]), &d)
+    });
     let mut model = Mlp::new(&d, ni, start.hidden(), no).with_weights(start, &d);
     let mut optim = SgdConfig::new()
         .with_momentum(Some(
@@ -176,7 +185,16 @@ pub fn train_momentum(
         .init();
     let mut current = start.clone();
     for epoch in 1..=epochs {
-        let loss = MseLoss::new().forward(model.forward(xt.clone()), yt.clone(), Reduction::Mean);
+        let y = model.forward(xt.clone());
+        let pred = match &maps {
+            None => y,
+            Some(a) => {
+                let y3: Tensor<3> = y.reshape([n, 1, no]);
+                let ay: Tensor<3> = a.clone().mul(y3).sum_dim(2);
+                ay.reshape([n, nr])
+            }
+        };
+        let loss = MseLoss::new().forward(pred, bt.clone(), Reduction::Mean);
         let mse: f64 = loss.clone().into_scalar::<f64>();
         if !mse.is_finite() {
             return Err(Error::NotConverged(format!(
@@ -233,7 +251,13 @@ mod tests {
         let start = weights(1, 8, 1, 0.3);
         let mut first = f64::NAN;
         let mut last = f64::NAN;
-        train_momentum(&start, &x, &y, 300, |e, mse, _| {
+        let s = Samples {
+            x,
+            b: y,
+            maps: None,
+            lin: None,
+        };
+        train_momentum(&start, &s, 300, |e, mse, _| {
             if e == 1 {
                 first = mse;
             }
@@ -242,5 +266,38 @@ mod tests {
         })
         .unwrap();
         assert!(last < 0.3 * first, "{first} -> {last}");
+    }
+
+    #[test]
+    fn momentum_loss_through_maps_equals_the_direct_sum() {
+        // burn's batched A_k y_k (broadcast multiply and sum) against the plain loop.
+        let start = weights(2, 4, 3, 0.45);
+        let mut s = Samples {
+            maps: Some(Vec::new()),
+            ..Default::default()
+        };
+        let mut direct = 0.0;
+        for k in 0..7 {
+            let x = vec![k as f64 * 0.2 - 0.6, (k as f64).cos()];
+            let a = DMatrix::from_fn(2, 3, |i, j| ((k * 6 + i * 3 + j) as f64).sin());
+            let b = vec![0.3 * k as f64, -0.1];
+            let y = DVector::from_vec(start.forward(&x));
+            let r = DVector::from_column_slice(&b) - &a * y;
+            direct += r.norm_squared();
+            s.x.push(x);
+            s.b.push(b);
+            s.maps.as_mut().unwrap().push(a);
+        }
+        direct /= 14.0;
+        let mut first = f64::NAN;
+        train_momentum(&start, &s, 1, |_, mse, _| {
+            first = mse;
+            true
+        })
+        .unwrap();
+        assert!(
+            (first - direct).abs() < 1e-12 * direct,
+            "{first} vs {direct}"
+        );
     }
 }

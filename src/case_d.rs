@@ -1,0 +1,204 @@
+//! Case D end to end (thesis 6.4, Table 6.6) and the same protocol on the shipped
+//! non-geometric robot.
+//!
+//! Protocol (thesis notes): identify on the 30 calibration poses (joint offsets as the thesis
+//! does, and the full identifiable set), train the compensator on the 150 training poses, and
+//! report every model on the unseen test poses, against the noise-free truth and against the
+//! noisy measurements. A compensator refines the parameters its model was identified with
+//! together with the network ([`CompensatorOptions::refine`]): "offsets + network" re-estimates
+//! the offsets only, "full geometric + network" the full set.
+
+use crate::data::{MeasurementSet, Profile, read_measurements};
+use crate::error::Result;
+use crate::evaluate::{ErrorStats, row_errors, summarize};
+use crate::identify::{Measure, Options, identify};
+use crate::kinematics::tool_pose;
+use crate::model::{Robot, read_robot};
+use crate::neural::compensator::{
+    Compensator, CompensatorOptions, CompensatorReport, PredictWorkspace,
+};
+use std::path::Path;
+
+/// One shipped data set of the protocol.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Robotset {
+    /// `datasets/case_d`: Table 6.1 deviations, the focused region.
+    CaseD,
+    /// `datasets/nongeometric_robot`: Table 6.1 deviations plus gravity compliance and gear
+    /// errors, the full joint ranges.
+    NonGeometric,
+}
+
+impl Robotset {
+    pub const ALL: [Robotset; 2] = [Robotset::CaseD, Robotset::NonGeometric];
+
+    pub fn folder(self) -> &'static str {
+        match self {
+            Robotset::CaseD => "case_d",
+            Robotset::NonGeometric => "nongeometric_robot",
+        }
+    }
+
+    pub fn title(self) -> &'static str {
+        match self {
+            Robotset::CaseD => "Case D (Table 6.1 deviations, focused region)",
+            Robotset::NonGeometric => {
+                "non-geometric robot (Table 6.1 + gravity compliance + gear errors, full ranges)"
+            }
+        }
+    }
+}
+
+/// A model of the protocol.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stage {
+    Nominal,
+    Offsets,
+    OffsetsNetwork,
+    Full,
+    FullNetwork,
+}
+
+impl Stage {
+    pub const ALL: [Stage; 5] = [
+        Stage::Nominal,
+        Stage::Offsets,
+        Stage::OffsetsNetwork,
+        Stage::Full,
+        Stage::FullNetwork,
+    ];
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Stage::Nominal => "nominal model",
+            Stage::Offsets => "joint offsets",
+            Stage::OffsetsNetwork => "joint offsets + network",
+            Stage::Full => "full geometric",
+            Stage::FullNetwork => "full geometric + network",
+        }
+    }
+
+    /// The thesis's Table 6.6 (Case D only): mean position (mm) and orientation (deg)
+    /// errors, which match per-coordinate means against the measurements (thesis notes).
+    pub fn thesis(self, set: Robotset) -> Option<(f64, f64)> {
+        match (set, self) {
+            (Robotset::CaseD, Stage::Nominal) => Some((6.7929, 0.8386)),
+            (Robotset::CaseD, Stage::Offsets) => Some((0.2183, 0.2585)),
+            (Robotset::CaseD, Stage::OffsetsNetwork) => Some((0.0336, 0.0160)),
+            _ => None,
+        }
+    }
+}
+
+/// One row of the result.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Row {
+    pub set: Robotset,
+    pub stage: Stage,
+    /// Test set against its noise-free truth.
+    pub truth: ErrorStats,
+    /// Test set against the noisy measurements.
+    pub measured: ErrorStats,
+    /// The compensator's training, for the network rows.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub training: Option<CompensatorReport>,
+}
+
+/// The shipped files of one set.
+pub struct SetData {
+    pub calibration: MeasurementSet,
+    pub training: MeasurementSet,
+    pub test: MeasurementSet,
+    pub test_truth: MeasurementSet,
+}
+
+/// Reads a set's four files from `datasets/<folder>/`.
+pub fn load(datasets: &Path, set: Robotset, nominal: &Robot) -> Result<SetData> {
+    let dir = datasets.join(set.folder());
+    let read = |name: &str| -> Result<MeasurementSet> {
+        Ok(read_measurements(
+            &dir.join(name),
+            nominal,
+            &Profile::default(),
+            &Default::default(),
+        )?
+        .0)
+    };
+    Ok(SetData {
+        calibration: read("calibration.csv")?,
+        training: read("training.csv")?,
+        test: read("test.csv")?,
+        test_truth: read("test_truth.csv")?,
+    })
+}
+
+/// Runs the protocol on one set; `opts.refine` is set per row.
+pub fn run_set(
+    nominal: &Robot,
+    set: Robotset,
+    data: &SetData,
+    opts: &CompensatorOptions,
+) -> Result<Vec<Row>> {
+    let stats = |f: &mut dyn FnMut(&[f64]) -> crate::Pose| -> Result<(ErrorStats, ErrorStats)> {
+        Ok((
+            summarize(&row_errors(&data.test_truth, Measure::Pose, &mut *f)?),
+            summarize(&row_errors(&data.test, Measure::Pose, &mut *f)?),
+        ))
+    };
+    let identified = |params: &str| {
+        identify(
+            nominal,
+            &data.calibration,
+            &Options {
+                params: params.into(),
+                measure: Some(Measure::Pose),
+                ..Default::default()
+            },
+        )
+    };
+    let mut rows = Vec::new();
+    let mut push = |stage, (truth, measured), training| {
+        rows.push(Row {
+            set,
+            stage,
+            truth,
+            measured,
+            training,
+        })
+    };
+    push(Stage::Nominal, stats(&mut |q| tool_pose(nominal, q))?, None);
+    for (params, plain, with) in [
+        ("offsets", Stage::Offsets, Stage::OffsetsNetwork),
+        ("full", Stage::Full, Stage::FullNetwork),
+    ] {
+        let model = identified(params)?.robot;
+        push(plain, stats(&mut |q| tool_pose(&model, q))?, None);
+        let o = CompensatorOptions {
+            refine: Some(params.into()),
+            ..opts.clone()
+        };
+        let (c, report) = Compensator::train(&model, &data.training, &o)?;
+        let mut ws = PredictWorkspace::default();
+        push(with, stats(&mut |q| c.predict(q, &mut ws))?, Some(report));
+    }
+    Ok(rows)
+}
+
+/// Runs the protocol on both shipped sets; the nominal robot is
+/// `datasets/robots/fanuc_r2000ib_210f.toml`.
+pub fn run(datasets: &Path, opts: &CompensatorOptions) -> Result<Vec<Row>> {
+    let nominal = read_robot(datasets.join("robots/fanuc_r2000ib_210f.toml"))?;
+    let mut rows = Vec::new();
+    for set in Robotset::ALL {
+        let data = load(datasets, set, &nominal)?;
+        rows.extend(run_set(&nominal, set, &data, opts)?);
+    }
+    Ok(rows)
+}
+
+/// The row of `stage` on `set`.
+pub fn find(rows: &[Row], set: Robotset, stage: Stage) -> Option<&Row> {
+    rows.iter().find(|r| r.set == set && r.stage == stage)
+}

@@ -1,0 +1,130 @@
+//! `robocal case-d`: thesis Case D end to end (Table 6.6) and the same protocol on the shipped
+//! non-geometric robot.
+
+use super::identify::write_json;
+use crate::case_d::{Robotset, Row, Stage, find, run};
+use crate::evaluate::ErrorStats;
+use crate::neural::compensator::{CompensatorOptions, Form};
+use crate::neural::train::TrainOptions;
+use anyhow::{Context, Result};
+use clap::Args;
+use serde_json::json;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct CaseDArgs {
+    /// The repository's datasets folder.
+    #[arg(long, default_value = "datasets")]
+    datasets: PathBuf,
+    /// Where the network acts.
+    #[arg(long, value_enum, default_value_t = Form::Joint)]
+    form: Form,
+    /// Hidden sigmoid units.
+    #[arg(long, default_value_t = 20)]
+    hidden: usize,
+    /// Seed of the initial weights and of the held-out validation part.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// JSON report of every row (statistics against truth and measurements, training).
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+fn pos(s: &ErrorStats) -> f64 {
+    s.position_mm.map_or(f64::NAN, |p| p.mean)
+}
+fn pc(s: &ErrorStats) -> f64 {
+    s.position_per_coordinate_mean_mm.unwrap_or(f64::NAN)
+}
+fn rot(s: &ErrorStats) -> f64 {
+    s.orientation_deg.map_or(f64::NAN, |p| p.mean)
+}
+
+fn print_set(rows: &[Row], set: Robotset) {
+    let test = rows
+        .iter()
+        .find(|r| r.set == set)
+        .map_or(0, |r| r.truth.count);
+    println!("\n{} - {test} unseen test poses", set.title());
+    println!(
+        "{:<26} | {:>17} | {:>27} | {:>27}",
+        "model", "thesis Table 6.6", "vs truth", "vs measured"
+    );
+    println!(
+        "{:<26} | {:>8} {:>8} | {:>8} {:>8} {:>9} | {:>8} {:>8} {:>9}",
+        "", "mm", "deg", "mean mm", "coord mm", "mean deg", "mean mm", "coord mm", "mean deg"
+    );
+    for stage in Stage::ALL {
+        let Some(r) = find(rows, set, stage) else {
+            continue;
+        };
+        let thesis = stage.thesis(set).map_or(format!("{:>17}", "-"), |(p, o)| {
+            format!("{p:>8.4} {o:>8.4}")
+        });
+        println!(
+            "{:<26} | {thesis} | {:>8.4} {:>8.4} {:>9.4} | {:>8.4} {:>8.4} {:>9.4}",
+            stage.label(),
+            pos(&r.truth),
+            pc(&r.truth),
+            rot(&r.truth),
+            pos(&r.measured),
+            pc(&r.measured),
+            rot(&r.measured)
+        );
+    }
+    let ratio = |a: Stage, b: Stage| -> Option<f64> {
+        Some(pos(&find(rows, set, a)?.truth) / pos(&find(rows, set, b)?.truth))
+    };
+    if let (Some(o), Some(f)) = (
+        ratio(Stage::Offsets, Stage::OffsetsNetwork),
+        ratio(Stage::Full, Stage::FullNetwork),
+    ) {
+        println!(
+            "the network lowers the mean position error vs truth {o:.1}x after offsets, {f:.1}x after full identification"
+        );
+    }
+}
+
+pub fn run_case_d(a: CaseDArgs) -> Result<()> {
+    let opts = CompensatorOptions {
+        form: a.form,
+        train: TrainOptions {
+            hidden: a.hidden,
+            seed: a.seed,
+            progress: std::io::stderr().is_terminal(),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let rows = run(&a.datasets, &opts).with_context(|| {
+        format!(
+            "run from the repository root, or give --datasets ({})",
+            a.datasets.display()
+        )
+    })?;
+    println!(
+        "Case D (thesis 6.4): identification on the 30 calibration poses, {} network ({} hidden \
+         units, seed {}) on the 150 training poses, refining the identified parameters with it.",
+        match a.form {
+            Form::Joint => "joint-space",
+            Form::Pose => "pose-space",
+        },
+        a.hidden,
+        a.seed
+    );
+    println!(
+        "Errors on the test poses: mean Euclidean position (mm), mean per coordinate |dx|,|dy|,|dz| \
+         (mm, the thesis's measure), mean orientation angle (deg)."
+    );
+    for set in Robotset::ALL {
+        print_set(&rows, set);
+    }
+    if let Some(p) = &a.report {
+        write_json(
+            p,
+            &json!({"form": a.form, "hidden": a.hidden, "seed": a.seed, "rows": rows}),
+        )?;
+    }
+    Ok(())
+}

@@ -1,0 +1,228 @@
+//! `robocal train`, `predict`, `evaluate --compensator` and `case-d` from the command line.
+
+mod common;
+use common::{robocal, stderr, stdout, tmp};
+
+const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
+
+fn json(p: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+#[test]
+fn identify_train_evaluate_and_predict() {
+    let model = tmp("d_offsets.toml");
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        FANUC,
+        "--data",
+        "datasets/case_d/calibration.csv",
+        "--params",
+        "offsets",
+        "--out",
+        model.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let comp = tmp("d.rcal");
+    let report = tmp("train.json");
+    let o = robocal(&[
+        "train",
+        "--robot",
+        model.to_str().unwrap(),
+        "--data",
+        "datasets/case_d/training.csv",
+        "--validate",
+        "datasets/case_d/test_truth.csv",
+        "--refine",
+        "offsets",
+        "--hidden",
+        "10",
+        "--seed",
+        "3",
+        "--out",
+        comp.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    let out = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        out.contains("joint form, 12-10-6 network on 150 rows"),
+        "{out}"
+    );
+    assert!(
+        out.contains("refined with the network:") && out.contains("theta2"),
+        "{out}"
+    );
+    let r = json(&report);
+    let stats = &r["statistics"][1];
+    assert_eq!(stats["set"], "validation");
+    let before = stats["model"]["position_mm"]["mean"].as_f64().unwrap();
+    let after = stats["compensated"]["position_mm"]["mean"]
+        .as_f64()
+        .unwrap();
+    assert!(after < 0.1 * before, "{before} -> {after}");
+    assert!(r["training"]["network"]["curve"].as_array().unwrap().len() > 10);
+
+    // evaluate --compensator gives the same figure as train's validation report.
+    let ev = tmp("eval.json");
+    let o = robocal(&[
+        "evaluate",
+        "--robot",
+        model.to_str().unwrap(),
+        "--compensator",
+        comp.to_str().unwrap(),
+        "--data",
+        "datasets/case_d/test_truth.csv",
+        "--report",
+        ev.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("runs in series with its own model"));
+    let e = json(&ev);
+    assert_eq!(
+        e["compensated"]["position_mm"]["mean"].as_f64().unwrap(),
+        after
+    );
+    assert_eq!(
+        e["validation"]["position_mm"]["mean"].as_f64().unwrap(),
+        before
+    );
+
+    // predict on the test joints reproduces what evaluate compared.
+    let joints = tmp("joints.csv");
+    let t = std::fs::read_to_string("datasets/case_d/test_truth.csv").unwrap();
+    let lines: Vec<String> = t
+        .lines()
+        .take(4)
+        .map(|l| l.split(',').take(7).collect::<Vec<_>>().join(","))
+        .collect();
+    std::fs::write(&joints, lines.join("\n") + "\n").unwrap();
+    let pred = tmp("pred.csv");
+    let o = robocal(&[
+        "predict",
+        "--compensator",
+        comp.to_str().unwrap(),
+        "--joints",
+        joints.to_str().unwrap(),
+        "--out",
+        pred.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let p = std::fs::read_to_string(&pred).unwrap();
+    let head: Vec<&str> = p.lines().next().unwrap().split(',').collect();
+    assert_eq!(
+        head,
+        [
+            "id", "q1", "q2", "q3", "q4", "q5", "q6", "x", "y", "z", "rz", "ry", "rx"
+        ]
+    );
+    for (pl, tl) in p.lines().skip(1).zip(t.lines().skip(1)) {
+        let pv: Vec<f64> = pl.split(',').map(|v| v.parse().unwrap()).collect();
+        let tv: Vec<f64> = tl.split(',').map(|v| v.parse().unwrap()).collect();
+        let d =
+            ((pv[7] - tv[7]).powi(2) + (pv[8] - tv[8]).powi(2) + (pv[9] - tv[9]).powi(2)).sqrt();
+        // Compensated to the Case D level (a tenth of a millimetre), not the offsets' 1 mm.
+        assert!(d < 0.3, "row {}: {d} mm from the truth", pv[0]);
+    }
+
+    // A compensator for another robot's joints is refused by evaluate: a UR10 whose wrist 2
+    // is prismatic.
+    let ur = std::fs::read_to_string("datasets/robots/ur10.toml").unwrap();
+    let at = ur.find("[[joint]]  # wrist 2").unwrap();
+    let other = tmp("ur10_prismatic_wrist.toml");
+    std::fs::write(
+        &other,
+        format!(
+            "{}[[joint]]\ntype = \"prismatic\"\n{}",
+            &ur[..at],
+            &ur[at + 20..]
+        ),
+    )
+    .unwrap();
+    let o = robocal(&[
+        "evaluate",
+        "--robot",
+        other.to_str().unwrap(),
+        "--compensator",
+        comp.to_str().unwrap(),
+        "--data",
+        "datasets/case_d/test_truth.csv",
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("other joints"), "{}", stderr(&o));
+}
+
+#[test]
+fn train_refuses_bad_input_and_predict_refuses_a_corrupt_compensator() {
+    let bad = tmp("bad_train.csv");
+    std::fs::write(
+        &bad,
+        "id,q1,q2,q3,q4,q5,q6,x,y,z\n1,0,0,0,0,30,0,2000,0,1900\n2,0,0,0,0,30,0,2000,0,1.9e3.1\n",
+    )
+    .unwrap();
+    let out = tmp("never.rcal");
+    let o = robocal(&[
+        "train",
+        "--robot",
+        FANUC,
+        "--data",
+        bad.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("bad_train.csv:3: field `z`"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists(), "no compensator file on failure");
+
+    let corrupt = tmp("corrupt.rcal");
+    std::fs::write(
+        &corrupt,
+        "{\"format\": \"robocal-compensator\", \"version\": 1}",
+    )
+    .unwrap();
+    let o = robocal(&[
+        "predict",
+        "--compensator",
+        corrupt.to_str().unwrap(),
+        "--joints",
+        "datasets/joints/fanuc_demo.csv",
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("corrupt.rcal") && stderr(&o).contains("checksum"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn case_d_prints_table_6_6_beside_ours_and_reports_every_row() {
+    let report = tmp("case_d.json");
+    let o = robocal(&["case-d", "--report", report.to_str().unwrap()]);
+    let out = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for s in [
+        "thesis Table 6.6",
+        "joint offsets + network    |   0.0336   0.0160",
+        "full geometric + network",
+        "non-geometric robot",
+        "vs truth",
+        "vs measured",
+    ] {
+        assert!(out.contains(s), "missing `{s}` in\n{out}");
+    }
+    let r = json(&report);
+    let rows = r["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 10);
+    assert!(
+        rows.iter()
+            .all(|r| r["truth"]["position_mm"]["mean"].is_f64()
+                && r["measured"]["position_mm"]["mean"].is_f64())
+    );
+}
