@@ -24,12 +24,12 @@ pub struct FkArgs {
     output: OutputArgs,
 }
 
-/// Headers, cells and joint values (file units) of a CSV with columns q1..qN; refuses a
-/// table that already has the pose columns the command would write.
-pub(super) fn joint_table(
-    path: &std::path::Path,
-    n: usize,
-) -> Result<(Vec<String>, Vec<Vec<String>>, Vec<Vec<f64>>)> {
+/// Headers, cells of each row, and joint values of each row (file units: deg, mm).
+pub(super) type JointTable = (Vec<String>, Vec<Vec<String>>, Vec<Vec<f64>>);
+
+/// The joint table of a CSV with columns q1..qN; refuses a table that already has the pose
+/// columns the command would write.
+pub(super) fn joint_table(path: &std::path::Path, n: usize) -> Result<JointTable> {
     let t = Table::read(path)?;
     let idx: Vec<usize> = joint_columns(n)
         .iter()
@@ -54,16 +54,15 @@ pub fn run(a: FkArgs) -> Result<()> {
     let robot = read_robot(&a.robot)?;
     let n = robot.dof();
     let qcols = joint_columns(n);
-    let (mut headers, rows, joints): (Vec<String>, Vec<Vec<String>>, Vec<Vec<f64>>) =
-        match (&a.q, &a.joints) {
-            (Some(q), _) => {
-                let q = parse_list(q, "--q", n)?;
-                let cells = q.iter().map(|v| num(*v, None)).collect();
-                (qcols, vec![cells], vec![q])
-            }
-            (None, Some(path)) => joint_table(path, n)?,
-            (None, None) => unreachable!("clap requires one input"),
-        };
+    let (mut headers, rows, joints): JointTable = match (&a.q, &a.joints) {
+        (Some(q), _) => {
+            let q = parse_list(q, "--q", n)?;
+            let cells = q.iter().map(|v| num(*v, None)).collect();
+            (qcols, vec![cells], vec![q])
+        }
+        (None, Some(path)) => joint_table(path, n)?,
+        (None, None) => unreachable!("clap requires one input"),
+    };
     headers.extend(POSE_COLUMNS.iter().map(|s| s.to_string()));
     let mut out_rows = Vec::with_capacity(rows.len());
     let mut outside = Vec::new();

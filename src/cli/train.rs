@@ -107,7 +107,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         .with_context(|| format!("writing {}", a.out.display()))?;
     let n = &report.network;
     println!(
-        "train: {} form, {}-{}-{} network on {} rows of {}; {} momentum + {} LM epochs, stopped: {:?}",
+        "train: {} form, {}-{}-{} network on {} rows of {}; {} momentum + {} LM epochs; stopped: {}",
         match a.form {
             Form::Joint => "joint",
             Form::Pose => "pose",
@@ -119,7 +119,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         a.data.display(),
         n.momentum_epochs,
         n.lm_epochs,
-        n.stop
+        n.stop.describe()
     );
     println!(
         "performance (mean squared normalised residual): training {:.4e}, held-out {:.4e}",

@@ -116,17 +116,24 @@ fn pose_samples(robot: &Robot, set: &MeasurementSet, xs: Vec<Vec<f64>>) -> Resul
             maps: None,
             lin: None,
         },
+        input_norm: MinMax::default(),
         output_norm: norm,
         row_scales: vec![half; set.rows.len()],
+        refine_cols: Vec::new(),
+        refine_scale: Vec::new(),
     })
 }
 
-/// Samples of a form, their output normalisation, and for each sample and target row the
-/// factor from a pose-error component (mm, rad) to the target's unit.
-struct Prepared {
-    samples: Samples,
-    output_norm: MinMax,
-    row_scales: Vec<Vec<f64>>,
+/// Samples of a form, their input and output normalisations, for each sample and target row
+/// the factor from a pose-error component (mm, rad) to the target's unit, and the refined
+/// parameters (indices into `Robot::parameters`) with their scales (mm or rad per unit).
+pub struct Prepared {
+    pub samples: Samples,
+    pub input_norm: MinMax,
+    pub output_norm: MinMax,
+    pub row_scales: Vec<Vec<f64>>,
+    pub refine_cols: Vec<usize>,
+    pub refine_scale: Vec<f64>,
 }
 
 /// Joint-form samples: the network's joint corrections dq are seen through the model's joint
@@ -202,9 +209,56 @@ fn joint_samples(
             maps: Some(maps),
             lin: None,
         },
+        input_norm: MinMax::default(),
         output_norm: norm,
         row_scales,
+        refine_cols: Vec::new(),
+        refine_scale: Vec::new(),
     })
+}
+
+/// The training problem of a compensator: normalised inputs, targets and maps of the form,
+/// and the linear columns of the refined parameters.
+pub fn prepare(robot: &Robot, set: &MeasurementSet, opts: &CompensatorOptions) -> Result<Prepared> {
+    let mut feat = Vec::new();
+    let mut xs = Vec::with_capacity(set.rows.len());
+    for m in &set.rows {
+        features(robot, &m.q, &mut feat);
+        xs.push(feat.clone());
+    }
+    let kinds = set.rows.iter().map(|m| m.rotation.is_some());
+    if kinds.clone().any(|k| k) && kinds.clone().any(|k| !k) {
+        return Err(Error::Invalid(format!(
+            "{}: some rows have orientations and some not",
+            set.source.display()
+        )));
+    }
+    let input_norm = MinMax::fit(&xs);
+    for x in xs.iter_mut() {
+        let raw = x.clone();
+        input_norm.apply(&raw, x);
+    }
+    let mut prepared = match opts.form {
+        Form::Pose => pose_samples(robot, set, xs)?,
+        Form::Joint => joint_samples(robot, set, xs, opts.sigmas)?,
+    };
+    let cols = match &opts.refine {
+        None => Vec::new(),
+        Some(spec) => {
+            let measure = Measure::default_for(set);
+            let obs = Observations::new(set, measure, opts.sigmas)?;
+            analyse(robot, &obs, &select(robot, spec)?).selected
+        }
+    };
+    let scale = if cols.is_empty() {
+        Vec::new()
+    } else {
+        add_linear(robot, set, &cols, &mut prepared)
+    };
+    prepared.input_norm = input_norm;
+    prepared.refine_cols = cols;
+    prepared.refine_scale = scale;
+    Ok(prepared)
 }
 
 /// Adds the model parameters `cols` (indices into `Robot::parameters`) as linear terms of
@@ -304,44 +358,11 @@ impl Compensator {
         set: &MeasurementSet,
         opts: &CompensatorOptions,
     ) -> Result<(Compensator, CompensatorReport)> {
-        let mut feat = Vec::new();
-        let mut xs = Vec::with_capacity(set.rows.len());
-        for m in &set.rows {
-            features(robot, &m.q, &mut feat);
-            xs.push(feat.clone());
-        }
-        let kinds = set.rows.iter().map(|m| m.rotation.is_some());
-        if kinds.clone().any(|k| k) && kinds.clone().any(|k| !k) {
-            return Err(Error::Invalid(format!(
-                "{}: some rows have orientations and some not",
-                set.source.display()
-            )));
-        }
-        let input_norm = MinMax::fit(&xs);
-        for x in xs.iter_mut() {
-            let raw = x.clone();
-            input_norm.apply(&raw, x);
-        }
-        let mut prepared = match opts.form {
-            Form::Pose => pose_samples(robot, set, xs)?,
-            Form::Joint => joint_samples(robot, set, xs, opts.sigmas)?,
-        };
-        let cols = match &opts.refine {
-            None => Vec::new(),
-            Some(spec) => {
-                let measure = Measure::default_for(set);
-                let obs = Observations::new(set, measure, opts.sigmas)?;
-                analyse(robot, &obs, &select(robot, spec)?).selected
-            }
-        };
-        let scale = if cols.is_empty() {
-            Vec::new()
-        } else {
-            add_linear(robot, set, &cols, &mut prepared)
-        };
+        let prepared = prepare(robot, set, opts)?;
+        let (cols, scale) = (&prepared.refine_cols, &prepared.refine_scale);
         let outputs = prepared.output_norm.min.len();
         let (fit, network) = train(&prepared.samples, outputs, &opts.train)?;
-        let (ids, x0) = free_values(robot, &cols);
+        let (ids, x0) = free_values(robot, cols);
         let x = DVector::from_iterator(
             ids.len(),
             (0..ids.len()).map(|j| x0[j] + fit.theta[j] * scale[j]),
@@ -362,7 +383,7 @@ impl Compensator {
                 form: opts.form,
                 robot: refined_robot,
                 weights: fit.weights,
-                input_norm,
+                input_norm: prepared.input_norm,
                 output_norm: prepared.output_norm,
             },
             CompensatorReport { network, refined },

@@ -68,6 +68,18 @@ pub enum TrainStop {
     MuMax,
 }
 
+impl TrainStop {
+    pub fn describe(self) -> &'static str {
+        match self {
+            TrainStop::Goal => "performance goal reached",
+            TrainStop::MinGradient => "minimum gradient reached",
+            TrainStop::ValidationFailures => "held-out error stopped improving (best epoch kept)",
+            TrainStop::MaxEpochs => "epoch limit",
+            TrainStop::MuMax => "mu above 1e10 (no step lowers the error)",
+        }
+    }
+}
+
 /// What training did.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct TrainReport {
@@ -238,7 +250,7 @@ impl Fit {
         v
     }
 
-    fn from_vector(&self, v: &DVector<f64>) -> Fit {
+    fn with_vector(&self, v: &DVector<f64>) -> Fit {
         let p = self.weights.len();
         Fit {
             weights: self.weights.from_vector(&v.rows(0, p).into_owned()),
@@ -298,7 +310,7 @@ fn lm_step(fit: &Fit, s: &Samples, mu: &mut f64, min_grad: f64) -> Result<LmOutc
             mat[(i, i)] += *mu;
         }
         if let Some(ch) = mat.cholesky() {
-            let cand = fit.from_vector(&(&v + ch.solve(&g)));
+            let cand = fit.with_vector(&(&v + ch.solve(&g)));
             let c = cand.mse(s);
             if c.is_finite() && c < perf {
                 *mu *= 0.1;

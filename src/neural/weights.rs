@@ -132,7 +132,7 @@ impl Weights {
 
 /// Min-max normalisation of each feature to [-1, 1], fitted on training data and stored with
 /// the network.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MinMax {
     pub min: Vec<f64>,
     pub max: Vec<f64>,
