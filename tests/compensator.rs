@@ -124,3 +124,63 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
         let _ = std::fs::remove_file(&path);
     }
 }
+
+#[test]
+fn position_only_training_through_the_joint_jacobian() {
+    // Three residuals per pose: the joint form still learns six joint corrections, because
+    // the network is shared across poses. Non-geometric robot, fresh seeds, `full` refined.
+    use robocal::sim::{Deviations, NonGeometric, Observe, Region, Simulation};
+    let ds = root().join("datasets");
+    let nominal = read_robot(ds.join("robots/fanuc_r2000ib_210f.toml")).unwrap();
+    let truth = Deviations::read(ds.join("deviations/table_6_1.toml"), &nominal)
+        .unwrap()
+        .apply(&nominal)
+        .unwrap();
+    let ng =
+        NonGeometric::read(ds.join("nongeometric/fanuc_compliance_gear.toml"), &nominal).unwrap();
+    let region = Region::limits(&nominal);
+    let sim = |count, seed| {
+        Simulation {
+            truth: &truth,
+            nongeometric: &ng,
+            region: &region,
+            count,
+            seed,
+            sigma_position_mm: 0.033,
+            sigma_rotation_rad: 0.174e-3,
+            observe: Observe::Position,
+        }
+        .run(PathBuf::from(format!("position_only_{seed}")))
+        .unwrap()
+    };
+    let (cal, train, test) = (sim(40, 911), sim(150, 912), sim(300, 913));
+    let model = identify(
+        &nominal,
+        &cal.measured,
+        &Options {
+            params: "full".into(),
+            ..Default::default()
+        },
+    )
+    .unwrap()
+    .robot;
+    let opts = CompensatorOptions {
+        refine: Some("full".into()),
+        ..Default::default()
+    };
+    let (c, _) = Compensator::train(&model, &train.measured, &opts).unwrap();
+    assert_eq!(c.weights.outputs(), 6);
+    let mean = |f: &mut dyn FnMut(&[f64]) -> robocal::Pose| {
+        let rows =
+            robocal::evaluate::row_errors(&test.truth, robocal::identify::Measure::Position, f)
+                .unwrap();
+        robocal::evaluate::summarize(&rows)
+            .position_mm
+            .unwrap()
+            .mean
+    };
+    let before = mean(&mut |q| robocal::kinematics::tool_pose(&model, q));
+    let mut ws = PredictWorkspace::default();
+    let after = mean(&mut |q| c.predict(q, &mut ws));
+    assert!(after * 2.0 < before, "{before} -> {after}");
+}
