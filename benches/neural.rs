@@ -4,7 +4,7 @@
 //! training to its stopping rule, and one compensated-pose prediction.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use robocal::data::{Profile, read_measurements};
+use robocal::data::read_canonical;
 use robocal::identify::{Options, identify};
 use robocal::model::read_robot;
 use robocal::neural::compensator::{Compensator, CompensatorOptions, PredictWorkspace, prepare};
@@ -20,11 +20,7 @@ fn path(p: &str) -> std::path::PathBuf {
 
 fn neural(c: &mut Criterion) {
     let nominal = read_robot(path("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
-    let rd = |p: &str| {
-        read_measurements(&path(p), &nominal, &Profile::default(), &Default::default())
-            .unwrap()
-            .0
-    };
+    let rd = |p: &str| read_canonical(&path(p), &nominal).unwrap();
     let cal = rd("datasets/case_d/calibration.csv");
     let set = rd("datasets/case_d/training.csv");
     let model = identify(

@@ -8,7 +8,7 @@
 //! together with the network ([`CompensatorOptions::refine`]): "offsets + network" re-estimates
 //! the offsets only, "full geometric + network" the full set.
 
-use crate::data::{MeasurementSet, Profile, read_measurements};
+use crate::data::{MeasurementSet, read_canonical};
 use crate::error::Result;
 use crate::evaluate::{ErrorStats, row_errors, summarize};
 use crate::identify::{Measure, Options, identify};
@@ -117,15 +117,7 @@ pub struct SetData {
 /// Reads a set's four files from `datasets/<folder>/`.
 pub fn load(datasets: &Path, set: Robotset, nominal: &Robot) -> Result<SetData> {
     let dir = datasets.join(set.folder());
-    let read = |name: &str| -> Result<MeasurementSet> {
-        Ok(read_measurements(
-            &dir.join(name),
-            nominal,
-            &Profile::default(),
-            &Default::default(),
-        )?
-        .0)
-    };
+    let read = |name: &str| read_canonical(&dir.join(name), nominal);
     Ok(SetData {
         calibration: read("calibration.csv")?,
         training: read("training.csv")?,

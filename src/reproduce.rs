@@ -100,16 +100,7 @@ pub struct CaseRun {
 /// Loads a shipped case from `datasets` (the repository's `datasets/` folder).
 pub fn load_shipped(datasets: &Path, case: Case, robot: &Robot) -> Result<CaseData> {
     let dir = datasets.join(case.folder());
-    let read = |name: &str| -> Result<MeasurementSet> {
-        let path: PathBuf = dir.join(name);
-        Ok(crate::data::read_measurements(
-            &path,
-            robot,
-            &crate::data::Profile::default(),
-            &Default::default(),
-        )?
-        .0)
-    };
+    let read = |name: &str| crate::data::read_canonical(&dir.join(name), robot);
     let v = case.validation_name();
     Ok(CaseData {
         calibration: read("calibration.csv")?,

@@ -2,7 +2,7 @@
 //! predictions, and damaged files are refused.
 
 use robocal::case_d::{Robotset, Stage, find, run};
-use robocal::data::{Profile, read_measurements};
+use robocal::data::read_canonical;
 use robocal::identify::{Options, identify};
 use robocal::model::read_robot;
 use robocal::neural::compensator::{Compensator, CompensatorOptions, Form, PredictWorkspace};
@@ -58,16 +58,7 @@ fn case_d_targets_on_the_unseen_test_sets() {
 #[test]
 fn save_load_gives_identical_predictions_and_damage_is_refused() {
     let nominal = read_robot(root().join("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
-    let rd = |p: &str| {
-        read_measurements(
-            &root().join(p),
-            &nominal,
-            &Profile::default(),
-            &Default::default(),
-        )
-        .unwrap()
-        .0
-    };
+    let rd = |p: &str| read_canonical(&root().join(p), &nominal).unwrap();
     let cal = rd("datasets/case_d/calibration.csv");
     let train = rd("datasets/case_d/training.csv");
     let test = rd("datasets/case_d/test_truth.csv");
@@ -121,6 +112,13 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
         );
         std::fs::write(&path, &text[..text.len() / 2]).unwrap();
         assert!(Compensator::load(&path).is_err());
+        // A well-formed file whose shapes disagree (here the output normalisation) is refused,
+        // not left to panic in prediction.
+        let mut odd = c.clone();
+        odd.output_norm.min.pop();
+        odd.save(&path).unwrap();
+        let e = Compensator::load(&path).unwrap_err().to_string();
+        assert!(e.contains("does not fit"), "{e}");
         let _ = std::fs::remove_file(&path);
     }
 }

@@ -41,6 +41,28 @@ impl DataArgs {
     }
 }
 
+/// Set-level tracker sigmas for rows that carry none (identify, train).
+#[derive(Args, Debug, Clone)]
+pub struct SigmaArgs {
+    /// Position sigma (mm) for rows without sx,sy,sz (default 0.033, the thesis's tracker).
+    #[arg(long)]
+    pub sigma_pos: Option<f64>,
+    /// Orientation sigma (mrad) for rows without srx,sry,srz (default 0.174).
+    #[arg(long)]
+    pub sigma_rot: Option<f64>,
+}
+
+impl SigmaArgs {
+    /// The sigmas in internal units (mm, rad), defaults where not given.
+    pub fn sigmas(&self) -> crate::identify::Sigmas {
+        let d = crate::identify::Sigmas::default();
+        crate::identify::Sigmas {
+            position_mm: self.sigma_pos.unwrap_or(d.position_mm),
+            rotation_rad: self.sigma_rot.map_or(d.rotation_rad, |s| s * 1e-3),
+        }
+    }
+}
+
 /// Prints warnings and dropped rows to stderr.
 pub fn print_report(path: &Path, report: &ReadReport) {
     for w in &report.warnings {

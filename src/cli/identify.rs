@@ -1,13 +1,11 @@
 //! `robocal identify` and `robocal evaluate`.
 
-use super::data_args::DataArgs;
+use super::data_args::{DataArgs, SigmaArgs};
 use crate::data::{JointInfo, MeasurementSet};
 use crate::evaluate::{ErrorStats, evaluate_model};
 use crate::evaluate::{row_errors, summarize};
 use crate::identify::identifiability::DropReason;
-use crate::identify::{
-    Identified, Measure, Method, Options, RobustLoss, Sigmas, SolveOptions, identify,
-};
+use crate::identify::{Identified, Measure, Method, Options, RobustLoss, SolveOptions, identify};
 use crate::model::{Robot, read_robot, robot_to_toml, write_robot};
 use crate::neural::compensator::{Compensator, PredictWorkspace};
 use anyhow::{Context, Result, bail};
@@ -36,12 +34,8 @@ pub struct IdentifyArgs {
     measure: Option<Measure>,
     #[arg(long, value_enum, default_value_t = Method::Lm)]
     method: Method,
-    /// Set-level position sigma (mm) for rows without sx,sy,sz (default 0.033, the thesis's tracker).
-    #[arg(long)]
-    sigma_pos: Option<f64>,
-    /// Set-level orientation sigma (mrad) for rows without srx,sry,srz (default 0.174).
-    #[arg(long)]
-    sigma_rot: Option<f64>,
+    #[command(flatten)]
+    sigma: SigmaArgs,
     /// Robust loss by iteratively reweighted least squares.
     #[arg(long, value_enum)]
     robust: Option<RobustLoss>,
@@ -119,25 +113,25 @@ pub(super) fn read_set(args: &DataArgs, path: &Path, robot: &Robot) -> Result<Me
     args.read(path, &JointInfo::of(robot))
 }
 
+/// The main data set and the optional validation set of a command.
+pub(super) fn read_sets(
+    args: &DataArgs,
+    data: &Path,
+    validate: Option<&Path>,
+    robot: &Robot,
+) -> Result<(MeasurementSet, Option<MeasurementSet>)> {
+    let set = read_set(args, data, robot)?;
+    let val = validate.map(|p| read_set(args, p, robot)).transpose()?;
+    Ok((set, val))
+}
+
 pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     let nominal = read_robot(&a.robot)?;
-    let cal = read_set(&a.read, &a.data, &nominal)?;
-    let val = a
-        .validate
-        .as_ref()
-        .map(|p| read_set(&a.read, p, &nominal))
-        .transpose()?;
-    let mut sigmas = Sigmas::default();
-    if let Some(s) = a.sigma_pos {
-        sigmas.position_mm = s;
-    }
-    if let Some(s) = a.sigma_rot {
-        sigmas.rotation_rad = s * 1e-3;
-    }
+    let (cal, val) = read_sets(&a.read, &a.data, a.validate.as_deref(), &nominal)?;
     let opts = Options {
         params: a.params.clone(),
         measure: a.measure,
-        sigmas,
+        sigmas: a.sigma.sigmas(),
         solve: SolveOptions {
             method: a.method,
             max_iterations: a.max_iterations,

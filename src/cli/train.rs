@@ -1,10 +1,10 @@
 //! `robocal train` and `robocal predict`: the neural compensator.
 
-use super::data_args::DataArgs;
-use super::identify::{print_stats, read_set, stats_json, write_json};
+use super::data_args::{DataArgs, SigmaArgs};
+use super::identify::{print_stats, read_sets, stats_json, write_json};
 use super::output::{OutputArgs, num};
 use crate::evaluate::{row_errors, summarize};
-use crate::identify::{Measure, Sigmas};
+use crate::identify::Measure;
 use crate::kinematics::{pose_to_file, tool_pose};
 use crate::model::read_robot;
 use crate::neural::compensator::{Compensator, CompensatorOptions, Form, PredictWorkspace};
@@ -56,12 +56,9 @@ pub struct TrainArgs {
     /// Part of the training rows held out for early stopping.
     #[arg(long, default_value_t = 0.15)]
     validation_fraction: f64,
-    /// Position sigma (mm) for rows without sx,sy,sz (joint form weighting).
-    #[arg(long)]
-    sigma_pos: Option<f64>,
-    /// Orientation sigma (mrad) for rows without srx,sry,srz.
-    #[arg(long)]
-    sigma_rot: Option<f64>,
+    /// Tracker sigmas for rows without their own (joint form weighting, refinement).
+    #[command(flatten)]
+    sigma: SigmaArgs,
     /// Compensator file to write (JSON).
     #[arg(long)]
     out: PathBuf,
@@ -72,22 +69,10 @@ pub struct TrainArgs {
 
 pub fn run_train(a: TrainArgs) -> Result<()> {
     let robot = read_robot(&a.robot)?;
-    let set = read_set(&a.read, &a.data, &robot)?;
-    let val = a
-        .validate
-        .as_ref()
-        .map(|p| read_set(&a.read, p, &robot))
-        .transpose()?;
-    let mut sigmas = Sigmas::default();
-    if let Some(s) = a.sigma_pos {
-        sigmas.position_mm = s;
-    }
-    if let Some(s) = a.sigma_rot {
-        sigmas.rotation_rad = s * 1e-3;
-    }
+    let (set, val) = read_sets(&a.read, &a.data, a.validate.as_deref(), &robot)?;
     let opts = CompensatorOptions {
         form: a.form,
-        sigmas,
+        sigmas: a.sigma.sigmas(),
         refine: a.refine.clone(),
         train: TrainOptions {
             hidden: a.hidden,

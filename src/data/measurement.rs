@@ -183,6 +183,12 @@ pub fn read_measurements(
     parse_measurements(&t, &JointInfo::of(robot), profile, opts)
 }
 
+/// Reads a canonical CSV measurement file (the shipped sets) with default options; what the
+/// read noticed is dropped, so use [`read_measurements`] for user data.
+pub fn read_canonical(path: &Path, robot: &Robot) -> Result<MeasurementSet> {
+    Ok(read_measurements(path, robot, &Profile::default(), &ReadOptions::default())?.0)
+}
+
 /// Turns a table into measurements; see [`read_measurements`].
 pub fn parse_measurements(
     t: &Table,

@@ -6,8 +6,8 @@ pub mod profile;
 pub mod table;
 
 pub use measurement::{
-    JointInfo, Measurement, MeasurementSet, ReadOptions, ReadReport, read_measurements,
-    write_measurements,
+    JointInfo, Measurement, MeasurementSet, ReadOptions, ReadReport, read_canonical,
+    read_measurements, write_measurements,
 };
 pub use profile::Profile;
 pub use table::Table;

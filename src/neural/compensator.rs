@@ -516,13 +516,37 @@ impl Compensator {
             serde_json::from_value(v[k].clone())
                 .map_err(|e| Error::input(Location::file(path), format!("`{k}`: {e}")))
         }
-        Ok(Compensator {
+        let c = Compensator {
             form: de(&v, "form", path)?,
             robot,
             weights,
             input_norm: de(&v, "input_norm", path)?,
             output_norm: de(&v, "output_norm", path)?,
-        })
+        };
+        // A consistent checksum does not prove consistent shapes: prediction indexes by them.
+        let mut feat = Vec::new();
+        features(&c.robot, &vec![0.0; c.robot.dof()], &mut feat);
+        let outputs_ok = match c.form {
+            Form::Joint => no == c.robot.dof(),
+            Form::Pose => no == 3 || no == 6,
+        };
+        let norms_ok = [&c.input_norm, &c.output_norm]
+            .iter()
+            .zip([ni, no])
+            .all(|(n, len)| n.min.len() == len && n.max.len() == len);
+        if ni != feat.len() || !outputs_ok || !norms_ok {
+            return Err(bad(format!(
+                "a {ni}-{nh}-{no} {:?}-form network with normalisations of {}/{} inputs and \
+                 {}/{} outputs does not fit its {}-joint robot",
+                c.form,
+                c.input_norm.min.len(),
+                c.input_norm.max.len(),
+                c.output_norm.min.len(),
+                c.output_norm.max.len(),
+                c.robot.dof()
+            )));
+        }
+        Ok(c)
     }
 }
 

@@ -279,21 +279,15 @@ fn lm_step(fit: &Fit, s: &Samples, mu: &mut f64, min_grad: f64) -> Result<LmOutc
     let mut r = vec![0.0; nr];
     for k in 0..s.len() {
         // The residual's Jacobian is -[A_k dy/dw, L_k]; the step below uses its negative.
+        w.jacobian_into(&s.x[k], &mut h, &mut out, &mut blk, 0);
+        let mut rows_k = jac.view_mut((k * nr, 0), (nr, pw));
         match &s.maps {
-            None => {
-                w.jacobian_into(&s.x[k], &mut h, &mut blk, 0);
-                jac.view_mut((k * nr, 0), (nr, pw)).copy_from(&blk);
-            }
-            Some(a) => {
-                w.jacobian_into(&s.x[k], &mut h, &mut blk, 0);
-                jac.view_mut((k * nr, 0), (nr, pw))
-                    .gemm(1.0, &a[k], &blk, 0.0);
-            }
+            None => rows_k.copy_from(&blk),
+            Some(a) => rows_k.gemm(1.0, &a[k], &blk, 0.0),
         }
         if let Some(l) = &s.lin {
             jac.view_mut((k * nr, pw), (nr, m)).copy_from(&l[k]);
         }
-        w.forward_into(&s.x[k], &mut h, &mut out);
         s.residual(k, &out, &fit.theta, &mut r);
         e.rows_mut(k * nr, nr).copy_from_slice(&r);
     }

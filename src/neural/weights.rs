@@ -96,8 +96,9 @@ impl Weights {
         y
     }
 
-    /// Jacobian of the outputs at `x` with respect to every weight (outputs x len, in the order
-    /// of [`Weights::to_vector`]), written into `jac` rows `row0..row0 + outputs`.
+    /// Outputs at `x` into `y` and their Jacobian with respect to every weight (outputs x len,
+    /// in the order of [`Weights::to_vector`]) into `jac` rows `row0..row0 + outputs`; one
+    /// forward pass serves both, and nothing is allocated.
     ///
     /// dy_k/dW2[k,j] = h_j, dy_k/db2[k] = 1, dy_k/dW1[j,i] = W2[k,j] h_j (1 - h_j) x_i,
     /// dy_k/db1[j] = W2[k,j] h_j (1 - h_j).
@@ -105,12 +106,12 @@ impl Weights {
         &self,
         x: &[f64],
         hidden: &mut [f64],
+        y: &mut [f64],
         jac: &mut DMatrix<f64>,
         row0: usize,
     ) {
         let (h, i, o) = (self.hidden(), self.inputs(), self.outputs());
-        let mut y = vec![0.0; o];
-        self.forward_into(x, hidden, &mut y);
+        self.forward_into(x, hidden, y);
         let (off_b1, off_w2, off_b2) = (h * i, h * i + h, h * i + h + o * h);
         for k in 0..o {
             let r = row0 + k;
@@ -196,7 +197,9 @@ mod tests {
         let n = w.len();
         let mut jac = DMatrix::zeros(2, n);
         let mut h = vec![0.0; w.hidden()];
-        w.jacobian_into(&x, &mut h, &mut jac, 0);
+        let mut y = vec![0.0; 2];
+        w.jacobian_into(&x, &mut h, &mut y, &mut jac, 0);
+        assert_eq!(y, w.forward(&x));
         let v = w.to_vector();
         for c in 0..n {
             let e = 1e-6;
