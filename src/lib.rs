@@ -5,6 +5,7 @@
 
 pub mod case_d;
 pub mod cli;
+pub mod compensation;
 pub mod data;
 pub mod error;
 pub mod evaluate;

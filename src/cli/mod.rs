@@ -1,6 +1,7 @@
 //! The `robocal` command line: a thin layer over the library.
 
 mod case_d;
+mod compensate;
 mod data_args;
 mod fk;
 mod identify;
@@ -48,6 +49,9 @@ enum Command {
     Train(train::TrainArgs),
     /// Compensated tool poses for joint configurations.
     Predict(train::PredictArgs),
+    /// Fake targets: joints at which the calibrated (compensated) robot reaches each desired
+    /// pose, and the nominal pose an unmodified controller must be given for them.
+    Compensate(compensate::CompensateArgs),
     /// Thesis Case D end to end (Table 6.6) and the non-geometric robot, beside the thesis.
     CaseD(case_d::CaseDArgs),
 }
@@ -67,6 +71,7 @@ pub fn main() -> ExitCode {
         Command::Reproduce(a) => reproduce::run(a),
         Command::Train(a) => train::run_train(a),
         Command::Predict(a) => train::run_predict(a),
+        Command::Compensate(a) => compensate::run(a),
         Command::CaseD(a) => case_d::run_case_d(a),
     };
     match result {

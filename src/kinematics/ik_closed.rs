@@ -25,6 +25,24 @@ type V3 = Vector3<f64>;
 /// Tolerance (mm) for axes meeting in a point, and (unit-vector norm) for parallel axes.
 const STRUCTURE_TOL: f64 = 1e-7;
 
+/// Which of the closed form's up to 8 solutions: one of two roots for joint 1 (shoulder), for
+/// joint 3 (elbow) and for joints 4-5 (wrist flip), in the solver's fixed order. A controller's
+/// configuration flags name the same choice; a pose keeps its branch under small changes away
+/// from singularities, which is what target compensation relies on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Branch {
+    pub shoulder: u8,
+    pub elbow: u8,
+    pub wrist: u8,
+}
+
+impl std::fmt::Display for Branch {
+    /// Three digits, 0 or 1 each: shoulder, elbow, wrist.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}{}{}", self.shoulder, self.elbow, self.wrist)
+    }
+}
+
 /// A closed-form solver built once for a robot and reused for many poses.
 #[derive(Debug, Clone)]
 pub struct SphericalWristIk {
@@ -146,6 +164,16 @@ impl SphericalWristIk {
     /// or q5 such that axes 4 and 6 align) one representative of the continuum is returned.
     pub fn solve_unlimited(&self, target: &Pose, out: &mut Vec<[f64; 6]>) {
         out.clear();
+        self.each_solution(target, |_, q| out.push(q));
+    }
+
+    /// As [`SphericalWristIk::solve_unlimited`], each solution with its [`Branch`].
+    pub fn solve_branches(&self, target: &Pose, out: &mut Vec<(Branch, [f64; 6])>) {
+        out.clear();
+        self.each_solution(target, |b, q| out.push((b, q)));
+    }
+
+    fn each_solution(&self, target: &Pose, mut emit: impl FnMut(Branch, [f64; 6])) {
         let [w1, w2, w3, w4, w5, w6] = &self.w;
         let [p1, p2, p3, ..] = &self.p;
         let g = target * self.m_inv;
@@ -163,7 +191,7 @@ impl SphericalWristIk {
             None => return,
         };
         let dedup1 = (q1s[0] - q1s[1]).abs() < 1e-14;
-        for &q1 in &q1s[..if dedup1 { 1 } else { 2 }] {
+        for (b1, &q1) in q1s[..if dedup1 { 1 } else { 2 }].iter().enumerate() {
             let r1 = rot(w1, q1);
             let wp = r1.inverse() * (wc - p1) + p1;
             let delta = (wp - p2).norm();
@@ -171,7 +199,7 @@ impl SphericalWristIk {
                 continue;
             };
             let dedup3 = (q3s[0] - q3s[1]).abs() < 1e-14;
-            for &q3 in &q3s[..if dedup3 { 1 } else { 2 }] {
+            for (b3, &q3) in q3s[..if dedup3 { 1 } else { 2 }].iter().enumerate() {
                 let r3 = rot(w3, q3);
                 let elbow = r3 * (self.w0 - p3) + p3;
                 let q2 = rotate_onto(w2, &(elbow - p2), &(wp - p2));
@@ -182,12 +210,17 @@ impl SphericalWristIk {
                 };
                 let dedupw = (wrists[0][0] - wrists[1][0]).abs() < 1e-14
                     && (wrists[0][1] - wrists[1][1]).abs() < 1e-14;
-                for &[q4, q5] in &wrists[..if dedupw { 1 } else { 2 }] {
+                for (bw, &[q4, q5]) in wrists[..if dedupw { 1 } else { 2 }].iter().enumerate() {
                     // Any vector off axis 6 fixes q6; axis 5 is perpendicular to it here.
                     let x = w5 - w6 * w6.dot(w5);
                     let y = (rot(w4, q4) * rot(w5, q5)).inverse() * (rw * x);
                     let q6 = rotate_onto(w6, &x, &y);
-                    out.push([q1, q2, q3, q4, q5, q6].map(wrap));
+                    let branch = Branch {
+                        shoulder: b1 as u8,
+                        elbow: b3 as u8,
+                        wrist: bw as u8,
+                    };
+                    emit(branch, [q1, q2, q3, q4, q5, q6].map(wrap));
                 }
             }
         }

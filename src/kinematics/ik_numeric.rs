@@ -5,6 +5,11 @@
 //! rad) that puts orientation on the scale of position. Step: (J^T J + lambda diag(J^T J))
 //! dq = J^T e with J the geometric Jacobian (orientation rows scaled by L). A solve either
 //! meets both tolerances or returns [`Error::NotConverged`] with the error it reached.
+//!
+//! The solver works on any [`ToolModel`] (a pose and its geometric Jacobian): the rigid model
+//! ([`solve_numeric`]) or a model with a neural compensator in series (see `compensation`).
+//! An approximate Jacobian only slows convergence; the tolerances are checked on the model's
+//! own pose.
 
 use super::Pose;
 use super::fk::{Frames, frames};
@@ -63,20 +68,51 @@ pub struct IkSolution {
     pub outside_limits: Vec<usize>,
 }
 
-/// Scratch space for numerical IK, reused across solves of one robot.
+/// A forward model that numerical IK can invert.
+pub trait ToolModel {
+    /// The robot whose joints (types, limits) the model moves.
+    fn robot(&self) -> &Robot;
+    /// The tool pose (mm) at joints `q` (rad or mm).
+    fn pose(&mut self, q: &[f64]) -> Pose;
+    /// The geometric Jacobian at `q` into `jac` (6 x N): rows 0-2 the tool origin's velocity
+    /// (mm per rad or per mm), rows 3-5 its angular velocity (rad per rad or per mm), world.
+    fn jacobian(&mut self, q: &[f64], jac: &mut Matrix6xX<f64>);
+}
+
+/// The rigid kinematic model as a [`ToolModel`].
+pub struct RigidModel<'a> {
+    pub robot: &'a Robot,
+    pub frames: &'a mut Frames,
+}
+
+impl ToolModel for RigidModel<'_> {
+    fn robot(&self) -> &Robot {
+        self.robot
+    }
+
+    fn pose(&mut self, q: &[f64]) -> Pose {
+        frames(self.robot, q, self.frames);
+        self.frames.tool
+    }
+
+    fn jacobian(&mut self, q: &[f64], jac: &mut Matrix6xX<f64>) {
+        frames(self.robot, q, self.frames);
+        joint_jacobian(self.robot, self.frames, jac);
+    }
+}
+
+/// The solver's own buffers, reused across solves of one robot.
 #[derive(Debug, Clone)]
-pub struct IkWorkspace {
-    frames: Frames,
+pub struct IkBuffers {
     jac: Matrix6xX<f64>,
     q: Vec<f64>,
     trial: Vec<f64>,
 }
 
-impl IkWorkspace {
-    pub fn new(robot: &Robot) -> Self {
-        let n = robot.dof();
-        IkWorkspace {
-            frames: Frames::new(robot),
+impl IkBuffers {
+    /// Buffers for `n` joints.
+    pub fn new(n: usize) -> Self {
+        IkBuffers {
             jac: Matrix6xX::zeros(n),
             q: vec![0.0; n],
             trial: vec![0.0; n],
@@ -84,16 +120,25 @@ impl IkWorkspace {
     }
 }
 
-/// Residual (6 components, mm; orientation scaled by L) at `q`; fills the frames.
-fn residual(
-    robot: &Robot,
-    target: &IkTarget,
-    q: &[f64],
-    scale: f64,
-    frames_ws: &mut Frames,
-) -> Vector6<f64> {
-    frames(robot, q, frames_ws);
-    let t = &frames_ws.tool;
+/// Scratch space for numerical IK of the rigid model, reused across solves of one robot.
+#[derive(Debug, Clone)]
+pub struct IkWorkspace {
+    frames: Frames,
+    buffers: IkBuffers,
+}
+
+impl IkWorkspace {
+    pub fn new(robot: &Robot) -> Self {
+        IkWorkspace {
+            frames: Frames::new(robot),
+            buffers: IkBuffers::new(robot.dof()),
+        }
+    }
+}
+
+/// Residual (6 components, mm; orientation scaled by L) at `q`.
+fn residual<M: ToolModel>(model: &mut M, target: &IkTarget, q: &[f64], scale: f64) -> Vector6<f64> {
+    let t = model.pose(q);
     match target {
         IkTarget::Pose(g) => {
             let dp = g.translation.vector - t.translation.vector;
@@ -107,7 +152,8 @@ fn residual(
     }
 }
 
-/// Solves for joints that put the tool on `target`, starting from `seed` (rad or mm).
+/// Solves for joints that put the tool of the rigid model on `target`, starting from `seed`
+/// (rad or mm).
 pub fn solve_numeric(
     robot: &Robot,
     target: &IkTarget,
@@ -115,7 +161,26 @@ pub fn solve_numeric(
     opts: &IkOptions,
     ws: &mut IkWorkspace,
 ) -> Result<IkSolution> {
-    let n = robot.dof();
+    let mut model = RigidModel {
+        robot,
+        frames: &mut ws.frames,
+    };
+    solve_model(&mut model, target, seed, opts, &mut ws.buffers)
+}
+
+/// Solves for joints that put the tool of `model` on `target`, starting from `seed`
+/// (rad or mm).
+pub fn solve_model<M: ToolModel>(
+    model: &mut M,
+    target: &IkTarget,
+    seed: &[f64],
+    opts: &IkOptions,
+    ws: &mut IkBuffers,
+) -> Result<IkSolution> {
+    let n = model.robot().dof();
+    if ws.q.len() != n {
+        *ws = IkBuffers::new(n);
+    }
     if seed.len() != n {
         return Err(Error::Invalid(format!(
             "seed has {} joints, the robot {n}",
@@ -125,7 +190,7 @@ pub fn solve_numeric(
     let position_only = matches!(target, IkTarget::Position(_));
     let l = opts.length_scale_mm;
     ws.q.copy_from_slice(seed);
-    let mut e = residual(robot, target, &ws.q, l, &mut ws.frames);
+    let mut e = residual(model, target, &ws.q, l);
     let mut cost = e.norm_squared();
     let mut lambda = 1e-3;
     let errors = |e: &Vector6<f64>| {
@@ -138,12 +203,12 @@ pub fn solve_numeric(
     for iter in 0..=opts.max_iterations {
         let (pos, rot) = errors(&e);
         if pos <= opts.tol_position_mm && rot <= opts.tol_rotation_rad {
-            return Ok(finish(robot, &ws.q, iter, pos, rot));
+            return Ok(finish(model.robot(), &ws.q, iter, pos, rot));
         }
         if iter == opts.max_iterations {
             break;
         }
-        joint_jacobian(robot, &ws.frames, &mut ws.jac);
+        model.jacobian(&ws.q, &mut ws.jac);
         if position_only {
             ws.jac.fixed_rows_mut::<3>(3).fill(0.0);
         } else {
@@ -166,7 +231,7 @@ pub fn solve_numeric(
             for k in 0..n {
                 ws.trial[k] = ws.q[k] + dq[k];
             }
-            let e_new = residual(robot, target, &ws.trial, l, &mut ws.frames);
+            let e_new = residual(model, target, &ws.trial, l);
             let c_new = e_new.norm_squared();
             if c_new.is_finite() && c_new < cost {
                 std::mem::swap(&mut ws.q, &mut ws.trial);
@@ -179,7 +244,7 @@ pub fn solve_numeric(
             lambda *= 10.0;
         }
         if !improved {
-            // Frames hold the last trial; the caller gets the error at the best point.
+            // The caller gets the error at the best point.
             let (pos, rot) = errors(&e);
             return Err(Error::NotConverged(format!(
                 "numerical IK stalled after {iter} iterations (no step lowers the error): \

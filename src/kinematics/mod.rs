@@ -12,8 +12,11 @@ pub mod subproblems;
 pub type Pose = nalgebra::IsometryMatrix3<f64>;
 
 pub use fk::{Frames, frames, tool_pose};
-pub use ik_closed::SphericalWristIk;
-pub use ik_numeric::{IkOptions, IkSolution, IkTarget, IkWorkspace, solve_numeric};
+pub use ik_closed::{Branch, SphericalWristIk};
+pub use ik_numeric::{
+    IkBuffers, IkOptions, IkSolution, IkTarget, IkWorkspace, RigidModel, ToolModel, solve_model,
+    solve_numeric,
+};
 pub use jacobian::joint_jacobian;
 
 use crate::rotation::{rotation_to_zyx, zyx_to_rotation};

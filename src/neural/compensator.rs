@@ -339,7 +339,7 @@ pub struct CompensatorReport {
 }
 
 /// Scratch space for prediction.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct PredictWorkspace {
     feat: Vec<f64>,
     x: Vec<f64>,
@@ -347,6 +347,25 @@ pub struct PredictWorkspace {
     y: Vec<f64>,
     out: Vec<f64>,
     q: Vec<f64>,
+    row: Vec<f64>,
+    dy: DMatrix<f64>,
+    dout: DMatrix<f64>,
+}
+
+impl Default for PredictWorkspace {
+    fn default() -> Self {
+        PredictWorkspace {
+            feat: Vec::new(),
+            x: Vec::new(),
+            h: Vec::new(),
+            y: Vec::new(),
+            out: Vec::new(),
+            q: Vec::new(),
+            row: Vec::new(),
+            dy: DMatrix::zeros(0, 0),
+            dout: DMatrix::zeros(0, 0),
+        }
+    }
 }
 
 impl Compensator {
@@ -400,6 +419,104 @@ impl Compensator {
         self.input_norm.apply(&ws.feat, &mut ws.x);
         self.weights.forward_into(&ws.x, &mut ws.h, &mut ws.y);
         self.output_norm.invert(&ws.y, &mut ws.out);
+    }
+
+    /// The network's raw outputs for `q` into `ws.out` and their derivatives by the joints
+    /// (outputs x joints; output units per rad or per mm) into `ws.dout`.
+    fn output_derivatives(&self, q: &[f64], ws: &mut PredictWorkspace) {
+        features(&self.robot, q, &mut ws.feat);
+        let (i, o, n) = (ws.feat.len(), self.weights.outputs(), q.len());
+        ws.x.resize(i, 0.0);
+        ws.h.resize(self.weights.hidden(), 0.0);
+        ws.y.resize(o, 0.0);
+        ws.out.resize(o, 0.0);
+        if ws.dy.shape() != (o, i) {
+            ws.dy = DMatrix::zeros(o, i);
+        }
+        if ws.dout.shape() != (o, n) {
+            ws.dout = DMatrix::zeros(o, n);
+        }
+        self.input_norm.apply(&ws.feat, &mut ws.x);
+        self.weights
+            .input_jacobian_into(&ws.x, &mut ws.h, &mut ws.y, &mut ws.dy);
+        self.output_norm.invert(&ws.y, &mut ws.out);
+        // Chain rule through out = y h_out + mid_out, x = (f - mid_in) / h_in and the
+        // features (sin q, cos q) or q.
+        ws.dout.fill(0.0);
+        let mut col = 0;
+        for (j, joint) in self.robot.joints().iter().enumerate() {
+            let dfeat: &[(usize, f64)] = &match joint.joint_type {
+                JointType::Revolute => {
+                    let (s, c) = libm::sincos(q[j]);
+                    [(col, c), (col + 1, -s)]
+                }
+                JointType::Prismatic => [(col, 1.0), (col, 0.0)],
+            };
+            for &(f, d) in dfeat {
+                let dx = d / self.input_norm.half_range(f);
+                for k in 0..o {
+                    ws.dout[(k, j)] += ws.dy[(k, f)] * dx * self.output_norm.half_range(k);
+                }
+            }
+            col += match joint.joint_type {
+                JointType::Revolute => 2,
+                JointType::Prismatic => 1,
+            };
+        }
+    }
+
+    /// The geometric Jacobian of the compensated pose at `q` into `jac` (6 x N; rows 0-2 mm
+    /// per rad or per mm, rows 3-5 rad per rad or per mm, world); `frames` is a workspace of
+    /// `self.robot`. Joint form: J = J_model(q + dq(q)) (I + d dq/dq). Pose form:
+    /// [J_p + d dp/dq; exp(dr) J_w + J_l(dr) d dr/dq], J_l the left Jacobian of SO(3).
+    pub fn jacobian(
+        &self,
+        q: &[f64],
+        ws: &mut PredictWorkspace,
+        frames_ws: &mut Frames,
+        jac: &mut Matrix6xX<f64>,
+    ) {
+        self.output_derivatives(q, ws);
+        let n = q.len();
+        match self.form {
+            Form::Joint => {
+                ws.q.clear();
+                ws.q.extend(q.iter().zip(&ws.out).map(|(a, d)| a + d * 1e-3));
+                frames(&self.robot, &ws.q, frames_ws);
+                joint_jacobian(&self.robot, frames_ws, jac);
+                // jac <- jac (I + 1e-3 dout), column by column without a temporary.
+                for r in 0..6 {
+                    ws.row.clear();
+                    ws.row.extend((0..n).map(|c| jac[(r, c)]));
+                    for c in 0..n {
+                        let extra: f64 = (0..n).map(|k| ws.row[k] * ws.dout[(k, c)] * 1e-3).sum();
+                        jac[(r, c)] = ws.row[c] + extra;
+                    }
+                }
+            }
+            Form::Pose => {
+                frames(&self.robot, q, frames_ws);
+                joint_jacobian(&self.robot, frames_ws, jac);
+                let with_rotation = ws.out.len() >= 6;
+                let dr = if with_rotation {
+                    Vector3::new(ws.out[3], ws.out[4], ws.out[5]) * 1e-3
+                } else {
+                    Vector3::zeros()
+                };
+                let (turn, left) = (from_rotation_vector(&dr), left_jacobian(&dr));
+                for c in 0..n {
+                    let mut w = turn * Vector3::new(jac[(3, c)], jac[(4, c)], jac[(5, c)]);
+                    if with_rotation {
+                        let ddr = Vector3::new(ws.dout[(3, c)], ws.dout[(4, c)], ws.dout[(5, c)]);
+                        w += left * ddr * 1e-3;
+                    }
+                    for r in 0..3 {
+                        jac[(r, c)] += ws.dout[(r, c)];
+                        jac[(3 + r, c)] = w[r];
+                    }
+                }
+            }
+        }
     }
 
     /// The compensated tool pose for joints `q` (rad, mm). Allocation-free once `ws` has been
@@ -552,6 +669,19 @@ impl Compensator {
 
 const FORMAT: &str = "robocal-compensator";
 const VERSION: u64 = 1;
+
+/// The left Jacobian of SO(3) at rotation vector `phi` (rad): the angular velocity of
+/// exp(phi) is J_l(phi) dphi/dt. J_l = I + (1 - cos t)/t^2 [phi]x + (t - sin t)/t^3 [phi]x^2.
+fn left_jacobian(phi: &Vector3<f64>) -> nalgebra::Matrix3<f64> {
+    let t = phi.norm();
+    let k = phi.cross_matrix();
+    let (a, b) = if t < 1e-6 {
+        (0.5 - t * t / 24.0, 1.0 / 6.0 - t * t / 120.0)
+    } else {
+        ((1.0 - t.cos()) / (t * t), (t - t.sin()) / (t * t * t))
+    };
+    nalgebra::Matrix3::identity() + k * a + k * k * b
+}
 
 /// FNV-1a, 64 bits: a checksum against corruption, not a cryptographic hash.
 fn fnv1a(b: &[u8]) -> u64 {

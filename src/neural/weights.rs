@@ -88,6 +88,28 @@ impl Weights {
         }
     }
 
+    /// Outputs at `x` into `y` and their derivatives by the inputs into `jac` (outputs x
+    /// inputs): dy_k/dx_i = sum_j W2[k,j] h_j (1 - h_j) W1[j,i]. Does not allocate.
+    pub fn input_jacobian_into(
+        &self,
+        x: &[f64],
+        hidden: &mut [f64],
+        y: &mut [f64],
+        jac: &mut DMatrix<f64>,
+    ) {
+        self.forward_into(x, hidden, y);
+        jac.fill(0.0);
+        for j in 0..self.hidden() {
+            let s = hidden[j] * (1.0 - hidden[j]);
+            for k in 0..self.outputs() {
+                let d = self.w2[(k, j)] * s;
+                for i in 0..self.inputs() {
+                    jac[(k, i)] += d * self.w1[(j, i)];
+                }
+            }
+        }
+    }
+
     /// Output for input `x` (allocates; for tests and one-off use).
     pub fn forward(&self, x: &[f64]) -> Vec<f64> {
         let mut h = vec![0.0; self.hidden()];
@@ -154,7 +176,8 @@ impl MinMax {
         MinMax { min, max }
     }
 
-    fn half_range(&self, k: usize) -> f64 {
+    /// Half the fitted range of feature `k` (1 for a constant feature).
+    pub fn half_range(&self, k: usize) -> f64 {
         let h = 0.5 * (self.max[k] - self.min[k]);
         if h > 0.0 { h } else { 1.0 }
     }
@@ -217,6 +240,32 @@ mod tests {
                     (fd - jac[(k, c)]).abs() < 1e-8 * (1.0 + fd.abs()),
                     "weight {c}, output {k}: {fd} vs {}",
                     jac[(k, c)]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn input_jacobian_matches_central_differences() {
+        let w = sample();
+        let x = [0.3, -0.7, 0.55];
+        let mut jac = DMatrix::zeros(2, 3);
+        let mut h = vec![0.0; w.hidden()];
+        let mut y = vec![0.0; 2];
+        w.input_jacobian_into(&x, &mut h, &mut y, &mut jac);
+        assert_eq!(y, w.forward(&x));
+        for i in 0..3 {
+            let e = 1e-6;
+            let (mut xp, mut xm) = (x, x);
+            xp[i] += e;
+            xm[i] -= e;
+            let (yp, ym) = (w.forward(&xp), w.forward(&xm));
+            for k in 0..2 {
+                let fd = (yp[k] - ym[k]) / (2.0 * e);
+                assert!(
+                    (fd - jac[(k, i)]).abs() < 1e-8 * (1.0 + fd.abs()) && jac[(k, i)] != 0.0,
+                    "input {i}, output {k}: {fd} vs {}",
+                    jac[(k, i)]
                 );
             }
         }

@@ -9,7 +9,7 @@ pub use nongeometric::NonGeometric;
 
 use crate::data::{Measurement, MeasurementSet};
 use crate::error::{Error, Location, Result};
-use crate::kinematics::{Frames, tool_pose};
+use crate::kinematics::{Frames, Pose, tool_pose};
 use crate::model::Robot;
 use crate::rotation::from_rotation_vector;
 use nalgebra::Vector3;
@@ -80,6 +80,21 @@ impl Region {
     }
 }
 
+/// The true robot's tool pose (mm) at commanded joints `q` (rad, mm) approached from
+/// `previous`: the non-geometric joint deflections, then the true model's FK.
+pub fn actual_pose(
+    truth: &Robot,
+    nongeometric: &NonGeometric,
+    q: &[f64],
+    previous: &[f64],
+    ws: &mut Frames,
+) -> Pose {
+    let mut dq = vec![0.0; q.len()];
+    nongeometric.deflection(truth, q, previous, ws, &mut dq);
+    let actual: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
+    tool_pose(truth, &actual)
+}
+
 /// A simulation run.
 #[derive(Debug, Clone)]
 pub struct Simulation<'a> {
@@ -140,15 +155,11 @@ impl Simulation<'_> {
             .collect();
         let unit = Normal::new(0.0, 1.0).map_err(|e| Error::Invalid(e.to_string()))?;
         let mut ws = Frames::new(robot);
-        let mut dq = vec![0.0; n];
         let mut previous = vec![0.0; n];
         let mut measured = Vec::with_capacity(self.count);
         let mut truth = Vec::with_capacity(self.count);
         for (k, q) in configs.into_iter().enumerate() {
-            self.nongeometric
-                .deflection(robot, &q, &previous, &mut ws, &mut dq);
-            let actual: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
-            let pose = tool_pose(robot, &actual);
+            let pose = actual_pose(robot, self.nongeometric, &q, &previous, &mut ws);
             let mut draw3 = |s: f64| {
                 Vector3::new(
                     unit.sample(&mut rng_noise),

@@ -1,0 +1,221 @@
+//! `robocal compensate`: fake targets for an unmodified controller (see `compensation`).
+
+use super::output::{OutputArgs, num, parse_list};
+use crate::compensation::{CalibratedModel, Desired, FakeTargetSolver};
+use crate::data::{POSE_COLUMNS, Table, joint_columns};
+use crate::kinematics::{pose_from_file, pose_to_file};
+use crate::model::{Robot, read_robot};
+use crate::neural::compensator::Compensator;
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use nalgebra::Vector3;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct CompensateArgs {
+    /// The controller's nominal robot (TOML; mm, deg); it must have a closed form.
+    #[arg(long)]
+    nominal: PathBuf,
+    /// The calibrated robot (from `robocal identify`).
+    #[arg(long)]
+    robot: PathBuf,
+    /// A compensator (from `robocal train`): its model and network are inverted instead.
+    #[arg(long)]
+    compensator: Option<PathBuf>,
+    /// Desired tool poses: CSV with x,y,z (mm) and rz,ry,rx (deg, R = Rz Ry Rx), or x,y,z
+    /// only (the orientation is then the calibrated robot's at the seed joints). Optional
+    /// q1..qN (deg) seed each row (branch and turns) and are renamed seed_q1..seed_qN; other
+    /// columns are carried through.
+    #[arg(long)]
+    targets: PathBuf,
+    /// Seed joints "j1,...,jN" (deg) for rows without their own.
+    #[arg(long, allow_hyphen_values = true)]
+    seed: Option<String>,
+    #[command(flatten)]
+    output: OutputArgs,
+}
+
+/// The compensator's joints must be the robot's.
+fn check_joints(robot: &Robot, other: &Robot) -> bool {
+    robot.dof() == other.dof()
+        && robot
+            .joints()
+            .iter()
+            .zip(other.joints())
+            .all(|(a, b)| a.joint_type == b.joint_type)
+}
+
+pub fn run(a: CompensateArgs) -> Result<()> {
+    let nominal = read_robot(&a.nominal)?;
+    let robot = read_robot(&a.robot)?;
+    let n = nominal.dof();
+    if !check_joints(&nominal, &robot) {
+        bail!(
+            "{} and {} have different joints",
+            a.nominal.display(),
+            a.robot.display()
+        );
+    }
+    let comp = a
+        .compensator
+        .as_ref()
+        .map(|p| Compensator::load(p))
+        .transpose()?;
+    let model = match (&comp, &a.compensator) {
+        (Some(c), Some(p)) => {
+            if !check_joints(&robot, &c.robot) {
+                bail!(
+                    "{}: the compensator was trained for a robot with other joints than {}",
+                    p.display(),
+                    a.robot.display()
+                );
+            }
+            eprintln!(
+                "note: the compensator runs in series with its own model (embedded; refined in \
+                 training), not with {}",
+                a.robot.display()
+            );
+            CalibratedModel::compensated(c)
+        }
+        _ => CalibratedModel::rigid(&robot),
+    };
+    let mut solver = FakeTargetSolver::new(&nominal, model)
+        .with_context(|| format!("{}: no closed form to seed from", a.nominal.display()))?;
+    let global_seed = match &a.seed {
+        Some(s) => Some(nominal.joints_to_internal(&parse_list(s, "--seed", n)?)),
+        None => None,
+    };
+
+    let t = Table::read(&a.targets)?;
+    let pos_idx: Vec<usize> = POSE_COLUMNS[..3]
+        .iter()
+        .map(|c| t.require(c))
+        .collect::<Result<_, _>>()?;
+    let rot_present: Vec<bool> = POSE_COLUMNS[3..]
+        .iter()
+        .map(|c| t.column(c).is_some())
+        .collect();
+    let with_orientation = rot_present.iter().all(|&p| p);
+    if !with_orientation && rot_present.iter().any(|&p| p) {
+        // Names the first missing orientation column.
+        for c in &POSE_COLUMNS[3..] {
+            t.require(c)?;
+        }
+    }
+    let rot_idx: Vec<usize> = if with_orientation {
+        POSE_COLUMNS[3..]
+            .iter()
+            .map(|c| t.require(c))
+            .collect::<Result<_, _>>()?
+    } else {
+        Vec::new()
+    };
+    let qcols = joint_columns(n);
+    let seed_idx: Vec<Option<usize>> = qcols.iter().map(|c| t.column(c)).collect();
+    let row_seeds = match seed_idx.iter().filter(|c| c.is_some()).count() {
+        0 => false,
+        k if k == n => true,
+        _ => {
+            for c in &qcols {
+                t.require(c)?;
+            }
+            unreachable!("a missing seed column was named above")
+        }
+    };
+
+    let mut headers = t.headers.clone();
+    if row_seeds {
+        for h in headers.iter_mut() {
+            if qcols.contains(h) {
+                *h = format!("seed_{h}");
+            }
+        }
+    }
+    if !with_orientation {
+        headers.extend(POSE_COLUMNS[3..].iter().map(|s| s.to_string()));
+    }
+    headers.push("branch".into());
+    headers.extend(qcols.iter().cloned());
+    headers.extend(POSE_COLUMNS.iter().map(|c| format!("cmd_{c}")));
+    headers.extend(["residual_mm".into(), "residual_deg".into(), "status".into()]);
+
+    let bar = if std::io::stderr().is_terminal() && t.rows.len() >= 1000 {
+        indicatif::ProgressBar::new(t.rows.len() as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let d = a.output.decimals;
+    let mut out_rows = Vec::with_capacity(t.rows.len());
+    let mut failed = Vec::new();
+    let mut shifts = Vec::new();
+    for r in 0..t.rows.len() {
+        bar.inc(1);
+        let p = t.numbers(r, &pos_idx)?;
+        let desired = if with_orientation {
+            let o = t.numbers(r, &rot_idx)?;
+            Desired::Pose(pose_from_file([p[0], p[1], p[2], o[0], o[1], o[2]]))
+        } else {
+            Desired::Position(Vector3::new(p[0], p[1], p[2]))
+        };
+        let own_seed = if row_seeds {
+            let idx: Vec<usize> = seed_idx.iter().flatten().copied().collect();
+            Some(nominal.joints_to_internal(&t.numbers(r, &idx)?))
+        } else {
+            None
+        };
+        let seed = own_seed.as_deref().or(global_seed.as_deref());
+        let mut row = t.rows[r].clone();
+        match solver.solve(&desired, seed) {
+            Ok(c) => {
+                let want = pose_to_file(&c.desired);
+                if !with_orientation {
+                    row.extend(want[3..].iter().map(|v| num(*v, d)));
+                }
+                row.push(c.branch.to_string());
+                row.extend(nominal.joints_to_file(&c.q).iter().map(|v| num(*v, d)));
+                row.extend(pose_to_file(&c.fake).iter().map(|v| num(*v, d)));
+                row.push(num(c.position_residual_mm, Some(9)));
+                row.push(num(c.rotation_residual_rad.to_degrees(), Some(9)));
+                row.push("ok".into());
+                shifts.push((c.fake.translation.vector - c.desired.translation.vector).norm());
+            }
+            Err(why) => {
+                let blanks = (if with_orientation { 0 } else { 3 }) + 1 + n + 6 + 2;
+                row.extend(std::iter::repeat_n(String::new(), blanks));
+                row.push(why.to_string());
+                failed.push((t.lines[r], why));
+            }
+        }
+        out_rows.push(row);
+    }
+    bar.finish_and_clear();
+    a.output
+        .emit(&headers, &out_rows)
+        .context("writing the commands")?;
+    let total = t.rows.len();
+    if !shifts.is_empty() {
+        let mean = shifts.iter().sum::<f64>() / shifts.len() as f64;
+        let max = shifts.iter().copied().fold(0.0, f64::max);
+        eprintln!(
+            "compensate: {} of {total} targets solved; the commands move the tool positions by \
+             {mean:.3} mm on average (max {max:.3} mm) from the desired ones",
+            shifts.len()
+        );
+    }
+    if !failed.is_empty() {
+        let mut msg = format!(
+            "{} of {total} targets have no command (marked in the status column, the rest were \
+             written):",
+            failed.len()
+        );
+        for (line, why) in failed.iter().take(20) {
+            msg.push_str(&format!("\n  {}:{line}: {why}", a.targets.display()));
+        }
+        if failed.len() > 20 {
+            msg.push_str(&format!("\n  ... and {} more", failed.len() - 20));
+        }
+        bail!(msg);
+    }
+    Ok(())
+}

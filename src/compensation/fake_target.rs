@@ -1,0 +1,283 @@
+//! Fake targets for an unmodified controller (thesis 2.7): for a desired tool pose T, the
+//! joints q* at which the calibrated model reaches T, and the pose FK_nominal(q*) to command.
+//!
+//! Per target:
+//! 1. the nominal closed form (App. B) gives the seed q0: the solution nearest the row's seed
+//!    joints (or the middle of the joint ranges), within the limits if one is; its [`Branch`]
+//!    is the configuration the controller is asked to keep. Out of the nominal's reach, the
+//!    row's seed joints start the solve instead;
+//! 2. numerical IK of the calibrated model from q0 (LM, `kinematics::ik_numeric`) gives q*;
+//! 3. q* must lie within the limits, and the nominal closed form of F = FK_nominal(q*) on the
+//!    seed's branch must return q* itself: that is what the controller will compute from F.
+//!    A target failing any step is a [`Failure`], never a command.
+
+use super::model::CalibratedModel;
+use crate::error::{Error, Result};
+use crate::kinematics::{
+    Branch, IkBuffers, IkOptions, IkTarget, Pose, SphericalWristIk, ToolModel, solve_model,
+    tool_pose,
+};
+use crate::model::Robot;
+use nalgebra::{Translation3, Vector3};
+use std::f64::consts::PI;
+
+/// Largest difference (rad) between q* and the controller's solution for F on the same branch.
+const SAME_JOINTS_RAD: f64 = 1e-6;
+
+/// A desired tool pose.
+#[derive(Debug, Clone, Copy)]
+pub enum Desired {
+    /// Position (mm) and orientation.
+    Pose(Pose),
+    /// Position only (mm); the orientation is the calibrated model's at the seed joints.
+    Position(Vector3<f64>),
+}
+
+/// A solved target.
+#[derive(Debug, Clone)]
+pub struct Command {
+    /// The pose solved for (for a position target: with the seed's orientation) (mm).
+    pub desired: Pose,
+    /// Joints (rad, mm) at which the calibrated model reaches `desired`.
+    pub q: Vec<f64>,
+    /// The fake target FK_nominal(q) to give the controller (mm).
+    pub fake: Pose,
+    /// The nominal closed form's branch of q (the seed's).
+    pub branch: Branch,
+    /// LM iterations.
+    pub iterations: usize,
+    /// Remaining position error of the calibrated model at q (mm).
+    pub position_residual_mm: f64,
+    /// Remaining orientation error of the calibrated model at q (rad).
+    pub rotation_residual_rad: f64,
+}
+
+/// Why a target has no command.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Failure {
+    /// A position-only target without seed joints (its orientation is undefined).
+    NoSeed,
+    /// Neither the nominal closed form nor a seed gives a start.
+    Unreachable(String),
+    /// The calibrated model's numerical IK did not reach the pose.
+    NotConverged(String),
+    /// q* leaves the limits of these 0-based joints.
+    OutsideLimits(Vec<usize>),
+    /// The controller would not return q* for the fake target on the seed's branch.
+    BranchChanged(String),
+}
+
+impl Failure {
+    /// A short code for the status column.
+    pub fn code(&self) -> &'static str {
+        match self {
+            Failure::NoSeed => "no-seed",
+            Failure::Unreachable(_) => "unreachable",
+            Failure::NotConverged(_) => "not-converged",
+            Failure::OutsideLimits(_) => "outside-limits",
+            Failure::BranchChanged(_) => "branch-changed",
+        }
+    }
+}
+
+impl std::fmt::Display for Failure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Failure::NoSeed => write!(
+                f,
+                "no-seed: a position-only target needs seed joints (q1..qN columns or --seed) \
+                 for its orientation"
+            ),
+            Failure::OutsideLimits(j) => write!(
+                f,
+                "outside-limits: the calibrated solution leaves the limits of joint(s) {}",
+                j.iter()
+                    .map(|j| (j + 1).to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            Failure::Unreachable(m) | Failure::NotConverged(m) | Failure::BranchChanged(m) => {
+                write!(f, "{}: {m}", self.code())
+            }
+        }
+    }
+}
+
+/// The per-target solver: nominal closed form, calibrated model, reused buffers.
+pub struct FakeTargetSolver<'a> {
+    nominal: &'a Robot,
+    closed: SphericalWristIk,
+    model: CalibratedModel<'a>,
+    opts: IkOptions,
+    buffers: IkBuffers,
+    sols: Vec<(Branch, [f64; 6])>,
+    mid: Vec<f64>,
+}
+
+/// Distance (rad) from `a` to `b` with each revolute joint's difference wrapped to [-pi, pi].
+fn wrapped_distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| {
+            let d = (x - y + PI).rem_euclid(2.0 * PI) - PI;
+            d * d
+        })
+        .sum::<f64>()
+        .sqrt()
+}
+
+impl<'a> FakeTargetSolver<'a> {
+    /// `nominal` is the controller's model (it needs a closed form); `model` the calibrated
+    /// one. Both must have the same joints.
+    pub fn new(nominal: &'a Robot, model: CalibratedModel<'a>) -> Result<Self> {
+        let closed = SphericalWristIk::new(nominal)?;
+        let cal = model.robot();
+        if cal.dof() != nominal.dof()
+            || cal
+                .joints()
+                .iter()
+                .zip(nominal.joints())
+                .any(|(a, b)| a.joint_type != b.joint_type)
+        {
+            return Err(Error::Invalid(
+                "the calibrated model's joints differ from the nominal model's".into(),
+            ));
+        }
+        let mid = nominal
+            .joints()
+            .iter()
+            .map(|j| {
+                let [lo, hi] = j.limits_internal();
+                0.5 * (lo + hi)
+            })
+            .collect();
+        Ok(FakeTargetSolver {
+            nominal,
+            closed,
+            buffers: IkBuffers::new(nominal.dof()),
+            model,
+            opts: IkOptions {
+                tol_position_mm: 1e-6,
+                tol_rotation_rad: 1e-9,
+                ..IkOptions::default()
+            },
+            sols: Vec::with_capacity(8),
+            mid,
+        })
+    }
+
+    /// The nominal closed form's solution for `target` nearest `reference` (rad), shifted by
+    /// whole turns to lie nearest it, and its branch. Solutions within the nominal limits come
+    /// first; one outside them still seeds the calibrated model, whose solution may be inside.
+    fn nominal_start(&mut self, target: &Pose, reference: &[f64]) -> Option<(Branch, Vec<f64>)> {
+        self.closed.solve_branches(target, &mut self.sols);
+        let mut best: Option<((bool, f64), Branch, Vec<f64>)> = None;
+        for (b, q) in &self.sols {
+            let mut q = q.to_vec();
+            for (v, r) in q.iter_mut().zip(reference) {
+                *v += ((r - *v) / (2.0 * PI)).round() * 2.0 * PI;
+            }
+            let outside = !self.nominal.joints_outside_limits(&q).is_empty();
+            let d = wrapped_distance(&q, reference)
+                + q.iter()
+                    .zip(reference)
+                    .map(|(a, b)| (a - b).abs())
+                    .sum::<f64>()
+                    * 1e-9;
+            let key = (outside, d);
+            if best.as_ref().is_none_or(|(bk, ..)| key < *bk) {
+                best = Some((key, *b, q));
+            }
+        }
+        best.map(|(_, b, q)| (b, q))
+    }
+
+    /// The branch of the nominal closed form that returns `q` (mod 2 pi) for FK_nominal(q);
+    /// None at a singularity, where the branches merge.
+    pub fn branch_of(&mut self, q: &[f64]) -> Option<Branch> {
+        let f = tool_pose(self.nominal, q);
+        self.closed.solve_branches(&f, &mut self.sols);
+        let mut found = None;
+        for (b, s) in &self.sols {
+            if wrapped_distance(s, q) < SAME_JOINTS_RAD {
+                if found.is_some() {
+                    return None;
+                }
+                found = Some(*b);
+            }
+        }
+        found
+    }
+
+    /// The command for one desired pose; `seed` (rad, mm) chooses the branch and turns.
+    pub fn solve(
+        &mut self,
+        desired: &Desired,
+        seed: Option<&[f64]>,
+    ) -> std::result::Result<Command, Failure> {
+        let target = match desired {
+            Desired::Pose(p) => *p,
+            Desired::Position(x) => {
+                let s = seed.ok_or(Failure::NoSeed)?;
+                let r = self.model.pose(s).rotation;
+                Pose::from_parts(Translation3::from(*x), r)
+            }
+        };
+        let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
+        let (branch, q0) = match self.nominal_start(&target, &reference) {
+            Some(s) => s,
+            None => {
+                let s = seed.ok_or_else(|| {
+                    Failure::Unreachable(
+                        "out of the nominal model's reach; seed joints would let the \
+                         calibrated model try"
+                            .into(),
+                    )
+                })?;
+                let b = self.branch_of(s).ok_or_else(|| {
+                    Failure::Unreachable(
+                        "out of the nominal model's reach, and the seed is at a singularity".into(),
+                    )
+                })?;
+                (b, s.to_vec())
+            }
+        };
+        let sol = solve_model(
+            &mut self.model,
+            &IkTarget::Pose(target),
+            &q0,
+            &self.opts,
+            &mut self.buffers,
+        )
+        .map_err(|e| match e {
+            Error::NotConverged(m) => Failure::NotConverged(m),
+            other => Failure::NotConverged(other.to_string()),
+        })?;
+        if !sol.outside_limits.is_empty() {
+            return Err(Failure::OutsideLimits(sol.outside_limits));
+        }
+        match self.branch_of(&sol.q) {
+            Some(b) if b == branch => {}
+            Some(b) => {
+                return Err(Failure::BranchChanged(format!(
+                    "the seed is on branch {branch}, the calibrated solution on {b}"
+                )));
+            }
+            None => {
+                return Err(Failure::BranchChanged(format!(
+                    "the calibrated solution is at a singularity of the nominal model, where \
+                     branch {branch} is ambiguous"
+                )));
+            }
+        }
+        Ok(Command {
+            desired: target,
+            fake: tool_pose(self.nominal, &sol.q),
+            branch,
+            iterations: sol.iterations,
+            position_residual_mm: sol.position_error_mm,
+            rotation_residual_rad: sol.rotation_error_rad,
+            q: sol.q,
+        })
+    }
+}

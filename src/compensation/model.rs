@@ -1,0 +1,71 @@
+//! The calibrated forward model that target compensation inverts: the identified rigid model,
+//! or a compensator (its embedded model and network in series).
+
+use crate::kinematics::{Frames, Pose, ToolModel, frames, joint_jacobian};
+use crate::model::Robot;
+use crate::neural::compensator::{Compensator, PredictWorkspace};
+use nalgebra::Matrix6xX;
+
+/// What the robot really does at joints q, as far as calibration knows.
+pub enum CalibratedModel<'a> {
+    /// The identified kinematic model.
+    Rigid { robot: &'a Robot, frames: Frames },
+    /// A compensator in series with its model.
+    Compensated {
+        compensator: &'a Compensator,
+        ws: PredictWorkspace,
+        frames: Frames,
+    },
+}
+
+impl<'a> CalibratedModel<'a> {
+    pub fn rigid(robot: &'a Robot) -> Self {
+        CalibratedModel::Rigid {
+            robot,
+            frames: Frames::new(robot),
+        }
+    }
+
+    pub fn compensated(compensator: &'a Compensator) -> Self {
+        CalibratedModel::Compensated {
+            compensator,
+            ws: PredictWorkspace::default(),
+            frames: Frames::new(&compensator.robot),
+        }
+    }
+}
+
+impl ToolModel for CalibratedModel<'_> {
+    fn robot(&self) -> &Robot {
+        match self {
+            CalibratedModel::Rigid { robot, .. } => robot,
+            CalibratedModel::Compensated { compensator, .. } => &compensator.robot,
+        }
+    }
+
+    fn pose(&mut self, q: &[f64]) -> Pose {
+        match self {
+            CalibratedModel::Rigid { robot, frames: f } => {
+                frames(robot, q, f);
+                f.tool
+            }
+            CalibratedModel::Compensated {
+                compensator, ws, ..
+            } => compensator.predict(q, ws),
+        }
+    }
+
+    fn jacobian(&mut self, q: &[f64], jac: &mut Matrix6xX<f64>) {
+        match self {
+            CalibratedModel::Rigid { robot, frames: f } => {
+                frames(robot, q, f);
+                joint_jacobian(robot, f, jac);
+            }
+            CalibratedModel::Compensated {
+                compensator,
+                ws,
+                frames: f,
+            } => compensator.jacobian(q, ws, f, jac),
+        }
+    }
+}

@@ -1,0 +1,205 @@
+//! `robocal compensate` from the command line: commands that the nominal model turns back into
+//! the solved joints, position-only targets, marked failures and bad input.
+
+mod common;
+use common::{robocal, stderr, stdout, tmp};
+
+const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
+
+fn identified() -> std::path::PathBuf {
+    let model = tmp("cd_full.toml");
+    if !model.exists() {
+        let o = robocal(&[
+            "identify",
+            "--robot",
+            FANUC,
+            "--data",
+            "datasets/case_d/calibration.csv",
+            "--out",
+            model.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    model
+}
+
+fn csv(text: &str) -> Vec<Vec<String>> {
+    csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(text.as_bytes())
+        .records()
+        .map(|r| r.unwrap().iter().map(str::to_string).collect())
+        .collect()
+}
+
+fn col(rows: &[Vec<String>], name: &str) -> usize {
+    rows[0].iter().position(|h| h == name).unwrap()
+}
+
+fn compensate(
+    model: &std::path::Path,
+    targets: &std::path::Path,
+    extra: &[&str],
+) -> std::process::Output {
+    let mut args = vec![
+        "compensate",
+        "--nominal",
+        FANUC,
+        "--robot",
+        model.to_str().unwrap(),
+        "--targets",
+        targets.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    robocal(&args)
+}
+
+#[test]
+fn commands_are_what_the_nominal_model_reaches_at_the_solved_joints() {
+    let model = identified();
+    // Desired poses: the true robot's poses of five test configurations, with their joints
+    // as seeds.
+    let truth = std::fs::read_to_string("datasets/case_d/test_truth.csv").unwrap();
+    let targets = tmp("targets.csv");
+    std::fs::write(
+        &targets,
+        truth.lines().take(6).collect::<Vec<_>>().join("\n"),
+    )
+    .unwrap();
+    let out = tmp("commands.csv");
+    let o = compensate(&model, &targets, &["--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("5 of 5 targets solved"),
+        "{}",
+        stderr(&o)
+    );
+    let rows = csv(&std::fs::read_to_string(&out).unwrap());
+    assert_eq!(rows.len(), 6);
+    for h in [
+        "seed_q1",
+        "branch",
+        "q1",
+        "q6",
+        "cmd_x",
+        "cmd_rx",
+        "residual_mm",
+        "status",
+    ] {
+        col(&rows, h);
+    }
+    // robocal fk of the nominal robot at q1..q6 gives the cmd_ columns.
+    let joints = tmp("joints.csv");
+    let qs: Vec<String> = rows
+        .iter()
+        .map(|r| {
+            (1..=6)
+                .map(|i| r[col(&rows, &format!("q{i}"))].clone())
+                .collect::<Vec<_>>()
+                .join(",")
+        })
+        .collect();
+    std::fs::write(&joints, qs.join("\n")).unwrap();
+    let o = robocal(&["fk", "--robot", FANUC, "--joints", joints.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let fk = csv(&stdout(&o));
+    for (r, f) in rows.iter().zip(&fk).skip(1) {
+        assert_eq!(r[col(&rows, "status")], "ok");
+        for c in ["x", "y", "z", "rz", "ry", "rx"] {
+            let a: f64 = r[col(&rows, &format!("cmd_{c}"))].parse().unwrap();
+            let b: f64 = f[col(&fk, c)].parse().unwrap();
+            assert!((a - b).abs() < 1e-9, "{c}: {a} vs {b}");
+        }
+        // The commands differ from the desired poses by the calibration (mm).
+        let d: f64 = (0..3)
+            .map(|k| {
+                let c = ["x", "y", "z"][k];
+                let a: f64 = r[col(&rows, &format!("cmd_{c}"))].parse().unwrap();
+                let b: f64 = r[col(&rows, c)].parse().unwrap();
+                (a - b).powi(2)
+            })
+            .sum::<f64>()
+            .sqrt();
+        assert!(d > 1.0 && d < 50.0, "{d}");
+    }
+}
+
+#[test]
+fn position_targets_keep_the_seed_orientation_and_failures_are_marked() {
+    let model = identified();
+    let targets = tmp("positions.csv");
+    // Row 2: position-only without a seed cannot be solved (its orientation is undefined) ...
+    std::fs::write(&targets, "name,x,y,z\na,1400,100,1800\nb,1e5,0,0\n").unwrap();
+    let out = tmp("position_commands.csv");
+    let o = compensate(
+        &model,
+        &targets,
+        &["--out", out.to_str().unwrap(), "--seed", "5,10,0,10,45,0"],
+    );
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("1 of 2 targets have no command"), "{err}");
+    assert!(err.contains("positions.csv:3: not-converged"), "{err}");
+    let rows = csv(&std::fs::read_to_string(&out).unwrap());
+    assert_eq!(rows[0][..7], ["name", "x", "y", "z", "rz", "ry", "rx"]);
+    assert_eq!(rows[1][col(&rows, "status")], "ok");
+    assert!(rows[2][col(&rows, "status")].starts_with("not-converged"));
+    assert_eq!(rows[2][col(&rows, "q1")], "", "a failed row has no joints");
+    assert_eq!(
+        rows[2][col(&rows, "cmd_x")],
+        "",
+        "a failed row has no command"
+    );
+    // The orientation written for row 1 is the calibrated robot's at the seed.
+    let seed_pose = robocal(&[
+        "fk",
+        "--robot",
+        model.to_str().unwrap(),
+        "--q",
+        "5,10,0,10,45,0",
+    ]);
+    let fk = csv(&stdout(&seed_pose));
+    for c in ["rz", "ry", "rx"] {
+        let a: f64 = rows[1][col(&rows, c)].parse().unwrap();
+        let b: f64 = fk[1][col(&fk, c)].parse().unwrap();
+        assert!((a - b).abs() < 1e-9, "{c}: {a} vs {b}");
+    }
+    // Without any seed, position-only targets are refused row by row.
+    let o = compensate(&model, &targets, &[]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("positions.csv:2: no-seed"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn bad_input_names_file_line_and_column() {
+    let model = identified();
+    let bad = tmp("bad_targets.csv");
+    for (text, want) in [
+        ("x,z\n1,2\n", "bad_targets.csv:1: field `y`"),
+        ("x,y,z,rz\n1,2,3,4\n", "field `ry`"),
+        ("x,y,z\n1,abc,3\n", "bad_targets.csv:2: field `y`"),
+        ("x,y,z,q1,q2\n1,2,3,4,5\n", "field `q3`"),
+    ] {
+        std::fs::write(&bad, text).unwrap();
+        let out = tmp("never.csv");
+        let o = compensate(&model, &bad, &["--out", out.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(1), "{text}");
+        assert!(stderr(&o).contains(want), "{text}: {}", stderr(&o));
+        assert!(!out.exists(), "{text}: no output on bad input");
+    }
+    // A nominal robot without a closed form cannot seed the solve.
+    let o = robocal(&[
+        "compensate",
+        "--nominal",
+        "datasets/robots/ur10.toml",
+        "--robot",
+        model.to_str().unwrap(),
+        "--targets",
+        bad.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+}
