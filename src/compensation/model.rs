@@ -13,7 +13,7 @@ pub enum CalibratedModel<'a> {
     /// A compensator in series with its model.
     Compensated {
         compensator: &'a Compensator,
-        ws: PredictWorkspace,
+        ws: Box<PredictWorkspace>,
         frames: Frames,
     },
 }
@@ -29,7 +29,7 @@ impl<'a> CalibratedModel<'a> {
     pub fn compensated(compensator: &'a Compensator) -> Self {
         CalibratedModel::Compensated {
             compensator,
-            ws: PredictWorkspace::default(),
+            ws: Box::default(),
             frames: Frames::new(&compensator.robot),
         }
     }

@@ -99,8 +99,8 @@ impl Weights {
     ) {
         self.forward_into(x, hidden, y);
         jac.fill(0.0);
-        for j in 0..self.hidden() {
-            let s = hidden[j] * (1.0 - hidden[j]);
+        for (j, hj) in hidden.iter().enumerate() {
+            let s = hj * (1.0 - hj);
             for k in 0..self.outputs() {
                 let d = self.w2[(k, j)] * s;
                 for i in 0..self.inputs() {
