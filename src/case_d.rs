@@ -10,7 +10,7 @@
 
 use crate::data::{MeasurementSet, read_canonical};
 use crate::error::Result;
-use crate::evaluate::{ErrorStats, row_errors, summarize};
+use crate::evaluate::{ErrorStats, RowError, row_errors, summarize};
 use crate::identify::{Measure, Options, identify};
 use crate::kinematics::tool_pose;
 use crate::model::{Robot, read_robot};
@@ -104,6 +104,9 @@ pub struct Row {
     /// The compensator's training, for the network rows.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub training: Option<CompensatorReport>,
+    /// Every test row's error against the truth (for plots).
+    #[serde(skip)]
+    pub truth_errors: Vec<RowError>,
 }
 
 /// The shipped files of one set.
@@ -133,10 +136,13 @@ pub fn run_set(
     data: &SetData,
     opts: &CompensatorOptions,
 ) -> Result<Vec<Row>> {
-    let stats = |f: &mut dyn FnMut(&[f64]) -> crate::Pose| -> Result<(ErrorStats, ErrorStats)> {
+    type Stats = (ErrorStats, ErrorStats, Vec<RowError>);
+    let stats = |f: &mut dyn FnMut(&[f64]) -> crate::Pose| -> Result<Stats> {
+        let truth = row_errors(&data.test_truth, Measure::Pose, &mut *f)?;
         Ok((
-            summarize(&row_errors(&data.test_truth, Measure::Pose, &mut *f)?),
+            summarize(&truth),
             summarize(&row_errors(&data.test, Measure::Pose, &mut *f)?),
+            truth,
         ))
     };
     let identified = |params: &str| {
@@ -151,13 +157,14 @@ pub fn run_set(
         )
     };
     let mut rows = Vec::new();
-    let mut push = |stage, (truth, measured), training| {
+    let mut push = |stage, (truth, measured, truth_errors): Stats, training| {
         rows.push(Row {
             set,
             stage,
             truth,
             measured,
             training,
+            truth_errors,
         })
     };
     push(Stage::Nominal, stats(&mut |q| tool_pose(nominal, q))?, None);

@@ -14,6 +14,7 @@ pub mod io;
 pub mod kinematics;
 pub mod model;
 pub mod neural;
+pub mod plot;
 pub mod reproduce;
 pub mod rotation;
 pub mod sim;

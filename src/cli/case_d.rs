@@ -2,15 +2,17 @@
 //! non-geometric robot.
 
 use super::identify::write_json;
-use crate::case_d::{Robotset, Row, Stage, find, run};
+use crate::case_d::{Robotset, Row, Stage, find, load, run};
 use crate::evaluate::ErrorStats;
+use crate::model::read_robot;
 use crate::neural::compensator::{CompensatorOptions, Form};
 use crate::neural::train::TrainOptions;
+use crate::plot::{ErrorRun, error_figures, training_figure};
 use anyhow::{Context, Result};
 use clap::Args;
 use serde_json::json;
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct CaseDArgs {
@@ -29,6 +31,9 @@ pub struct CaseDArgs {
     /// JSON report of every row (statistics against truth and measurements, training).
     #[arg(long)]
     report: Option<PathBuf>,
+    /// Folder for pictures (PNG and SVG, listed in figures.json for `robocal report`).
+    #[arg(long)]
+    plot: Option<PathBuf>,
 }
 
 fn pos(s: &ErrorStats) -> f64 {
@@ -86,6 +91,51 @@ fn print_set(rows: &[Row], set: Robotset) {
     }
 }
 
+/// Per set: the test errors of every stage, and the training curves of the network stages.
+fn plot(dir: &Path, datasets: &Path, rows: &[Row]) -> Result<usize> {
+    let nominal = read_robot(datasets.join("robots/fanuc_r2000ib_210f.toml"))?;
+    let mut figs = 0;
+    for set in Robotset::ALL {
+        let data = load(datasets, set, &nominal)?;
+        let (tag, name) = match set {
+            Robotset::CaseD => ("case_d", "Case D"),
+            Robotset::NonGeometric => ("nongeometric", "non-geometric robot"),
+        };
+        let mine: Vec<&Row> = rows.iter().filter(|r| r.set == set).collect();
+        let runs: Vec<ErrorRun> = mine
+            .iter()
+            .map(|r| ErrorRun {
+                label: r.stage.label(),
+                errors: &r.truth_errors,
+            })
+            .collect();
+        figs += error_figures(
+            dir,
+            &format!("case_d_{tag}_test"),
+            &format!("{name} test truth"),
+            &data.test_truth,
+            &runs,
+        )?
+        .len();
+        for r in &mine {
+            if let Some(t) = &r.training {
+                let stage = match r.stage {
+                    Stage::OffsetsNetwork => "offsets_network",
+                    _ => "full_network",
+                };
+                training_figure(
+                    dir,
+                    &format!("case_d_{tag}_{stage}"),
+                    &format!("{name}, {}", r.stage.label()),
+                    &t.network,
+                )?;
+                figs += 1;
+            }
+        }
+    }
+    Ok(figs)
+}
+
 pub fn run_case_d(a: CaseDArgs) -> Result<()> {
     let opts = CompensatorOptions {
         form: a.form,
@@ -119,6 +169,10 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
     );
     for set in Robotset::ALL {
         print_set(&rows, set);
+    }
+    if let Some(dir) = &a.plot {
+        let figs = plot(dir, &a.datasets, &rows)?;
+        println!("\nplots: {figs} pictures in {}", dir.display());
     }
     if let Some(p) = &a.report {
         write_json(

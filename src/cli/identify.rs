@@ -6,8 +6,10 @@ use crate::evaluate::{ErrorStats, evaluate_model};
 use crate::evaluate::{row_errors, summarize};
 use crate::identify::identifiability::DropReason;
 use crate::identify::{Identified, Measure, Method, Options, RobustLoss, SolveOptions, identify};
+use crate::kinematics::tool_pose;
 use crate::model::{Robot, read_robot, robot_to_toml, write_robot};
 use crate::neural::compensator::{Compensator, PredictWorkspace};
+use crate::plot::{ErrorRun, error_figures};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde_json::{Value, json};
@@ -54,6 +56,9 @@ pub struct IdentifyArgs {
     /// JSON report.
     #[arg(long)]
     report: Option<PathBuf>,
+    /// Folder for pictures (PNG and SVG, listed in figures.json for `robocal report`).
+    #[arg(long)]
+    plot: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -75,6 +80,9 @@ pub struct EvaluateArgs {
     /// compensator).
     #[arg(long)]
     report: Option<PathBuf>,
+    /// Folder for pictures (PNG and SVG, listed in figures.json for `robocal report`).
+    #[arg(long)]
+    plot: Option<PathBuf>,
 }
 
 fn fmt_stats(s: &ErrorStats) -> (String, String) {
@@ -170,6 +178,33 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         eprintln!("warning: {w}");
     }
     println!("wrote {}", a.out.display());
+    if let Some(dir) = &a.plot {
+        let mut figs = 0;
+        for (name, set) in [("calibration", Some(&cal)), ("validation", val.as_ref())] {
+            let Some(set) = set else { continue };
+            let before = row_errors(set, m, |q| tool_pose(&nominal, q))?;
+            let after = row_errors(set, m, |q| tool_pose(&id.robot, q))?;
+            let runs = [
+                ErrorRun {
+                    label: "nominal",
+                    errors: &before,
+                },
+                ErrorRun {
+                    label: "identified",
+                    errors: &after,
+                },
+            ];
+            figs += error_figures(
+                dir,
+                &format!("identify_{name}"),
+                &format!("{name} data"),
+                set,
+                &runs,
+            )?
+            .len();
+        }
+        println!("plots: {figs} pictures in {}", dir.display());
+    }
     if let Some(path) = &a.report {
         let params = id.robot.parameters();
         let dropped: Vec<Value> = id
@@ -358,6 +393,28 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             "note: the compensator runs in series with its own model (embedded; refined in training), not with {}",
             a.robot.display()
         );
+    }
+    if let Some(dir) = &a.plot {
+        let model = row_errors(&set, m, |q| tool_pose(&robot, q))?;
+        let net = match &comp {
+            Some(c) => {
+                let mut ws = PredictWorkspace::default();
+                Some(row_errors(&set, m, |q| c.predict(q, &mut ws))?)
+            }
+            None => None,
+        };
+        let mut runs = vec![ErrorRun {
+            label: "model",
+            errors: &model,
+        }];
+        if let Some(n) = &net {
+            runs.push(ErrorRun {
+                label: "with compensator",
+                errors: n,
+            });
+        }
+        let figs = error_figures(dir, "evaluate", "evaluation data", &set, &runs)?;
+        println!("plots: {} pictures in {}", figs.len(), dir.display());
     }
     if let Some(path) = &a.report {
         let mut v =

@@ -9,6 +9,7 @@ use crate::kinematics::{pose_to_file, tool_pose};
 use crate::model::read_robot;
 use crate::neural::compensator::{Compensator, CompensatorOptions, Form, PredictWorkspace};
 use crate::neural::train::TrainOptions;
+use crate::plot::{ErrorRun, error_figures, training_figure};
 use anyhow::{Context, Result};
 use clap::Args;
 use serde_json::json;
@@ -65,6 +66,9 @@ pub struct TrainArgs {
     /// JSON report: training curve, stop reason, refined parameters, statistics.
     #[arg(long)]
     report: Option<PathBuf>,
+    /// Folder for pictures (PNG and SVG, listed in figures.json for `robocal report`).
+    #[arg(long)]
+    plot: Option<PathBuf>,
 }
 
 pub fn run_train(a: TrainArgs) -> Result<()> {
@@ -119,14 +123,40 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             );
         }
     }
+    let mut figs = 0;
+    if let Some(dir) = &a.plot {
+        training_figure(dir, "train", "compensator", &report.network)?;
+        figs += 1;
+    }
     let mut ws = PredictWorkspace::default();
     let mut rows = vec![];
     let mut stat_rows = vec![];
     for (name, s) in [("training", Some(&set)), ("validation", val.as_ref())] {
         let Some(s) = s else { continue };
         let m = Measure::default_for(s);
-        let before = summarize(&row_errors(s, m, |q| tool_pose(&robot, q))?);
-        let after = summarize(&row_errors(s, m, |q| c.predict(q, &mut ws))?);
+        let before_rows = row_errors(s, m, |q| tool_pose(&robot, q))?;
+        let after_rows = row_errors(s, m, |q| c.predict(q, &mut ws))?;
+        if let Some(dir) = &a.plot {
+            let runs = [
+                ErrorRun {
+                    label: "model",
+                    errors: &before_rows,
+                },
+                ErrorRun {
+                    label: "with compensator",
+                    errors: &after_rows,
+                },
+            ];
+            figs += error_figures(
+                dir,
+                &format!("train_{name}"),
+                &format!("{name} data"),
+                s,
+                &runs,
+            )?
+            .len();
+        }
+        let (before, after) = (summarize(&before_rows), summarize(&after_rows));
         stat_rows.push((name, before, after));
         rows.push(
             json!({"set": name, "model": stats_json(&before), "compensated": stats_json(&after)}),
@@ -138,6 +168,9 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         .collect();
     print_stats(&table);
     println!("wrote {}", a.out.display());
+    if let Some(dir) = &a.plot {
+        println!("plots: {figs} pictures in {}", dir.display());
+    }
     if let Some(p) = &a.report {
         write_json(
             p,

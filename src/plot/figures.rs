@@ -1,0 +1,149 @@
+//! The pictures the commands draw, from their results.
+
+use super::charts::{ErrorSeries, Histograms, Scatter, Series, TrainingCurve};
+use super::{Figure, save};
+use crate::data::MeasurementSet;
+use crate::error::Result;
+use crate::evaluate::RowError;
+use crate::neural::train::TrainReport;
+use std::path::Path;
+
+/// The errors of several predictors on one set, each named (e.g. "nominal", "identified").
+pub struct ErrorRun<'a> {
+    pub label: &'a str,
+    pub errors: &'a [RowError],
+}
+
+fn series(runs: &[ErrorRun], get: impl Fn(&RowError) -> Option<f64>) -> Vec<Series> {
+    runs.iter()
+        .map(|r| Series {
+            label: r.label.to_string(),
+            values: r.errors.iter().filter_map(&get).collect(),
+        })
+        .filter(|s| !s.values.is_empty())
+        .collect()
+}
+
+/// Per-measurement position and orientation errors of every run, their histograms, and the
+/// set's measured tool positions coloured by the last run's position error. Files are named
+/// `{prefix}_position`, `{prefix}_orientation`, `{prefix}_histogram`, `{prefix}_scatter`;
+/// `what` names the data in titles (e.g. "calibration data").
+pub fn error_figures(
+    dir: &Path,
+    prefix: &str,
+    what: &str,
+    set: &MeasurementSet,
+    runs: &[ErrorRun],
+) -> Result<Vec<Figure>> {
+    let mut figs = Vec::new();
+    let names = runs.iter().map(|r| r.label).collect::<Vec<_>>().join(", ");
+    let pos = series(runs, |e| e.position_mm);
+    if !pos.is_empty() {
+        figs.push(save(
+            dir,
+            &format!("{prefix}_position"),
+            &format!("Position error per measurement, {what}"),
+            &format!(
+                "Euclidean position error (mm) of every measurement of {what} ({}): {names}.",
+                set.source.display()
+            ),
+            &ErrorSeries {
+                title: format!("Position error per measurement, {what}"),
+                y_label: "position error (mm)".into(),
+                unit: "mm".into(),
+                series: pos.clone(),
+            },
+        )?);
+        figs.push(save(
+            dir,
+            &format!("{prefix}_histogram"),
+            &format!("Position error histograms, {what}"),
+            &format!("How the position errors (mm) of {what} are distributed: {names}."),
+            &Histograms {
+                title: format!("Position error histograms, {what}"),
+                x_label: "position error (mm)".into(),
+                unit: "mm".into(),
+                series: pos,
+            },
+        )?);
+    }
+    let rot = series(runs, |e| e.orientation_deg);
+    if !rot.is_empty() {
+        figs.push(save(
+            dir,
+            &format!("{prefix}_orientation"),
+            &format!("Orientation error per measurement, {what}"),
+            &format!(
+                "Angle (deg) between the measured and predicted tool orientations, {what}: \
+                 {names}."
+            ),
+            &ErrorSeries {
+                title: format!("Orientation error per measurement, {what}"),
+                y_label: "orientation error (deg)".into(),
+                unit: "deg".into(),
+                series: rot,
+            },
+        )?);
+    }
+    // The scatter needs one error per measured position.
+    if let Some(last) = runs.last()
+        && last.errors.len() == set.rows.len()
+    {
+        let (points, errors): (Vec<[f64; 3]>, Vec<f64>) = set
+            .rows
+            .iter()
+            .zip(last.errors)
+            .filter_map(|(m, e)| {
+                Some((
+                    [m.position?.x, m.position?.y, m.position?.z],
+                    e.position_mm?,
+                ))
+            })
+            .unzip();
+        if !points.is_empty() {
+            figs.push(save(
+                dir,
+                &format!("{prefix}_scatter"),
+                &format!("Tool positions by position error, {what}"),
+                &format!(
+                    "Measured tool positions (mm) of {what} from above and from the side, \
+                     coloured by the position error (mm) of {}.",
+                    last.label
+                ),
+                &Scatter {
+                    title: format!("Tool positions by position error, {what}"),
+                    points,
+                    errors,
+                    label: format!("position error (mm), {}", last.label),
+                },
+            )?);
+        }
+    }
+    Ok(figs)
+}
+
+/// The training curve of a compensator: `{prefix}_training`.
+pub fn training_figure(
+    dir: &Path,
+    prefix: &str,
+    what: &str,
+    report: &TrainReport,
+) -> Result<Figure> {
+    save(
+        dir,
+        &format!("{prefix}_training"),
+        &format!("Training curve, {what}"),
+        &format!(
+            "Mean squared error of the normalised network outputs by epoch, {what}: {} SGD \
+             momentum epochs, then {} Levenberg-Marquardt epochs; stopped: {}.",
+            report.momentum_epochs,
+            report.lm_epochs,
+            report.stop.describe()
+        ),
+        &TrainingCurve {
+            title: format!("Training curve, {what}"),
+            curve: report.curve.clone(),
+            momentum_epochs: report.momentum_epochs,
+        },
+    )
+}
