@@ -15,6 +15,7 @@ pub mod kinematics;
 pub mod model;
 pub mod neural;
 pub mod plot;
+pub mod report;
 pub mod reproduce;
 pub mod rotation;
 pub mod sim;

@@ -8,6 +8,7 @@ mod identify;
 mod ik;
 mod import;
 mod output;
+mod report;
 mod reproduce;
 mod simulate;
 mod split;
@@ -52,6 +53,8 @@ enum Command {
     /// Fake targets: joints at which the calibrated (compensated) robot reaches each desired
     /// pose, and the nominal pose an unmodified controller must be given for them.
     Compensate(compensate::CompensateArgs),
+    /// One self-contained HTML page (tables and pictures) from a run folder.
+    Report(report::ReportArgs),
     /// Thesis Case D end to end (Table 6.6) and the non-geometric robot, beside the thesis.
     CaseD(case_d::CaseDArgs),
 }
@@ -72,6 +75,7 @@ pub fn main() -> ExitCode {
         Command::Train(a) => train::run_train(a),
         Command::Predict(a) => train::run_predict(a),
         Command::Compensate(a) => compensate::run(a),
+        Command::Report(a) => report::run(a),
         Command::CaseD(a) => case_d::run_case_d(a),
     };
     match result {

@@ -203,11 +203,7 @@ impl Chart for Histograms {
                 .y_label_area_size(55)
                 .build_cartesian_2d(0.0..hi, 0.0..top_count as f64 * 1.1)?;
             c.configure_mesh()
-                .x_desc(format!(
-                    "{}; mean {:.4}",
-                    self.x_label,
-                    mean(&s.values)
-                ))
+                .x_desc(format!("{}; mean {:.4}", self.x_label, mean(&s.values)))
                 .y_desc("measurements")
                 .axis_desc_style(font(14))
                 .label_style(font(12))

@@ -1,0 +1,196 @@
+//! `--plot` pictures and `robocal report`: the page is self-contained and a real browser
+//! (headless Chromium, installed by .ci/run) shows its tables and pictures.
+
+mod common;
+use common::{robocal, stderr, stdout, tmp};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
+
+/// A run folder with an identify report and its pictures.
+fn run_dir(name: &str) -> PathBuf {
+    let dir = tmp(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        FANUC,
+        "--data",
+        "datasets/case_d/calibration.csv",
+        "--validate",
+        "datasets/case_d/test_truth.csv",
+        "--out",
+        dir.join("robot.toml").to_str().unwrap(),
+        "--report",
+        dir.join("identify.json").to_str().unwrap(),
+        "--plot",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("plots: 8 pictures"), "{}", stdout(&o));
+    dir
+}
+
+fn figures(dir: &Path) -> Vec<serde_json::Value> {
+    let text = std::fs::read_to_string(dir.join("figures.json")).unwrap();
+    serde_json::from_str::<serde_json::Value>(&text)
+        .unwrap()
+        .as_array()
+        .unwrap()
+        .clone()
+}
+
+#[test]
+fn plots_are_png_and_svg_with_axis_titles() {
+    let dir = run_dir("plots");
+    let figs = figures(&dir);
+    let names: Vec<&str> = figs.iter().map(|f| f["png"].as_str().unwrap()).collect();
+    for want in [
+        "identify_calibration_position.png",
+        "identify_calibration_orientation.png",
+        "identify_calibration_histogram.png",
+        "identify_calibration_scatter.png",
+        "identify_validation_position.png",
+    ] {
+        assert!(names.contains(&want), "{names:?}");
+    }
+    for f in &figs {
+        let png = image::open(dir.join(f["png"].as_str().unwrap()))
+            .unwrap()
+            .to_rgb8();
+        assert_eq!(png.dimensions(), (1100, 600));
+        // Not blank: dark text and coloured data cover a real part of the picture.
+        let inked = png
+            .pixels()
+            .filter(|p| p.0.iter().any(|c| *c < 200))
+            .count();
+        assert!(
+            inked > 1100 * 600 / 100,
+            "{}: {inked} inked pixels",
+            f["png"]
+        );
+        let svg = std::fs::read_to_string(dir.join(f["svg"].as_str().unwrap())).unwrap();
+        assert!(svg.starts_with("<svg"), "{}", f["svg"]);
+        assert!(!f["title"].as_str().unwrap().is_empty());
+    }
+    let svg = std::fs::read_to_string(dir.join("identify_calibration_position.svg")).unwrap();
+    assert!(
+        svg.contains("position error (mm)") && svg.contains("measurement (order in the data file)")
+    );
+    assert!(svg.contains("identified: mean"), "legend with means");
+}
+
+/// Headless Chromium: DOM after load, and a screenshot.
+fn chromium(page: &Path, shot: &Path) -> String {
+    let exe = std::env::var("ROBOCAL_CHROMIUM").unwrap_or_else(|_| "chromium".into());
+    let profile = tmp("chromium-profile");
+    let common = [
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--hide-scrollbars",
+        "--window-size=1280,4000",
+    ];
+    let url = format!("file://{}", page.canonicalize().unwrap().display());
+    let run = |extra: &[String]| {
+        Command::new(&exe)
+            .args(common)
+            .arg(format!("--user-data-dir={}", profile.display()))
+            .args(extra)
+            .arg(&url)
+            .output()
+            .unwrap_or_else(|e| {
+                panic!("{exe}: {e}; install Debian's chromium (as .ci/run does) or set ROBOCAL_CHROMIUM")
+            })
+    };
+    let o = run(&[format!("--screenshot={}", shot.display())]);
+    assert!(
+        shot.exists(),
+        "no screenshot: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let o = run(&["--dump-dom".into()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn report_page_shows_tables_and_pictures_in_a_browser() {
+    let dir = run_dir("report_run");
+    let page = dir.join("report.html");
+    let o = robocal(&[
+        "report",
+        dir.to_str().unwrap(),
+        "--out",
+        page.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let html = std::fs::read_to_string(&page).unwrap();
+    // Self-contained: every picture embedded, nothing fetched.
+    let n = figures(&dir).len();
+    assert_eq!(html.matches("<img src=\"data:image/png;base64,").count(), n);
+    assert!(!html.contains("src=\"http") && !html.contains("href=\"http"));
+
+    let shot = tmp("report.png");
+    let dom = chromium(&page, &shot);
+    assert_eq!(dom.matches("<figure>").count(), n, "figures in the DOM");
+    assert!(dom.matches("<table").count() >= 3, "tables in the DOM");
+    for want in [
+        "Accuracy",
+        "calibration_before",
+        "validation",
+        "base.x",
+        "condition_number",
+    ] {
+        assert!(dom.contains(want), "{want} not in the DOM");
+    }
+    // The screenshot is not blank and shows the plots' series colours (so the embedded
+    // pictures were decoded and drawn, not just the text).
+    let img = image::open(&shot).unwrap().to_rgb8();
+    let total = (img.width() * img.height()) as usize;
+    let inked = img
+        .pixels()
+        .filter(|p| p.0.iter().any(|c| *c < 200))
+        .count();
+    assert!(inked * 50 > total, "{inked} of {total} pixels inked");
+    let near = |p: &image::Rgb<u8>, c: [u8; 3]| {
+        p.0.iter()
+            .zip(c)
+            .all(|(a, b)| (*a as i32 - b as i32).abs() < 12)
+    };
+    for colour in [[214, 39, 40], [31, 119, 180]] {
+        let k = img.pixels().filter(|p| near(p, colour)).count();
+        assert!(k > 200, "{k} pixels of colour {colour:?}");
+    }
+}
+
+#[test]
+fn report_refuses_empty_folders_and_bad_json() {
+    let empty = tmp("empty_run");
+    std::fs::create_dir_all(&empty).unwrap();
+    let out = tmp("never.html");
+    let o = robocal(&[
+        "report",
+        empty.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("no reports"), "{}", stderr(&o));
+    std::fs::write(empty.join("broken.json"), "{\n  \"a\": 1,\n  oops\n}\n").unwrap();
+    let o = robocal(&[
+        "report",
+        empty.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("broken.json:3:"), "{}", stderr(&o));
+    assert!(!out.exists());
+}
