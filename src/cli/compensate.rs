@@ -120,7 +120,7 @@ pub fn run(a: CompensateArgs) -> Result<()> {
             for c in &qcols {
                 t.require(c)?;
             }
-            unreachable!("a missing seed column was named above")
+            bail!("seed columns q1..q{n} must be all present or all absent")
         }
     };
 
