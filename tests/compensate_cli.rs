@@ -2,23 +2,14 @@
 //! the solved joints, position-only targets, marked failures and bad input.
 
 mod common;
-use common::{robocal, stderr, stdout, tmp};
+use common::{identify_case_d, robocal, stderr, stdout, tmp};
 
 const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
 
 fn identified() -> std::path::PathBuf {
     let model = tmp("cd_full.toml");
     if !model.exists() {
-        let o = robocal(&[
-            "identify",
-            "--robot",
-            FANUC,
-            "--data",
-            "datasets/case_d/calibration.csv",
-            "--out",
-            model.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", stderr(&o));
+        identify_case_d(&model, &[]);
     }
     model
 }

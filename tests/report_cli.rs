@@ -2,33 +2,26 @@
 //! (headless Chromium, installed by .ci/run) shows its tables and pictures.
 
 mod common;
-use common::{robocal, stderr, stdout, tmp};
+use common::{identify_case_d, robocal, stderr, tmp};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
 
 /// A run folder with an identify report and its pictures.
 fn run_dir(name: &str) -> PathBuf {
     let dir = tmp(name);
     std::fs::create_dir_all(&dir).unwrap();
-    let o = robocal(&[
-        "identify",
-        "--robot",
-        FANUC,
-        "--data",
-        "datasets/case_d/calibration.csv",
-        "--validate",
-        "datasets/case_d/test_truth.csv",
-        "--out",
-        dir.join("robot.toml").to_str().unwrap(),
-        "--report",
-        dir.join("identify.json").to_str().unwrap(),
-        "--plot",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stdout(&o).contains("plots: 8 pictures"), "{}", stdout(&o));
+    let out = identify_case_d(
+        &dir.join("robot.toml"),
+        &[
+            "--validate",
+            "datasets/case_d/test_truth.csv",
+            "--report",
+            dir.join("identify.json").to_str().unwrap(),
+            "--plot",
+            dir.to_str().unwrap(),
+        ],
+    );
+    assert!(out.contains("plots: 8 pictures"), "{out}");
     dir
 }
 

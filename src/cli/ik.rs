@@ -203,14 +203,7 @@ pub fn run(a: IkArgs) -> Result<()> {
     headers.extend(qcols.iter().cloned());
     headers.push("status".into());
 
-    let mid: Vec<f64> = robot
-        .joints()
-        .iter()
-        .map(|j| {
-            let [lo, hi] = j.limits_internal();
-            0.5 * (lo + hi)
-        })
-        .collect();
+    let mid = robot.mid_joints();
     let mut solver = Solver {
         robot: &robot,
         method,

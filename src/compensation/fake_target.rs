@@ -143,14 +143,7 @@ impl<'a> FakeTargetSolver<'a> {
                 "the calibrated model's joints differ from the nominal model's".into(),
             ));
         }
-        let mid = nominal
-            .joints()
-            .iter()
-            .map(|j| {
-                let [lo, hi] = j.limits_internal();
-                0.5 * (lo + hi)
-            })
-            .collect();
+        let mid = nominal.mid_joints();
         Ok(FakeTargetSolver {
             nominal,
             closed,

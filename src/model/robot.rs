@@ -357,6 +357,18 @@ impl Robot {
         Robot::new(self.name.clone(), base, self.joints.clone(), tool)
     }
 
+    /// The middle of every joint's range (rad or mm): the reference for choosing among IK
+    /// solutions when no seed is given.
+    pub fn mid_joints(&self) -> Vec<f64> {
+        self.joints()
+            .iter()
+            .map(|j| {
+                let [lo, hi] = j.limits_internal();
+                0.5 * (lo + hi)
+            })
+            .collect()
+    }
+
     /// Checks a joint vector (internal units) against the limits; returns the 0-based indices
     /// of the joints outside, with a tolerance of 1e-9 (rad or mm).
     pub fn joints_outside_limits(&self, q: &[f64]) -> Vec<usize> {

@@ -2,6 +2,7 @@
 
 use super::{Chart, DrawResult};
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 /// Series colours, in order (colour-blind-safe Tableau tones).
@@ -118,24 +119,7 @@ impl Chart for ErrorSeries {
                 .axis_desc_style(font(17))
                 .label_style(font(14))
                 .draw()?;
-            for (k, s) in self.series.iter().enumerate() {
-                let col = COLOURS[k % COLOURS.len()];
-                let pts = s
-                    .values
-                    .iter()
-                    .enumerate()
-                    .map(|(i, v)| (i as f64 + 1.0, v.max(lo)));
-                c.draw_series(LineSeries::new(pts.clone(), col.stroke_width(1)))?
-                    .label(format!(
-                        "{}: mean {:.4} {}",
-                        s.label,
-                        mean(&s.values),
-                        self.unit
-                    ))
-                    .legend(move |(x, y)| Circle::new((x + 10, y), 4, col.filled()));
-                c.draw_series(pts.map(|p| Circle::new(p, 2, col.filled())))?;
-            }
-            legend(&mut c)
+            self.lines(&mut c, lo)
         } else {
             let mut c = b.build_cartesian_2d(x, 0.0..hi * 1.4)?;
             c.configure_mesh()
@@ -145,25 +129,40 @@ impl Chart for ErrorSeries {
                 .axis_desc_style(font(17))
                 .label_style(font(14))
                 .draw()?;
-            for (k, s) in self.series.iter().enumerate() {
-                let col = COLOURS[k % COLOURS.len()];
-                let pts = s
-                    .values
-                    .iter()
-                    .enumerate()
-                    .map(|(i, v)| (i as f64 + 1.0, *v));
-                c.draw_series(LineSeries::new(pts.clone(), col.stroke_width(1)))?
-                    .label(format!(
-                        "{}: mean {:.4} {}",
-                        s.label,
-                        mean(&s.values),
-                        self.unit
-                    ))
-                    .legend(move |(x, y)| Circle::new((x + 10, y), 4, col.filled()));
-                c.draw_series(pts.map(|p| Circle::new(p, 2, col.filled())))?;
-            }
-            legend(&mut c)
+            self.lines(&mut c, f64::NEG_INFINITY)
         }
+    }
+}
+
+impl ErrorSeries {
+    /// Draws every series (values below `floor` at `floor`, for a log axis) and the legend.
+    fn lines<'a, DB, Y>(
+        &self,
+        c: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
+        floor: f64,
+    ) -> DrawResult<DB>
+    where
+        DB: DrawingBackend + 'a,
+        Y: Ranged<ValueType = f64>,
+    {
+        for (k, s) in self.series.iter().enumerate() {
+            let col = COLOURS[k % COLOURS.len()];
+            let pts = s
+                .values
+                .iter()
+                .enumerate()
+                .map(|(i, v)| (i as f64 + 1.0, v.max(floor)));
+            c.draw_series(LineSeries::new(pts.clone(), col.stroke_width(1)))?
+                .label(format!(
+                    "{}: mean {:.4} {}",
+                    s.label,
+                    mean(&s.values),
+                    self.unit
+                ))
+                .legend(move |(x, y)| Circle::new((x + 10, y), 4, col.filled()));
+            c.draw_series(pts.map(|p| Circle::new(p, 2, col.filled())))?;
+        }
+        legend(c)
     }
 }
 
@@ -278,12 +277,7 @@ impl Chart for TrainingCurve {
                 .label(*name)
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], col.stroke_width(2)));
         }
-        c.configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font(font(15))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
+        legend(&mut c)
     }
 }
 

@@ -27,3 +27,21 @@ pub fn tmp(name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(name)
 }
+
+/// `robocal identify` of the FANUC on Case D's calibration set into `out`, with `extra` flags;
+/// panics with robocal's stderr on failure. Returns stdout.
+pub fn identify_case_d(out: &std::path::Path, extra: &[&str]) -> String {
+    let mut args = vec![
+        "identify",
+        "--robot",
+        "datasets/robots/fanuc_r2000ib_210f.toml",
+        "--data",
+        "datasets/case_d/calibration.csv",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let o = robocal(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    stdout(&o)
+}
