@@ -258,7 +258,16 @@ fn compensated_jacobian_matches_central_differences() {
         "nongeometric_robot",
         Some("nongeometric/fanuc_compliance_gear.toml"),
     );
-    for form in [Form::Joint, Form::Pose] {
+    let mut positions = s.training.clone();
+    for m in &mut positions.rows {
+        m.rotation = None;
+        m.sigma_rotation = None;
+    }
+    for (form, training) in [
+        (Form::Joint, &s.training),
+        (Form::Pose, &s.training),
+        (Form::Pose, &positions),
+    ] {
         let opts = CompensatorOptions {
             form,
             train: TrainOptions {
@@ -268,11 +277,21 @@ fn compensated_jacobian_matches_central_differences() {
             },
             ..Default::default()
         };
-        let (comp, _) = Compensator::train(&s.nominal, &s.training, &opts).unwrap();
+        let (comp, _) = Compensator::train(&s.nominal, training, &opts).unwrap();
         let mut model = CalibratedModel::compensated(&comp);
+        let mut rigid = robocal::kinematics::Frames::new(&comp.robot);
+        let mut jac_rigid = nalgebra::Matrix6xX::zeros(6);
         let mut jac = nalgebra::Matrix6xX::zeros(6);
         for m in s.test_truth.rows.iter().take(5) {
             model.jacobian(&m.q, &mut jac);
+            // The network's part must be far above the tolerance below.
+            robocal::kinematics::frames(&comp.robot, &m.q, &mut rigid);
+            robocal::kinematics::joint_jacobian(&comp.robot, &rigid, &mut jac_rigid);
+            let diff = (&jac - &jac_rigid).abs().max();
+            assert!(
+                diff > 1e-2,
+                "{form:?}: the network changes the Jacobian by {diff}"
+            );
             for c in 0..6 {
                 let h = 1e-6;
                 let (mut qp, mut qm) = (m.q.clone(), m.q.clone());

@@ -79,6 +79,33 @@ fn commands_are_what_the_nominal_model_reaches_at_the_solved_joints() {
     ] {
         col(&rows, h);
     }
+    // The controller's view: the nominal closed form of each cmd_ pose, seeded with q1..q6,
+    // gives q1..q6 back.
+    let cmds = tmp("cmd_poses.csv");
+    let mut text = String::from("x,y,z,rz,ry,rx,q1,q2,q3,q4,q5,q6\n");
+    for r in rows.iter().skip(1) {
+        let mut cells: Vec<String> = ["x", "y", "z", "rz", "ry", "rx"]
+            .iter()
+            .map(|c| r[col(&rows, &format!("cmd_{c}"))].clone())
+            .collect();
+        cells.extend((1..=6).map(|i| r[col(&rows, &format!("q{i}"))].clone()));
+        text.push_str(&(cells.join(",") + "\n"));
+        assert!(r[col(&rows, "branch")].starts_with('s'), "branch is text");
+    }
+    std::fs::write(&cmds, text).unwrap();
+    let o = robocal(&["ik", "--robot", FANUC, "--poses", cmds.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let back = csv(&stdout(&o));
+    for (r, b) in rows.iter().zip(&back).skip(1) {
+        for i in 1..=6 {
+            let q: f64 = r[col(&rows, &format!("q{i}"))].parse().unwrap();
+            let k: f64 = b[col(&back, &format!("q{i}"))].parse().unwrap();
+            assert!(
+                (q - k).abs() < 1e-6,
+                "q{i}: command {q} deg, controller {k} deg"
+            );
+        }
+    }
     // robocal fk of the nominal robot at q1..q6 gives the cmd_ columns.
     let joints = tmp("joints.csv");
     let qs: Vec<String> = rows
@@ -183,6 +210,8 @@ fn bad_input_names_file_line_and_column() {
         assert!(!out.exists(), "{text}: no output on bad input");
     }
     // A nominal robot without a closed form cannot seed the solve.
+    let good = tmp("good_targets.csv");
+    std::fs::write(&good, "x,y,z,rz,ry,rx\n2000,0,1500,90,0,90\n").unwrap();
     let o = robocal(&[
         "compensate",
         "--nominal",
@@ -190,7 +219,17 @@ fn bad_input_names_file_line_and_column() {
         "--robot",
         model.to_str().unwrap(),
         "--targets",
-        bad.to_str().unwrap(),
+        good.to_str().unwrap(),
     ]);
     assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("no closed form"), "{}", stderr(&o));
+    // Output columns in the input (a previous output fed back in) are refused.
+    std::fs::write(&bad, "x,y,z,status\n1,2,3,ok\n").unwrap();
+    let o = compensate(&model, &bad, &[]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("column `status` clashes"),
+        "{}",
+        stderr(&o)
+    );
 }

@@ -25,11 +25,12 @@ pub struct CompensateArgs {
     compensator: Option<PathBuf>,
     /// Desired tool poses: CSV with x,y,z (mm) and rz,ry,rx (deg, R = Rz Ry Rx), or x,y,z
     /// only (the orientation is then the calibrated robot's at the seed joints). Optional
-    /// q1..qN (deg) seed each row (branch and turns) and are renamed seed_q1..seed_qN; other
-    /// columns are carried through.
+    /// q1..qN (deg) seed each row (branch and turns; all empty: no seed) and are renamed
+    /// seed_q1..seed_qN; other columns are carried through.
     #[arg(long)]
     targets: PathBuf,
-    /// Seed joints "j1,...,jN" (deg) for rows without their own.
+    /// Seed joints "j1,...,jN" (deg) for rows without their own (no q1..qN columns, or all
+    /// of a row's q cells empty).
     #[arg(long, allow_hyphen_values = true)]
     seed: Option<String>,
     #[command(flatten)]
@@ -132,13 +133,26 @@ pub fn run(a: CompensateArgs) -> Result<()> {
             }
         }
     }
+    let mut added: Vec<String> = Vec::new();
     if !with_orientation {
-        headers.extend(POSE_COLUMNS[3..].iter().map(|s| s.to_string()));
+        added.extend(POSE_COLUMNS[3..].iter().map(|s| s.to_string()));
     }
-    headers.push("branch".into());
-    headers.extend(qcols.iter().cloned());
-    headers.extend(POSE_COLUMNS.iter().map(|c| format!("cmd_{c}")));
-    headers.extend(["residual_mm".into(), "residual_deg".into(), "status".into()]);
+    added.push("branch".into());
+    added.extend(qcols.iter().cloned());
+    added.extend(POSE_COLUMNS.iter().map(|c| format!("cmd_{c}")));
+    added.extend(["residual_mm".into(), "residual_deg".into(), "status".into()]);
+    // Carried columns must not collide with what is written (e.g. a previous output fed
+    // back in): the CSV would be ambiguous and JSON would keep only one of them.
+    for (k, h) in headers.iter().enumerate() {
+        if added.contains(h) || headers[..k].contains(h) {
+            bail!(
+                "{}:1: column `{}` clashes with a column compensate writes; rename or remove it",
+                a.targets.display(),
+                t.headers[k]
+            );
+        }
+    }
+    headers.extend(added);
 
     let bar = if std::io::stderr().is_terminal() && t.rows.len() >= 1000 {
         indicatif::ProgressBar::new(t.rows.len() as u64)
@@ -158,8 +172,9 @@ pub fn run(a: CompensateArgs) -> Result<()> {
         } else {
             Desired::Position(Vector3::new(p[0], p[1], p[2]))
         };
-        let own_seed = if row_seeds {
-            let idx: Vec<usize> = seed_idx.iter().flatten().copied().collect();
+        // A row whose seed cells are all empty has no seed of its own.
+        let idx: Vec<usize> = seed_idx.iter().flatten().copied().collect();
+        let own_seed = if row_seeds && idx.iter().any(|&c| !t.rows[r][c].trim().is_empty()) {
             Some(nominal.joints_to_internal(&t.numbers(r, &idx)?))
         } else {
             None

@@ -2,9 +2,10 @@
 //! joints q* at which the calibrated model reaches T, and the pose FK_nominal(q*) to command.
 //!
 //! Per target:
-//! 1. the nominal closed form (App. B) gives the seed q0: the solution nearest the row's seed
-//!    joints (or the middle of the joint ranges), within the limits if one is; its [`Branch`]
-//!    is the configuration the controller is asked to keep. Out of the nominal's reach, the
+//! 1. the nominal closed form (App. B) gives the seed q0: the solution on the seed joints'
+//!    branch nearest them (without a seed: the solution nearest the middle of the joint
+//!    ranges), within the limits if one is; its [`Branch`] is the configuration the
+//!    controller is asked to keep. Out of the nominal's reach, the
 //!    row's seed joints start the solve instead;
 //! 2. numerical IK of the calibrated model from q0 (LM, `kinematics::ik_numeric`) gives q*;
 //! 3. q* must lie within the limits, and the nominal closed form of F = FK_nominal(q*) on the
@@ -57,6 +58,8 @@ pub struct Command {
 pub enum Failure {
     /// A position-only target without seed joints (its orientation is undefined).
     NoSeed,
+    /// Seed joints that do not fit the robot.
+    BadSeed(String),
     /// Neither the nominal closed form nor a seed gives a start.
     Unreachable(String),
     /// The calibrated model's numerical IK did not reach the pose.
@@ -72,6 +75,7 @@ impl Failure {
     pub fn code(&self) -> &'static str {
         match self {
             Failure::NoSeed => "no-seed",
+            Failure::BadSeed(_) => "bad-seed",
             Failure::Unreachable(_) => "unreachable",
             Failure::NotConverged(_) => "not-converged",
             Failure::OutsideLimits(_) => "outside-limits",
@@ -96,7 +100,10 @@ impl std::fmt::Display for Failure {
                     .collect::<Vec<_>>()
                     .join(", ")
             ),
-            Failure::Unreachable(m) | Failure::NotConverged(m) | Failure::BranchChanged(m) => {
+            Failure::Unreachable(m)
+            | Failure::NotConverged(m)
+            | Failure::BranchChanged(m)
+            | Failure::BadSeed(m) => {
                 write!(f, "{}: {m}", self.code())
             }
         }
@@ -159,16 +166,32 @@ impl<'a> FakeTargetSolver<'a> {
         })
     }
 
-    /// The nominal closed form's solution for `target` nearest `reference` (rad), shifted by
-    /// whole turns to lie nearest it, and its branch. Solutions within the nominal limits come
-    /// first; one outside them still seeds the calibrated model, whose solution may be inside.
-    fn nominal_start(&mut self, target: &Pose, reference: &[f64]) -> Option<(Branch, Vec<f64>)> {
+    /// The nominal closed form's solution for `target` nearest `reference` (rad), on branch
+    /// `only` if given, and its branch. Each solution is taken in the 2 pi copy nearest the
+    /// reference, or the next one when that leaves the limits. Solutions within the nominal
+    /// limits come first; one outside them still seeds the calibrated model, whose solution
+    /// may be inside.
+    fn nominal_start(
+        &mut self,
+        target: &Pose,
+        reference: &[f64],
+        only: Option<Branch>,
+    ) -> Option<(Branch, Vec<f64>)> {
         self.closed.solve_branches(target, &mut self.sols);
         let mut best: Option<((bool, f64), Branch, Vec<f64>)> = None;
         for (b, q) in &self.sols {
+            if only.is_some_and(|o| o != *b) {
+                continue;
+            }
             let mut q = q.to_vec();
-            for (v, r) in q.iter_mut().zip(reference) {
+            for (j, (v, r)) in q.iter_mut().zip(reference).enumerate() {
                 *v += ((r - *v) / (2.0 * PI)).round() * 2.0 * PI;
+                let [lo, hi] = self.nominal.joints()[j].limits_internal();
+                if *v > hi && *v - 2.0 * PI >= lo {
+                    *v -= 2.0 * PI;
+                } else if *v < lo && *v + 2.0 * PI <= hi {
+                    *v += 2.0 * PI;
+                }
             }
             let outside = !self.nominal.joints_outside_limits(&q).is_empty();
             let d = wrapped_distance(&q, reference)
@@ -208,6 +231,15 @@ impl<'a> FakeTargetSolver<'a> {
         desired: &Desired,
         seed: Option<&[f64]>,
     ) -> std::result::Result<Command, Failure> {
+        let n = self.nominal.dof();
+        if let Some(s) = seed
+            && s.len() != n
+        {
+            return Err(Failure::BadSeed(format!(
+                "{} seed joints for a robot with {n}",
+                s.len()
+            )));
+        }
         let target = match desired {
             Desired::Pose(p) => *p,
             Desired::Position(x) => {
@@ -217,7 +249,9 @@ impl<'a> FakeTargetSolver<'a> {
             }
         };
         let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
-        let (branch, q0) = match self.nominal_start(&target, &reference) {
+        // A seed fixes the branch (the configuration the robot program was taught in).
+        let seed_branch = seed.and_then(|s| self.branch_of(s));
+        let (branch, q0) = match self.nominal_start(&target, &reference, seed_branch) {
             Some(s) => s,
             None => {
                 let s = seed.ok_or_else(|| {
@@ -246,8 +280,16 @@ impl<'a> FakeTargetSolver<'a> {
             Error::NotConverged(m) => Failure::NotConverged(m),
             other => Failure::NotConverged(other.to_string()),
         })?;
-        if !sol.outside_limits.is_empty() {
-            return Err(Failure::OutsideLimits(sol.outside_limits));
+        // The calibrated model's limits and the controller's (usually the same).
+        let mut outside = sol.outside_limits.clone();
+        for j in self.nominal.joints_outside_limits(&sol.q) {
+            if !outside.contains(&j) {
+                outside.push(j);
+            }
+        }
+        outside.sort_unstable();
+        if !outside.is_empty() {
+            return Err(Failure::OutsideLimits(outside));
         }
         match self.branch_of(&sol.q) {
             Some(b) if b == branch => {}

@@ -37,9 +37,9 @@ pub struct Branch {
 }
 
 impl std::fmt::Display for Branch {
-    /// Three digits, 0 or 1 each: shoulder, elbow, wrist.
+    /// `s<shoulder>e<elbow>w<wrist>`, each 0 or 1 (text, so that it stays text in JSON).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}{}{}", self.shoulder, self.elbow, self.wrist)
+        write!(f, "s{}e{}w{}", self.shoulder, self.elbow, self.wrist)
     }
 }
 

@@ -703,3 +703,37 @@ fn unhex(s: &str) -> Option<Vec<u8>> {
         .map(|i| u8::from_str_radix(s.get(i..i + 2)?, 16).ok())
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn left_jacobian_matches_differences_of_exp() {
+        let phi = Vector3::new(0.3, -0.35, 0.2);
+        let jl = left_jacobian(&phi);
+        for k in 0..3 {
+            let h = 1e-6;
+            let mut d = Vector3::zeros();
+            d[k] = h;
+            let (rp, rm) = (
+                from_rotation_vector(&(phi + d)),
+                from_rotation_vector(&(phi - d)),
+            );
+            // Angular velocity (world) of exp(phi) as phi moves along e_k.
+            let w = rotation_vector(&(rp * rm.inverse())) / (2.0 * h);
+            for r in 0..3 {
+                assert!(
+                    (w[r] - jl[(r, k)]).abs() < 1e-8,
+                    "{k} {r}: {} vs {}",
+                    w[r],
+                    jl[(r, k)]
+                );
+            }
+        }
+        assert_eq!(
+            left_jacobian(&Vector3::zeros()),
+            nalgebra::Matrix3::identity()
+        );
+    }
+}

@@ -59,6 +59,8 @@ const LOG_RATIO: f64 = 20.0;
 #[derive(Debug, Clone)]
 pub struct Series {
     pub label: String,
+    /// 1-based position of each value in its data (the x of per-measurement plots).
+    pub rows: Vec<usize>,
     pub values: Vec<f64>,
 }
 
@@ -90,7 +92,7 @@ impl Chart for ErrorSeries {
         let n = self
             .series
             .iter()
-            .map(|s| s.values.len())
+            .filter_map(|s| s.rows.last().copied())
             .max()
             .unwrap_or(0)
             .max(1);
@@ -148,10 +150,10 @@ impl ErrorSeries {
         for (k, s) in self.series.iter().enumerate() {
             let col = COLOURS[k % COLOURS.len()];
             let pts = s
-                .values
+                .rows
                 .iter()
-                .enumerate()
-                .map(|(i, v)| (i as f64 + 1.0, v.max(floor)));
+                .zip(&s.values)
+                .map(|(i, v)| (*i as f64, v.max(floor)));
             c.draw_series(LineSeries::new(pts.clone(), col.stroke_width(1)))?
                 .label(format!(
                     "{}: mean {:.4} {}",
@@ -188,7 +190,14 @@ impl Chart for Histograms {
         let panels = body.split_evenly((rows, k.div_ceil(rows)));
         for (k, (s, area)) in self.series.iter().zip(&panels).enumerate() {
             let col = COLOURS[k % COLOURS.len()];
-            let hi = s.values.iter().copied().fold(0.0f64, f64::max).max(1e-12) * 1.0001;
+            let hi = s
+                .values
+                .iter()
+                .copied()
+                .filter(|v| v.is_finite())
+                .fold(0.0f64, f64::max)
+                .max(1e-12)
+                * 1.0001;
             let width = hi / BINS as f64;
             let mut counts = [0usize; BINS];
             for v in &s.values {
@@ -234,7 +243,7 @@ impl Chart for TrainingCurve {
             .curve
             .iter()
             .flat_map(|c| [c.1, c.2])
-            .filter(|v| *v > 0.0);
+            .filter(|v| *v > 0.0 && v.is_finite());
         let lo = vals.clone().fold(f64::INFINITY, f64::min);
         let hi = vals.fold(0.0f64, f64::max);
         let (lo, hi) = if lo.is_finite() && hi > lo {
@@ -336,6 +345,7 @@ impl Chart for Scatter {
             .errors
             .iter()
             .copied()
+            .filter(|v| v.is_finite())
             .fold(0.0f64, f64::max)
             .max(1e-12);
         // Largest errors drawn last, on top.

@@ -14,11 +14,22 @@ pub struct ErrorRun<'a> {
     pub errors: &'a [RowError],
 }
 
+/// One series per run of the values `get` finds, each with its 1-based row position; rows
+/// without a (finite) value are left out, not shifted.
 fn series(runs: &[ErrorRun], get: impl Fn(&RowError) -> Option<f64>) -> Vec<Series> {
     runs.iter()
-        .map(|r| Series {
-            label: r.label.to_string(),
-            values: r.errors.iter().filter_map(&get).collect(),
+        .map(|r| {
+            let (rows, values) = r
+                .errors
+                .iter()
+                .enumerate()
+                .filter_map(|(i, e)| get(e).filter(|v| v.is_finite()).map(|v| (i + 1, v)))
+                .unzip();
+            Series {
+                label: r.label.to_string(),
+                rows,
+                values,
+            }
         })
         .filter(|s| !s.values.is_empty())
         .collect()
@@ -94,10 +105,9 @@ pub fn error_figures(
             .iter()
             .zip(last.errors)
             .filter_map(|(m, e)| {
-                Some((
-                    [m.position?.x, m.position?.y, m.position?.z],
-                    e.position_mm?,
-                ))
+                let p = m.position?;
+                let v = e.position_mm.filter(|v| v.is_finite())?;
+                Some(([p.x, p.y, p.z], v))
             })
             .unzip();
         if !points.is_empty() {
