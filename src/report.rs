@@ -165,14 +165,6 @@ fn record_columns(a: &[Value]) -> Vec<String> {
     cols
 }
 
-fn lookup<'a>(r: &'a Value, col: &str) -> &'a Value {
-    let mut l = Vec::new();
-    leaves(r, "", &mut l);
-    l.into_iter()
-        .find(|(n, _)| n == col)
-        .map_or(&Value::Null, |(_, v)| v)
-}
-
 /// Long numeric series (training curves) are summarised rather than tabulated.
 const LONG: usize = 40;
 
@@ -214,9 +206,15 @@ fn section(title: &str, m: &Map<String, Value>, depth: usize, html: &mut String)
                 }
                 html.push_str("</tr></thead><tbody>");
                 for r in a {
+                    let mut l = Vec::new();
+                    leaves(r, "", &mut l);
                     html.push_str("<tr>");
                     for c in &cols {
-                        let _ = write!(html, "<td>{}</td>", cell(lookup(r, c)));
+                        let v = l
+                            .iter()
+                            .find(|(n, _)| n == c)
+                            .map_or(&Value::Null, |(_, v)| v);
+                        let _ = write!(html, "<td>{}</td>", cell(v));
                     }
                     html.push_str("</tr>");
                 }

@@ -1,11 +1,11 @@
 //! `robocal compensate`: fake targets for an unmodified controller (see `compensation`).
 
 use super::output::{OutputArgs, num, parse_list};
+use super::train::load_compensator;
 use crate::compensation::{CalibratedModel, Desired, FakeTargetSolver};
 use crate::data::{POSE_COLUMNS, Table, joint_columns};
 use crate::kinematics::{pose_from_file, pose_to_file};
-use crate::model::{Robot, read_robot};
-use crate::neural::compensator::Compensator;
+use crate::model::read_robot;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use nalgebra::Vector3;
@@ -37,49 +37,30 @@ pub struct CompensateArgs {
     output: OutputArgs,
 }
 
-/// The compensator's joints must be the robot's.
-fn check_joints(robot: &Robot, other: &Robot) -> bool {
-    robot.dof() == other.dof()
-        && robot
-            .joints()
-            .iter()
-            .zip(other.joints())
-            .all(|(a, b)| a.joint_type == b.joint_type)
-}
-
 pub fn run(a: CompensateArgs) -> Result<()> {
     let nominal = read_robot(&a.nominal)?;
     let robot = read_robot(&a.robot)?;
     let n = nominal.dof();
-    if !check_joints(&nominal, &robot) {
+    if !nominal.same_joints(&robot) {
         bail!(
             "{} and {} have different joints",
             a.nominal.display(),
             a.robot.display()
         );
     }
-    let comp = a
-        .compensator
-        .as_ref()
-        .map(|p| Compensator::load(p))
-        .transpose()?;
-    let model = match (&comp, &a.compensator) {
-        (Some(c), Some(p)) => {
-            if !check_joints(&robot, &c.robot) {
-                bail!(
-                    "{}: the compensator was trained for a robot with other joints than {}",
-                    p.display(),
-                    a.robot.display()
-                );
+    let comp = match &a.compensator {
+        Some(p) => {
+            let (c, note) = load_compensator(p, &a.robot, &robot)?;
+            if let Some(note) = note {
+                eprintln!("{note}");
             }
-            eprintln!(
-                "note: the compensator runs in series with its own model (embedded; refined in \
-                 training), not with {}",
-                a.robot.display()
-            );
-            CalibratedModel::compensated(c)
+            Some(c)
         }
-        _ => CalibratedModel::rigid(&robot),
+        None => None,
+    };
+    let model = match &comp {
+        Some(c) => CalibratedModel::compensated(c),
+        None => CalibratedModel::rigid(&robot),
     };
     let mut solver = FakeTargetSolver::new(&nominal, model)
         .with_context(|| format!("{}: no closed form to seed from", a.nominal.display()))?;

@@ -1,16 +1,16 @@
 //! `robocal identify` and `robocal evaluate`.
 
 use super::data_args::{DataArgs, SigmaArgs};
+use super::train::load_compensator;
 use crate::data::{JointInfo, MeasurementSet};
-use crate::evaluate::{ErrorStats, evaluate_model};
-use crate::evaluate::{row_errors, summarize};
+use crate::evaluate::{ErrorStats, RowError, row_errors, summarize};
 use crate::identify::identifiability::DropReason;
 use crate::identify::{Identified, Measure, Method, Options, RobustLoss, SolveOptions, identify};
 use crate::kinematics::tool_pose;
-use crate::model::{Robot, read_robot, robot_to_toml, write_robot};
-use crate::neural::compensator::{Compensator, PredictWorkspace};
+use crate::model::{Robot, read_robot, write_robot};
+use crate::neural::compensator::PredictWorkspace;
 use crate::plot::{ErrorRun, error_figures};
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -152,15 +152,19 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     let id = identify(&nominal, &cal, &opts)?;
     write_robot(&id.robot, &a.out).with_context(|| format!("writing {}", a.out.display()))?;
     let m = id.measure;
-    let cal_before = evaluate_model(&nominal, &cal, m)?;
-    let cal_after = evaluate_model(&id.robot, &cal, m)?;
-    let val_stats = match &val {
-        Some(v) => Some((
-            evaluate_model(&nominal, v, m)?,
-            evaluate_model(&id.robot, v, m)?,
-        )),
-        None => None,
+    // Row errors before and after, per set: for the statistics and the pictures.
+    let errors = |set: &MeasurementSet| -> Result<(Vec<RowError>, Vec<RowError>)> {
+        Ok((
+            row_errors(set, m, |q| tool_pose(&nominal, q))?,
+            row_errors(set, m, |q| tool_pose(&id.robot, q))?,
+        ))
     };
+    let cal_rows = errors(&cal)?;
+    let val_rows = val.as_ref().map(errors).transpose()?;
+    let (cal_before, cal_after) = (summarize(&cal_rows.0), summarize(&cal_rows.1));
+    let val_stats = val_rows
+        .as_ref()
+        .map(|(b, af)| (summarize(b), summarize(af)));
     print_identified(&a, &cal, &id);
     let mut rows = vec![
         ("calibration", "before", &cal_before),
@@ -180,18 +184,22 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     println!("wrote {}", a.out.display());
     if let Some(dir) = &a.plot {
         let mut figs = 0;
-        for (name, set) in [("calibration", Some(&cal)), ("validation", val.as_ref())] {
-            let Some(set) = set else { continue };
-            let before = row_errors(set, m, |q| tool_pose(&nominal, q))?;
-            let after = row_errors(set, m, |q| tool_pose(&id.robot, q))?;
+        let sets = [
+            ("calibration", Some((&cal, &cal_rows))),
+            ("validation", val.as_ref().zip(val_rows.as_ref())),
+        ];
+        for (name, set) in sets {
+            let Some((set, (before, after))) = set else {
+                continue;
+            };
             let runs = [
                 ErrorRun {
                     label: "nominal",
-                    errors: &before,
+                    errors: before,
                 },
                 ErrorRun {
                     label: "identified",
-                    errors: &after,
+                    errors: after,
                 },
             ];
             figs += error_figures(
@@ -337,28 +345,17 @@ fn print_identified(a: &IdentifyArgs, cal: &MeasurementSet, id: &Identified) {
 
 pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     let robot = read_robot(&a.robot)?;
-    let comp = a
-        .compensator
-        .as_ref()
-        .map(|p| Compensator::load(p))
-        .transpose()?;
-    if let Some(c) = &comp
-        && (c.robot.dof() != robot.dof()
-            || c.robot
-                .joints()
-                .iter()
-                .zip(robot.joints())
-                .any(|(x, y)| x.joint_type != y.joint_type))
-    {
-        bail!(
-            "{}: the compensator was trained for a robot with other joints than {}",
-            a.compensator.as_deref().unwrap_or(Path::new("")).display(),
-            a.robot.display()
-        );
-    }
+    let (comp, note) = match &a.compensator {
+        Some(p) => {
+            let (c, note) = load_compensator(p, &a.robot, &robot)?;
+            (Some(c), note)
+        }
+        None => (None, None),
+    };
     let set = read_set(&a.read, &a.data, &robot)?;
     let m = a.measure.unwrap_or_else(|| Measure::default_for(&set));
-    let s = evaluate_model(&robot, &set, m)?;
+    let model_rows = row_errors(&set, m, |q| tool_pose(&robot, q))?;
+    let s = summarize(&model_rows);
     println!(
         "evaluate: {} on {} ({} rows, measure {})",
         a.robot.display(),
@@ -366,13 +363,14 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         set.rows.len(),
         m.name()
     );
-    let compensated = match &comp {
+    let net_rows = match &comp {
         Some(c) => {
             let mut ws = PredictWorkspace::default();
-            Some(summarize(&row_errors(&set, m, |q| c.predict(q, &mut ws))?))
+            Some(row_errors(&set, m, |q| c.predict(q, &mut ws))?)
         }
         None => None,
     };
+    let compensated = net_rows.as_deref().map(summarize);
     let mut table = vec![("data", "model", &s)];
     if let Some(c) = &compensated {
         table.push(("data", "+net", c));
@@ -386,28 +384,15 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             println!("mean per-coordinate position error |dx|,|dy|,|dz| ({what}): {c:.4} mm");
         }
     }
-    if let Some(c) = &comp
-        && robot_to_toml(&c.robot) != robot_to_toml(&robot)
-    {
-        println!(
-            "note: the compensator runs in series with its own model (embedded; refined in training), not with {}",
-            a.robot.display()
-        );
+    if let Some(note) = note {
+        println!("{note}");
     }
     if let Some(dir) = &a.plot {
-        let model = row_errors(&set, m, |q| tool_pose(&robot, q))?;
-        let net = match &comp {
-            Some(c) => {
-                let mut ws = PredictWorkspace::default();
-                Some(row_errors(&set, m, |q| c.predict(q, &mut ws))?)
-            }
-            None => None,
-        };
         let mut runs = vec![ErrorRun {
             label: "model",
-            errors: &model,
+            errors: &model_rows,
         }];
-        if let Some(n) = &net {
+        if let Some(n) = &net_rows {
             runs.push(ErrorRun {
                 label: "with compensator",
                 errors: n,

@@ -6,15 +6,15 @@ use super::output::{OutputArgs, num};
 use crate::evaluate::{row_errors, summarize};
 use crate::identify::Measure;
 use crate::kinematics::{pose_to_file, tool_pose};
-use crate::model::read_robot;
+use crate::model::{Robot, read_robot, robot_to_toml};
 use crate::neural::compensator::{Compensator, CompensatorOptions, Form, PredictWorkspace};
 use crate::neural::train::TrainOptions;
 use crate::plot::{ErrorRun, error_figures, training_figure};
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde_json::json;
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct TrainArgs {
@@ -182,6 +182,31 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         )?;
     }
     Ok(())
+}
+
+/// Loads a compensator to use beside `robot` (read from `robot_path`): its joints must be
+/// the robot's. With it, a note for the user when it runs with a model other than that file's.
+pub(super) fn load_compensator(
+    path: &Path,
+    robot_path: &Path,
+    robot: &Robot,
+) -> Result<(Compensator, Option<String>)> {
+    let c = Compensator::load(path)?;
+    if !c.robot.same_joints(robot) {
+        bail!(
+            "{}: the compensator was trained for a robot with other joints than {}",
+            path.display(),
+            robot_path.display()
+        );
+    }
+    let note = (robot_to_toml(&c.robot) != robot_to_toml(robot)).then(|| {
+        format!(
+            "note: the compensator runs in series with its own model (embedded; refined in \
+             training), not with {}",
+            robot_path.display()
+        )
+    });
+    Ok((c, note))
 }
 
 #[derive(Args)]

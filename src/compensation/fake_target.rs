@@ -139,13 +139,7 @@ impl<'a> FakeTargetSolver<'a> {
     pub fn new(nominal: &'a Robot, model: CalibratedModel<'a>) -> Result<Self> {
         let closed = SphericalWristIk::new(nominal)?;
         let cal = model.robot();
-        if cal.dof() != nominal.dof()
-            || cal
-                .joints()
-                .iter()
-                .zip(nominal.joints())
-                .any(|(a, b)| a.joint_type != b.joint_type)
-        {
+        if !cal.same_joints(nominal) {
             return Err(Error::Invalid(
                 "the calibrated model's joints differ from the nominal model's".into(),
             ));
@@ -178,12 +172,11 @@ impl<'a> FakeTargetSolver<'a> {
         only: Option<Branch>,
     ) -> Option<(Branch, Vec<f64>)> {
         self.closed.solve_branches(target, &mut self.sols);
-        let mut best: Option<((bool, f64), Branch, Vec<f64>)> = None;
-        for (b, q) in &self.sols {
-            if only.is_some_and(|o| o != *b) {
+        let mut best: Option<((bool, f64), Branch, [f64; 6])> = None;
+        for &(b, mut q) in &self.sols {
+            if only.is_some_and(|o| o != b) {
                 continue;
             }
-            let mut q = q.to_vec();
             for (j, (v, r)) in q.iter_mut().zip(reference).enumerate() {
                 *v += ((r - *v) / (2.0 * PI)).round() * 2.0 * PI;
                 let [lo, hi] = self.nominal.joints()[j].limits_internal();
@@ -202,10 +195,10 @@ impl<'a> FakeTargetSolver<'a> {
                     * 1e-9;
             let key = (outside, d);
             if best.as_ref().is_none_or(|(bk, ..)| key < *bk) {
-                best = Some((key, *b, q));
+                best = Some((key, b, q));
             }
         }
-        best.map(|(_, b, q)| (b, q))
+        best.map(|(_, b, q)| (b, q.to_vec()))
     }
 
     /// The branch of the nominal closed form that returns `q` (mod 2 pi) for FK_nominal(q);

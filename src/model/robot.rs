@@ -357,6 +357,16 @@ impl Robot {
         Robot::new(self.name.clone(), base, self.joints.clone(), tool)
     }
 
+    /// Whether `other` has the same number and types of joints (so joint vectors fit both).
+    pub fn same_joints(&self, other: &Robot) -> bool {
+        self.dof() == other.dof()
+            && self
+                .joints()
+                .iter()
+                .zip(other.joints())
+                .all(|(a, b)| a.joint_type == b.joint_type)
+    }
+
     /// The middle of every joint's range (rad or mm): the reference for choosing among IK
     /// solutions when no seed is given.
     pub fn mid_joints(&self) -> Vec<f64> {
