@@ -15,7 +15,7 @@ use crate::identify::{Measure, Options, identify};
 use crate::kinematics::tool_pose;
 use crate::model::{Robot, read_robot};
 use crate::neural::compensator::{
-    Compensator, CompensatorOptions, CompensatorReport, PredictWorkspace,
+    Compensator, CompensatorOptions, CompensatorReport, PredictWorkspace, Refine,
 };
 use std::path::Path;
 
@@ -129,7 +129,8 @@ pub fn load(datasets: &Path, set: Robotset, nominal: &Robot) -> Result<SetData> 
     })
 }
 
-/// Runs the protocol on one set; `opts.refine` is set per row.
+/// Runs the protocol on one set; `opts.refine` is set per row (the parameters the model was
+/// identified with, kept where cross-validation favours them).
 pub fn run_set(
     nominal: &Robot,
     set: Robotset,
@@ -175,10 +176,10 @@ pub fn run_set(
         let model = identified(params)?.robot;
         push(plain, stats(&mut |q| tool_pose(&model, q))?, None);
         let o = CompensatorOptions {
-            refine: Some(params.into()),
+            refine: Refine::Params(params.into()),
             ..opts.clone()
         };
-        let (c, report) = Compensator::train(&model, &data.training, &o)?;
+        let (c, report) = Compensator::train(&model, &data.training, &o, &|_, _| {})?;
         let mut ws = PredictWorkspace::default();
         push(with, stats(&mut |q| c.predict(q, &mut ws))?, Some(report));
     }

@@ -19,11 +19,14 @@ use crate::model::Robot;
 use crate::rotation::angle_between;
 use serde::Serialize;
 
-/// Mean, RMS and max of a list of errors.
+/// Mean, RMS, 95th percentile and max of a list of errors.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Summary {
     pub mean: f64,
     pub rms: f64,
+    /// The 95th percentile (nearest rank: the smallest error that at least 95 % of the errors
+    /// do not exceed).
+    pub p95: f64,
     pub max: f64,
 }
 
@@ -33,9 +36,13 @@ impl Summary {
             return None;
         }
         let n = v.len() as f64;
+        let mut sorted = v.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        let rank = ((0.95 * n).ceil() as usize).clamp(1, v.len());
         Some(Summary {
             mean: v.iter().sum::<f64>() / n,
             rms: (v.iter().map(|x| x * x).sum::<f64>() / n).sqrt(),
+            p95: sorted[rank - 1],
             max: v.iter().cloned().fold(0.0, f64::max),
         })
     }

@@ -178,11 +178,8 @@ fn true_robot_reaches_compensated_targets_within_the_model_accuracy() {
         Some("nongeometric/fanuc_compliance_gear.toml"),
     );
     let robot = identified(&s);
-    let opts = CompensatorOptions {
-        refine: Some("full".into()),
-        ..Default::default()
-    };
-    let (comp, _) = Compensator::train(&robot, &s.training, &opts).unwrap();
+    let opts = CompensatorOptions::default();
+    let (comp, _) = Compensator::train(&robot, &s.training, &opts, &|_, _| {}).unwrap();
     let mut pw = PredictWorkspace::default();
     let (model_p, model_r) = model_errors(&s, &mut |q| comp.predict(q, &mut pw));
     let (rigid_p, rigid_r) = model_errors(&s, &mut |q| tool_pose(&robot, q));
@@ -320,21 +317,30 @@ fn compensated_jacobian_matches_central_differences() {
         m.rotation = None;
         m.sigma_rotation = None;
     }
-    for (form, training) in [
-        (Form::Joint, &s.training),
-        (Form::Pose, &s.training),
-        (Form::Pose, &positions),
+    use robocal::neural::compensator::Settings;
+    use robocal::neural::encoding::Encoding;
+    for (form, encoding, members, training) in [
+        (Form::Joint, Encoding::Gravity, 1, &s.training),
+        (Form::Joint, Encoding::SinCos, 2, &s.training),
+        (Form::Pose, Encoding::Gravity, 2, &s.training),
+        (Form::Pose, Encoding::Angles, 1, &positions),
     ] {
-        let opts = CompensatorOptions {
+        let settings = Settings {
             form,
-            train: TrainOptions {
-                hidden: 8,
+            encoding,
+            hidden: 8,
+            penalty: 0.1,
+            members,
+            refine: None,
+        };
+        let opts = CompensatorOptions::fixed(
+            &settings,
+            TrainOptions {
                 max_epochs: 20,
                 ..Default::default()
             },
-            ..Default::default()
-        };
-        let (comp, _) = Compensator::train(&s.nominal, training, &opts).unwrap();
+        );
+        let (comp, _) = Compensator::train(&s.nominal, training, &opts, &|_, _| {}).unwrap();
         let mut model = CalibratedModel::compensated(&comp);
         let mut rigid = robocal::kinematics::Frames::new(&comp.robot);
         let mut jac_rigid = nalgebra::Matrix6xX::zeros(6);
@@ -362,7 +368,7 @@ fn compensated_jacobian_matches_central_differences() {
                     let (ep, er) = ((dp[r] - jac[(r, c)]).abs(), (dw[r] - jac[(3 + r, c)]).abs());
                     assert!(
                         ep < 1e-4 && er < 1e-7,
-                        "{form:?} joint {c} row {r}: {ep} {er}"
+                        "{form:?} {encoding:?} joint {c} row {r}: {ep} {er}"
                     );
                 }
             }

@@ -36,8 +36,12 @@ fn identify_train_evaluate_and_predict() {
         "datasets/case_d/test_truth.csv",
         "--refine",
         "offsets",
+        "--form",
+        "joint",
         "--hidden",
         "10",
+        "--members",
+        "2",
         "--seed",
         "3",
         "--out",
@@ -47,14 +51,12 @@ fn identify_train_evaluate_and_predict() {
     ]);
     let out = stdout(&o);
     assert!(o.status.success(), "{}", stderr(&o));
+    // The encoding and penalty were left open, and whether refining the offsets helps.
     assert!(
-        out.contains("joint form, 12-10-6 network on 150 rows"),
+        out.contains("cross-validation (5 folds") && out.contains("settings: joint/"),
         "{out}"
     );
-    assert!(
-        out.contains("refined with the network:") && out.contains("theta2"),
-        "{out}"
-    );
+    assert!(out.contains("networks: 2 x "), "{out}");
     let r = json(&report);
     let stats = &r["statistics"][1];
     assert_eq!(stats["set"], "validation");
@@ -63,7 +65,14 @@ fn identify_train_evaluate_and_predict() {
         .as_f64()
         .unwrap();
     assert!(after < 0.1 * before, "{before} -> {after}");
-    assert!(r["training"]["network"]["curve"].as_array().unwrap().len() > 10);
+    assert_eq!(r["training"]["settings"]["form"], "joint");
+    assert!(
+        r["training"]["networks"][0]["curve"]
+            .as_array()
+            .unwrap()
+            .len()
+            > 10
+    );
 
     // evaluate --compensator gives the same figure as train's validation report.
     let ev = tmp("eval.json");
@@ -79,16 +88,28 @@ fn identify_train_evaluate_and_predict() {
         ev.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stdout(&o).contains("runs in series with its own model"));
+    // The note appears exactly when cross-validation kept the refined model.
+    assert_eq!(
+        stdout(&o).contains("runs in series with its own model"),
+        !r["training"]["settings"]["refine"].is_null(),
+        "{}",
+        stdout(&o)
+    );
+    // Every figure train reports for the held-out rows is evaluate's on those rows (1e-9).
     let e = json(&ev);
-    assert_eq!(
-        e["compensated"]["position_mm"]["mean"].as_f64().unwrap(),
-        after
-    );
-    assert_eq!(
-        e["validation"]["position_mm"]["mean"].as_f64().unwrap(),
-        before
-    );
+    for (kind, (a, b)) in [
+        ("position_mm", (&e["compensated"], &stats["compensated"])),
+        ("position_mm", (&e["validation"], &stats["model"])),
+        (
+            "orientation_deg",
+            (&e["compensated"], &stats["compensated"]),
+        ),
+    ] {
+        for f in ["mean", "rms", "p95", "max"] {
+            let (x, y) = (a[kind][f].as_f64().unwrap(), b[kind][f].as_f64().unwrap());
+            assert!((x - y).abs() <= 1e-9, "{kind} {f}: evaluate {x}, train {y}");
+        }
+    }
 
     // predict on the test joints reproduces what evaluate compared.
     let joints = tmp("joints.csv");
@@ -115,11 +136,13 @@ fn identify_train_evaluate_and_predict() {
     assert_eq!(
         head,
         [
-            "id", "q1", "q2", "q3", "q4", "q5", "q6", "x", "y", "z", "rz", "ry", "rx"
+            "id", "q1", "q2", "q3", "q4", "q5", "q6", "x", "y", "z", "rz", "ry", "rx", "domain"
         ]
     );
     for (pl, tl) in p.lines().skip(1).zip(t.lines().skip(1)) {
-        let pv: Vec<f64> = pl.split(',').map(|v| v.parse().unwrap()).collect();
+        // Test configurations come from the training region.
+        assert!(pl.ends_with(",inside"), "{pl}");
+        let pv: Vec<f64> = pl.split(',').take(13).map(|v| v.parse().unwrap()).collect();
         let tv: Vec<f64> = tl.split(',').map(|v| v.parse().unwrap()).collect();
         let d =
             ((pv[7] - tv[7]).powi(2) + (pv[8] - tv[8]).powi(2) + (pv[9] - tv[9]).powi(2)).sqrt();
@@ -179,11 +202,45 @@ fn train_refuses_bad_input_and_predict_refuses_a_corrupt_compensator() {
         stderr(&o)
     );
     assert!(!out.exists(), "no compensator file on failure");
+    // Sizes and values out of range are refused with the flag's name, before any work.
+    for (flag, value) in [
+        ("--hidden", "3000"),
+        ("--penalty", "nan"),
+        ("--members", "51"),
+        ("--folds", "1"),
+        ("--validation-fraction", "1"),
+    ] {
+        let o = robocal(&[
+            "train",
+            "--robot",
+            FANUC,
+            "--data",
+            "datasets/case_d/training.csv",
+            flag,
+            value,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(!o.status.success(), "{flag} {value}");
+        assert!(stderr(&o).contains(flag), "{flag}: {}", stderr(&o));
+        assert!(!out.exists());
+    }
+    // A version-1 file (before ensembles and the training domain) is refused by name.
+    let v1 = tmp("v1.rcal");
+    std::fs::write(&v1, "{\"format\": \"robocal-compensator\", \"version\": 1}").unwrap();
+    let o = robocal(&[
+        "predict",
+        "--compensator",
+        v1.to_str().unwrap(),
+        "--joints",
+        "datasets/joints/fanuc_demo.csv",
+    ]);
+    assert!(stderr(&o).contains("version 1"), "{}", stderr(&o));
 
     let corrupt = tmp("corrupt.rcal");
     std::fs::write(
         &corrupt,
-        "{\"format\": \"robocal-compensator\", \"version\": 1}",
+        "{\"format\": \"robocal-compensator\", \"version\": 2}",
     )
     .unwrap();
     let o = robocal(&[

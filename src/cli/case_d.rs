@@ -1,12 +1,12 @@
 //! `robocal case-d`: thesis Case D end to end (Table 6.6) and the same protocol on the shipped
 //! non-geometric robot.
 
+use super::compensator_args::CompensatorArgs;
+use super::data_args::SigmaArgs;
 use super::identify::write_json;
 use crate::case_d::{Robotset, Row, Stage, find, load, run};
 use crate::evaluate::ErrorStats;
 use crate::model::read_robot;
-use crate::neural::compensator::{CompensatorOptions, Form};
-use crate::neural::train::TrainOptions;
 use crate::plot::{ErrorRun, error_figures, training_figure};
 use anyhow::{Context, Result};
 use clap::Args;
@@ -19,15 +19,10 @@ pub struct CaseDArgs {
     /// The repository's datasets folder.
     #[arg(long, default_value = "datasets")]
     datasets: PathBuf,
-    /// Where the network acts.
-    #[arg(long, value_enum, default_value_t = Form::Joint)]
-    form: Form,
-    /// Hidden sigmoid units.
-    #[arg(long, default_value_t = 20)]
-    hidden: usize,
-    /// Seed of the initial weights and of the held-out validation part.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
+    #[command(flatten)]
+    build: CompensatorArgs,
+    #[command(flatten)]
+    sigma: SigmaArgs,
     /// JSON report of every row (statistics against truth and measurements, training).
     #[arg(long)]
     report: Option<PathBuf>,
@@ -127,7 +122,7 @@ fn plot(dir: &Path, datasets: &Path, rows: &[Row]) -> Result<usize> {
                     dir,
                     &format!("case_d_{tag}_{stage}"),
                     &format!("{name}, {}", r.stage.label()),
-                    &t.network,
+                    &t.networks[0],
                 )?;
                 figs += 1;
             }
@@ -137,16 +132,9 @@ fn plot(dir: &Path, datasets: &Path, rows: &[Row]) -> Result<usize> {
 }
 
 pub fn run_case_d(a: CaseDArgs) -> Result<()> {
-    let opts = CompensatorOptions {
-        form: a.form,
-        train: TrainOptions {
-            hidden: a.hidden,
-            seed: a.seed,
-            progress: std::io::stderr().is_terminal(),
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let opts = a
+        .build
+        .options(a.sigma.sigmas(), std::io::stderr().is_terminal())?;
     let rows = run(&a.datasets, &opts).with_context(|| {
         format!(
             "run from the repository root, or give --datasets ({})",
@@ -154,15 +142,23 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
         )
     })?;
     println!(
-        "Case D (thesis 6.4): identification on the 30 calibration poses, {} network ({} hidden \
-         units, seed {}) on the 150 training poses, refining the identified parameters with it.",
-        match a.form {
-            Form::Joint => "joint-space",
-            Form::Pose => "pose-space",
-        },
-        a.hidden,
-        a.seed
+        "Case D (thesis 6.4): identification on the 30 calibration poses, then a compensator \
+         trained on the 150 training poses (seed {}; settings and the refinement of the \
+         identified parameters chosen by cross-validation unless fixed by flags).",
+        a.build.seed
     );
+    for set in Robotset::ALL {
+        for r in rows.iter().filter(|r| r.set == set) {
+            if let Some(t) = &r.training {
+                println!(
+                    "  {}, {}: {}",
+                    set.folder(),
+                    r.stage.label(),
+                    t.settings.describe()
+                );
+            }
+        }
+    }
     println!(
         "Errors on the test poses: mean Euclidean position (mm), mean per coordinate |dx|,|dy|,|dz| \
          (mm, the thesis's measure), mean orientation angle (deg)."
@@ -175,10 +171,7 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
         println!("\nplots: {figs} pictures in {}", dir.display());
     }
     if let Some(p) = &a.report {
-        write_json(
-            p,
-            &json!({"form": a.form, "hidden": a.hidden, "seed": a.seed, "rows": rows}),
-        )?;
+        write_json(p, &json!({"seed": a.build.seed, "rows": rows}))?;
     }
     Ok(())
 }

@@ -122,6 +122,9 @@ pub fn run(a: CompensateArgs) -> Result<()> {
     added.extend(qcols.iter().cloned());
     added.extend(POSE_COLUMNS.iter().map(|c| format!("cmd_{c}")));
     added.extend(["residual_mm".into(), "residual_deg".into(), "status".into()]);
+    if comp.is_some() {
+        added.push(super::train::DOMAIN_COLUMN.into());
+    }
     // Carried columns must not collide with what is written (e.g. a previous output fed
     // back in): the CSV would be ambiguous and JSON would keep only one of them.
     for (k, h) in headers.iter().enumerate() {
@@ -144,6 +147,8 @@ pub fn run(a: CompensateArgs) -> Result<()> {
     let mut out_rows = Vec::with_capacity(t.rows.len());
     let mut failed = Vec::new();
     let mut shifts = Vec::new();
+    let mut outside = Vec::new();
+    let mut dws = crate::neural::compensator::PredictWorkspace::default();
     for r in 0..t.rows.len() {
         bar.inc(1);
         let p = t.numbers(r, &pos_idx)?;
@@ -174,12 +179,22 @@ pub fn run(a: CompensateArgs) -> Result<()> {
                 row.push(num(c.position_residual_mm, Some(9)));
                 row.push(num(c.rotation_residual_rad.to_degrees(), Some(9)));
                 row.push("ok".into());
+                if let Some(cm) = &comp {
+                    let check = cm.domain_check(&c.q, &mut dws);
+                    if !check.inside() {
+                        outside.push(t.lines[r]);
+                    }
+                    row.push(check.describe());
+                }
                 shifts.push((c.fake.translation.vector - c.desired.translation.vector).norm());
             }
             Err(why) => {
                 let blanks = (if with_orientation { 0 } else { 3 }) + 1 + n + 6 + 2;
                 row.extend(std::iter::repeat_n(String::new(), blanks));
                 row.push(why.to_string());
+                if comp.is_some() {
+                    row.push(String::new());
+                }
                 failed.push((t.lines[r], why));
             }
         }
@@ -189,6 +204,7 @@ pub fn run(a: CompensateArgs) -> Result<()> {
     a.output
         .emit(&headers, &out_rows)
         .context("writing the commands")?;
+    super::train::warn_outside(&a.targets, &outside);
     let total = t.rows.len();
     if !shifts.is_empty() {
         let mean = shifts.iter().sum::<f64>() / shifts.len() as f64;

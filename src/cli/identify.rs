@@ -87,7 +87,10 @@ pub struct EvaluateArgs {
 
 fn fmt_stats(s: &ErrorStats) -> (String, String) {
     let p = s.position_mm.map_or("-".into(), |p| {
-        format!("{:>9.4} {:>9.4} {:>9.4}", p.mean, p.rms, p.max)
+        format!(
+            "{:>9.4} {:>9.4} {:>9.4} {:>9.4}",
+            p.mean, p.rms, p.p95, p.max
+        )
     });
     let r = s.orientation_deg.map_or("-".into(), |r| {
         format!("{:>8.4} {:>8.4} {:>8.4}", r.mean, r.rms, r.max)
@@ -98,12 +101,12 @@ fn fmt_stats(s: &ErrorStats) -> (String, String) {
 /// Prints a before/after table of error statistics.
 pub fn print_stats(rows: &[(&str, &str, &ErrorStats)]) {
     println!(
-        "{:<12} {:<7} {:>29}   {:>26}",
-        "set", "model", "position mm: mean rms max", "orientation deg: mean rms max"
+        "{:<12} {:<7} {:>39}   {:>26}",
+        "set", "model", "position mm: mean rms p95 max", "orientation deg: mean rms max"
     );
     for (set, model, s) in rows {
         let (p, r) = fmt_stats(s);
-        println!("{set:<12} {model:<7} {p:>29}   {r:>26}");
+        println!("{set:<12} {model:<7} {p:>39}   {r:>26}");
     }
 }
 
@@ -148,6 +151,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         robust: a.robust,
         register: !a.no_register,
         outlier_k: a.outlier_k,
+        ..Default::default()
     };
     let id = identify(&nominal, &cal, &opts)?;
     write_robot(&id.robot, &a.out).with_context(|| format!("writing {}", a.out.display()))?;
@@ -363,9 +367,16 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         set.rows.len(),
         m.name()
     );
+    let mut outside = Vec::new();
     let net_rows = match &comp {
         Some(c) => {
             let mut ws = PredictWorkspace::default();
+            outside = set
+                .rows
+                .iter()
+                .filter(|r| !c.domain_check(&r.q, &mut ws).inside())
+                .map(|r| r.line)
+                .collect();
             Some(row_errors(&set, m, |q| c.predict(q, &mut ws))?)
         }
         None => None,
@@ -387,6 +398,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     if let Some(note) = note {
         println!("{note}");
     }
+    super::train::warn_outside(&a.data, &outside);
     if let Some(dir) = &a.plot {
         let mut runs = vec![ErrorRun {
             label: "model",
@@ -407,6 +419,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         if let (Some(p), Some(c)) = (&a.compensator, &compensated) {
             v["compensator"] = json!(p);
             v["compensated"] = stats_json(c);
+            v["rows_outside_domain"] = json!(outside.len());
         }
         write_json(path, &v)?;
     }

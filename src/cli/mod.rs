@@ -2,6 +2,7 @@
 
 mod case_d;
 mod compensate;
+mod compensator_args;
 mod data_args;
 mod fk;
 mod identify;

@@ -1,5 +1,6 @@
 //! `robocal train` and `robocal predict`: the neural compensator.
 
+use super::compensator_args::{CompensatorArgs, progress_bar};
 use super::data_args::{DataArgs, SigmaArgs};
 use super::identify::{print_stats, read_sets, stats_json, write_json};
 use super::output::{OutputArgs, num};
@@ -7,8 +8,9 @@ use crate::evaluate::{row_errors, summarize};
 use crate::identify::Measure;
 use crate::kinematics::{pose_to_file, tool_pose};
 use crate::model::{Robot, read_robot, robot_to_toml};
-use crate::neural::compensator::{Compensator, CompensatorOptions, Form, PredictWorkspace};
-use crate::neural::train::TrainOptions;
+use crate::neural::compensator::{Compensator, PredictWorkspace};
+use crate::neural::train::Phase2;
+use crate::neural::tuning::{Score, Selection};
 use crate::plot::{ErrorRun, error_figures, training_figure};
 use anyhow::{Context, Result, bail};
 use clap::Args;
@@ -29,41 +31,15 @@ pub struct TrainArgs {
     validate: Option<PathBuf>,
     #[command(flatten)]
     read: DataArgs,
-    /// Where the network acts: joint corrections before FK, or a pose residual after it.
-    #[arg(long, value_enum, default_value_t = Form::Joint)]
-    form: Form,
-    /// Hidden sigmoid units.
-    #[arg(long, default_value_t = 20)]
-    hidden: usize,
-    /// Model parameters re-estimated together with the network (offsets | full | names, as
-    /// for identify); the compensator then embeds the refined model.
-    #[arg(long)]
-    refine: Option<String>,
-    /// Seed of the initial weights and of the held-out validation part.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// Phase-1 (gradient descent with momentum) epochs.
-    #[arg(long, default_value_t = 200)]
-    momentum_epochs: usize,
-    /// Phase-2 (Levenberg-Marquardt) epoch limit.
-    #[arg(long, default_value_t = 200)]
-    max_epochs: usize,
-    /// Performance goal: mean squared normalised residual.
-    #[arg(long, default_value_t = 0.0)]
-    goal: f64,
-    /// Validation failures in a row before stopping.
-    #[arg(long, default_value_t = 6)]
-    max_fail: usize,
-    /// Part of the training rows held out for early stopping.
-    #[arg(long, default_value_t = 0.15)]
-    validation_fraction: f64,
-    /// Tracker sigmas for rows without their own (joint form weighting, refinement).
+    #[command(flatten)]
+    build: CompensatorArgs,
+    /// Tracker sigmas for rows without their own (refinement).
     #[command(flatten)]
     sigma: SigmaArgs,
     /// Compensator file to write (JSON).
     #[arg(long)]
     out: PathBuf,
-    /// JSON report: training curve, stop reason, refined parameters, statistics.
+    /// JSON report: cross-validation, training curves, refined parameters, statistics.
     #[arg(long)]
     report: Option<PathBuf>,
     /// Folder for pictures (PNG and SVG, listed in figures.json for `robocal report`).
@@ -71,61 +47,119 @@ pub struct TrainArgs {
     plot: Option<PathBuf>,
 }
 
+/// Prints the cross-validation table.
+fn print_selection(sel: &Selection) {
+    println!(
+        "cross-validation ({} folds of whole configurations; RMS over every held-out row):",
+        sel.folds
+    );
+    println!(
+        "  {:>5} {:<5} {:<6} {:>6} {:>7} {:>7} {:<10} {:>11} {:>15}",
+        "stage",
+        "form",
+        "inputs",
+        "hidden",
+        "penalty",
+        "members",
+        "refine",
+        "position mm",
+        "orientation deg"
+    );
+    let rot = |s: &Score| {
+        s.orientation_rms_deg
+            .map_or("-".into(), |r| format!("{r:.4}"))
+    };
+    println!(
+        "  {:>5} {:<44} {:>11.4} {:>15}",
+        "-",
+        "model alone",
+        sel.model.position_rms_mm,
+        rot(&sel.model)
+    );
+    for (i, c) in sel.candidates.iter().enumerate() {
+        let s = &c.settings;
+        let score = c.score.as_ref().map_or("failed".to_string(), |x| {
+            format!("{:>11.4} {:>15}", x.position_rms_mm, rot(x))
+        });
+        println!(
+            "{} {:>5} {:<5} {:<6} {:>6} {:>7} {:>7} {:<10} {score}",
+            if i == sel.chosen { "*" } else { " " },
+            c.stage,
+            s.form.name(),
+            s.encoding.name(),
+            s.hidden,
+            s.penalty,
+            s.members,
+            s.refine.as_deref().unwrap_or("-"),
+        );
+        if let Some(e) = &c.error {
+            println!("        {e}");
+        }
+    }
+}
+
 pub fn run_train(a: TrainArgs) -> Result<()> {
     let robot = read_robot(&a.robot)?;
     let (set, val) = read_sets(&a.read, &a.data, a.validate.as_deref(), &robot)?;
-    let opts = CompensatorOptions {
-        form: a.form,
-        sigmas: a.sigma.sigmas(),
-        refine: a.refine.clone(),
-        train: TrainOptions {
-            hidden: a.hidden,
-            seed: a.seed,
-            momentum_epochs: a.momentum_epochs,
-            max_epochs: a.max_epochs,
-            goal: a.goal,
-            max_fail: a.max_fail,
-            validation_fraction: a.validation_fraction,
-            progress: std::io::stderr().is_terminal(),
-            ..Default::default()
-        },
-    };
-    let (c, report) = Compensator::train(&robot, &set, &opts)
-        .with_context(|| format!("training on {}", a.data.display()))?;
-    c.save(&a.out)
-        .with_context(|| format!("writing {}", a.out.display()))?;
-    let n = &report.network;
+    let terminal = std::io::stderr().is_terminal();
+    let opts = a.build.options(a.sigma.sigmas(), terminal)?;
+    let bar = progress_bar(terminal);
+    let started = std::time::Instant::now();
+    let (c, report) = Compensator::train(&robot, &set, &opts, &|done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })
+    .with_context(|| format!("training on {}", a.data.display()))?;
+    let seconds = started.elapsed().as_secs_f64();
+    bar.finish_and_clear();
     println!(
-        "train: {} form, {}-{}-{} network on {} rows of {}; {} momentum + {} LM epochs; stopped: {}",
-        match a.form {
-            Form::Joint => "joint",
-            Form::Pose => "pose",
-        },
-        c.weights.inputs(),
-        c.weights.hidden(),
-        c.weights.outputs(),
+        "train: {} rows of {}, model {}",
         set.rows.len(),
         a.data.display(),
-        n.momentum_epochs,
-        n.lm_epochs,
-        n.stop.describe()
+        a.robot.display()
     );
-    println!(
-        "performance (mean squared normalised residual): training {:.4e}, held-out {:.4e}",
-        n.train_mse, n.validation_mse
-    );
+    if let Some(sel) = &report.selection {
+        print_selection(sel);
+    }
+    println!("settings: {}", report.settings.describe());
+    for n in &report.notes {
+        println!("note: {n}");
+    }
     if !report.refined.is_empty() {
-        println!("refined with the network:");
+        println!(
+            "refined on the training rows (exact identification, {} parameters):",
+            report.refined.len()
+        );
         for p in &report.refined {
             println!(
-                "  {:<12} {:<4} {:>14.6} -> {:>14.6}",
-                p.name, p.unit, p.before, p.after
+                "  {:<12} {:<4} {:>14.6} -> {:>14.6}  (std {:.6})",
+                p.name, p.unit, p.before, p.after, p.std
             );
         }
     }
+    let n = &report.networks;
+    let stops: std::collections::BTreeSet<&str> = n.iter().map(|r| r.stop.describe()).collect();
+    println!(
+        "networks: {} x {}-{}-{} ({} inputs); phase 1 {} epochs, phase 2 {} ({} epochs) per network; \
+         stopped: {}; {seconds:.1} s",
+        n.len(),
+        c.inputs(),
+        c.hidden(),
+        c.outputs(),
+        c.encoding.name(),
+        n.iter().map(|r| r.momentum_epochs).max().unwrap_or(0),
+        match n.first().map(|r| r.phase2) {
+            Some(Phase2::Lbfgs) => "L-BFGS",
+            _ => "LM",
+        },
+        n.iter().map(|r| r.lm_epochs).max().unwrap_or(0),
+        stops.into_iter().collect::<Vec<_>>().join(", ")
+    );
     let mut figs = 0;
-    if let Some(dir) = &a.plot {
-        training_figure(dir, "train", "compensator", &report.network)?;
+    if let Some(dir) = &a.plot
+        && let Some(first) = report.networks.first()
+    {
+        training_figure(dir, "train", "compensator", first)?;
         figs += 1;
     }
     let mut ws = PredictWorkspace::default();
@@ -136,6 +170,11 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         let m = Measure::default_for(s);
         let before_rows = row_errors(s, m, |q| tool_pose(&robot, q))?;
         let after_rows = row_errors(s, m, |q| c.predict(q, &mut ws))?;
+        let outside = s
+            .rows
+            .iter()
+            .filter(|r| !c.domain_check(&r.q, &mut ws).inside())
+            .count();
         if let Some(dir) = &a.plot {
             let runs = [
                 ErrorRun {
@@ -157,16 +196,26 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             .len();
         }
         let (before, after) = (summarize(&before_rows), summarize(&after_rows));
-        stat_rows.push((name, before, after));
-        rows.push(
-            json!({"set": name, "model": stats_json(&before), "compensated": stats_json(&after)}),
-        );
+        stat_rows.push((name, before, after, outside));
+        rows.push(json!({
+            "set": name, "model": stats_json(&before), "compensated": stats_json(&after),
+            "rows_outside_domain": outside,
+        }));
     }
     let table: Vec<(&str, &str, &crate::evaluate::ErrorStats)> = stat_rows
         .iter()
-        .flat_map(|(n, b, a)| [(*n, "model", b), (*n, "+net", a)])
+        .flat_map(|(n, b, a, _)| [(*n, "model", b), (*n, "+net", a)])
         .collect();
     print_stats(&table);
+    for (name, _, _, outside) in &stat_rows {
+        if *outside > 0 && *name != "training" {
+            eprintln!(
+                "warning: {outside} {name} row(s) lie outside the compensator's training domain"
+            );
+        }
+    }
+    c.save(&a.out)
+        .with_context(|| format!("writing {}", a.out.display()))?;
     println!("wrote {}", a.out.display());
     if let Some(dir) = &a.plot {
         println!("plots: {figs} pictures in {}", dir.display());
@@ -176,7 +225,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             p,
             &json!({
                 "robot": a.robot, "data": a.data, "compensator": a.out,
-                "form": a.form, "hidden": a.hidden, "seed": a.seed,
+                "seconds": seconds,
                 "training": report, "statistics": rows,
             }),
         )?;
@@ -225,20 +274,52 @@ pub struct PredictArgs {
 pub fn run_predict(a: PredictArgs) -> Result<()> {
     let c = Compensator::load(&a.compensator)?;
     let (mut headers, rows, joints) = super::fk::joint_table(&a.joints, c.robot.dof())?;
+    if headers.iter().any(|h| h == DOMAIN_COLUMN) {
+        bail!(
+            "{}: the input already has a column `{DOMAIN_COLUMN}`, which would be written; \
+             rename or drop it",
+            a.joints.display()
+        );
+    }
     headers.extend(crate::data::POSE_COLUMNS.iter().map(|s| s.to_string()));
+    headers.push(DOMAIN_COLUMN.into());
     let mut ws = PredictWorkspace::default();
     let mut out = Vec::with_capacity(rows.len());
-    for (cells, q) in rows.into_iter().zip(&joints) {
-        let pose = c.predict(&c.robot.joints_to_internal(q), &mut ws);
+    let mut outside = Vec::new();
+    for (k, (cells, q)) in rows.into_iter().zip(&joints).enumerate() {
+        let q = c.robot.joints_to_internal(q);
+        let pose = c.predict(&q, &mut ws);
+        let check = c.domain_check(&q, &mut ws);
+        if !check.inside() {
+            outside.push(k + 2);
+        }
         let mut row = cells;
         row.extend(
             pose_to_file(&pose)
                 .iter()
                 .map(|v| num(*v, a.output.decimals)),
         );
+        row.push(check.describe());
         out.push(row);
     }
+    warn_outside(&a.joints, &outside);
     a.output
         .emit(&headers, &out)
         .with_context(|| "writing the predictions".to_string())
+}
+
+/// The output column that says where a row stands against the training domain.
+pub(super) const DOMAIN_COLUMN: &str = "domain";
+
+/// Warns (stderr) about rows outside a compensator's training domain, by line.
+pub(super) fn warn_outside(path: &Path, lines: &[usize]) {
+    if !lines.is_empty() {
+        eprintln!(
+            "warning: {}: {} row(s) outside the compensator's training domain (lines {}): \
+             the network extrapolates there; see the `{DOMAIN_COLUMN}` column",
+            path.display(),
+            lines.len(),
+            crate::data::measurement::list_lines(lines)
+        );
+    }
 }

@@ -83,7 +83,15 @@ fn condition(m: &DMatrix<f64>) -> (Vec<f64>, f64) {
 }
 
 /// Analyses the candidate parameters (indices into `Robot::parameters`, in priority order).
-pub fn analyse(robot: &Robot, obs: &Observations, candidates: &[usize]) -> Identifiability {
+/// A candidate joins the identifiable subset when the sine of the angle between its scaled
+/// column and the span of those kept before it exceeds `tolerance` ([`RANK_TOL`] for plain
+/// identification; larger keeps only well-determined parameters).
+pub fn analyse(
+    robot: &Robot,
+    obs: &Observations,
+    candidates: &[usize],
+    tolerance: f64,
+) -> Identifiability {
     let mut ws = Workspace::new(robot);
     let r = observation_r(robot, obs, candidates, &mut ws);
     let k = candidates.len();
@@ -136,7 +144,7 @@ pub fn analyse(robot: &Robot, obs: &Observations, candidates: &[usize]) -> Ident
             }
         }
         let rest = v.norm();
-        if rest > RANK_TOL {
+        if rest > tolerance.max(RANK_TOL) {
             basis.push(v / rest);
             kept.push(c);
         }

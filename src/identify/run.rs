@@ -53,6 +53,9 @@ pub struct Options {
     pub register: bool,
     /// Rows whose residual exceeds this many robust sigmas are reported as outliers.
     pub outlier_k: f64,
+    /// Smallest sine of the angle between a parameter's scaled column and the span of the
+    /// parameters kept before it (see [`super::identifiability::analyse`]).
+    pub rank_tolerance: f64,
 }
 
 impl Default for Options {
@@ -65,6 +68,7 @@ impl Default for Options {
             robust: None,
             register: true,
             outlier_k: 3.0,
+            rank_tolerance: super::identifiability::RANK_TOL,
         }
     }
 }
@@ -222,7 +226,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         registration = Some(reg);
     }
 
-    let ident = analyse(&start, &obs, &candidates);
+    let ident = analyse(&start, &obs, &candidates, opts.rank_tolerance);
     let cols = ident.selected.clone();
     if cols.is_empty() {
         return Err(Error::Invalid(

@@ -1,6 +1,15 @@
-//! The neural compensator (thesis 3.2, 5.5, 6.4): a small MLP in series with a kinematic model.
+//! The neural compensator (thesis 3.2, 5.5, 6.4): small MLPs in series with a kinematic model.
 
 pub mod compensator;
+pub mod domain;
+pub mod encoding;
+pub mod file;
+pub mod lbfgs;
 pub mod net;
+pub mod predict;
+pub mod refine;
+pub mod samples;
+pub mod targets;
 pub mod train;
+pub mod tuning;
 pub mod weights;

@@ -3,7 +3,7 @@
 //! Weights move to and from [`Weights`] (nalgebra) for the Levenberg-Marquardt phase and for
 //! fast prediction.
 
-use super::train::Samples;
+use super::samples::Samples;
 use super::weights::Weights;
 use crate::error::{Error, Result};
 use burn::module::Module;
@@ -155,13 +155,15 @@ pub fn weights_from_record(
 }
 
 /// Phase 1 (thesis 3.2): full-batch gradient descent with momentum 0.9 and learning rate
-/// 0.01 on the mean squared residual of [`Samples`], through burn's autodiff and SGD
-/// optimizer (heavy-ball momentum: v <- 0.9 v + g, w <- w - 0.01 v). Starts from `start`;
-/// calls `epoch_done` with (epoch, training MSE, weights) after each epoch and stops when it
-/// returns false.
+/// 0.01 on the penalised mean squared residual of [`Samples`] (`lambda`: the L2 weight
+/// penalty of [`super::samples::objective`]), through burn's autodiff and SGD optimizer
+/// (heavy-ball momentum: v <- 0.9 v + g, w <- w - 0.01 v). Starts from `start`; calls
+/// `epoch_done` with (epoch, training MSE without the penalty, weights) after each epoch and
+/// stops when it returns false.
 pub fn train_momentum(
     start: &Weights,
     s: &Samples,
+    lambda: f64,
     epochs: usize,
     mut epoch_done: impl FnMut(usize, f64, &Weights) -> bool,
 ) -> Result<Weights> {
@@ -194,8 +196,15 @@ pub fn train_momentum(
                 ay.reshape([n, nr])
             }
         };
-        let loss = MseLoss::new().forward(pred, bt.clone(), Reduction::Mean);
-        let mse: f64 = loss.clone().into_scalar::<f64>();
+        let mse_t = MseLoss::new().forward(pred, bt.clone(), Reduction::Mean);
+        let mse: f64 = mse_t.clone().into_scalar::<f64>();
+        let loss = if lambda > 0.0 {
+            let w2 = model.hidden.weight.val().powi_scalar(2).sum()
+                + model.out.weight.val().powi_scalar(2).sum();
+            mse_t + w2.mul_scalar(lambda / (n * nr) as f64)
+        } else {
+            mse_t
+        };
         if !mse.is_finite() {
             return Err(Error::NotConverged(format!(
                 "network training diverged at epoch {epoch}: MSE {mse}"
@@ -254,10 +263,9 @@ mod tests {
         let s = Samples {
             x,
             b: y,
-            maps: None,
-            lin: None,
+            ..Default::default()
         };
-        train_momentum(&start, &s, 300, |e, mse, _| {
+        train_momentum(&start, &s, 0.0, 300, |e, mse, _| {
             if e == 1 {
                 first = mse;
             }
@@ -290,7 +298,7 @@ mod tests {
         }
         direct /= 14.0;
         let mut first = f64::NAN;
-        train_momentum(&start, &s, 1, |_, mse, _| {
+        train_momentum(&start, &s, 0.0, 1, |_, mse, _| {
             first = mse;
             true
         })
@@ -299,5 +307,33 @@ mod tests {
             (first - direct).abs() < 1e-12 * direct,
             "{first} vs {direct}"
         );
+    }
+
+    #[test]
+    fn first_momentum_step_follows_the_penalised_gradient() {
+        // burn's first heavy-ball step is w - 0.01 g, g the gradient of the penalised loss:
+        // burn's autodiff and our backpropagation (samples::objective) must agree.
+        let start = weights(2, 4, 3, 0.45);
+        let mut s = Samples {
+            maps: Some(Vec::new()),
+            ..Default::default()
+        };
+        for k in 0..6 {
+            s.x.push(vec![k as f64 * 0.3 - 0.8, (k as f64 * 0.7).sin()]);
+            s.b.push(vec![0.2 * k as f64, -0.4]);
+            s.maps
+                .as_mut()
+                .unwrap()
+                .push(DMatrix::from_fn(2, 3, |i, j| {
+                    ((k + 2 * i + j) as f64).cos()
+                }));
+        }
+        let lambda = 0.3;
+        let mut g = DVector::zeros(start.len());
+        crate::neural::samples::objective(&s, &start, lambda, &mut g);
+        let after = train_momentum(&start, &s, lambda, 1, |_, _, _| true).unwrap();
+        let expected = start.to_vector() - g * 0.01;
+        let got = after.to_vector();
+        assert!((got - &expected).amax() < 1e-12, "{expected}");
     }
 }

@@ -153,49 +153,67 @@ impl Weights {
     }
 }
 
-/// Min-max normalisation of each feature to [-1, 1], fitted on training data and stored with
-/// the network.
+/// An affine normalisation of each feature, v_norm = (v - offset) / scale, fitted on training
+/// data and stored with the network.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct MinMax {
-    pub min: Vec<f64>,
-    pub max: Vec<f64>,
+pub struct Affine {
+    pub offset: Vec<f64>,
+    pub scale: Vec<f64>,
 }
 
-impl MinMax {
-    /// Fits to rows of equal length; a constant feature maps to 0.
-    pub fn fit(rows: &[Vec<f64>]) -> MinMax {
+impl Affine {
+    /// Mean 0 and standard deviation 1 over `rows` (of equal length); a constant feature
+    /// keeps scale 1.
+    pub fn standardise(rows: &[Vec<f64>]) -> Affine {
         let n = rows.first().map_or(0, |r| r.len());
-        let mut min = vec![f64::INFINITY; n];
-        let mut max = vec![f64::NEG_INFINITY; n];
-        for r in rows {
-            for k in 0..n {
-                min[k] = min[k].min(r[k]);
-                max[k] = max[k].max(r[k]);
-            }
+        let count = rows.len().max(1) as f64;
+        let offset: Vec<f64> = (0..n)
+            .map(|k| rows.iter().map(|r| r[k]).sum::<f64>() / count)
+            .collect();
+        let scale = (0..n)
+            .map(|k| {
+                let var = rows.iter().map(|r| (r[k] - offset[k]).powi(2)).sum::<f64>() / count;
+                if var > 1e-24 { var.sqrt() } else { 1.0 }
+            })
+            .collect();
+        Affine { offset, scale }
+    }
+
+    /// Scale only (offset 0).
+    pub fn scaling(scale: Vec<f64>) -> Affine {
+        Affine {
+            offset: vec![0.0; scale.len()],
+            scale,
         }
-        MinMax { min, max }
     }
 
-    /// Half the fitted range of feature `k` (1 for a constant feature).
-    pub fn half_range(&self, k: usize) -> f64 {
-        let h = 0.5 * (self.max[k] - self.min[k]);
-        if h > 0.0 { h } else { 1.0 }
+    pub fn len(&self) -> usize {
+        self.offset.len()
     }
 
-    /// Raw to [-1, 1].
+    pub fn is_empty(&self) -> bool {
+        self.offset.is_empty()
+    }
+
+    /// Raw to normalised.
     pub fn apply(&self, v: &[f64], out: &mut [f64]) {
         for k in 0..v.len() {
-            let mid = 0.5 * (self.max[k] + self.min[k]);
-            out[k] = (v[k] - mid) / self.half_range(k);
+            out[k] = (v[k] - self.offset[k]) / self.scale[k];
         }
     }
 
-    /// [-1, 1] back to raw.
+    /// Normalised back to raw.
     pub fn invert(&self, v: &[f64], out: &mut [f64]) {
         for k in 0..v.len() {
-            let mid = 0.5 * (self.max[k] + self.min[k]);
-            out[k] = v[k] * self.half_range(k) + mid;
+            out[k] = v[k] * self.scale[k] + self.offset[k];
         }
+    }
+
+    /// True when every offset is finite and every scale finite and positive.
+    pub fn is_valid(&self) -> bool {
+        self.offset.len() == self.scale.len()
+            && self.offset.iter().all(|v| v.is_finite())
+            && self.scale.iter().all(|v| v.is_finite() && *v > 0.0)
     }
 }
 
@@ -275,12 +293,17 @@ mod tests {
     fn vector_round_trip_and_normalisation() {
         let w = sample();
         assert_eq!(w.from_vector(&w.to_vector()), w);
-        let m = MinMax::fit(&[vec![0.0, 5.0], vec![10.0, 5.0]]);
+        let m = Affine::standardise(&[vec![0.0, 5.0], vec![10.0, 5.0]]);
+        assert_eq!(
+            (m.offset.clone(), m.scale.clone()),
+            (vec![5.0, 5.0], vec![5.0, 1.0])
+        );
         let mut out = [0.0; 2];
         m.apply(&[10.0, 5.0], &mut out);
         assert_eq!(out, [1.0, 0.0]);
         let mut back = [0.0; 2];
         m.invert(&out, &mut back);
         assert_eq!(back, [10.0, 5.0]);
+        assert!(m.is_valid() && !Affine::scaling(vec![0.0]).is_valid());
     }
 }

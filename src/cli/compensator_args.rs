@@ -1,0 +1,176 @@
+//! Flags that build a compensator (`train`, `case-d`): every choice left out is made by
+//! cross-validation on the training rows.
+
+use crate::neural::compensator::{CompensatorOptions, Form, Refine};
+use crate::neural::encoding::Encoding;
+use crate::neural::train::{Phase2, TrainOptions};
+use anyhow::{Result, bail};
+use clap::{Args, ValueEnum};
+
+/// Input encodings on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum EncodingArg {
+    /// sin and cos of each revolute joint angle.
+    Sincos,
+    /// The joint values (rad, mm).
+    Angles,
+    /// sin and cos, and gravity's direction in each link frame of the model.
+    Gravity,
+}
+
+/// Phase-2 methods on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum Phase2Arg {
+    /// Levenberg-Marquardt when its normal matrix is cheap, L-BFGS beyond.
+    Auto,
+    /// Levenberg-Marquardt (MATLAB trainlm).
+    Lm,
+    /// L-BFGS.
+    Lbfgs,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct CompensatorArgs {
+    /// Where the network acts: joint corrections before FK, or a pose residual after it
+    /// (robot base frame). Default: chosen by cross-validation.
+    #[arg(long, value_enum)]
+    pub form: Option<Form>,
+    /// Network inputs: sin/cos of the joints, the joint values, or sin/cos plus the direction
+    /// of gravity in each link frame. Default: chosen by cross-validation.
+    #[arg(long, value_enum)]
+    pub encoding: Option<EncodingArg>,
+    /// Hidden sigmoid units (1 to 256). Default: chosen by cross-validation among 16, 32, 64.
+    #[arg(long)]
+    pub hidden: Option<usize>,
+    /// L2 weight penalty lambda (>= 0; one squared weight against one squared unit-scale
+    /// residual). Default: chosen by cross-validation among 0.03, 0.1, 0.3, 1.
+    #[arg(long)]
+    pub penalty: Option<f64>,
+    /// Networks in the ensemble (0 to 50; the prediction is their mean; 0: the model alone).
+    /// Default: 1 or 4, or none where no network lowers the error, by cross-validation.
+    #[arg(long)]
+    pub members: Option<usize>,
+    /// Model parameters re-estimated on the training rows before the network is trained
+    /// (exact identification): `auto` (cross-validation decides between none and `full`),
+    /// `none`, or a selection as for identify (`offsets`, `full`, names), kept only where
+    /// cross-validation shows it lowers the held-out error.
+    #[arg(long, default_value = "auto")]
+    pub refine: String,
+    /// Cross-validation folds (2 to 20). Default: 5, or 3 from 1000 distinct configurations.
+    #[arg(long)]
+    pub folds: Option<usize>,
+    /// Seed of the folds, the initial weights and the held-out validation parts.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Phase-1 (gradient descent with momentum) epochs (at most 100000).
+    #[arg(long, default_value_t = 200)]
+    pub momentum_epochs: usize,
+    /// Phase-2 epoch limit (at most 100000; L-BFGS: ten iterations an epoch).
+    #[arg(long, default_value_t = 60)]
+    pub max_epochs: usize,
+    /// Phase-2 method.
+    #[arg(long, value_enum, default_value_t = Phase2Arg::Auto)]
+    pub phase2: Phase2Arg,
+    /// Performance goal: mean squared normalised residual (>= 0).
+    #[arg(long, default_value_t = 0.0)]
+    pub goal: f64,
+    /// Validation failures in a row before stopping (1 to 1000).
+    #[arg(long, default_value_t = 6)]
+    pub max_fail: usize,
+    /// Part of each network's training rows held out for the thesis's validation-failure
+    /// stopping rule (0 to 0.5; 0: none, the penalty regularises and every row trains).
+    #[arg(long, default_value_t = 0.0)]
+    pub validation_fraction: f64,
+}
+
+impl CompensatorArgs {
+    /// The library options; out-of-range values are refused with the flag's name.
+    pub fn options(
+        &self,
+        sigmas: crate::identify::Sigmas,
+        progress: bool,
+    ) -> Result<CompensatorOptions> {
+        if let Some(h) = self.hidden
+            && !(1..=256).contains(&h)
+        {
+            bail!("--hidden {h}: give 1 to 256 hidden units");
+        }
+        if let Some(p) = self.penalty
+            && !(p.is_finite() && p >= 0.0)
+        {
+            bail!("--penalty {p}: give a finite penalty >= 0");
+        }
+        if let Some(m) = self.members
+            && m > 50
+        {
+            bail!("--members {m}: give 0 to 50 networks");
+        }
+        if let Some(k) = self.folds
+            && !(2..=20).contains(&k)
+        {
+            bail!("--folds {k}: give 2 to 20 folds");
+        }
+        if self.momentum_epochs > 100_000 || self.max_epochs > 100_000 {
+            bail!("--momentum-epochs and --max-epochs take at most 100000");
+        }
+        if !(self.goal.is_finite() && self.goal >= 0.0) {
+            bail!("--goal {}: give a finite goal >= 0", self.goal);
+        }
+        if !(1..=1000).contains(&self.max_fail) {
+            bail!("--max-fail {}: give 1 to 1000", self.max_fail);
+        }
+        if !(0.0..=0.5).contains(&self.validation_fraction) {
+            bail!(
+                "--validation-fraction {}: give a fraction from 0 to 0.5",
+                self.validation_fraction
+            );
+        }
+        let refine = match self.refine.as_str() {
+            "auto" => Refine::Auto,
+            "none" => Refine::Off,
+            spec => Refine::Params(spec.to_string()),
+        };
+        Ok(CompensatorOptions {
+            form: self.form,
+            encoding: self.encoding.map(|e| match e {
+                EncodingArg::Sincos => Encoding::SinCos,
+                EncodingArg::Angles => Encoding::Angles,
+                EncodingArg::Gravity => Encoding::Gravity,
+            }),
+            hidden: self.hidden,
+            penalty: self.penalty,
+            members: self.members,
+            refine,
+            sigmas,
+            folds: self.folds,
+            train: TrainOptions {
+                seed: self.seed,
+                momentum_epochs: self.momentum_epochs,
+                max_epochs: self.max_epochs,
+                goal: self.goal,
+                max_fail: self.max_fail,
+                validation_fraction: self.validation_fraction,
+                phase2: match self.phase2 {
+                    Phase2Arg::Auto => Phase2::Auto,
+                    Phase2Arg::Lm => Phase2::Lm,
+                    Phase2Arg::Lbfgs => Phase2::Lbfgs,
+                },
+                progress,
+                ..Default::default()
+            },
+        })
+    }
+}
+
+/// A progress bar over cross-validation trainings on a terminal, hidden elsewhere.
+pub fn progress_bar(show: bool) -> indicatif::ProgressBar {
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let b = indicatif::ProgressBar::new(0);
+    b.set_style(
+        indicatif::ProgressStyle::with_template("cross-validation {bar:30} {pos}/{len} trainings")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    b
+}

@@ -1,0 +1,161 @@
+//! What the network sees of a configuration: its input features and their derivatives by
+//! the joints.
+
+use crate::kinematics::{Frames, frames};
+use crate::model::{JointType, Robot};
+use nalgebra::Vector3;
+
+/// How joints become network inputs (then standardised to mean 0, deviation 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Encoding {
+    /// sin q and cos q of each revolute joint (the value of prismatic ones): periodic, so
+    /// q and q + 2 pi look alike, as gear errors of one revolution do.
+    SinCos,
+    /// The joint values themselves (rad, mm).
+    Angles,
+    /// sin q and cos q as `SinCos`, then the direction of gravity (the robot base's -z)
+    /// in each link frame of the model: what loads each joint and link, whatever the
+    /// robot's structure (for parallel axes it carries the sums q2 + q3, q2 + q3 + q4).
+    Gravity,
+}
+
+impl Encoding {
+    pub const ALL: [Encoding; 3] = [Encoding::SinCos, Encoding::Angles, Encoding::Gravity];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Encoding::SinCos => "sincos",
+            Encoding::Angles => "angles",
+            Encoding::Gravity => "gravity",
+        }
+    }
+
+    /// Number of features of a robot's configuration.
+    pub fn len(self, robot: &Robot) -> usize {
+        let joints: usize = robot
+            .joints()
+            .iter()
+            .map(|j| self.per_joint(j.joint_type))
+            .sum();
+        match self {
+            Encoding::Gravity => joints + 3 * robot.dof(),
+            _ => joints,
+        }
+    }
+
+    fn per_joint(self, t: JointType) -> usize {
+        match (self, t) {
+            (Encoding::SinCos | Encoding::Gravity, JointType::Revolute) => 2,
+            _ => 1,
+        }
+    }
+
+    /// The raw features of `q` (rad, mm) into `out` (cleared first); `ws` is an FK workspace
+    /// of `robot` (used by `Gravity`).
+    pub fn features(self, robot: &Robot, q: &[f64], ws: &mut Frames, out: &mut Vec<f64>) {
+        out.clear();
+        for (j, v) in robot.joints().iter().zip(q) {
+            match (self, j.joint_type) {
+                (Encoding::SinCos | Encoding::Gravity, JointType::Revolute) => {
+                    let (s, c) = libm::sincos(*v);
+                    out.push(s);
+                    out.push(c);
+                }
+                _ => out.push(*v),
+            }
+        }
+        if self == Encoding::Gravity {
+            frames(robot, q, ws);
+            let g = gravity(robot);
+            for link in &ws.link {
+                out.extend((link.rotation.inverse() * g).iter());
+            }
+        }
+    }
+
+    /// Calls `f(joint, feature, d feature / d q_joint)` for every non-zero derivative of the
+    /// raw features at `q`; `ws` as for [`Encoding::features`].
+    pub fn for_each_derivative(
+        self,
+        robot: &Robot,
+        q: &[f64],
+        ws: &mut Frames,
+        mut f: impl FnMut(usize, usize, f64),
+    ) {
+        let mut col = 0;
+        for (j, joint) in robot.joints().iter().enumerate() {
+            match (self, joint.joint_type) {
+                (Encoding::SinCos | Encoding::Gravity, JointType::Revolute) => {
+                    let (s, c) = libm::sincos(q[j]);
+                    f(j, col, c);
+                    f(j, col + 1, -s);
+                }
+                _ => f(j, col, 1.0),
+            }
+            col += self.per_joint(joint.joint_type);
+        }
+        if self == Encoding::Gravity {
+            // Joint j <= i turns link frame i about its world axis a_j:
+            // d(R_i^T g)/dq_j = -R_i^T (a_j x g).
+            frames(robot, q, ws);
+            let g = gravity(robot);
+            for i in 0..robot.dof() {
+                let inv = ws.link[i].rotation.inverse();
+                for j in 0..=i {
+                    if robot.joints()[j].joint_type != JointType::Revolute {
+                        continue;
+                    }
+                    let a: Vector3<f64> = ws.joint[j].rotation.matrix().column(2).into();
+                    let d = -(inv * a.cross(&g));
+                    for r in 0..3 {
+                        f(j, col + 3 * i + r, d[r]);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The direction of gravity in the world frame: -z of the robot's base row.
+fn gravity(robot: &Robot) -> Vector3<f64> {
+    -robot
+        .base()
+        .transform()
+        .rotation
+        .matrix()
+        .column(2)
+        .into_owned()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::read_robot;
+
+    #[test]
+    fn derivatives_match_central_differences() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let robot = read_robot(root.join("datasets/robots/ur10.toml")).unwrap();
+        let q = [0.3, -1.2, 2.0, -0.4, 1.1, -2.9];
+        let mut ws = Frames::new(&robot);
+        for enc in Encoding::ALL {
+            let n = enc.len(&robot);
+            let mut d = vec![vec![0.0; n]; 6];
+            enc.for_each_derivative(&robot, &q, &mut ws, |j, k, v| d[j][k] += v);
+            let (mut fp, mut fm) = (Vec::new(), Vec::new());
+            for j in 0..6 {
+                let (mut qp, mut qm) = (q, q);
+                qp[j] += 1e-6;
+                qm[j] -= 1e-6;
+                enc.features(&robot, &qp, &mut ws, &mut fp);
+                enc.features(&robot, &qm, &mut ws, &mut fm);
+                assert_eq!(fp.len(), n);
+                for k in 0..n {
+                    let fd = (fp[k] - fm[k]) / 2e-6;
+                    assert!((fd - d[j][k]).abs() < 1e-8, "{enc:?} {j} {k}");
+                }
+            }
+        }
+    }
+}

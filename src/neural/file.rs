@@ -1,0 +1,190 @@
+//! The compensator file (JSON, version 2): format and version, form, encoding, shapes,
+//! normalisations, training domain, the robot file it runs in series with (embedded, with its
+//! hash), one burn record (burnpack bytes, hex) per ensemble member, and a checksum of it all.
+//!
+//! Version 2 changed the inputs (encodings, standardisation), the pose form's frame (the
+//! robot's base frame) and added ensembles and the domain: version 1 files are refused with a
+//! message that says so.
+
+use super::compensator::{Compensator, Form};
+use super::domain::Domain;
+use super::encoding::Encoding;
+use super::net::{record_bytes, weights_from_record};
+use super::weights::Affine;
+use crate::error::{Error, Location, Result};
+use crate::model::robot_to_toml;
+use serde_json::Value;
+use std::path::Path;
+
+const FORMAT: &str = "robocal-compensator";
+const VERSION: u64 = 2;
+
+impl Compensator {
+    /// The compensator file's text.
+    pub fn to_file_text(&self) -> Result<String> {
+        let robot_toml = robot_to_toml(&self.robot);
+        let records = self
+            .members
+            .iter()
+            .map(|w| record_bytes(w).map(|b| hex(&b)))
+            .collect::<Result<Vec<_>>>()?;
+        let mut body = serde_json::json!({
+            "format": FORMAT,
+            "version": VERSION,
+            "form": self.form,
+            "encoding": self.encoding,
+            "inputs": self.inputs(),
+            "hidden": self.hidden(),
+            "outputs": self.outputs(),
+            "input_norm": self.input_norm,
+            "output_norm": self.output_norm,
+            "domain": self.domain,
+            "robot_toml": robot_toml,
+            "robot_hash": format!("{:016x}", fnv1a(robot_toml.as_bytes())),
+            "network_records_burnpack_hex": records,
+        });
+        let sum = fnv1a(
+            serde_json::to_string(&body)
+                .map_err(|e| Error::Invalid(e.to_string()))?
+                .as_bytes(),
+        );
+        body["checksum"] = serde_json::json!(format!("{sum:016x}"));
+        serde_json::to_string_pretty(&body).map_err(|e| Error::Invalid(e.to_string()))
+    }
+
+    /// Writes the compensator file atomically.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        crate::io::write_atomic(path, self.to_file_text()?.as_bytes())
+    }
+
+    /// Reads a compensator file; a wrong format, version, checksum, robot hash, record, shape
+    /// or a non-finite number is an error naming the file.
+    pub fn load(path: &Path) -> Result<Compensator> {
+        let text = crate::io::read_text(path)?;
+        Self::from_file_text(&text, path)
+    }
+
+    /// Parses a compensator file's text; `path` names it in errors.
+    pub fn from_file_text(text: &str, path: &Path) -> Result<Compensator> {
+        let bad = |m: String| Error::input(Location::file(path), m);
+        let mut v: Value =
+            serde_json::from_str(text).map_err(|e| bad(format!("not a compensator file: {e}")))?;
+        if v["format"] != FORMAT {
+            return Err(bad("not a robocal compensator file".into()));
+        }
+        if v["version"] != VERSION {
+            return Err(bad(format!(
+                "compensator file version {} (this robocal reads version {VERSION}; train it again)",
+                v["version"]
+            )));
+        }
+        let sum = v["checksum"].as_str().unwrap_or_default().to_string();
+        if let Some(o) = v.as_object_mut() {
+            o.remove("checksum");
+        }
+        let body = serde_json::to_string(&v).map_err(|e| bad(e.to_string()))?;
+        if format!("{:016x}", fnv1a(body.as_bytes())) != sum {
+            return Err(bad(
+                "checksum mismatch: the file is corrupt or was edited".into()
+            ));
+        }
+        let robot_toml = v["robot_toml"]
+            .as_str()
+            .ok_or_else(|| bad("no embedded robot".into()))?;
+        if format!("{:016x}", fnv1a(robot_toml.as_bytes()))
+            != v["robot_hash"].as_str().unwrap_or_default()
+        {
+            return Err(bad("the embedded robot does not match its hash".into()));
+        }
+        let robot =
+            crate::model::file::parse_robot(robot_toml, &path.with_extension("embedded.toml"))?;
+        let get = |k: &str| {
+            v[k].as_u64()
+                .map(|x| x as usize)
+                .ok_or_else(|| bad(format!("missing `{k}`")))
+        };
+        let (ni, nh, no) = (get("inputs")?, get("hidden")?, get("outputs")?);
+        let records = v["network_records_burnpack_hex"]
+            .as_array()
+            .ok_or_else(|| bad("no network records".into()))?;
+        let mut members = Vec::with_capacity(records.len());
+        for (k, r) in records.iter().enumerate() {
+            let bytes = unhex(r.as_str().unwrap_or_default())
+                .ok_or_else(|| bad(format!("network record {} is not hex", k + 1)))?;
+            let w = weights_from_record(&bytes, ni, nh, no).map_err(|e| bad(e.to_string()))?;
+            if w.to_vector().iter().any(|x| !x.is_finite()) {
+                return Err(bad(format!("network {} has a non-finite weight", k + 1)));
+            }
+            members.push(w);
+        }
+        if members.is_empty() != (nh == 0) {
+            return Err(bad(format!(
+                "{} network records for {nh} hidden units",
+                members.len()
+            )));
+        }
+        fn de<T: serde::de::DeserializeOwned>(v: &Value, k: &str, path: &Path) -> Result<T> {
+            serde_json::from_value(v[k].clone())
+                .map_err(|e| Error::input(Location::file(path), format!("`{k}`: {e}")))
+        }
+        let c = Compensator {
+            form: de::<Form>(&v, "form", path)?,
+            encoding: de::<Encoding>(&v, "encoding", path)?,
+            robot,
+            members,
+            input_norm: de::<Affine>(&v, "input_norm", path)?,
+            output_norm: de::<Affine>(&v, "output_norm", path)?,
+            domain: de::<Domain>(&v, "domain", path)?,
+        };
+        // A consistent checksum does not prove consistent shapes or sane numbers: prediction
+        // indexes by the shapes and would spread a non-finite number into every pose.
+        let outputs_ok = match c.form {
+            Form::Joint => no == c.robot.dof(),
+            Form::Pose => no == 3 || no == 6,
+        };
+        let norms_ok = c.input_norm.len() == ni
+            && c.output_norm.len() == no
+            && c.input_norm.is_valid()
+            && c.output_norm.is_valid();
+        if ni != c.encoding.len(&c.robot) || !outputs_ok || !norms_ok {
+            return Err(bad(format!(
+                "a {ni}-{nh}-{no} {}-form network on {} inputs, with normalisations of {} \
+                 inputs and {} outputs (finite, positive scales: {}), does not fit its \
+                 {}-joint robot",
+                c.form.name(),
+                c.encoding.name(),
+                c.input_norm.len(),
+                c.output_norm.len(),
+                c.input_norm.is_valid() && c.output_norm.is_valid(),
+                c.robot.dof()
+            )));
+        }
+        if !c.domain.is_valid(c.robot.dof(), ni) {
+            return Err(bad(
+                "the training domain does not fit the network or holds a non-finite number".into(),
+            ));
+        }
+        Ok(c)
+    }
+}
+
+/// FNV-1a, 64 bits: a checksum against corruption, not a cryptographic hash.
+fn fnv1a(b: &[u8]) -> u64 {
+    b.iter().fold(0xcbf29ce484222325u64, |h, &x| {
+        (h ^ x as u64).wrapping_mul(0x100000001b3)
+    })
+}
+
+fn hex(b: &[u8]) -> String {
+    b.iter().map(|x| format!("{x:02x}")).collect()
+}
+
+fn unhex(s: &str) -> Option<Vec<u8>> {
+    if !s.len().is_multiple_of(2) {
+        return None;
+    }
+    (0..s.len())
+        .step_by(2)
+        .map(|i| u8::from_str_radix(s.get(i..i + 2)?, 16).ok())
+        .collect()
+}

@@ -1,0 +1,266 @@
+//! A compensator's prediction and its Jacobian by the joints.
+//!
+//! The networks' outputs are averaged over the ensemble's members (in normalised units, then
+//! mapped back: the map is affine, so this is the mean of the members' raw outputs).
+
+use super::compensator::{Compensator, Form};
+use super::targets::base_rotation;
+use crate::kinematics::{Frames, Pose, frames, joint_jacobian, tool_pose};
+use crate::rotation::from_rotation_vector;
+use nalgebra::{DMatrix, Matrix3, Matrix6xX, Translation3, Vector3};
+
+/// Scratch space for prediction, reused across calls.
+#[derive(Debug, Clone)]
+pub struct PredictWorkspace {
+    feat: Vec<f64>,
+    x: Vec<f64>,
+    h: Vec<f64>,
+    y: Vec<f64>,
+    y_sum: Vec<f64>,
+    out: Vec<f64>,
+    q: Vec<f64>,
+    row: Vec<f64>,
+    dy: DMatrix<f64>,
+    dy_sum: DMatrix<f64>,
+    dout: DMatrix<f64>,
+    frames: Option<Frames>,
+}
+
+impl Default for PredictWorkspace {
+    fn default() -> Self {
+        PredictWorkspace {
+            feat: Vec::new(),
+            x: Vec::new(),
+            h: Vec::new(),
+            y: Vec::new(),
+            y_sum: Vec::new(),
+            out: Vec::new(),
+            q: Vec::new(),
+            row: Vec::new(),
+            dy: DMatrix::zeros(0, 0),
+            dy_sum: DMatrix::zeros(0, 0),
+            dout: DMatrix::zeros(0, 0),
+            frames: None,
+        }
+    }
+}
+
+impl PredictWorkspace {
+    /// The normalised network inputs of `q` under `c`.
+    pub fn normalised_inputs(&mut self, c: &Compensator, q: &[f64]) -> &[f64] {
+        c.prepare(q, self);
+        &self.x
+    }
+}
+
+impl Compensator {
+    fn prepare(&self, q: &[f64], ws: &mut PredictWorkspace) {
+        let fr = frames_for(&mut ws.frames, &self.robot);
+        self.encoding.features(&self.robot, q, fr, &mut ws.feat);
+        let (i, o) = (ws.feat.len(), self.outputs());
+        ws.x.resize(i, 0.0);
+        ws.h.resize(self.hidden(), 0.0);
+        ws.y.resize(o, 0.0);
+        ws.y_sum.resize(o, 0.0);
+        ws.out.resize(o, 0.0);
+        self.input_norm.apply(&ws.feat, &mut ws.x);
+    }
+
+    /// The mean raw network output for `q` into `ws.out` (joint form: mrad or um per joint;
+    /// pose form: dp mm, dr mrad in the robot's base frame).
+    pub fn correction<'w>(&self, q: &[f64], ws: &'w mut PredictWorkspace) -> &'w [f64] {
+        self.prepare(q, ws);
+        ws.y_sum.fill(0.0);
+        for w in &self.members {
+            w.forward_into(&ws.x, &mut ws.h, &mut ws.y);
+            ws.y_sum.iter_mut().zip(&ws.y).for_each(|(s, v)| *s += v);
+        }
+        if self.members.is_empty() {
+            ws.out.fill(0.0);
+            return &ws.out;
+        }
+        let m = self.members.len() as f64;
+        ws.y_sum.iter_mut().for_each(|s| *s /= m);
+        self.output_norm.invert(&ws.y_sum, &mut ws.out);
+        &ws.out
+    }
+
+    /// The mean raw outputs into `ws.out` and their derivatives by the joints (outputs x
+    /// joints; output units per rad or per mm) into `ws.dout`.
+    fn output_derivatives(&self, q: &[f64], ws: &mut PredictWorkspace) {
+        self.prepare(q, ws);
+        let (i, o, n) = (ws.feat.len(), self.outputs(), q.len());
+        for m in [&mut ws.dy, &mut ws.dy_sum] {
+            if m.shape() != (o, i) {
+                *m = DMatrix::zeros(o, i);
+            }
+        }
+        if ws.dout.shape() != (o, n) {
+            ws.dout = DMatrix::zeros(o, n);
+        }
+        ws.y_sum.fill(0.0);
+        ws.dy_sum.fill(0.0);
+        for w in &self.members {
+            w.input_jacobian_into(&ws.x, &mut ws.h, &mut ws.y, &mut ws.dy);
+            ws.y_sum.iter_mut().zip(&ws.y).for_each(|(s, v)| *s += v);
+            ws.dy_sum += &ws.dy;
+        }
+        ws.dout.fill(0.0);
+        if self.members.is_empty() {
+            ws.out.fill(0.0);
+            return;
+        }
+        let m = self.members.len() as f64;
+        ws.y_sum.iter_mut().for_each(|s| *s /= m);
+        ws.dy_sum /= m;
+        self.output_norm.invert(&ws.y_sum, &mut ws.out);
+        // Chain rule through out = y scale_out + offset_out, x = (f - offset_in) / scale_in
+        // and the features.
+        let fr = frames_for(&mut ws.frames, &self.robot);
+        let (dy, dout) = (&ws.dy_sum, &mut ws.dout);
+        let (inorm, onorm) = (&self.input_norm, &self.output_norm);
+        self.encoding
+            .for_each_derivative(&self.robot, q, fr, |j, f, d| {
+                let dx = d / inorm.scale[f];
+                for k in 0..o {
+                    dout[(k, j)] += dy[(k, f)] * dx * onorm.scale[k];
+                }
+            });
+    }
+
+    /// The geometric Jacobian of the compensated pose at `q` into `jac` (6 x N; rows 0-2 mm
+    /// per rad or per mm, rows 3-5 rad per rad or per mm, world); `frames_ws` is a workspace
+    /// of `self.robot`. Joint form: J = J_model(q + dq(q)) (I + d dq/dq). Pose form, with
+    /// R_b the base rotation: [J_p + R_b d dp/dq; exp(dr_w) J_w + J_l(dr_w) R_b d dr/dq],
+    /// dr_w = R_b dr, J_l the left Jacobian of SO(3).
+    pub fn jacobian(
+        &self,
+        q: &[f64],
+        ws: &mut PredictWorkspace,
+        frames_ws: &mut Frames,
+        jac: &mut Matrix6xX<f64>,
+    ) {
+        self.output_derivatives(q, ws);
+        let n = q.len();
+        match self.form {
+            Form::Joint => {
+                ws.q.clear();
+                ws.q.extend(q.iter().zip(&ws.out).map(|(a, d)| a + d * 1e-3));
+                frames(&self.robot, &ws.q, frames_ws);
+                joint_jacobian(&self.robot, frames_ws, jac);
+                // jac <- jac (I + 1e-3 dout), row by row without a temporary.
+                for r in 0..6 {
+                    ws.row.clear();
+                    ws.row.extend((0..n).map(|c| jac[(r, c)]));
+                    for c in 0..n {
+                        let extra: f64 = (0..n).map(|k| ws.row[k] * ws.dout[(k, c)] * 1e-3).sum();
+                        jac[(r, c)] = ws.row[c] + extra;
+                    }
+                }
+            }
+            Form::Pose => {
+                frames(&self.robot, q, frames_ws);
+                joint_jacobian(&self.robot, frames_ws, jac);
+                let rb = base_rotation(&self.robot);
+                let with_rotation = ws.out.len() >= 6;
+                let dr = if with_rotation {
+                    rb * Vector3::new(ws.out[3], ws.out[4], ws.out[5]) * 1e-3
+                } else {
+                    Vector3::zeros()
+                };
+                let (turn, left) = (from_rotation_vector(&dr), left_jacobian(&dr));
+                for c in 0..n {
+                    let mut w = turn * Vector3::new(jac[(3, c)], jac[(4, c)], jac[(5, c)]);
+                    if with_rotation {
+                        let ddr = Vector3::new(ws.dout[(3, c)], ws.dout[(4, c)], ws.dout[(5, c)]);
+                        w += left * (rb * ddr) * 1e-3;
+                    }
+                    let ddp = rb * Vector3::new(ws.dout[(0, c)], ws.dout[(1, c)], ws.dout[(2, c)]);
+                    for r in 0..3 {
+                        jac[(r, c)] += ddp[r];
+                        jac[(3 + r, c)] = w[r];
+                    }
+                }
+            }
+        }
+    }
+
+    /// The compensated tool pose for joints `q` (rad, mm). Allocation-free once `ws` has been
+    /// used for this compensator.
+    pub fn predict(&self, q: &[f64], ws: &mut PredictWorkspace) -> Pose {
+        self.correction(q, ws);
+        match self.form {
+            Form::Pose => {
+                let model = tool_pose(&self.robot, q);
+                let rb = base_rotation(&self.robot);
+                let dp = rb * Vector3::new(ws.out[0], ws.out[1], ws.out[2]);
+                let rot = if ws.out.len() >= 6 {
+                    from_rotation_vector(
+                        &(rb * Vector3::new(ws.out[3], ws.out[4], ws.out[5]) * 1e-3),
+                    ) * model.rotation
+                } else {
+                    model.rotation
+                };
+                Pose::from_parts(Translation3::from(model.translation.vector + dp), rot)
+            }
+            Form::Joint => {
+                ws.q.clear();
+                ws.q.extend(q.iter().zip(&ws.out).map(|(a, d)| a + d * 1e-3));
+                tool_pose(&self.robot, &ws.q)
+            }
+        }
+    }
+}
+
+/// The FK frames of a workspace slot, made on first use for this robot.
+fn frames_for<'w>(slot: &'w mut Option<Frames>, robot: &crate::model::Robot) -> &'w mut Frames {
+    if slot.as_ref().is_none_or(|f| f.joint.len() != robot.dof()) {
+        *slot = Some(Frames::new(robot));
+    }
+    slot.get_or_insert_with(|| Frames::new(robot))
+}
+
+/// The left Jacobian of SO(3) at rotation vector `phi` (rad): the angular velocity of
+/// exp(phi) is J_l(phi) dphi/dt. J_l = I + (1 - cos t)/t^2 [phi]x + (t - sin t)/t^3 [phi]x^2.
+fn left_jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
+    let t = phi.norm();
+    let k = phi.cross_matrix();
+    let (a, b) = if t < 1e-6 {
+        (0.5 - t * t / 24.0, 1.0 / 6.0 - t * t / 120.0)
+    } else {
+        ((1.0 - t.cos()) / (t * t), (t - t.sin()) / (t * t * t))
+    };
+    Matrix3::identity() + k * a + k * k * b
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rotation::rotation_vector;
+
+    #[test]
+    fn left_jacobian_matches_differences_of_exp() {
+        let phi = Vector3::new(0.3, -0.35, 0.2);
+        let jl = left_jacobian(&phi);
+        for k in 0..3 {
+            let h = 1e-6;
+            let mut d = Vector3::zeros();
+            d[k] = h;
+            let (rp, rm) = (
+                from_rotation_vector(&(phi + d)),
+                from_rotation_vector(&(phi - d)),
+            );
+            // Angular velocity (world) of exp(phi) as phi moves along e_k.
+            let w = rotation_vector(&(rp * rm.inverse())) / (2.0 * h);
+            for r in 0..3 {
+                assert!(
+                    (w[r] - jl[(r, k)]).abs() < 1e-8,
+                    "{k} {r}: {} vs {}",
+                    w[r],
+                    jl[(r, k)]
+                );
+            }
+        }
+        assert_eq!(left_jacobian(&Vector3::zeros()), Matrix3::identity());
+    }
+}

@@ -1,0 +1,72 @@
+//! Refinement: the model's parameters re-estimated on the compensator's training rows before
+//! the network is trained on what the refined model still misses.
+//!
+//! The re-estimation is an identification ([`crate::identify::identify`], started at the
+//! given model, no re-registration) and so runs the exact model with its exact Jacobian in
+//! every iteration; its identifiable subset comes from the rank analysis of the training rows.
+//! Parameters and network are never estimated together: a network's constant output can
+//! mimic a joint offset or a base rotation, and a joint estimate would let them trade along
+//! that direction by any amount. Whether the refined model is kept is decided on held-out
+//! rows by the exact compensated prediction ([`super::tuning`]).
+
+use crate::data::MeasurementSet;
+use crate::error::{Error, Result};
+use crate::identify::{Options, Sigmas, identify};
+use crate::model::Robot;
+
+/// Refinement keeps a parameter only when its column's angle to the span of those kept before
+/// it has a sine of at least this (its standard deviation at most 100 times what an
+/// orthogonal column would give): a model that was identified already has parameters whose
+/// columns nearly coincide (the d of parallel axes), and re-estimating those would move them
+/// by metres for nothing.
+pub const RANK_TOLERANCE: f64 = 1e-2;
+
+/// A model parameter re-estimated for the network (file units: mm or deg).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RefinedParam {
+    pub name: String,
+    pub unit: &'static str,
+    pub before: f64,
+    pub after: f64,
+    /// One standard deviation of the re-estimate (file units).
+    pub std: f64,
+}
+
+/// Re-estimates the parameters `spec` (a selection as for `identify`) of `model` on `set`:
+/// the refined model, what moved, and the identification's warnings.
+pub fn refine(
+    model: &Robot,
+    set: &MeasurementSet,
+    spec: &str,
+    sigmas: Sigmas,
+) -> Result<(Robot, Vec<RefinedParam>, Vec<String>)> {
+    let id = identify(
+        model,
+        set,
+        &Options {
+            params: spec.into(),
+            sigmas,
+            register: false,
+            rank_tolerance: RANK_TOLERANCE,
+            ..Default::default()
+        },
+    )
+    .map_err(|e| Error::Invalid(format!("refining `{spec}` on the training rows: {e}")))?;
+    let moved = id
+        .parameters
+        .iter()
+        .map(|p| RefinedParam {
+            name: p.name.clone(),
+            unit: p.unit,
+            before: p.nominal,
+            after: p.estimate,
+            std: p.std,
+        })
+        .collect();
+    let warnings = id
+        .warnings
+        .iter()
+        .map(|w| format!("refinement: {w}"))
+        .collect();
+    Ok((id.robot, moved, warnings))
+}

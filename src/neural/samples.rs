@@ -1,0 +1,449 @@
+//! Training samples of a network: normalised inputs, unit-scale targets, optional per-sample
+//! maps of the outputs, and the penalised mean squared residual with its analytic gradient.
+//!
+//! The residual of sample k is r_k = b_k - A_k y(x_k) (A_k = I without maps): the thesis's
+//! pose network has A_k = I, the joint-space network A_k = W J(q_k), the weighted joint
+//! Jacobian of the model.
+//!
+//! Objective (an L2 weight penalty as MATLAB's msereg / a Gaussian prior on the weights):
+//! F(w) = (sum_k |r_k|^2 + lambda |W|^2) / M, M the number of residual components and |W|^2
+//! the squared weights of both layers (biases are not penalised: the output bias carries
+//! constant errors). lambda weighs one squared weight against one squared unit-scale
+//! residual, so its effect fades as the data grow, as a prior's should.
+
+use super::weights::Weights;
+use nalgebra::{DMatrix, DVector};
+
+/// Training samples: normalised inputs `x[k]`, targets `b[k]`, optional maps `maps[k]`
+/// (rows of b x network outputs) and a group per sample (rows of one repeated configuration
+/// share a group and are never split between training and held-out parts).
+#[derive(Debug, Clone, Default)]
+pub struct Samples {
+    pub x: Vec<Vec<f64>>,
+    pub b: Vec<Vec<f64>>,
+    pub maps: Option<Vec<DMatrix<f64>>>,
+    /// Group of each sample; empty: every sample its own group.
+    pub groups: Vec<usize>,
+}
+
+impl Samples {
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    /// Rows of each target (all equal, checked by training).
+    pub fn rows(&self) -> usize {
+        self.b.first().map_or(0, |b| b.len())
+    }
+
+    /// The group of sample `k`.
+    pub fn group(&self, k: usize) -> usize {
+        self.groups.get(k).copied().unwrap_or(k)
+    }
+
+    /// The samples at `idx`.
+    pub fn pick(&self, idx: &[usize]) -> Samples {
+        Samples {
+            x: idx.iter().map(|&i| self.x[i].clone()).collect(),
+            b: idx.iter().map(|&i| self.b[i].clone()).collect(),
+            maps: self
+                .maps
+                .as_ref()
+                .map(|m| idx.iter().map(|&i| m[i].clone()).collect()),
+            groups: idx.iter().map(|&i| self.group(i)).collect(),
+        }
+    }
+
+    /// Writes r_k = b_k - A_k y into `r`.
+    pub fn residual(&self, k: usize, y: &[f64], r: &mut [f64]) {
+        match &self.maps {
+            None => {
+                for (c, rc) in r.iter_mut().enumerate() {
+                    *rc = self.b[k][c] - y[c];
+                }
+            }
+            Some(m) => {
+                let a = &m[k];
+                for (row, rr) in r.iter_mut().enumerate() {
+                    let mut s = self.b[k][row];
+                    for (c, yc) in y.iter().enumerate() {
+                        s -= a[(row, c)] * yc;
+                    }
+                    *rr = s;
+                }
+            }
+        }
+    }
+
+    /// Number of residual components, M.
+    pub fn components(&self) -> usize {
+        self.len() * self.rows()
+    }
+
+    /// Mean squared residual (no penalty); 0 for no samples.
+    pub fn mse(&self, w: &Weights) -> f64 {
+        if self.is_empty() {
+            return 0.0;
+        }
+        let mut ws = Scratch::new(w, self.rows());
+        let mut sum = 0.0;
+        for k in 0..self.len() {
+            w.forward_into(&self.x[k], &mut ws.h, &mut ws.y);
+            self.residual(k, &ws.y, &mut ws.r);
+            sum += ws.r.iter().map(|v| v * v).sum::<f64>();
+        }
+        sum / self.components() as f64
+    }
+}
+
+/// Sum of the squared weights of both layers (biases excluded).
+pub fn weight_norm2(w: &Weights) -> f64 {
+    w.w1.norm_squared() + w.w2.norm_squared()
+}
+
+/// 1 for the entries of [`Weights::to_vector`] that the penalty acts on (weights), 0 for
+/// biases.
+pub fn penalty_mask(w: &Weights) -> DVector<f64> {
+    let (h, i, o) = (w.hidden(), w.inputs(), w.outputs());
+    let mut m = DVector::zeros(w.len());
+    m.rows_mut(0, h * i).fill(1.0);
+    m.rows_mut(h * i + h, o * h).fill(1.0);
+    m
+}
+
+/// Buffers of one forward and backward pass.
+struct Scratch {
+    h: Vec<f64>,
+    y: Vec<f64>,
+    r: Vec<f64>,
+    gy: Vec<f64>,
+    gz: Vec<f64>,
+}
+
+impl Scratch {
+    fn new(w: &Weights, rows: usize) -> Self {
+        Scratch {
+            h: vec![0.0; w.hidden()],
+            y: vec![0.0; w.outputs()],
+            r: vec![0.0; rows],
+            gy: vec![0.0; w.outputs()],
+            gz: vec![0.0; w.hidden()],
+        }
+    }
+}
+
+/// The penalised objective F (module doc) of `w` on `s` and its gradient by every entry of
+/// [`Weights::to_vector`], written into `grad` (backpropagation; one pass per sample).
+pub fn objective(s: &Samples, w: &Weights, lambda: f64, grad: &mut DVector<f64>) -> f64 {
+    let (nh, ni, no) = (w.hidden(), w.inputs(), w.outputs());
+    let (off_b1, off_w2, off_b2) = (nh * ni, nh * ni + nh, nh * ni + nh + no * nh);
+    let m = s.components().max(1) as f64;
+    let mut ws = Scratch::new(w, s.rows());
+    grad.fill(0.0);
+    let mut sum = 0.0;
+    for k in 0..s.len() {
+        let x = &s.x[k];
+        w.forward_into(x, &mut ws.h, &mut ws.y);
+        s.residual(k, &ws.y, &mut ws.r);
+        sum += ws.r.iter().map(|v| v * v).sum::<f64>();
+        // dF/dy = -(2/M) A^T r.
+        match &s.maps {
+            None => {
+                for (g, r) in ws.gy.iter_mut().zip(&ws.r) {
+                    *g = -2.0 / m * r;
+                }
+            }
+            Some(a) => {
+                let a = &a[k];
+                for (c, g) in ws.gy.iter_mut().enumerate() {
+                    let mut t = 0.0;
+                    for (row, r) in ws.r.iter().enumerate() {
+                        t += a[(row, c)] * r;
+                    }
+                    *g = -2.0 / m * t;
+                }
+            }
+        }
+        for (j, gz) in ws.gz.iter_mut().enumerate() {
+            let mut t = 0.0;
+            for (o, gy) in ws.gy.iter().enumerate() {
+                t += w.w2[(o, j)] * gy;
+                grad[off_w2 + o * nh + j] += gy * ws.h[j];
+            }
+            *gz = t * ws.h[j] * (1.0 - ws.h[j]);
+            grad[off_b1 + j] += *gz;
+            for (i, xi) in x.iter().enumerate() {
+                grad[j * ni + i] += *gz * xi;
+            }
+        }
+        for (o, gy) in ws.gy.iter().enumerate() {
+            grad[off_b2 + o] += gy;
+        }
+    }
+    if lambda > 0.0 {
+        let v = w.to_vector();
+        let mask = penalty_mask(w);
+        for c in 0..v.len() {
+            grad[c] += 2.0 * lambda / m * mask[c] * v[c];
+        }
+    }
+    (sum + lambda * weight_norm2(w)) / m
+}
+
+/// The samples as matrices (one row per sample) for fast batched passes: the objective and
+/// its gradient by matrix products, the same numbers as [`objective`] and [`Samples::mse`].
+pub struct Batch<'a> {
+    s: &'a Samples,
+    x: DMatrix<f64>,
+    b: DMatrix<f64>,
+    z: DMatrix<f64>,
+    y: DMatrix<f64>,
+    r: DMatrix<f64>,
+    gy: DMatrix<f64>,
+    gh: DMatrix<f64>,
+    gw1: DMatrix<f64>,
+    gw2: DMatrix<f64>,
+}
+
+impl<'a> Batch<'a> {
+    pub fn new(s: &'a Samples, w: &Weights) -> Self {
+        let (n, rows) = (s.len(), s.rows());
+        let (nh, ni, no) = (w.hidden(), w.inputs(), w.outputs());
+        Batch {
+            s,
+            x: DMatrix::from_fn(n, ni, |k, i| s.x[k][i]),
+            b: DMatrix::from_fn(n, rows, |k, r| s.b[k][r]),
+            z: DMatrix::zeros(n, nh),
+            y: DMatrix::zeros(n, no),
+            r: DMatrix::zeros(n, rows),
+            gy: DMatrix::zeros(n, no),
+            gh: DMatrix::zeros(n, nh),
+            gw1: DMatrix::zeros(nh, ni),
+            gw2: DMatrix::zeros(no, nh),
+        }
+    }
+
+    /// Hidden activations of every sample into `z`.
+    fn hidden(&mut self, w: &Weights) {
+        self.x.mul_to(&w.w1.transpose(), &mut self.z);
+        for (j, mut col) in self.z.column_iter_mut().enumerate() {
+            let b = w.b1[j];
+            col.apply(|v| *v = 1.0 / (1.0 + (-(*v + b)).exp()));
+        }
+    }
+
+    /// Forward pass: hidden activations into `z`, outputs into `y`, residuals into `r`;
+    /// returns the sum of squared residuals.
+    fn forward(&mut self, w: &Weights) -> f64 {
+        self.hidden(w);
+        self.outputs(w)
+    }
+
+    /// Outputs and residuals from the activations in `z`; the sum of squared residuals.
+    fn outputs(&mut self, w: &Weights) -> f64 {
+        self.z.mul_to(&w.w2.transpose(), &mut self.y);
+        for (o, mut col) in self.y.column_iter_mut().enumerate() {
+            col.add_scalar_mut(w.b2[o]);
+        }
+        match &self.s.maps {
+            None => {
+                self.r.copy_from(&self.b);
+                self.r -= &self.y;
+            }
+            Some(maps) => {
+                for (k, a) in maps.iter().enumerate() {
+                    for row in 0..a.nrows() {
+                        let mut v = self.b[(k, row)];
+                        for c in 0..a.ncols() {
+                            v -= a[(row, c)] * self.y[(k, c)];
+                        }
+                        self.r[(k, row)] = v;
+                    }
+                }
+            }
+        }
+        self.r.norm_squared()
+    }
+
+    /// Mean squared residual (no penalty).
+    pub fn mse(&mut self, w: &Weights) -> f64 {
+        if self.s.is_empty() {
+            return 0.0;
+        }
+        self.forward(w) / self.s.components() as f64
+    }
+
+    /// The penalised objective F and its gradient, as [`objective`].
+    pub fn objective(&mut self, w: &Weights, lambda: f64, grad: &mut DVector<f64>) -> f64 {
+        let sum = self.forward(w);
+        self.backward(w, sum, lambda, grad)
+    }
+
+    /// Variable projection (samples without maps: the outputs are linear in the output layer):
+    /// for the hidden layer of `w`, sets the output layer to its exact minimiser
+    /// (W2 b2)^T = (H~^T H~ + lambda D)^-1 H~^T B, H~ = [H 1], D = diag(1, .., 1, 0), and
+    /// returns F there with its gradient (by the envelope theorem, the full gradient at that
+    /// point; its output-layer part is zero).
+    pub fn objective_projected(
+        &mut self,
+        w: &mut Weights,
+        lambda: f64,
+        grad: &mut DVector<f64>,
+    ) -> f64 {
+        self.hidden(w);
+        let (n, nh) = (self.z.nrows(), self.z.ncols());
+        let mut a = DMatrix::<f64>::zeros(nh + 1, nh + 1);
+        let mut zt_z = a.view_mut((0, 0), (nh, nh));
+        self.z.tr_mul_to(&self.z, &mut zt_z);
+        for j in 0..nh {
+            let s = self.z.column(j).sum();
+            a[(j, nh)] = s;
+            a[(nh, j)] = s;
+            a[(j, j)] += lambda;
+        }
+        a[(nh, nh)] = n as f64;
+        let mut rhs = DMatrix::<f64>::zeros(nh + 1, self.b.ncols());
+        let mut top = rhs.view_mut((0, 0), (nh, self.b.ncols()));
+        self.z.tr_mul_to(&self.b, &mut top);
+        for c in 0..self.b.ncols() {
+            rhs[(nh, c)] = self.b.column(c).sum();
+        }
+        // A tiny ridge keeps a saturated (constant) unit from making A singular.
+        for j in 0..=nh {
+            a[(j, j)] += 1e-12 * (1.0 + a[(j, j)]);
+        }
+        if let Some(ch) = a.cholesky() {
+            let v = ch.solve(&rhs);
+            for o in 0..w.outputs() {
+                for j in 0..nh {
+                    w.w2[(o, j)] = v[(j, o)];
+                }
+                w.b2[o] = v[(nh, o)];
+            }
+        }
+        let sum = self.outputs(w);
+        self.backward(w, sum, lambda, grad)
+    }
+
+    /// The gradient from the residuals of the last forward pass into `grad`; returns F.
+    fn backward(&mut self, w: &Weights, sum: f64, lambda: f64, grad: &mut DVector<f64>) -> f64 {
+        let (nh, ni, no) = (w.hidden(), w.inputs(), w.outputs());
+        let m = self.s.components().max(1) as f64;
+        match &self.s.maps {
+            None => {
+                self.gy.copy_from(&self.r);
+                self.gy *= -2.0 / m;
+            }
+            Some(maps) => {
+                for (k, a) in maps.iter().enumerate() {
+                    for c in 0..no {
+                        let mut t = 0.0;
+                        for row in 0..a.nrows() {
+                            t += a[(row, c)] * self.r[(k, row)];
+                        }
+                        self.gy[(k, c)] = -2.0 / m * t;
+                    }
+                }
+            }
+        }
+        // dF/dW2 = Gy^T H, dF/dH = Gy W2, dF/dZ = dF/dH . H (1 - H), dF/dW1 = Gz^T X.
+        self.gy.tr_mul_to(&self.z, &mut self.gw2);
+        self.gy.mul_to(&w.w2, &mut self.gh);
+        self.gh.zip_apply(&self.z, |g, h| *g *= h * (1.0 - h));
+        self.gh.tr_mul_to(&self.x, &mut self.gw1);
+        let (off_b1, off_w2, off_b2) = (nh * ni, nh * ni + nh, nh * ni + nh + no * nh);
+        for j in 0..nh {
+            for i in 0..ni {
+                grad[j * ni + i] = self.gw1[(j, i)] + 2.0 * lambda / m * w.w1[(j, i)];
+            }
+            grad[off_b1 + j] = self.gh.column(j).sum();
+        }
+        for o in 0..no {
+            for j in 0..nh {
+                grad[off_w2 + o * nh + j] = self.gw2[(o, j)] + 2.0 * lambda / m * w.w2[(o, j)];
+            }
+            grad[off_b2 + o] = self.gy.column(o).sum();
+        }
+        (sum + lambda * weight_norm2(w)) / m
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gradient_matches_central_differences_with_maps_and_penalty() {
+        let w = Weights {
+            w1: DMatrix::from_fn(4, 3, |i, j| ((i * 7 + j * 3) as f64 * 0.37).sin()),
+            b1: DVector::from_fn(4, |i, _| (i as f64 * 0.9).cos()),
+            w2: DMatrix::from_fn(2, 4, |i, j| ((i * 5 + j) as f64 * 0.53).sin()),
+            b2: DVector::from_fn(2, |i, _| i as f64 * 0.1 - 0.2),
+        };
+        for with_maps in [false, true] {
+            let mut s = Samples::default();
+            let mut maps = Vec::new();
+            for k in 0..5 {
+                let t = k as f64;
+                s.x.push(vec![(t * 0.7).sin(), (t * 1.3).cos(), t * 0.1 - 0.2]);
+                if with_maps {
+                    s.b.push(vec![t * 0.2, -0.3, 0.5 - t * 0.1]);
+                    maps.push(DMatrix::from_fn(3, 2, |i, j| {
+                        ((k + i * 2 + j) as f64).cos()
+                    }));
+                } else {
+                    s.b.push(vec![t * 0.2, -0.3]);
+                }
+            }
+            s.maps = with_maps.then_some(maps);
+            let lambda = 0.7;
+            let mut g = DVector::zeros(w.len());
+            let f = objective(&s, &w, lambda, &mut g);
+            // The batched pass gives the same numbers.
+            let mut batch = Batch::new(&s, &w);
+            let mut gb = DVector::zeros(w.len());
+            let fb = batch.objective(&w, lambda, &mut gb);
+            assert!(
+                (f - fb).abs() < 1e-12 && (&g - &gb).amax() < 1e-12,
+                "{f} vs {fb}"
+            );
+            assert!((batch.mse(&w) - s.mse(&w)).abs() < 1e-12);
+            if !with_maps {
+                // Projection: the output layer it sets is optimal (zero output-layer gradient,
+                // checked by the per-sample objective) and its value is the objective there.
+                let mut wp = w.clone();
+                let mut gp = DVector::zeros(w.len());
+                let fp = batch.objective_projected(&mut wp, lambda, &mut gp);
+                let mut gd = DVector::zeros(w.len());
+                let fd = objective(&s, &wp, lambda, &mut gd);
+                assert!((fp - fd).abs() < 1e-12 && (&gp - &gd).amax() < 1e-10);
+                let off = w.hidden() * w.inputs() + w.hidden();
+                assert!(gd.rows(off, gd.len() - off).amax() < 1e-10, "{gd}");
+                assert!(fp < f);
+            }
+            let direct = (s.mse(&w) * s.components() as f64 + lambda * weight_norm2(&w))
+                / s.components() as f64;
+            assert!((f - direct).abs() < 1e-12, "{f} vs {direct}");
+            let v = w.to_vector();
+            let mut scratch = DVector::zeros(w.len());
+            for c in 0..v.len() {
+                let e = 1e-6;
+                let (mut vp, mut vm) = (v.clone(), v.clone());
+                vp[c] += e;
+                vm[c] -= e;
+                let fp = objective(&s, &w.from_vector(&vp), lambda, &mut scratch);
+                let fm = objective(&s, &w.from_vector(&vm), lambda, &mut scratch);
+                let fd = (fp - fm) / (2.0 * e);
+                assert!(
+                    (fd - g[c]).abs() < 1e-8 * (1.0 + fd.abs()),
+                    "maps {with_maps}, entry {c}: {fd} vs {}",
+                    g[c]
+                );
+            }
+        }
+    }
+}

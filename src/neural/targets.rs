@@ -1,0 +1,225 @@
+//! What a compensator's network is trained on: for a model, a measurement set, a form and an
+//! encoding, the normalised inputs, the unit-scale targets (and maps) and both normalisations.
+//!
+//! The model's error of row k is e_k = [dp; dr]: measured minus model position (mm) and the
+//! rotation vector of R_measured R_model^T (rad). Residual components are weighted by
+//! W = diag(1/s_p, 1/s_p, 1/s_p, 1/s_r, 1/s_r, 1/s_r), s_p and s_r the RMS of the model's
+//! position and orientation error components over the set: position errors count as a
+//! Euclidean distance, orientation errors as an angle, and both kinds weigh alike. (The
+//! tracker's own sigmas are far below what a kinematic model misses, so weighting by them would
+//! favour arbitrary directions.)
+//!
+//! - Pose form: targets are W e_k expressed in the robot's base frame (where gravity acts),
+//!   centred; the network's outputs are dp (mm) and dr (mrad) in that frame.
+//! - Joint form: the network gives joint corrections dq = C y (C = diag(c_j)), seen through
+//!   the model's joint Jacobian: r_k = W e_k - W J(q_k) C y(x_k); c_j is the correction joint
+//!   j alone would need, sqrt(sum_k |W e_k|^2 / sum_k |W J_k e_j|^2).
+
+use super::compensator::Form;
+use super::encoding::Encoding;
+use super::samples::Samples;
+use super::weights::Affine;
+use crate::data::{Measurement, MeasurementSet};
+use crate::error::{Error, Location, Result};
+use crate::kinematics::{Frames, frames, joint_jacobian};
+use crate::model::Robot;
+use crate::rotation::rotation_vector;
+use nalgebra::{DMatrix, Matrix3, Matrix6xX, Vector3};
+use std::collections::HashMap;
+
+/// A network's training problem.
+#[derive(Debug, Clone)]
+pub struct Problem {
+    pub samples: Samples,
+    pub input_norm: Affine,
+    pub output_norm: Affine,
+}
+
+/// The rotation of the robot's base row: world (measurement) frame from robot base frame.
+pub fn base_rotation(robot: &Robot) -> Matrix3<f64> {
+    *robot.base().transform().rotation.matrix()
+}
+
+/// The model's error at one measured row: position (mm) and, when the row has an orientation,
+/// rotation vector (rad), both in the world frame. None without a position.
+pub fn model_error(
+    robot: &Robot,
+    m: &Measurement,
+    ws: &mut Frames,
+) -> Option<(Vector3<f64>, Option<Vector3<f64>>)> {
+    frames(robot, &m.q, ws);
+    let t = &ws.tool;
+    let dp = m.position? - t.translation.vector;
+    let dr = m
+        .rotation
+        .map(|r| rotation_vector(&(r * t.rotation.inverse())));
+    Some((dp, dr))
+}
+
+/// Group ids of the rows: rows with the same joint values (to 1e-9) share one.
+pub fn configuration_groups(set: &MeasurementSet) -> Vec<usize> {
+    let mut ids: HashMap<Vec<i64>, usize> = HashMap::new();
+    set.rows
+        .iter()
+        .map(|m| {
+            let key = m.q.iter().map(|v| (v * 1e9).round() as i64).collect();
+            let next = ids.len();
+            *ids.entry(key).or_insert(next)
+        })
+        .collect()
+}
+
+/// The normalised network inputs of every row, and the normalisation (fitted here when
+/// `norm` is None).
+pub fn inputs(
+    robot: &Robot,
+    set: &MeasurementSet,
+    encoding: Encoding,
+    norm: Option<&Affine>,
+) -> (Vec<Vec<f64>>, Affine) {
+    let mut feat = Vec::new();
+    let mut ws = Frames::new(robot);
+    let mut xs: Vec<Vec<f64>> = set
+        .rows
+        .iter()
+        .map(|m| {
+            encoding.features(robot, &m.q, &mut ws, &mut feat);
+            feat.clone()
+        })
+        .collect();
+    let norm = norm.cloned().unwrap_or_else(|| Affine::standardise(&xs));
+    for x in xs.iter_mut() {
+        let raw = x.clone();
+        norm.apply(&raw, x);
+    }
+    (xs, norm)
+}
+
+/// Builds the training problem of `form` for `robot` on `set`.
+pub fn build(
+    robot: &Robot,
+    set: &MeasurementSet,
+    form: Form,
+    encoding: Encoding,
+) -> Result<Problem> {
+    let kinds = set.rows.iter().map(|m| m.rotation.is_some());
+    if kinds.clone().any(|k| k) && kinds.clone().any(|k| !k) {
+        return Err(Error::Invalid(format!(
+            "{}: some rows have orientations and some not",
+            set.source.display()
+        )));
+    }
+    let mut ws = Frames::new(robot);
+    let mut errors = Vec::with_capacity(set.rows.len());
+    for m in &set.rows {
+        errors.push(model_error(robot, m, &mut ws).ok_or_else(|| {
+            Error::input(
+                Location::at(&set.source, m.line, "x"),
+                "training needs a measured position in every row",
+            )
+        })?);
+    }
+    let rms = |v: &mut dyn Iterator<Item = Vector3<f64>>| {
+        let (sum, n) = v.fold((0.0, 0usize), |(s, n), e| (s + e.norm_squared(), n + 3));
+        (sum / n.max(1) as f64).sqrt()
+    };
+    let s_p = rms(&mut errors.iter().map(|e| e.0));
+    let with_rotation = errors.first().is_some_and(|e| e.1.is_some());
+    let s_r = rms(&mut errors.iter().filter_map(|e| e.1));
+    if !(s_p > 0.0 && s_p.is_finite()) || (with_rotation && !(s_r > 0.0 && s_r.is_finite())) {
+        return Err(Error::Invalid(format!(
+            "{}: the model fits every row exactly (or not at all: RMS error {s_p} mm, {s_r} rad); \
+             there is nothing to train on",
+            set.source.display()
+        )));
+    }
+    let rows = if with_rotation { 6 } else { 3 };
+    // W e_k, world frame.
+    let weighted: Vec<Vec<f64>> = errors
+        .iter()
+        .map(|(dp, dr)| {
+            let mut v: Vec<f64> = (dp / s_p).iter().copied().collect();
+            if let Some(r) = dr {
+                v.extend((r / s_r).iter());
+            }
+            v
+        })
+        .collect();
+    let (x, input_norm) = inputs(robot, set, encoding, None);
+    let groups = configuration_groups(set);
+    let (samples, output_norm) = match form {
+        Form::Pose => {
+            let rb = base_rotation(robot).transpose();
+            let local: Vec<Vec<f64>> = weighted
+                .iter()
+                .map(|v| {
+                    let mut out = Vec::with_capacity(rows);
+                    for block in v.chunks(3) {
+                        out.extend((rb * Vector3::from_column_slice(block)).iter());
+                    }
+                    out
+                })
+                .collect();
+            let centre = Affine::standardise(&local).offset;
+            let b = local
+                .iter()
+                .map(|v| v.iter().zip(&centre).map(|(a, c)| a - c).collect())
+                .collect();
+            // Raw outputs: mm and mrad, y_raw = (y + centre) s.
+            let unit = |r: usize| if r < 3 { s_p } else { s_r * 1e3 };
+            let norm = Affine {
+                offset: (0..rows).map(|r| centre[r] * unit(r)).collect(),
+                scale: (0..rows).map(unit).collect(),
+            };
+            (
+                Samples {
+                    x,
+                    b,
+                    maps: None,
+                    groups,
+                },
+                norm,
+            )
+        }
+        Form::Joint => {
+            let n = robot.dof();
+            let mut jac = Matrix6xX::zeros(n);
+            let mut maps: Vec<DMatrix<f64>> = Vec::with_capacity(set.rows.len());
+            for m in &set.rows {
+                frames(robot, &m.q, &mut ws);
+                joint_jacobian(robot, &ws, &mut jac);
+                maps.push(DMatrix::from_fn(rows, n, |r, c| {
+                    jac[(r, c)] / if r < 3 { s_p } else { s_r }
+                }));
+            }
+            let total: f64 = weighted.iter().flatten().map(|v| v * v).sum();
+            let scale: Vec<f64> = (0..n)
+                .map(|j| {
+                    let col: f64 = maps.iter().map(|a| a.column(j).norm_squared()).sum();
+                    if col > 0.0 { (total / col).sqrt() } else { 1.0 }
+                })
+                .collect();
+            for a in maps.iter_mut() {
+                for (j, s) in scale.iter().enumerate() {
+                    a.column_mut(j).scale_mut(*s);
+                }
+            }
+            // Raw outputs in mrad (um for prismatic joints).
+            let norm = Affine::scaling(scale.iter().map(|s| s * 1e3).collect());
+            (
+                Samples {
+                    x,
+                    b: weighted,
+                    maps: Some(maps),
+                    groups,
+                },
+                norm,
+            )
+        }
+    };
+    Ok(Problem {
+        samples,
+        input_norm,
+        output_norm,
+    })
+}

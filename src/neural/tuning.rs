@@ -1,0 +1,415 @@
+//! The self-tuning default: k-fold cross-validation on the training rows chooses what the
+//! options leave open (form, encoding, hidden units, penalty, refinement, ensemble size).
+//!
+//! Folds are drawn by a seeded shuffle of whole configurations (rows that repeat a joint
+//! configuration stay in one fold). Every candidate is fitted on k - 1 folds (refinement
+//! included, so a refined model is judged on rows it never saw) and scored on the held-out
+//! fold through the exact compensated prediction ([`Compensator::predict`], the code path of
+//! `predict` and `evaluate`); the score is the RMS position error over all held-out rows (mm),
+//! orientation RMS reported beside it.
+//!
+//! The search is staged to stay cheap: (1) refinement x form with gravity inputs at the middle
+//! size and penalty, then the other encodings for the best; (2) hidden units for the best of
+//! (1), then the penalty for the best size; (3) the ensemble, kept where it lowers the
+//! cross-validated error; (4) no network at all. Candidates are fitted with a shortened phase 2 ([`CV_MAX_EPOCHS`])
+//! and without phase 1; the chosen settings are then fitted in full.
+
+use super::compensator::{Compensator, CompensatorOptions, Form, Refine, Settings, parallel_map};
+use super::encoding::Encoding;
+use super::refine::refine;
+use super::train::TrainOptions;
+use crate::data::MeasurementSet;
+use crate::error::{Error, Result};
+use crate::evaluate::row_errors;
+use crate::identify::Measure;
+use crate::model::Robot;
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Hidden units tried when not fixed (the middle one first).
+pub const HIDDEN: [usize; 3] = [16, 32, 64];
+/// Penalties tried when not fixed (the second one first).
+pub const PENALTIES: [f64; 4] = [0.03, 0.1, 0.3, 1.0];
+/// Phase-2 epoch limit of the candidates' fits (L-BFGS: 100 iterations): enough to rank
+/// candidates, a fraction of a full fit's cost.
+pub const CV_MAX_EPOCHS: usize = 10;
+/// Distinct configurations from which 3 folds replace 5.
+pub const MANY: usize = 1000;
+/// Ensemble size tried against a single network when not fixed.
+pub const ENSEMBLE: usize = 4;
+/// The parameters refined when refinement is left to cross-validation.
+pub const AUTO_REFINE: &str = "full";
+
+/// Cross-validated errors of one candidate (mm, deg; RMS over every held-out row).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Score {
+    pub position_rms_mm: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub orientation_rms_deg: Option<f64>,
+}
+
+/// One cross-validated candidate.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Candidate {
+    pub stage: usize,
+    pub settings: Settings,
+    /// None when the candidate failed on some fold (see `error`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub score: Option<Score>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+}
+
+/// What cross-validation did.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Selection {
+    pub folds: usize,
+    /// The model alone on the same held-out rows.
+    pub model: Score,
+    pub candidates: Vec<Candidate>,
+    /// Index of the chosen candidate.
+    pub chosen: usize,
+    pub notes: Vec<String>,
+}
+
+/// Fold of each row: whole configurations, shuffled by `seed`, dealt round-robin.
+pub fn folds(set: &MeasurementSet, k: usize, seed: u64) -> Vec<usize> {
+    let groups = super::targets::configuration_groups(set);
+    let mut ids: Vec<usize> = groups.clone();
+    ids.sort_unstable();
+    ids.dedup();
+    ids.shuffle(&mut ChaCha8Rng::seed_from_u64(seed ^ 0xf01d));
+    let mut fold_of_group = vec![0; ids.len()];
+    for (i, g) in ids.iter().enumerate() {
+        fold_of_group[*g] = i % k;
+    }
+    groups.iter().map(|g| fold_of_group[*g]).collect()
+}
+
+fn subset(set: &MeasurementSet, keep: impl Fn(usize) -> bool) -> MeasurementSet {
+    MeasurementSet {
+        source: set.source.clone(),
+        rows: set
+            .rows
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| keep(*i))
+            .map(|(_, m)| m.clone())
+            .collect(),
+        extra_columns: set.extra_columns.clone(),
+    }
+}
+
+/// Sums of squared errors over held-out rows.
+#[derive(Debug, Clone, Copy, Default)]
+struct Sums {
+    pos: f64,
+    rot: f64,
+    rows: usize,
+    with_rotation: bool,
+}
+
+impl Sums {
+    fn add(&mut self, o: Sums) {
+        self.pos += o.pos;
+        self.rot += o.rot;
+        self.rows += o.rows;
+        self.with_rotation |= o.with_rotation;
+    }
+
+    fn score(&self) -> Score {
+        let n = self.rows.max(1) as f64;
+        Score {
+            position_rms_mm: (self.pos / n).sqrt(),
+            orientation_rms_deg: self.with_rotation.then(|| (self.rot / n).sqrt()),
+        }
+    }
+}
+
+fn sums(set: &MeasurementSet, predict: impl FnMut(&[f64]) -> crate::Pose) -> Result<Sums> {
+    let measure = if set.has_rotation() {
+        Measure::Pose
+    } else {
+        Measure::Position
+    };
+    let rows = row_errors(set, measure, predict)?;
+    let mut s = Sums::default();
+    for r in rows {
+        s.pos += r.position_mm.unwrap_or(0.0).powi(2);
+        if let Some(o) = r.orientation_deg {
+            s.rot += o * o;
+            s.with_rotation = true;
+        }
+        s.rows += 1;
+    }
+    Ok(s)
+}
+
+/// The cross-validation workspace: folds, each fold's training and held-out rows, and the
+/// refined models of each fold (computed once per refinement).
+struct Cv<'a> {
+    robot: &'a Robot,
+    train: Vec<MeasurementSet>,
+    held: Vec<MeasurementSet>,
+    opts: &'a CompensatorOptions,
+}
+
+impl Cv<'_> {
+    fn model(&self, fold: usize, spec: &Option<String>) -> Result<Robot> {
+        match spec {
+            None => Ok(self.robot.clone()),
+            Some(s) => Ok(refine(self.robot, &self.train[fold], s, self.opts.sigmas)?.0),
+        }
+    }
+
+    /// Held-out sums of `settings` on one fold.
+    fn run(&self, fold: usize, settings: &Settings, model: &Robot) -> Result<Sums> {
+        let plain = Settings {
+            refine: None,
+            ..settings.clone()
+        };
+        // Phase 1 (momentum) is left out of the candidates' fits: after it the weight-refining
+        // phase reaches the same networks (held-out RMS equal to 1e-4 mm on real data), and it
+        // costs most of a fit's time. The chosen settings are then fitted with both phases.
+        let train = TrainOptions {
+            momentum_epochs: 0,
+            max_epochs: self.opts.train.max_epochs.min(CV_MAX_EPOCHS),
+            progress: false,
+            ..self.opts.train.clone()
+        };
+        let (c, ..) =
+            Compensator::fit_with(model, &self.train[fold], &plain, &train, false, false)?;
+        let mut ws = Default::default();
+        sums(&self.held[fold], |q| c.predict(q, &mut ws))
+    }
+}
+
+/// The settings to fit: `opts`'s fixed choices, the rest chosen by cross-validation on `set`
+/// (None when nothing was left to choose).
+pub fn select_settings(
+    robot: &Robot,
+    set: &MeasurementSet,
+    opts: &CompensatorOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(Settings, Option<Selection>)> {
+    let refines: Vec<Option<String>> = match &opts.refine {
+        Refine::Off => vec![None],
+        Refine::Auto => vec![None, Some(AUTO_REFINE.into())],
+        Refine::Params(p) => vec![None, Some(p.clone())],
+    };
+    let forms: Vec<Form> = opts.form.map_or(Form::ALL.to_vec(), |f| vec![f]);
+    let encodings: Vec<Encoding> = opts.encoding.map_or(Encoding::ALL.to_vec(), |e| vec![e]);
+    let hiddens: Vec<usize> = opts.hidden.map_or(HIDDEN.to_vec(), |h| vec![h]);
+    let penalties: Vec<f64> = opts.penalty.map_or(PENALTIES.to_vec(), |p| vec![p]);
+    let base = Settings {
+        form: forms[0],
+        encoding: opts.encoding.unwrap_or(Encoding::Gravity),
+        hidden: opts.hidden.unwrap_or(HIDDEN[1]),
+        penalty: opts.penalty.unwrap_or(PENALTIES[1]),
+        members: opts.members.unwrap_or(1),
+        refine: refines[0].clone(),
+    };
+    let open = refines.len() > 1
+        || forms.len() > 1
+        || encodings.len() > 1
+        || hiddens.len() > 1
+        || penalties.len() > 1
+        || opts.members.is_none();
+    if !open {
+        return Ok((base, None));
+    }
+    let distinct = {
+        let mut g = super::targets::configuration_groups(set);
+        g.sort_unstable();
+        g.dedup();
+        g.len()
+    };
+    let want = opts.folds.unwrap_or(if distinct >= MANY { 3 } else { 5 });
+    let fold_of = folds(set, want.max(2), opts.train.seed);
+    let k = fold_of.iter().max().map_or(0, |m| m + 1);
+    if k < 2 || want < 2 {
+        return Err(Error::Invalid(format!(
+            "choosing the settings by cross-validation needs at least 2 folds of distinct \
+             configurations (got {k}); fix form, encoding, hidden units, penalty, ensemble \
+             size and refinement instead"
+        )));
+    }
+    let cv = Cv {
+        robot,
+        train: (0..k).map(|f| subset(set, |i| fold_of[i] != f)).collect(),
+        held: (0..k).map(|f| subset(set, |i| fold_of[i] == f)).collect(),
+        opts,
+    };
+    let mut model = Sums::default();
+    for f in 0..k {
+        model.add(sums(&cv.held[f], |q| {
+            crate::kinematics::tool_pose(robot, q)
+        })?);
+    }
+    // Refined models per fold and refinement, computed once.
+    let refined: Vec<Vec<Result<Robot>>> = refines
+        .iter()
+        .map(|spec| parallel_map(k, |f| cv.model(f, spec)))
+        .collect();
+    let done = AtomicUsize::new(0);
+    let mut candidates: Vec<Candidate> = Vec::new();
+    let evaluate = |stage: usize, list: Vec<Settings>, candidates: &mut Vec<Candidate>| {
+        let list: Vec<Settings> = list
+            .into_iter()
+            .filter(|s| !candidates.iter().any(|c| &c.settings == s))
+            .collect();
+        let total_now = done.load(Ordering::Relaxed) + list.len() * k;
+        let jobs: Vec<(usize, usize)> = (0..list.len())
+            .flat_map(|c| (0..k).map(move |f| (c, f)))
+            .collect();
+        let results = parallel_map(jobs.len(), |j| {
+            let (c, f) = jobs[j];
+            let s = &list[c];
+            let r_idx = refines.iter().position(|r| r == &s.refine).unwrap_or(0);
+            let out = match &refined[r_idx][f] {
+                Ok(m) => cv.run(f, s, m),
+                Err(e) => Err(Error::Invalid(e.to_string())),
+            };
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1, total_now);
+            out
+        });
+        for (c, s) in list.into_iter().enumerate() {
+            let mut total = Sums::default();
+            let mut error = None;
+            for f in 0..k {
+                match &results[c * k + f] {
+                    Ok(x) => total.add(*x),
+                    Err(e) => error = Some(e.to_string()),
+                }
+            }
+            candidates.push(Candidate {
+                stage,
+                settings: s,
+                score: error.is_none().then(|| total.score()),
+                error,
+            });
+        }
+    };
+    let best = |candidates: &[Candidate]| -> Option<usize> {
+        candidates
+            .iter()
+            .enumerate()
+            .filter_map(|(i, c)| c.score.as_ref().map(|s| (i, s.position_rms_mm)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(i, _)| i)
+    };
+    // Stage 1: refinement x form with the first encoding, then the other encodings.
+    let mut list = Vec::new();
+    for r in &refines {
+        for f in &forms {
+            list.push(Settings {
+                form: *f,
+                refine: r.clone(),
+                ..base.clone()
+            });
+        }
+    }
+    evaluate(1, list, &mut candidates);
+    let Some(b0) = best(&candidates) else {
+        return Err(failed(&candidates));
+    };
+    let w0 = candidates[b0].settings.clone();
+    let list = encodings
+        .iter()
+        .map(|e| Settings {
+            encoding: *e,
+            ..w0.clone()
+        })
+        .collect();
+    evaluate(1, list, &mut candidates);
+    let b1 = best(&candidates).unwrap_or(b0);
+    // Stage 2: hidden units, then the penalty at the best size.
+    let w1 = candidates[b1].settings.clone();
+    let list = hiddens
+        .iter()
+        .map(|h| Settings {
+            hidden: *h,
+            ..w1.clone()
+        })
+        .collect();
+    evaluate(2, list, &mut candidates);
+    let w2 = candidates[best(&candidates).unwrap_or(b1)].settings.clone();
+    let list = penalties
+        .iter()
+        .map(|p| Settings {
+            penalty: *p,
+            ..w2.clone()
+        })
+        .collect();
+    evaluate(2, list, &mut candidates);
+    let mut chosen = best(&candidates).unwrap_or(b1);
+    // Stage 3: the ensemble.
+    if opts.members.is_none() {
+        let single = candidates[chosen].settings.clone();
+        evaluate(
+            3,
+            vec![Settings {
+                members: ENSEMBLE,
+                ..single
+            }],
+            &mut candidates,
+        );
+        chosen = best(&candidates).unwrap_or(chosen);
+    }
+    // Stage 4: the (refined) model alone, without a network.
+    if opts.members.is_none() {
+        let w = candidates[chosen].settings.clone();
+        evaluate(
+            4,
+            vec![Settings {
+                members: 0,
+                hidden: 0,
+                ..w
+            }],
+            &mut candidates,
+        );
+        chosen = best(&candidates).unwrap_or(chosen);
+    }
+    let mut notes = Vec::new();
+    let winner = &candidates[chosen].settings;
+    if winner.members == 0 {
+        notes.push(
+            "no network lowered the cross-validated error: the compensator is the model alone"
+                .into(),
+        );
+    }
+    if let Refine::Params(spec) = &opts.refine
+        && winner.refine.is_none()
+    {
+        notes.push(format!(
+            "refining `{spec}` raised the cross-validated error: the model is kept as given"
+        ));
+    }
+    Ok((
+        winner.clone(),
+        Some(Selection {
+            folds: k,
+            model: model.score(),
+            candidates,
+            chosen,
+            notes,
+        }),
+    ))
+}
+
+fn failed(candidates: &[Candidate]) -> Error {
+    let why: Vec<String> = candidates
+        .iter()
+        .filter_map(|c| {
+            c.error
+                .as_ref()
+                .map(|e| format!("{}: {e}", c.settings.describe()))
+        })
+        .collect();
+    Error::Invalid(format!(
+        "no candidate could be cross-validated: {}",
+        why.join("; ")
+    ))
+}
