@@ -252,4 +252,51 @@ fn configurations_outside_the_training_domain_are_flagged() {
         "{}",
         check.describe()
     );
+    // Far out the network is not trusted: the compensator is the model.
+    assert_eq!(check.weight, 0.0);
+    assert_eq!(
+        c.predict(&q, &mut ws),
+        robocal::kinematics::tool_pose(&c.robot, &q)
+    );
+    // In the fade zone (weight strictly between 0 and 1) the Jacobian still matches central
+    // differences of the prediction: the fade's own derivative is in it.
+    let start = train.rows[0].q.clone();
+    let mut q = start.clone();
+    let mut found = false;
+    for step in 1..400 {
+        q[0] = start[0] + step as f64 * 0.002;
+        q[4] = start[4] - step as f64 * 0.002;
+        let w = c.domain_check(&q, &mut ws).weight;
+        if w > 0.2 && w < 0.8 {
+            found = true;
+            break;
+        }
+    }
+    assert!(found, "no configuration in the fade zone");
+    let mut frames = robocal::kinematics::Frames::new(&c.robot);
+    let mut jac = nalgebra::Matrix6xX::zeros(6);
+    c.jacobian(&q, &mut ws, &mut frames, &mut jac);
+    let mut model_jac = nalgebra::Matrix6xX::zeros(6);
+    robocal::kinematics::frames(&c.robot, &q, &mut frames);
+    robocal::kinematics::joint_jacobian(&c.robot, &frames, &mut model_jac);
+    assert!(
+        (&jac - &model_jac).abs().max() > 1e-3,
+        "the network part must show"
+    );
+    for j in 0..6 {
+        let h = 1e-6;
+        let (mut qp, mut qm) = (q.clone(), q.clone());
+        qp[j] += h;
+        qm[j] -= h;
+        let (fp, fm) = (c.predict(&qp, &mut ws), c.predict(&qm, &mut ws));
+        let dp = (fp.translation.vector - fm.translation.vector) / (2.0 * h);
+        for r in 0..3 {
+            assert!(
+                (dp[r] - jac[(r, j)]).abs() < 1e-4 * (1.0 + dp[r].abs()),
+                "joint {j} row {r}: {} vs {}",
+                dp[r],
+                jac[(r, j)]
+            );
+        }
+    }
 }

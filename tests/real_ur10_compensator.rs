@@ -83,8 +83,8 @@ fn baseline_fit(model: &Robot, set: &MeasurementSet, hidden: usize, alpha: f64) 
         },
         |_, _, _| Next::Continue,
     );
-    let qs: Vec<&[f64]> = set.rows.iter().map(|m| m.q.as_slice()).collect();
-    let domain = Domain::fit(model, Encoding::Angles, &p.input_norm, &qs);
+    // No training domain: the baseline has no fade.
+    let domain = Domain::fit(model, Encoding::Angles, &p.input_norm, &[]);
     Compensator {
         form: Form::Pose,
         encoding: Encoding::Angles,
@@ -169,8 +169,10 @@ fn default_beats_the_plain_baseline_on_series_b() {
 /// The README table (run by hand: `cargo test --release --test real_ur10_compensator --
 /// --ignored --nocapture`).
 #[test]
-#[ignore = "prints the README table; several minutes"]
+#[ignore = "prints the README table; a minute"]
 fn readme_table_series_b() {
+    use robocal::neural::compensator::{Refine, Settings};
+    use robocal::neural::train::TrainOptions;
     let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
     let (id, pool, val) = series_b_split(&ur);
     let model = identified(&ur, &id);
@@ -180,166 +182,81 @@ fn readme_table_series_b() {
         })
         .unwrap(),
     );
-    println!("| model | mean | RMS | p95 | max | orientation mean deg | training s |");
-    println!("|---|---|---|---|---|---|---|");
+    println!("| model | mean | RMS | p95 | max | orientation mean deg | training s | settings |");
+    println!("|---|---|---|---|---|---|---|---|");
     println!(
-        "{}",
+        "{} - |",
         line("identified model (`full`, 500 poses)", &plain, 0.0)
     );
     let t = Instant::now();
     let base = baseline(&model, &pool);
     println!(
-        "{}",
+        "{} see the test |",
         line(
-            "plain MLP baseline",
+            "plain MLP baseline (test code)",
             &stats(&base, &val),
             t.elapsed().as_secs_f64()
         )
     );
-    let runs: Vec<(&str, CompensatorOptions)> =
-        vec![("default (cross-validated)", CompensatorOptions::default())];
+    let thesis = Settings {
+        form: Form::Joint,
+        encoding: Encoding::SinCos,
+        hidden: 20,
+        penalty: 0.0,
+        members: 1,
+        refine: None,
+    };
+    let d = CompensatorOptions::default;
+    let runs: Vec<(&str, CompensatorOptions)> = vec![
+        ("`train` default (cross-validated)", d()),
+        (
+            "`--form pose`",
+            CompensatorOptions {
+                form: Some(Form::Pose),
+                ..d()
+            },
+        ),
+        (
+            "`--form joint`",
+            CompensatorOptions {
+                form: Some(Form::Joint),
+                ..d()
+            },
+        ),
+        (
+            "`--refine full`",
+            CompensatorOptions {
+                refine: Refine::Params("full".into()),
+                ..d()
+            },
+        ),
+        (
+            "`--refine none`",
+            CompensatorOptions {
+                refine: Refine::Off,
+                ..d()
+            },
+        ),
+        (
+            "fixed as before: joint, sin/cos, 20 hidden, no penalty, 15 % early stopping",
+            CompensatorOptions::fixed(
+                &thesis,
+                TrainOptions {
+                    validation_fraction: 0.15,
+                    momentum_epochs: 200,
+                    max_epochs: 200,
+                    ..Default::default()
+                },
+            ),
+        ),
+    ];
     for (name, opts) in runs {
         let t = Instant::now();
         let (c, rep) = Compensator::train(&model, &pool, &opts, &|_, _| {}).unwrap();
         println!(
-            "{} {}",
+            "{} {} |",
             line(name, &stats(&c, &val), t.elapsed().as_secs_f64()),
             rep.settings.describe()
-        );
-    }
-}
-
-#[test]
-#[ignore = "timing experiment"]
-fn timing_one_fit() {
-    use robocal::neural::compensator::Settings;
-    use robocal::neural::train::TrainOptions;
-    let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
-    let (id, pool, val) = series_b_split(&ur);
-    let model = identified(&ur, &id);
-    for (form, enc, hidden, penalty, me) in [
-        (Form::Pose, Encoding::SinCos, 16, 1.0, 200),
-        (Form::Pose, Encoding::SinCos, 16, 1.0, 0),
-        (Form::Joint, Encoding::SinCos, 16, 1.0, 200),
-        (Form::Pose, Encoding::SinCos, 32, 1.0, 200),
-    ] {
-        let s = Settings {
-            form,
-            encoding: enc,
-            hidden,
-            penalty,
-            members: 1,
-            refine: None,
-        };
-        let t = Instant::now();
-        let topts = TrainOptions {
-            momentum_epochs: me,
-            ..Default::default()
-        };
-        let (c, rep) = Compensator::fit(&model, &pool, &s, Default::default(), &topts).unwrap();
-        println!(
-            "{} me {me}: {:.2} s, {} mom + {} p2 ({:?}, {:?}), val rms {:.4}",
-            s.describe(),
-            t.elapsed().as_secs_f64(),
-            rep.networks[0].momentum_epochs,
-            rep.networks[0].lm_epochs,
-            rep.networks[0].phase2,
-            rep.networks[0].stop,
-            position_rms(&c, &val)
-        );
-    }
-}
-
-#[test]
-#[ignore = "timing experiment"]
-fn timing_default() {
-    let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
-    let (id, pool, val) = series_b_split(&ur);
-    let model = identified(&ur, &id);
-    let t = Instant::now();
-    let (c, rep) =
-        Compensator::train(&model, &pool, &CompensatorOptions::default(), &|_, _| {}).unwrap();
-    println!(
-        "{:.2} s {} val {:.4}",
-        t.elapsed().as_secs_f64(),
-        rep.settings.describe(),
-        position_rms(&c, &val)
-    );
-    for cand in &rep.selection.as_ref().unwrap().candidates {
-        println!(
-            "  {} {:?}",
-            cand.settings.describe(),
-            cand.score.as_ref().map(|s| s.position_rms_mm)
-        );
-    }
-}
-
-#[test]
-#[ignore = "experiment"]
-fn probe_settings() {
-    use robocal::neural::compensator::Settings;
-    use robocal::neural::train::TrainOptions;
-    let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
-    let (id, pool, val) = series_b_split(&ur);
-    let model = identified(&ur, &id);
-    let probes: Vec<(Form, Encoding, usize, f64, usize)> = std::env::var("PROBES")
-        .unwrap_or_default()
-        .split(';')
-        .filter(|s| !s.is_empty())
-        .map(|p| {
-            let f: Vec<&str> = p.split(',').collect();
-            (
-                if f[0] == "pose" {
-                    Form::Pose
-                } else {
-                    Form::Joint
-                },
-                match f[1] {
-                    "sincos" => Encoding::SinCos,
-                    "angles" => Encoding::Angles,
-                    _ => Encoding::Gravity,
-                },
-                f[2].parse().unwrap(),
-                f[3].parse().unwrap(),
-                f[4].parse().unwrap(),
-            )
-        })
-        .collect();
-    for (form, encoding, hidden, penalty, members) in probes {
-        let _ = &val;
-        let s = Settings {
-            form,
-            encoding,
-            hidden,
-            penalty,
-            members,
-            refine: Some("full".into()),
-        };
-        let t = Instant::now();
-        let (c, ..) = Compensator::fit(
-            &model,
-            &pool,
-            &s,
-            Default::default(),
-            &TrainOptions {
-                momentum_epochs: 0,
-                validation_fraction: std::env::var("VF")
-                    .map(|v| v.parse().unwrap())
-                    .unwrap_or(0.15),
-                max_epochs: std::env::var("ME")
-                    .map(|v| v.parse().unwrap())
-                    .unwrap_or(200),
-                ..Default::default()
-            },
-        )
-        .unwrap();
-        let st = stats(&c, &val);
-        println!(
-            "{}: {:.1} s val rms {:.4} max {:.4}",
-            s.describe(),
-            t.elapsed().as_secs_f64(),
-            st.position_mm.unwrap().rms,
-            st.position_mm.unwrap().max
         );
     }
 }
@@ -377,4 +294,131 @@ fn series_a_pool_2000() {
         line("default", &stats(&c, &val), t.elapsed().as_secs_f64()),
         rep.settings.describe()
     );
+    let mut ws = PredictWorkspace::default();
+    let mut rows: Vec<(f64, f64, String, f64)> = val
+        .rows
+        .iter()
+        .map(|m| {
+            let e = (m.position.unwrap() - c.predict(&m.q, &mut ws).translation.vector).norm();
+            let em = (m.position.unwrap()
+                - robocal::kinematics::tool_pose(&model, &m.q)
+                    .translation
+                    .vector)
+                .norm();
+            let corr = c
+                .correction(&m.q, &mut ws)
+                .iter()
+                .take(3)
+                .map(|v| v * v)
+                .sum::<f64>()
+                .sqrt();
+            let d = c.domain_check(&m.q, &mut ws);
+            // Spread: RMS distance of the members' position corrections from their mean.
+            let mut outs = Vec::new();
+            for w in &c.members {
+                let mut one = c.clone();
+                one.members = vec![w.clone()];
+                outs.push(one.correction(&m.q, &mut ws)[..3].to_vec());
+            }
+            let mean: Vec<f64> = (0..3)
+                .map(|k| outs.iter().map(|o| o[k]).sum::<f64>() / outs.len() as f64)
+                .collect();
+            let spread = (outs
+                .iter()
+                .map(|o| (0..3).map(|k| (o[k] - mean[k]).powi(2)).sum::<f64>())
+                .sum::<f64>()
+                / outs.len() as f64)
+                .sqrt();
+            (
+                e,
+                em,
+                format!(
+                    "{} line {} nearest {:.2}/{:.2} spread {spread:.3}",
+                    d.describe(),
+                    m.line,
+                    d.nearest,
+                    d.radius
+                ),
+                corr,
+            )
+        })
+        .collect();
+    rows.sort_by(|a, b| b.0.total_cmp(&a.0));
+    for r in rows
+        .iter()
+        .take(6)
+        .chain(rows.iter().skip(500).step_by(300).take(5))
+    {
+        println!("comp {:.3} model {:.3} |corr| {:.3} {}", r.0, r.1, r.3, r.2);
+    }
+    let outside = rows.iter().filter(|r| !r.2.starts_with("inside")).count();
+    println!(
+        "{outside} of {} validation rows outside the domain",
+        rows.len()
+    );
+}
+
+/// Series B with other pool sizes and seeds (POOL, SEEDS env): identification on the pool
+/// itself when POOL <= 500, else on 500 of it.
+#[test]
+#[ignore = "experiment"]
+fn series_b_pools() {
+    let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
+    let profile = Profile::read(root().join("datasets/profiles/ipa_ur10.toml")).unwrap();
+    let path = root().join("datasets/ipa-ur10/Series_B/measurements_joint_configurations.csv");
+    let (set, _) = read_measurements(Path::new(&path), &ur, &profile, &Default::default()).unwrap();
+    let pool_n: f64 = std::env::var("POOL")
+        .map(|v| v.parse().unwrap())
+        .unwrap_or(500.0);
+    let seeds: u64 = std::env::var("SEEDS")
+        .map(|v| v.parse().unwrap())
+        .unwrap_or(3);
+    for seed in 0..seeds {
+        let (pool, val) = split(&set, pool_n / set.rows.len() as f64, 100 + seed);
+        let id = if pool.rows.len() <= 500 {
+            pool.clone()
+        } else {
+            split(&pool, 500.0 / pool.rows.len() as f64, 200 + seed).0
+        };
+        let model = identified(&ur, &id);
+        let plain = summarize(
+            &row_errors(&val, Measure::Pose, |q| {
+                robocal::kinematics::tool_pose(&model, q)
+            })
+            .unwrap(),
+        );
+        let base = stats(&baseline(&model, &pool), &val);
+        let t = Instant::now();
+        let (c, rep) =
+            Compensator::train(&model, &pool, &CompensatorOptions::default(), &|_, _| {}).unwrap();
+        let d = stats(&c, &val);
+        let (m, b, dd) = (
+            plain.position_mm.unwrap(),
+            base.position_mm.unwrap(),
+            d.position_mm.unwrap(),
+        );
+        println!(
+            "seed {seed}: model {:.4}/{:.3} baseline {:.4}/{:.3} default {:.4}/{:.3} ({:+.1}% vs baseline) {:.1} s {}",
+            m.rms,
+            m.max,
+            b.rms,
+            b.max,
+            dd.rms,
+            dd.max,
+            100.0 * (dd.rms / b.rms - 1.0),
+            t.elapsed().as_secs_f64(),
+            rep.settings.describe()
+        );
+        if std::env::var("TABLE").is_ok() {
+            let sel = rep.selection.as_ref().unwrap();
+            println!("  model alone cv {:.4}", sel.model.position_rms_mm);
+            for cand in &sel.candidates {
+                println!(
+                    "  {} {:?}",
+                    cand.settings.describe(),
+                    cand.score.as_ref().map(|s| s.position_rms_mm)
+                );
+            }
+        }
+    }
 }

@@ -141,7 +141,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     let stops: std::collections::BTreeSet<&str> = n.iter().map(|r| r.stop.describe()).collect();
     println!(
         "networks: {} x {}-{}-{} ({} inputs); phase 1 {} epochs, phase 2 {} ({} epochs) per network; \
-         stopped: {}; {seconds:.1} s",
+         stopped: {}; {seconds:.1} s ({:.1} s cross-validation, {:.1} s final fit)",
         n.len(),
         c.inputs(),
         c.hidden(),
@@ -153,7 +153,9 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             _ => "LM",
         },
         n.iter().map(|r| r.lm_epochs).max().unwrap_or(0),
-        stops.into_iter().collect::<Vec<_>>().join(", ")
+        stops.into_iter().collect::<Vec<_>>().join(", "),
+        report.selection_seconds,
+        report.fit_seconds
     );
     let mut figs = 0;
     if let Some(dir) = &a.plot

@@ -19,7 +19,7 @@ pub use super::predict::PredictWorkspace;
 use super::refine::{RefinedParam, refine};
 use super::targets::{build, inputs};
 use super::train::{TrainOptions, TrainReport, train};
-use super::tuning::{Selection, select_settings};
+use super::tuning::{FIT_WORK, Selection, budget_epochs, select_settings};
 use super::weights::{Affine, Weights};
 use crate::data::MeasurementSet;
 use crate::error::Result;
@@ -123,11 +123,14 @@ pub struct CompensatorOptions {
     pub refine: Refine,
     /// Tracker sigmas for rows that carry none (refinement).
     pub sigmas: Sigmas,
-    /// Cross-validation folds; None: 5, or 3 from 1000 distinct configurations.
+    /// Cross-validation folds; None: 5, or 4 from 1500 distinct configurations.
     pub folds: Option<usize>,
     /// The training procedure of every network; its `hidden` and `penalty` are overridden by
     /// the settings.
     pub train: TrainOptions,
+    /// Phase-2 epoch limits from the row count (the same work per fit: [`super::tuning`])
+    /// instead of `train.max_epochs`.
+    pub budget: bool,
 }
 
 impl Default for CompensatorOptions {
@@ -142,6 +145,7 @@ impl Default for CompensatorOptions {
             sigmas: Sigmas::default(),
             folds: None,
             train: TrainOptions::default(),
+            budget: true,
         }
     }
 }
@@ -174,6 +178,9 @@ pub struct CompensatorReport {
     pub refined: Vec<RefinedParam>,
     /// What the user should know (refinement kept or dropped, ill-conditioning).
     pub notes: Vec<String>,
+    /// Wall-clock seconds of the cross-validation and of the final fit.
+    pub selection_seconds: f64,
+    pub fit_seconds: f64,
 }
 
 /// Runs `f(k)` for k in 0..n on up to `available_parallelism` threads; results in order.
@@ -239,7 +246,9 @@ impl Compensator {
             Some(spec) => refine(model, set, spec, sigmas)?,
             None => (model.clone(), Vec::new(), Vec::new()),
         };
-        let (c, networks) = Compensator::fit_with(&robot, set, settings, train_opts, true, true)?;
+        let started = std::time::Instant::now();
+        let (c, networks) =
+            Compensator::fit_with(&robot, set, settings, train_opts, true, true, 0)?;
         Ok((
             c,
             CompensatorReport {
@@ -248,13 +257,17 @@ impl Compensator {
                 networks,
                 refined,
                 notes,
+                selection_seconds: 0.0,
+                fit_seconds: started.elapsed().as_secs_f64(),
             },
         ))
     }
 
     /// [`Compensator::fit`] on a model already refined (`settings.refine` is not applied);
     /// `parallel` trains the members on several threads; without `with_domain` the domain is
-    /// left empty (cross-validation fits never check it).
+    /// left empty (cross-validation fits never check it). Member m (counting from
+    /// `first_member`) trains from seed `train_opts.seed + 7919 m`, so members already trained
+    /// for the same settings can be reused and completed.
     pub(crate) fn fit_with(
         robot: &Robot,
         set: &MeasurementSet,
@@ -262,10 +275,12 @@ impl Compensator {
         train_opts: &TrainOptions,
         parallel: bool,
         with_domain: bool,
+        first_member: usize,
     ) -> Result<(Compensator, Vec<TrainReport>)> {
         let problem = build(robot, set, settings.form, settings.encoding)?;
         let outputs = problem.output_norm.len();
         let one = |m: usize| {
+            let m = m + first_member;
             let opts = TrainOptions {
                 hidden: settings.hidden,
                 penalty: settings.penalty,
@@ -275,10 +290,11 @@ impl Compensator {
             };
             train(&problem.samples, outputs, &opts)
         };
+        let count = settings.members.saturating_sub(first_member);
         let trained = if parallel {
-            parallel_map(settings.members, one)
+            parallel_map(count, one)
         } else {
-            (0..settings.members).map(one).collect()
+            (0..count).map(one).collect()
         };
         let mut members = Vec::with_capacity(trained.len());
         let mut reports = Vec::with_capacity(trained.len());
@@ -316,12 +332,23 @@ impl Compensator {
         opts: &CompensatorOptions,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<(Compensator, CompensatorReport)> {
+        let started = std::time::Instant::now();
         let (settings, selection) = select_settings(robot, set, opts, progress)?;
-        let (c, mut report) = Compensator::fit(robot, set, &settings, opts.sigmas, &opts.train)?;
+        let selection_seconds = started.elapsed().as_secs_f64();
+        let train = TrainOptions {
+            max_epochs: if opts.budget {
+                budget_epochs(FIT_WORK, set.rows.len(), 50, 120)
+            } else {
+                opts.train.max_epochs
+            },
+            ..opts.train.clone()
+        };
+        let (c, mut report) = Compensator::fit(robot, set, &settings, opts.sigmas, &train)?;
         if let Some(s) = &selection {
             report.notes.extend(s.notes.iter().cloned());
         }
         report.selection = selection;
+        report.selection_seconds = selection_seconds;
         Ok((c, report))
     }
 

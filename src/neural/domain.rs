@@ -3,8 +3,13 @@
 //!
 //! A configuration is inside when every joint lies within the range the training rows
 //! covered and its distance to the nearest training configuration, measured in the network's
-//! normalised input space, is at most the domain's radius: the largest distance of a
-//! training configuration to its own nearest (distinct) neighbour.
+//! normalised input space, is at most the domain's radius: the distance that 99 % of the
+//! training configurations are within of their own nearest (distinct) neighbour (a single
+//! isolated training row would make the largest such distance meaningless).
+//!
+//! Beyond the radius the network is not trusted: its correction is scaled by the weight
+//! w = 2 - d / radius, falling from 1 at the radius to 0 at twice the radius (d the distance to
+//! the nearest training configuration), so far from its data the compensator is the model.
 
 use super::encoding::Encoding;
 use super::weights::Affine;
@@ -28,6 +33,8 @@ pub struct DomainCheck {
     /// Distance to the nearest training configuration (normalised input units).
     pub nearest: f64,
     pub radius: f64,
+    /// The weight of the network's correction there (module doc).
+    pub weight: f64,
 }
 
 impl DomainCheck {
@@ -47,8 +54,8 @@ impl DomainCheck {
             .collect();
         if self.nearest > self.radius {
             parts.push(format!(
-                "{:.2} from the nearest training configuration (radius {:.2})",
-                self.nearest, self.radius
+                "{:.2} from the nearest training configuration (radius {:.2}): correction x{:.2}",
+                self.nearest, self.radius, self.weight
             ));
         }
         parts.join("; ")
@@ -87,23 +94,29 @@ impl Domain {
                 })
         });
         inputs.dedup();
-        let mut radius2: f64 = 0.0;
-        for (i, a) in inputs.iter().enumerate() {
-            let nearest = inputs
-                .iter()
-                .enumerate()
-                .filter(|(k, _)| *k != i)
-                .map(|(_, b)| distance2(a, b))
-                .fold(f64::INFINITY, f64::min);
-            if nearest.is_finite() {
-                radius2 = radius2.max(nearest);
-            }
-        }
+        let mut gaps: Vec<f64> = inputs
+            .iter()
+            .enumerate()
+            .map(|(i, a)| {
+                inputs
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| *k != i)
+                    .map(|(_, b)| distance2(a, b))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .filter(|d| d.is_finite())
+            .collect();
+        gaps.sort_by(f64::total_cmp);
+        let radius = match gaps.len() {
+            0 => 0.0,
+            n => gaps[((0.99 * n as f64).ceil() as usize).clamp(1, n) - 1].sqrt(),
+        };
         Domain {
             joint_min,
             joint_max,
             inputs,
-            radius: radius2.sqrt(),
+            radius,
         }
     }
 
@@ -112,17 +125,36 @@ impl Domain {
         let joints_outside = (0..q.len())
             .filter(|&j| q[j] < self.joint_min[j] || q[j] > self.joint_max[j])
             .collect();
-        let nearest = self
-            .inputs
-            .iter()
-            .map(|b| distance2(x, b))
-            .fold(f64::INFINITY, f64::min)
-            .sqrt();
+        let (_, nearest, weight) = self.trust(x);
         DomainCheck {
             joints_outside,
             nearest,
             radius: self.radius,
+            weight,
         }
+    }
+
+    /// The nearest training configuration to `x` (index, distance) and the correction's
+    /// weight there; an empty domain (cross-validation fits) trusts everywhere.
+    pub fn trust(&self, x: &[f64]) -> (usize, f64, f64) {
+        if self.inputs.is_empty() {
+            return (0, 0.0, 1.0);
+        }
+        let (k, d2) = self
+            .inputs
+            .iter()
+            .enumerate()
+            .map(|(k, b)| (k, distance2(x, b)))
+            .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+        let d = d2.sqrt();
+        let w = if d <= self.radius {
+            1.0
+        } else if self.radius > 0.0 {
+            (2.0 - d / self.radius).max(0.0)
+        } else {
+            0.0
+        };
+        (k, d, w)
     }
 
     /// True when the sizes fit `dof` joints and `inputs` features and every number is finite.

@@ -23,6 +23,8 @@ pub struct PredictWorkspace {
     dy: DMatrix<f64>,
     dy_sum: DMatrix<f64>,
     dout: DMatrix<f64>,
+    /// d weight / dq (the domain's fade).
+    dw: Vec<f64>,
     frames: Option<Frames>,
 }
 
@@ -40,6 +42,7 @@ impl Default for PredictWorkspace {
             dy: DMatrix::zeros(0, 0),
             dy_sum: DMatrix::zeros(0, 0),
             dout: DMatrix::zeros(0, 0),
+            dw: Vec::new(),
             frames: None,
         }
     }
@@ -82,6 +85,10 @@ impl Compensator {
         let m = self.members.len() as f64;
         ws.y_sum.iter_mut().for_each(|s| *s /= m);
         self.output_norm.invert(&ws.y_sum, &mut ws.out);
+        let (_, _, w) = self.domain.trust(&ws.x);
+        if w < 1.0 {
+            ws.out.iter_mut().for_each(|v| *v *= w);
+        }
         &ws.out
     }
 
@@ -119,13 +126,32 @@ impl Compensator {
         let fr = frames_for(&mut ws.frames, &self.robot);
         let (dy, dout) = (&ws.dy_sum, &mut ws.dout);
         let (inorm, onorm) = (&self.input_norm, &self.output_norm);
+        // The domain's fade: out_w = w(x) out, w = 2 - d / r between r and 2 r, with
+        // dw/dq = -(x - x_nearest) . dx/dq / (r d).
+        let (k_near, d, w) = self.domain.trust(&ws.x);
+        let fading = w > 0.0 && w < 1.0 && d > 0.0;
+        ws.dw.clear();
+        ws.dw.resize(n, 0.0);
+        let (x, dw) = (&ws.x, &mut ws.dw);
+        let near = self.domain.inputs.get(k_near);
         self.encoding
-            .for_each_derivative(&self.robot, q, fr, |j, f, d| {
-                let dx = d / inorm.scale[f];
+            .for_each_derivative(&self.robot, q, fr, |j, f, dfeat| {
+                let dx = dfeat / inorm.scale[f];
                 for k in 0..o {
                     dout[(k, j)] += dy[(k, f)] * dx * onorm.scale[k];
                 }
+                if let (true, Some(nx)) = (fading, near) {
+                    dw[j] -= (x[f] - nx[f]) * dx / (self.domain.radius * d);
+                }
             });
+        if w < 1.0 {
+            for k in 0..o {
+                for j in 0..n {
+                    ws.dout[(k, j)] = w * ws.dout[(k, j)] + ws.out[k] * ws.dw[j];
+                }
+            }
+            ws.out.iter_mut().for_each(|v| *v *= w);
+        }
     }
 
     /// The geometric Jacobian of the compensated pose at `q` into `jac` (6 x N; rows 0-2 mm

@@ -199,6 +199,9 @@ pub fn objective(s: &Samples, w: &Weights, lambda: f64, grad: &mut DVector<f64>)
 pub struct Batch<'a> {
     s: &'a Samples,
     x: DMatrix<f64>,
+    /// Transposed copies: products of the form A^T B go through the blocked `gemm`.
+    zt: DMatrix<f64>,
+    gt: DMatrix<f64>,
     b: DMatrix<f64>,
     z: DMatrix<f64>,
     y: DMatrix<f64>,
@@ -213,10 +216,14 @@ impl<'a> Batch<'a> {
     pub fn new(s: &'a Samples, w: &Weights) -> Self {
         let (n, rows) = (s.len(), s.rows());
         let (nh, ni, no) = (w.hidden(), w.inputs(), w.outputs());
+        let x = DMatrix::from_fn(n, ni, |k, i| s.x[k][i]);
+        let b = DMatrix::from_fn(n, rows, |k, r| s.b[k][r]);
         Batch {
             s,
-            x: DMatrix::from_fn(n, ni, |k, i| s.x[k][i]),
-            b: DMatrix::from_fn(n, rows, |k, r| s.b[k][r]),
+            zt: DMatrix::zeros(nh, n),
+            gt: DMatrix::zeros(nh, n),
+            x,
+            b,
             z: DMatrix::zeros(n, nh),
             y: DMatrix::zeros(n, no),
             r: DMatrix::zeros(n, rows),
@@ -297,8 +304,9 @@ impl<'a> Batch<'a> {
         self.hidden(w);
         let (n, nh) = (self.z.nrows(), self.z.ncols());
         let mut a = DMatrix::<f64>::zeros(nh + 1, nh + 1);
-        let mut zt_z = a.view_mut((0, 0), (nh, nh));
-        self.z.tr_mul_to(&self.z, &mut zt_z);
+        self.z.transpose_to(&mut self.zt);
+        a.view_mut((0, 0), (nh, nh))
+            .gemm(1.0, &self.zt, &self.z, 0.0);
         for j in 0..nh {
             let s = self.z.column(j).sum();
             a[(j, nh)] = s;
@@ -307,8 +315,8 @@ impl<'a> Batch<'a> {
         }
         a[(nh, nh)] = n as f64;
         let mut rhs = DMatrix::<f64>::zeros(nh + 1, self.b.ncols());
-        let mut top = rhs.view_mut((0, 0), (nh, self.b.ncols()));
-        self.z.tr_mul_to(&self.b, &mut top);
+        rhs.view_mut((0, 0), (nh, self.b.ncols()))
+            .gemm(1.0, &self.zt, &self.b, 0.0);
         for c in 0..self.b.ncols() {
             rhs[(nh, c)] = self.b.column(c).sum();
         }
@@ -354,7 +362,8 @@ impl<'a> Batch<'a> {
         self.gy.tr_mul_to(&self.z, &mut self.gw2);
         self.gy.mul_to(&w.w2, &mut self.gh);
         self.gh.zip_apply(&self.z, |g, h| *g *= h * (1.0 - h));
-        self.gh.tr_mul_to(&self.x, &mut self.gw1);
+        self.gh.transpose_to(&mut self.gt);
+        self.gw1.gemm(1.0, &self.gt, &self.x, 0.0);
         let (off_b1, off_w2, off_b2) = (nh * ni, nh * ni + nh, nh * ni + nh + no * nh);
         for j in 0..nh {
             for i in 0..ni {

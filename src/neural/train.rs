@@ -70,7 +70,7 @@ impl Default for TrainOptions {
         TrainOptions {
             hidden: 20,
             seed: 1,
-            momentum_epochs: 200,
+            momentum_epochs: 50,
             max_epochs: 60,
             goal: 0.0,
             min_grad: 1e-7,
