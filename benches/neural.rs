@@ -8,7 +8,9 @@ use robocal::data::measurement::split;
 use robocal::data::{Profile, read_canonical, read_measurements};
 use robocal::identify::{Options, identify};
 use robocal::model::read_robot;
-use robocal::neural::compensator::{Compensator, CompensatorOptions, Form, PredictWorkspace};
+use robocal::neural::compensator::{
+    Compensator, CompensatorOptions, Form, PredictWorkspace, Settings,
+};
 use robocal::neural::encoding::Encoding;
 use robocal::neural::net::train_momentum;
 use robocal::neural::samples::Batch;
@@ -69,10 +71,26 @@ fn neural(c: &mut Criterion) {
         b.iter(|| Compensator::train(&ur_model, black_box(&pool), &opts, &|_, _| {}).unwrap())
     });
     g.finish();
-    let (comp, _) = Compensator::train(&model, &set, &opts, &|_, _| {}).unwrap();
+    // A real ensemble (cross-validation may keep the model alone for some sets).
+    let settings = Settings {
+        form: Form::Pose,
+        encoding: Encoding::Gravity,
+        hidden: 32,
+        penalty: 1.0,
+        members: 4,
+        refine: None,
+    };
+    let (comp, _) = Compensator::fit(
+        &model,
+        &set,
+        &settings,
+        Default::default(),
+        &Default::default(),
+    )
+    .unwrap();
     let mut ws = PredictWorkspace::default();
     let q = [0.05, 0.15, -0.05, 0.1, 0.7, 0.2];
-    c.bench_function("compensated_pose", |b| {
+    c.bench_function("compensated_pose_4_networks_gravity_inputs", |b| {
         b.iter(|| comp.predict(black_box(&q), &mut ws))
     });
 }

@@ -27,12 +27,20 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// A series of the shipped UR10 data set, imported through its profile.
+fn series(robot: &Robot, file: &str) -> MeasurementSet {
+    let profile = Profile::read(root().join("datasets/profiles/ipa_ur10.toml")).unwrap();
+    let path = root().join("datasets/ipa-ur10").join(file);
+    read_measurements(Path::new(&path), robot, &profile, &Default::default())
+        .unwrap()
+        .0
+}
+
+const SERIES_B: &str = "Series_B/measurements_joint_configurations.csv";
+
 /// Series B, split as in the README: (identification, pool, validation).
 fn series_b_split(robot: &Robot) -> (MeasurementSet, MeasurementSet, MeasurementSet) {
-    let profile = Profile::read(root().join("datasets/profiles/ipa_ur10.toml")).unwrap();
-    let path = root().join("datasets/ipa-ur10/Series_B/measurements_joint_configurations.csv");
-    let (set, _) =
-        read_measurements(Path::new(&path), robot, &profile, &Default::default()).unwrap();
+    let set = series(robot, SERIES_B);
     let (pool, val) = split(&set, 1000.0 / 1495.0, 11);
     let (id, _) = split(&pool, 0.5, 12);
     (id, pool, val)
@@ -266,9 +274,7 @@ fn readme_table_series_b() {
 #[ignore = "experiment: Series A, pool of 2000"]
 fn series_a_pool_2000() {
     let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
-    let profile = Profile::read(root().join("datasets/profiles/ipa_ur10.toml")).unwrap();
-    let path = root().join("datasets/ipa-ur10/Series_A/measurements_grid.csv");
-    let (set, _) = read_measurements(Path::new(&path), &ur, &profile, &Default::default()).unwrap();
+    let set = series(&ur, "Series_A/measurements_grid.csv");
     let (pool, rest) = split(&set, 2000.0 / set.rows.len() as f64, 21);
     let (val, _) = split(&rest, 2000.0 / rest.rows.len() as f64, 22);
     let (id, _) = split(&pool, 0.25, 23);
@@ -364,9 +370,7 @@ fn series_a_pool_2000() {
 #[ignore = "experiment"]
 fn series_b_pools() {
     let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
-    let profile = Profile::read(root().join("datasets/profiles/ipa_ur10.toml")).unwrap();
-    let path = root().join("datasets/ipa-ur10/Series_B/measurements_joint_configurations.csv");
-    let (set, _) = read_measurements(Path::new(&path), &ur, &profile, &Default::default()).unwrap();
+    let set = series(&ur, SERIES_B);
     let pool_n: f64 = std::env::var("POOL")
         .map(|v| v.parse().unwrap())
         .unwrap_or(500.0);

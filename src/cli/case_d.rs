@@ -81,7 +81,7 @@ fn print_set(rows: &[Row], set: Robotset) {
         ratio(Stage::Full, Stage::FullNetwork),
     ) {
         println!(
-            "the network lowers the mean position error vs truth {o:.1}x after offsets, {f:.1}x after full identification"
+            "the compensator lowers the mean position error vs truth {o:.1}x after offsets, {f:.1}x after full identification"
         );
     }
 }

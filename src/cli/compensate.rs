@@ -204,7 +204,7 @@ pub fn run(a: CompensateArgs) -> Result<()> {
     a.output
         .emit(&headers, &out_rows)
         .context("writing the commands")?;
-    super::train::warn_outside(&a.targets, &outside);
+    super::train::warn_outside(&a.targets, &outside, true);
     let total = t.rows.len();
     if !shifts.is_empty() {
         let mean = shifts.iter().sum::<f64>() / shifts.len() as f64;

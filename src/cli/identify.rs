@@ -398,7 +398,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     if let Some(note) = note {
         println!("{note}");
     }
-    super::train::warn_outside(&a.data, &outside);
+    super::train::warn_outside(&a.data, &outside, false);
     if let Some(dir) = &a.plot {
         let mut runs = vec![ErrorRun {
             label: "model",

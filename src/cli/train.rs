@@ -140,7 +140,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     let n = &report.networks;
     let stops: std::collections::BTreeSet<&str> = n.iter().map(|r| r.stop.describe()).collect();
     println!(
-        "networks: {} x {}-{}-{} ({} inputs); phase 1 {} epochs, phase 2 {} ({} epochs) per network; \
+        "networks: {} x {}-{}-{} ({} inputs); phase 1 {} epochs, phase 2 {} per network; \
          stopped: {}; {seconds:.1} s ({:.1} s cross-validation, {:.1} s final fit)",
         n.len(),
         c.inputs(),
@@ -148,11 +148,13 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         c.outputs(),
         c.encoding.name(),
         n.iter().map(|r| r.momentum_epochs).max().unwrap_or(0),
-        match n.first().map(|r| r.phase2) {
-            Some(Phase2::Lbfgs) => "L-BFGS",
-            _ => "LM",
+        {
+            let most = n.iter().map(|r| r.lm_epochs).max().unwrap_or(0);
+            match n.first().map(|r| r.phase2) {
+                Some(Phase2::Lbfgs) => format!("L-BFGS ({most} iterations)"),
+                _ => format!("LM ({most} epochs)"),
+            }
         },
-        n.iter().map(|r| r.lm_epochs).max().unwrap_or(0),
         stops.into_iter().collect::<Vec<_>>().join(", "),
         report.selection_seconds,
         report.fit_seconds
@@ -304,7 +306,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
         row.push(check.describe());
         out.push(row);
     }
-    warn_outside(&a.joints, &outside);
+    warn_outside(&a.joints, &outside, true);
     a.output
         .emit(&headers, &out)
         .with_context(|| "writing the predictions".to_string())
@@ -313,15 +315,21 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
 /// The output column that says where a row stands against the training domain.
 pub(super) const DOMAIN_COLUMN: &str = "domain";
 
-/// Warns (stderr) about rows outside a compensator's training domain, by line.
-pub(super) fn warn_outside(path: &Path, lines: &[usize]) {
+/// Warns (stderr) about rows outside a compensator's training domain, by line; `column`: the
+/// output has the domain column.
+pub(super) fn warn_outside(path: &Path, lines: &[usize], column: bool) {
     if !lines.is_empty() {
         eprintln!(
             "warning: {}: {} row(s) outside the compensator's training domain (lines {}): \
-             the network extrapolates there; see the `{DOMAIN_COLUMN}` column",
+             the network extrapolates there, its correction fades{}",
             path.display(),
             lines.len(),
-            crate::data::measurement::list_lines(lines)
+            crate::data::measurement::list_lines(lines),
+            if column {
+                format!("; see the `{DOMAIN_COLUMN}` column")
+            } else {
+                String::new()
+            }
         );
     }
 }

@@ -367,60 +367,30 @@ pub fn select_settings(
     };
     // Stage 1: the forms (gravity inputs, middle size and penalty), then for the best so far
     // the penalty decade and the other encodings.
-    let list = forms
-        .iter()
-        .map(|f| Settings {
-            form: *f,
-            ..base.clone()
-        })
-        .collect();
-    evaluate(1, list, &mut candidates);
+    evaluate(1, vary(&base, &forms, |s, f| s.form = f), &mut candidates);
     let Some(b0) = best(&candidates) else {
         return Err(failed(&candidates));
     };
-    for axis in 0..2 {
-        let w = candidates[best(&candidates).unwrap_or(b0)].settings.clone();
-        let list: Vec<Settings> = if axis == 0 {
-            penalties
-                .iter()
-                .map(|p| Settings {
-                    penalty: *p,
-                    ..w.clone()
-                })
-                .collect()
-        } else {
-            encodings
-                .iter()
-                .map(|e| Settings {
-                    encoding: *e,
-                    ..w.clone()
-                })
-                .collect()
-        };
-        evaluate(1, list, &mut candidates);
-    }
+    let w = candidates[best(&candidates).unwrap_or(b0)].settings.clone();
+    evaluate(
+        1,
+        vary(&w, &penalties, |s, p| s.penalty = p),
+        &mut candidates,
+    );
+    let w = candidates[best(&candidates).unwrap_or(b0)].settings.clone();
+    evaluate(
+        1,
+        vary(&w, &encodings, |s, e| s.encoding = e),
+        &mut candidates,
+    );
     let b1 = best(&candidates).unwrap_or(b0);
     // Stage 2: hidden units, then a finer penalty step around the best.
-    let w1 = candidates[b1].settings.clone();
-    let list = hiddens
-        .iter()
-        .map(|h| Settings {
-            hidden: *h,
-            ..w1.clone()
-        })
-        .collect();
-    evaluate(2, list, &mut candidates);
-    let w2 = candidates[best(&candidates).unwrap_or(b1)].settings.clone();
+    let w = candidates[b1].settings.clone();
+    evaluate(2, vary(&w, &hiddens, |s, h| s.hidden = h), &mut candidates);
+    let w = candidates[best(&candidates).unwrap_or(b1)].settings.clone();
     if opts.penalty.is_none() {
-        let list = [w2.penalty / PENALTY_STEP, w2.penalty * PENALTY_STEP]
-            .map(significant3)
-            .iter()
-            .map(|p| Settings {
-                penalty: *p,
-                ..w2.clone()
-            })
-            .collect();
-        evaluate(2, list, &mut candidates);
+        let step = [w.penalty / PENALTY_STEP, w.penalty * PENALTY_STEP].map(significant3);
+        evaluate(2, vary(&w, &step, |s, p| s.penalty = p), &mut candidates);
     }
     let mut chosen = best(&candidates).unwrap_or(b1);
     let mut notes = Vec::new();
@@ -455,15 +425,8 @@ pub fn select_settings(
     // an unregularised single network, it looked worse where it finally helped 1.3x).
     if refines.len() > 1 {
         let w = candidates[chosen].settings.clone();
-        let list = refines
-            .iter()
-            .map(|r| Settings {
-                refine: r.clone(),
-                ..w.clone()
-            })
-            .collect();
         let first = candidates.len();
-        evaluate(4, list, &mut candidates);
+        evaluate(4, vary(&w, &refines, |s, r| s.refine = r), &mut candidates);
         chosen = better(&candidates, chosen, first..candidates.len());
     }
     // Stage 5: the (refined) model alone, without a network.
@@ -481,7 +444,7 @@ pub fn select_settings(
         chosen = better(&candidates, chosen, candidates.len() - 1..candidates.len());
     }
     let mut winner = candidates[chosen].settings.clone();
-    if winner.members == ENSEMBLE_PROBE {
+    if opts.members.is_none() && winner.members == ENSEMBLE_PROBE {
         winner.members = ENSEMBLE;
     }
     if winner.members == 0 {
@@ -507,6 +470,18 @@ pub fn select_settings(
             notes,
         }),
     ))
+}
+
+/// `base` with one setting changed to each of `values`.
+fn vary<T: Clone>(base: &Settings, values: &[T], set: impl Fn(&mut Settings, T)) -> Vec<Settings> {
+    values
+        .iter()
+        .map(|v| {
+            let mut s = base.clone();
+            set(&mut s, v.clone());
+            s
+        })
+        .collect()
 }
 
 /// The best of `current` and the candidates in `new` (ties keep `current`).
