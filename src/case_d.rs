@@ -176,7 +176,10 @@ pub fn run_set(
         let model = identified(params)?.robot;
         push(plain, stats(&mut |q| tool_pose(&model, q))?, None);
         let o = CompensatorOptions {
-            refine: Refine::Params(params.into()),
+            refine: match &opts.refine {
+                Refine::Auto => Refine::Params(params.into()),
+                explicit => explicit.clone(),
+            },
             ..opts.clone()
         };
         let (c, report) = Compensator::train(&model, &data.training, &o, &|_, _| {})?;

@@ -130,26 +130,37 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
         );
         std::fs::write(&path, &text[..text.len() / 2]).unwrap();
         assert!(Compensator::load(&path).is_err());
-        // A well-formed file whose shapes disagree (here the output normalisation) is refused,
-        // not left to panic in prediction.
-        let mut odd = c.clone();
-        odd.output_norm.offset.pop();
-        odd.save(&path).unwrap();
-        let e = Compensator::load(&path).unwrap_err().to_string();
+        // Well-formed, correctly signed files with inconsistent or absurd content are refused at
+        // load, not left to panic or spread non-finite numbers in prediction.
+        let edit = |f: &dyn Fn(&mut serde_json::Value)| {
+            let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            f(&mut v);
+            std::fs::write(&path, resign(v)).unwrap();
+            Compensator::load(&path).unwrap_err().to_string()
+        };
+        let e = edit(&|v| {
+            v["output_norm"]["offset"].as_array_mut().unwrap().pop();
+        });
         assert!(e.contains("does not fit"), "{e}");
-        // Non-finite numbers are refused at load, not spread into every prediction.
-        let mut odd = c.clone();
-        odd.output_norm.scale[0] = f64::INFINITY;
-        odd.save(&path).unwrap();
-        assert!(Compensator::load(&path).is_err());
+        let e = edit(&|v| v["output_norm"]["scale"][0] = serde_json::json!(0.0));
+        assert!(e.contains("does not fit"), "{e}");
+        let e = edit(&|v| v["domain"]["radius"] = serde_json::json!(-1.0));
+        assert!(e.contains("domain"), "{e}");
         if let Some(w) = c.members.first() {
-            let mut odd = c.clone();
-            let mut w = w.clone();
-            w.w1[(0, 0)] = f64::NAN;
-            odd.members[0] = w;
-            odd.save(&path).unwrap();
-            let e = Compensator::load(&path).unwrap_err().to_string();
+            let mut bad = w.clone();
+            bad.w1[(0, 0)] = f64::NAN;
+            let record: String = robocal::neural::net::record_bytes(&bad)
+                .unwrap()
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect();
+            let e = edit(&|v| v["network_records_burnpack_hex"][0] = serde_json::json!(record));
             assert!(e.contains("non-finite weight"), "{e}");
+            // And such a compensator is never written.
+            let mut odd = c.clone();
+            odd.members[0] = bad;
+            let e = odd.save(&path).unwrap_err().to_string();
+            assert!(e.contains("nothing was written"), "{e}");
         }
         let _ = std::fs::remove_file(&path);
     }
@@ -299,4 +310,16 @@ fn configurations_outside_the_training_domain_are_flagged() {
             );
         }
     }
+}
+
+/// The file's checksum again after an edit: FNV-1a 64 of the compact JSON without it
+/// (written here independently of the library).
+fn resign(mut v: serde_json::Value) -> String {
+    v.as_object_mut().unwrap().remove("checksum");
+    let body = serde_json::to_string(&v).unwrap();
+    let sum = body.bytes().fold(0xcbf29ce484222325u64, |h, x| {
+        (h ^ x as u64).wrapping_mul(0x100000001b3)
+    });
+    v["checksum"] = serde_json::json!(format!("{sum:016x}"));
+    serde_json::to_string_pretty(&v).unwrap()
 }

@@ -113,7 +113,7 @@ fn plot(dir: &Path, datasets: &Path, rows: &[Row]) -> Result<usize> {
         )?
         .len();
         for r in &mine {
-            if let Some(t) = &r.training {
+            if let Some(t) = r.training.as_ref().filter(|t| !t.networks.is_empty()) {
                 let stage = match r.stage {
                     Stage::OffsetsNetwork => "offsets_network",
                     _ => "full_network",
@@ -122,7 +122,7 @@ fn plot(dir: &Path, datasets: &Path, rows: &[Row]) -> Result<usize> {
                     dir,
                     &format!("case_d_{tag}_{stage}"),
                     &format!("{name}, {}", r.stage.label()),
-                    &t.networks[0],
+                    &t.networks[0], // not empty: filtered above
                 )?;
                 figs += 1;
             }

@@ -161,6 +161,7 @@ impl CompensatorOptions {
             members: Some(settings.members),
             refine: settings.refine.clone().map_or(Refine::Off, Refine::Params),
             train,
+            budget: false,
             ..Default::default()
         }
     }

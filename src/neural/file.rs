@@ -22,6 +22,20 @@ const VERSION: u64 = 2;
 impl Compensator {
     /// The compensator file's text.
     pub fn to_file_text(&self) -> Result<String> {
+        let finite = self
+            .members
+            .iter()
+            .all(|w| w.to_vector().iter().all(|v| v.is_finite()))
+            && self.input_norm.is_valid()
+            && self.output_norm.is_valid()
+            && self.domain.is_valid(self.robot.dof(), self.inputs());
+        if !finite {
+            return Err(Error::Invalid(
+                "the compensator holds a non-finite weight, normalisation or domain value; \
+                 nothing was written"
+                    .into(),
+            ));
+        }
         let robot_toml = robot_to_toml(&self.robot);
         let records = self
             .members

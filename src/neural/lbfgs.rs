@@ -40,6 +40,7 @@ pub fn minimize(
     mut after: impl FnMut(usize, f64, &DVector<f64>) -> Next,
 ) -> (DVector<f64>, f64, LbfgsStop) {
     let n = x.len();
+    let memory = memory.max(1);
     let mut g = DVector::zeros(n);
     let mut fx = f(&x, &mut g);
     let mut pairs: VecDeque<(DVector<f64>, DVector<f64>, f64)> = VecDeque::with_capacity(memory);
@@ -89,7 +90,12 @@ pub fn minimize(
             step *= 0.5;
         }
         let Some(f_new) = accepted else {
-            return (x, fx, LbfgsStop::LineSearch);
+            if pairs.is_empty() {
+                return (x, fx, LbfgsStop::LineSearch);
+            }
+            // Stale curvature pairs can point nowhere useful: restart from steepest descent.
+            pairs.clear();
+            continue;
         };
         let s = &x_new - &x;
         let y = &g_new - &g;

@@ -69,8 +69,9 @@ impl Compensator {
         self.input_norm.apply(&ws.feat, &mut ws.x);
     }
 
-    /// The mean raw network output for `q` into `ws.out` (joint form: mrad or um per joint;
-    /// pose form: dp mm, dr mrad in the robot's base frame).
+    /// The correction for `q` into `ws.out`: the members' mean raw output, scaled by the
+    /// training domain's fade (joint form: mrad or um per joint; pose form: dp mm, dr mrad in
+    /// the robot's base frame).
     pub fn correction<'w>(&self, q: &[f64], ws: &'w mut PredictWorkspace) -> &'w [f64] {
         self.prepare(q, ws);
         ws.y_sum.fill(0.0);

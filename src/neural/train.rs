@@ -49,7 +49,7 @@ pub struct TrainOptions {
     pub max_epochs: usize,
     /// Performance goal (MSE of normalised outputs).
     pub goal: f64,
-    /// Smallest gradient norm (max |J^T e|) before stopping.
+    /// Smallest gradient before stopping: the largest |J^T e| component.
     pub min_grad: f64,
     /// Validation failures in a row before stopping.
     pub max_fail: usize,
@@ -116,9 +116,11 @@ pub struct TrainReport {
     pub lm_epochs: usize,
     /// The phase-2 method used.
     pub phase2: Phase2,
-    /// Final MSE (normalised outputs, no penalty) on the training and validation parts.
+    /// Final MSE (normalised outputs, no penalty) on the training part, and on the held-out
+    /// part when there is one.
     pub train_mse: f64,
-    pub validation_mse: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation_mse: Option<f64>,
     /// (epoch, training MSE, validation MSE) over both phases.
     pub curve: Vec<(usize, f64, f64)>,
 }
@@ -299,7 +301,18 @@ pub fn train(
     let (st, sv) = (samples.pick(&ti), samples.pick(&vi));
     let start = initial_weights(samples.x[0].len(), opts.hidden, outputs, opts.seed);
     let held = std::cell::RefCell::new(Batch::new(if sv.is_empty() { &st } else { &sv }, &start));
-    let val = |w: &Weights| held.borrow_mut().mse(w);
+    // Without a held-out part the best weights are those of the lowest penalised training
+    // objective (what both phases minimise), not of the lowest plain MSE: near the penalised
+    // optimum the plain MSE rises as the weights shrink.
+    let per_component = lambda / st.components().max(1) as f64;
+    let val = |w: &Weights| {
+        let mse = held.borrow_mut().mse(w);
+        if sv.is_empty() {
+            mse + per_component * weight_norm2(w)
+        } else {
+            mse
+        }
+    };
 
     let bar = if opts.progress {
         let b = indicatif::ProgressBar::new((opts.momentum_epochs + opts.max_epochs) as u64);
@@ -446,13 +459,18 @@ pub fn train(
     }
     bar.finish_and_clear();
     let w = best.weights;
+    if w.to_vector().iter().any(|v| !v.is_finite()) {
+        return Err(Error::NotConverged(
+            "network training diverged: a weight is not finite".into(),
+        ));
+    }
     let report = TrainReport {
         stop: stop.unwrap_or(TrainStop::MaxEpochs),
         momentum_epochs,
         lm_epochs: epochs,
         phase2,
         train_mse: st.mse(&w),
-        validation_mse: val(&w),
+        validation_mse: (!sv.is_empty()).then(|| sv.mse(&w)),
         curve,
     };
     Ok((w, report))

@@ -5,7 +5,9 @@
 //! configuration stay in one fold). Every candidate is fitted on k - 1 folds (refinement
 //! included, so a refined model is judged on rows it never saw) and scored on the held-out
 //! fold through the exact compensated prediction ([`Compensator::predict`], the code path of
-//! `predict` and `evaluate`); the score is the RMS position error over all held-out rows (mm),
+//! `predict` and `evaluate`, except the training-domain fade: candidates carry no domain, whose
+//! nearest-neighbour search would cost more than the fit, so their correction is never
+//! faded); the score is the RMS position error over all held-out rows (mm),
 //! orientation RMS reported beside it.
 //!
 //! The search is staged to stay cheap, each step starting from the best so far: (1) the forms
@@ -432,15 +434,7 @@ pub fn select_settings(
     // Stage 5: the (refined) model alone, without a network.
     if opts.members.is_none() {
         let w = candidates[chosen].settings.clone();
-        evaluate(
-            5,
-            vec![Settings {
-                members: 0,
-                hidden: 0,
-                ..w
-            }],
-            &mut candidates,
-        );
+        evaluate(5, vec![Settings { members: 0, ..w }], &mut candidates);
         chosen = better(&candidates, chosen, candidates.len() - 1..candidates.len());
     }
     let mut winner = candidates[chosen].settings.clone();
