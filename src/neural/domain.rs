@@ -134,6 +134,31 @@ impl Domain {
         }
     }
 
+    /// The correction's weight at `x` as [`Domain::trust`] gives it, found fast: inside the
+    /// domain any training configuration within the radius settles it (weight 1, no
+    /// derivative), so the search starts at `hint` (the last call's neighbour: successive
+    /// calls from an iterative solver move little) and stops at the first one within the
+    /// radius; only outside is the exact nearest searched. Returns (index, distance, weight):
+    /// the distance is exact only when the weight is below 1.
+    pub fn weight(&self, x: &[f64], hint: &mut usize) -> (usize, f64, f64) {
+        if self.inputs.is_empty() {
+            return (0, 0.0, 1.0);
+        }
+        let r2 = self.radius * self.radius;
+        let n = self.inputs.len();
+        let start = (*hint).min(n - 1);
+        for k in (start..n).chain(0..start) {
+            let d2 = distance2(x, &self.inputs[k]);
+            if d2 <= r2 {
+                *hint = k;
+                return (k, d2.sqrt(), 1.0);
+            }
+        }
+        let found = self.trust(x);
+        *hint = found.0;
+        found
+    }
+
     /// The nearest training configuration to `x` (index, distance) and the correction's
     /// weight there; an empty domain (cross-validation fits) trusts everywhere.
     pub fn trust(&self, x: &[f64]) -> (usize, f64, f64) {
@@ -173,5 +198,46 @@ impl Domain {
                 .inputs
                 .iter()
                 .all(|x| x.len() == inputs && x.iter().all(|v| v.is_finite()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn the_fast_search_gives_the_exact_weight() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let inputs: Vec<Vec<f64>> = (0..300)
+            .map(|_| (0..4).map(|_| rng.random_range(-1.0..1.0)).collect())
+            .collect();
+        let d = Domain {
+            joint_min: vec![-1.0; 4],
+            joint_max: vec![1.0; 4],
+            inputs,
+            radius: 0.3,
+        };
+        let mut hint = 0;
+        let (mut inside, mut fading, mut outside) = (0, 0, 0);
+        for _ in 0..2000 {
+            let x: Vec<f64> = (0..4).map(|_| rng.random_range(-1.6..1.6)).collect();
+            let (k, dist, w) = d.weight(&x, &mut hint);
+            let exact = d.trust(&x);
+            assert_eq!(w, exact.2, "{x:?}");
+            if w < 1.0 {
+                assert_eq!((k, dist), (exact.0, exact.1));
+            }
+            match w {
+                1.0 => inside += 1,
+                0.0 => outside += 1,
+                _ => fading += 1,
+            }
+        }
+        // The draw covers all three cases.
+        assert!(
+            inside > 100 && fading > 100 && outside > 100,
+            "{inside} {fading} {outside}"
+        );
     }
 }

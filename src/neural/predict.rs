@@ -25,6 +25,8 @@ pub struct PredictWorkspace {
     dout: DMatrix<f64>,
     /// d weight / dq (the domain's fade).
     dw: Vec<f64>,
+    /// The training configuration nearest the last query (where the domain search starts).
+    near_hint: usize,
     frames: Option<Frames>,
 }
 
@@ -43,6 +45,7 @@ impl Default for PredictWorkspace {
             dy_sum: DMatrix::zeros(0, 0),
             dout: DMatrix::zeros(0, 0),
             dw: Vec::new(),
+            near_hint: 0,
             frames: None,
         }
     }
@@ -86,7 +89,7 @@ impl Compensator {
         let m = self.members.len() as f64;
         ws.y_sum.iter_mut().for_each(|s| *s /= m);
         self.output_norm.invert(&ws.y_sum, &mut ws.out);
-        let (_, _, w) = self.domain.trust(&ws.x);
+        let (_, _, w) = self.domain.weight(&ws.x, &mut ws.near_hint);
         if w < 1.0 {
             ws.out.iter_mut().for_each(|v| *v *= w);
         }
@@ -129,7 +132,7 @@ impl Compensator {
         let (inorm, onorm) = (&self.input_norm, &self.output_norm);
         // The domain's fade: out_w = w(x) out, w = 2 - d / r between r and 2 r, with
         // dw/dq = -(x - x_nearest) . dx/dq / (r d).
-        let (k_near, d, w) = self.domain.trust(&ws.x);
+        let (k_near, d, w) = self.domain.weight(&ws.x, &mut ws.near_hint);
         let fading = w > 0.0 && w < 1.0 && d > 0.0;
         ws.dw.clear();
         ws.dw.resize(n, 0.0);
