@@ -67,7 +67,7 @@ pub struct CompensatorArgs {
     #[arg(long, default_value_t = 50)]
     pub momentum_epochs: usize,
     /// Phase-2 epoch limit (at most 100000; L-BFGS: ten iterations an epoch). Default: from
-    /// the row count, the same work per fit (50 epochs on 2000 rows, up to 120 on fewer).
+    /// the row count (50 epochs on 2000 rows, 60 on up to 1333).
     #[arg(long)]
     pub max_epochs: Option<usize>,
     /// Phase-2 method.

@@ -138,27 +138,31 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         }
     }
     let n = &report.networks;
-    let stops: std::collections::BTreeSet<&str> = n.iter().map(|r| r.stop.describe()).collect();
-    println!(
-        "networks: {} x {}-{}-{} ({} inputs); phase 1 {} epochs, phase 2 {} per network; \
-         stopped: {}; {seconds:.1} s ({:.1} s cross-validation, {:.1} s final fit)",
-        n.len(),
-        c.inputs(),
-        c.hidden(),
-        c.outputs(),
-        c.encoding.name(),
-        n.iter().map(|r| r.momentum_epochs).max().unwrap_or(0),
-        {
-            let most = n.iter().map(|r| r.lm_epochs).max().unwrap_or(0);
-            match n.first().map(|r| r.phase2) {
-                Some(Phase2::Lbfgs) => format!("L-BFGS ({most} iterations)"),
-                _ => format!("LM ({most} epochs)"),
-            }
-        },
-        stops.into_iter().collect::<Vec<_>>().join(", "),
-        report.selection_seconds,
-        report.fit_seconds
+    let timing = format!(
+        "{seconds:.1} s ({:.1} s cross-validation, {:.1} s final fit)",
+        report.selection_seconds, report.fit_seconds
     );
+    if n.is_empty() {
+        println!("networks: none, the compensator is the model alone; {timing}");
+    } else {
+        let stops: std::collections::BTreeSet<&str> = n.iter().map(|r| r.stop.describe()).collect();
+        let most = n.iter().map(|r| r.lm_epochs).max().unwrap_or(0);
+        let phase2 = match n[0].phase2 {
+            Phase2::Lbfgs => format!("L-BFGS ({most} iterations)"),
+            _ => format!("LM ({most} epochs)"),
+        };
+        println!(
+            "networks: {} x {}-{}-{} ({} inputs); phase 1 {} epochs, phase 2 {phase2} per \
+             network; stopped: {}; {timing}",
+            n.len(),
+            c.inputs(),
+            c.hidden(),
+            c.outputs(),
+            c.encoding.name(),
+            n.iter().map(|r| r.momentum_epochs).max().unwrap_or(0),
+            stops.into_iter().collect::<Vec<_>>().join(", "),
+        );
+    }
     let mut figs = 0;
     if let Some(dir) = &a.plot
         && let Some(first) = report.networks.first()

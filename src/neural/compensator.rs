@@ -128,8 +128,8 @@ pub struct CompensatorOptions {
     /// The training procedure of every network; its `hidden` and `penalty` are overridden by
     /// the settings.
     pub train: TrainOptions,
-    /// Phase-2 epoch limits from the row count (the same work per fit: [`super::tuning`])
-    /// instead of `train.max_epochs`.
+    /// Phase-2 epoch limits from the row count ([`super::tuning::CV_WORK`] for candidates,
+    /// [`super::tuning::FIT_WORK`] for the final fit) instead of `train.max_epochs`.
     pub budget: bool,
 }
 
@@ -338,7 +338,7 @@ impl Compensator {
         let selection_seconds = started.elapsed().as_secs_f64();
         let train = TrainOptions {
             max_epochs: if opts.budget {
-                budget_epochs(FIT_WORK, set.rows.len(), 50, 120)
+                budget_epochs(FIT_WORK, set.rows.len(), 50, 60)
             } else {
                 opts.train.max_epochs
             },
