@@ -17,7 +17,7 @@ use super::domain::{Domain, DomainCheck};
 use super::encoding::Encoding;
 pub use super::predict::PredictWorkspace;
 use super::refine::{RefinedParam, refine};
-use super::targets::{build, inputs};
+use super::targets::build;
 use super::train::{TrainOptions, TrainReport, train};
 use super::tuning::{FIT_WORK, Selection, budget_epochs, select_settings};
 use super::weights::{Affine, Weights};
@@ -357,10 +357,5 @@ impl Compensator {
     pub fn domain_check(&self, q: &[f64], ws: &mut PredictWorkspace) -> DomainCheck {
         let x = ws.normalised_inputs(self, q);
         self.domain.check(q, x)
-    }
-
-    /// The normalised inputs of every row of `set` (for tests and diagnostics).
-    pub fn normalised_inputs(&self, set: &MeasurementSet) -> Vec<Vec<f64>> {
-        inputs(&self.robot, set, self.encoding, Some(&self.input_norm)).0
     }
 }

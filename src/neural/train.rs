@@ -144,10 +144,17 @@ fn penalised_sum(w: &Weights, s: &Samples, lambda: f64) -> f64 {
     s.mse(w) * s.components() as f64 + lambda * weight_norm2(w)
 }
 
-/// One LM (trainlm) step loop from `w` on sum |r|^2 + lambda |W|^2: the Jacobian of A_k y
-/// by every weight, steps (J^T J + lambda D + mu I) dw = J^T e - lambda D w solved by Cholesky
-/// (D: 1 on weights, 0 on biases), mu x0.1 on success, x10 on failure.
-fn lm_step(w: &Weights, s: &Samples, mu: &mut f64, min_grad: f64, lambda: f64) -> LmOutcome {
+/// One LM (trainlm) step loop from `w`, whose sum |r|^2 + lambda |W|^2 is `perf`: the
+/// Jacobian of A_k y by every weight, steps (J^T J + lambda D + mu I) dw = J^T e - lambda D w
+/// solved by Cholesky (D: 1 on weights, 0 on biases), mu x0.1 on success, x10 on failure.
+fn lm_step(
+    w: &Weights,
+    perf: f64,
+    s: &Samples,
+    mu: &mut f64,
+    min_grad: f64,
+    lambda: f64,
+) -> LmOutcome {
     let (no, p, nr) = (w.outputs(), w.len(), s.rows());
     let rows = s.len() * nr;
     let mut jac = DMatrix::<f64>::zeros(rows, p);
@@ -173,7 +180,6 @@ fn lm_step(w: &Weights, s: &Samples, mu: &mut f64, min_grad: f64, lambda: f64) -
     if g.amax() < min_grad {
         return LmOutcome::MinGradient;
     }
-    let perf = penalised_sum(w, s, lambda);
     while *mu <= 1e10 {
         let mut mat = a.clone();
         for i in 0..p {
@@ -184,7 +190,7 @@ fn lm_step(w: &Weights, s: &Samples, mu: &mut f64, min_grad: f64, lambda: f64) -
             let c = penalised_sum(&cand, s, lambda);
             if c.is_finite() && c < perf {
                 *mu *= 0.1;
-                return LmOutcome::Step(cand);
+                return LmOutcome::Step(cand, c);
             }
         }
         *mu *= 10.0;
@@ -234,7 +240,8 @@ impl Best {
 const LBFGS_MIN_GAIN: f64 = 1e-4;
 
 enum LmOutcome {
-    Step(Weights),
+    /// The accepted weights and their sum |r|^2 + lambda |W|^2.
+    Step(Weights, f64),
     MinGradient,
     MuMax,
 }
@@ -366,8 +373,11 @@ pub fn train(
         p => p,
     };
     let mut epochs = 0;
-    let mut record = |epoch: usize, w: &Weights, train_mse: f64, patience: usize, gain: f64| {
-        let v = val(w);
+    // `objective`: the penalised training objective F of `w`, which both phase-2 methods have
+    // already computed; without a held-out part it is also the value tracked.
+    let mut record = |epoch: usize, w: &Weights, objective: f64, patience: usize, gain: f64| {
+        let train_mse = objective - per_component * weight_norm2(w);
+        let v = if sv.is_empty() { objective } else { val(w) };
         curve.push((momentum_epochs + epoch, train_mse, v));
         bar.set_position((opts.momentum_epochs + epoch) as u64);
         bar.set_message(format!("train {train_mse:.3e} validation {v:.3e}"));
@@ -384,19 +394,20 @@ pub fn train(
         match phase2 {
             Phase2::Lm | Phase2::Auto => {
                 let mut w = w;
+                let mut perf = penalised_sum(&w, &st, lambda);
                 let mut mu = 1e-3;
                 while stop.is_none() {
                     if epochs >= opts.max_epochs {
                         stop = Some(TrainStop::MaxEpochs);
                         break;
                     }
-                    match lm_step(&w, &st, &mut mu, opts.min_grad, lambda) {
+                    match lm_step(&w, perf, &st, &mut mu, opts.min_grad, lambda) {
                         LmOutcome::MinGradient => stop = Some(TrainStop::MinGradient),
                         LmOutcome::MuMax => stop = Some(TrainStop::MuMax),
-                        LmOutcome::Step(next) => {
+                        LmOutcome::Step(next, sum) => {
                             epochs += 1;
-                            w = next;
-                            stop = record(epochs, &w, st.mse(&w), opts.max_fail, 0.0);
+                            (w, perf) = (next, sum);
+                            stop = record(epochs, &w, sum / components, opts.max_fail, 0.0);
                         }
                     }
                 }
@@ -440,8 +451,7 @@ pub fn train(
                     |it, f, v| {
                         epochs = it;
                         let w = weights_of(v);
-                        let train_mse = f - lambda * weight_norm2(&w) / components;
-                        stop = record(it, &w, train_mse, opts.max_fail * 10, LBFGS_MIN_GAIN);
+                        stop = record(it, &w, f, opts.max_fail * 10, LBFGS_MIN_GAIN);
                         if stop.is_some() {
                             Next::Stop
                         } else {
