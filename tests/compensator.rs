@@ -323,3 +323,49 @@ fn resign(mut v: serde_json::Value) -> String {
     v["checksum"] = serde_json::json!(format!("{sum:016x}"));
     serde_json::to_string_pretty(&v).unwrap()
 }
+
+/// Racing in the default selection on Case D's training poses: candidates clearly worse on
+/// the first folds are dropped there (never chosen, no full score), every candidate has one
+/// outcome, and the model alone is scored as given and refined.
+#[test]
+fn default_selection_races_candidates() {
+    let nominal = read_robot(root().join("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
+    let rd = |p: &str| read_canonical(&root().join(p), &nominal).unwrap();
+    let (cal, train) = (
+        rd("datasets/case_d/calibration.csv"),
+        rd("datasets/case_d/training.csv"),
+    );
+    let params = Options {
+        params: "offsets".into(),
+        ..Default::default()
+    };
+    let model = identify(&nominal, &cal, &params).unwrap().robot;
+    let (_, report) =
+        Compensator::train(&model, &train, &CompensatorOptions::default(), &|_, _| {}).unwrap();
+    let sel = report.selection.expect("defaults are cross-validated");
+    let outcomes = |c: &robocal::neural::tuning::Candidate| {
+        [c.score.is_some(), c.pruned.is_some(), c.error.is_some()]
+            .iter()
+            .filter(|x| **x)
+            .count()
+    };
+    assert!(sel.candidates.iter().all(|c| outcomes(c) == 1));
+    assert!(sel.candidates[sel.chosen].score.is_some());
+    let dropped = sel.candidates.iter().filter(|c| c.pruned.is_some()).count();
+    assert!(dropped > 0, "nothing raced out: {:?}", sel.candidates);
+    let best = sel
+        .candidates
+        .iter()
+        .filter_map(|c| c.score.as_ref().map(|s| s.position_rms_mm))
+        .fold(f64::INFINITY, f64::min);
+    // The best, or an ensemble within the tie of it.
+    let chosen = sel.candidates[sel.chosen].score.as_ref().unwrap();
+    assert!(chosen.position_rms_mm <= best * (1.0 + robocal::neural::tuning::ENSEMBLE_TIE));
+    let alone: Vec<_> = sel
+        .candidates
+        .iter()
+        .filter(|c| c.settings.members == 0)
+        .map(|c| (c.settings.refine.clone(), c.score.is_some()))
+        .collect();
+    assert_eq!(alone, vec![(None, true), (Some("full".into()), true)]);
+}

@@ -10,6 +10,7 @@ use crate::kinematics::{pose_to_file, tool_pose};
 use crate::model::{Robot, read_robot, robot_to_toml};
 use crate::neural::compensator::{Compensator, PredictWorkspace};
 use crate::neural::train::Phase2;
+use crate::neural::tuning::RACE_FOLDS;
 use crate::neural::tuning::{Score, Selection};
 use crate::plot::{ErrorRun, error_figures, training_figure};
 use anyhow::{Context, Result, bail};
@@ -78,9 +79,16 @@ fn print_selection(sel: &Selection) {
     );
     for (i, c) in sel.candidates.iter().enumerate() {
         let s = &c.settings;
-        let score = c.score.as_ref().map_or("failed".to_string(), |x| {
-            format!("{:>11.4} {:>15}", x.position_rms_mm, rot(x))
-        });
+        let score = match (&c.score, &c.pruned) {
+            (Some(x), _) => format!("{:>11.4} {:>15}", x.position_rms_mm, rot(x)),
+            (None, Some(x)) => format!(
+                "{:>11.4} {:>15}  dropped after {} folds",
+                x.position_rms_mm,
+                rot(x),
+                RACE_FOLDS
+            ),
+            (None, None) => "failed".to_string(),
+        };
         println!(
             "{} {:>5} {:<5} {:<6} {:>6} {:>7} {:>7} {:<10} {score}",
             if i == sel.chosen { "*" } else { " " },

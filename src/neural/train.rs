@@ -63,6 +63,9 @@ pub struct TrainOptions {
     pub phase2: Phase2,
     /// Show a progress bar (on a terminal).
     pub progress: bool,
+    /// Weights to start from instead of the seeded initial ones (a warm start: the same
+    /// network trained with another penalty); ignored when their shape does not fit.
+    pub start: Option<Weights>,
 }
 
 impl Default for TrainOptions {
@@ -79,6 +82,7 @@ impl Default for TrainOptions {
             penalty: 0.0,
             phase2: Phase2::Auto,
             progress: false,
+            start: None,
         }
     }
 }
@@ -306,7 +310,13 @@ pub fn train(
     let lambda = opts.penalty;
     let (ti, vi) = holdout(samples, opts.validation_fraction, opts.seed);
     let (st, sv) = (samples.pick(&ti), samples.pick(&vi));
-    let start = initial_weights(samples.x[0].len(), opts.hidden, outputs, opts.seed);
+    let inputs = samples.x[0].len();
+    let start = match &opts.start {
+        Some(w) if (w.inputs(), w.hidden(), w.outputs()) == (inputs, opts.hidden, outputs) => {
+            w.clone()
+        }
+        _ => initial_weights(inputs, opts.hidden, outputs, opts.seed),
+    };
     let held = std::cell::RefCell::new(Batch::new(if sv.is_empty() { &st } else { &sv }, &start));
     // Without a held-out part the best weights are those of the lowest penalised training
     // objective (what both phases minimise), not of the lowest plain MSE: near the penalised
