@@ -200,14 +200,18 @@ struct Cv<'a> {
     opts: &'a CompensatorOptions,
     /// The networks of each (single-network settings, fold) fitted so far: an ensemble
     /// candidate of the same settings reuses them as its first member.
-    nets: Mutex<HashMap<(String, usize), Vec<Weights>>>,
-    /// Single networks by (settings but the penalty, fold): (evaluation round, penalty,
-    /// weights), the warm starts of candidates that differ from them by the penalty only.
+    /// With each network, the phase-2 epochs behind it (a warm start's included).
+    nets: Mutex<HashMap<(String, usize), Vec<Worked>>>,
+    /// Single networks by (settings but the penalty, fold): the warm starts of candidates
+    /// that differ from them by the penalty only.
     warm: Mutex<HashMap<(String, usize), Vec<WarmStart>>>,
 }
 
-/// A fitted single network: (evaluation round, penalty, weights).
-type WarmStart = (usize, f64, Weights);
+/// A network and the phase-2 epochs behind it.
+type Worked = (Weights, usize);
+
+/// A fitted single network: (evaluation round, penalty, weights, phase-2 epochs behind it).
+type WarmStart = (usize, f64, Weights, usize);
 
 impl Cv<'_> {
     fn model(&self, fold: usize, spec: &Option<String>) -> Result<Robot> {
@@ -239,28 +243,16 @@ impl Cv<'_> {
         // starts from that network (the nearest penalty): a penalty path, as glmnet walks it,
         // needs a third of the work from a neighbour's optimum.
         let start = match self.warm.lock() {
-            Ok(w) if settings.members == 1 => w.get(&shape).and_then(|list| {
+            Ok(w) if settings.members == 1 && self.opts.budget => w.get(&shape).and_then(|list| {
                 list.iter()
                     .filter(|(r, ..)| *r < round)
                     .min_by(|a, b| {
                         let d = |p: f64| (p.max(1e-300) / settings.penalty.max(1e-300)).ln().abs();
                         d(a.1).total_cmp(&d(b.1)).then(a.1.total_cmp(&b.1))
                     })
-                    .map(|(.., w)| w.clone())
+                    .map(|(_, _, w, e)| (w.clone(), *e))
             }),
             _ => None,
-        };
-        let rows = self.train[fold].rows.len();
-        let train = TrainOptions {
-            momentum_epochs: 0,
-            max_epochs: match (self.opts.budget, &start) {
-                (false, _) => self.opts.train.max_epochs,
-                (true, None) => budget_epochs(CV_WORK, rows, 10, 25),
-                (true, Some(_)) => budget_epochs(CV_WORK / 3, rows, 4, 10),
-            },
-            progress: false,
-            start,
-            ..self.opts.train.clone()
         };
         // The key keeps the refinement: a network is only valid for the model it was trained on.
         let key = (
@@ -271,11 +263,29 @@ impl Cv<'_> {
             .describe(),
             fold,
         );
-        let done: Vec<Weights> = match self.nets.lock() {
+        let done: Vec<Worked> = match self.nets.lock() {
             Ok(n) => n.get(&key).cloned().unwrap_or_default(),
             Err(_) => Vec::new(),
         };
         let reuse = done.len().min(plain.members);
+        let rows = self.train[fold].rows.len();
+        // Members of one candidate get equal work: networks added to a reused (possibly
+        // warm-started) one train as many epochs from scratch as lie behind it, or the
+        // ensemble would be judged on weaker members than the single network it is held
+        // against.
+        let (epochs, behind) = match (&start, done.first()) {
+            _ if !self.opts.budget => (self.opts.train.max_epochs, 0),
+            (Some((_, e)), _) => (budget_epochs(CV_WORK / 3, rows, 4, 10), *e),
+            (None, Some((_, e))) if reuse > 0 => (*e, 0),
+            _ => (budget_epochs(CV_WORK, rows, 10, 25), 0),
+        };
+        let train = TrainOptions {
+            momentum_epochs: 0,
+            max_epochs: epochs,
+            progress: false,
+            start: start.map(|(w, _)| w),
+            ..self.opts.train.clone()
+        };
         let (mut c, ..) = Compensator::fit_with(
             model,
             &self.train[fold],
@@ -285,17 +295,21 @@ impl Cv<'_> {
             false,
             reuse,
         )?;
-        let mut members = done[..reuse].to_vec();
+        let mut members: Vec<Weights> = done[..reuse].iter().map(|(w, _)| w.clone()).collect();
         members.append(&mut c.members);
         c.members = members;
         if plain.members == 1
             && let Ok(mut n) = self.nets.lock()
         {
-            n.insert(key, c.members.clone());
+            let work = behind + epochs;
+            n.insert(key, vec![(c.members[0].clone(), work)]);
             if let Ok(mut w) = self.warm.lock() {
-                w.entry(shape)
-                    .or_default()
-                    .push((round, settings.penalty, c.members[0].clone()));
+                w.entry(shape).or_default().push((
+                    round,
+                    settings.penalty,
+                    c.members[0].clone(),
+                    work,
+                ));
             }
         }
         let mut ws = Default::default();
