@@ -198,10 +198,10 @@ struct Cv<'a> {
     train: Vec<MeasurementSet>,
     held: Vec<MeasurementSet>,
     opts: &'a CompensatorOptions,
-    /// The networks of each (single-network settings, fold) fitted so far: an ensemble
-    /// candidate of the same settings reuses them as its first member.
-    /// With each network, the phase-2 epochs behind it (a warm start's included).
-    nets: Mutex<HashMap<(String, usize), Vec<Worked>>>,
+    /// The network of each (single-network settings, fold) fitted so far: an ensemble
+    /// candidate of the same settings reuses it as its first member.
+    /// With it, the phase-2 epochs behind it (a warm start's included).
+    nets: Mutex<HashMap<(String, usize), Worked>>,
     /// Single networks by (settings but the penalty, fold): the warm starts of candidates
     /// that differ from them by the penalty only.
     warm: Mutex<HashMap<(String, usize), Vec<WarmStart>>>,
@@ -263,17 +263,14 @@ impl Cv<'_> {
             .describe(),
             fold,
         );
-        let done: Vec<Worked> = match self.nets.lock() {
-            Ok(n) => n.get(&key).cloned().unwrap_or_default(),
-            Err(_) => Vec::new(),
-        };
-        let reuse = done.len().min(plain.members);
+        let done: Option<Worked> = self.nets.lock().ok().and_then(|n| n.get(&key).cloned());
+        let reuse = usize::from(done.is_some()).min(plain.members);
         let rows = self.train[fold].rows.len();
         // Members of one candidate get equal work: networks added to a reused (possibly
         // warm-started) one train as many epochs from scratch as lie behind it, or the
         // ensemble would be judged on weaker members than the single network it is held
         // against.
-        let (epochs, behind) = match (&start, done.first()) {
+        let (epochs, behind) = match (&start, &done) {
             _ if !self.opts.budget => (self.opts.train.max_epochs, 0),
             (Some((_, e)), _) => (budget_epochs(CV_WORK / 3, rows, 4, 10), *e),
             (None, Some((_, e))) if reuse > 0 => (*e, 0),
@@ -295,14 +292,14 @@ impl Cv<'_> {
             false,
             reuse,
         )?;
-        let mut members: Vec<Weights> = done[..reuse].iter().map(|(w, _)| w.clone()).collect();
+        let mut members: Vec<Weights> = done.into_iter().take(reuse).map(|(w, _)| w).collect();
         members.append(&mut c.members);
         c.members = members;
         if plain.members == 1
             && let Ok(mut n) = self.nets.lock()
         {
             let work = behind + epochs;
-            n.insert(key, vec![(c.members[0].clone(), work)]);
+            n.insert(key, (c.members[0].clone(), work));
             if let Ok(mut w) = self.warm.lock() {
                 w.entry(shape).or_default().push((
                     round,
