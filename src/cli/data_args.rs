@@ -44,11 +44,13 @@ impl DataArgs {
 /// Set-level tracker sigmas for rows that carry none (identify, train).
 #[derive(Args, Debug, Clone)]
 pub struct SigmaArgs {
-    /// Position sigma (mm) for rows without sx,sy,sz (default 0.033, the thesis's tracker).
-    #[arg(long)]
+    /// Position sigma (mm, above 0 up to 1000) for rows without sx,sy,sz (default 0.033, the
+    /// thesis's tracker).
+    #[arg(long, value_parser = super::bounds::sigma)]
     pub sigma_pos: Option<f64>,
-    /// Orientation sigma (mrad) for rows without srx,sry,srz (default 0.174).
-    #[arg(long)]
+    /// Orientation sigma (mrad, above 0 up to 1000) for rows without srx,sry,srz (default
+    /// 0.174).
+    #[arg(long, value_parser = super::bounds::sigma)]
     pub sigma_rot: Option<f64>,
 }
 

@@ -44,8 +44,8 @@ pub struct IdentifyArgs {
     /// Do not register a 6-DOF base (and tool) to the measured positions before solving.
     #[arg(long)]
     no_register: bool,
-    /// Iteration limit.
-    #[arg(long, default_value_t = 200)]
+    /// Iteration limit (1 to 100000).
+    #[arg(long, default_value_t = 200, value_parser = super::bounds::iterations)]
     max_iterations: usize,
     /// Rows beyond this many robust sigmas are reported as outliers.
     #[arg(long, default_value_t = 3.0)]

@@ -1,5 +1,6 @@
 //! The `robocal` command line: a thin layer over the library.
 
+mod bounds;
 mod case_d;
 mod compensate;
 mod compensator_args;

@@ -13,8 +13,8 @@ pub struct OutputArgs {
     /// JSON instead of CSV: an array of objects keyed by column name.
     #[arg(long)]
     pub json: bool,
-    /// Round output numbers to this many decimals (default: shortest exact form).
-    #[arg(long)]
+    /// Round output numbers to this many decimals, 0 to 17 (default: shortest exact form).
+    #[arg(long, value_parser = super::bounds::decimals)]
     pub decimals: Option<usize>,
 }
 

@@ -16,8 +16,8 @@ pub struct ReproduceArgs {
     /// The repository's datasets folder.
     #[arg(long, default_value = "datasets")]
     datasets: PathBuf,
-    /// Seeds for the repeated protocols (1..=N).
-    #[arg(long, default_value_t = 20)]
+    /// Seeds for the repeated protocols (1..=N; N from 1 to 1000).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..=1000))]
     seeds: u64,
     /// JSON report of every figure.
     #[arg(long)]

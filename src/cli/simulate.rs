@@ -23,17 +23,17 @@ pub struct SimulateArgs {
     /// Joint ranges to draw from (TOML `ranges = [[min, max], ...]`, deg). Default: the limits.
     #[arg(long)]
     region: Option<PathBuf>,
-    /// Number of configurations.
-    #[arg(long)]
+    /// Number of configurations (1 to 1000000).
+    #[arg(long, value_parser = super::bounds::count)]
     count: usize,
     /// Random seed (configurations and noise).
     #[arg(long)]
     seed: u64,
-    /// Noise on each position coordinate (mm, one standard deviation).
-    #[arg(long, default_value_t = 0.0)]
+    /// Noise on each position coordinate (mm, one standard deviation; 0 to 1000).
+    #[arg(long, default_value_t = 0.0, value_parser = super::bounds::noise)]
     sigma_pos: f64,
-    /// Noise on each orientation component (mrad, one standard deviation).
-    #[arg(long, default_value_t = 0.0)]
+    /// Noise on each orientation component (mrad, one standard deviation; 0 to 1000).
+    #[arg(long, default_value_t = 0.0, value_parser = super::bounds::noise)]
     sigma_rot: f64,
     /// What the sensor reports.
     #[arg(long, value_enum, default_value_t = Observe::Pose)]

@@ -1,0 +1,58 @@
+//! Value parsers for bounded command-line options: every size, count and sigma has a range,
+//! named in `--help` and in the usage error, so that no option can exhaust memory, run away
+//! or put a non-finite number into a computation.
+
+/// Most decimals a number is printed with: an f64 holds about 17 significant digits.
+pub const MAX_DECIMALS: usize = 17;
+/// Most configurations one `simulate` run draws: every row is held in memory until the
+/// output is written (about 1 kB each).
+pub const MAX_COUNT: usize = 1_000_000;
+/// Largest tracker or noise sigma accepted (mm, mrad): far beyond any real instrument.
+pub const MAX_SIGMA: f64 = 1000.0;
+
+fn whole(s: &str, what: &str, lo: usize, hi: usize) -> Result<usize, String> {
+    let n: usize = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a whole number of {what}"))?;
+    if !(lo..=hi).contains(&n) {
+        return Err(format!("give {lo} to {hi} {what} (got {n})"));
+    }
+    Ok(n)
+}
+
+/// `--decimals`: 0 to [`MAX_DECIMALS`].
+pub fn decimals(s: &str) -> Result<usize, String> {
+    whole(s, "decimals", 0, MAX_DECIMALS)
+}
+
+/// `simulate --count`: 1 to [`MAX_COUNT`].
+pub fn count(s: &str) -> Result<usize, String> {
+    whole(s, "configurations", 1, MAX_COUNT)
+}
+
+/// `identify --max-iterations`: 1 to 100000 (each solves the normal equations once).
+pub fn iterations(s: &str) -> Result<usize, String> {
+    whole(s, "iterations", 1, 100_000)
+}
+
+fn real(s: &str, what: &str, zero_ok: bool) -> Result<f64, String> {
+    let v: f64 = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number ({what})"))?;
+    let low_ok = if zero_ok { v >= 0.0 } else { v > 0.0 };
+    if !(v.is_finite() && low_ok && v <= MAX_SIGMA) {
+        let low = if zero_ok { "from 0" } else { "above 0" };
+        return Err(format!("give a {what} {low} up to {MAX_SIGMA} (got {s})"));
+    }
+    Ok(v)
+}
+
+/// A tracker sigma that weights rows (identify, train): above 0, at most [`MAX_SIGMA`].
+pub fn sigma(s: &str) -> Result<f64, String> {
+    real(s, "sigma", false)
+}
+
+/// A simulated noise sigma: 0 (no noise) to [`MAX_SIGMA`].
+pub fn noise(s: &str) -> Result<f64, String> {
+    real(s, "noise sigma", true)
+}
