@@ -150,6 +150,32 @@ fn identify_train_evaluate_and_predict() {
         assert!(d < 0.3, "row {}: {d} mm from the truth", pv[0]);
     }
 
+    // Rows outside the training domain are named by their file line, blank lines counted.
+    let gap = tmp("joints_gap.csv");
+    let far: Vec<&str> = lines[1]
+        .split(',')
+        .take(1)
+        .chain(["170", "0", "0", "0", "0", "0"])
+        .collect();
+    std::fs::write(
+        &gap,
+        format!("{}\n\n{}\n{}\n", lines[0], lines[1], far.join(",")),
+    )
+    .unwrap();
+    let o = robocal(&[
+        "predict",
+        "--compensator",
+        comp.to_str().unwrap(),
+        "--joints",
+        gap.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("1 row(s) outside the compensator's training domain (lines 4)"),
+        "{}",
+        stderr(&o)
+    );
+
     // A compensator for another robot's joints is refused by evaluate: a UR10 whose wrist 2
     // is prismatic.
     let ur = std::fs::read_to_string("datasets/robots/ur10.toml").unwrap();

@@ -25,7 +25,8 @@ pub struct FkArgs {
 }
 
 /// Headers, cells of each row, and joint values of each row (file units: deg, mm).
-pub(super) type JointTable = (Vec<String>, Vec<Vec<String>>, Vec<Vec<f64>>);
+/// Headers, cells of each row, joints of each row (file units) and each row's file line.
+pub(super) type JointTable = (Vec<String>, Vec<Vec<String>>, Vec<Vec<f64>>, Vec<usize>);
 
 /// The joint table of a CSV with columns q1..qN; refuses a table that already has the pose
 /// columns the command would write.
@@ -47,18 +48,18 @@ pub(super) fn joint_table(path: &std::path::Path, n: usize) -> Result<JointTable
     let joints = (0..t.rows.len())
         .map(|r| t.numbers(r, &idx))
         .collect::<Result<Vec<_>, _>>()?;
-    Ok((t.headers.clone(), t.rows.clone(), joints))
+    Ok((t.headers, t.rows, joints, t.lines))
 }
 
 pub fn run(a: FkArgs) -> Result<()> {
     let robot = read_robot(&a.robot)?;
     let n = robot.dof();
     let qcols = joint_columns(n);
-    let (mut headers, rows, joints): JointTable = match (&a.q, &a.joints) {
+    let (mut headers, rows, joints, _): JointTable = match (&a.q, &a.joints) {
         (Some(q), _) => {
             let q = parse_list(q, "--q", n)?;
             let cells = q.iter().map(|v| num(*v, None)).collect();
-            (qcols, vec![cells], vec![q])
+            (qcols, vec![cells], vec![q], vec![0])
         }
         (None, Some(path)) => joint_table(path, n)?,
         (None, None) => unreachable!("clap requires one input"),

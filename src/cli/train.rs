@@ -289,7 +289,7 @@ pub struct PredictArgs {
 /// Compensated tool poses (x, y, z mm; rz, ry, rx deg) for a joint CSV.
 pub fn run_predict(a: PredictArgs) -> Result<()> {
     let c = Compensator::load(&a.compensator)?;
-    let (mut headers, rows, joints) = super::fk::joint_table(&a.joints, c.robot.dof())?;
+    let (mut headers, rows, joints, lines) = super::fk::joint_table(&a.joints, c.robot.dof())?;
     if headers.iter().any(|h| h == DOMAIN_COLUMN) {
         bail!(
             "{}: the input already has a column `{DOMAIN_COLUMN}`, which would be written; \
@@ -302,12 +302,12 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     let mut ws = PredictWorkspace::default();
     let mut out = Vec::with_capacity(rows.len());
     let mut outside = Vec::new();
-    for (k, (cells, q)) in rows.into_iter().zip(&joints).enumerate() {
+    for ((cells, q), line) in rows.into_iter().zip(&joints).zip(lines) {
         let q = c.robot.joints_to_internal(q);
         let pose = c.predict(&q, &mut ws);
         let check = c.domain_check(&q, &mut ws);
         if !check.inside() {
-            outside.push(k + 2);
+            outside.push(line);
         }
         let mut row = cells;
         row.extend(

@@ -77,23 +77,41 @@ impl Compensator {
     /// the robot's base frame).
     pub fn correction<'w>(&self, q: &[f64], ws: &'w mut PredictWorkspace) -> &'w [f64] {
         self.prepare(q, ws);
+        if self.mean_output(ws, false) {
+            let (_, _, w) = self.domain.weight(&ws.x, &mut ws.near_hint);
+            if w < 1.0 {
+                ws.out.iter_mut().for_each(|v| *v *= w);
+            }
+        }
+        &ws.out
+    }
+
+    /// The members' mean raw output at the prepared inputs `ws.x` into `ws.out` and, with
+    /// `derivatives`, their mean derivative by the normalised inputs into `ws.dy_sum`
+    /// (normalised outputs x inputs). False (and `ws.out` zero) without members.
+    fn mean_output(&self, ws: &mut PredictWorkspace, derivatives: bool) -> bool {
         ws.y_sum.fill(0.0);
+        ws.dy_sum.fill(0.0);
         for w in &self.members {
-            w.forward_into(&ws.x, &mut ws.h, &mut ws.y);
+            if derivatives {
+                w.input_jacobian_into(&ws.x, &mut ws.h, &mut ws.y, &mut ws.dy);
+                ws.dy_sum += &ws.dy;
+            } else {
+                w.forward_into(&ws.x, &mut ws.h, &mut ws.y);
+            }
             ws.y_sum.iter_mut().zip(&ws.y).for_each(|(s, v)| *s += v);
         }
         if self.members.is_empty() {
             ws.out.fill(0.0);
-            return &ws.out;
+            return false;
         }
         let m = self.members.len() as f64;
         ws.y_sum.iter_mut().for_each(|s| *s /= m);
-        self.output_norm.invert(&ws.y_sum, &mut ws.out);
-        let (_, _, w) = self.domain.weight(&ws.x, &mut ws.near_hint);
-        if w < 1.0 {
-            ws.out.iter_mut().for_each(|v| *v *= w);
+        if derivatives {
+            ws.dy_sum /= m;
         }
-        &ws.out
+        self.output_norm.invert(&ws.y_sum, &mut ws.out);
+        true
     }
 
     /// The mean raw outputs into `ws.out` and their derivatives by the joints (outputs x
@@ -109,22 +127,10 @@ impl Compensator {
         if ws.dout.shape() != (o, n) {
             ws.dout = DMatrix::zeros(o, n);
         }
-        ws.y_sum.fill(0.0);
-        ws.dy_sum.fill(0.0);
-        for w in &self.members {
-            w.input_jacobian_into(&ws.x, &mut ws.h, &mut ws.y, &mut ws.dy);
-            ws.y_sum.iter_mut().zip(&ws.y).for_each(|(s, v)| *s += v);
-            ws.dy_sum += &ws.dy;
-        }
         ws.dout.fill(0.0);
-        if self.members.is_empty() {
-            ws.out.fill(0.0);
+        if !self.mean_output(ws, true) {
             return;
         }
-        let m = self.members.len() as f64;
-        ws.y_sum.iter_mut().for_each(|s| *s /= m);
-        ws.dy_sum /= m;
-        self.output_norm.invert(&ws.y_sum, &mut ws.out);
         // Chain rule through out = y scale_out + offset_out, x = (f - offset_in) / scale_in
         // and the features.
         let fr = frames_for(&mut ws.frames, &self.robot);

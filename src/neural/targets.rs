@@ -69,28 +69,24 @@ pub fn configuration_groups(set: &MeasurementSet) -> Vec<usize> {
         .collect()
 }
 
-/// The normalised network inputs of every row, and the normalisation (fitted here when
-/// `norm` is None).
-pub fn inputs(
-    robot: &Robot,
-    set: &MeasurementSet,
-    encoding: Encoding,
-    norm: Option<&Affine>,
-) -> (Vec<Vec<f64>>, Affine) {
-    let mut feat = Vec::new();
+/// The standardised network inputs of every row, and the standardisation fitted on them.
+fn inputs(robot: &Robot, set: &MeasurementSet, encoding: Encoding) -> (Vec<Vec<f64>>, Affine) {
     let mut ws = Frames::new(robot);
     let mut xs: Vec<Vec<f64>> = set
         .rows
         .iter()
         .map(|m| {
+            let mut feat = Vec::new();
             encoding.features(robot, &m.q, &mut ws, &mut feat);
-            feat.clone()
+            feat
         })
         .collect();
-    let norm = norm.cloned().unwrap_or_else(|| Affine::standardise(&xs));
+    let norm = Affine::standardise(&xs);
+    let mut scaled = Vec::new();
     for x in xs.iter_mut() {
-        let raw = x.clone();
-        norm.apply(&raw, x);
+        scaled.resize(x.len(), 0.0);
+        norm.apply(x, &mut scaled);
+        x.copy_from_slice(&scaled);
     }
     (xs, norm)
 }
@@ -145,7 +141,7 @@ pub fn build(
             v
         })
         .collect();
-    let (x, input_norm) = inputs(robot, set, encoding, None);
+    let (x, input_norm) = inputs(robot, set, encoding);
     let groups = configuration_groups(set);
     let (samples, output_norm) = match form {
         Form::Pose => {

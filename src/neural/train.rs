@@ -309,7 +309,13 @@ pub fn train(
     }
     let lambda = opts.penalty;
     let (ti, vi) = holdout(samples, opts.validation_fraction, opts.seed);
-    let (st, sv) = (samples.pick(&ti), samples.pick(&vi));
+    // Nothing held out (the default): train on the samples themselves, not on a copy.
+    let st = if vi.is_empty() {
+        std::borrow::Cow::Borrowed(samples)
+    } else {
+        std::borrow::Cow::Owned(samples.pick(&ti))
+    };
+    let sv = samples.pick(&vi);
     let inputs = samples.x[0].len();
     let start = match &opts.start {
         Some(w) if (w.inputs(), w.hidden(), w.outputs()) == (inputs, opts.hidden, outputs) => {
@@ -369,12 +375,13 @@ pub fn train(
             stop.is_none() && !phase1_done
         },
     )?;
-    let w = if best.mse < val(&after_momentum) {
-        best.weights.clone()
+    let after = val(&after_momentum);
+    let (w, v) = if best.mse < after {
+        (best.weights, best.mse)
     } else {
-        after_momentum
+        (after_momentum, after)
     };
-    best = Best::new(val(&w), w.clone());
+    best = Best::new(v, w.clone());
     let components = st.components() as f64;
     let cost = components * (w.len() as f64).powi(2);
     let phase2 = match opts.phase2 {

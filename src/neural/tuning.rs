@@ -475,42 +475,35 @@ pub fn select_settings(
             });
         }
     };
-    let best = |candidates: &[Candidate]| -> Option<usize> {
-        candidates
-            .iter()
-            .enumerate()
-            .filter_map(|(i, c)| c.score.as_ref().map(|s| (i, s.position_rms_mm)))
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(i, _)| i)
-    };
     // Stage 1: the forms (gravity inputs, middle size and penalty), then for the best so far
     // the penalty decade and the other encodings.
     evaluate(1, vary(&base, &forms, |s, f| s.form = f), &mut candidates);
-    let Some(b0) = best(&candidates) else {
+    if candidates.iter().all(|c| c.score.is_none()) {
         return Err(failed(&candidates));
-    };
-    let w = candidates[best(&candidates).unwrap_or(b0)].settings.clone();
+    }
+    // From here on some candidate has a score: the best always exists.
+    let best = |candidates: &[Candidate]| better(candidates, 0, 1..candidates.len());
+    let w = candidates[best(&candidates)].settings.clone();
     evaluate(
         1,
         vary(&w, &penalties, |s, p| s.penalty = p),
         &mut candidates,
     );
-    let w = candidates[best(&candidates).unwrap_or(b0)].settings.clone();
+    let w = candidates[best(&candidates)].settings.clone();
     evaluate(
         1,
         vary(&w, &encodings, |s, e| s.encoding = e),
         &mut candidates,
     );
-    let b1 = best(&candidates).unwrap_or(b0);
     // Stage 2: hidden units, then a finer penalty step around the best.
-    let w = candidates[b1].settings.clone();
+    let w = candidates[best(&candidates)].settings.clone();
     evaluate(2, vary(&w, &hiddens, |s, h| s.hidden = h), &mut candidates);
-    let w = candidates[best(&candidates).unwrap_or(b1)].settings.clone();
+    let w = candidates[best(&candidates)].settings.clone();
     if opts.penalty.is_none() {
         let step = [w.penalty / PENALTY_STEP, w.penalty * PENALTY_STEP].map(significant3);
         evaluate(2, vary(&w, &step, |s, p| s.penalty = p), &mut candidates);
     }
-    let mut chosen = best(&candidates).unwrap_or(b1);
+    let mut chosen = best(&candidates);
     let mut notes = Vec::new();
     // Stage 3: the ensemble. The mean of several networks has at most the mean squared error
     // of its members (convexity), so a tie within ENSEMBLE_TIE goes to the ensemble.
@@ -525,13 +518,7 @@ pub fn select_settings(
             &mut candidates,
         );
         let probe = candidates.len() - 1;
-        let score = |i: usize| {
-            candidates[i]
-                .score
-                .as_ref()
-                .map_or(f64::INFINITY, |s| s.position_rms_mm)
-        };
-        if score(probe) <= score(chosen) * (1.0 + ENSEMBLE_TIE) {
+        if cv_rms(&candidates, probe) <= cv_rms(&candidates, chosen) * (1.0 + ENSEMBLE_TIE) {
             chosen = probe;
             notes.push(format!(
                 "{ENSEMBLE_PROBE} networks did not raise the cross-validated error over one: the \
@@ -603,15 +590,23 @@ fn vary<T: Clone>(base: &Settings, values: &[T], set: impl Fn(&mut Settings, T))
         .collect()
 }
 
-/// The best of `current` and the candidates in `new` (ties keep `current`).
+/// Cross-validated position RMS of candidate `i` (mm); infinite when it has no score.
+fn cv_rms(candidates: &[Candidate], i: usize) -> f64 {
+    candidates[i]
+        .score
+        .as_ref()
+        .map_or(f64::INFINITY, |s| s.position_rms_mm)
+}
+
+/// The best of `current` and the candidates in `new` (ties keep the earlier one).
 fn better(candidates: &[Candidate], current: usize, new: std::ops::Range<usize>) -> usize {
-    let score = |i: usize| {
-        candidates[i]
-            .score
-            .as_ref()
-            .map_or(f64::INFINITY, |s| s.position_rms_mm)
-    };
-    new.fold(current, |b, i| if score(i) < score(b) { i } else { b })
+    new.fold(current, |b, i| {
+        if cv_rms(candidates, i) < cv_rms(candidates, b) {
+            i
+        } else {
+            b
+        }
+    })
 }
 
 /// `x` to 3 significant digits (penalties read back as typed: 0.333, not 0.3333333333333333).
