@@ -26,6 +26,8 @@ fn compensation(c: &mut Criterion) {
     let test = rd("datasets/nongeometric_robot/test_truth.csv");
     let robot = identify(&nominal, &cal, &Options::default()).unwrap().robot;
     let settings = Settings {
+        network: robocal::neural::compensator::Network::Mlp,
+        rbf_start: None,
         form: Form::Joint,
         encoding: Encoding::Gravity,
         hidden: 32,

@@ -73,6 +73,8 @@ fn neural(c: &mut Criterion) {
     g.finish();
     // A real ensemble (cross-validation may keep the model alone for some sets).
     let settings = Settings {
+        network: robocal::neural::compensator::Network::Mlp,
+        rbf_start: None,
         form: Form::Pose,
         encoding: Encoding::Gravity,
         hidden: 32,
@@ -91,6 +93,17 @@ fn neural(c: &mut Criterion) {
     let mut ws = PredictWorkspace::default();
     let q = [0.05, 0.15, -0.05, 0.1, 0.7, 0.2];
     c.bench_function("compensated_pose_4_networks_gravity_inputs", |b| {
+        b.iter(|| comp.predict(black_box(&q), &mut ws))
+    });
+    // The same MLPs mixed with an RBF network of one unit per training row (150).
+    let mix = Settings {
+        network: robocal::neural::compensator::Network::Mix,
+        ..settings
+    };
+    let (comp, _) =
+        Compensator::fit(&model, &set, &mix, Default::default(), &Default::default()).unwrap();
+    assert!(comp.rbf.is_some());
+    c.bench_function("compensated_pose_4_networks_and_rbf_150_units", |b| {
         b.iter(|| comp.predict(black_box(&q), &mut ws))
     });
 }

@@ -317,15 +317,20 @@ fn compensated_jacobian_matches_central_differences() {
         m.rotation = None;
         m.sigma_rotation = None;
     }
+    use robocal::neural::compensator::Network;
     use robocal::neural::compensator::Settings;
     use robocal::neural::encoding::Encoding;
-    for (form, encoding, members, training) in [
-        (Form::Joint, Encoding::Gravity, 1, &s.training),
-        (Form::Joint, Encoding::SinCos, 2, &s.training),
-        (Form::Pose, Encoding::Gravity, 2, &s.training),
-        (Form::Pose, Encoding::Angles, 1, &positions),
+    for (form, encoding, members, training, network) in [
+        (Form::Joint, Encoding::Gravity, 1, &s.training, Network::Mlp),
+        (Form::Joint, Encoding::SinCos, 2, &s.training, Network::Mlp),
+        (Form::Pose, Encoding::Gravity, 2, &s.training, Network::Mlp),
+        (Form::Pose, Encoding::Angles, 1, &positions, Network::Mlp),
+        (Form::Pose, Encoding::Gravity, 2, &s.training, Network::Mix),
+        (Form::Pose, Encoding::SinCos, 1, &positions, Network::Rbf),
     ] {
         let settings = Settings {
+            network,
+            rbf_start: None,
             form,
             encoding,
             hidden: 8,
@@ -368,7 +373,7 @@ fn compensated_jacobian_matches_central_differences() {
                     let (ep, er) = ((dp[r] - jac[(r, c)]).abs(), (dw[r] - jac[(3 + r, c)]).abs());
                     assert!(
                         ep < 1e-4 && er < 1e-7,
-                        "{form:?} {encoding:?} joint {c} row {r}: {ep} {er}"
+                        "{form:?} {encoding:?} {network:?} joint {c} row {r}: {ep} {er}"
                     );
                 }
             }

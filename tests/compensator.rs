@@ -76,17 +76,23 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
         },
     )
     .unwrap();
-    for (form, encoding, refine, members) in [
-        (Form::Pose, Encoding::Gravity, None, 2),
+    use robocal::neural::compensator::Network;
+    for (form, encoding, refine, members, network) in [
+        (Form::Pose, Encoding::Gravity, None, 2, Network::Mlp),
         (
             Form::Joint,
             Encoding::SinCos,
             Some("offsets".to_string()),
             1,
+            Network::Mlp,
         ),
-        (Form::Joint, Encoding::Angles, None, 0),
+        (Form::Joint, Encoding::Angles, None, 0, Network::Mlp),
+        (Form::Pose, Encoding::Angles, None, 2, Network::Mix),
+        (Form::Pose, Encoding::SinCos, None, 1, Network::Rbf),
     ] {
         let settings = Settings {
+            network,
+            rbf_start: None,
             form,
             encoding,
             hidden: if members == 0 { 0 } else { 8 },
@@ -99,13 +105,37 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
         // Fixed settings need no cross-validation, except to decide whether a requested
         // refinement is kept.
         assert_eq!(report.selection.is_none(), settings.refine.is_none());
-        assert_eq!(c.members.len(), members);
+        let mlps = if network == Network::Rbf { 0 } else { members };
+        assert_eq!(c.members.len(), mlps);
+        assert_eq!(c.rbf.is_some(), network != Network::Mlp);
         assert!(
             report.networks.iter().all(|n| n.lm_epochs > 0),
             "{form:?}: {report:?}"
         );
-        let path =
-            std::env::temp_dir().join(format!("robocal-comp-{}-{form:?}.rcal", std::process::id()));
+        if network == Network::Mix {
+            // The MLPs' mean and the RBF network have equal say.
+            let (mut mlp, mut rbf) = (c.clone(), c.clone());
+            mlp.rbf = None;
+            rbf.members.clear();
+            let (mut w1, mut w2, mut w3) = Default::default();
+            for m in test.rows.iter().take(5) {
+                let a = mlp.correction(&m.q, &mut w1).to_vec();
+                let b = rbf.correction(&m.q, &mut w2).to_vec();
+                let both = c.correction(&m.q, &mut w3);
+                for i in 0..both.len() {
+                    let mid = 0.5 * (a[i] + b[i]);
+                    assert!((both[i] - mid).abs() <= 1e-12 * (1.0 + mid.abs()), "{i}");
+                }
+                assert!(
+                    a != b,
+                    "the two parts must differ for the check to mean anything"
+                );
+            }
+        }
+        let path = std::env::temp_dir().join(format!(
+            "robocal-comp-{}-{form:?}-{network:?}.rcal",
+            std::process::id()
+        ));
         c.save(&path).unwrap();
         let back = Compensator::load(&path).unwrap();
         let (mut ws, mut ws2) = (PredictWorkspace::default(), PredictWorkspace::default());
@@ -231,6 +261,8 @@ fn configurations_outside_the_training_domain_are_flagged() {
     let nominal = read_robot(root().join("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
     let train = read_canonical(&root().join("datasets/case_d/training.csv"), &nominal).unwrap();
     let settings = Settings {
+        network: robocal::neural::compensator::Network::Mlp,
+        rbf_start: None,
         form: Form::Pose,
         encoding: Encoding::SinCos,
         hidden: 4,

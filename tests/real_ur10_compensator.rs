@@ -98,6 +98,7 @@ fn baseline_fit(model: &Robot, set: &MeasurementSet, hidden: usize, alpha: f64) 
         encoding: Encoding::Angles,
         robot: model.clone(),
         members: vec![shape.from_vector(&v)],
+        rbf: None,
         input_norm: p.input_norm,
         output_norm: out_norm,
         domain,
@@ -207,6 +208,8 @@ fn readme_table_series_b() {
         )
     );
     let thesis = Settings {
+        network: robocal::neural::compensator::Network::Mlp,
+        rbf_start: None,
         form: Form::Joint,
         encoding: Encoding::SinCos,
         hidden: 20,
@@ -228,6 +231,27 @@ fn readme_table_series_b() {
             "`--form joint`",
             CompensatorOptions {
                 form: Some(Form::Joint),
+                ..d()
+            },
+        ),
+        (
+            "`--network mlp` (MLPs only)",
+            CompensatorOptions {
+                network: Some(robocal::neural::compensator::Network::Mlp),
+                ..d()
+            },
+        ),
+        (
+            "`--network rbf`",
+            CompensatorOptions {
+                network: Some(robocal::neural::compensator::Network::Rbf),
+                ..d()
+            },
+        ),
+        (
+            "`--network mix`",
+            CompensatorOptions {
+                network: Some(robocal::neural::compensator::Network::Mix),
                 ..d()
             },
         ),

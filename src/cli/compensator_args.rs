@@ -1,7 +1,7 @@
 //! Flags that build a compensator (`train`, `case-d`): every choice left out is made by
 //! cross-validation on the training rows.
 
-use crate::neural::compensator::{CompensatorOptions, Form, Refine};
+use crate::neural::compensator::{CompensatorOptions, Form, Network, Refine};
 use crate::neural::encoding::Encoding;
 use crate::neural::train::{Phase2, TrainOptions};
 use anyhow::{Result, bail};
@@ -31,6 +31,13 @@ pub enum Phase2Arg {
 
 #[derive(Args, Debug, Clone)]
 pub struct CompensatorArgs {
+    /// The network: `mlp` (the thesis's multilayer perceptron, in ensembles where that
+    /// helps), `rbf` (one Gaussian unit per training row, widths and weights of a Gaussian
+    /// process's posterior mean; pose form only; its cost grows with the cube of the rows) or
+    /// `mix` (the MLPs' mean and an RBF network averaged; pose form only). Default: chosen by
+    /// cross-validation (rbf and mix tried on up to 3000 rows).
+    #[arg(long, value_enum)]
+    pub network: Option<Network>,
     /// Where the network acts: joint corrections before FK, or a pose residual after it
     /// (robot base frame). Default: chosen by cross-validation.
     #[arg(long, value_enum)]
@@ -132,7 +139,28 @@ impl CompensatorArgs {
             "none" => Refine::Off,
             spec => Refine::Params(spec.to_string()),
         };
+        if let Some(n @ (Network::Rbf | Network::Mix)) = self.network
+            && self.form == Some(Form::Joint)
+        {
+            bail!(
+                "--network {} acts on the pose residual: use --form pose (or leave it out)",
+                n.name()
+            );
+        }
+        if self.network == Some(Network::Rbf) {
+            if self.hidden.is_some() || self.penalty.is_some() {
+                bail!(
+                    "--hidden and --penalty set up an MLP; an RBF network has one unit per \
+                     training row and fits its own noise level"
+                );
+            }
+            if self.members.is_some_and(|m| m > 1) {
+                bail!("--network rbf: --members takes 0 or 1 (the RBF network is deterministic)");
+            }
+        }
         Ok(CompensatorOptions {
+            network: self.network,
+            rbf_start: None,
             form: self.form,
             encoding: self.encoding.map(|e| match e {
                 EncodingArg::Sincos => Encoding::SinCos,

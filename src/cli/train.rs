@@ -8,7 +8,7 @@ use crate::evaluate::{row_errors, summarize};
 use crate::identify::Measure;
 use crate::kinematics::{pose_to_file, tool_pose};
 use crate::model::{Robot, read_robot, robot_to_toml};
-use crate::neural::compensator::{Compensator, PredictWorkspace};
+use crate::neural::compensator::{Compensator, Network, PredictWorkspace};
 use crate::neural::train::Phase2;
 use crate::neural::tuning::RACE_FOLDS;
 use crate::neural::tuning::{Score, Selection};
@@ -55,8 +55,9 @@ fn print_selection(sel: &Selection) {
         sel.folds
     );
     println!(
-        "  {:>5} {:<5} {:<6} {:>6} {:>7} {:>7} {:<10} {:>11} {:>15}",
+        "  {:>5} {:<7} {:<5} {:<6} {:>6} {:>7} {:>7} {:<10} {:>11} {:>15}",
         "stage",
+        "network",
         "form",
         "inputs",
         "hidden",
@@ -71,7 +72,7 @@ fn print_selection(sel: &Selection) {
             .map_or("-".into(), |r| format!("{r:.4}"))
     };
     println!(
-        "  {:>5} {:<44} {:>11.4} {:>15}",
+        "  {:>5} {:<52} {:>11.4} {:>15}",
         "-",
         "model alone",
         sel.model.position_rms_mm,
@@ -89,15 +90,24 @@ fn print_selection(sel: &Selection) {
             ),
             (None, None) => "failed".to_string(),
         };
+        // The RBF network's search start is counted from 1, as `describe` does.
+        let network = match (s.network, s.rbf_start) {
+            (Network::Mlp, _) => "mlp".to_string(),
+            (n, Some(k)) => format!("{} {}", n.name(), k + 1),
+            (n, None) => n.name().to_string(),
+        };
+        let mlp = s.network != Network::Rbf;
+        let dash = |show: bool, v: String| if show { v } else { "-".into() };
         println!(
-            "{} {:>5} {:<5} {:<6} {:>6} {:>7} {:>7} {:<10} {score}",
+            "{} {:>5} {:<7} {:<5} {:<6} {:>6} {:>7} {:>7} {:<10} {score}",
             if i == sel.chosen { "*" } else { " " },
             c.stage,
+            network,
             s.form.name(),
             s.encoding.name(),
-            s.hidden,
-            s.penalty,
-            s.members,
+            dash(mlp, s.hidden.to_string()),
+            dash(mlp, s.penalty.to_string()),
+            dash(mlp, s.members.to_string()),
             s.refine.as_deref().unwrap_or("-"),
         );
         if let Some(e) = &c.error {
@@ -150,8 +160,27 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         "{seconds:.1} s ({:.1} s cross-validation, {:.1} s final fit)",
         report.selection_seconds, report.fit_seconds
     );
+    if let Some(r) = &c.rbf {
+        let widths: Vec<String> = r.widths.iter().map(|w| format!("{w:.3}")).collect();
+        println!(
+            "rbf network: {} units ({} inputs), widths {} (standardised inputs), noise variance \
+             {:.4} of signal {:.4}{}",
+            r.units(),
+            c.encoding.name(),
+            widths.join(" "),
+            r.noise_variance,
+            r.signal_variance,
+            if n.is_empty() {
+                format!("; {timing}")
+            } else {
+                "; averaged with the MLPs' mean".into()
+            }
+        );
+    }
     if n.is_empty() {
-        println!("networks: none, the compensator is the model alone; {timing}");
+        if c.rbf.is_none() {
+            println!("networks: none, the compensator is the model alone; {timing}");
+        }
     } else {
         let stops: std::collections::BTreeSet<&str> = n.iter().map(|r| r.stop.describe()).collect();
         let most = n.iter().map(|r| r.lm_epochs).max().unwrap_or(0);

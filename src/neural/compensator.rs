@@ -16,6 +16,7 @@
 use super::domain::{Domain, DomainCheck};
 use super::encoding::Encoding;
 pub use super::predict::PredictWorkspace;
+use super::rbf::Rbf;
 use super::refine::{RefinedParam, refine};
 use super::targets::build;
 use super::train::{TrainOptions, TrainReport, train};
@@ -49,6 +50,44 @@ impl Form {
     }
 }
 
+/// What kind of network a compensator carries.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    Default,
+    PartialEq,
+    Eq,
+    Hash,
+    clap::ValueEnum,
+    serde::Serialize,
+    serde::Deserialize,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Network {
+    /// The thesis's multilayer perceptron: one logistic hidden layer, trained by momentum
+    /// then L-BFGS (an ensemble of them where it helps).
+    #[default]
+    Mlp,
+    /// A radial-basis-function network with one unit per training row, widths and weights of
+    /// a Gaussian process's posterior mean ([`super::rbf`]); pose form only.
+    Rbf,
+    /// The MLPs' mean and an RBF network with equal say (pose form only): the MLPs follow the
+    /// smooth trend, the RBF network the sharp local structure (repeated configurations), and
+    /// their errors are far from fully correlated.
+    Mix,
+}
+
+impl Network {
+    pub fn name(self) -> &'static str {
+        match self {
+            Network::Mlp => "mlp",
+            Network::Rbf => "rbf",
+            Network::Mix => "mix",
+        }
+    }
+}
+
 /// A trained compensator.
 #[derive(Debug, Clone)]
 pub struct Compensator {
@@ -56,8 +95,11 @@ pub struct Compensator {
     pub encoding: Encoding,
     /// The model the networks run in series with (refined in training when asked).
     pub robot: Robot,
-    /// The ensemble's networks; the prediction uses their mean output (none: no correction).
+    /// The ensemble's MLPs; the prediction uses their mean output, averaged with `rbf`'s
+    /// where both are present (none of either: no correction).
     pub members: Vec<Weights>,
+    /// An RBF network, alone or with the MLPs.
+    pub rbf: Option<Rbf>,
     pub input_norm: Affine,
     pub output_norm: Affine,
     pub domain: Domain,
@@ -66,14 +108,19 @@ pub struct Compensator {
 /// One complete choice of how to build a compensator.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Settings {
+    pub network: Network,
     pub form: Form,
     pub encoding: Encoding,
     pub hidden: usize,
     /// L2 weight penalty lambda (see [`super::samples`]).
     pub penalty: f64,
-    /// Networks in the ensemble; 0: none, the (refined) model alone, chosen where
-    /// cross-validation finds that no network lowers the held-out error.
+    /// MLPs in the ensemble (for `Rbf`: 1 with the RBF network); 0 and no RBF network: the
+    /// (refined) model alone, chosen where cross-validation finds that no network lowers the
+    /// held-out error.
     pub members: usize,
+    /// The RBF network's hyperparameter search start ([`super::rbf::STARTS`]); None: every
+    /// start, the highest likelihood kept.
+    pub rbf_start: Option<usize>,
     /// Model parameters re-estimated on the training rows first (a selection as for
     /// `identify`), or None.
     pub refine: Option<String>,
@@ -86,17 +133,47 @@ impl Settings {
             .refine
             .as_ref()
             .map_or(String::new(), |r| format!(", refine {r}"));
-        if self.members == 0 {
+        if !self.has_network() {
             return format!("model alone (no network){refine}");
         }
-        format!(
-            "{}/{}/{} penalty {} x{}{refine}",
-            self.form.name(),
-            self.encoding.name(),
-            self.hidden,
-            self.penalty,
-            self.members,
-        )
+        let rbf = match self.rbf_start {
+            Some(k) => format!("rbf start {}", k + 1),
+            None => "rbf".into(),
+        };
+        match self.network {
+            Network::Rbf => format!(
+                "{}/{}/{rbf}{refine}",
+                self.form.name(),
+                self.encoding.name()
+            ),
+            Network::Mlp | Network::Mix => format!(
+                "{}/{}/{} penalty {} x{}{}{refine}",
+                self.form.name(),
+                self.encoding.name(),
+                self.hidden,
+                self.penalty,
+                self.members,
+                if self.network == Network::Mix {
+                    format!(" + {rbf}")
+                } else {
+                    String::new()
+                }
+            ),
+        }
+    }
+
+    /// Whether these settings carry a network at all.
+    pub fn has_network(&self) -> bool {
+        self.members > 0 || self.network == Network::Mix
+    }
+
+    /// Whether these settings carry an RBF network.
+    pub fn has_rbf(&self) -> bool {
+        match self.network {
+            Network::Mlp => false,
+            Network::Rbf => self.members > 0,
+            Network::Mix => true,
+        }
     }
 }
 
@@ -115,6 +192,12 @@ pub enum Refine {
 /// How to build a compensator: each choice left None is made by cross-validation.
 #[derive(Debug, Clone)]
 pub struct CompensatorOptions {
+    /// The network kind; None: cross-validation decides (an RBF network is tried on sets of
+    /// at most [`super::tuning::RBF_MAX_ROWS`] rows).
+    pub network: Option<Network>,
+    /// The RBF network's search start ([`super::rbf::STARTS`]); None: cross-validation
+    /// decides where it runs, else the highest likelihood.
+    pub rbf_start: Option<usize>,
     pub form: Option<Form>,
     pub encoding: Option<Encoding>,
     pub hidden: Option<usize>,
@@ -136,6 +219,8 @@ pub struct CompensatorOptions {
 impl Default for CompensatorOptions {
     fn default() -> Self {
         CompensatorOptions {
+            network: None,
+            rbf_start: None,
             form: None,
             encoding: None,
             hidden: None,
@@ -154,6 +239,8 @@ impl CompensatorOptions {
     /// Options with every choice fixed.
     pub fn fixed(settings: &Settings, train: TrainOptions) -> Self {
         CompensatorOptions {
+            network: Some(settings.network),
+            rbf_start: settings.rbf_start,
             form: Some(settings.form),
             encoding: Some(settings.encoding),
             hidden: Some(settings.hidden),
@@ -224,7 +311,12 @@ impl Compensator {
         self.input_norm.len()
     }
 
-    /// Hidden units of each network (0 without networks).
+    /// Networks whose outputs are averaged: the MLPs and the RBF network.
+    pub fn network_count(&self) -> usize {
+        self.members.len() + usize::from(self.rbf.is_some())
+    }
+
+    /// Hidden units of each MLP (0 without MLPs).
     pub fn hidden(&self) -> usize {
         self.members.first().map_or(0, |w| w.hidden())
     }
@@ -280,29 +372,39 @@ impl Compensator {
     ) -> Result<(Compensator, Vec<TrainReport>)> {
         let problem = build(robot, set, settings.form, settings.encoding)?;
         let outputs = problem.output_norm.len();
-        let one = |m: usize| {
-            let m = m + first_member;
-            let opts = TrainOptions {
-                hidden: settings.hidden,
-                penalty: settings.penalty,
-                seed: train_opts.seed.wrapping_add(m as u64 * 7919),
-                progress: train_opts.progress && settings.members == 1,
-                ..train_opts.clone()
-            };
-            train(&problem.samples, outputs, &opts)
-        };
-        let count = settings.members.saturating_sub(first_member);
-        let trained = if parallel {
-            parallel_map(count, one)
+        let mut members = Vec::new();
+        let mut reports = Vec::new();
+        let rbf = if settings.has_rbf() {
+            Some(match &train_opts.rbf_hyper {
+                Some(h) => Rbf::with_hyper(&problem.samples, h)?,
+                None => Rbf::fit(&problem.samples, settings.rbf_start, train_opts.seed)?.0,
+            })
         } else {
-            (0..count).map(one).collect()
+            None
         };
-        let mut members = Vec::with_capacity(trained.len());
-        let mut reports = Vec::with_capacity(trained.len());
-        for t in trained {
-            let (w, r) = t?;
-            members.push(w);
-            reports.push(r);
+        if settings.network != Network::Rbf {
+            let one = |m: usize| {
+                let m = m + first_member;
+                let opts = TrainOptions {
+                    hidden: settings.hidden,
+                    penalty: settings.penalty,
+                    seed: train_opts.seed.wrapping_add(m as u64 * 7919),
+                    progress: train_opts.progress && settings.members == 1,
+                    ..train_opts.clone()
+                };
+                train(&problem.samples, outputs, &opts)
+            };
+            let count = settings.members.saturating_sub(first_member);
+            let trained = if parallel {
+                parallel_map(count, one)
+            } else {
+                (0..count).map(one).collect()
+            };
+            for t in trained {
+                let (w, r) = t?;
+                members.push(w);
+                reports.push(r);
+            }
         }
         let qs: Vec<&[f64]> = if with_domain {
             set.rows.iter().map(|m| m.q.as_slice()).collect()
@@ -316,6 +418,7 @@ impl Compensator {
                 encoding: settings.encoding,
                 robot: robot.clone(),
                 members,
+                rbf,
                 input_norm: problem.input_norm,
                 output_norm: problem.output_norm,
                 domain,
@@ -342,6 +445,11 @@ impl Compensator {
             } else {
                 opts.train.max_epochs
             },
+            // The search cross-validation made on these rows for this model (the same result).
+            rbf_hyper: selection
+                .as_ref()
+                .and_then(|s| s.rbf_hyper.clone())
+                .filter(|_| settings.refine.is_none()),
             ..opts.train.clone()
         };
         let (c, mut report) = Compensator::fit(robot, set, &settings, opts.sigmas, &train)?;

@@ -1,15 +1,18 @@
-//! The compensator file (JSON, version 2): format and version, form, encoding, shapes,
+//! The compensator file (JSON, version 3): format and version, form, encoding, shapes,
 //! normalisations, training domain, the robot file it runs in series with (embedded, with its
-//! hash), one burn record (burnpack bytes, hex) per ensemble member, and a checksum of it all.
+//! hash), one burn record (burnpack bytes, hex) per MLP of the ensemble, the RBF network
+//! (`rbf`: centres, widths, weights and variances, or null), and a checksum of it all.
 //!
-//! Version 2 changed the inputs (encodings, standardisation), the pose form's frame (the
-//! robot's base frame) and added ensembles and the domain: version 1 files are refused with a
-//! message that says so.
+//! Version 3 added the RBF network; version 2 files (MLPs only) are read as before. Version 2
+//! changed the inputs (encodings, standardisation), the pose form's frame (the robot's base
+//! frame) and added ensembles and the domain: version 1 files are refused with a message that
+//! says so.
 
 use super::compensator::{Compensator, Form};
 use super::domain::Domain;
 use super::encoding::Encoding;
 use super::net::{record_bytes, weights_from_record};
+use super::rbf::Rbf;
 use super::weights::Affine;
 use crate::error::{Error, Location, Result};
 use crate::model::robot_to_toml;
@@ -17,7 +20,9 @@ use serde_json::Value;
 use std::path::Path;
 
 const FORMAT: &str = "robocal-compensator";
-const VERSION: u64 = 2;
+const VERSION: u64 = 3;
+/// The oldest version this robocal reads.
+const OLDEST: u64 = 2;
 
 impl Compensator {
     /// The compensator file's text.
@@ -28,7 +33,11 @@ impl Compensator {
             .all(|w| w.to_vector().iter().all(|v| v.is_finite()))
             && self.input_norm.is_valid()
             && self.output_norm.is_valid()
-            && self.domain.is_valid(self.robot.dof(), self.inputs());
+            && self.domain.is_valid(self.robot.dof(), self.inputs())
+            && self
+                .rbf
+                .as_ref()
+                .is_none_or(|r| r.is_valid(self.inputs(), self.outputs()));
         if !finite {
             return Err(Error::Invalid(
                 "the compensator holds a non-finite weight, normalisation or domain value; \
@@ -56,6 +65,7 @@ impl Compensator {
             "robot_toml": robot_toml,
             "robot_hash": format!("{:016x}", fnv1a(robot_toml.as_bytes())),
             "network_records_burnpack_hex": records,
+            "rbf": self.rbf,
         });
         let sum = fnv1a(
             serde_json::to_string(&body)
@@ -86,9 +96,11 @@ impl Compensator {
         if v["format"] != FORMAT {
             return Err(bad("not a robocal compensator file".into()));
         }
-        if v["version"] != VERSION {
+        let version = v["version"].as_u64().unwrap_or(0);
+        if !(OLDEST..=VERSION).contains(&version) {
             return Err(bad(format!(
-                "compensator file version {} (this robocal reads version {VERSION}; train it again)",
+                "compensator file version {} (this robocal reads versions {OLDEST} to {VERSION}; \
+                 train it again)",
                 v["version"]
             )));
         }
@@ -131,6 +143,17 @@ impl Compensator {
             }
             members.push(w);
         }
+        let rbf: Option<Rbf> = if version >= 3 {
+            de(&v, "rbf", path)?
+        } else {
+            None
+        };
+        if rbf.as_ref().is_some_and(|r| !r.is_valid(ni, no)) {
+            return Err(bad(
+                "the RBF network does not fit the inputs and outputs or holds a non-finite number"
+                    .into(),
+            ));
+        }
         if members.is_empty() != (nh == 0) {
             return Err(bad(format!(
                 "{} network records for {nh} hidden units",
@@ -146,6 +169,7 @@ impl Compensator {
             encoding: de::<Encoding>(&v, "encoding", path)?,
             robot,
             members,
+            rbf,
             input_norm: de::<Affine>(&v, "input_norm", path)?,
             output_norm: de::<Affine>(&v, "output_norm", path)?,
             domain: de::<Domain>(&v, "domain", path)?,
@@ -153,7 +177,7 @@ impl Compensator {
         // A consistent checksum does not prove consistent shapes or sane numbers: prediction
         // indexes by the shapes and would spread a non-finite number into every pose.
         let outputs_ok = match c.form {
-            Form::Joint => no == c.robot.dof(),
+            Form::Joint => no == c.robot.dof() && c.rbf.is_none(),
             Form::Pose => no == 3 || no == 6,
         };
         let norms_ok = c.input_norm.len() == ni

@@ -7,6 +7,7 @@ pub mod file;
 pub mod lbfgs;
 pub mod net;
 pub mod predict;
+pub mod rbf;
 pub mod refine;
 pub mod samples;
 pub mod targets;

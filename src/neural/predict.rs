@@ -1,7 +1,8 @@
 //! A compensator's prediction and its Jacobian by the joints.
 //!
-//! The networks' outputs are averaged over the ensemble's members (in normalised units, then
-//! mapped back: the map is affine, so this is the mean of the members' raw outputs).
+//! The networks' outputs are averaged over the ensemble's members (MLPs, or one RBF network)
+//! in normalised units, then mapped back: the map is affine, so this is the mean of the
+//! members' raw outputs.
 
 use super::compensator::{Compensator, Form};
 use super::targets::base_rotation;
@@ -86,9 +87,10 @@ impl Compensator {
         &ws.out
     }
 
-    /// The members' mean raw output at the prepared inputs `ws.x` into `ws.out` and, with
-    /// `derivatives`, their mean derivative by the normalised inputs into `ws.dy_sum`
-    /// (normalised outputs x inputs). False (and `ws.out` zero) without members.
+    /// The networks' combined raw output at the prepared inputs `ws.x` into `ws.out` and, with
+    /// `derivatives`, its derivative by the normalised inputs into `ws.dy_sum` (normalised
+    /// outputs x inputs). The MLPs' mean and the RBF network have equal say when both are
+    /// present: y = (mean_m y_m + y_rbf) / 2. False (and `ws.out` zero) without networks.
     fn mean_output(&self, ws: &mut PredictWorkspace, derivatives: bool) -> bool {
         ws.y_sum.fill(0.0);
         ws.dy_sum.fill(0.0);
@@ -101,14 +103,33 @@ impl Compensator {
             }
             ws.y_sum.iter_mut().zip(&ws.y).for_each(|(s, v)| *s += v);
         }
-        if self.members.is_empty() {
+        let m = self.members.len();
+        if m > 1 {
+            let m = m as f64;
+            ws.y_sum.iter_mut().for_each(|s| *s /= m);
+            if derivatives {
+                ws.dy_sum /= m;
+            }
+        }
+        if let Some(r) = &self.rbf {
+            let share = if m > 0 { 0.5 } else { 1.0 };
+            let keep = 1.0 - share;
+            if derivatives {
+                r.input_jacobian_into(&ws.x, &mut ws.y, &mut ws.dy);
+                ws.dy_sum
+                    .iter_mut()
+                    .zip(ws.dy.iter())
+                    .for_each(|(s, d)| *s = keep * *s + share * d);
+            } else {
+                r.forward_into(&ws.x, &mut ws.y);
+            }
+            ws.y_sum
+                .iter_mut()
+                .zip(&ws.y)
+                .for_each(|(s, v)| *s = keep * *s + share * v);
+        } else if m == 0 {
             ws.out.fill(0.0);
             return false;
-        }
-        let m = self.members.len() as f64;
-        ws.y_sum.iter_mut().for_each(|s| *s /= m);
-        if derivatives {
-            ws.dy_sum /= m;
         }
         self.output_norm.invert(&ws.y_sum, &mut ws.out);
         true

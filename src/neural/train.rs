@@ -66,6 +66,9 @@ pub struct TrainOptions {
     /// Weights to start from instead of the seeded initial ones (a warm start: the same
     /// network trained with another penalty); ignored when their shape does not fit.
     pub start: Option<Weights>,
+    /// An RBF network's hyperparameters ([`super::rbf::Hyper`]), found before on the same
+    /// rows; None: searched.
+    pub rbf_hyper: Option<nalgebra::DVector<f64>>,
 }
 
 impl Default for TrainOptions {
@@ -83,6 +86,7 @@ impl Default for TrainOptions {
             phase2: Phase2::Auto,
             progress: false,
             start: None,
+            rbf_hyper: None,
         }
     }
 }

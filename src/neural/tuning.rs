@@ -18,9 +18,13 @@
 //! on [`RACE_FOLDS`] folds first and dropped there when it is more than [`RACE_MARGIN`] worse
 //! than the best so far on the same folds. The chosen settings are then fitted in full.
 
-use super::compensator::{Compensator, CompensatorOptions, Form, Refine, Settings, parallel_map};
+use super::compensator::{
+    Compensator, CompensatorOptions, Form, Network, Refine, Settings, parallel_map,
+};
 use super::encoding::Encoding;
+use super::rbf::{self, Hyper, Rbf};
 use super::refine::refine;
+use super::targets::build;
 use super::train::TrainOptions;
 use super::weights::Weights;
 use crate::data::MeasurementSet;
@@ -73,6 +77,12 @@ pub const ENSEMBLE_TIE: f64 = 0.005;
 /// [`ENSEMBLE`] beats both.
 pub const ENSEMBLE_PROBE: usize = 2;
 
+/// Rows up to which cross-validation tries an RBF network when the network is not fixed: its
+/// weights solve with the kernel matrix of every row (n^2 numbers, a factorisation cubic in
+/// n), which MLPs do not need. The hyperparameter search itself sees at most
+/// [`super::rbf::HYPER_ROWS`] rows.
+pub const RBF_MAX_ROWS: usize = 3000;
+
 /// Ensemble size tried against a single network when not fixed.
 pub const ENSEMBLE: usize = 4;
 /// The parameters refined when refinement is left to cross-validation.
@@ -116,6 +126,10 @@ pub struct Selection {
     /// Index of the chosen candidate.
     pub chosen: usize,
     pub notes: Vec<String>,
+    /// The chosen RBF network's hyperparameters, searched on every row for the model as
+    /// given (the final fit reuses them when nothing is refined).
+    #[serde(skip)]
+    pub rbf_hyper: Option<Hyper>,
 }
 
 /// Fold of each row: whole configurations, shuffled by `seed`, dealt round-robin.
@@ -205,6 +219,13 @@ struct Cv<'a> {
     /// Single networks by (settings but the penalty, fold): the warm starts of candidates
     /// that differ from them by the penalty only.
     warm: Mutex<HashMap<(String, usize), Vec<WarmStart>>>,
+    /// Every MLP candidate's fold fit by (settings, fold): a mixed candidate adds an RBF
+    /// network to it instead of training it again.
+    fitted: Mutex<HashMap<(String, usize), Compensator>>,
+    /// All training rows: the RBF hyperparameters are searched on them once per (encoding,
+    /// start); the folds fit only the weights.
+    set: &'a MeasurementSet,
+    hypers: Mutex<HashMap<(Encoding, usize), std::result::Result<Hyper, String>>>,
 }
 
 /// A network and the phase-2 epochs behind it.
@@ -221,8 +242,74 @@ impl Cv<'_> {
         }
     }
 
+    /// The RBF hyperparameters of `encoding` from search start `start` on all training rows
+    /// (searched once, then cached).
+    fn hyper(&self, encoding: Encoding, start: usize) -> Result<Hyper> {
+        if let Ok(h) = self.hypers.lock()
+            && let Some(r) = h.get(&(encoding, start))
+        {
+            return r.clone().map_err(Error::Invalid);
+        }
+        let found = build(self.robot, self.set, Form::Pose, encoding)
+            .and_then(|p| rbf::search(&p.samples, start, self.opts.train.seed))
+            .map(|f| f.hyper)
+            .map_err(|e| e.to_string());
+        if let Ok(mut h) = self.hypers.lock() {
+            h.insert((encoding, start), found.clone());
+        }
+        found.map_err(Error::Invalid)
+    }
+
     /// Held-out sums of `settings` on one fold; warm starts come from rounds before `round`.
     fn run(&self, fold: usize, settings: &Settings, model: &Robot, round: usize) -> Result<Sums> {
+        let c = self.fit(fold, settings, model, round)?;
+        let mut ws = Default::default();
+        sums(&self.held[fold], |q| c.predict(q, &mut ws))
+    }
+
+    /// The compensator of `settings` fitted on one fold's training rows.
+    fn fit(
+        &self,
+        fold: usize,
+        settings: &Settings,
+        model: &Robot,
+        round: usize,
+    ) -> Result<Compensator> {
+        if settings.has_rbf() {
+            let h = self.hyper(settings.encoding, settings.rbf_start.unwrap_or(0))?;
+            let mlp = Settings {
+                network: Network::Mlp,
+                rbf_start: None,
+                members: if settings.network == Network::Mix {
+                    settings.members
+                } else {
+                    0
+                },
+                ..settings.clone()
+            };
+            let mut c = if mlp.members > 0 {
+                self.fit(fold, &mlp, model, round)?
+            } else {
+                let plain = Settings {
+                    refine: None,
+                    ..mlp
+                };
+                let train = TrainOptions {
+                    progress: false,
+                    ..self.opts.train.clone()
+                };
+                Compensator::fit_with(model, &self.train[fold], &plain, &train, false, false, 0)?.0
+            };
+            let problem = build(model, &self.train[fold], Form::Pose, settings.encoding)?;
+            c.rbf = Some(Rbf::with_hyper(&problem.samples, &h)?);
+            return Ok(c);
+        }
+        let key_all = (settings.describe(), fold);
+        if let Ok(f) = self.fitted.lock()
+            && let Some(c) = f.get(&key_all)
+        {
+            return Ok(c.clone());
+        }
         let plain = Settings {
             refine: None,
             ..settings.clone()
@@ -309,8 +396,10 @@ impl Cv<'_> {
                 ));
             }
         }
-        let mut ws = Default::default();
-        sums(&self.held[fold], |q| c.predict(q, &mut ws))
+        if let Ok(mut f) = self.fitted.lock() {
+            f.insert(key_all, c.clone());
+        }
+        Ok(c)
     }
 }
 
@@ -327,26 +416,71 @@ pub fn select_settings(
         Refine::Auto => vec![None, Some(AUTO_REFINE.into())],
         Refine::Params(p) => vec![None, Some(p.clone())],
     };
-    let forms: Vec<Form> = opts.form.map_or(Form::ALL.to_vec(), |f| vec![f]);
-    let encodings: Vec<Encoding> = opts.encoding.map_or(Encoding::ALL.to_vec(), |e| vec![e]);
-    let hiddens: Vec<usize> = opts.hidden.map_or(HIDDEN.to_vec(), |h| vec![h]);
-    let penalties: Vec<f64> = opts.penalty.map_or(PENALTIES.to_vec(), |p| vec![p]);
-    let base = Settings {
-        form: forms[0],
-        encoding: opts.encoding.unwrap_or(Encoding::Gravity),
-        hidden: opts.hidden.unwrap_or(HIDDEN[1]),
-        penalty: opts.penalty.unwrap_or(PENALTIES[1]),
-        members: opts.members.unwrap_or(1),
-        refine: refines[0].clone(),
+    let rbf_only = opts.network == Some(Network::Rbf);
+    let mix_only = opts.network == Some(Network::Mix);
+    if (rbf_only || mix_only) && opts.form == Some(Form::Joint) {
+        return Err(Error::Invalid(
+            "an RBF network acts on the pose residual: it has no joint form".into(),
+        ));
+    }
+    let forms: Vec<Form> = match opts.form {
+        Some(f) => vec![f],
+        None if rbf_only || mix_only => vec![Form::Pose],
+        None => Form::ALL.to_vec(),
     };
+    let encodings: Vec<Encoding> = opts.encoding.map_or(Encoding::ALL.to_vec(), |e| vec![e]);
+    let fixed = |v: Option<usize>, all: &[usize]| v.map_or(all.to_vec(), |h| vec![h]);
+    let hiddens: Vec<usize> = if rbf_only {
+        vec![0]
+    } else {
+        fixed(opts.hidden, &HIDDEN)
+    };
+    let penalties: Vec<f64> = match opts.penalty {
+        _ if rbf_only => vec![0.0],
+        Some(p) => vec![p],
+        None => PENALTIES.to_vec(),
+    };
+    let base = if rbf_only {
+        Settings {
+            network: Network::Rbf,
+            form: Form::Pose,
+            encoding: opts.encoding.unwrap_or(Encoding::Angles),
+            hidden: 0,
+            penalty: 0.0,
+            members: opts.members.unwrap_or(1).min(1),
+            rbf_start: opts.rbf_start,
+            refine: refines[0].clone(),
+        }
+    } else {
+        Settings {
+            network: Network::Mlp,
+            form: forms[0],
+            encoding: opts.encoding.unwrap_or(Encoding::Gravity),
+            hidden: opts.hidden.unwrap_or(HIDDEN[1]),
+            penalty: opts.penalty.unwrap_or(PENALTIES[1]),
+            members: opts.members.unwrap_or(1),
+            rbf_start: opts.rbf_start,
+            refine: refines[0].clone(),
+        }
+    };
+    let starts: Vec<usize> = opts
+        .rbf_start
+        .map_or((0..rbf::STARTS.len()).collect(), |k| vec![k]);
+    // An RBF network (alone or with the MLPs) is tried where the network is left open, on
+    // the pose form, while its kernel matrix stays small.
+    let try_rbf =
+        opts.network.is_none() && forms.contains(&Form::Pose) && set.rows.len() <= RBF_MAX_ROWS;
     let open = refines.len() > 1
         || forms.len() > 1
         || encodings.len() > 1
         || hiddens.len() > 1
         || penalties.len() > 1
-        || opts.members.is_none();
+        || opts.members.is_none()
+        || try_rbf;
     if !open {
-        return Ok((base, None));
+        // Nothing to choose (a fixed mix keeps the start of highest likelihood).
+        let network = opts.network.unwrap_or(Network::Mlp);
+        return Ok((Settings { network, ..base }, None));
     }
     // Fewer folds train candidates on a smaller part of the set; where the held-out error
     // still falls steeply with more rows (real tracker data), 3 folds chose penalties ten
@@ -375,6 +509,9 @@ pub fn select_settings(
         opts,
         nets: Mutex::new(HashMap::new()),
         warm: Mutex::new(HashMap::new()),
+        fitted: Mutex::new(HashMap::new()),
+        set,
+        hypers: Mutex::new(HashMap::new()),
     };
     let rounds = AtomicUsize::new(0);
     let mut model = Sums::default();
@@ -475,56 +612,128 @@ pub fn select_settings(
             });
         }
     };
-    // Stage 1: the forms (gravity inputs, middle size and penalty), then for the best so far
-    // the penalty decade and the other encodings.
-    evaluate(1, vary(&base, &forms, |s, f| s.form = f), &mut candidates);
+    if rbf_only {
+        // A fixed RBF network: its encoding and search start are open.
+        let mut list = Vec::new();
+        for &e in &encodings {
+            for &k in &starts {
+                list.push(Settings {
+                    encoding: e,
+                    rbf_start: Some(k),
+                    members: 1,
+                    ..base.clone()
+                });
+            }
+        }
+        searches(&cv, &list);
+        evaluate(1, list, &mut candidates);
+    } else {
+        // Stage 1: the forms (gravity inputs, middle size and penalty), then for the best so
+        // far the penalty decade and the other encodings.
+        evaluate(1, vary(&base, &forms, |s, f| s.form = f), &mut candidates);
+    }
     if candidates.iter().all(|c| c.score.is_none()) {
         return Err(failed(&candidates));
     }
     // From here on some candidate has a score: the best always exists.
     let best = |candidates: &[Candidate]| better(candidates, 0, 1..candidates.len());
-    let w = candidates[best(&candidates)].settings.clone();
-    evaluate(
-        1,
-        vary(&w, &penalties, |s, p| s.penalty = p),
-        &mut candidates,
-    );
-    let w = candidates[best(&candidates)].settings.clone();
-    evaluate(
-        1,
-        vary(&w, &encodings, |s, e| s.encoding = e),
-        &mut candidates,
-    );
-    // Stage 2: hidden units, then a finer penalty step around the best.
-    let w = candidates[best(&candidates)].settings.clone();
-    evaluate(2, vary(&w, &hiddens, |s, h| s.hidden = h), &mut candidates);
-    let w = candidates[best(&candidates)].settings.clone();
-    if opts.penalty.is_none() {
-        let step = [w.penalty / PENALTY_STEP, w.penalty * PENALTY_STEP].map(significant3);
-        evaluate(2, vary(&w, &step, |s, p| s.penalty = p), &mut candidates);
-    }
-    let mut chosen = best(&candidates);
     let mut notes = Vec::new();
-    // Stage 3: the ensemble. The mean of several networks has at most the mean squared error
-    // of its members (convexity), so a tie within ENSEMBLE_TIE goes to the ensemble.
-    if opts.members.is_none() {
-        let single = candidates[chosen].settings.clone();
-        evaluate(
-            3,
-            vec![Settings {
-                members: ENSEMBLE_PROBE,
-                ..single
-            }],
-            &mut candidates,
-        );
-        let probe = candidates.len() - 1;
-        if cv_rms(&candidates, probe) <= cv_rms(&candidates, chosen) * (1.0 + ENSEMBLE_TIE) {
-            chosen = probe;
-            notes.push(format!(
-                "{ENSEMBLE_PROBE} networks did not raise the cross-validated error over one: the \
-                 compensator averages {ENSEMBLE}"
-            ));
+    let mut chosen = best(&candidates);
+    let with_rbf = try_rbf || mix_only;
+    // The RBF hyperparameter searches run beside stages 2 and 3 (whose fits leave cores
+    // idle between rounds) once stage 1 has fixed the pose form's encoding.
+    std::thread::scope(|scope| {
+        if !rbf_only {
+            let w = candidates[best(&candidates)].settings.clone();
+            evaluate(
+                1,
+                vary(&w, &penalties, |s, p| s.penalty = p),
+                &mut candidates,
+            );
+            let w = candidates[best(&candidates)].settings.clone();
+            evaluate(
+                1,
+                vary(&w, &encodings, |s, e| s.encoding = e),
+                &mut candidates,
+            );
+            if with_rbf && let Some(p) = best_pose_mlp(&candidates) {
+                let e = candidates[p].settings.encoding;
+                let cv = &cv;
+                for &k in &starts {
+                    scope.spawn(move || cv.hyper(e, k));
+                }
+            }
+            // Stage 2: hidden units, then a finer penalty step around the best.
+            let w = candidates[best(&candidates)].settings.clone();
+            evaluate(2, vary(&w, &hiddens, |s, h| s.hidden = h), &mut candidates);
+            let w = candidates[best(&candidates)].settings.clone();
+            if opts.penalty.is_none() {
+                let step = [w.penalty / PENALTY_STEP, w.penalty * PENALTY_STEP].map(significant3);
+                evaluate(2, vary(&w, &step, |s, p| s.penalty = p), &mut candidates);
+            }
+            chosen = best(&candidates);
+            // Stage 3: the ensemble. The mean of several networks has at most the mean squared
+            // error of its members (convexity), so a tie within ENSEMBLE_TIE goes to the ensemble.
+            if opts.members.is_none() {
+                let single = candidates[chosen].settings.clone();
+                evaluate(
+                    3,
+                    vec![Settings {
+                        members: ENSEMBLE_PROBE,
+                        ..single
+                    }],
+                    &mut candidates,
+                );
+                let probe = candidates.len() - 1;
+                if cv_rms(&candidates, probe) <= cv_rms(&candidates, chosen) * (1.0 + ENSEMBLE_TIE)
+                {
+                    chosen = probe;
+                    notes.push(format!(
+                        "{ENSEMBLE_PROBE} networks did not raise the cross-validated error over \
+                     one: the compensator averages {ENSEMBLE}"
+                    ));
+                }
+            }
         }
+    });
+    // Stage 3b: an RBF network from each search start, with the best pose-form MLPs (their
+    // mean and the RBF network's averaged) and alone, against the best so far. The
+    // hyperparameters come from all training rows once per start; each fold fits only the
+    // weights.
+    if with_rbf {
+        let pose_mlp = best_pose_mlp(&candidates);
+        let first = candidates.len();
+        let mut list = Vec::new();
+        for &k in &starts {
+            if let Some(p) = pose_mlp {
+                list.push(Settings {
+                    network: Network::Mix,
+                    rbf_start: Some(k),
+                    ..candidates[p].settings.clone()
+                });
+            }
+            if !mix_only {
+                list.push(Settings {
+                    network: Network::Rbf,
+                    form: Form::Pose,
+                    encoding: pose_mlp.map_or(base.encoding, |p| candidates[p].settings.encoding),
+                    hidden: 0,
+                    penalty: 0.0,
+                    members: 1,
+                    rbf_start: Some(k),
+                    refine: refines[0].clone(),
+                });
+            }
+        }
+        searches(&cv, &list);
+        evaluate(3, list, &mut candidates);
+        chosen = if mix_only {
+            // The network is fixed: the best of its own candidates.
+            let own = first..candidates.len();
+            better(&candidates, first, own)
+        } else {
+            better(&candidates, chosen, first..candidates.len())
+        };
     }
     // Stage 4: refinement, judged for the network it will carry (early in the search, with
     // an unregularised single network, it looked worse where it finally helped 1.3x; judged
@@ -541,7 +750,12 @@ pub fn select_settings(
     if opts.members.is_none() {
         let w = candidates[chosen].settings.clone();
         let first = candidates.len();
-        let alone = Settings { members: 0, ..w };
+        let alone = Settings {
+            network: Network::Mlp,
+            members: 0,
+            rbf_start: None,
+            ..w
+        };
         evaluate(
             5,
             vary(&alone, &refines, |s, r| s.refine = r),
@@ -566,6 +780,12 @@ pub fn select_settings(
             "refining `{spec}` raised the cross-validated error: the model is kept as given"
         ));
     }
+    let rbf_hyper = if winner.has_rbf() {
+        cv.hyper(winner.encoding, winner.rbf_start.unwrap_or(0))
+            .ok()
+    } else {
+        None
+    };
     Ok((
         winner,
         Some(Selection {
@@ -574,8 +794,35 @@ pub fn select_settings(
             candidates,
             chosen,
             notes,
+            rbf_hyper,
         }),
     ))
+}
+
+/// The best-scored pose-form MLP candidate, the partner of a mixed candidate.
+fn best_pose_mlp(candidates: &[Candidate]) -> Option<usize> {
+    (0..candidates.len())
+        .filter(|&i| {
+            let c = &candidates[i].settings;
+            c.form == Form::Pose && c.network == Network::Mlp && c.members > 0
+        })
+        .fold(None, |b: Option<usize>, i| {
+            Some(b.map_or(i, |b| better(candidates, b, i..i + 1)))
+        })
+}
+
+/// The RBF hyperparameter searches `list` needs, run two at a time before its fold fits
+/// (which would otherwise wait on one another for them).
+fn searches(cv: &Cv, list: &[Settings]) {
+    let mut keys: Vec<(Encoding, usize)> = list
+        .iter()
+        .filter(|s| s.has_rbf())
+        .map(|s| (s.encoding, s.rbf_start.unwrap_or(0)))
+        .collect();
+    keys.sort_by_key(|(e, k)| (e.name(), *k));
+    keys.dedup();
+    // Errors are cached with the results and reported by the candidates.
+    let _ = parallel_map(keys.len(), |i| cv.hyper(keys[i].0, keys[i].1));
 }
 
 /// `base` with one setting changed to each of `values`.
