@@ -99,3 +99,205 @@ fn sigmas_are_finite_positive_and_bounded() {
         "give 1 to 100000 iterations",
     );
 }
+
+/// Copies a shipped file into this test's temporary folder under `name`.
+fn copy(from: &str, name: &str) -> std::path::PathBuf {
+    let to = common::tmp(name);
+    std::fs::copy(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(from),
+        &to,
+    )
+    .unwrap();
+    to
+}
+
+#[test]
+fn outputs_never_overwrite_an_input_or_each_other() {
+    let robot = copy(UR10, "guard_robot.toml");
+    let data = copy("datasets/case_d/calibration.csv", "guard_data.csv");
+    let fanuc = copy(
+        "datasets/robots/fanuc_r2000ib_210f.toml",
+        "guard_fanuc.toml",
+    );
+    let (r, d, f) = (
+        robot.to_str().unwrap(),
+        data.to_str().unwrap(),
+        fanuc.to_str().unwrap(),
+    );
+    let before = |p: &std::path::Path| std::fs::read(p).unwrap();
+    let (rb, db, fb) = (before(&robot), before(&data), before(&fanuc));
+    // The same file spelt another way is still the same file.
+    let dir = robot.parent().unwrap().to_str().unwrap().to_string();
+    let d_other = format!("{dir}/./guard_data.csv");
+    let a = common::tmp("guard_a.csv");
+    let a = a.to_str().unwrap();
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["fk", "--robot", r, "--q", "0,0,0,0,0,0", "--out", r],
+        vec!["split", d, "--seed", "1", "--out-a", d, "--out-b", a],
+        vec!["split", d, "--seed", "1", "--out-a", a, "--out-b", a],
+        vec!["identify", "--robot", f, "--data", d, "--out", &d_other],
+        vec![
+            "identify", "--robot", f, "--data", d, "--out", a, "--report", f,
+        ],
+        vec![
+            "simulate", "--robot", f, "--count", "3", "--seed", "1", "--out", f,
+        ],
+        vec![
+            "simulate",
+            "--robot",
+            f,
+            "--count",
+            "3",
+            "--seed",
+            "1",
+            "--out",
+            a,
+            "--truth-out",
+            a,
+        ],
+        vec!["evaluate", "--robot", f, "--data", d, "--report", d],
+        vec!["train", "--robot", f, "--data", d, "--out", d],
+    ];
+    for args in &cases {
+        let o = robocal(args);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(
+            err.contains("refusing to overwrite an input") || err.contains("name the same file"),
+            "{args:?}: {err}"
+        );
+    }
+    assert_eq!(before(&robot), rb);
+    assert_eq!(before(&data), db);
+    assert_eq!(before(&fanuc), fb);
+    assert!(!std::path::Path::new(a).exists(), "nothing was written");
+    // `report` reads every file of its run folder.
+    let run = common::tmp("guard_run");
+    std::fs::create_dir_all(&run).unwrap();
+    let id = run.join("identify.json");
+    std::fs::write(&id, "{}").unwrap();
+    refused(
+        &[
+            "report",
+            run.to_str().unwrap(),
+            "--out",
+            id.to_str().unwrap(),
+        ],
+        "refusing to overwrite an input",
+    );
+    assert_eq!(std::fs::read_to_string(&id).unwrap(), "{}");
+}
+
+#[test]
+fn identical_rows_are_a_rank_error_not_a_model() {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/case_d/calibration.csv"),
+    )
+    .unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let first = lines.next().unwrap();
+    let rest = first.split_once(',').unwrap().1;
+    let mut same = format!("{header}\n");
+    for i in 1..=20 {
+        same.push_str(&format!("{i},{rest}\n"));
+    }
+    let data = common::tmp("identical_rows.csv");
+    std::fs::write(&data, same).unwrap();
+    let out = common::tmp("identical_rows.toml");
+    let d = data.to_str().unwrap();
+    let o = out.to_str().unwrap();
+    // With base registration (the default for `full`), and without it (joint offsets only).
+    refused(
+        &[
+            "identify",
+            "--robot",
+            "datasets/robots/fanuc_r2000ib_210f.toml",
+            "--data",
+            d,
+            "--out",
+            o,
+        ],
+        "not on one line",
+    );
+    refused(
+        &[
+            "identify",
+            "--robot",
+            "datasets/robots/fanuc_r2000ib_210f.toml",
+            "--data",
+            d,
+            "--params",
+            "offsets",
+            "--out",
+            o,
+        ],
+        "1 distinct configuration",
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn header_only_files_are_refused_and_ik_keeps_an_input_status_column() {
+    let joints = common::tmp("header_only_joints.csv");
+    std::fs::write(&joints, "q1,q2,q3,q4,q5,q6\n").unwrap();
+    let j = joints.to_str().unwrap();
+    refused(&["fk", "--robot", UR10, "--joints", j], "no data rows");
+    let poses = common::tmp("header_only_poses.csv");
+    std::fs::write(&poses, "x,y,z,rz,ry,rx\n").unwrap();
+    let p = poses.to_str().unwrap();
+    refused(&["ik", "--robot", UR10, "--poses", p], "no data rows");
+    refused(
+        &[
+            "compensate",
+            "--nominal",
+            "datasets/robots/fanuc_r2000ib_210f.toml",
+            "--robot",
+            "datasets/robots/fanuc_r2000ib_210f.toml",
+            "--targets",
+            p,
+        ],
+        "no data rows",
+    );
+    // A `status` column of the input is kept as `input_status`, not written twice.
+    std::fs::write(
+        &poses,
+        "x,y,z,rz,ry,rx,status\n500,200,800,0,180,0,taught\n",
+    )
+    .unwrap();
+    let o = robocal(&["ik", "--robot", UR10, "--poses", p]);
+    let out = common::stdout(&o);
+    let header = out.lines().next().unwrap_or_default();
+    assert_eq!(header.matches("status").count(), 2, "{header}");
+    assert!(
+        header.contains("input_status") && out.contains("taught"),
+        "{out}"
+    );
+}
+
+#[test]
+fn region_rows_are_pairs_and_errors_name_their_line() {
+    let region = common::tmp("region_three.toml");
+    std::fs::write(
+        &region,
+        "ranges = [\n  [-10, 10],\n  [0, 20],\n  [1, 2, 3],\n  [-5, 5],\n  [0, 10],\n  [-5, 5],\n]\n",
+    )
+    .unwrap();
+    let r = region.to_str().unwrap();
+    let out = common::tmp("region_three.csv");
+    let args = [
+        "simulate",
+        "--robot",
+        "datasets/robots/fanuc_r2000ib_210f.toml",
+        "--region",
+        r,
+        "--count",
+        "3",
+        "--seed",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    refused(&args, "2 numbers (got 3)");
+    refused(&args, ":4");
+}

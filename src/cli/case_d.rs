@@ -132,6 +132,10 @@ fn plot(dir: &Path, datasets: &Path, rows: &[Row]) -> Result<usize> {
 }
 
 pub fn run_case_d(a: CaseDArgs) -> Result<()> {
+    use super::paths::{files_under, guard, opt, req};
+    let read = files_under(&a.datasets);
+    let inputs: Vec<_> = read.iter().map(|p| req("--datasets", p)).collect();
+    guard(&inputs, &[opt("--report", a.report.as_ref())])?;
     let opts = a
         .build
         .options(a.sigma.sigmas(), std::io::stderr().is_terminal())?;

@@ -38,6 +38,16 @@ pub struct CompensateArgs {
 }
 
 pub fn run(a: CompensateArgs) -> Result<()> {
+    use super::paths::{guard, opt, req};
+    guard(
+        &[
+            req("--nominal", &a.nominal),
+            req("--robot", &a.robot),
+            opt("--compensator", a.compensator.as_ref()),
+            req("--targets", &a.targets),
+        ],
+        &[opt("--out", a.output.out.as_ref())],
+    )?;
     let nominal = read_robot(&a.nominal)?;
     let robot = read_robot(&a.robot)?;
     let n = nominal.dof();

@@ -52,6 +52,11 @@ pub(super) fn joint_table(path: &std::path::Path, n: usize) -> Result<JointTable
 }
 
 pub fn run(a: FkArgs) -> Result<()> {
+    use super::paths::{guard, opt, req};
+    guard(
+        &[req("--robot", &a.robot), opt("--joints", a.joints.as_ref())],
+        &[opt("--out", a.output.out.as_ref())],
+    )?;
     let robot = read_robot(&a.robot)?;
     let n = robot.dof();
     let qcols = joint_columns(n);

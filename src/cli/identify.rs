@@ -137,6 +137,16 @@ pub(super) fn read_sets(
 }
 
 pub fn run_identify(a: IdentifyArgs) -> Result<()> {
+    use super::paths::{guard, opt, req};
+    guard(
+        &[
+            req("--robot", &a.robot),
+            req("--data", &a.data),
+            opt("--validate", a.validate.as_ref()),
+            opt("--profile", a.read.profile.as_ref()),
+        ],
+        &[req("--out", &a.out), opt("--report", a.report.as_ref())],
+    )?;
     let nominal = read_robot(&a.robot)?;
     let (cal, val) = read_sets(&a.read, &a.data, a.validate.as_deref(), &nominal)?;
     let opts = Options {
@@ -348,6 +358,16 @@ fn print_identified(a: &IdentifyArgs, cal: &MeasurementSet, id: &Identified) {
 }
 
 pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
+    use super::paths::{guard, opt, req};
+    guard(
+        &[
+            req("--robot", &a.robot),
+            req("--data", &a.data),
+            opt("--compensator", a.compensator.as_ref()),
+            opt("--profile", a.read.profile.as_ref()),
+        ],
+        &[opt("--report", a.report.as_ref())],
+    )?;
     let robot = read_robot(&a.robot)?;
     let (comp, note) = match &a.compensator {
         Some(p) => {

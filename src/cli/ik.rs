@@ -131,6 +131,15 @@ fn nearest(sols: &[Vec<f64>], reference: &[f64]) -> usize {
 }
 
 pub fn run(a: IkArgs) -> Result<()> {
+    use super::paths::{guard, opt, req};
+    guard(
+        &[
+            req("--robot", &a.robot),
+            opt("--poses", a.poses.as_ref()),
+            opt("--nominal", a.nominal.as_ref()),
+        ],
+        &[opt("--out", a.output.out.as_ref())],
+    )?;
     let robot = read_robot(&a.robot)?;
     let n = robot.dof();
     let qcols = joint_columns(n);
@@ -188,11 +197,14 @@ pub fn run(a: IkArgs) -> Result<()> {
                 });
             }
             let mut headers = t.headers.clone();
-            if seed_idx.is_some() {
-                for h in headers.iter_mut() {
-                    if qcols.contains(h) {
-                        *h = format!("seed_{h}");
-                    }
+            for h in headers.iter_mut() {
+                if seed_idx.is_some() && qcols.contains(h) {
+                    *h = format!("seed_{h}");
+                }
+                // The output's own columns: an input column of the same name keeps its
+                // values under another name instead of appearing twice.
+                if h == "solution" || h == "status" {
+                    *h = format!("input_{h}");
                 }
             }
             (headers, t.rows.clone(), targets, seeds, t.lines.clone())

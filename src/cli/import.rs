@@ -23,6 +23,15 @@ pub struct ImportArgs {
 }
 
 pub fn run(a: ImportArgs) -> Result<()> {
+    use super::paths::{guard, opt, req};
+    guard(
+        &[
+            req("input", &a.input),
+            opt("--profile", a.data.profile.as_ref()),
+            opt("--robot", a.robot.as_ref()),
+        ],
+        &[req("--out", &a.out)],
+    )?;
     let profile = a.data.profile()?;
     let n = match (&a.robot, &profile.columns.joints) {
         (Some(_), _) => 0,

@@ -10,6 +10,7 @@ mod identify;
 mod ik;
 mod import;
 mod output;
+mod paths;
 mod report;
 mod reproduce;
 mod simulate;

@@ -14,6 +14,18 @@ pub struct ReportArgs {
 }
 
 pub fn run(a: ReportArgs) -> Result<()> {
+    use super::paths::{files_under, guard, req};
+    // What the page is made of: the folder's reports and pictures (a page written there
+    // before is not read, so it may be written again).
+    let read: Vec<_> = files_under(&a.run_dir)
+        .into_iter()
+        .filter(|p| {
+            p.extension()
+                .is_some_and(|e| e == "json" || e == "png" || e == "svg")
+        })
+        .collect();
+    let inputs: Vec<_> = read.iter().map(|p| req("run folder", p)).collect();
+    guard(&inputs, &[req("--out", &a.out)])?;
     let html = crate::report::render(&a.run_dir)?;
     crate::io::write_atomic(&a.out, html.as_bytes())
         .with_context(|| format!("writing {}", a.out.display()))?;

@@ -123,6 +123,10 @@ fn figures(run: &CaseRun) -> Vec<(&'static str, f64, f64, f64)> {
 }
 
 pub fn run(a: ReproduceArgs) -> Result<()> {
+    use super::paths::{files_under, guard, opt, req};
+    let read = files_under(&a.datasets);
+    let inputs: Vec<_> = read.iter().map(|p| req("--datasets", p)).collect();
+    guard(&inputs, &[opt("--report", a.report.as_ref())])?;
     let robot_path = a.datasets.join("robots/fanuc_r2000ib_210f.toml");
     let nominal = read_robot(&robot_path).with_context(|| {
         format!(

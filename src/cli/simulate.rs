@@ -50,6 +50,20 @@ pub struct SimulateArgs {
 }
 
 pub fn run(a: SimulateArgs) -> Result<()> {
+    use super::paths::{guard, opt, req};
+    guard(
+        &[
+            req("--robot", &a.robot),
+            opt("--deviations", a.deviations.as_ref()),
+            opt("--nongeometric", a.nongeometric.as_ref()),
+            opt("--region", a.region.as_ref()),
+        ],
+        &[
+            req("--out", &a.out),
+            opt("--truth-out", a.truth_out.as_ref()),
+            opt("--true-robot", a.true_robot.as_ref()),
+        ],
+    )?;
     let nominal = read_robot(&a.robot)?;
     let truth = match &a.deviations {
         Some(p) => Deviations::read(p, &nominal)?.apply(&nominal)?,

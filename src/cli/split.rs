@@ -30,6 +30,15 @@ pub struct SplitArgs {
 }
 
 pub fn run(a: SplitArgs) -> Result<()> {
+    use super::paths::{guard, opt, req};
+    guard(
+        &[
+            req("input", &a.input),
+            opt("--profile", a.data.profile.as_ref()),
+            opt("--robot", a.robot.as_ref()),
+        ],
+        &[req("--out-a", &a.out_a), req("--out-b", &a.out_b)],
+    )?;
     if !(0.0..=1.0).contains(&a.fraction) {
         bail!("--fraction must be within 0..1");
     }

@@ -117,6 +117,16 @@ fn print_selection(sel: &Selection) {
 }
 
 pub fn run_train(a: TrainArgs) -> Result<()> {
+    use super::paths::{guard, opt, req};
+    guard(
+        &[
+            req("--robot", &a.robot),
+            req("--data", &a.data),
+            opt("--validate", a.validate.as_ref()),
+            opt("--profile", a.read.profile.as_ref()),
+        ],
+        &[req("--out", &a.out), opt("--report", a.report.as_ref())],
+    )?;
     let robot = read_robot(&a.robot)?;
     let (set, val) = read_sets(&a.read, &a.data, a.validate.as_deref(), &robot)?;
     let terminal = std::io::stderr().is_terminal();
@@ -317,6 +327,14 @@ pub struct PredictArgs {
 
 /// Compensated tool poses (x, y, z mm; rz, ry, rx deg) for a joint CSV.
 pub fn run_predict(a: PredictArgs) -> Result<()> {
+    use super::paths::{guard, opt, req};
+    guard(
+        &[
+            req("--compensator", &a.compensator),
+            req("--joints", &a.joints),
+        ],
+        &[opt("--out", a.output.out.as_ref())],
+    )?;
     let c = Compensator::load(&a.compensator)?;
     let (mut headers, rows, joints, lines) = super::fk::joint_table(&a.joints, c.robot.dof())?;
     if headers.iter().any(|h| h == DOMAIN_COLUMN) {

@@ -28,6 +28,17 @@ impl Table {
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
         let t = Table::parse(&bytes, path, b',', false)?;
         t.reject_malformed()?;
+        if t.rows.is_empty() {
+            // A header alone is a file cut short or a template, never an empty batch to skip.
+            return Err(Error::input(
+                Location {
+                    file: t.path.clone(),
+                    line: None,
+                    field: None,
+                },
+                "no data rows (only a header or nothing at all)",
+            ));
+        }
         Ok(t)
     }
 

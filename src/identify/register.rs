@@ -74,6 +74,29 @@ fn set_transform(robot: &Robot, slot: Slot, p: &Pose) -> Result<Robot> {
     robot.with_params(&values)
 }
 
+/// Least RMS distance (mm) of the measured positions from their best-fitting line for a
+/// registration: a tracker measures to hundredths of a millimetre, so points a micron off one
+/// line are on it.
+pub const MIN_SPREAD_MM: f64 = 1e-3;
+
+/// RMS distance (mm) of `points` from their best-fitting line: the square root of the sum of
+/// the two smaller eigenvalues of the centred scatter matrix, over the count.
+fn spread_across_line(points: &[Vector3<f64>]) -> f64 {
+    if points.len() < 2 {
+        return 0.0;
+    }
+    let n = points.len() as f64;
+    let mean = points.iter().sum::<Vector3<f64>>() / n;
+    let mut scatter = nalgebra::Matrix3::zeros();
+    for p in points {
+        let d = p - mean;
+        scatter += d * d.transpose();
+    }
+    let mut ev: Vec<f64> = scatter.symmetric_eigenvalues().iter().copied().collect();
+    ev.sort_by(|a, b| b.total_cmp(a));
+    ((ev[1] + ev[2]).max(0.0) / n).sqrt()
+}
+
 /// Registers the base (and, with `tool`, the tool) of `robot` to the positions of `set`.
 /// The base (and tool) must be 6-DOF transform rows; needs at least 3 rows with positions that
 /// are not collinear.
@@ -85,12 +108,19 @@ pub fn register(robot: &Robot, set: &MeasurementSet, tool: bool) -> Result<(Robo
     }
     let tool = tool && robot.tool().convention() == Convention::Transform;
     let rows: Vec<_> = set.rows.iter().filter(|m| m.position.is_some()).collect();
-    if rows.len() < 3 {
-        return Err(Error::Invalid(
-            "registration needs at least 3 measured positions: more measurements are needed".into(),
-        ));
-    }
     let measured: Vec<Vector3<f64>> = rows.iter().filter_map(|m| m.position).collect();
+    // Points on one line (or one point measured again and again) leave the rotation about
+    // that line free: the fit would return an arbitrary base.
+    let across = spread_across_line(&measured);
+    if rows.len() < 3 || across < MIN_SPREAD_MM {
+        return Err(Error::Invalid(format!(
+            "{}: registration needs at least 3 measured positions that are not on one line \
+             ({} positions, {across:.2e} mm RMS off their best line; at least {MIN_SPREAD_MM} \
+             mm needed): more measurements of distinct configurations are needed",
+            set.source.display(),
+            rows.len()
+        )));
+    }
     let mut model = set_transform(robot, Slot::Base, &Pose::identity())?;
     let tool_t0 = if tool {
         model = set_transform(&model, Slot::Tool, &Pose::identity())?;

@@ -233,6 +233,30 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
             "the data identify none of the selected parameters".into(),
         ));
     }
+    // Rows that repeat one configuration add no independent equation: 20 measurements of one
+    // pose give 6 equations, whatever their number.
+    let distinct = {
+        let mut keys: Vec<Vec<i64>> = set
+            .rows
+            .iter()
+            .map(|m| m.q.iter().map(|v| (v * 1e9).round() as i64).collect())
+            .collect();
+        keys.sort_unstable();
+        keys.dedup();
+        keys.len()
+    };
+    let per_row = obs.len().div_ceil(set.rows.len().max(1));
+    if distinct * per_row <= cols.len() {
+        return Err(Error::Invalid(format!(
+            "{}: {} rows hold {distinct} distinct configuration(s), at most {} independent \
+             residual components for {} identifiable parameters: more measurements of distinct \
+             configurations are needed",
+            set.source.display(),
+            set.rows.len(),
+            distinct * per_row,
+            cols.len()
+        )));
+    }
     if obs.len() <= cols.len() {
         return Err(Error::Invalid(format!(
             "{} residual components for {} identifiable parameters: more measurements are needed",

@@ -18,7 +18,8 @@
 //! where a small MLP can only follow the smooth trend. Far from every centre its output falls
 //! to zero: the compensator becomes the model. Its cost is cubic in the rows, so the
 //! hyperparameters are fitted on at most [`HYPER_ROWS`] of them (a seeded choice) and only
-//! the weights use every row.
+//! the weights use every row. The likelihood has several modes on real data, so the search
+//! runs from each of [`STARTS`]; the factorisations use `faer`.
 
 use super::lbfgs::{Next, minimize};
 use super::samples::Samples;

@@ -1,5 +1,6 @@
 //! The self-tuning default: k-fold cross-validation on the training rows chooses what the
-//! options leave open (form, encoding, hidden units, penalty, refinement, ensemble size).
+//! options leave open (network, form, encoding, hidden units, penalty, refinement, ensemble
+//! size).
 //!
 //! Folds are drawn by a seeded shuffle of whole configurations (rows that repeat a joint
 //! configuration stay in one fold). Every candidate is fitted on k - 1 folds (refinement
@@ -13,7 +14,10 @@
 //! The search is staged to stay cheap, each step starting from the best so far: (1) the forms
 //! with gravity inputs at the middle size and penalty, then the penalty decade and the other
 //! encodings; (2) hidden units, then a finer penalty step; (3) the ensemble, kept where it
-//! lowers the cross-validated error; (4) refinement; (5) no network at all. Candidates are fitted
+//! lowers the cross-validated error, then the RBF network from each search start, alone and
+//! averaged with the best pose-form MLPs (its hyperparameters searched once on all training
+//! rows, beside stages 2 and 3; the folds fit only its weights); (4) refinement; (5) no
+//! network at all. Candidates are fitted
 //! with a phase 2 of fixed work ([`CV_WORK`]) and without phase 1, and raced: each is scored
 //! on [`RACE_FOLDS`] folds first and dropped there when it is more than [`RACE_MARGIN`] worse
 //! than the best so far on the same folds. The chosen settings are then fitted in full.

@@ -37,7 +37,8 @@ pub struct Region(pub Vec<[f64; 2]>);
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RegionFile {
-    ranges: Vec<[f64; 2]>,
+    /// Kept with their spans: a message names the line of the range at fault.
+    ranges: toml::Spanned<Vec<toml::Spanned<Vec<f64>>>>,
 }
 
 impl Region {
@@ -50,29 +51,48 @@ impl Region {
     /// prismatic joints). Each range must lie within the joint's limits.
     pub fn read(path: impl AsRef<Path>, robot: &Robot) -> Result<Self> {
         let path = path.as_ref();
-        let f: RegionFile = crate::io::parse_toml(&crate::io::read_text(path)?, path)?;
-        let bad = |m: String| Error::input(Location::at(path, 0, "ranges"), m);
-        if f.ranges.len() != robot.dof() {
-            return Err(bad(format!(
-                "{} ranges for a robot with {} joints",
-                f.ranges.len(),
-                robot.dof()
-            )));
+        let text = crate::io::read_text(path)?;
+        let f: RegionFile = crate::io::parse_toml(&text, path)?;
+        let line = |at: usize| crate::model::file::line_of(&text, at);
+        let bad = |at: usize, m: String| Error::input(Location::at(path, line(at), "ranges"), m);
+        let ranges = f.ranges.get_ref();
+        if ranges.len() != robot.dof() {
+            return Err(bad(
+                f.ranges.span().start,
+                format!(
+                    "{} ranges for a robot with {} joints",
+                    ranges.len(),
+                    robot.dof()
+                ),
+            ));
         }
-        let mut out = Vec::with_capacity(f.ranges.len());
-        for (i, (r, j)) in f.ranges.iter().zip(robot.joints()).enumerate() {
-            let [lo, hi] = *r;
+        let mut out = Vec::with_capacity(ranges.len());
+        for (i, (r, j)) in ranges.iter().zip(robot.joints()).enumerate() {
+            let at = r.span().start;
+            let &[lo, hi] = r.get_ref().as_slice() else {
+                return Err(bad(
+                    at,
+                    format!(
+                        "joint {}: a range is [min, max], 2 numbers (got {})",
+                        i + 1,
+                        r.get_ref().len()
+                    ),
+                ));
+            };
             if !(lo.is_finite() && hi.is_finite())
                 || lo > hi
                 || lo < j.limits[0]
                 || hi > j.limits[1]
             {
-                return Err(bad(format!(
-                    "joint {}: range [{lo}, {hi}] must be ordered and within the limits [{}, {}]",
-                    i + 1,
-                    j.limits[0],
-                    j.limits[1]
-                )));
+                return Err(bad(
+                    at,
+                    format!(
+                        "joint {}: range [{lo}, {hi}] must be ordered and within the limits [{}, {}]",
+                        i + 1,
+                        j.limits[0],
+                        j.limits[1]
+                    ),
+                ));
             }
             out.push([lo, hi].map(|v| j.joint_type.to_internal(v)));
         }

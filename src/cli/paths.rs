@@ -1,0 +1,112 @@
+//! Output paths checked against a command's inputs and against each other before anything is
+//! read or written: calibration data is precious, and `--out` naming an input (or two outputs
+//! naming one file) would silently destroy it.
+
+use anyhow::{Result, bail};
+use std::path::{Path, PathBuf};
+
+/// A path as the file system will resolve it: canonical when it exists, else its canonical
+/// folder joined with its name (an output that does not exist yet). None when neither
+/// resolves (the command's own read or write will report it).
+fn resolved(p: &Path) -> Option<PathBuf> {
+    if let Ok(c) = p.canonicalize() {
+        return Some(c);
+    }
+    let name = p.file_name()?;
+    let dir = match p.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    Some(dir.canonicalize().ok()?.join(name))
+}
+
+/// A flag and its path; None for an optional path not given.
+pub type Named<'a> = Option<(&'a str, &'a Path)>;
+
+/// Refuses outputs that resolve to an input of the command or to another output. Each entry
+/// is a flag and its path ([`req`], [`opt`]).
+pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
+    let ins: Vec<(&str, &Path, PathBuf)> = inputs
+        .iter()
+        .flatten()
+        .filter_map(|(f, p)| resolved(p).map(|r| (*f, *p, r)))
+        .collect();
+    let mut seen: Vec<(&str, &Path, PathBuf)> = Vec::new();
+    for (flag, path) in outputs.iter().flatten() {
+        let Some(r) = resolved(path) else { continue };
+        if let Some((f, p, _)) = ins.iter().find(|(_, _, i)| *i == r) {
+            bail!(
+                "{flag} {} is the same file as an input ({f} {}): refusing to overwrite an input; \
+                 choose another output path",
+                path.display(),
+                p.display()
+            );
+        }
+        if let Some((f, p, _)) = seen.iter().find(|(_, _, o)| *o == r) {
+            bail!(
+                "{flag} {} and {f} {} name the same file: each output needs its own path",
+                path.display(),
+                p.display()
+            );
+        }
+        seen.push((flag, path, r));
+    }
+    Ok(())
+}
+
+/// A required path for [`guard`]'s lists.
+pub fn req<'a>(flag: &'a str, p: &'a Path) -> Named<'a> {
+    Some((flag, p))
+}
+
+/// An optional path for [`guard`]'s lists.
+pub fn opt<'a>(flag: &'a str, p: Option<&'a PathBuf>) -> Named<'a> {
+    p.map(|p| (flag, p.as_path()))
+}
+
+/// Every file under `dir` (recursively): the inputs of commands that read a
+/// folder (`report`, the datasets of `case-d` and `reproduce`).
+pub fn files_under(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        let Ok(entries) = std::fs::read_dir(&d) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let p = e.path();
+            match e.file_type() {
+                Ok(t) if t.is_dir() => todo.push(p),
+                Ok(_) => out.push(p),
+                Err(_) => {}
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn same_file_by_another_spelling_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("data.csv");
+        std::fs::write(&input, "x\n").unwrap();
+        let other = dir.path().join("sub/../data.csv");
+        std::fs::create_dir(dir.path().join("sub")).unwrap();
+        let e = guard(&[req("--data", &input)], &[req("--out", &other)])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--out") && e.contains("--data"), "{e}");
+        // A new file beside it is fine; two outputs on one new file are not.
+        let new = dir.path().join("new.csv");
+        assert!(guard(&[req("--data", &input)], &[req("--out", &new)]).is_ok());
+        assert!(guard(&[opt("--data", None)], &[req("--out", &input)]).is_ok());
+        let e = guard(&[], &[req("--out-a", &new), req("--out-b", &new)])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--out-a") && e.contains("--out-b"), "{e}");
+    }
+}
