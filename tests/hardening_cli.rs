@@ -301,3 +301,99 @@ fn region_rows_are_pairs_and_errors_name_their_line() {
     refused(&args, "2 numbers (got 3)");
     refused(&args, ":4");
 }
+
+#[test]
+fn robot_values_beyond_physical_bounds_are_refused_at_load() {
+    let text = std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(UR10))
+        .unwrap();
+    let first_limits = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("limits"))
+        .unwrap();
+    let first_d = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("d ="))
+        .unwrap();
+    for (name, bad, expect) in [
+        (
+            "wide_limits.toml",
+            text.replacen(first_limits, "limits = [-1e308, 1e308]", 1),
+            "beyond +-1440 deg",
+        ),
+        (
+            "long_d.toml",
+            text.replacen(first_d, "d = 1e308", 1),
+            "beyond the physical bound",
+        ),
+    ] {
+        let p = common::tmp(name);
+        std::fs::write(&p, bad).unwrap();
+        // ik over +-1e308 deg never returned; now the file is refused with its line.
+        refused(
+            &[
+                "ik",
+                "--robot",
+                p.to_str().unwrap(),
+                "--pose",
+                "500,200,800,0,180,0",
+            ],
+            expect,
+        );
+        refused(
+            &[
+                "ik",
+                "--robot",
+                p.to_str().unwrap(),
+                "--pose",
+                "500,200,800,0,180,0",
+            ],
+            &format!("{name}:"),
+        );
+    }
+}
+
+#[test]
+fn nongeometric_values_are_finite_and_bounded_at_load() {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("datasets/nongeometric/fanuc_compliance_gear.toml"),
+    )
+    .unwrap();
+    let masses = text
+        .lines()
+        .find(|l| l.starts_with("link_masses_kg"))
+        .unwrap();
+    for (name, bad, expect) in [
+        (
+            "gear_nan.toml",
+            text.replacen("amplitude1_mrad = 0.05", "amplitude1_mrad = nan", 1),
+            "amplitudes must be finite",
+        ),
+        (
+            "mass_huge.toml",
+            text.replacen(masses, "link_masses_kg = [1e308, 1, 1, 1, 1, 1]", 1),
+            "masses must lie in",
+        ),
+    ] {
+        let p = common::tmp(name);
+        std::fs::write(&p, bad).unwrap();
+        let out = common::tmp(&format!("{name}.csv"));
+        refused(
+            &[
+                "simulate",
+                "--robot",
+                "datasets/robots/fanuc_r2000ib_210f.toml",
+                "--nongeometric",
+                p.to_str().unwrap(),
+                "--count",
+                "3",
+                "--seed",
+                "1",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            expect,
+        );
+        assert!(!out.exists(), "no NaN poses written");
+    }
+}

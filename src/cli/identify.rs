@@ -136,19 +136,40 @@ pub(super) fn read_sets(
     Ok((set, val))
 }
 
-pub fn run_identify(a: IdentifyArgs) -> Result<()> {
+/// The model and the data of a fit on measurements (`identify`, `train`), after refusing
+/// outputs that name one of its inputs or each other ([`super::paths::guard`]).
+pub(super) fn open_fit(
+    robot: &Path,
+    data: &Path,
+    validate: Option<&PathBuf>,
+    read: &DataArgs,
+    out: &Path,
+    report: Option<&PathBuf>,
+) -> Result<(Robot, MeasurementSet, Option<MeasurementSet>)> {
     use super::paths::{guard, opt, req};
     guard(
         &[
-            req("--robot", &a.robot),
-            req("--data", &a.data),
-            opt("--validate", a.validate.as_ref()),
-            opt("--profile", a.read.profile.as_ref()),
+            req("--robot", robot),
+            req("--data", data),
+            opt("--validate", validate),
+            opt("--profile", read.profile.as_ref()),
         ],
-        &[req("--out", &a.out), opt("--report", a.report.as_ref())],
+        &[req("--out", out), opt("--report", report)],
     )?;
-    let nominal = read_robot(&a.robot)?;
-    let (cal, val) = read_sets(&a.read, &a.data, a.validate.as_deref(), &nominal)?;
+    let model = read_robot(robot)?;
+    let (set, val) = read_sets(read, data, validate.map(|p| p.as_path()), &model)?;
+    Ok((model, set, val))
+}
+
+pub fn run_identify(a: IdentifyArgs) -> Result<()> {
+    let (nominal, cal, val) = open_fit(
+        &a.robot,
+        &a.data,
+        a.validate.as_ref(),
+        &a.read,
+        &a.out,
+        a.report.as_ref(),
+    )?;
     let opts = Options {
         params: a.params.clone(),
         measure: a.measure,

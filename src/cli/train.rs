@@ -2,12 +2,12 @@
 
 use super::compensator_args::{CompensatorArgs, progress_bar};
 use super::data_args::{DataArgs, SigmaArgs};
-use super::identify::{print_stats, read_sets, stats_json, write_json};
+use super::identify::{print_stats, stats_json, write_json};
 use super::output::{OutputArgs, num};
 use crate::evaluate::{row_errors, summarize};
 use crate::identify::Measure;
 use crate::kinematics::{pose_to_file, tool_pose};
-use crate::model::{Robot, read_robot, robot_to_toml};
+use crate::model::{Robot, robot_to_toml};
 use crate::neural::compensator::{Compensator, Network, PredictWorkspace};
 use crate::neural::train::Phase2;
 use crate::neural::tuning::RACE_FOLDS;
@@ -117,18 +117,14 @@ fn print_selection(sel: &Selection) {
 }
 
 pub fn run_train(a: TrainArgs) -> Result<()> {
-    use super::paths::{guard, opt, req};
-    guard(
-        &[
-            req("--robot", &a.robot),
-            req("--data", &a.data),
-            opt("--validate", a.validate.as_ref()),
-            opt("--profile", a.read.profile.as_ref()),
-        ],
-        &[req("--out", &a.out), opt("--report", a.report.as_ref())],
+    let (robot, set, val) = super::identify::open_fit(
+        &a.robot,
+        &a.data,
+        a.validate.as_ref(),
+        &a.read,
+        &a.out,
+        a.report.as_ref(),
     )?;
-    let robot = read_robot(&a.robot)?;
-    let (set, val) = read_sets(&a.read, &a.data, a.validate.as_deref(), &robot)?;
     let terminal = std::io::stderr().is_terminal();
     let opts = a.build.options(a.sigma.sigmas(), terminal)?;
     let bar = progress_bar(terminal);

@@ -34,6 +34,14 @@ use std::fmt::Write as _;
 use std::path::Path;
 use toml::Spanned;
 
+/// Largest length (mm) a robot file may hold: 100 m, far beyond any robot or cell, small
+/// enough that poses stay exact in f64.
+pub const MAX_LENGTH_MM: f64 = 1e5;
+/// Largest angle (deg) of a row's field.
+pub const MAX_ANGLE_DEG: f64 = 720.0;
+/// Largest joint limit (deg) of a revolute joint: four turns either way.
+pub const MAX_JOINT_DEG: f64 = 1440.0;
+
 /// A TOML number: integers are accepted where a float is meant (`d = 670`).
 #[derive(Debug, Clone, Copy)]
 struct Number(f64);
@@ -165,6 +173,21 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
                     format!("{what}: {key} must be finite"),
                 ));
             }
+            let bound = if field.is_angle() {
+                MAX_ANGLE_DEG
+            } else {
+                MAX_LENGTH_MM
+            };
+            if v.abs() > bound {
+                return Err(Error::input(
+                    at(value.span(), key),
+                    format!(
+                        "{what}: {key} = {v} {} is beyond the physical bound of {bound} {}",
+                        field.file_unit(),
+                        field.file_unit()
+                    ),
+                ));
+            }
             row.set_file_value(field, v);
         }
         let joint_type = match &rf.joint_type {
@@ -215,6 +238,27 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
                 }
             },
         };
+        // Searches over the joint range (IK seeds, branch scans) take time in proportion to
+        // its width: +-1e8 deg took minutes. No joint turns more than a few times.
+        let bound = match joint_type {
+            JointType::Revolute => MAX_JOINT_DEG,
+            JointType::Prismatic => MAX_LENGTH_MM,
+        };
+        if limits.iter().any(|v| v.abs() > bound) {
+            let at_limits = rf.limits.as_ref().map_or(
+                Location::at(path, line_of(text, rf.convention.span().start), "limits"),
+                |l| at(l.span(), "limits"),
+            );
+            return Err(Error::input(
+                at_limits,
+                format!(
+                    "{what}: limits [{}, {}] beyond +-{bound} {}",
+                    limits[0],
+                    limits[1],
+                    joint_type.file_unit()
+                ),
+            ));
+        }
         if is_joint {
             match (conv, joint_type) {
                 (Convention::Transform, _) => {

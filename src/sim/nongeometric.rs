@@ -34,6 +34,14 @@ use nalgebra::Vector3;
 use serde::Deserialize;
 use std::path::Path;
 
+/// Largest mass (kg) of a link or payload: heavier than any robot lifts.
+pub const MAX_MASS_KG: f64 = 1e5;
+/// Largest joint error term (mrad: compliance per kN m, gear amplitude, backlash): a radian,
+/// far beyond any real joint.
+pub const MAX_MRAD: f64 = 1e3;
+/// Largest gravity component (m/s^2).
+pub const MAX_GRAVITY: f64 = 100.0;
+
 /// Gravity compliance: deflection proportional to a static gravity torque.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -115,16 +123,53 @@ impl NonGeometric {
                     "compliance: values must be finite and the payload non-negative".into(),
                 );
             }
+            // 1e308 kg passed and gave NaN poses: keep to what a robot can carry and bend.
+            let masses = c
+                .link_masses_kg
+                .iter()
+                .chain(std::iter::once(&c.payload_kg));
+            if masses.clone().any(|m| !(0.0..=MAX_MASS_KG).contains(m))
+                || c.mrad_per_knm.iter().any(|v| v.abs() > MAX_MRAD)
+                || c.gravity.iter().any(|v| v.abs() > MAX_GRAVITY)
+            {
+                return Err(format!(
+                    "compliance: masses must lie in [0, {MAX_MASS_KG}] kg, compliances within \
+                     +-{MAX_MRAD} mrad per kN m and gravity within +-{MAX_GRAVITY} m/s^2"
+                ));
+            }
         }
         for g in &self.gear {
             if g.joint == 0 || g.joint > n {
                 return Err(format!("gear: joint {} does not exist (1..{n})", g.joint));
             }
+            let values = [
+                g.amplitude1_mrad,
+                g.phase1_deg,
+                g.amplitude2_mrad,
+                g.phase2_deg,
+            ];
+            if values.iter().any(|v| !v.is_finite())
+                || g.amplitude1_mrad.abs() > MAX_MRAD
+                || g.amplitude2_mrad.abs() > MAX_MRAD
+                || g.phase1_deg.abs() > 720.0
+                || g.phase2_deg.abs() > 720.0
+            {
+                return Err(format!(
+                    "gear of joint {}: amplitudes must be finite and within +-{MAX_MRAD} mrad, \
+                     phases within +-720 deg",
+                    g.joint
+                ));
+            }
         }
         if let Some(b) = &self.backlash
-            && (b.mrad.len() != n || b.mrad.iter().any(|v| !v.is_finite() || *v < 0.0))
+            && (b.mrad.len() != n
+                || b.mrad
+                    .iter()
+                    .any(|v| !v.is_finite() || *v < 0.0 || *v > MAX_MRAD))
         {
-            return Err(format!("backlash: mrad needs {n} non-negative values"));
+            return Err(format!(
+                "backlash: mrad needs {n} values in [0, {MAX_MRAD}]"
+            ));
         }
         Ok(())
     }
