@@ -174,6 +174,13 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
         assert!(e.contains("does not fit"), "{e}");
         let e = edit(&|v| v["output_norm"]["scale"][0] = serde_json::json!(0.0));
         assert!(e.contains("does not fit"), "{e}");
+        // Finite but absurd: predictions would overflow to infinity.
+        let e = edit(&|v| v["output_norm"]["scale"][0] = serde_json::json!(1e308));
+        assert!(e.contains("does not fit"), "{e}");
+        if c.rbf.is_some() {
+            let e = edit(&|v| v["rbf"]["weights"][0][0] = serde_json::json!(1e300));
+            assert!(e.contains("rbf") || e.contains("RBF"), "{e}");
+        }
         let e = edit(&|v| v["domain"]["radius"] = serde_json::json!(-1.0));
         assert!(e.contains("domain"), "{e}");
         if let Some(w) = c.members.first() {

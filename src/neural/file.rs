@@ -22,6 +22,8 @@ use std::path::Path;
 const FORMAT: &str = "robocal-compensator";
 const VERSION: u64 = 3;
 /// The oldest version this robocal reads.
+/// Largest weight magnitude a compensator file may hold (trained weights stay far below).
+pub const WEIGHT_BOUND: f64 = 1e9;
 const OLDEST: u64 = 2;
 
 impl Compensator {
@@ -138,8 +140,15 @@ impl Compensator {
             let bytes = unhex(r.as_str().unwrap_or_default())
                 .ok_or_else(|| bad(format!("network record {} is not hex", k + 1)))?;
             let w = weights_from_record(&bytes, ni, nh, no).map_err(|e| bad(e.to_string()))?;
-            if w.to_vector().iter().any(|x| !x.is_finite()) {
-                return Err(bad(format!("network {} has a non-finite weight", k + 1)));
+            // Finite but huge weights overflow in the first product: bound them too.
+            if w.to_vector()
+                .iter()
+                .any(|x| x.is_nan() || x.abs() > WEIGHT_BOUND)
+            {
+                return Err(bad(format!(
+                    "network {} has a non-finite weight or one beyond +-{WEIGHT_BOUND:e}",
+                    k + 1
+                )));
             }
             members.push(w);
         }
@@ -150,7 +159,8 @@ impl Compensator {
         };
         if rbf.as_ref().is_some_and(|r| !r.is_valid(ni, no)) {
             return Err(bad(
-                "the RBF network does not fit the inputs and outputs or holds a non-finite number"
+                "the RBF network does not fit the inputs and outputs, or holds a non-finite or \
+                 out-of-bounds number"
                     .into(),
             ));
         }

@@ -108,10 +108,18 @@ impl Rbf {
         (-0.5 * s).exp()
     }
 
-    /// Whether every number is finite and the shapes agree with `inputs` and `outputs`.
+    /// Whether every number is finite and bounded (a finite 1e308 overflows in prediction)
+    /// and the shapes agree with `inputs` and `outputs`.
     pub fn is_valid(&self, inputs: usize, outputs: usize) -> bool {
+        let bound = super::file::WEIGHT_BOUND;
+        let small = |v: &f64| v.abs() <= bound;
         self.widths.len() == inputs
-            && self.widths.iter().all(|l| l.is_finite() && *l > 0.0)
+            && self
+                .widths
+                .iter()
+                .all(|l| (1.0 / bound..=bound).contains(l))
+            && self.centres.iter().flatten().all(small)
+            && self.weights.iter().flatten().all(small)
             && self.centres.len() == self.weights.len()
             && !self.centres.is_empty()
             && self

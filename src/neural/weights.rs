@@ -153,6 +153,9 @@ impl Weights {
     }
 }
 
+/// Bound on a normalisation's offsets and scales (and their inverse for scales).
+pub const NORM_BOUND: f64 = 1e9;
+
 /// An affine normalisation of each feature, v_norm = (v - offset) / scale, fitted on training
 /// data and stored with the network.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -209,11 +212,17 @@ impl Affine {
         }
     }
 
-    /// True when every offset is finite and every scale finite and positive.
+    /// True when every offset lies within +-[`NORM_BOUND`] and every scale in
+    /// [1 / [`NORM_BOUND`], [`NORM_BOUND`]]: features and outputs are rad, mm and mrad of a
+    /// robot, and a normalisation of 1e308 (finite, yet overflowing in the first product)
+    /// would make predictions infinite.
     pub fn is_valid(&self) -> bool {
         self.offset.len() == self.scale.len()
-            && self.offset.iter().all(|v| v.is_finite())
-            && self.scale.iter().all(|v| v.is_finite() && *v > 0.0)
+            && self.offset.iter().all(|v| v.abs() <= NORM_BOUND)
+            && self
+                .scale
+                .iter()
+                .all(|v| (1.0 / NORM_BOUND..=NORM_BOUND).contains(v))
     }
 }
 
