@@ -8,11 +8,30 @@ const UR10: &str = "datasets/robots/ur10.toml";
 
 /// The command fails cleanly: nonzero exit, no panic, and the message says `expect`.
 fn refused(args: &[&str], expect: &str) {
+    refused_saying(args, &[expect]);
+}
+
+/// As [`refused`], the message saying each of `expect`.
+fn refused_saying(args: &[&str], expect: &[&str]) {
     let o = robocal(args);
     let err = stderr(&o);
     assert!(!o.status.success(), "{args:?} succeeded");
     assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
-    assert!(err.contains(expect), "{args:?}: {err}");
+    for e in expect {
+        assert!(err.contains(e), "{args:?}: {err}");
+    }
+}
+
+/// The text of a shipped file and its first line starting with `prefix`.
+fn shipped(rel: &str, prefix: &str) -> (String, String) {
+    let text = std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(rel))
+        .unwrap();
+    let line = text
+        .lines()
+        .find(|l| l.trim_start().starts_with(prefix))
+        .unwrap()
+        .to_string();
+    (text, line)
 }
 
 #[test]
@@ -298,38 +317,29 @@ fn region_rows_are_pairs_and_errors_name_their_line() {
         "--out",
         out.to_str().unwrap(),
     ];
-    refused(&args, "2 numbers (got 3)");
-    refused(&args, ":4");
+    refused_saying(&args, &["2 numbers (got 3)", &format!("{r}:4")]);
 }
 
 #[test]
 fn robot_values_beyond_physical_bounds_are_refused_at_load() {
-    let text = std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(UR10))
-        .unwrap();
-    let first_limits = text
-        .lines()
-        .find(|l| l.trim_start().starts_with("limits"))
-        .unwrap();
-    let first_d = text
-        .lines()
-        .find(|l| l.trim_start().starts_with("d ="))
-        .unwrap();
+    let (text, first_limits) = shipped(UR10, "limits");
+    let (_, first_d) = shipped(UR10, "d =");
     for (name, bad, expect) in [
         (
             "wide_limits.toml",
-            text.replacen(first_limits, "limits = [-1e308, 1e308]", 1),
+            text.replacen(&first_limits, "limits = [-1e308, 1e308]", 1),
             "beyond +-1440 deg",
         ),
         (
             "long_d.toml",
-            text.replacen(first_d, "d = 1e308", 1),
+            text.replacen(&first_d, "d = 1e308", 1),
             "beyond the physical bound",
         ),
     ] {
         let p = common::tmp(name);
         std::fs::write(&p, bad).unwrap();
         // ik over +-1e308 deg never returned; now the file is refused with its line.
-        refused(
+        refused_saying(
             &[
                 "ik",
                 "--robot",
@@ -337,32 +347,17 @@ fn robot_values_beyond_physical_bounds_are_refused_at_load() {
                 "--pose",
                 "500,200,800,0,180,0",
             ],
-            expect,
-        );
-        refused(
-            &[
-                "ik",
-                "--robot",
-                p.to_str().unwrap(),
-                "--pose",
-                "500,200,800,0,180,0",
-            ],
-            &format!("{name}:"),
+            &[expect, &format!("{name}:")],
         );
     }
 }
 
 #[test]
 fn nongeometric_values_are_finite_and_bounded_at_load() {
-    let text = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("datasets/nongeometric/fanuc_compliance_gear.toml"),
-    )
-    .unwrap();
-    let masses = text
-        .lines()
-        .find(|l| l.starts_with("link_masses_kg"))
-        .unwrap();
+    let (text, masses) = shipped(
+        "datasets/nongeometric/fanuc_compliance_gear.toml",
+        "link_masses_kg",
+    );
     for (name, bad, expect) in [
         (
             "gear_nan.toml",
@@ -371,7 +366,7 @@ fn nongeometric_values_are_finite_and_bounded_at_load() {
         ),
         (
             "mass_huge.toml",
-            text.replacen(masses, "link_masses_kg = [1e308, 1, 1, 1, 1, 1]", 1),
+            text.replacen(&masses, "link_masses_kg = [1e308, 1, 1, 1, 1, 1]", 1),
             "masses must lie in",
         ),
     ] {

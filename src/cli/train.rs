@@ -90,12 +90,7 @@ fn print_selection(sel: &Selection) {
             ),
             (None, None) => "failed".to_string(),
         };
-        // The RBF network's search start is counted from 1, as `describe` does.
-        let network = match (s.network, s.rbf_start) {
-            (Network::Mlp, _) => "mlp".to_string(),
-            (n, Some(k)) => format!("{} {}", n.name(), k + 1),
-            (n, None) => n.name().to_string(),
-        };
+        let network = s.network_label();
         let mlp = s.network != Network::Rbf;
         let dash = |show: bool, v: String| if show { v } else { "-".into() };
         println!(

@@ -162,6 +162,16 @@ impl Settings {
         }
     }
 
+    /// The network and its RBF search start, counted from 1 as in [`Settings::describe`]:
+    /// `mlp`, `rbf 2`, `mix 1`.
+    pub fn network_label(&self) -> String {
+        match (self.network, self.rbf_start) {
+            (Network::Mlp, _) => "mlp".into(),
+            (n, Some(k)) => format!("{} {}", n.name(), k + 1),
+            (n, None) => n.name().into(),
+        }
+    }
+
     /// Whether these settings carry a network at all.
     pub fn has_network(&self) -> bool {
         self.members > 0 || self.network == Network::Mix
@@ -309,11 +319,6 @@ pub(crate) fn parallel_map<T: Send>(n: usize, f: impl Fn(usize) -> T + Sync) -> 
 impl Compensator {
     pub fn inputs(&self) -> usize {
         self.input_norm.len()
-    }
-
-    /// Networks whose outputs are averaged: the MLPs and the RBF network.
-    pub fn network_count(&self) -> usize {
-        self.members.len() + usize::from(self.rbf.is_some())
     }
 
     /// Hidden units of each MLP (0 without MLPs).

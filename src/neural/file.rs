@@ -13,7 +13,7 @@ use super::domain::Domain;
 use super::encoding::Encoding;
 use super::net::{record_bytes, weights_from_record};
 use super::rbf::Rbf;
-use super::weights::Affine;
+use super::weights::{Affine, VALUE_BOUND};
 use crate::error::{Error, Location, Result};
 use crate::model::robot_to_toml;
 use serde_json::Value;
@@ -22,17 +22,16 @@ use std::path::Path;
 const FORMAT: &str = "robocal-compensator";
 const VERSION: u64 = 3;
 /// The oldest version this robocal reads.
-/// Largest weight magnitude a compensator file may hold (trained weights stay far below).
-pub const WEIGHT_BOUND: f64 = 1e9;
 const OLDEST: u64 = 2;
 
 impl Compensator {
     /// The compensator file's text.
     pub fn to_file_text(&self) -> Result<String> {
+        // The bounds the reader checks: a file is never written that cannot be read back.
         let finite = self
             .members
             .iter()
-            .all(|w| w.to_vector().iter().all(|v| v.is_finite()))
+            .all(|w| w.to_vector().iter().all(|v| v.abs() <= VALUE_BOUND))
             && self.input_norm.is_valid()
             && self.output_norm.is_valid()
             && self.domain.is_valid(self.robot.dof(), self.inputs())
@@ -42,8 +41,8 @@ impl Compensator {
                 .is_none_or(|r| r.is_valid(self.inputs(), self.outputs()));
         if !finite {
             return Err(Error::Invalid(
-                "the compensator holds a non-finite weight, normalisation or domain value; \
-                 nothing was written"
+                "the compensator holds a non-finite or out-of-bounds weight, normalisation or \
+                 domain value; nothing was written"
                     .into(),
             ));
         }
@@ -143,10 +142,10 @@ impl Compensator {
             // Finite but huge weights overflow in the first product: bound them too.
             if w.to_vector()
                 .iter()
-                .any(|x| x.is_nan() || x.abs() > WEIGHT_BOUND)
+                .any(|x| x.is_nan() || x.abs() > VALUE_BOUND)
             {
                 return Err(bad(format!(
-                    "network {} has a non-finite weight or one beyond +-{WEIGHT_BOUND:e}",
+                    "network {} has a non-finite weight or one beyond +-{VALUE_BOUND:e}",
                     k + 1
                 )));
             }

@@ -93,7 +93,9 @@ impl Compensator {
     /// present: y = (mean_m y_m + y_rbf) / 2. False (and `ws.out` zero) without networks.
     fn mean_output(&self, ws: &mut PredictWorkspace, derivatives: bool) -> bool {
         ws.y_sum.fill(0.0);
-        ws.dy_sum.fill(0.0);
+        if derivatives {
+            ws.dy_sum.fill(0.0);
+        }
         for w in &self.members {
             if derivatives {
                 w.input_jacobian_into(&ws.x, &mut ws.h, &mut ws.y, &mut ws.dy);

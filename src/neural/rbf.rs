@@ -59,14 +59,6 @@ pub struct Rbf {
 pub type Hyper = DVector<f64>;
 
 impl Rbf {
-    pub fn inputs(&self) -> usize {
-        self.widths.len()
-    }
-
-    pub fn outputs(&self) -> usize {
-        self.weights.first().map_or(0, |w| w.len())
-    }
-
     pub fn units(&self) -> usize {
         self.centres.len()
     }
@@ -111,7 +103,7 @@ impl Rbf {
     /// Whether every number is finite and bounded (a finite 1e308 overflows in prediction)
     /// and the shapes agree with `inputs` and `outputs`.
     pub fn is_valid(&self, inputs: usize, outputs: usize) -> bool {
-        let bound = super::file::WEIGHT_BOUND;
+        let bound = super::weights::VALUE_BOUND;
         let small = |v: &f64| v.abs() <= bound;
         self.widths.len() == inputs
             && self
@@ -155,8 +147,7 @@ impl Rbf {
                 d + 2
             )));
         }
-        let rows: Vec<usize> = (0..n).collect();
-        let k = kernel(&s.x, &rows, h);
+        let k = kernel(&s.x, h);
         let chol = k.llt(Side::Lower).map_err(|_| {
             Error::Invalid("the RBF network's kernel matrix is not positive definite".into())
         })?;
@@ -276,7 +267,7 @@ pub fn search(s: &Samples, start: usize, seed: u64) -> Result<Search> {
     Ok(Search { hyper, objective })
 }
 
-/// The searches from every start (two at a time) and the one of highest likelihood.
+/// The searches from every start (in parallel) and the one of highest likelihood.
 pub fn search_best(s: &Samples, seed: u64) -> Result<Search> {
     let all = super::compensator::parallel_map(STARTS.len(), |k| search(s, k, seed));
     let mut best: Option<Search> = None;
@@ -300,19 +291,18 @@ fn prior_mean(d: usize, var: f64) -> Hyper {
     m
 }
 
-/// K = s^2 E + (sigma^2 + jitter) I at the inputs `x[rows]` under `h` (E the unit
-/// responses).
-fn kernel(x: &[Vec<f64>], rows: &[usize], h: &Hyper) -> Mat<f64> {
-    let n = rows.len();
+/// K = s^2 E + (sigma^2 + jitter) I at the inputs `x` under `h` (E the unit responses).
+fn kernel(x: &[Vec<f64>], h: &Hyper) -> Mat<f64> {
+    let n = x.len();
     let d = h.len() - 2;
     let w: Vec<f64> = (0..d).map(|j| (-2.0 * h[j]).exp()).collect();
     let (s2, noise) = (h[d].exp(), h[d + 1].exp());
     let mut k = Mat::<f64>::zeros(n, n);
     for j in 0..n {
-        let xj = &x[rows[j]];
+        let xj = &x[j];
         k[(j, j)] = s2 + noise + 1e-8 * s2;
         for i in j + 1..n {
-            let xi = &x[rows[i]];
+            let xi = &x[i];
             let q: f64 = (0..d).map(|c| (xi[c] - xj[c]).powi(2) * w[c]).sum();
             let v = s2 * (-0.5 * q).exp();
             k[(i, j)] = v;

@@ -15,8 +15,9 @@
 //! with gravity inputs at the middle size and penalty, then the penalty decade and the other
 //! encodings; (2) hidden units, then a finer penalty step; (3) the ensemble, kept where it
 //! lowers the cross-validated error, then the RBF network from each search start, alone and
-//! averaged with the best pose-form MLPs (its hyperparameters searched once on all training
-//! rows, beside stages 2 and 3; the folds fit only its weights); (4) refinement; (5) no
+//! averaged with the best pose-form MLPs (its hyperparameters searched once on the training
+//! rows, at most [`rbf::HYPER_ROWS`] of them, beside stages 2 and 3; the folds fit only its
+//! weights); (4) refinement; (5) no
 //! network at all. Candidates are fitted
 //! with a phase 2 of fixed work ([`CV_WORK`]) and without phase 1, and raced: each is scored
 //! on [`RACE_FOLDS`] folds first and dropped there when it is more than [`RACE_MARGIN`] worse
@@ -26,7 +27,7 @@ use super::compensator::{
     Compensator, CompensatorOptions, Form, Network, Refine, Settings, parallel_map,
 };
 use super::encoding::Encoding;
-use super::rbf::{self, Hyper, Rbf};
+use super::rbf::{self, Hyper};
 use super::refine::refine;
 use super::targets::build;
 use super::train::TrainOptions;
@@ -230,7 +231,12 @@ struct Cv<'a> {
     /// start); the folds fit only the weights.
     set: &'a MeasurementSet,
     hypers: Mutex<HashMap<(Encoding, usize), std::result::Result<Hyper, String>>>,
+    /// The RBF network alone of each (refinement, encoding, start, fold).
+    rbf_fits: Mutex<HashMap<RbfKey, Compensator>>,
 }
+
+/// (refinement, encoding, search start, fold) of a fold's RBF fit.
+type RbfKey = (Option<String>, Encoding, usize, usize);
 
 /// A network and the phase-2 epochs behind it.
 type Worked = (Weights, usize);
@@ -280,32 +286,56 @@ impl Cv<'_> {
         round: usize,
     ) -> Result<Compensator> {
         if settings.has_rbf() {
-            let h = self.hyper(settings.encoding, settings.rbf_start.unwrap_or(0))?;
+            let start = settings.rbf_start.unwrap_or(0);
+            // The RBF network of one fold, shared by the candidate alone and mixed: one
+            // factorisation per (refinement, encoding, start, fold).
+            let key = (settings.refine.clone(), settings.encoding, start, fold);
+            let cached = self.rbf_fits.lock().ok().and_then(|f| f.get(&key).cloned());
+            let alone = match cached {
+                Some(c) => c,
+                None => {
+                    let rbf = Settings {
+                        network: Network::Rbf,
+                        form: Form::Pose,
+                        hidden: 0,
+                        penalty: 0.0,
+                        members: 1,
+                        rbf_start: Some(start),
+                        refine: None,
+                        ..settings.clone()
+                    };
+                    let train = TrainOptions {
+                        progress: false,
+                        rbf_hyper: Some(self.hyper(settings.encoding, start)?),
+                        ..self.opts.train.clone()
+                    };
+                    let c = Compensator::fit_with(
+                        model,
+                        &self.train[fold],
+                        &rbf,
+                        &train,
+                        false,
+                        false,
+                        0,
+                    )?
+                    .0;
+                    if let Ok(mut f) = self.rbf_fits.lock() {
+                        f.insert(key, c.clone());
+                    }
+                    c
+                }
+            };
+            if settings.network != Network::Mix || settings.members == 0 {
+                return Ok(alone);
+            }
+            // The MLPs' fit has the same normalisations (same rows, model, form and inputs).
             let mlp = Settings {
                 network: Network::Mlp,
                 rbf_start: None,
-                members: if settings.network == Network::Mix {
-                    settings.members
-                } else {
-                    0
-                },
                 ..settings.clone()
             };
-            let mut c = if mlp.members > 0 {
-                self.fit(fold, &mlp, model, round)?
-            } else {
-                let plain = Settings {
-                    refine: None,
-                    ..mlp
-                };
-                let train = TrainOptions {
-                    progress: false,
-                    ..self.opts.train.clone()
-                };
-                Compensator::fit_with(model, &self.train[fold], &plain, &train, false, false, 0)?.0
-            };
-            let problem = build(model, &self.train[fold], Form::Pose, settings.encoding)?;
-            c.rbf = Some(Rbf::with_hyper(&problem.samples, &h)?);
+            let mut c = self.fit(fold, &mlp, model, round)?;
+            c.rbf = alone.rbf;
             return Ok(c);
         }
         let key_all = (settings.describe(), fold);
@@ -516,6 +546,7 @@ pub fn select_settings(
         fitted: Mutex::new(HashMap::new()),
         set,
         hypers: Mutex::new(HashMap::new()),
+        rbf_fits: Mutex::new(HashMap::new()),
     };
     let rounds = AtomicUsize::new(0);
     let mut model = Sums::default();
@@ -732,9 +763,15 @@ pub fn select_settings(
         searches(&cv, &list);
         evaluate(3, list, &mut candidates);
         chosen = if mix_only {
-            // The network is fixed: the best of its own candidates.
-            let own = first..candidates.len();
-            better(&candidates, first, own)
+            // The network is fixed: the best of its own candidates, which need pose-form MLPs.
+            if !(first..candidates.len()).any(|i| candidates[i].score.is_some()) {
+                return Err(Error::Invalid(
+                    "--network mix: no pose-form MLP was fitted to mix the RBF network with \
+                     (--members 0, or every MLP candidate failed)"
+                        .into(),
+                ));
+            }
+            better(&candidates, first, first..candidates.len())
         } else {
             better(&candidates, chosen, first..candidates.len())
         };
@@ -815,7 +852,7 @@ fn best_pose_mlp(candidates: &[Candidate]) -> Option<usize> {
         })
 }
 
-/// The RBF hyperparameter searches `list` needs, run two at a time before its fold fits
+/// The RBF hyperparameter searches `list` needs, run in parallel before its fold fits
 /// (which would otherwise wait on one another for them).
 fn searches(cv: &Cv, list: &[Settings]) {
     let mut keys: Vec<(Encoding, usize)> = list

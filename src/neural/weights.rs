@@ -153,8 +153,10 @@ impl Weights {
     }
 }
 
-/// Bound on a normalisation's offsets and scales (and their inverse for scales).
-pub const NORM_BOUND: f64 = 1e9;
+/// Bound on every number a compensator stores: weights, normalisation offsets and scales (and
+/// the inverse of a scale). Trained values stay far below; a finite 1e308 would overflow to
+/// an infinite prediction in the first product.
+pub const VALUE_BOUND: f64 = 1e9;
 
 /// An affine normalisation of each feature, v_norm = (v - offset) / scale, fitted on training
 /// data and stored with the network.
@@ -212,17 +214,15 @@ impl Affine {
         }
     }
 
-    /// True when every offset lies within +-[`NORM_BOUND`] and every scale in
-    /// [1 / [`NORM_BOUND`], [`NORM_BOUND`]]: features and outputs are rad, mm and mrad of a
-    /// robot, and a normalisation of 1e308 (finite, yet overflowing in the first product)
-    /// would make predictions infinite.
+    /// True when every offset lies within +-[`VALUE_BOUND`] and every scale in
+    /// [1 / [`VALUE_BOUND`], [`VALUE_BOUND`]].
     pub fn is_valid(&self) -> bool {
         self.offset.len() == self.scale.len()
-            && self.offset.iter().all(|v| v.abs() <= NORM_BOUND)
+            && self.offset.iter().all(|v| v.abs() <= VALUE_BOUND)
             && self
                 .scale
                 .iter()
-                .all(|v| (1.0 / NORM_BOUND..=NORM_BOUND).contains(v))
+                .all(|v| (1.0 / VALUE_BOUND..=VALUE_BOUND).contains(v))
     }
 }
 
