@@ -19,6 +19,7 @@ pub mod report;
 pub mod reproduce;
 pub mod rotation;
 pub mod sim;
+pub mod stats;
 
 pub use error::{Error, Result};
 pub use kinematics::Pose;

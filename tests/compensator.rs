@@ -408,3 +408,59 @@ fn default_selection_races_candidates() {
         .collect();
     assert_eq!(alone, vec![(None, true), (Some("full".into()), true)]);
 }
+
+/// A mis-measured training row (3 mm off in x) is listed as an outlier of the
+/// cross-validated error, by its line, and the clean set lists none; kept by default, left out of the final fit with
+/// `drop_outliers`, where the compensated pose of that configuration then lies nearer its
+/// true measurement.
+#[test]
+fn a_mis_measured_training_row_is_listed_and_can_be_left_out() {
+    let nominal = read_robot(root().join("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
+    let rd = |p: &str| read_canonical(&root().join(p), &nominal).unwrap();
+    let (cal, clean) = (
+        rd("datasets/case_d/calibration.csv"),
+        rd("datasets/case_d/training.csv"),
+    );
+    let params = Options {
+        params: "offsets".into(),
+        ..Default::default()
+    };
+    let model = identify(&nominal, &cal, &params).unwrap().robot;
+    let bad = 40;
+    let mut train = clean.clone();
+    if let Some(p) = train.rows[bad].position.as_mut() {
+        p.x += 3.0;
+    }
+    let opts = CompensatorOptions::default();
+    let (kept, report) = Compensator::train(&model, &train, &opts, &|_, _| {}).unwrap();
+    let sel = report.selection.unwrap();
+    let listed: Vec<usize> = sel.outliers.iter().map(|o| o.row).collect();
+    assert_eq!(listed, vec![bad], "{:?}", sel.outliers);
+    assert_eq!(sel.outliers[0].line, train.rows[bad].line);
+    assert!(sel.outliers[0].robust_sigmas > sel.outlier_k);
+    assert!(report.notes.iter().any(|n| n.contains("kept")));
+    let drop = CompensatorOptions {
+        drop_outliers: true,
+        ..Default::default()
+    };
+    let (dropped, report) = Compensator::train(&model, &train, &drop, &|_, _| {}).unwrap();
+    assert!(report.notes.iter().any(|n| n.contains("left out")));
+    let mut ws = PredictWorkspace::default();
+    let truth = clean.rows[bad].position.unwrap();
+    let miss = |c: &Compensator, ws: &mut PredictWorkspace| {
+        (c.predict(&clean.rows[bad].q, ws).translation.vector - truth).norm()
+    };
+    let (k, d) = (miss(&kept, &mut ws), miss(&dropped, &mut ws));
+    assert!(d < k, "left out {d} mm, kept {k} mm");
+    // Without the cut, nothing is listed.
+    let none = CompensatorOptions {
+        outlier_k: f64::INFINITY,
+        ..Default::default()
+    };
+    let (_, report) = Compensator::train(&model, &train, &none, &|_, _| {}).unwrap();
+    assert!(report.selection.unwrap().outliers.is_empty());
+    // Simulated tracker noise alone lists nothing.
+    let (_, report) = Compensator::train(&model, &clean, &opts, &|_, _| {}).unwrap();
+    let sel = report.selection.unwrap();
+    assert!(sel.outliers.is_empty(), "{:?}", sel.outliers);
+}

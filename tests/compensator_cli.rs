@@ -235,6 +235,8 @@ fn train_refuses_bad_input_and_predict_refuses_a_corrupt_compensator() {
         ("--members", "51"),
         ("--folds", "1"),
         ("--validation-fraction", "1"),
+        ("--outlier-k", "nan"),
+        ("--outlier-k", "1"),
     ] {
         let o = robocal(&[
             "train",

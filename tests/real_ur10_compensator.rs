@@ -388,7 +388,8 @@ fn series_a_pool_2000() {
     );
 }
 
-/// Series B with other pool sizes and seeds (POOL, SEEDS env): identification on the pool
+/// Series B with other pool sizes and seeds (POOL, SEEDS env; OUTLIER_K, DROP for the
+/// outlier options): identification on the pool
 /// itself when POOL <= 500, else on 500 of it.
 #[test]
 #[ignore = "experiment"]
@@ -417,8 +418,14 @@ fn series_b_pools() {
         );
         let base = stats(&baseline(&model, &pool), &val);
         let t = Instant::now();
-        let (c, rep) =
-            Compensator::train(&model, &pool, &CompensatorOptions::default(), &|_, _| {}).unwrap();
+        let opts = CompensatorOptions {
+            outlier_k: std::env::var("OUTLIER_K")
+                .map(|v| v.parse().unwrap())
+                .unwrap_or(robocal::neural::tuning::OUTLIER_K),
+            drop_outliers: std::env::var("DROP").is_ok(),
+            ..Default::default()
+        };
+        let (c, rep) = Compensator::train(&model, &pool, &opts, &|_, _| {}).unwrap();
         let d = stats(&c, &val);
         let (m, b, dd) = (
             plain.position_mm.unwrap(),
@@ -437,6 +444,9 @@ fn series_b_pools() {
             t.elapsed().as_secs_f64(),
             rep.settings.describe()
         );
+        if let Some(sel) = &rep.selection {
+            println!("  outliers listed: {}", sel.outliers.len());
+        }
         if std::env::var("TABLE").is_ok() {
             let sel = rep.selection.as_ref().unwrap();
             println!("  model alone cv {:.4}", sel.model.position_rms_mm);

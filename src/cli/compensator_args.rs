@@ -90,6 +90,15 @@ pub struct CompensatorArgs {
     /// stopping rule (0 to 0.5; 0: none, the penalty regularises and every row trains).
     #[arg(long, default_value_t = 0.0)]
     pub validation_fraction: f64,
+    /// Training rows whose cross-validated error exceeds this many robust sigmas (1.4826 x
+    /// the median) are listed as outliers (at least 2; `inf` lists none). Needs
+    /// cross-validation: with every choice fixed, no row is listed.
+    #[arg(long, default_value_t = crate::neural::tuning::OUTLIER_K)]
+    pub outlier_k: f64,
+    /// Leave the listed outliers out of the final fit (default: keep them; one sample
+    /// cannot tell a mis-measured row from a sharp feature of the robot).
+    #[arg(long)]
+    pub drop_outliers: bool,
 }
 
 impl CompensatorArgs {
@@ -132,6 +141,12 @@ impl CompensatorArgs {
             bail!(
                 "--validation-fraction {}: give a fraction from 0 to 0.5",
                 self.validation_fraction
+            );
+        }
+        if self.outlier_k.is_nan() || self.outlier_k < 2.0 {
+            bail!(
+                "--outlier-k {}: give a cut of at least 2 robust sigmas (inf keeps every row)",
+                self.outlier_k
             );
         }
         let refine = match self.refine.as_str() {
@@ -188,6 +203,8 @@ impl CompensatorArgs {
                 progress,
                 ..Default::default()
             },
+            outlier_k: self.outlier_k,
+            drop_outliers: self.drop_outliers,
             budget: self.max_epochs.is_none(),
         })
     }

@@ -11,6 +11,7 @@ use super::solve::{Method, Solution, SolveOptions, StopReason, covariance, solve
 use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
 use crate::model::{Convention, ParamId, Robot, Slot};
+use crate::stats::median;
 use nalgebra::Matrix6xX;
 
 /// Robust loss for iteratively reweighted least squares.
@@ -131,19 +132,6 @@ fn normalized_residuals(robot: &Robot, obs: &Observations) -> Vec<f64> {
                 .sqrt()
         })
         .collect()
-}
-
-fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(|a, b| a.total_cmp(b));
-    let n = s.len();
-    if n == 0 {
-        0.0
-    } else if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
 }
 
 pub(crate) fn file_value(id: &ParamId, v: f64) -> f64 {

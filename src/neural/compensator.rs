@@ -221,6 +221,12 @@ pub struct CompensatorOptions {
     /// The training procedure of every network; its `hidden` and `penalty` are overridden by
     /// the settings.
     pub train: TrainOptions,
+    /// Robust sigmas of the cross-validated error beyond which a training row is listed as
+    /// an outlier ([`super::tuning::OUTLIER_K`]; infinite lists none). Applies where
+    /// cross-validation runs.
+    pub outlier_k: f64,
+    /// Leave the listed outliers out of the final fit.
+    pub drop_outliers: bool,
     /// Phase-2 epoch limits from the row count ([`super::tuning::CV_WORK`] for candidates,
     /// [`super::tuning::FIT_WORK`] for the final fit) instead of `train.max_epochs`.
     pub budget: bool,
@@ -240,6 +246,8 @@ impl Default for CompensatorOptions {
             sigmas: Sigmas::default(),
             folds: None,
             train: TrainOptions::default(),
+            outlier_k: super::tuning::OUTLIER_K,
+            drop_outliers: false,
             budget: true,
         }
     }
@@ -457,7 +465,18 @@ impl Compensator {
                 .filter(|_| settings.refine.is_none()),
             ..opts.train.clone()
         };
-        let (c, mut report) = Compensator::fit(robot, set, &settings, opts.sigmas, &train)?;
+        // Rows cross-validation listed as outliers stay out of the final fit when asked.
+        let kept;
+        let fit_set = match &selection {
+            Some(s) if opts.drop_outliers && !s.outliers.is_empty() => {
+                let out: std::collections::HashSet<usize> =
+                    s.outliers.iter().map(|o| o.row).collect();
+                kept = super::tuning::subset(set, |i| !out.contains(&i));
+                &kept
+            }
+            _ => set,
+        };
+        let (c, mut report) = Compensator::fit(robot, fit_set, &settings, opts.sigmas, &train)?;
         if let Some(s) = &selection {
             report.notes.extend(s.notes.iter().cloned());
         }
