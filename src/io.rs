@@ -1,21 +1,141 @@
-//! File output that never leaves a half-written file behind.
+//! File output that never leaves a half-written file behind, and a command's outputs that
+//! appear together or not at all ([`all_or_nothing`]).
 
 use crate::error::{Error, Location, Result};
+use std::cell::RefCell;
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// A write waiting for its transaction: the complete temporary file beside its destination.
+struct Staged {
+    path: PathBuf,
+    tmp: tempfile::NamedTempFile,
+    bytes: Vec<u8>,
+}
+
+/// The open transaction of this thread: its staged writes and the folders it created.
+#[derive(Default)]
+struct Transaction {
+    writes: Vec<Staged>,
+    dirs: Vec<PathBuf>,
+}
+
+thread_local! {
+    static OPEN: RefCell<Option<Transaction>> = const { RefCell::new(None) };
+}
 
 /// Writes `bytes` to `path` through a temporary file in the same folder and a rename, so that
-/// a reader sees either the old file or the whole new one.
+/// a reader sees either the old file or the whole new one. Inside [`all_or_nothing`] the
+/// rename waits for the transaction's end (a later write of the same path replaces it).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(|e| Error::io(dir, e))?;
-    tmp.write_all(bytes).map_err(|e| Error::io(path, e))?;
-    tmp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
-    tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
+    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(|e| Error::io(path, bare(e)))?;
+    tmp.write_all(bytes).map_err(|e| Error::io(path, bare(e)))?;
+    tmp.as_file()
+        .sync_all()
+        .map_err(|e| Error::io(path, bare(e)))?;
+    let staged = OPEN.with_borrow_mut(|open| match open {
+        Some(t) => {
+            t.writes.retain(|w| w.path != path);
+            t.writes.push(Staged {
+                path: path.to_path_buf(),
+                tmp,
+                bytes: bytes.to_vec(),
+            });
+            None
+        }
+        None => Some(tmp),
+    });
+    if let Some(tmp) = staged {
+        tmp.persist(path)
+            .map_err(|e| Error::io(path, bare(e.error)))?;
+    }
     Ok(())
+}
+
+/// The OS error without the temporary file's name that `tempfile` wraps around it: the
+/// destination is named once, by [`Error::io`].
+fn bare(e: std::io::Error) -> std::io::Error {
+    // tempfile's wrapper keeps the OS error only in its text: "... (os error N) at path P".
+    let code = e.raw_os_error().or_else(|| {
+        let text = e.get_ref()?.to_string();
+        let at = text.find("(os error ")? + "(os error ".len();
+        text[at..].split(')').next()?.parse().ok()
+    });
+    match code {
+        Some(c) => std::io::Error::from_raw_os_error(c),
+        None => std::io::Error::new(e.kind(), e.kind().to_string()),
+    }
+}
+
+/// The bytes the open transaction will write to `path`, if it staged any: a read-modify-write
+/// (a folder's figure list) sees the transaction's own earlier writes.
+pub fn staged_bytes(path: &Path) -> Option<Vec<u8>> {
+    OPEN.with_borrow(|open| {
+        open.as_ref()?
+            .writes
+            .iter()
+            .find(|w| w.path == path)
+            .map(|w| w.bytes.clone())
+    })
+}
+
+/// Creates `dir` and its missing parents; inside [`all_or_nothing`] the folders created are
+/// removed again (when empty) if the transaction fails.
+pub fn create_dir_all(dir: &Path) -> Result<()> {
+    let mut missing = Vec::new();
+    let mut d = Some(dir);
+    while let Some(p) = d {
+        if p.as_os_str().is_empty() || p.exists() {
+            break;
+        }
+        missing.push(p.to_path_buf());
+        d = p.parent();
+    }
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    OPEN.with_borrow_mut(|open| {
+        if let Some(t) = open {
+            t.dirs.extend(missing);
+        }
+    });
+    Ok(())
+}
+
+/// Runs `f` as one transaction: every [`write_atomic`] inside it is renamed into place only
+/// when `f` succeeds, so a command's outputs appear together or not at all. On failure the
+/// temporary files are deleted and the folders [`create_dir_all`] made are removed when empty.
+/// Nested calls join the outer transaction.
+pub fn all_or_nothing<T, E: From<Error>>(
+    f: impl FnOnce() -> std::result::Result<T, E>,
+) -> std::result::Result<T, E> {
+    if OPEN.with_borrow(|open| open.is_some()) {
+        return f();
+    }
+    OPEN.set(Some(Transaction::default()));
+    let result = f();
+    let t = OPEN.take().unwrap_or_default();
+    match result {
+        Ok(v) => {
+            for w in t.writes {
+                let path = w.path;
+                w.tmp
+                    .persist(&path)
+                    .map_err(|e| Error::io(&path, bare(e.error)))?;
+            }
+            Ok(v)
+        }
+        Err(e) => {
+            drop(t.writes);
+            // Deepest first: a folder's own subfolders go before it.
+            for d in &t.dirs {
+                let _ = std::fs::remove_dir(d);
+            }
+            Err(e)
+        }
+    }
 }
 
 /// Reads a text file, naming it in the error.
@@ -59,4 +179,41 @@ fn key_at(text: &str, span: std::ops::Range<usize>) -> Option<String> {
     let snippet = text.get(span)?.trim();
     (!snippet.is_empty() && snippet.len() <= 40 && !snippet.contains('\n'))
         .then(|| snippet.to_string())
+}
+
+#[cfg(test)]
+mod transaction_tests {
+    use super::*;
+
+    #[test]
+    fn writes_appear_at_the_end_or_never() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.txt"), dir.path().join("new/b.txt"));
+        let r: Result<()> = all_or_nothing(|| {
+            write_atomic(&a, b"one")?;
+            assert!(!a.exists(), "renamed before the end");
+            assert_eq!(staged_bytes(&a).unwrap(), b"one");
+            write_atomic(&a, b"two")?;
+            create_dir_all(b.parent().unwrap())?;
+            write_atomic(&b, b"three")
+        });
+        r.unwrap();
+        assert_eq!(std::fs::read(&a).unwrap(), b"two");
+        assert_eq!(std::fs::read(&b).unwrap(), b"three");
+        let (c, d) = (dir.path().join("c.txt"), dir.path().join("x/y"));
+        let r: Result<()> = all_or_nothing(|| {
+            write_atomic(&c, b"lost")?;
+            create_dir_all(&d)?;
+            Err(Error::Invalid("a later step fails".into()))
+        });
+        assert!(r.is_err());
+        assert!(!c.exists() && !dir.path().join("x").exists());
+        // Only the destinations remain: no temporary file is left in the folder.
+        let mut names: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["a.txt", "new"]);
+    }
 }

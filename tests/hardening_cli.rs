@@ -392,3 +392,110 @@ fn nongeometric_values_are_finite_and_bounded_at_load() {
         assert!(!out.exists(), "no NaN poses written");
     }
 }
+
+/// A command's outputs appear together or not at all: when a later output (report, plot
+/// folder, truth file, second half) cannot be written, the earlier ones are not left behind,
+/// nor the plot folder the run created; and the OS error names the output once, without a
+/// temporary file's name.
+#[test]
+fn a_failed_run_leaves_no_output_behind() {
+    let dir = tempfile::Builder::new()
+        .prefix("all-or-nothing")
+        .tempdir()
+        .unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    // A regular file where a folder is expected makes every write under it fail.
+    std::fs::write(p("file"), "not a folder").unwrap();
+    let blocked = p("file/sub/r.json");
+    let fanuc = "datasets/robots/fanuc_r2000ib_210f.toml";
+    let cases: Vec<(Vec<String>, Vec<String>)> = vec![
+        (
+            vec![
+                "identify".into(),
+                "--robot".into(),
+                fanuc.into(),
+                "--data".into(),
+                "datasets/case_b_sim/calibration.csv".into(),
+                "--out".into(),
+                p("cal.toml"),
+                "--plot".into(),
+                p("plots"),
+                "--report".into(),
+                blocked.clone(),
+            ],
+            vec![p("cal.toml"), p("plots")],
+        ),
+        (
+            vec![
+                "simulate".into(),
+                "--robot".into(),
+                fanuc.into(),
+                "--count".into(),
+                "5".into(),
+                "--seed".into(),
+                "1".into(),
+                "--out".into(),
+                p("sim.csv"),
+                "--truth-out".into(),
+                blocked.clone(),
+            ],
+            vec![p("sim.csv")],
+        ),
+        (
+            vec![
+                "split".into(),
+                "datasets/case_b_sim/calibration.csv".into(),
+                "--seed".into(),
+                "1".into(),
+                "--out-a".into(),
+                p("a.csv"),
+                "--out-b".into(),
+                blocked.clone(),
+            ],
+            vec![p("a.csv")],
+        ),
+        (
+            vec![
+                "evaluate".into(),
+                "--robot".into(),
+                fanuc.into(),
+                "--data".into(),
+                "datasets/case_b_sim/validation_truth.csv".into(),
+                "--plot".into(),
+                p("eval_plots"),
+                "--report".into(),
+                blocked.clone(),
+            ],
+            vec![p("eval_plots")],
+        ),
+    ];
+    for (args, outputs) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        refused_saying(&args, &["file/sub/r.json", "Not a directory (os error 20)"]);
+        let err = stderr(&robocal(&args));
+        assert!(!err.contains(".tmp"), "{args:?}: {err}");
+        assert_eq!(err.matches("os error").count(), 1, "{args:?}: {err}");
+        assert_eq!(err.matches("file/sub/r.json").count(), 1, "{args:?}: {err}");
+        for o in outputs {
+            assert!(!std::path::Path::new(&o).exists(), "{args:?} left {o}");
+        }
+    }
+    // The same identify with a writable report writes all three.
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        fanuc,
+        "--data",
+        "datasets/case_b_sim/calibration.csv",
+        "--out",
+        &p("cal.toml"),
+        "--plot",
+        &p("plots"),
+        "--report",
+        &p("r.json"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["cal.toml", "r.json", "plots/figures.json"] {
+        assert!(dir.path().join(f).exists(), "{f}");
+    }
+}

@@ -10,7 +10,7 @@ use crate::kinematics::tool_pose;
 use crate::model::{Robot, read_robot, write_robot};
 use crate::neural::compensator::PredictWorkspace;
 use crate::plot::{ErrorRun, error_figures};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -117,7 +117,7 @@ pub(super) fn stats_json(s: &ErrorStats) -> Value {
 pub(super) fn write_json(path: &Path, v: &Value) -> Result<()> {
     let mut b = serde_json::to_vec_pretty(v)?;
     b.push(b'\n');
-    crate::io::write_atomic(path, &b).with_context(|| format!("writing {}", path.display()))
+    super::output::writing(crate::io::write_atomic(path, &b), path)
 }
 
 pub(super) fn read_set(args: &DataArgs, path: &Path, robot: &Robot) -> Result<MeasurementSet> {
@@ -185,7 +185,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         ..Default::default()
     };
     let id = identify(&nominal, &cal, &opts)?;
-    write_robot(&id.robot, &a.out).with_context(|| format!("writing {}", a.out.display()))?;
+    super::output::writing(write_robot(&id.robot, &a.out), &a.out)?;
     let m = id.measure;
     // Row errors before and after, per set: for the statistics and the pictures.
     let errors = |set: &MeasurementSet| -> Result<(Vec<RowError>, Vec<RowError>)> {

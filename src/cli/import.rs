@@ -3,7 +3,7 @@
 use super::data_args::{DataArgs, joints_of};
 use crate::data::measurement::write_measurements;
 use crate::data::{Table, joint_columns};
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -58,8 +58,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
     }
     let joints = joints_of(a.robot.as_ref(), n)?;
     let set = a.data.read(&a.input, &joints)?;
-    write_measurements(&set, &joints, &a.out)
-        .with_context(|| format!("writing {}", a.out.display()))?;
+    super::output::writing(write_measurements(&set, &joints, &a.out), &a.out)?;
     let what = match (set.has_position(), set.has_rotation()) {
         (true, true) => "poses",
         (true, false) => "positions",

@@ -62,11 +62,17 @@ enum Command {
     CaseD(case_d::CaseDArgs),
 }
 
-/// Runs the command line; errors are printed with their context and give exit code 1.
+/// Exit code of `compensate` when some targets have no command (the others are written).
+pub const EXIT_SOME_TARGETS_FAILED: u8 = 3;
+
+/// Runs the command line; errors are printed with their context and give exit code 1 (2 for
+/// a usage error, from clap; [`EXIT_SOME_TARGETS_FAILED`] from `compensate`). A command's
+/// output files appear together when it succeeds, and none of them when it fails.
 pub fn main() -> ExitCode {
     quiet_on_closed_stdout();
     let cli = Cli::parse();
-    let result = match cli.command {
+    let mut code = ExitCode::SUCCESS;
+    let result = crate::io::all_or_nothing(|| match cli.command {
         Command::Fk(a) => fk::run(a),
         Command::Ik(a) => ik::run(a),
         Command::Import(a) => import::run(a),
@@ -77,12 +83,17 @@ pub fn main() -> ExitCode {
         Command::Reproduce(a) => reproduce::run(a),
         Command::Train(a) => train::run_train(a),
         Command::Predict(a) => train::run_predict(a),
-        Command::Compensate(a) => compensate::run(a),
+        Command::Compensate(a) => compensate::run(a).map(|failed| {
+            if let Some(msg) = failed {
+                eprintln!("warning: {msg}");
+                code = ExitCode::from(EXIT_SOME_TARGETS_FAILED);
+            }
+        }),
         Command::Report(a) => report::run(a),
         Command::CaseD(a) => case_d::run_case_d(a),
-    };
+    });
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(()) => code,
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::from(1)

@@ -4,6 +4,17 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use std::path::{Path, PathBuf};
 
+/// `r` with "writing PATH" as context, unless its error already names `path` (an OS error
+/// from [`crate::io::write_atomic`]): a path is named once.
+pub fn writing<T>(r: crate::error::Result<T>, path: &Path) -> Result<T> {
+    match r {
+        Err(crate::error::Error::Io { path: p, cause }) if p == path => {
+            Err(crate::error::Error::Io { path: p, cause }.into())
+        }
+        r => r.with_context(|| format!("writing {}", path.display())),
+    }
+}
+
 /// Output flags of the batch commands.
 #[derive(Args)]
 pub struct OutputArgs {
@@ -106,9 +117,7 @@ pub fn emit(
         w.into_bytes()?
     };
     match out {
-        Some(p) => {
-            crate::io::write_atomic(p, &bytes).with_context(|| format!("writing {}", p.display()))
-        }
+        Some(p) => writing(crate::io::write_atomic(p, &bytes), p),
         None => {
             use std::io::Write;
             std::io::stdout()

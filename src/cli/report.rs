@@ -1,6 +1,6 @@
 //! `robocal report`: the HTML page of a run folder.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -27,8 +27,7 @@ pub fn run(a: ReportArgs) -> Result<()> {
     let inputs: Vec<_> = read.iter().map(|p| req("run folder", p)).collect();
     guard(&inputs, &[req("--out", &a.out)])?;
     let html = crate::report::render(&a.run_dir)?;
-    crate::io::write_atomic(&a.out, html.as_bytes())
-        .with_context(|| format!("writing {}", a.out.display()))?;
+    super::output::writing(crate::io::write_atomic(&a.out, html.as_bytes()), &a.out)?;
     println!("wrote {} ({} kB)", a.out.display(), html.len() / 1024);
     Ok(())
 }

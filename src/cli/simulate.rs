@@ -1,11 +1,12 @@
 //! `robocal simulate`: measurements of a virtual robot.
 
+use super::output::writing;
 use crate::data::JointInfo;
 use crate::data::measurement::write_measurements;
 use crate::kinematics::tool_pose;
 use crate::model::{read_robot, write_robot};
 use crate::sim::{Deviations, NonGeometric, Observe, Region, Simulation};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -89,14 +90,12 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     };
     let out = sim.run(a.out.clone())?;
     let joints = JointInfo::of(&nominal);
-    write_measurements(&out.measured, &joints, &a.out)
-        .with_context(|| format!("writing {}", a.out.display()))?;
+    writing(write_measurements(&out.measured, &joints, &a.out), &a.out)?;
     if let Some(p) = &a.truth_out {
-        write_measurements(&out.truth, &joints, p)
-            .with_context(|| format!("writing {}", p.display()))?;
+        writing(write_measurements(&out.truth, &joints, p), p)?;
     }
     if let Some(p) = &a.true_robot {
-        write_robot(&truth, p).with_context(|| format!("writing {}", p.display()))?;
+        writing(write_robot(&truth, p), p)?;
     }
     // How far the nominal model is from the truth, in position (mm), as a first look.
     let errors: Vec<f64> = out

@@ -260,8 +260,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             );
         }
     }
-    c.save(&a.out)
-        .with_context(|| format!("writing {}", a.out.display()))?;
+    super::output::writing(c.save(&a.out), &a.out)?;
     println!("wrote {}", a.out.display());
     if let Some(dir) = &a.plot {
         println!("plots: {figs} pictures in {}", dir.display());

@@ -65,7 +65,7 @@ pub fn save(
     chart: &impl Chart,
 ) -> Result<Figure> {
     register_font();
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    crate::io::create_dir_all(dir)?;
     let (w, h) = SIZE;
     let png_path = dir.join(format!("{name}.png"));
     let mut rgb = vec![0u8; (w * h * 3) as usize];
@@ -109,10 +109,11 @@ pub fn manifest_path(dir: &Path) -> PathBuf {
 /// Reads `dir/figures.json`; an absent file is an empty list.
 pub fn read_manifest(dir: &Path) -> Result<Vec<Figure>> {
     let path = manifest_path(dir);
-    if !path.exists() {
-        return Ok(Vec::new());
-    }
-    let text = crate::io::read_text(&path)?;
+    let text = match crate::io::staged_bytes(&path) {
+        Some(b) => String::from_utf8_lossy(&b).into_owned(),
+        None if !path.exists() => return Ok(Vec::new()),
+        None => crate::io::read_text(&path)?,
+    };
     serde_json::from_str(&text)
         .map_err(|e| Error::Invalid(format!("{}: not a figure list: {e}", path.display())))
 }
