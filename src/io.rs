@@ -10,7 +10,6 @@ use std::path::{Path, PathBuf};
 struct Staged {
     path: PathBuf,
     tmp: tempfile::NamedTempFile,
-    bytes: Vec<u8>,
 }
 
 /// The open transaction of this thread: its staged writes and the folders it created.
@@ -32,7 +31,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(|e| Error::io(path, bare(e)))?;
+    let mut tmp = temporary_in(dir, path).map_err(|e| Error::io(path, bare(e)))?;
     tmp.write_all(bytes).map_err(|e| Error::io(path, bare(e)))?;
     tmp.as_file()
         .sync_all()
@@ -43,7 +42,6 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
             t.writes.push(Staged {
                 path: path.to_path_buf(),
                 tmp,
-                bytes: bytes.to_vec(),
             });
             None
         }
@@ -54,6 +52,19 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
             .map_err(|e| Error::io(path, bare(e.error)))?;
     }
     Ok(())
+}
+
+/// A temporary file in `dir` for `path`: with the mode of the file it replaces, else the
+/// mode a plain create gives (0666 less the umask); tempfile's own default is 0600.
+fn temporary_in(dir: &Path, path: &Path) -> std::io::Result<tempfile::NamedTempFile> {
+    let mut b = tempfile::Builder::new();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = std::fs::metadata(path).map_or(0o666, |m| m.permissions().mode() & 0o7777);
+        b.permissions(std::fs::Permissions::from_mode(mode));
+    }
+    b.tempfile_in(dir)
 }
 
 /// The OS error without the temporary file's name that `tempfile` wraps around it: the
@@ -75,11 +86,8 @@ fn bare(e: std::io::Error) -> std::io::Error {
 /// (a folder's figure list) sees the transaction's own earlier writes.
 pub fn staged_bytes(path: &Path) -> Option<Vec<u8>> {
     OPEN.with_borrow(|open| {
-        open.as_ref()?
-            .writes
-            .iter()
-            .find(|w| w.path == path)
-            .map(|w| w.bytes.clone())
+        let w = open.as_ref()?.writes.iter().find(|w| w.path == path)?;
+        std::fs::read(w.tmp.path()).ok()
     })
 }
 
@@ -138,9 +146,55 @@ pub fn all_or_nothing<T, E: From<Error>>(
     }
 }
 
+/// Reads a regular file of at most `cap` bytes: a device (`/dev/zero`), a folder or a larger
+/// file is refused by name instead of read until memory runs out.
+pub fn read_capped(path: &Path, cap: u64) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let meta = file.metadata().map_err(|e| Error::io(path, e))?;
+    if !meta.is_file() {
+        return Err(Error::Invalid(format!(
+            "{}: not a regular file",
+            path.display()
+        )));
+    }
+    let mut bytes = Vec::new();
+    file.take(cap + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 > cap {
+        return Err(Error::Invalid(format!(
+            "{}: larger than {} MB",
+            path.display(),
+            cap >> 20
+        )));
+    }
+    Ok(bytes)
+}
+
 /// Reads a text file, naming it in the error.
+/// Invalid UTF-8 is refused with its line.
 pub fn read_text(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|e| Error::io(path, e))
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let before = &e.as_bytes()[..at];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let column = at
+            - before
+                .iter()
+                .rposition(|&b| b == b'\n')
+                .map_or(0, |p| p + 1)
+            + 1;
+        Error::input(
+            Location {
+                file: path.to_path_buf(),
+                line: Some(line),
+                field: None,
+            },
+            format!("invalid UTF-8 at byte {column} of the line"),
+        )
+    })
 }
 
 /// Parses TOML text into `T`; a syntax or type error names the file, the line and the key.
@@ -215,5 +269,27 @@ mod transaction_tests {
             .collect();
         names.sort();
         assert_eq!(names, ["a.txt", "new"]);
+    }
+}
+
+#[cfg(all(test, unix))]
+mod mode_tests {
+    use super::write_atomic;
+    use std::os::unix::fs::PermissionsExt;
+
+    #[test]
+    fn new_files_follow_the_umask_and_replaced_files_keep_their_mode() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.txt"), dir.path().join("b.txt"));
+        // What a plain create gives under this process's umask.
+        std::fs::write(&b, "x").unwrap();
+        let plain = std::fs::metadata(&b).unwrap().permissions().mode() & 0o777;
+        std::fs::remove_file(&b).unwrap();
+        write_atomic(&a, b"one").unwrap();
+        let mode = |p: &std::path::Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&a), plain);
+        std::fs::set_permissions(&a, std::fs::Permissions::from_mode(0o640)).unwrap();
+        write_atomic(&a, b"two").unwrap();
+        assert_eq!(mode(&a), 0o640);
     }
 }

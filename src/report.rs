@@ -234,9 +234,30 @@ fn section(title: &str, m: &Map<String, Value>, depth: usize, html: &mut String)
     }
 }
 
+/// The largest picture or report a page embeds (bytes).
+pub const MAX_EMBED_BYTES: u64 = 32 << 20;
+
+/// `name` from a run folder's figure list as a path inside `dir`: a name that leads out of
+/// the folder (`/etc/hostname`, `../x.png`, a link to elsewhere) is refused.
+fn inside(dir: &Path, name: &str) -> Result<std::path::PathBuf> {
+    let path = dir.join(name);
+    let outside = || {
+        Error::Invalid(format!(
+            "{}: `{name}` lies outside the run folder; only pictures inside it are embedded",
+            crate::plot::manifest_path(dir).display()
+        ))
+    };
+    let root = dir.canonicalize().map_err(|e| Error::io(dir, e))?;
+    let real = path.canonicalize().map_err(|e| Error::io(&path, e))?;
+    if !real.starts_with(&root) {
+        return Err(outside());
+    }
+    Ok(path)
+}
+
 fn figure(dir: &Path, f: &Figure, html: &mut String) -> Result<()> {
-    let path = dir.join(&f.png);
-    let bytes = std::fs::read(&path).map_err(|e| Error::io(&path, e))?;
+    let path = inside(dir, &f.png)?;
+    let bytes = crate::io::read_capped(&path, MAX_EMBED_BYTES)?;
     let b64 = base64::engine::general_purpose::STANDARD.encode(bytes);
     let _ = writeln!(
         html,
@@ -292,7 +313,9 @@ pub fn render(dir: &Path) -> Result<String> {
         env!("CARGO_PKG_VERSION")
     );
     for path in &reports {
-        let text = crate::io::read_text(path)?;
+        let bytes = crate::io::read_capped(path, MAX_EMBED_BYTES)?;
+        let text = String::from_utf8(bytes)
+            .map_err(|_| Error::Invalid(format!("{}: not UTF-8 text", path.display())))?;
         let v: Value = serde_json::from_str(&text).map_err(|e| {
             Error::Invalid(format!(
                 "{}:{}:{}: not JSON: {e}",

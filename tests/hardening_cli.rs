@@ -499,3 +499,105 @@ fn a_failed_run_leaves_no_output_behind() {
         assert!(dir.path().join(f).exists(), "{f}");
     }
 }
+
+/// Measurement values beyond physical bounds, cells of a megabyte and invalid UTF-8 get
+/// located, short messages; a joints file that holds radians gets a warning.
+#[test]
+fn values_cells_and_bytes_are_located_and_bounded() {
+    let dir = tempfile::Builder::new().prefix("bounds").tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let fanuc = "datasets/robots/fanuc_r2000ib_210f.toml";
+    let (text, _) = shipped("datasets/case_b_sim/calibration.csv", "id");
+    let lines: Vec<&str> = text.lines().collect();
+    let x = lines[0].split(',').position(|h| h == "x").unwrap();
+    let with_x = |v: &str| {
+        let mut row: Vec<String> = lines[1].split(',').map(String::from).collect();
+        row[x] = v.to_string();
+        let mut all = vec![lines[0].to_string(), row.join(",")];
+        all.extend(lines[2..].iter().map(|l| l.to_string()));
+        all.join("\n") + "\n"
+    };
+    let identify = |file: &str| {
+        vec![
+            "identify".to_string(),
+            "--robot".into(),
+            fanuc.into(),
+            "--data".into(),
+            p(file),
+            "--out".into(),
+            p("never.toml"),
+        ]
+    };
+    let run = |args: Vec<String>, expect: &[&str]| {
+        let a: Vec<&str> = args.iter().map(String::as_str).collect();
+        refused_saying(&a, expect);
+    };
+    std::fs::write(p("far.csv"), with_x("1e300")).unwrap();
+    run(
+        identify("far.csv"),
+        &["far.csv:2: field `x`", "beyond the bound of a position"],
+    );
+    std::fs::write(p("long.csv"), with_x(&"7".repeat(1 << 20))).unwrap();
+    let o = robocal(
+        &identify("long.csv")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    let err = stderr(&o);
+    assert!(
+        err.contains("long.csv:2: field `x`"),
+        "{}",
+        &err[..err.len().min(500)]
+    );
+    assert!(
+        err.contains("(1048576 characters)"),
+        "{}",
+        &err[..err.len().min(500)]
+    );
+    assert!(
+        err.len() < 1000,
+        "the cell is echoed whole: {} bytes",
+        err.len()
+    );
+    // Invalid UTF-8 in a robot file: its line.
+    let (robot, line) = shipped(fanuc, "name");
+    let mut bytes = Vec::new();
+    for l in robot.lines() {
+        bytes.extend_from_slice(l.as_bytes());
+        if l == line {
+            bytes.extend_from_slice(b" # \xff");
+        }
+        bytes.push(b'\n');
+    }
+    std::fs::write(p("bad.toml"), bytes).unwrap();
+    let at = robot.lines().position(|l| l == line).unwrap() + 1;
+    run(
+        vec![
+            "fk".into(),
+            "--robot".into(),
+            p("bad.toml"),
+            "--q".into(),
+            "0,0,0,0,0,0".into(),
+        ],
+        &[&format!("bad.toml:{at}: invalid UTF-8")],
+    );
+    // Radians in a degree file: a warning, and none for degrees.
+    std::fs::write(
+        p("rad.csv"),
+        "q1,q2,q3,q4,q5,q6\n0.5,-1.2,1.5,-1.57,-1.57,0\n",
+    )
+    .unwrap();
+    let o = robocal(&["fk", "--robot", UR10, "--joints", &p("rad.csv")]);
+    assert!(o.status.success());
+    assert!(stderr(&o).contains("radians"), "{}", stderr(&o));
+    let o = robocal(&[
+        "fk",
+        "--robot",
+        UR10,
+        "--joints",
+        "datasets/joints/fanuc_demo.csv",
+    ]);
+    assert!(o.status.success());
+    assert!(!stderr(&o).contains("radians"), "{}", stderr(&o));
+}

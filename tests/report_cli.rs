@@ -187,3 +187,51 @@ fn report_refuses_empty_folders_and_bad_json() {
     assert!(stderr(&o).contains("broken.json:3:"), "{}", stderr(&o));
     assert!(!out.exists());
 }
+
+/// `report` embeds only regular files inside the run folder, of bounded size: a figure list
+/// naming `/etc/hostname` or `../x.png`, a link to `/dev/zero` among the pictures or the
+/// reports, are refused by name (before: embedded, or read until memory ran out).
+#[cfg(unix)]
+#[test]
+fn report_embeds_only_files_inside_the_run_folder() {
+    let dir = tempfile::Builder::new().prefix("run").tempdir().unwrap();
+    let run = dir.path().join("run");
+    std::fs::create_dir(&run).unwrap();
+    std::fs::write(dir.path().join("x.png"), "outside").unwrap();
+    let out = dir.path().join("page.html");
+    let list = |png: &str| {
+        format!(
+            "[{{\"png\": \"{png}\", \"svg\": \"a.svg\", \"title\": \"t\", \"caption\": \"c\"}}]"
+        )
+    };
+    let page = || {
+        robocal(&[
+            "report",
+            run.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    std::os::unix::fs::symlink("/dev/zero", run.join("zero.png")).unwrap();
+    for (png, want) in [
+        ("/etc/hostname", "outside the run folder"),
+        ("../x.png", "outside the run folder"),
+        ("zero.png", "outside the run folder"),
+    ] {
+        std::fs::write(run.join("figures.json"), list(png)).unwrap();
+        let o = page();
+        assert_eq!(o.status.code(), Some(1), "{png}");
+        assert!(stderr(&o).contains(want), "{png}: {}", stderr(&o));
+        assert!(!out.exists());
+    }
+    std::fs::remove_file(run.join("figures.json")).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", run.join("zero.json")).unwrap();
+    let o = page();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("zero.json: not a regular file"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+}

@@ -30,6 +30,36 @@ pub(super) type JointTable = (Vec<String>, Vec<Vec<String>>, Vec<Vec<f64>>, Vec<
 
 /// The joint table of a CSV with columns q1..qN; refuses a table that already has the pose
 /// columns the command would write.
+/// Warns (stderr) when every revolute joint angle of a file read in degrees lies within one
+/// radian turn (|q| <= 2 pi) and some exceed 1: a file that holds radians (the joint_unit of
+/// most controllers' logs) would otherwise give plausible but wrong poses.
+pub(super) fn warn_if_radians(
+    path: &std::path::Path,
+    robot: &crate::model::Robot,
+    joints: &[Vec<f64>],
+) {
+    let revolute: Vec<usize> = (0..robot.dof())
+        .filter(|&j| robot.joints()[j].joint_type == crate::model::JointType::Revolute)
+        .collect();
+    let values = joints
+        .iter()
+        .flat_map(|q| revolute.iter().map(|&j| q[j].abs()));
+    let (mut max, mut any) = (0.0f64, false);
+    for v in values {
+        max = max.max(v);
+        any = true;
+    }
+    if any && max > 1.0 && max <= std::f64::consts::TAU {
+        eprintln!(
+            "warning: {}: every joint angle lies within +-{:.2}, one turn in radians: the \
+             columns are read in degrees; if they hold radians, convert them (or import the \
+             file with a profile whose joint_unit is \"rad\")",
+            path.display(),
+            std::f64::consts::TAU
+        );
+    }
+}
+
 pub(super) fn joint_table(path: &std::path::Path, n: usize) -> Result<JointTable> {
     let t = Table::read(path)?;
     let idx: Vec<usize> = joint_columns(n)
@@ -66,7 +96,11 @@ pub fn run(a: FkArgs) -> Result<()> {
             let cells = q.iter().map(|v| num(*v, None)).collect();
             (qcols, vec![cells], vec![q], vec![0])
         }
-        (None, Some(path)) => joint_table(path, n)?,
+        (None, Some(path)) => {
+            let t = joint_table(path, n)?;
+            warn_if_radians(path, &robot, &t.2);
+            t
+        }
         (None, None) => unreachable!("clap requires one input"),
     };
     headers.extend(POSE_COLUMNS.iter().map(|s| s.to_string()));

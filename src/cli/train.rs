@@ -327,6 +327,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     )?;
     let c = Compensator::load(&a.compensator)?;
     let (mut headers, rows, joints, lines) = super::fk::joint_table(&a.joints, c.robot.dof())?;
+    super::fk::warn_if_radians(&a.joints, &c.robot, &joints);
     if headers.iter().any(|h| h == DOMAIN_COLUMN) {
         bail!(
             "{}: the input already has a column `{DOMAIN_COLUMN}`, which would be written; \

@@ -7,7 +7,7 @@
 
 use super::joint_columns;
 use super::profile::{AngleUnit, Profile};
-use super::table::{CsvOut, Table};
+use super::table::{CsvOut, Table, shown};
 use crate::error::{Error, Location, Result};
 use crate::kinematics::Pose;
 use crate::model::{JointType, Robot};
@@ -296,8 +296,61 @@ pub fn parse_measurements(
                 ));
             }
         }
+        // Physical bounds, after unit conversion (mm, rad): a finite 1e300 would otherwise
+        // reach the solvers (and read as a perfect fit).
+        let bound = |col: usize, v: f64, max: f64, what: &str| -> Result<()> {
+            if v.abs() > max {
+                return Err(Error::input(
+                    t.location(r, col),
+                    format!(
+                        "`{}` is beyond the bound of a {what}",
+                        shown(&t.rows[r][col])
+                    ),
+                ));
+            }
+            Ok(())
+        };
+        let (max_mm, max_joint) = (
+            crate::model::file::MAX_LENGTH_MM,
+            crate::model::file::MAX_JOINT_DEG.to_radians(),
+        );
+        for ((&col, &v), j) in jidx.iter().zip(&m.q).zip(joints) {
+            match j.joint_type {
+                JointType::Revolute => bound(col, v, max_joint, "joint angle (4 turns)")?,
+                JointType::Prismatic => bound(col, v, max_mm, "joint length (100 m)")?,
+            }
+        }
+        if let (Some(i), Some(p)) = (pidx, m.position) {
+            for k in 0..3 {
+                bound(i[k], p[k], max_mm, "position (100 m)")?;
+            }
+        }
+        if let Some(i) = aidx {
+            for (k, col) in i.iter().enumerate() {
+                let v = au.to_rad(t.number(r, *col)?);
+                bound(
+                    i[k],
+                    v,
+                    crate::model::file::MAX_ANGLE_DEG.to_radians(),
+                    "orientation angle (2 turns)",
+                )?;
+            }
+        }
+        if let (Some(i), Some(v)) = (spidx, m.sigma_position) {
+            for k in 0..3 {
+                bound(i[k], v[k], 1e3, "position standard deviation (1 m)")?;
+            }
+        }
+        if let (Some(i), Some(v)) = (saidx, m.sigma_rotation) {
+            for k in 0..3 {
+                bound(i[k], v[k], 1.0, "orientation standard deviation (1 rad)")?;
+            }
+        }
         if let Some(i) = didx {
             m.distance = t.optional_number(r, i)?;
+            if let Some(d) = m.distance {
+                bound(i, lu.to_mm(d), max_mm, "distance (100 m)")?;
+            }
             if m.distance.is_some_and(|d| d < 0.0) {
                 return Err(Error::input(
                     t.location(r, i),

@@ -245,6 +245,41 @@ impl Profile {
         set(&mut cols.set, c.set);
         set(&mut cols.pair, c.pair);
         set(&mut cols.distance, c.distance);
+        // Two fields read from one column would silently read the same numbers twice.
+        let mut fields: Vec<(String, &String)> = Vec::new();
+        if let Some(j) = &cols.joints {
+            fields.extend(j.iter().map(|c| ("joints".to_string(), c)));
+        }
+        let named = [
+            ("x", &cols.position[0]),
+            ("y", &cols.position[1]),
+            ("z", &cols.position[2]),
+            ("rx", &cols.angles[0]),
+            ("ry", &cols.angles[1]),
+            ("rz", &cols.angles[2]),
+            ("sx", &cols.sigma_position[0]),
+            ("sy", &cols.sigma_position[1]),
+            ("sz", &cols.sigma_position[2]),
+            ("srx", &cols.sigma_angles[0]),
+            ("sry", &cols.sigma_angles[1]),
+            ("srz", &cols.sigma_angles[2]),
+            ("id", &cols.id),
+            ("set", &cols.set),
+            ("pair", &cols.pair),
+            ("distance", &cols.distance),
+        ];
+        fields.extend(named.iter().map(|(f, c)| (f.to_string(), *c)));
+        for (i, (field, column)) in fields.iter().enumerate() {
+            if let Some((first, _)) = fields[..i].iter().find(|(_, c)| c == column) {
+                return Err(bad(
+                    field,
+                    format!(
+                        "column `{column}` is already read as `{first}`: give each field its own \
+                         column"
+                    ),
+                ));
+            }
+        }
         Ok(p)
     }
 
@@ -257,6 +292,25 @@ impl Profile {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn two_fields_from_one_column_are_refused() {
+        for (text, field) in [
+            ("[columns]\nx = \"A\"\ny = \"A\"\n", "y"),
+            ("[columns]\nid = \"z\"\n", "id"),
+            ("[columns]\njoints = [\"a\", \"a\"]\n", "joints"),
+        ] {
+            let e = Profile::parse(text, Path::new("p.toml"))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains(&format!("field `{field}`")) && e.contains("already read"),
+                "{e}"
+            );
+        }
+        // Distinct columns pass.
+        Profile::parse("[columns]\nx = \"A\"\ny = \"B\"\n", Path::new("p.toml")).unwrap();
+    }
 
     #[test]
     fn profile_fields_and_errors() {

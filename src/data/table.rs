@@ -185,11 +185,11 @@ impl Table {
             Ok(v) if v.is_finite() => Ok(v),
             Ok(_) => Err(Error::input(
                 self.location(row, col),
-                format!("`{cell}` is not finite"),
+                format!("`{}` is not finite", shown(cell)),
             )),
             Err(_) => Err(Error::input(
                 self.location(row, col),
-                format!("`{cell}` is not a number"),
+                format!("`{}` is not a number", shown(cell)),
             )),
         }
     }
@@ -206,6 +206,19 @@ impl Table {
     /// Several cells of one row as finite numbers.
     pub fn numbers(&self, row: usize, cols: &[usize]) -> Result<Vec<f64>> {
         cols.iter().map(|&c| self.number(row, c)).collect()
+    }
+}
+
+/// A cell as messages show it: at most 40 characters, then an ellipsis and the full length
+/// (a 1 MB cell is not echoed whole).
+pub fn shown(cell: &str) -> String {
+    const MAX: usize = 40;
+    let n = cell.chars().count();
+    if n <= MAX {
+        cell.to_string()
+    } else {
+        let head: String = cell.chars().take(MAX).collect();
+        format!("{head}... ({n} characters)")
     }
 }
 

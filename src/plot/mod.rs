@@ -112,7 +112,8 @@ pub fn read_manifest(dir: &Path) -> Result<Vec<Figure>> {
     let text = match crate::io::staged_bytes(&path) {
         Some(b) => String::from_utf8_lossy(&b).into_owned(),
         None if !path.exists() => return Ok(Vec::new()),
-        None => crate::io::read_text(&path)?,
+        None => String::from_utf8(crate::io::read_capped(&path, 16 << 20)?)
+            .map_err(|_| Error::Invalid(format!("{}: not UTF-8 text", path.display())))?,
     };
     serde_json::from_str(&text)
         .map_err(|e| Error::Invalid(format!("{}: not a figure list: {e}", path.display())))
