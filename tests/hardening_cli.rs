@@ -601,3 +601,42 @@ fn values_cells_and_bytes_are_located_and_bounded() {
     assert!(o.status.success());
     assert!(!stderr(&o).contains("radians"), "{}", stderr(&o));
 }
+
+/// A deviation beyond the robot file's bounds, or one that pushes a parameter beyond them,
+/// is refused with the file (and the line and parameter where it is the deviation's own).
+#[test]
+fn deviations_are_bounded_and_keep_the_robot_within_bounds() {
+    let dir = tempfile::Builder::new().prefix("dev").tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let sim = |dev: &str| {
+        vec![
+            "simulate".to_string(),
+            "--robot".into(),
+            UR10.into(),
+            "--deviations".into(),
+            dev.into(),
+            "--count".into(),
+            "3".into(),
+            "--seed".into(),
+            "1".into(),
+            "--out".into(),
+            p("never.csv"),
+        ]
+    };
+    for (text, expect) in [
+        (
+            "a2 = 1e300\n",
+            vec!["far.toml:1: field `a2`", "beyond the bound"],
+        ),
+        (
+            "\nd1 = 99999\n",
+            vec!["far.toml: the deviated robot", "joint 1: d = 100126.3 mm"],
+        ),
+    ] {
+        std::fs::write(p("far.toml"), text).unwrap();
+        let args = sim(&p("far.toml"));
+        let a: Vec<&str> = args.iter().map(String::as_str).collect();
+        refused_saying(&a, &expect);
+        assert!(!dir.path().join("never.csv").exists());
+    }
+}

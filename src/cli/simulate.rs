@@ -6,7 +6,7 @@ use crate::data::measurement::write_measurements;
 use crate::kinematics::tool_pose;
 use crate::model::{read_robot, write_robot};
 use crate::sim::{Deviations, NonGeometric, Observe, Region, Simulation};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -67,7 +67,9 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     )?;
     let nominal = read_robot(&a.robot)?;
     let truth = match &a.deviations {
-        Some(p) => Deviations::read(p, &nominal)?.apply(&nominal)?,
+        Some(p) => Deviations::read(p, &nominal)?
+            .apply(&nominal)
+            .with_context(|| format!("{}: the deviated robot", p.display()))?,
         None => nominal.clone(),
     };
     let ng = match &a.nongeometric {

@@ -37,8 +37,11 @@ pub fn solve_nelder_mead(
     let mut f = |y: &DVector<f64>| -> Result<f64> {
         evaluations += 1;
         let x = &x0 + y.component_mul(&scale);
-        let r = with_values(robot, &ids, &x)?;
-        Ok(cost(&r, obs, &mut ws))
+        // A vertex beyond the robot's bounds (100 m, 2 turns) is infinitely bad.
+        Ok(match with_values(robot, &ids, &x) {
+            Ok(r) => cost(&r, obs, &mut ws),
+            Err(_) => f64::INFINITY,
+        })
     };
     let n = ids.len();
     let mut best = DVector::zeros(n);

@@ -190,7 +190,11 @@ pub fn solve_gradient(
             let mut found = None;
             for _ in 0..30 {
                 let step = &full * t;
-                let cand = with_values(robot, &ids, &(&x + &step))?;
+                // A step beyond the robot's bounds (100 m, 2 turns) is a failed step.
+                let Ok(cand) = with_values(robot, &ids, &(&x + &step)) else {
+                    t *= 0.5;
+                    continue;
+                };
                 let c = cost(&cand, obs, &mut ws);
                 evaluations += 1;
                 if c.is_finite() && c <= ne.cost {
@@ -234,7 +238,10 @@ pub fn solve_gradient(
                     continue;
                 };
                 let step = chol.solve(&ne.g);
-                let cand = with_values(robot, &ids, &(&x + &step))?;
+                let Ok(cand) = with_values(robot, &ids, &(&x + &step)) else {
+                    lambda *= 10.0;
+                    continue;
+                };
                 let c = cost(&cand, obs, &mut ws);
                 evaluations += 1;
                 if c.is_finite() && c < ne.cost {

@@ -34,13 +34,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 use toml::Spanned;
 
-/// Largest length (mm) a robot file may hold: 100 m, far beyond any robot or cell, small
-/// enough that poses stay exact in f64.
-pub const MAX_LENGTH_MM: f64 = 1e5;
-/// Largest angle (deg) of a row's field.
-pub const MAX_ANGLE_DEG: f64 = 720.0;
-/// Largest joint limit (deg) of a revolute joint: four turns either way.
-pub const MAX_JOINT_DEG: f64 = 1440.0;
+pub use super::robot::{MAX_ANGLE_DEG, MAX_JOINT_DEG, MAX_LENGTH_MM};
 
 /// A TOML number: integers are accepted where a float is meant (`d = 670`).
 #[derive(Debug, Clone, Copy)]

@@ -15,6 +15,14 @@ pub enum JointType {
     Prismatic,
 }
 
+/// Largest length (mm) a robot may hold: 100 m, far beyond any robot or cell, small enough
+/// that poses stay exact in f64.
+pub const MAX_LENGTH_MM: f64 = 1e5;
+/// Largest angle (deg) of a row's field.
+pub const MAX_ANGLE_DEG: f64 = 720.0;
+/// Largest joint limit (deg) of a revolute joint: four turns either way.
+pub const MAX_JOINT_DEG: f64 = 1440.0;
+
 impl JointType {
     pub fn name(self) -> &'static str {
         match self {
@@ -190,16 +198,29 @@ impl Robot {
                 )));
             }
         }
-        let robot_rows = std::iter::once(&base)
-            .chain(joints.iter().map(|j| &j.row))
-            .chain(std::iter::once(&tool));
-        for row in robot_rows {
+        let robot_rows = std::iter::once(("base".to_string(), &base))
+            .chain(
+                joints
+                    .iter()
+                    .enumerate()
+                    .map(|(i, j)| (format!("joint {}", i + 1), &j.row)),
+            )
+            .chain(std::iter::once(("tool".to_string(), &tool)));
+        // The file's bounds hold for robots made in code too (a deviation, an identification
+        // step), so that no robot poses beyond what f64 keeps exact.
+        for (label, row) in robot_rows {
             for &f in row.convention().fields() {
                 let v = row.file_value(f).unwrap_or(0.0);
-                if !v.is_finite() {
+                let bound = if f.is_angle() {
+                    MAX_ANGLE_DEG
+                } else {
+                    MAX_LENGTH_MM
+                };
+                if v.is_nan() || v.abs() > bound {
                     return Err(Error::Model(format!(
-                        "field {} is not finite: {v}",
-                        f.name()
+                        "{label}: {} = {v} {} is not finite or beyond the bound of {bound}",
+                        f.name(),
+                        f.file_unit()
                     )));
                 }
             }

@@ -69,6 +69,19 @@ impl Deviations {
                     ));
                 }
             };
+            // A deviation is small against its parameter: at most the robot file's bound on
+            // the parameter itself (100 m, 2 turns), so a deviated robot stays loadable.
+            let (max, unit) = if id.field.is_angle() {
+                (crate::model::file::MAX_ANGLE_DEG.to_radians() * 1e3, "mrad")
+            } else {
+                (crate::model::file::MAX_LENGTH_MM, "mm")
+            };
+            if v.abs() > max {
+                return Err(Error::input(
+                    at(),
+                    format!("a deviation of {v:e} {unit} is beyond the bound of {max:.0} {unit}"),
+                ));
+            }
             if out.iter().any(|(o, _)| *o == id) {
                 return Err(Error::input(at(), "this parameter is given twice"));
             }
