@@ -45,3 +45,75 @@ pub fn identify_case_d(out: &std::path::Path, extra: &[&str]) -> String {
     assert!(o.status.success(), "{}", stderr(&o));
     stdout(&o)
 }
+
+/// Text that breaks parsers: non-finite and huge numbers, separators, quotes, brackets, a BOM.
+const TOKENS: &[&str] = &[
+    "nan",
+    "inf",
+    "-inf",
+    "1e308",
+    "1e300",
+    "-1e300",
+    "-0",
+    "",
+    ",",
+    ";",
+    "\"",
+    "\n",
+    "=",
+    "[",
+    "]",
+    "{",
+    "}",
+    "99999999999",
+    "0x10",
+    "1e-320",
+    "\u{feff}",
+    "\r\n",
+    "#",
+    "'",
+    "[[",
+    "\u{0}",
+    "é",
+    "\\",
+    "true",
+    "1,5",
+];
+
+/// `base` after `edits` (position, operation, value): replace, delete or insert a byte,
+/// splice a token, duplicate the line, or cut the rest.
+pub fn mutate(base: &[u8], edits: &[(usize, u8, u8)]) -> Vec<u8> {
+    let mut v = base.to_vec();
+    for &(pos, op, val) in edits {
+        if v.is_empty() {
+            v.push(val);
+            continue;
+        }
+        let i = pos % v.len();
+        match op % 6 {
+            0 => v[i] = val,
+            1 => {
+                v.remove(i);
+            }
+            2 => v.insert(i, val),
+            3 => {
+                let t = TOKENS[val as usize % TOKENS.len()].as_bytes();
+                v.splice(i..i, t.iter().copied());
+            }
+            4 => {
+                let start = v[..i]
+                    .iter()
+                    .rposition(|&b| b == b'\n')
+                    .map_or(0, |p| p + 1);
+                let end = v[i..]
+                    .iter()
+                    .position(|&b| b == b'\n')
+                    .map_or(v.len(), |p| i + p + 1);
+                let line: Vec<u8> = v[start..end].to_vec();
+                v.splice(end..end, line);
+            }
+            _ => v.truncate(i),
+        }
+    }
+    v
+}
