@@ -27,31 +27,75 @@ thread_local! {
 /// a reader sees either the old file or the whole new one. Inside [`all_or_nothing`] the
 /// rename waits for the transaction's end (a later write of the same path replaces it).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut tmp = temporary_in(dir, path).map_err(|e| Error::io(path, bare(e)))?;
-    tmp.write_all(bytes).map_err(|e| Error::io(path, bare(e)))?;
-    tmp.as_file()
-        .sync_all()
-        .map_err(|e| Error::io(path, bare(e)))?;
-    let staged = OPEN.with_borrow_mut(|open| match open {
-        Some(t) => {
-            t.writes.retain(|w| w.path != path);
-            t.writes.push(Staged {
-                path: path.to_path_buf(),
-                tmp,
-            });
-            None
-        }
-        None => Some(tmp),
-    });
-    if let Some(tmp) = staged {
-        tmp.persist(path)
-            .map_err(|e| Error::io(path, bare(e.error)))?;
+    let mut w = AtomicWriter::create(path)?;
+    w.write_all(bytes).map_err(|e| Error::io(path, bare(e)))?;
+    w.finish()
+}
+
+/// A file written piece by piece (rows streamed, nothing held in memory) that appears only
+/// on [`AtomicWriter::finish`], as [`write_atomic`]'s does; dropped unfinished, it leaves
+/// nothing.
+pub struct AtomicWriter {
+    path: PathBuf,
+    out: std::io::BufWriter<tempfile::NamedTempFile>,
+}
+
+impl AtomicWriter {
+    /// A temporary file beside `path`.
+    pub fn create(path: &Path) -> Result<AtomicWriter> {
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let tmp = temporary_in(dir, path).map_err(|e| Error::io(path, bare(e)))?;
+        Ok(AtomicWriter {
+            path: path.to_path_buf(),
+            out: std::io::BufWriter::new(tmp),
+        })
     }
-    Ok(())
+
+    /// The destination.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Flushes and renames the file into place (or stages it for the open transaction).
+    pub fn finish(self) -> Result<()> {
+        let path = self.path;
+        let tmp = self
+            .out
+            .into_inner()
+            .map_err(|e| Error::io(&path, bare(e.into_error())))?;
+        tmp.as_file()
+            .sync_all()
+            .map_err(|e| Error::io(&path, bare(e)))?;
+        let staged = OPEN.with_borrow_mut(|open| match open {
+            Some(t) => {
+                t.writes.retain(|w| w.path != path);
+                t.writes.push(Staged {
+                    path: path.clone(),
+                    tmp,
+                });
+                None
+            }
+            None => Some(tmp),
+        });
+        if let Some(tmp) = staged {
+            tmp.persist(&path)
+                .map_err(|e| Error::io(&path, bare(e.error)))?;
+        }
+        Ok(())
+    }
+}
+
+impl Write for AtomicWriter {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.out.write(buf)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.out.flush()
+    }
 }
 
 /// A temporary file in `dir` for `path`: with the mode of the file it replaces, else the

@@ -206,3 +206,75 @@ fn simulate_writes_measurements_truth_and_true_robot_reproducibly() {
     assert!(truth.starts_with("id,q1,q2,q3,q4,q5,q6,x,y,z\n"));
     assert!(true_robot.contains("beta = 0.0211994384"), "{true_robot}");
 }
+
+/// `simulate` streams its rows to the files; they are byte for byte the rows the library's
+/// `Simulation::run` returns, written as a whole, for every kind of measurement and noise.
+#[test]
+fn simulate_streams_the_rows_the_library_returns() {
+    use robocal::data::JointInfo;
+    use robocal::data::measurement::measurements_to_csv;
+    use robocal::model::read_robot;
+    use robocal::sim::nongeometric::NonGeometric;
+    use robocal::sim::{Observe, Region, Simulation};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let robot = read_robot(root.join("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
+    let ng = NonGeometric::read(
+        root.join("datasets/nongeometric/fanuc_compliance_gear.toml"),
+        &robot,
+    )
+    .unwrap();
+    let region = Region::read(root.join("datasets/regions/case_d_focused.toml"), &robot).unwrap();
+    for (measure, observe, sigma) in [
+        ("pose", Observe::Pose, 0.05),
+        ("position", Observe::Position, 0.05),
+        ("orientation", Observe::Orientation, 0.0),
+    ] {
+        let (out, truth) = (tmp("stream.csv"), tmp("stream_truth.csv"));
+        let o = robocal(&[
+            "simulate",
+            "--robot",
+            "datasets/robots/fanuc_r2000ib_210f.toml",
+            "--nongeometric",
+            "datasets/nongeometric/fanuc_compliance_gear.toml",
+            "--region",
+            "datasets/regions/case_d_focused.toml",
+            "--count",
+            "40",
+            "--seed",
+            "3",
+            "--measure",
+            measure,
+            "--sigma-pos",
+            &sigma.to_string(),
+            "--sigma-rot",
+            "0.2",
+            "--out",
+            out.to_str().unwrap(),
+            "--truth-out",
+            truth.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let sim = Simulation {
+            truth: &robot,
+            nongeometric: &ng,
+            region: &region,
+            count: 40,
+            seed: 3,
+            sigma_position_mm: sigma,
+            sigma_rotation_rad: 0.2e-3,
+            observe,
+        };
+        let lib = sim.run(out.clone()).unwrap();
+        let joints = JointInfo::of(&robot);
+        assert_eq!(
+            std::fs::read(&out).unwrap(),
+            measurements_to_csv(&lib.measured, &joints).unwrap(),
+            "{measure}"
+        );
+        assert_eq!(
+            std::fs::read(&truth).unwrap(),
+            measurements_to_csv(&lib.truth, &joints).unwrap(),
+            "{measure}"
+        );
+    }
+}

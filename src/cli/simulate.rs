@@ -2,12 +2,13 @@
 
 use super::output::writing;
 use crate::data::JointInfo;
-use crate::data::measurement::write_measurements;
+use crate::data::measurement::MeasurementWriter;
 use crate::kinematics::tool_pose;
 use crate::model::{read_robot, write_robot};
 use crate::sim::{Deviations, NonGeometric, Observe, Region, Simulation};
 use anyhow::{Context, Result};
 use clap::Args;
+use std::io::IsTerminal;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -90,25 +91,48 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         sigma_rotation_rad: a.sigma_rot * 1e-3,
         observe: a.measure,
     };
-    let out = sim.run(a.out.clone())?;
+    // Rows stream to the files as they are drawn: a million of them need no memory.
     let joints = JointInfo::of(&nominal);
-    writing(write_measurements(&out.measured, &joints, &a.out), &a.out)?;
-    if let Some(p) = &a.truth_out {
-        writing(write_measurements(&out.truth, &joints, p), p)?;
+    let (measured_layout, truth_layout) = sim.layouts();
+    let mut out = writing(
+        MeasurementWriter::create(&a.out, measured_layout, &joints),
+        &a.out,
+    )?;
+    let mut truth_out = match &a.truth_out {
+        Some(p) => Some(writing(
+            MeasurementWriter::create(p, truth_layout, &joints),
+            p,
+        )?),
+        None => None,
+    };
+    // How far the nominal model is from the truth, in position (mm), as a first look.
+    let (mut sum, mut max, mut count) = (0.0, 0.0f64, 0usize);
+    let bar = super::compensator_args::progress_bar(std::io::stderr().is_terminal());
+    bar.set_length(a.count as u64);
+    sim.run_each(|m, t| {
+        out.write(&m)?;
+        if let Some(w) = truth_out.as_mut() {
+            w.write(&t)?;
+        }
+        if let Some(p) = t.position {
+            let e = (tool_pose(&nominal, &t.q).translation.vector - p).norm();
+            sum += e;
+            max = max.max(e);
+            count += 1;
+        }
+        bar.inc(1);
+        Ok(())
+    })?;
+    bar.finish_and_clear();
+    writing(out.finish(), &a.out)?;
+    if let (Some(w), Some(p)) = (truth_out, &a.truth_out) {
+        writing(w.finish(), p)?;
     }
     if let Some(p) = &a.true_robot {
         writing(write_robot(&truth, p), p)?;
     }
-    // How far the nominal model is from the truth, in position (mm), as a first look.
-    let errors: Vec<f64> = out
-        .truth
-        .rows
-        .iter()
-        .filter_map(|m| Some((tool_pose(&nominal, &m.q).translation.vector - m.position?).norm()))
-        .collect();
-    if !errors.is_empty() {
-        let mean = errors.iter().sum::<f64>() / errors.len() as f64;
-        let max = errors.iter().cloned().fold(0.0, f64::max);
+    if count > 0 {
+        let mean = sum / count as f64;
         eprintln!(
             "simulated {} configurations into {}; nominal model vs truth: mean {mean:.4} mm, max {max:.4} mm",
             a.count,

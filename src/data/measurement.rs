@@ -463,55 +463,76 @@ pub fn list_lines(lines: &[usize]) -> String {
     s.join(", ")
 }
 
-/// The canonical CSV text of a set: `id`, `set`, `pair` (when used), `q1..qN` (deg),
-/// `x,y,z` (mm), `rz,ry,rx` (deg, Z-Y-X), `distance` (mm), `sx,sy,sz` (mm),
-/// `srx,sry,srz` (deg), then the carried-through columns. Numbers are written exactly.
-pub fn measurements_to_csv(set: &MeasurementSet, joints: &[JointInfo]) -> Result<Vec<u8>> {
-    let rows = &set.rows;
-    let any = |f: &dyn Fn(&Measurement) -> bool| rows.iter().any(f);
-    let (has_id, has_set, has_pair) = (
-        any(&|m| m.id.is_some()),
-        any(&|m| m.set.is_some()),
-        any(&|m| m.pair.is_some()),
-    );
-    let has_pos = any(&|m| m.position.is_some());
-    let has_rot = any(&|m| m.rotation.is_some());
-    let has_dist = any(&|m| m.distance.is_some());
-    let has_sp = any(&|m| m.sigma_position.is_some());
-    let has_sr = any(&|m| m.sigma_rotation.is_some());
-    let mut headers: Vec<String> = Vec::new();
-    let mut push = |on: bool, names: &[&str]| {
-        if on {
-            headers.extend(names.iter().map(|s| s.to_string()));
+/// The columns of a canonical measurement CSV: which optional groups it has, and the
+/// carried-through columns.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Layout {
+    pub id: bool,
+    pub set: bool,
+    pub pair: bool,
+    pub position: bool,
+    pub rotation: bool,
+    pub distance: bool,
+    pub sigma_position: bool,
+    pub sigma_rotation: bool,
+    pub extra: Vec<String>,
+}
+
+impl Layout {
+    /// The groups some row of `set` has.
+    pub fn of(set: &MeasurementSet) -> Layout {
+        let any = |f: &dyn Fn(&Measurement) -> bool| set.rows.iter().any(f);
+        Layout {
+            id: any(&|m| m.id.is_some()),
+            set: any(&|m| m.set.is_some()),
+            pair: any(&|m| m.pair.is_some()),
+            position: any(&|m| m.position.is_some()),
+            rotation: any(&|m| m.rotation.is_some()),
+            distance: any(&|m| m.distance.is_some()),
+            sigma_position: any(&|m| m.sigma_position.is_some()),
+            sigma_rotation: any(&|m| m.sigma_rotation.is_some()),
+            extra: set.extra_columns.clone(),
         }
-    };
-    push(has_id, &["id"]);
-    push(has_set, &["set"]);
-    push(has_pair, &["pair"]);
-    headers.extend(joint_columns(joints.len()));
-    let mut push = |on: bool, names: &[&str]| {
-        if on {
-            headers.extend(names.iter().map(|s| s.to_string()));
-        }
-    };
-    push(has_pos, &["x", "y", "z"]);
-    push(has_rot, &["rz", "ry", "rx"]);
-    push(has_dist, &["distance"]);
-    push(has_sp, &["sx", "sy", "sz"]);
-    push(has_sr, &["srx", "sry", "srz"]);
-    headers.extend(set.extra_columns.iter().cloned());
-    let mut out = CsvOut::new(&headers)?;
-    let num = |v: f64| format!("{v}");
-    for m in rows {
-        let mut c: Vec<String> = Vec::with_capacity(headers.len());
+    }
+
+    /// The header row (joints in file units: deg, or mm for prismatic).
+    pub fn headers(&self, joints: &[JointInfo]) -> Vec<String> {
+        let mut headers: Vec<String> = Vec::new();
+        let mut push = |on: bool, names: &[&str]| {
+            if on {
+                headers.extend(names.iter().map(|s| s.to_string()));
+            }
+        };
+        push(self.id, &["id"]);
+        push(self.set, &["set"]);
+        push(self.pair, &["pair"]);
+        headers.extend(joint_columns(joints.len()));
+        let mut push = |on: bool, names: &[&str]| {
+            if on {
+                headers.extend(names.iter().map(|s| s.to_string()));
+            }
+        };
+        push(self.position, &["x", "y", "z"]);
+        push(self.rotation, &["rz", "ry", "rx"]);
+        push(self.distance, &["distance"]);
+        push(self.sigma_position, &["sx", "sy", "sz"]);
+        push(self.sigma_rotation, &["srx", "sry", "srz"]);
+        headers.extend(self.extra.iter().cloned());
+        headers
+    }
+
+    /// The cells of one row (mm, deg), blank where the row lacks a group the layout has.
+    pub fn cells(&self, m: &Measurement, joints: &[JointInfo]) -> Vec<String> {
+        let num = |v: f64| format!("{v}");
+        let mut c: Vec<String> = Vec::new();
         let text = |o: &Option<String>| o.clone().unwrap_or_default();
-        if has_id {
+        if self.id {
             c.push(text(&m.id));
         }
-        if has_set {
+        if self.set {
             c.push(text(&m.set));
         }
-        if has_pair {
+        if self.pair {
             c.push(text(&m.pair));
         }
         c.extend(
@@ -527,24 +548,37 @@ pub fn measurements_to_csv(set: &MeasurementSet, joints: &[JointInfo]) -> Result
                 }
             }
         };
-        opt3(&mut c, has_pos, m.position.map(|p| [p.x, p.y, p.z]));
+        opt3(&mut c, self.position, m.position.map(|p| [p.x, p.y, p.z]));
         opt3(
             &mut c,
-            has_rot,
+            self.rotation,
             m.rotation.map(|r| rotation_to_zyx(&r).map(f64::to_degrees)),
         );
-        if has_dist {
+        if self.distance {
             c.push(m.distance.map(num).unwrap_or_default());
         }
-        opt3(&mut c, has_sp, m.sigma_position.map(|s| [s.x, s.y, s.z]));
         opt3(
             &mut c,
-            has_sr,
+            self.sigma_position,
+            m.sigma_position.map(|s| [s.x, s.y, s.z]),
+        );
+        opt3(
+            &mut c,
+            self.sigma_rotation,
             m.sigma_rotation
                 .map(|s| [s.x, s.y, s.z].map(f64::to_degrees)),
         );
         c.extend(m.extra.iter().cloned());
-        out.row(&c)?;
+        c
+    }
+}
+
+/// A set as canonical CSV bytes.
+pub fn measurements_to_csv(set: &MeasurementSet, joints: &[JointInfo]) -> Result<Vec<u8>> {
+    let layout = Layout::of(set);
+    let mut out = CsvOut::new(&layout.headers(joints))?;
+    for m in &set.rows {
+        out.row(&layout.cells(m, joints))?;
     }
     out.into_bytes()
 }
@@ -552,6 +586,44 @@ pub fn measurements_to_csv(set: &MeasurementSet, joints: &[JointInfo]) -> Result
 /// Writes a set as canonical CSV, atomically.
 pub fn write_measurements(set: &MeasurementSet, joints: &[JointInfo], path: &Path) -> Result<()> {
     crate::io::write_atomic(path, &measurements_to_csv(set, joints)?)
+}
+
+/// Canonical CSV streamed row by row to a file that appears whole on
+/// [`MeasurementWriter::finish`] (a million simulated rows need no memory).
+pub struct MeasurementWriter {
+    w: csv::Writer<crate::io::AtomicWriter>,
+    layout: Layout,
+    joints: Vec<JointInfo>,
+    path: PathBuf,
+}
+
+impl MeasurementWriter {
+    pub fn create(path: &Path, layout: Layout, joints: &[JointInfo]) -> Result<Self> {
+        let mut w = csv::Writer::from_writer(crate::io::AtomicWriter::create(path)?);
+        let csv_err = |e: csv::Error| Error::Invalid(format!("{}: {e}", path.display()));
+        w.write_record(layout.headers(joints)).map_err(csv_err)?;
+        Ok(MeasurementWriter {
+            w,
+            layout,
+            joints: joints.to_vec(),
+            path: path.to_path_buf(),
+        })
+    }
+
+    pub fn write(&mut self, m: &Measurement) -> Result<()> {
+        let path = &self.path;
+        self.w
+            .write_record(self.layout.cells(m, &self.joints))
+            .map_err(|e| Error::Invalid(format!("{}: {e}", path.display())))
+    }
+
+    pub fn finish(self) -> Result<()> {
+        let path = self.path;
+        self.w
+            .into_inner()
+            .map_err(|e| Error::Invalid(format!("{}: {}", path.display(), e.error())))?
+            .finish()
+    }
 }
 
 /// Splits a set into two by a seeded random draw: `fraction` of the rows (rounded) go to the

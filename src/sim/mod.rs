@@ -7,6 +7,7 @@ pub mod nongeometric;
 pub use deviations::Deviations;
 pub use nongeometric::NonGeometric;
 
+use crate::data::measurement::Layout;
 use crate::data::{Measurement, MeasurementSet};
 use crate::error::{Error, Location, Result};
 use crate::kinematics::{Frames, Pose, tool_pose};
@@ -142,7 +143,12 @@ impl Simulation<'_> {
     /// Draws the configurations (uniform in the region), applies the non-geometric joint
     /// deflections, runs the true model's FK, and adds noise. Configurations and noise come
     /// from separate streams of one seed, so changing the noise leaves the configurations.
-    pub fn run(&self, source: PathBuf) -> Result<SimOutput> {
+    /// [`Simulation::run`] row by row: `emit(measured, truth)` for each configuration in
+    /// order, nothing kept (the same rows as `run`, from the same streams).
+    pub fn run_each(
+        &self,
+        mut emit: impl FnMut(Measurement, Measurement) -> Result<()>,
+    ) -> Result<()> {
         let robot = self.truth;
         let n = robot.dof();
         if self.region.0.len() != n {
@@ -158,27 +164,24 @@ impl Simulation<'_> {
         let mut rng_q = ChaCha8Rng::seed_from_u64(self.seed);
         let mut rng_noise = ChaCha8Rng::seed_from_u64(self.seed);
         rng_noise.set_stream(1);
-        let configs: Vec<Vec<f64>> = (0..self.count)
-            .map(|_| {
-                self.region
-                    .0
-                    .iter()
-                    .map(|&[lo, hi]| {
-                        if lo < hi {
-                            rng_q.random_range(lo..hi)
-                        } else {
-                            lo
-                        }
-                    })
-                    .collect()
-            })
-            .collect();
         let unit = Normal::new(0.0, 1.0).map_err(|e| Error::Invalid(e.to_string()))?;
         let mut ws = Frames::new(robot);
         let mut previous = vec![0.0; n];
-        let mut measured = Vec::with_capacity(self.count);
-        let mut truth = Vec::with_capacity(self.count);
-        for (k, q) in configs.into_iter().enumerate() {
+        for k in 0..self.count {
+            // Configurations and noise come from separate streams: drawing them in turn
+            // gives the rows drawing all configurations first gave.
+            let q: Vec<f64> = self
+                .region
+                .0
+                .iter()
+                .map(|&[lo, hi]| {
+                    if lo < hi {
+                        rng_q.random_range(lo..hi)
+                    } else {
+                        lo
+                    }
+                })
+                .collect();
             let pose = actual_pose(robot, self.nongeometric, &q, &previous, &mut ws);
             let mut draw3 = |s: f64| {
                 Vector3::new(
@@ -206,10 +209,38 @@ impl Simulation<'_> {
                     m.sigma_rotation = Some(Vector3::repeat(self.sigma_rotation_rad));
                 }
             }
+            previous = q.clone();
+            emit(m, t)?;
+        }
+        Ok(())
+    }
+
+    /// The columns of the measured and the true rows [`Simulation::run_each`] gives.
+    pub fn layouts(&self) -> (Layout, Layout) {
+        let pos = self.observe != Observe::Orientation;
+        let rot = self.observe != Observe::Position;
+        let truth = Layout {
+            id: true,
+            position: pos,
+            rotation: rot,
+            ..Layout::default()
+        };
+        let measured = Layout {
+            sigma_position: pos && self.sigma_position_mm > 0.0,
+            sigma_rotation: rot && self.sigma_rotation_rad > 0.0,
+            ..truth.clone()
+        };
+        (measured, truth)
+    }
+
+    pub fn run(&self, source: PathBuf) -> Result<SimOutput> {
+        let mut measured = Vec::with_capacity(self.count);
+        let mut truth = Vec::with_capacity(self.count);
+        self.run_each(|m, t| {
             measured.push(m);
             truth.push(t);
-            previous = q;
-        }
+            Ok(())
+        })?;
         let set = |rows| MeasurementSet {
             source: source.clone(),
             rows,
