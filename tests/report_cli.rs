@@ -74,9 +74,61 @@ fn plots_are_png_and_svg_with_axis_titles() {
     assert!(svg.contains("identified: mean"), "legend with means");
 }
 
+/// The Chromium to run: `ROBOCAL_CHROMIUM`, else the first of the usual names on PATH, else
+/// Debian's package installed here (as root, or through password-less sudo), said on stderr:
+/// the README's test command needs no manual step on a fresh Debian machine.
+fn chromium_exe() -> String {
+    static EXE: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    EXE.get_or_init(|| {
+        if let Ok(e) = std::env::var("ROBOCAL_CHROMIUM") {
+            return e;
+        }
+        let names = ["chromium", "chromium-browser", "google-chrome"];
+        let found = |n: &&str| {
+            Command::new(n)
+                .arg("--version")
+                .output()
+                .is_ok_and(|o| o.status.success())
+        };
+        if let Some(n) = names.iter().find(|n| found(n)) {
+            return n.to_string();
+        }
+        eprintln!(
+            "report test: no Chromium on PATH; installing Debian's chromium (apt-get) for the \
+             headless rendering test"
+        );
+        let root = Command::new("id")
+            .arg("-u")
+            .output()
+            .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0");
+        let apt = |args: &[&str]| {
+            let mut c = if root {
+                Command::new("apt-get")
+            } else {
+                let mut c = Command::new("sudo");
+                c.args(["-n", "apt-get"]);
+                c
+            };
+            c.args(args)
+                .env("DEBIAN_FRONTEND", "noninteractive")
+                .output()
+                .is_ok_and(|o| o.status.success())
+        };
+        let installed = apt(&["update", "-qq"]) && apt(&["install", "-y", "-qq", "chromium"]);
+        if !installed {
+            panic!(
+                "no Chromium, and installing Debian's chromium failed (not root, no \
+                 password-less sudo, or no apt-get): install chromium or set ROBOCAL_CHROMIUM"
+            );
+        }
+        "chromium".into()
+    })
+    .clone()
+}
+
 /// Headless Chromium: DOM after load, and a screenshot.
 fn chromium(page: &Path, shot: &Path) -> String {
-    let exe = std::env::var("ROBOCAL_CHROMIUM").unwrap_or_else(|_| "chromium".into());
+    let exe = chromium_exe();
     let profile = tmp("chromium-profile");
     let common = [
         "--headless",
@@ -99,7 +151,7 @@ fn chromium(page: &Path, shot: &Path) -> String {
             .arg(&url)
             .output()
             .unwrap_or_else(|e| {
-                panic!("{exe}: {e}; install Debian's chromium (as .ci/run does) or set ROBOCAL_CHROMIUM")
+                panic!("{exe}: {e}; install Debian's chromium or set ROBOCAL_CHROMIUM")
             })
     };
     let o = run(&[format!("--screenshot={}", shot.display())]);
