@@ -13,10 +13,10 @@
 use crate::data::MeasurementSet;
 use crate::data::pairs::{Pair, distance, pairs};
 use crate::error::Result;
+use crate::geometry::rotation::angle_between;
 use crate::identify::problem::Measure;
 use crate::kinematics::{Pose, tool_pose};
 use crate::model::Robot;
-use crate::rotation::angle_between;
 use serde::Serialize;
 
 /// Mean, RMS, 95th percentile and max of a list of errors.

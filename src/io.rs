@@ -241,14 +241,20 @@ pub fn read_text(path: &Path) -> Result<String> {
     })
 }
 
+/// 1-based line of a byte offset of `text`.
+pub fn line_of(text: &str, offset: usize) -> usize {
+    text.as_bytes()[..offset.min(text.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
+}
+
 /// Parses TOML text into `T`; a syntax or type error names the file, the line and the key.
 pub fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T> {
     toml::from_str(text).map_err(|e| {
         let (line, field) = match e.span() {
-            Some(s) => (
-                Some(crate::model::file::line_of(text, s.start)),
-                key_at(text, s),
-            ),
+            Some(s) => (Some(line_of(text, s.start)), key_at(text, s)),
             None => (None, None),
         };
         Error::input(

@@ -1,7 +1,7 @@
 //! robocal: kinematic calibration of industrial robots.
 //!
 //! Units: files and the command line use mm and degrees; everything inside uses mm and
-//! radians. Poses are [`kinematics::Pose`] (a rotation matrix and a translation in mm).
+//! radians. Poses are [`geometry::Pose`] (a rotation matrix and a translation in mm).
 
 pub mod case_d;
 pub mod cli;
@@ -9,6 +9,7 @@ pub mod compensation;
 pub mod data;
 pub mod error;
 pub mod evaluate;
+pub mod geometry;
 pub mod identify;
 pub mod io;
 pub mod kinematics;
@@ -17,10 +18,9 @@ pub mod neural;
 pub mod plot;
 pub mod report;
 pub mod reproduce;
-pub mod rotation;
 pub mod sim;
 pub mod stats;
 
 pub use error::{Error, Result};
-pub use kinematics::Pose;
+pub use geometry::Pose;
 pub use model::Robot;

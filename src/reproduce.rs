@@ -172,7 +172,7 @@ pub fn noise_floor(
     truth: &MeasurementSet,
     measure: Measure,
 ) -> Result<ErrorStats> {
-    use crate::kinematics::Pose;
+    use crate::geometry::Pose;
     let key = |q: &[f64]| q.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
     let poses: std::collections::HashMap<Vec<u64>, Pose> = truth
         .rows

@@ -5,11 +5,11 @@
 
 use robocal::compensation::{CalibratedModel, Desired, Failure, FakeTargetSolver};
 use robocal::data::{MeasurementSet, read_canonical};
+use robocal::geometry::rotation::rotation_vector;
 use robocal::identify::{Measure, Options, identify};
 use robocal::kinematics::{Frames, Pose, SphericalWristIk, tool_pose};
 use robocal::model::{Robot, read_robot};
 use robocal::neural::compensator::{Compensator, CompensatorOptions, PredictWorkspace};
-use robocal::rotation::rotation_vector;
 use robocal::sim::{actual_pose, nongeometric::NonGeometric};
 use std::path::PathBuf;
 

@@ -4,12 +4,12 @@
 use robocal::data::measurement::split;
 use robocal::data::{MeasurementSet, Profile, read_measurements};
 use robocal::evaluate::evaluate_model;
+use robocal::geometry::rotation::angle_between;
 use robocal::identify::identifiability::DropReason;
 use robocal::identify::{Measure, Method, Options, RobustLoss, SolveOptions, identify};
 use robocal::kinematics::{Pose, tool_pose};
 use robocal::model::{Robot, read_robot};
 use robocal::reproduce::{Case, median_range, over_seeds};
-use robocal::rotation::angle_between;
 use robocal::sim::{Deviations, NonGeometric, Observe, Region, Simulation};
 use std::path::{Path, PathBuf};
 

@@ -2,13 +2,13 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use robocal::geometry::rotation::angle_between;
 use robocal::kinematics::{
     Frames, IkOptions, IkTarget, IkWorkspace, Pose, SphericalWristIk, frames, solve_numeric,
     tool_pose,
 };
 use robocal::model::file::parse_robot;
 use robocal::model::{Robot, read_robot};
-use robocal::rotation::angle_between;
 use std::path::Path;
 
 fn robot_file(name: &str) -> Robot {

@@ -3,7 +3,7 @@
 
 use super::compensator_args::CompensatorArgs;
 use super::data_args::SigmaArgs;
-use super::identify::write_json;
+use super::summary::write_json;
 use crate::case_d::{Robotset, Row, Stage, find, load, run};
 use crate::evaluate::ErrorStats;
 use crate::model::read_robot;

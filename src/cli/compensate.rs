@@ -1,7 +1,7 @@
 //! `robocal compensate`: fake targets for an unmodified controller (see `compensation`).
 
 use super::output::{OutputArgs, num, parse_list};
-use super::train::load_compensator;
+use super::predict::load_compensator;
 use crate::compensation::{CalibratedModel, Desired, FakeTargetSolver};
 use crate::data::{POSE_COLUMNS, Table, joint_columns};
 use crate::kinematics::{pose_from_file, pose_to_file};
@@ -135,7 +135,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     added.extend(POSE_COLUMNS.iter().map(|c| format!("cmd_{c}")));
     added.extend(["residual_mm".into(), "residual_deg".into(), "status".into()]);
     if comp.is_some() {
-        added.push(super::train::DOMAIN_COLUMN.into());
+        added.push(super::predict::DOMAIN_COLUMN.into());
     }
     // Carried columns must not collide with what is written (e.g. a previous output fed
     // back in): the CSV would be ambiguous and JSON would keep only one of them.
@@ -216,7 +216,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     a.output
         .emit(&headers, &out_rows)
         .context("writing the commands")?;
-    super::train::warn_outside(&a.targets, &outside, true);
+    super::predict::warn_outside(&a.targets, &outside, true);
     let total = t.rows.len();
     if !shifts.is_empty() {
         let mean = shifts.iter().sum::<f64>() / shifts.len() as f64;

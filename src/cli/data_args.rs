@@ -2,6 +2,7 @@
 
 use crate::data::measurement::{list_lines, parse_measurements};
 use crate::data::{JointInfo, MeasurementSet, Profile, ReadOptions, ReadReport, Table};
+use crate::model::{Robot, read_robot};
 use anyhow::Result;
 use clap::Args;
 use std::path::{Path, PathBuf};
@@ -90,4 +91,45 @@ pub fn joints_of(robot: Option<&PathBuf>, fallback: usize) -> Result<Vec<JointIn
         Some(p) => JointInfo::of(&crate::model::read_robot(p)?),
         None => JointInfo::revolute(fallback),
     })
+}
+
+pub fn read_set(args: &DataArgs, path: &Path, robot: &Robot) -> Result<MeasurementSet> {
+    args.read(path, &JointInfo::of(robot))
+}
+
+/// The main data set and the optional validation set of a command.
+pub fn read_sets(
+    args: &DataArgs,
+    data: &Path,
+    validate: Option<&Path>,
+    robot: &Robot,
+) -> Result<(MeasurementSet, Option<MeasurementSet>)> {
+    let set = read_set(args, data, robot)?;
+    let val = validate.map(|p| read_set(args, p, robot)).transpose()?;
+    Ok((set, val))
+}
+
+/// The model and the data of a fit on measurements (`identify`, `train`), after refusing
+/// outputs that name one of its inputs or each other ([`super::paths::guard`]).
+pub fn open_fit(
+    robot: &Path,
+    data: &Path,
+    validate: Option<&PathBuf>,
+    read: &DataArgs,
+    out: &Path,
+    report: Option<&PathBuf>,
+) -> Result<(Robot, MeasurementSet, Option<MeasurementSet>)> {
+    use super::paths::{guard, opt, req};
+    guard(
+        &[
+            req("--robot", robot),
+            req("--data", data),
+            opt("--validate", validate),
+            opt("--profile", read.profile.as_ref()),
+        ],
+        &[req("--out", out), opt("--report", report)],
+    )?;
+    let model = read_robot(robot)?;
+    let (set, val) = read_sets(read, data, validate.map(|p| p.as_path()), &model)?;
+    Ok((model, set, val))
 }

@@ -1,19 +1,18 @@
-//! `robocal identify` and `robocal evaluate`.
+//! `robocal identify`.
 
-use super::data_args::{DataArgs, SigmaArgs};
-use super::train::load_compensator;
-use crate::data::{JointInfo, MeasurementSet};
-use crate::evaluate::{ErrorStats, RowError, row_errors, summarize};
+use super::data_args::{DataArgs, SigmaArgs, open_fit};
+use super::summary::{print_stats, stats_json, write_json};
+use crate::data::MeasurementSet;
+use crate::evaluate::{RowError, row_errors, summarize};
 use crate::identify::identifiability::DropReason;
 use crate::identify::{Identified, Measure, Method, Options, RobustLoss, SolveOptions, identify};
 use crate::kinematics::tool_pose;
-use crate::model::{Robot, read_robot, write_robot};
-use crate::neural::compensator::PredictWorkspace;
+use crate::model::write_robot;
 use crate::plot::{ErrorRun, error_figures};
 use anyhow::Result;
 use clap::Args;
 use serde_json::{Value, json};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct IdentifyArgs {
@@ -59,106 +58,6 @@ pub struct IdentifyArgs {
     /// Folder for pictures (PNG and SVG, listed in figures.json for `robocal report`).
     #[arg(long)]
     plot: Option<PathBuf>,
-}
-
-#[derive(Args)]
-pub struct EvaluateArgs {
-    /// Robot file to evaluate.
-    #[arg(long)]
-    robot: PathBuf,
-    /// Measurements to evaluate against.
-    #[arg(long)]
-    data: PathBuf,
-    /// A compensator (from `robocal train`) to evaluate beside the robot.
-    #[arg(long)]
-    compensator: Option<PathBuf>,
-    #[command(flatten)]
-    read: DataArgs,
-    #[arg(long, value_enum)]
-    measure: Option<Measure>,
-    /// JSON report (`validation` holds the statistics, `compensated` those with the
-    /// compensator).
-    #[arg(long)]
-    report: Option<PathBuf>,
-    /// Folder for pictures (PNG and SVG, listed in figures.json for `robocal report`).
-    #[arg(long)]
-    plot: Option<PathBuf>,
-}
-
-fn fmt_stats(s: &ErrorStats) -> (String, String) {
-    let p = s.position_mm.map_or("-".into(), |p| {
-        format!(
-            "{:>9.4} {:>9.4} {:>9.4} {:>9.4}",
-            p.mean, p.rms, p.p95, p.max
-        )
-    });
-    let r = s.orientation_deg.map_or("-".into(), |r| {
-        format!("{:>8.4} {:>8.4} {:>8.4}", r.mean, r.rms, r.max)
-    });
-    (p, r)
-}
-
-/// Prints a before/after table of error statistics.
-pub fn print_stats(rows: &[(&str, &str, &ErrorStats)]) {
-    println!(
-        "{:<12} {:<7} {:>39}   {:>26}",
-        "set", "model", "position mm: mean rms p95 max", "orientation deg: mean rms max"
-    );
-    for (set, model, s) in rows {
-        let (p, r) = fmt_stats(s);
-        println!("{set:<12} {model:<7} {p:>39}   {r:>26}");
-    }
-}
-
-pub(super) fn stats_json(s: &ErrorStats) -> Value {
-    serde_json::to_value(s).unwrap_or(Value::Null)
-}
-
-pub(super) fn write_json(path: &Path, v: &Value) -> Result<()> {
-    let mut b = serde_json::to_vec_pretty(v)?;
-    b.push(b'\n');
-    super::output::writing(crate::io::write_atomic(path, &b), path)
-}
-
-pub(super) fn read_set(args: &DataArgs, path: &Path, robot: &Robot) -> Result<MeasurementSet> {
-    args.read(path, &JointInfo::of(robot))
-}
-
-/// The main data set and the optional validation set of a command.
-pub(super) fn read_sets(
-    args: &DataArgs,
-    data: &Path,
-    validate: Option<&Path>,
-    robot: &Robot,
-) -> Result<(MeasurementSet, Option<MeasurementSet>)> {
-    let set = read_set(args, data, robot)?;
-    let val = validate.map(|p| read_set(args, p, robot)).transpose()?;
-    Ok((set, val))
-}
-
-/// The model and the data of a fit on measurements (`identify`, `train`), after refusing
-/// outputs that name one of its inputs or each other ([`super::paths::guard`]).
-pub(super) fn open_fit(
-    robot: &Path,
-    data: &Path,
-    validate: Option<&PathBuf>,
-    read: &DataArgs,
-    out: &Path,
-    report: Option<&PathBuf>,
-) -> Result<(Robot, MeasurementSet, Option<MeasurementSet>)> {
-    use super::paths::{guard, opt, req};
-    guard(
-        &[
-            req("--robot", robot),
-            req("--data", data),
-            opt("--validate", validate),
-            opt("--profile", read.profile.as_ref()),
-        ],
-        &[req("--out", out), opt("--report", report)],
-    )?;
-    let model = read_robot(robot)?;
-    let (set, val) = read_sets(read, data, validate.map(|p| p.as_path()), &model)?;
-    Ok((model, set, val))
 }
 
 pub fn run_identify(a: IdentifyArgs) -> Result<()> {
@@ -376,93 +275,4 @@ fn print_identified(a: &IdentifyArgs, cal: &MeasurementSet, id: &Identified) {
             lines.join(", ")
         );
     }
-}
-
-pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
-    use super::paths::{guard, opt, req};
-    guard(
-        &[
-            req("--robot", &a.robot),
-            req("--data", &a.data),
-            opt("--compensator", a.compensator.as_ref()),
-            opt("--profile", a.read.profile.as_ref()),
-        ],
-        &[opt("--report", a.report.as_ref())],
-    )?;
-    let robot = read_robot(&a.robot)?;
-    let (comp, note) = match &a.compensator {
-        Some(p) => {
-            let (c, note) = load_compensator(p, &a.robot, &robot)?;
-            (Some(c), note)
-        }
-        None => (None, None),
-    };
-    let set = read_set(&a.read, &a.data, &robot)?;
-    let m = a.measure.unwrap_or_else(|| Measure::default_for(&set));
-    let model_rows = row_errors(&set, m, |q| tool_pose(&robot, q))?;
-    let s = summarize(&model_rows);
-    println!(
-        "evaluate: {} on {} ({} rows, measure {})",
-        a.robot.display(),
-        a.data.display(),
-        set.rows.len(),
-        m.name()
-    );
-    let mut outside = Vec::new();
-    let net_rows = match &comp {
-        Some(c) => {
-            let mut ws = PredictWorkspace::default();
-            outside = set
-                .rows
-                .iter()
-                .filter(|r| !c.domain_check(&r.q, &mut ws).inside())
-                .map(|r| r.line)
-                .collect();
-            Some(row_errors(&set, m, |q| c.predict(q, &mut ws))?)
-        }
-        None => None,
-    };
-    let compensated = net_rows.as_deref().map(summarize);
-    let mut table = vec![("data", "model", &s)];
-    if let Some(c) = &compensated {
-        table.push(("data", "+net", c));
-    }
-    print_stats(&table);
-    for (what, st) in [
-        ("model", Some(&s)),
-        ("with the compensator", compensated.as_ref()),
-    ] {
-        if let Some(c) = st.and_then(|st| st.position_per_coordinate_mean_mm) {
-            println!("mean per-coordinate position error |dx|,|dy|,|dz| ({what}): {c:.4} mm");
-        }
-    }
-    if let Some(note) = note {
-        println!("{note}");
-    }
-    super::train::warn_outside(&a.data, &outside, false);
-    if let Some(dir) = &a.plot {
-        let mut runs = vec![ErrorRun {
-            label: "model",
-            errors: &model_rows,
-        }];
-        if let Some(n) = &net_rows {
-            runs.push(ErrorRun {
-                label: "with compensator",
-                errors: n,
-            });
-        }
-        let figs = error_figures(dir, "evaluate", "evaluation data", &set, &runs)?;
-        println!("plots: {} pictures in {}", figs.len(), dir.display());
-    }
-    if let Some(path) = &a.report {
-        let mut v =
-            json!({"robot": a.robot, "data": a.data, "measure": m, "validation": stats_json(&s)});
-        if let (Some(p), Some(c)) = (&a.compensator, &compensated) {
-            v["compensator"] = json!(p);
-            v["compensated"] = stats_json(c);
-            v["rows_outside_domain"] = json!(outside.len());
-        }
-        write_json(path, &v)?;
-    }
-    Ok(())
 }

@@ -5,16 +5,19 @@ mod case_d;
 mod compensate;
 mod compensator_args;
 mod data_args;
+mod evaluate;
 mod fk;
 mod identify;
 mod ik;
 mod import;
 mod output;
 mod paths;
+mod predict;
 mod report;
 mod reproduce;
 mod simulate;
 mod split;
+mod summary;
 mod train;
 
 use clap::{Parser, Subcommand};
@@ -46,13 +49,13 @@ enum Command {
     /// Identifies kinematic parameters from measurements and writes the calibrated robot.
     Identify(identify::IdentifyArgs),
     /// Reports the accuracy of a robot model on measurements.
-    Evaluate(identify::EvaluateArgs),
+    Evaluate(evaluate::EvaluateArgs),
     /// Reproduces the thesis's case studies A-D (identification) beside the thesis's figures.
     Reproduce(reproduce::ReproduceArgs),
     /// Trains a neural compensator (a model and an MLP in series) on measurements.
     Train(train::TrainArgs),
     /// Compensated tool poses for joint configurations.
-    Predict(train::PredictArgs),
+    Predict(predict::PredictArgs),
     /// Fake targets: joints at which the calibrated (compensated) robot reaches each desired
     /// pose, and the nominal pose an unmodified controller must be given for them.
     Compensate(compensate::CompensateArgs),
@@ -79,10 +82,10 @@ pub fn main() -> ExitCode {
         Command::Simulate(a) => simulate::run(a),
         Command::Split(a) => split::run(a),
         Command::Identify(a) => identify::run_identify(a),
-        Command::Evaluate(a) => identify::run_evaluate(a),
+        Command::Evaluate(a) => evaluate::run_evaluate(a),
         Command::Reproduce(a) => reproduce::run(a),
         Command::Train(a) => train::run_train(a),
-        Command::Predict(a) => train::run_predict(a),
+        Command::Predict(a) => predict::run_predict(a),
         Command::Compensate(a) => compensate::run(a).map(|failed| {
             if let Some(msg) = failed {
                 eprintln!("warning: {msg}");

@@ -9,9 +9,9 @@ use super::joint_columns;
 use super::profile::{AngleUnit, Profile};
 use super::table::{CsvOut, Table, shown};
 use crate::error::{Error, Location, Result};
-use crate::kinematics::Pose;
+use crate::geometry::Pose;
+use crate::geometry::rotation::{EulerConvention, rotation_to_zyx};
 use crate::model::{JointType, Robot};
-use crate::rotation::{EulerConvention, rotation_to_zyx};
 use nalgebra::{Rotation3, Translation3, Vector3};
 use std::path::{Path, PathBuf};
 

@@ -19,7 +19,7 @@
 //! The default profile is the canonical form: comma, decimal point, deg, mm, Z-Y-X.
 
 use crate::error::{Error, Location, Result};
-use crate::rotation::EulerConvention;
+use crate::geometry::rotation::EulerConvention;
 use serde::Deserialize;
 use std::path::Path;
 

@@ -9,7 +9,7 @@
 
 use crate::kinematics::{Frames, Pose};
 use crate::model::Robot;
-use crate::model::robot::Anchor;
+use crate::model::axes::Anchor;
 use nalgebra::{Matrix6xX, Point3, Vector3};
 
 /// Fills `out` (6 x cols.len()) with the columns of the parameters `cols` (indices into
@@ -53,9 +53,9 @@ pub fn parameter_jacobian(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::rotation::rotation_vector;
     use crate::kinematics::{frames, tool_pose};
     use crate::model::file::parse_robot;
-    use crate::rotation::rotation_vector;
     use std::path::Path;
 
     /// Every parameter kind: MDH (a, alpha, d, theta), Hayati (beta), standard DH, 6-DOF base

@@ -15,9 +15,9 @@ use super::jacobian::parameter_jacobian;
 use crate::data::MeasurementSet;
 use crate::data::pairs::{Pair, pairs};
 use crate::error::{Error, Result};
+use crate::geometry::rotation::rotation_vector;
 use crate::kinematics::{Frames, frames};
 use crate::model::Robot;
-use crate::rotation::rotation_vector;
 use nalgebra::{DMatrix, DVector, Matrix6xX, Vector3};
 
 /// How measurements are compared with the model.

@@ -16,10 +16,10 @@
 
 use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
+use crate::geometry::rotation::rotation_to_zyx;
 use crate::kinematics::{Pose, tool_pose};
 use crate::model::ParamId;
 use crate::model::{Convention, Field, Robot, Slot};
-use crate::rotation::rotation_to_zyx;
 use nalgebra::{Matrix3, Matrix6, Rotation3, Vector3, Vector6};
 
 /// What the registration found.

@@ -15,8 +15,8 @@ use super::Pose;
 use super::fk::{Frames, frames};
 use super::jacobian::joint_jacobian;
 use crate::error::{Error, Result};
+use crate::geometry::rotation::rotation_vector;
 use crate::model::{JointType, Robot};
-use crate::rotation::rotation_vector;
 use nalgebra::{DMatrix, DVector, Matrix6xX, Vector3, Vector6};
 use std::f64::consts::PI;
 

@@ -1,10 +1,33 @@
 //! Each parameter of a row as an elementary motion (a screw) fixed in a frame of the chain;
 //! the identification Jacobian is built from these (thesis eq. 4.19-4.21).
 
-use super::robot::{Anchor, ParamAxis};
 use super::row::{Convention, Field, Row};
-use crate::rotation::{rot_y, rot_z};
+use crate::geometry::rotation::{rot_y, rot_z};
 use nalgebra::Vector3;
+
+/// Which frame of a configuration a parameter's screw is fixed in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Anchor {
+    /// The world frame (base row).
+    World,
+    /// The frame before joint i's row (the base frame, or link frame i-1).
+    Entry(usize),
+    /// Joint i's frame after its RotZ TransZ.
+    Joint(usize),
+    /// The frame before the tool row (link frame N).
+    ToolEntry,
+}
+
+/// A parameter as an elementary motion: rotation about the line through `c` along `u`, or
+/// translation along `u`, both in the anchor frame's coordinates. Changing the parameter by
+/// dp moves every frame after it by that motion times dp.
+#[derive(Debug, Clone)]
+pub(crate) struct ParamAxis {
+    pub anchor: Anchor,
+    pub rotation: bool,
+    pub u: nalgebra::Vector3<f64>,
+    pub c: nalgebra::Vector3<f64>,
+}
 
 /// The screws of a row's parameters, in the order of `row.convention().fields()`.
 ///

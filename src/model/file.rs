@@ -29,6 +29,7 @@
 use super::robot::{Joint, JointType, Robot};
 use super::row::{Convention, Field, Row};
 use crate::error::{Error, Location, Result};
+use crate::io::line_of;
 use serde::Deserialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -114,15 +115,6 @@ impl RowFile {
             .filter_map(|(f, v)| v.as_ref().map(|v| (f, v)))
             .collect()
     }
-}
-
-/// 1-based line of a byte offset.
-pub(crate) fn line_of(text: &str, offset: usize) -> usize {
-    text[..offset.min(text.len())]
-        .bytes()
-        .filter(|&b| b == b'\n')
-        .count()
-        + 1
 }
 
 /// Reads a robot file.

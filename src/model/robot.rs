@@ -4,9 +4,10 @@
 //! A [`Robot`] never changes during a solve. It keeps the rows as written (file units) and a
 //! compiled chain of constant transforms that forward kinematics runs through.
 
+use super::axes::{Anchor, ParamAxis};
 use super::row::{Convention, Field, Row, apply_z};
 use crate::error::{Error, Result};
-use crate::kinematics::Pose;
+use crate::geometry::Pose;
 
 /// Revolute joints add their variable to theta; prismatic joints add it to d.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -123,30 +124,6 @@ pub(crate) struct Chain {
     pub base: Pose,
     /// The screw of every parameter, in the order of [`Robot::parameters`].
     pub axes: Vec<ParamAxis>,
-}
-
-/// Which frame of a configuration a parameter's screw is fixed in.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Anchor {
-    /// The world frame (base row).
-    World,
-    /// The frame before joint i's row (the base frame, or link frame i-1).
-    Entry(usize),
-    /// Joint i's frame after its RotZ TransZ.
-    Joint(usize),
-    /// The frame before the tool row (link frame N).
-    ToolEntry,
-}
-
-/// A parameter as an elementary motion: rotation about the line through `c` along `u`, or
-/// translation along `u`, both in the anchor frame's coordinates. Changing the parameter by
-/// dp moves every frame after it by that motion times dp.
-#[derive(Debug, Clone)]
-pub(crate) struct ParamAxis {
-    pub anchor: Anchor,
-    pub rotation: bool,
-    pub u: nalgebra::Vector3<f64>,
-    pub c: nalgebra::Vector3<f64>,
 }
 
 /// A robot: base row, joints and tool row. Immutable during a solve; see [`Robot::with_param`]
@@ -357,7 +334,7 @@ impl Robot {
             }
         };
         let t = row.transform();
-        let [rz, ry, rx] = crate::rotation::rotation_to_zyx(&t.rotation);
+        let [rz, ry, rx] = crate::geometry::rotation::rotation_to_zyx(&t.rotation);
         let v = t.translation.vector;
         let mut new = Row::zero(Convention::Transform);
         for (f, val) in [

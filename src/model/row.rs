@@ -4,8 +4,8 @@
 //! file written and read again gives the same model to the last bit. Every accessor that feeds
 //! computation converts to the internal units (mm, rad).
 
-use crate::kinematics::Pose;
-use crate::rotation::{rot_x, rot_y, zyx_to_rotation};
+use crate::geometry::Pose;
+use crate::geometry::rotation::{rot_x, rot_y, zyx_to_rotation};
 use nalgebra::{Translation3, Vector3};
 
 /// The geometric convention of a row.
@@ -288,7 +288,7 @@ pub fn apply_z_sc(t: &mut Pose, s: f64, c: f64, d: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rotation::rot_z;
+    use crate::geometry::rotation::rot_z;
 
     fn mat(p: &Pose) -> nalgebra::Matrix4<f64> {
         p.to_homogeneous()

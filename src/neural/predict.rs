@@ -6,8 +6,8 @@
 
 use super::compensator::{Compensator, Form};
 use super::targets::base_rotation;
+use crate::geometry::rotation::from_rotation_vector;
 use crate::kinematics::{Frames, Pose, frames, joint_jacobian, tool_pose};
-use crate::rotation::from_rotation_vector;
 use nalgebra::{DMatrix, Matrix3, Matrix6xX, Translation3, Vector3};
 
 /// Scratch space for prediction, reused across calls.
@@ -295,7 +295,7 @@ fn left_jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rotation::rotation_vector;
+    use crate::geometry::rotation::rotation_vector;
 
     #[test]
     fn left_jacobian_matches_differences_of_exp() {

@@ -21,9 +21,9 @@ use super::samples::Samples;
 use super::weights::Affine;
 use crate::data::{Measurement, MeasurementSet};
 use crate::error::{Error, Location, Result};
+use crate::geometry::rotation::rotation_vector;
 use crate::kinematics::{Frames, frames, joint_jacobian};
 use crate::model::Robot;
-use crate::rotation::rotation_vector;
 use nalgebra::{DMatrix, Matrix3, Matrix6xX, Vector3};
 use std::collections::HashMap;
 

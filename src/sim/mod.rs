@@ -10,9 +10,9 @@ pub use nongeometric::NonGeometric;
 use crate::data::measurement::Layout;
 use crate::data::{Measurement, MeasurementSet};
 use crate::error::{Error, Location, Result};
+use crate::geometry::rotation::from_rotation_vector;
 use crate::kinematics::{Frames, Pose, tool_pose};
 use crate::model::Robot;
-use crate::rotation::from_rotation_vector;
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -54,7 +54,7 @@ impl Region {
         let path = path.as_ref();
         let text = crate::io::read_text(path)?;
         let f: RegionFile = crate::io::parse_toml(&text, path)?;
-        let line = |at: usize| crate::model::file::line_of(&text, at);
+        let line = |at: usize| crate::io::line_of(&text, at);
         let bad = |at: usize, m: String| Error::input(Location::at(path, line(at), "ranges"), m);
         let ranges = f.ranges.get_ref();
         if ranges.len() != robot.dof() {

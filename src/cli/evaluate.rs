@@ -1,0 +1,128 @@
+//! `robocal evaluate`: the accuracy of a model (and a compensator) on measurements.
+
+use super::data_args::{DataArgs, read_set};
+use super::predict::{load_compensator, warn_outside};
+use super::summary::{print_stats, stats_json, write_json};
+use crate::evaluate::{row_errors, summarize};
+use crate::identify::Measure;
+use crate::kinematics::tool_pose;
+use crate::model::read_robot;
+use crate::neural::compensator::PredictWorkspace;
+use crate::plot::{ErrorRun, error_figures};
+use anyhow::Result;
+use clap::Args;
+use serde_json::json;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct EvaluateArgs {
+    /// Robot file to evaluate.
+    #[arg(long)]
+    robot: PathBuf,
+    /// Measurements to evaluate against.
+    #[arg(long)]
+    data: PathBuf,
+    /// A compensator (from `robocal train`) to evaluate beside the robot.
+    #[arg(long)]
+    compensator: Option<PathBuf>,
+    #[command(flatten)]
+    read: DataArgs,
+    #[arg(long, value_enum)]
+    measure: Option<Measure>,
+    /// JSON report (`validation` holds the statistics, `compensated` those with the
+    /// compensator).
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Folder for pictures (PNG and SVG, listed in figures.json for `robocal report`).
+    #[arg(long)]
+    plot: Option<PathBuf>,
+}
+
+pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
+    use super::paths::{guard, opt, req};
+    guard(
+        &[
+            req("--robot", &a.robot),
+            req("--data", &a.data),
+            opt("--compensator", a.compensator.as_ref()),
+            opt("--profile", a.read.profile.as_ref()),
+        ],
+        &[opt("--report", a.report.as_ref())],
+    )?;
+    let robot = read_robot(&a.robot)?;
+    let (comp, note) = match &a.compensator {
+        Some(p) => {
+            let (c, note) = load_compensator(p, &a.robot, &robot)?;
+            (Some(c), note)
+        }
+        None => (None, None),
+    };
+    let set = read_set(&a.read, &a.data, &robot)?;
+    let m = a.measure.unwrap_or_else(|| Measure::default_for(&set));
+    let model_rows = row_errors(&set, m, |q| tool_pose(&robot, q))?;
+    let s = summarize(&model_rows);
+    println!(
+        "evaluate: {} on {} ({} rows, measure {})",
+        a.robot.display(),
+        a.data.display(),
+        set.rows.len(),
+        m.name()
+    );
+    let mut outside = Vec::new();
+    let net_rows = match &comp {
+        Some(c) => {
+            let mut ws = PredictWorkspace::default();
+            outside = set
+                .rows
+                .iter()
+                .filter(|r| !c.domain_check(&r.q, &mut ws).inside())
+                .map(|r| r.line)
+                .collect();
+            Some(row_errors(&set, m, |q| c.predict(q, &mut ws))?)
+        }
+        None => None,
+    };
+    let compensated = net_rows.as_deref().map(summarize);
+    let mut table = vec![("data", "model", &s)];
+    if let Some(c) = &compensated {
+        table.push(("data", "+net", c));
+    }
+    print_stats(&table);
+    for (what, st) in [
+        ("model", Some(&s)),
+        ("with the compensator", compensated.as_ref()),
+    ] {
+        if let Some(c) = st.and_then(|st| st.position_per_coordinate_mean_mm) {
+            println!("mean per-coordinate position error |dx|,|dy|,|dz| ({what}): {c:.4} mm");
+        }
+    }
+    if let Some(note) = note {
+        println!("{note}");
+    }
+    warn_outside(&a.data, &outside, false);
+    if let Some(dir) = &a.plot {
+        let mut runs = vec![ErrorRun {
+            label: "model",
+            errors: &model_rows,
+        }];
+        if let Some(n) = &net_rows {
+            runs.push(ErrorRun {
+                label: "with compensator",
+                errors: n,
+            });
+        }
+        let figs = error_figures(dir, "evaluate", "evaluation data", &set, &runs)?;
+        println!("plots: {} pictures in {}", figs.len(), dir.display());
+    }
+    if let Some(path) = &a.report {
+        let mut v =
+            json!({"robot": a.robot, "data": a.data, "measure": m, "validation": stats_json(&s)});
+        if let (Some(p), Some(c)) = (&a.compensator, &compensated) {
+            v["compensator"] = json!(p);
+            v["compensated"] = stats_json(c);
+            v["rows_outside_domain"] = json!(outside.len());
+        }
+        write_json(path, &v)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,115 @@
+//! `robocal predict`, and loading a compensator for the commands that run one.
+
+use super::output::{OutputArgs, num};
+use crate::kinematics::pose_to_file;
+use crate::model::{Robot, robot_to_toml};
+use crate::neural::compensator::{Compensator, PredictWorkspace};
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use std::path::{Path, PathBuf};
+
+/// Loads a compensator to use beside `robot` (read from `robot_path`): its joints must be
+/// the robot's. With it, a note for the user when it runs with a model other than that file's.
+pub fn load_compensator(
+    path: &Path,
+    robot_path: &Path,
+    robot: &Robot,
+) -> Result<(Compensator, Option<String>)> {
+    let c = Compensator::load(path)?;
+    if !c.robot.same_joints(robot) {
+        bail!(
+            "{}: the compensator was trained for a robot with other joints than {}",
+            path.display(),
+            robot_path.display()
+        );
+    }
+    let note = (robot_to_toml(&c.robot) != robot_to_toml(robot)).then(|| {
+        format!(
+            "note: the compensator runs in series with its own model (embedded; refined in \
+             training), not with {}",
+            robot_path.display()
+        )
+    });
+    Ok((c, note))
+}
+
+#[derive(Args)]
+pub struct PredictArgs {
+    /// Compensator file written by `robocal train`.
+    #[arg(long)]
+    compensator: PathBuf,
+    /// CSV with columns q1..qN (deg); other columns are carried through.
+    #[arg(long)]
+    joints: PathBuf,
+    #[command(flatten)]
+    output: OutputArgs,
+}
+
+/// Compensated tool poses (x, y, z mm; rz, ry, rx deg) for a joint CSV.
+pub fn run_predict(a: PredictArgs) -> Result<()> {
+    use super::paths::{guard, opt, req};
+    guard(
+        &[
+            req("--compensator", &a.compensator),
+            req("--joints", &a.joints),
+        ],
+        &[opt("--out", a.output.out.as_ref())],
+    )?;
+    let c = Compensator::load(&a.compensator)?;
+    let (mut headers, rows, joints, lines) = super::fk::joint_table(&a.joints, c.robot.dof())?;
+    super::fk::warn_if_radians(&a.joints, &c.robot, &joints);
+    if headers.iter().any(|h| h == DOMAIN_COLUMN) {
+        bail!(
+            "{}: the input already has a column `{DOMAIN_COLUMN}`, which would be written; \
+             rename or drop it",
+            a.joints.display()
+        );
+    }
+    headers.extend(crate::data::POSE_COLUMNS.iter().map(|s| s.to_string()));
+    headers.push(DOMAIN_COLUMN.into());
+    let mut ws = PredictWorkspace::default();
+    let mut out = Vec::with_capacity(rows.len());
+    let mut outside = Vec::new();
+    for ((cells, q), line) in rows.into_iter().zip(&joints).zip(lines) {
+        let q = c.robot.joints_to_internal(q);
+        let pose = c.predict(&q, &mut ws);
+        let check = c.domain_check(&q, &mut ws);
+        if !check.inside() {
+            outside.push(line);
+        }
+        let mut row = cells;
+        row.extend(
+            pose_to_file(&pose)
+                .iter()
+                .map(|v| num(*v, a.output.decimals)),
+        );
+        row.push(check.describe());
+        out.push(row);
+    }
+    warn_outside(&a.joints, &outside, true);
+    a.output
+        .emit(&headers, &out)
+        .with_context(|| "writing the predictions".to_string())
+}
+
+/// The output column that says where a row stands against the training domain.
+pub const DOMAIN_COLUMN: &str = "domain";
+
+/// Warns (stderr) about rows outside a compensator's training domain, by line; `column`: the
+/// output has the domain column.
+pub fn warn_outside(path: &Path, lines: &[usize], column: bool) {
+    if !lines.is_empty() {
+        eprintln!(
+            "warning: {}: {} row(s) outside the compensator's training domain (lines {}): \
+             the network extrapolates there, its correction fades{}",
+            path.display(),
+            lines.len(),
+            crate::data::measurement::list_lines(lines),
+            if column {
+                format!("; see the `{DOMAIN_COLUMN}` column")
+            } else {
+                String::new()
+            }
+        );
+    }
+}
