@@ -8,11 +8,10 @@ use robocal::data::measurement::split;
 use robocal::data::{Profile, read_canonical, read_measurements};
 use robocal::identify::{Options, identify};
 use robocal::model::read_robot;
-use robocal::neural::compensator::{
-    Compensator, CompensatorOptions, Form, PredictWorkspace, Settings,
-};
+use robocal::neural::compensator::{Compensator, CompensatorOptions, Form, Settings};
 use robocal::neural::encoding::Encoding;
 use robocal::neural::net::train_momentum;
+use robocal::neural::predict::PredictWorkspace;
 use robocal::neural::samples::Batch;
 use robocal::neural::targets::build;
 use robocal::neural::train::initial_weights;

@@ -14,9 +14,9 @@ use crate::evaluate::{ErrorStats, RowError, row_errors, summarize};
 use crate::identify::{Measure, Options, identify};
 use crate::kinematics::tool_pose;
 use crate::model::{Robot, read_robot};
-use crate::neural::compensator::{
-    Compensator, CompensatorOptions, CompensatorReport, PredictWorkspace, Refine,
-};
+use crate::neural::compensator::{Compensator, CompensatorOptions, Refine};
+use crate::neural::fit::CompensatorReport;
+use crate::neural::predict::PredictWorkspace;
 use std::path::Path;
 
 /// One shipped data set of the protocol.

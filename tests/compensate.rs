@@ -9,7 +9,8 @@ use robocal::geometry::rotation::rotation_vector;
 use robocal::identify::{Measure, Options, identify};
 use robocal::kinematics::{Frames, Pose, SphericalWristIk, tool_pose};
 use robocal::model::{Robot, read_robot};
-use robocal::neural::compensator::{Compensator, CompensatorOptions, PredictWorkspace};
+use robocal::neural::compensator::{Compensator, CompensatorOptions};
+use robocal::neural::predict::PredictWorkspace;
 use robocal::sim::{actual_pose, nongeometric::NonGeometric};
 use std::path::PathBuf;
 

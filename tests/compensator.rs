@@ -5,10 +5,9 @@ use robocal::case_d::{Robotset, Stage, find, run};
 use robocal::data::read_canonical;
 use robocal::identify::{Options, identify};
 use robocal::model::read_robot;
-use robocal::neural::compensator::{
-    Compensator, CompensatorOptions, Form, PredictWorkspace, Settings,
-};
+use robocal::neural::compensator::{Compensator, CompensatorOptions, Form, Settings};
 use robocal::neural::encoding::Encoding;
+use robocal::neural::predict::PredictWorkspace;
 use robocal::neural::train::TrainOptions;
 use std::path::{Path, PathBuf};
 

@@ -58,14 +58,14 @@ fn paths_after(text: &str, prefix: &str) -> Vec<Vec<String>> {
         if at > 0 && (b[at - 1].is_ascii_alphanumeric() || b[at - 1] == b'_' || b[at - 1] == b':') {
             continue;
         }
-        expand(&text[start..], &mut Vec::new(), &mut out);
+        expand(&text[start..], &[], &mut out);
     }
     out
 }
 
 /// Reads one path (maybe a `{...}` group) from the start of `rest`.
-fn expand(rest: &str, base: &mut Vec<String>, out: &mut Vec<Vec<String>>) {
-    let mut segs = base.clone();
+fn expand(rest: &str, base: &[String], out: &mut Vec<Vec<String>>) {
+    let mut segs = base.to_vec();
     let mut s = rest;
     loop {
         if let Some(inner) = s.strip_prefix('{') {
@@ -76,12 +76,12 @@ fn expand(rest: &str, base: &mut Vec<String>, out: &mut Vec<Vec<String>>) {
                 match c {
                     '{' => depth += 1,
                     '}' if depth == 0 => {
-                        expand(&inner[item..k], &mut segs.clone(), out);
+                        expand(&inner[item..k], &segs, out);
                         return;
                     }
                     '}' => depth -= 1,
                     ',' if depth == 0 => {
-                        expand(&inner[item..k], &mut segs.clone(), out);
+                        expand(&inner[item..k], &segs, out);
                         item = k + 1;
                     }
                     _ => {}

@@ -160,7 +160,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     let mut failed = Vec::new();
     let mut shifts = Vec::new();
     let mut outside = Vec::new();
-    let mut dws = crate::neural::compensator::PredictWorkspace::default();
+    let mut dws = crate::neural::predict::PredictWorkspace::default();
     for r in 0..t.rows.len() {
         bar.inc(1);
         let p = t.numbers(r, &pos_idx)?;

@@ -7,7 +7,7 @@ use crate::evaluate::{row_errors, summarize};
 use crate::identify::Measure;
 use crate::kinematics::tool_pose;
 use crate::model::read_robot;
-use crate::neural::compensator::PredictWorkspace;
+use crate::neural::predict::PredictWorkspace;
 use crate::plot::{ErrorRun, error_figures};
 use anyhow::Result;
 use clap::Args;

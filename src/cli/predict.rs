@@ -3,7 +3,8 @@
 use super::output::{OutputArgs, num};
 use crate::kinematics::pose_to_file;
 use crate::model::{Robot, robot_to_toml};
-use crate::neural::compensator::{Compensator, PredictWorkspace};
+use crate::neural::compensator::Compensator;
+use crate::neural::predict::PredictWorkspace;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use std::path::{Path, PathBuf};

@@ -3,7 +3,8 @@
 
 use crate::kinematics::{Frames, Pose, ToolModel, frames, joint_jacobian};
 use crate::model::Robot;
-use crate::neural::compensator::{Compensator, PredictWorkspace};
+use crate::neural::compensator::Compensator;
+use crate::neural::predict::PredictWorkspace;
 use nalgebra::Matrix6xX;
 
 /// What the robot really does at joints q, as far as calibration knows.

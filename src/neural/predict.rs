@@ -4,7 +4,9 @@
 //! in normalised units, then mapped back: the map is affine, so this is the mean of the
 //! members' raw outputs.
 
-use super::compensator::{Compensator, Form};
+use super::compensator::Compensator;
+use super::domain::DomainCheck;
+use super::settings::Form;
 use super::targets::base_rotation;
 use crate::geometry::rotation::from_rotation_vector;
 use crate::kinematics::{Frames, Pose, frames, joint_jacobian, tool_pose};
@@ -290,6 +292,14 @@ fn left_jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
         ((1.0 - t.cos()) / (t * t), (t - t.sin()) / (t * t * t))
     };
     Matrix3::identity() + k * a + k * k * b
+}
+
+impl Compensator {
+    /// Where `q` (rad, mm) stands against the training domain.
+    pub fn domain_check(&self, q: &[f64], ws: &mut PredictWorkspace) -> DomainCheck {
+        let x = ws.normalised_inputs(self, q);
+        self.domain.check(q, x)
+    }
 }
 
 #[cfg(test)]

@@ -269,7 +269,7 @@ pub fn search(s: &Samples, start: usize, seed: u64) -> Result<Search> {
 
 /// The searches from every start (in parallel) and the one of highest likelihood.
 pub fn search_best(s: &Samples, seed: u64) -> Result<Search> {
-    let all = super::compensator::parallel_map(STARTS.len(), |k| search(s, k, seed));
+    let all = super::parallel::parallel_map(STARTS.len(), |k| search(s, k, seed));
     let mut best: Option<Search> = None;
     let mut last_error = None;
     for r in all {

@@ -15,9 +15,9 @@
 //!   the model's joint Jacobian: r_k = W e_k - W J(q_k) C y(x_k); c_j is the correction joint
 //!   j alone would need, sqrt(sum_k |W e_k|^2 / sum_k |W J_k e_j|^2).
 
-use super::compensator::Form;
 use super::encoding::Encoding;
 use super::samples::Samples;
+use super::settings::Form;
 use super::weights::Affine;
 use crate::data::{Measurement, MeasurementSet};
 use crate::error::{Error, Location, Result};

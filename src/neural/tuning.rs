@@ -23,12 +23,15 @@
 //! on [`RACE_FOLDS`] folds first and dropped there when it is more than [`RACE_MARGIN`] worse
 //! than the best so far on the same folds. The chosen settings are then fitted in full.
 
-use super::compensator::{
-    Compensator, CompensatorOptions, Form, Network, Refine, Settings, parallel_map,
-};
+use super::compensator::Compensator;
 use super::encoding::Encoding;
+use super::parallel::parallel_map;
 use super::rbf::{self, Hyper};
 use super::refine::refine;
+use super::selection::Sums;
+pub use super::selection::{Candidate, Outlier, Score, Selection};
+pub use super::settings::OUTLIER_K;
+use super::settings::{CompensatorOptions, Form, Network, Refine, Settings};
 use super::targets::build;
 use super::train::TrainOptions;
 use super::weights::Weights;
@@ -93,80 +96,6 @@ pub const ENSEMBLE: usize = 4;
 /// The parameters refined when refinement is left to cross-validation.
 pub const AUTO_REFINE: &str = "full";
 
-/// Default outlier cut: robust sigmas (1.4826 x the median, as `identify` scales its
-/// outliers) of the chosen candidate's cross-validated error beyond which a training row is
-/// listed as an outlier (and, when asked, left out of the final fit). Under Gaussian noise
-/// the cut lies near 9 sigmas of each coordinate, so clean rows are not listed. Rows are
-/// kept by default: on real tracker data, leaving them out lowered the held-out RMS by 0 to
-/// 10 % on seven Series B splits but raised the max error on two of them by up to 33 %,
-/// where a held-out neighbour shared the listed row's large error (a sharp feature of the
-/// robot, which one sample cannot tell from a mis-measured row).
-pub const OUTLIER_K: f64 = 4.0;
-
-/// A training row whose cross-validated error marks it an outlier.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct Outlier {
-    /// Index of the row in the training set (0-based).
-    pub row: usize,
-    /// Line of the row in its data file (0 for generated rows).
-    pub line: usize,
-    /// The chosen candidate's held-out errors on the row (mm, deg).
-    pub position_mm: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub orientation_deg: Option<f64>,
-    /// The larger error in robust sigmas of its own column.
-    pub robust_sigmas: f64,
-}
-
-/// Cross-validated errors of one candidate (mm, deg; RMS over every held-out row).
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct Score {
-    pub position_rms_mm: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub orientation_rms_deg: Option<f64>,
-}
-
-/// One cross-validated candidate.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct Candidate {
-    pub stage: usize,
-    pub settings: Settings,
-    /// None when the candidate failed on some fold (see `error`) or was dropped early
-    /// (see `pruned`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub score: Option<Score>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub error: Option<String>,
-    /// Set instead of `score` when the candidate was dropped after the first
-    /// [`RACE_FOLDS`] folds: its errors on those folds.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub pruned: Option<Score>,
-    /// Sums over the race folds, the yardstick for later candidates.
-    #[serde(skip)]
-    race: Option<Sums>,
-}
-
-/// What cross-validation did.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct Selection {
-    pub folds: usize,
-    /// The model alone on the same held-out rows.
-    pub model: Score,
-    pub candidates: Vec<Candidate>,
-    /// Index of the chosen candidate.
-    pub chosen: usize,
-    pub notes: Vec<String>,
-    /// Training rows beyond `outlier_k` robust sigmas of the chosen candidate's held-out
-    /// errors (the final fit leaves them out when the options say so).
-    pub outliers: Vec<Outlier>,
-    /// The cut, robust sigmas (infinite: no row is left out).
-    pub outlier_k: f64,
-    /// The chosen RBF network's hyperparameters, searched on every row for the model as
-    /// given (the final fit reuses them when nothing is refined).
-    #[serde(skip)]
-    pub rbf_hyper: Option<Hyper>,
-}
-
 /// Fold of each row: whole configurations, shuffled by `seed`, dealt round-robin.
 pub fn folds(set: &MeasurementSet, k: usize, seed: u64) -> Vec<usize> {
     let groups = super::targets::configuration_groups(set);
@@ -192,32 +121,6 @@ pub(crate) fn subset(set: &MeasurementSet, keep: impl Fn(usize) -> bool) -> Meas
             .map(|(_, m)| m.clone())
             .collect(),
         extra_columns: set.extra_columns.clone(),
-    }
-}
-
-/// Sums of squared errors over held-out rows.
-#[derive(Debug, Clone, Copy, Default)]
-struct Sums {
-    pos: f64,
-    rot: f64,
-    rows: usize,
-    with_rotation: bool,
-}
-
-impl Sums {
-    fn add(&mut self, o: Sums) {
-        self.pos += o.pos;
-        self.rot += o.rot;
-        self.rows += o.rows;
-        self.with_rotation |= o.with_rotation;
-    }
-
-    fn score(&self) -> Score {
-        let n = self.rows.max(1) as f64;
-        Score {
-            position_rms_mm: (self.pos / n).sqrt(),
-            orientation_rms_deg: self.with_rotation.then(|| (self.rot / n).sqrt()),
-        }
     }
 }
 
@@ -339,7 +242,7 @@ impl Cv<'_> {
                         rbf_hyper: Some(self.hyper(settings.encoding, start)?),
                         ..self.opts.train.clone()
                     };
-                    let c = Compensator::fit_with(
+                    let c = super::fit::fit_with(
                         model,
                         &self.train[fold],
                         &rbf,
@@ -434,7 +337,7 @@ impl Cv<'_> {
             start: start.map(|(w, _)| w),
             ..self.opts.train.clone()
         };
-        let (mut c, ..) = Compensator::fit_with(
+        let (mut c, ..) = super::fit::fit_with(
             model,
             &self.train[fold],
             &plain,

@@ -1,0 +1,136 @@
+//! Fitting a compensator of fixed settings: refinement (exact re-identification) first, then
+//! the RBF network and the MLPs of the ensemble on the training rows.
+
+use super::compensator::Compensator;
+use super::domain::Domain;
+use super::parallel::parallel_map;
+use super::rbf::Rbf;
+use super::refine::{RefinedParam, refine};
+use super::selection::Selection;
+use super::settings::{Network, Settings};
+use super::targets::build;
+use super::train::{TrainOptions, TrainReport, train};
+use crate::data::MeasurementSet;
+use crate::error::Result;
+use crate::identify::Sigmas;
+use crate::model::Robot;
+
+/// What training did.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct CompensatorReport {
+    pub settings: Settings,
+    /// The cross-validation that chose the settings, when anything was left to choose.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub selection: Option<Selection>,
+    /// The training of each ensemble member.
+    pub networks: Vec<TrainReport>,
+    pub refined: Vec<RefinedParam>,
+    /// What the user should know (refinement kept or dropped, ill-conditioning).
+    pub notes: Vec<String>,
+    /// Wall-clock seconds of the cross-validation and of the final fit.
+    pub selection_seconds: f64,
+    pub fit_seconds: f64,
+}
+
+impl Compensator {
+    /// Builds a compensator for `model` on the measured rows of `set` with fixed `settings`:
+    /// refinement (exact re-identification) first, then the members, each with its own seed
+    /// (and so its own initial weights and held-out part), trained in parallel.
+    pub fn fit(
+        model: &Robot,
+        set: &MeasurementSet,
+        settings: &Settings,
+        sigmas: Sigmas,
+        train_opts: &TrainOptions,
+    ) -> Result<(Compensator, CompensatorReport)> {
+        let (robot, refined, notes) = match &settings.refine {
+            Some(spec) => refine(model, set, spec, sigmas)?,
+            None => (model.clone(), Vec::new(), Vec::new()),
+        };
+        let started = std::time::Instant::now();
+        let (c, networks) = fit_with(&robot, set, settings, train_opts, true, true, 0)?;
+        Ok((
+            c,
+            CompensatorReport {
+                settings: settings.clone(),
+                selection: None,
+                networks,
+                refined,
+                notes,
+                selection_seconds: 0.0,
+                fit_seconds: started.elapsed().as_secs_f64(),
+            },
+        ))
+    }
+}
+
+/// [`Compensator::fit`] on a model already refined (`settings.refine` is not applied);
+/// `parallel` trains the members on several threads; without `with_domain` the domain is
+/// left empty (cross-validation fits never check it). Member m (counting from
+/// `first_member`) trains from seed `train_opts.seed + 7919 m`, so members already trained
+/// for the same settings can be reused and completed.
+pub(crate) fn fit_with(
+    robot: &Robot,
+    set: &MeasurementSet,
+    settings: &Settings,
+    train_opts: &TrainOptions,
+    parallel: bool,
+    with_domain: bool,
+    first_member: usize,
+) -> Result<(Compensator, Vec<TrainReport>)> {
+    let problem = build(robot, set, settings.form, settings.encoding)?;
+    let outputs = problem.output_norm.len();
+    let mut members = Vec::new();
+    let mut reports = Vec::new();
+    let rbf = if settings.has_rbf() {
+        Some(match &train_opts.rbf_hyper {
+            Some(h) => Rbf::with_hyper(&problem.samples, h)?,
+            None => Rbf::fit(&problem.samples, settings.rbf_start, train_opts.seed)?.0,
+        })
+    } else {
+        None
+    };
+    if settings.network != Network::Rbf {
+        let one = |m: usize| {
+            let m = m + first_member;
+            let opts = TrainOptions {
+                hidden: settings.hidden,
+                penalty: settings.penalty,
+                seed: train_opts.seed.wrapping_add(m as u64 * 7919),
+                progress: train_opts.progress && settings.members == 1,
+                ..train_opts.clone()
+            };
+            train(&problem.samples, outputs, &opts)
+        };
+        let count = settings.members.saturating_sub(first_member);
+        let trained = if parallel {
+            parallel_map(count, one)
+        } else {
+            (0..count).map(one).collect()
+        };
+        for t in trained {
+            let (w, r) = t?;
+            members.push(w);
+            reports.push(r);
+        }
+    }
+    let qs: Vec<&[f64]> = if with_domain {
+        set.rows.iter().map(|m| m.q.as_slice()).collect()
+    } else {
+        Vec::new()
+    };
+    let domain = Domain::fit(robot, settings.encoding, &problem.input_norm, &qs);
+    Ok((
+        Compensator {
+            form: settings.form,
+            encoding: settings.encoding,
+            robot: robot.clone(),
+            members,
+            rbf,
+            input_norm: problem.input_norm,
+            output_norm: problem.output_norm,
+            domain,
+        },
+        reports,
+    ))
+}

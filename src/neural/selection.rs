@@ -1,0 +1,95 @@
+//! What cross-validation did: every candidate's held-out errors, the choice, and the
+//! training rows it found to be outliers.
+
+use super::rbf::Hyper;
+use super::settings::Settings;
+
+/// A training row whose cross-validated error marks it an outlier.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Outlier {
+    /// Index of the row in the training set (0-based).
+    pub row: usize,
+    /// Line of the row in its data file (0 for generated rows).
+    pub line: usize,
+    /// The chosen candidate's held-out errors on the row (mm, deg).
+    pub position_mm: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub orientation_deg: Option<f64>,
+    /// The larger error in robust sigmas of its own column.
+    pub robust_sigmas: f64,
+}
+
+/// Cross-validated errors of one candidate (mm, deg; RMS over every held-out row).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Score {
+    pub position_rms_mm: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub orientation_rms_deg: Option<f64>,
+}
+
+/// One cross-validated candidate.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Candidate {
+    pub stage: usize,
+    pub settings: Settings,
+    /// None when the candidate failed on some fold (see `error`) or was dropped early
+    /// (see `pruned`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub score: Option<Score>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+    /// Set instead of `score` when the candidate was dropped after the first
+    /// [`RACE_FOLDS`] folds: its errors on those folds.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pruned: Option<Score>,
+    /// Sums over the race folds, the yardstick for later candidates.
+    #[serde(skip)]
+    pub(crate) race: Option<Sums>,
+}
+
+/// What cross-validation did.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Selection {
+    pub folds: usize,
+    /// The model alone on the same held-out rows.
+    pub model: Score,
+    pub candidates: Vec<Candidate>,
+    /// Index of the chosen candidate.
+    pub chosen: usize,
+    pub notes: Vec<String>,
+    /// Training rows beyond `outlier_k` robust sigmas of the chosen candidate's held-out
+    /// errors (the final fit leaves them out when the options say so).
+    pub outliers: Vec<Outlier>,
+    /// The cut, robust sigmas (infinite: no row is left out).
+    pub outlier_k: f64,
+    /// The chosen RBF network's hyperparameters, searched on every row for the model as
+    /// given (the final fit reuses them when nothing is refined).
+    #[serde(skip)]
+    pub rbf_hyper: Option<Hyper>,
+}
+
+/// Sums of squared errors over held-out rows.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Sums {
+    pub pos: f64,
+    pub rot: f64,
+    pub rows: usize,
+    pub with_rotation: bool,
+}
+
+impl Sums {
+    pub fn add(&mut self, o: Sums) {
+        self.pos += o.pos;
+        self.rot += o.rot;
+        self.rows += o.rows;
+        self.with_rotation |= o.with_rotation;
+    }
+
+    pub fn score(&self) -> Score {
+        let n = self.rows.max(1) as f64;
+        Score {
+            position_rms_mm: (self.pos / n).sqrt(),
+            orientation_rms_deg: self.with_rotation.then(|| (self.rot / n).sqrt()),
+        }
+    }
+}
