@@ -313,3 +313,51 @@ fn paths_are_read_with_their_groups() {
     let g: BTreeMap<u8, BTreeSet<u8>> = [(1, [2].into()), (2, [3].into())].into();
     assert_eq!(cycle(&g), None);
 }
+
+/// The layers of the library, lowest first (issue 13): a module may use its own layer and
+/// the ones below, never one above.
+const LAYERS: &[&[&str]] = &[
+    &["error", "io", "stats"],
+    &["geometry"],
+    &["model"],
+    &["kinematics"],
+    &["data"],
+    &["identify", "sim", "evaluate"],
+    &["neural"],
+    &["compensation"],
+    &["plot", "report"],
+    &["case_d", "reproduce"],
+    &["cli"],
+];
+
+#[test]
+fn layers_run_one_way() {
+    let layer = |m: &str| LAYERS.iter().position(|l| l.contains(&m));
+    let top = |p: &PathBuf| module_of(p).first().cloned().unwrap_or_default();
+    let mut wrong = BTreeSet::new();
+    let mut unknown = BTreeSet::new();
+    for (from, tos) in file_graph() {
+        let a = top(&from);
+        for to in tos {
+            let b = top(&to);
+            match (layer(&a), layer(&b)) {
+                (Some(x), Some(y)) if y > x => {
+                    wrong.insert(format!("{} -> {} ({a} uses {b})", show(&from), show(&to)));
+                }
+                (None, _) => {
+                    unknown.insert(a.clone());
+                }
+                (_, None) => {
+                    unknown.insert(b.clone());
+                }
+                _ => {}
+            }
+        }
+    }
+    assert!(unknown.is_empty(), "modules without a layer: {unknown:?}");
+    assert!(
+        wrong.is_empty(),
+        "uses of a higher layer:\n  {}",
+        wrong.into_iter().collect::<Vec<_>>().join("\n  ")
+    );
+}
