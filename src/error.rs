@@ -41,7 +41,14 @@ impl std::fmt::Display for Location {
             write!(f, ":{line}")?;
         }
         if let Some(field) = &self.field {
-            write!(f, ": field `{field}`")?;
+            // A field name from a hostile file can be a megabyte long.
+            let n = field.chars().count();
+            if n > 60 {
+                let head: String = field.chars().take(60).collect();
+                write!(f, ": field `{head}...` ({n} characters)")?;
+            } else {
+                write!(f, ": field `{field}`")?;
+            }
         }
         Ok(())
     }

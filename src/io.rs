@@ -169,6 +169,17 @@ pub fn all_or_nothing<T, E: From<Error>>(
     OPEN.set(Some(Transaction::default()));
     let result = f();
     let t = OPEN.take().unwrap_or_default();
+    // A destination that cannot take a file (a folder) fails before any rename, not halfway.
+    let blocked = t.writes.iter().find(|w| w.path.is_dir()).map(|w| {
+        Error::io(
+            &w.path,
+            std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a folder"),
+        )
+    });
+    let result = match (result, blocked) {
+        (Ok(_), Some(e)) => Err(E::from(e)),
+        (r, _) => r,
+    };
     match result {
         Ok(v) => {
             for w in t.writes {
@@ -194,14 +205,15 @@ pub fn all_or_nothing<T, E: From<Error>>(
 /// file is refused by name instead of read until memory runs out.
 pub fn read_capped(path: &Path, cap: u64) -> Result<Vec<u8>> {
     use std::io::Read;
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let meta = file.metadata().map_err(|e| Error::io(path, e))?;
+    // Checked before opening: opening a FIFO blocks until a writer comes.
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     if !meta.is_file() {
         return Err(Error::Invalid(format!(
             "{}: not a regular file",
             path.display()
         )));
     }
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut bytes = Vec::new();
     file.take(cap + 1)
         .read_to_end(&mut bytes)

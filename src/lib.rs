@@ -4,7 +4,6 @@
 //! radians. Poses are [`geometry::Pose`] (a rotation matrix and a translation in mm).
 
 pub mod case_d;
-pub mod cli;
 pub mod compensation;
 pub mod data;
 pub mod error;
@@ -15,7 +14,9 @@ pub mod io;
 pub mod kinematics;
 pub mod model;
 pub mod neural;
+#[cfg(feature = "plot")]
 pub mod plot;
+#[cfg(feature = "report")]
 pub mod report;
 pub mod reproduce;
 pub mod sim;

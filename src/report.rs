@@ -234,6 +234,9 @@ fn section(title: &str, m: &Map<String, Value>, depth: usize, html: &mut String)
     }
 }
 
+/// The largest page `report` writes (bytes).
+pub const MAX_PAGE_BYTES: u64 = 256 << 20;
+
 /// The largest picture or report a page embeds (bytes).
 pub const MAX_EMBED_BYTES: u64 = 32 << 20;
 
@@ -345,6 +348,14 @@ pub fn render(dir: &Path) -> Result<String> {
         html.push_str("<h2>Figures</h2>\n");
         for f in &figures {
             figure(dir, f, &mut html)?;
+            if html.len() as u64 > MAX_PAGE_BYTES {
+                return Err(Error::Invalid(format!(
+                    "{}: the page would pass {} MB ({} pictures listed); list fewer",
+                    crate::plot::manifest_path(dir).display(),
+                    MAX_PAGE_BYTES >> 20,
+                    figures.len()
+                )));
+            }
         }
     }
     html.push_str("</body></html>\n");

@@ -172,10 +172,14 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
         });
         assert!(e.contains("does not fit"), "{e}");
         let e = edit(&|v| v["output_norm"]["scale"][0] = serde_json::json!(0.0));
-        assert!(e.contains("does not fit"), "{e}");
-        // Finite but absurd: predictions would overflow to infinity.
+        assert!(e.contains("out of bounds"), "{e}");
+        // Finite but absurd: predictions would overflow to infinity, or move the tool by km.
         let e = edit(&|v| v["output_norm"]["scale"][0] = serde_json::json!(1e308));
-        assert!(e.contains("does not fit"), "{e}");
+        assert!(e.contains("out of bounds"), "{e}");
+        let e = edit(&|v| v["output_norm"]["scale"][0] = serde_json::json!(1e9));
+        assert!(e.contains("out of bounds"), "{e}");
+        let e = edit(&|v| v["domain"]["radius"] = serde_json::json!(1e308));
+        assert!(e.contains("training domain"), "{e}");
         if c.rbf.is_some() {
             let e = edit(&|v| v["rbf"]["weights"][0][0] = serde_json::json!(1e300));
             assert!(e.contains("rbf") || e.contains("RBF"), "{e}");

@@ -640,3 +640,208 @@ fn deviations_are_bounded_and_keep_the_robot_within_bounds() {
         assert!(!dir.path().join("never.csv").exists());
     }
 }
+
+/// Second review round: each case once hung, wrote a partial or unreadable output, or
+/// accepted nonsense.
+#[cfg(unix)]
+#[test]
+fn second_review_round() {
+    let dir = tempfile::Builder::new().prefix("round2").tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let fanuc = "datasets/robots/fanuc_r2000ib_210f.toml";
+    let data = "datasets/case_d/training.csv";
+    // ik on joints of four turns each way answers at once (it enumerated 9^6 copies).
+    let (robot, _) = shipped(fanuc, "name");
+    let wide: String = robot
+        .lines()
+        .map(|l| {
+            if l.trim_start().starts_with("limits") {
+                "limits = [-1440, 1440]".to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(p("wide.toml"), wide).unwrap();
+    let t = std::time::Instant::now();
+    let o = robocal(&[
+        "ik",
+        "--robot",
+        &p("wide.toml"),
+        "--pose",
+        "2000,0,1500,0,0,180",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    refused(
+        &[
+            "ik",
+            "--robot",
+            &p("wide.toml"),
+            "--pose",
+            "2000,0,1500,0,0,180",
+            "--all",
+        ],
+        "more than 10000 solutions",
+    );
+    assert!(t.elapsed().as_secs() < 10, "{:?}", t.elapsed());
+    // An output that is a folder, or --plot equal to --out: refused before anything runs.
+    std::fs::create_dir(p("folder")).unwrap();
+    for args in [
+        vec![
+            "identify",
+            "--robot",
+            fanuc,
+            "--data",
+            data,
+            "--out",
+            &p("a.toml"),
+            "--report",
+            &p("folder"),
+        ],
+        vec![
+            "identify",
+            "--robot",
+            fanuc,
+            "--data",
+            data,
+            "--out",
+            &p("a.toml"),
+            "--plot",
+            &p("a.toml"),
+        ],
+        vec![
+            "split",
+            data,
+            "--seed",
+            "1",
+            "--out-a",
+            &p("b.csv"),
+            "--out-b",
+            &p("folder"),
+        ],
+    ] {
+        refused(&args, "--");
+        assert!(!dir.path().join("a.toml").exists() && !dir.path().join("b.csv").exists());
+    }
+    refused(
+        &[
+            "identify",
+            "--robot",
+            fanuc,
+            "--data",
+            data,
+            "--outlier-k",
+            "0",
+            "--out",
+            &p("a.toml"),
+        ],
+        "--outlier-k 0",
+    );
+    refused(
+        &["fk", "--robot", fanuc, "--q", "1e308,0,0,0,0,0"],
+        "--q: value 1",
+    );
+    refused(
+        &[
+            "split",
+            data,
+            "--seed",
+            "1",
+            "--fraction",
+            "0",
+            "--out-a",
+            &p("c.csv"),
+            "--out-b",
+            &p("d.csv"),
+        ],
+        "--out-a would get no rows",
+    );
+    // A sigma of 1e-300 mm would weigh its row by 1e600.
+    let (text, _) = shipped(data, "id");
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let header: Vec<&str> = lines[0].split(',').collect();
+    if let Some(sx) = header.iter().position(|h| *h == "sx") {
+        let mut row: Vec<String> = lines[1].split(',').map(String::from).collect();
+        row[sx] = "1e-300".into();
+        lines[1] = row.join(",");
+        std::fs::write(p("tiny.csv"), lines.join("\n") + "\n").unwrap();
+        refused(
+            &[
+                "identify",
+                "--robot",
+                fanuc,
+                "--data",
+                &p("tiny.csv"),
+                "--out",
+                &p("a.toml"),
+            ],
+            "below the bound",
+        );
+    }
+    // A robot whose tool reaches past 100 m cannot simulate data that would not read back.
+    let far: String = robot
+        .lines()
+        .map(|l| l.replace("d = 0.0", "d = 99999.0"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(p("far.toml"), far).unwrap();
+    let o = robocal(&[
+        "simulate",
+        "--robot",
+        &p("far.toml"),
+        "--count",
+        "3",
+        "--seed",
+        "1",
+        "--out",
+        &p("s.csv"),
+    ]);
+    if !o.status.success() {
+        assert!(stderr(&o).contains("beyond 100000 mm"), "{}", stderr(&o));
+        assert!(!dir.path().join("s.csv").exists());
+    }
+    // Two [[gear]] tables for one joint.
+    let (ng, _) = shipped(
+        "datasets/nongeometric/fanuc_compliance_gear.toml",
+        "[[gear]]",
+    );
+    let start = ng.find("[[gear]]").unwrap();
+    let end = ng[start + 8..]
+        .find("[[")
+        .map_or(ng.len(), |e| start + 8 + e);
+    let twice = format!("{}\n{}", ng, &ng[start..end]);
+    std::fs::write(p("ng.toml"), twice).unwrap();
+    refused(
+        &[
+            "simulate",
+            "--robot",
+            fanuc,
+            "--nongeometric",
+            &p("ng.toml"),
+            "--count",
+            "3",
+            "--seed",
+            "1",
+            "--out",
+            &p("s2.csv"),
+        ],
+        "given twice",
+    );
+    // A FIFO among the pictures is refused, not waited on.
+    std::fs::create_dir(p("run")).unwrap();
+    std::fs::write(
+        p("run/figures.json"),
+        "[{\"png\": \"f.png\", \"svg\": \"f.svg\", \"title\": \"t\", \"caption\": \"c\"}]",
+    )
+    .unwrap();
+    let fifo = std::process::Command::new("mkfifo")
+        .arg(p("run/f.png"))
+        .status();
+    if fifo.is_ok_and(|s| s.success()) {
+        refused(
+            &["report", &p("run"), "--out", &p("page.html")],
+            "not a regular file",
+        );
+    }
+}

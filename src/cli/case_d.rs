@@ -4,12 +4,12 @@
 use super::compensator_args::CompensatorArgs;
 use super::data_args::SigmaArgs;
 use super::summary::write_json;
-use crate::case_d::{Robotset, Row, Stage, find, load, run};
-use crate::evaluate::ErrorStats;
-use crate::model::read_robot;
-use crate::plot::{ErrorRun, error_figures, training_figure};
 use anyhow::{Context, Result};
 use clap::Args;
+use robocal::case_d::{Robotset, Row, Stage, find, load, run};
+use robocal::evaluate::ErrorStats;
+use robocal::model::read_robot;
+use robocal::plot::{ErrorRun, error_figures, training_figure};
 use serde_json::json;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -135,7 +135,13 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
     use super::paths::{files_under, guard, opt, req};
     let read = files_under(&a.datasets);
     let inputs: Vec<_> = read.iter().map(|p| req("--datasets", p)).collect();
-    guard(&inputs, &[opt("--report", a.report.as_ref())])?;
+    guard(
+        &inputs,
+        &[
+            opt("--report", a.report.as_ref()),
+            opt("--plot", a.plot.as_ref()),
+        ],
+    )?;
     let opts = a
         .build
         .options(a.sigma.sigmas(), std::io::stderr().is_terminal())?;

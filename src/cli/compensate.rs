@@ -1,14 +1,14 @@
 //! `robocal compensate`: fake targets for an unmodified controller (see `compensation`).
 
-use super::output::{OutputArgs, num, parse_list};
+use super::output::{OutputArgs, joints_arg, num};
 use super::predict::load_compensator;
-use crate::compensation::{CalibratedModel, Desired, FakeTargetSolver};
-use crate::data::{POSE_COLUMNS, Table, joint_columns};
-use crate::kinematics::{pose_from_file, pose_to_file};
-use crate::model::read_robot;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use nalgebra::Vector3;
+use robocal::compensation::{CalibratedModel, Desired, FakeTargetSolver};
+use robocal::data::{POSE_COLUMNS, Table, joint_columns};
+use robocal::kinematics::{pose_from_file, pose_to_file};
+use robocal::model::read_robot;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -77,7 +77,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     let mut solver = FakeTargetSolver::new(&nominal, model)
         .with_context(|| format!("{}: no closed form to seed from", a.nominal.display()))?;
     let global_seed = match &a.seed {
-        Some(s) => Some(nominal.joints_to_internal(&parse_list(s, "--seed", n)?)),
+        Some(s) => Some(nominal.joints_to_internal(&joints_arg(&nominal, s, "--seed")?)),
         None => None,
     };
 
@@ -160,7 +160,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     let mut failed = Vec::new();
     let mut shifts = Vec::new();
     let mut outside = Vec::new();
-    let mut dws = crate::neural::predict::PredictWorkspace::default();
+    let mut dws = robocal::neural::predict::PredictWorkspace::default();
     for r in 0..t.rows.len() {
         bar.inc(1);
         let p = t.numbers(r, &pos_idx)?;

@@ -1,11 +1,12 @@
 //! Flags that build a compensator (`train`, `case-d`): every choice left out is made by
 //! cross-validation on the training rows.
 
-use crate::neural::compensator::{CompensatorOptions, Form, Network, Refine};
-use crate::neural::encoding::Encoding;
-use crate::neural::train::{Phase2, TrainOptions};
+use super::choices::{Form, Network};
 use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
+use robocal::neural::compensator::{CompensatorOptions, Refine};
+use robocal::neural::encoding::Encoding;
+use robocal::neural::train::{Epoch, Phase2, Progress, TrainOptions};
 
 /// Input encodings on the command line.
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -93,7 +94,7 @@ pub struct CompensatorArgs {
     /// Training rows whose cross-validated error exceeds this many robust sigmas (1.4826 x
     /// the median) are listed as outliers (at least 2; `inf` lists none). Needs
     /// cross-validation: with every choice fixed, no row is listed.
-    #[arg(long, default_value_t = crate::neural::tuning::OUTLIER_K)]
+    #[arg(long, default_value_t = robocal::neural::tuning::OUTLIER_K)]
     pub outlier_k: f64,
     /// Leave the listed outliers out of the final fit (default: keep them; one sample
     /// cannot tell a mis-measured row from a sharp feature of the robot).
@@ -105,7 +106,7 @@ impl CompensatorArgs {
     /// The library options; out-of-range values are refused with the flag's name.
     pub fn options(
         &self,
-        sigmas: crate::identify::Sigmas,
+        sigmas: robocal::identify::Sigmas,
         progress: bool,
     ) -> Result<CompensatorOptions> {
         if let Some(h) = self.hidden
@@ -159,7 +160,7 @@ impl CompensatorArgs {
         {
             bail!(
                 "--network {} acts on the pose residual: use --form pose (or leave it out)",
-                n.name()
+                robocal::neural::settings::Network::from(n).name()
             );
         }
         if self.network == Some(Network::Rbf) {
@@ -174,9 +175,9 @@ impl CompensatorArgs {
             }
         }
         Ok(CompensatorOptions {
-            network: self.network,
+            network: self.network.map(Into::into),
             rbf_start: None,
-            form: self.form,
+            form: self.form.map(Into::into),
             encoding: self.encoding.map(|e| match e {
                 EncodingArg::Sincos => Encoding::SinCos,
                 EncodingArg::Angles => Encoding::Angles,
@@ -200,7 +201,7 @@ impl CompensatorArgs {
                     Phase2Arg::Lm => Phase2::Lm,
                     Phase2Arg::Lbfgs => Phase2::Lbfgs,
                 },
-                progress,
+                progress: progress.then(epoch_bar),
                 ..Default::default()
             },
             outlier_k: self.outlier_k,
@@ -221,4 +222,32 @@ pub fn progress_bar(show: bool) -> indicatif::ProgressBar {
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     b
+}
+
+/// A progress bar over a network's epochs, drawn from the library's [`Progress`] callback
+/// (created at the first epoch, cleared at the last).
+fn epoch_bar() -> Progress {
+    let bar: std::sync::Mutex<Option<indicatif::ProgressBar>> = std::sync::Mutex::new(None);
+    Progress(std::sync::Arc::new(move |e: &Epoch| {
+        let Ok(mut slot) = bar.lock() else { return };
+        if e.finished {
+            if let Some(b) = slot.take() {
+                b.finish_and_clear();
+            }
+            return;
+        }
+        let b = slot.get_or_insert_with(|| {
+            let b = indicatif::ProgressBar::new(e.total as u64);
+            b.set_style(
+                indicatif::ProgressStyle::with_template("{bar:30} epoch {pos}/{len} {msg}")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            b
+        });
+        b.set_position(e.done as u64);
+        b.set_message(format!(
+            "train {:.3e} validation {:.3e}",
+            e.train_mse, e.validation_mse
+        ));
+    }))
 }

@@ -1,10 +1,10 @@
 //! Flags shared by every command that reads measurements.
 
-use crate::data::measurement::{list_lines, parse_measurements};
-use crate::data::{JointInfo, MeasurementSet, Profile, ReadOptions, ReadReport, Table};
-use crate::model::{Robot, read_robot};
 use anyhow::Result;
 use clap::Args;
+use robocal::data::measurement::{list_lines, parse_measurements};
+use robocal::data::{JointInfo, MeasurementSet, Profile, ReadOptions, ReadReport, Table};
+use robocal::model::{Robot, read_robot};
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug, Clone)]
@@ -57,9 +57,9 @@ pub struct SigmaArgs {
 
 impl SigmaArgs {
     /// The sigmas in internal units (mm, rad), defaults where not given.
-    pub fn sigmas(&self) -> crate::identify::Sigmas {
-        let d = crate::identify::Sigmas::default();
-        crate::identify::Sigmas {
+    pub fn sigmas(&self) -> robocal::identify::Sigmas {
+        let d = robocal::identify::Sigmas::default();
+        robocal::identify::Sigmas {
             position_mm: self.sigma_pos.unwrap_or(d.position_mm),
             rotation_rad: self.sigma_rot.map_or(d.rotation_rad, |s| s * 1e-3),
         }
@@ -88,7 +88,7 @@ pub fn print_report(path: &Path, report: &ReadReport) {
 /// Reads an optional robot argument.
 pub fn joints_of(robot: Option<&PathBuf>, fallback: usize) -> Result<Vec<JointInfo>> {
     Ok(match robot {
-        Some(p) => JointInfo::of(&crate::model::read_robot(p)?),
+        Some(p) => JointInfo::of(&robocal::model::read_robot(p)?),
         None => JointInfo::revolute(fallback),
     })
 }
@@ -118,6 +118,7 @@ pub fn open_fit(
     read: &DataArgs,
     out: &Path,
     report: Option<&PathBuf>,
+    plot: Option<&PathBuf>,
 ) -> Result<(Robot, MeasurementSet, Option<MeasurementSet>)> {
     use super::paths::{guard, opt, req};
     guard(
@@ -127,7 +128,11 @@ pub fn open_fit(
             opt("--validate", validate),
             opt("--profile", read.profile.as_ref()),
         ],
-        &[req("--out", out), opt("--report", report)],
+        &[
+            req("--out", out),
+            opt("--report", report),
+            opt("--plot", plot),
+        ],
     )?;
     let model = read_robot(robot)?;
     let (set, val) = read_sets(read, data, validate.map(|p| p.as_path()), &model)?;

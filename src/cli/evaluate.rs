@@ -3,14 +3,14 @@
 use super::data_args::{DataArgs, read_set};
 use super::predict::{load_compensator, warn_outside};
 use super::summary::{print_stats, stats_json, write_json};
-use crate::evaluate::{row_errors, summarize};
-use crate::identify::Measure;
-use crate::kinematics::tool_pose;
-use crate::model::read_robot;
-use crate::neural::predict::PredictWorkspace;
-use crate::plot::{ErrorRun, error_figures};
 use anyhow::Result;
 use clap::Args;
+use robocal::evaluate::{row_errors, summarize};
+use robocal::identify::Measure;
+use robocal::kinematics::tool_pose;
+use robocal::model::read_robot;
+use robocal::neural::predict::PredictWorkspace;
+use robocal::plot::{ErrorRun, error_figures};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -28,7 +28,7 @@ pub struct EvaluateArgs {
     #[command(flatten)]
     read: DataArgs,
     #[arg(long, value_enum)]
-    measure: Option<Measure>,
+    measure: Option<super::choices::Measure>,
     /// JSON report (`validation` holds the statistics, `compensated` those with the
     /// compensator).
     #[arg(long)]
@@ -47,7 +47,10 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             opt("--compensator", a.compensator.as_ref()),
             opt("--profile", a.read.profile.as_ref()),
         ],
-        &[opt("--report", a.report.as_ref())],
+        &[
+            opt("--report", a.report.as_ref()),
+            opt("--plot", a.plot.as_ref()),
+        ],
     )?;
     let robot = read_robot(&a.robot)?;
     let (comp, note) = match &a.compensator {
@@ -58,7 +61,10 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         None => (None, None),
     };
     let set = read_set(&a.read, &a.data, &robot)?;
-    let m = a.measure.unwrap_or_else(|| Measure::default_for(&set));
+    let m = a
+        .measure
+        .map(Measure::from)
+        .unwrap_or_else(|| Measure::default_for(&set));
     let model_rows = row_errors(&set, m, |q| tool_pose(&robot, q))?;
     let s = summarize(&model_rows);
     println!(

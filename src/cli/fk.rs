@@ -1,11 +1,11 @@
 //! `robocal fk`: forward kinematics of one joint vector or of a CSV batch.
 
-use super::output::{OutputArgs, num, parse_list};
-use crate::data::{POSE_COLUMNS, Table, joint_columns};
-use crate::kinematics::{pose_to_file, tool_pose};
-use crate::model::read_robot;
+use super::output::{OutputArgs, joints_arg, num};
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use robocal::data::{POSE_COLUMNS, Table, joint_columns};
+use robocal::kinematics::{pose_to_file, tool_pose};
+use robocal::model::read_robot;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -35,11 +35,11 @@ pub(super) type JointTable = (Vec<String>, Vec<Vec<String>>, Vec<Vec<f64>>, Vec<
 /// most controllers' logs) would otherwise give plausible but wrong poses.
 pub(super) fn warn_if_radians(
     path: &std::path::Path,
-    robot: &crate::model::Robot,
+    robot: &robocal::model::Robot,
     joints: &[Vec<f64>],
 ) {
     let revolute: Vec<usize> = (0..robot.dof())
-        .filter(|&j| robot.joints()[j].joint_type == crate::model::JointType::Revolute)
+        .filter(|&j| robot.joints()[j].joint_type == robocal::model::JointType::Revolute)
         .collect();
     let values = joints
         .iter()
@@ -92,7 +92,7 @@ pub fn run(a: FkArgs) -> Result<()> {
     let qcols = joint_columns(n);
     let (mut headers, rows, joints, _): JointTable = match (&a.q, &a.joints) {
         (Some(q), _) => {
-            let q = parse_list(q, "--q", n)?;
+            let q = joints_arg(&robot, q, "--q")?;
             let cells = q.iter().map(|v| num(*v, None)).collect();
             (qcols, vec![cells], vec![q], vec![0])
         }

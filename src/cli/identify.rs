@@ -1,16 +1,17 @@
 //! `robocal identify`.
 
+use super::choices::{Measure, Method, RobustLoss};
 use super::data_args::{DataArgs, SigmaArgs, open_fit};
 use super::summary::{print_stats, stats_json, write_json};
-use crate::data::MeasurementSet;
-use crate::evaluate::{RowError, row_errors, summarize};
-use crate::identify::identifiability::DropReason;
-use crate::identify::{Identified, Measure, Method, Options, RobustLoss, SolveOptions, identify};
-use crate::kinematics::tool_pose;
-use crate::model::write_robot;
-use crate::plot::{ErrorRun, error_figures};
 use anyhow::Result;
 use clap::Args;
+use robocal::data::MeasurementSet;
+use robocal::evaluate::{RowError, row_errors, summarize};
+use robocal::identify::identifiability::DropReason;
+use robocal::identify::{Identified, Options, SolveOptions, identify};
+use robocal::kinematics::tool_pose;
+use robocal::model::write_robot;
+use robocal::plot::{ErrorRun, error_figures};
 use serde_json::{Value, json};
 use std::path::PathBuf;
 
@@ -68,17 +69,24 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         &a.read,
         &a.out,
         a.report.as_ref(),
+        a.plot.as_ref(),
     )?;
+    if a.outlier_k.is_nan() || a.outlier_k < 1.0 {
+        anyhow::bail!(
+            "--outlier-k {}: give a cut of at least 1 robust sigma (inf reports none)",
+            a.outlier_k
+        );
+    }
     let opts = Options {
         params: a.params.clone(),
-        measure: a.measure,
+        measure: a.measure.map(Into::into),
         sigmas: a.sigma.sigmas(),
         solve: SolveOptions {
-            method: a.method,
+            method: a.method.into(),
             max_iterations: a.max_iterations,
             ..Default::default()
         },
-        robust: a.robust,
+        robust: a.robust.map(Into::into),
         register: !a.no_register,
         outlier_k: a.outlier_k,
         ..Default::default()
@@ -165,7 +173,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         let ident = &id.identifiability;
         let v = json!({
             "robot": a.robot, "data": a.data, "validation_data": a.validate,
-            "measure": m, "method": a.method, "params": a.params,
+            "measure": m, "method": robocal::identify::Method::from(a.method), "params": a.params,
             "calibration": stats_json(&cal_after),
             "calibration_before": stats_json(&cal_before),
             "validation": val_stats.as_ref().map(|(_, af)| stats_json(af)),
@@ -182,7 +190,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
             "variance_factor": finite_or_null(id.variance_factor),
             "correlations": id.correlations.iter().map(|(x, y, r)| json!({"a": x, "b": y, "correlation": r})).collect::<Vec<_>>(),
             "outliers": id.outliers,
-            "robust": a.robust, "robust_rounds": id.robust_rounds,
+            "robust": a.robust.map(robocal::identify::RobustLoss::from), "robust_rounds": id.robust_rounds,
             "registration_rms_mm": id.registration.as_ref().map(|r| r.rms_mm),
             "notes": id.notes,
             "warnings": id.warnings,

@@ -4,14 +4,15 @@
 //! limits); else the nominal model's closed form (`--nominal`) refined numerically on the
 //! robot; else numerical IK from a seed (`--seed`, or the row's own q1..qN columns).
 
-use super::output::{OutputArgs, num, parse_list};
-use crate::data::{POSE_COLUMNS, Table, joint_columns};
-use crate::kinematics::{
-    IkOptions, IkTarget, IkWorkspace, Pose, SphericalWristIk, pose_from_file, solve_numeric,
-};
-use crate::model::{Robot, read_robot};
+use super::output::{OutputArgs, joints_arg, num, pose_arg};
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use robocal::data::{POSE_COLUMNS, Table, joint_columns};
+use robocal::kinematics::ik_closed::MAX_SOLUTIONS;
+use robocal::kinematics::{
+    IkOptions, IkTarget, IkWorkspace, Pose, SphericalWristIk, pose_from_file, solve_numeric,
+};
+use robocal::model::{MAX_ANGLE_DEG, MAX_LENGTH_MM, Robot, read_robot};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -56,16 +57,33 @@ struct Solver<'a> {
 
 impl Solver<'_> {
     /// Solutions (internal units) for one target, or the reason there are none.
-    fn solve(&mut self, target: &Pose, seed: Option<&[f64]>) -> Result<Vec<Vec<f64>>, String> {
+    /// With `all`, every solution; else (closed form) the one nearest `seed`, or `mid`.
+    fn solve(
+        &mut self,
+        target: &Pose,
+        seed: Option<&[f64]>,
+        all: bool,
+        mid: &[f64],
+    ) -> Result<Vec<Vec<f64>>, String> {
+        let unreachable = || "unreachable: no solution within the joint limits".to_string();
         let candidates: Vec<Vec<f64>> = match &self.method {
-            Method::Closed(ik) => {
+            Method::Closed(ik) if all => {
                 let mut out = Vec::new();
-                ik.solve(target, &mut out);
+                if !ik.solve(target, &mut out) {
+                    return Err(format!(
+                        "more than {MAX_SOLUTIONS} solutions within the joint limits (ranges of \
+                         many turns): leave out --all for the one nearest the seed"
+                    ));
+                }
                 if out.is_empty() {
-                    return Err("unreachable: no solution within the joint limits".into());
+                    return Err(unreachable());
                 }
                 out.into_iter().map(|q| q.to_vec()).collect()
             }
+            Method::Closed(ik) => match ik.solve_nearest(target, seed.unwrap_or(mid)) {
+                Some(q) => vec![q.to_vec()],
+                None => return Err(unreachable()),
+            },
             Method::Nominal(ik) => {
                 let mut seeds = Vec::new();
                 ik.solve_unlimited(target, &mut seeds);
@@ -144,7 +162,7 @@ pub fn run(a: IkArgs) -> Result<()> {
     let n = robot.dof();
     let qcols = joint_columns(n);
     let global_seed = match &a.seed {
-        Some(s) => Some(robot.joints_to_internal(&parse_list(s, "--seed", n)?)),
+        Some(s) => Some(robot.joints_to_internal(&joints_arg(&robot, s, "--seed")?)),
         None => None,
     };
     let method = match SphericalWristIk::new(&robot) {
@@ -174,7 +192,7 @@ pub fn run(a: IkArgs) -> Result<()> {
     // Inputs: headers, cells, target pose (file units), per-row seed (internal units).
     let (mut headers, rows, targets, row_seeds, lines) = match (&a.pose, &a.poses) {
         (Some(p), _) => {
-            let v = parse_list(p, "--pose", 6)?;
+            let v = pose_arg(p, "--pose")?;
             let headers: Vec<String> = POSE_COLUMNS.iter().map(|s| s.to_string()).collect();
             let cells = v.iter().map(|x| num(*x, None)).collect();
             (headers, vec![cells], vec![v], vec![None], vec![0])
@@ -190,6 +208,17 @@ pub fn run(a: IkArgs) -> Result<()> {
             let mut seeds = Vec::new();
             for r in 0..t.rows.len() {
                 let v = t.numbers(r, &idx)?;
+                for (k, x) in v.iter().enumerate() {
+                    let max = if k < 3 { MAX_LENGTH_MM } else { MAX_ANGLE_DEG };
+                    if x.abs() > max {
+                        bail!(
+                            "{}:{}: field `{}`: {x:e} is beyond the bound of {max}",
+                            path.display(),
+                            t.lines[r],
+                            POSE_COLUMNS[k]
+                        );
+                    }
+                }
                 targets.push(v);
                 seeds.push(match &seed_idx {
                     Some(si) => Some(robot.joints_to_internal(&t.numbers(r, si)?)),
@@ -214,6 +243,19 @@ pub fn run(a: IkArgs) -> Result<()> {
     headers.push("solution".into());
     headers.extend(qcols.iter().cloned());
     headers.push("status".into());
+    // After the renames no column may appear twice (an input holding both `status` and
+    // `input_status`, or `seed_q1` and `q1`): refused, not written twice.
+    for (i, h) in headers.iter().enumerate() {
+        if headers[..i].contains(h) {
+            bail!(
+                "{}: column `{h}` would appear twice in the output (the input's own, renamed \
+                 or not, and one ik writes); rename or drop it",
+                a.poses
+                    .as_ref()
+                    .map_or_else(|| "--pose".into(), |p| p.display().to_string())
+            );
+        }
+    }
 
     let mid = robot.mid_joints();
     let mut solver = Solver {
@@ -227,7 +269,7 @@ pub fn run(a: IkArgs) -> Result<()> {
     for (k, (cells, v)) in rows.iter().zip(&targets).enumerate() {
         let target = pose_from_file([v[0], v[1], v[2], v[3], v[4], v[5]]);
         let seed = row_seeds[k].as_deref().or(global_seed.as_deref());
-        match solver.solve(&target, seed) {
+        match solver.solve(&target, seed, a.all, &mid) {
             Ok(sols) => {
                 let chosen: Vec<usize> = if a.all {
                     (0..sols.len()).collect()

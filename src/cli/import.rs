@@ -1,10 +1,10 @@
 //! `robocal import`: a foreign export to canonical CSV through an import profile.
 
 use super::data_args::{DataArgs, joints_of};
-use crate::data::measurement::write_measurements;
-use crate::data::{Table, joint_columns};
 use anyhow::{Result, bail};
 use clap::Args;
+use robocal::data::measurement::write_measurements;
+use robocal::data::{Table, joint_columns};
 use std::path::PathBuf;
 
 #[derive(Args)]

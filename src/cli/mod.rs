@@ -2,6 +2,7 @@
 
 mod bounds;
 mod case_d;
+mod choices;
 mod compensate;
 mod compensator_args;
 mod data_args;
@@ -75,7 +76,7 @@ pub fn main() -> ExitCode {
     quiet_on_closed_stdout();
     let cli = Cli::parse();
     let mut code = ExitCode::SUCCESS;
-    let result = crate::io::all_or_nothing(|| match cli.command {
+    let result = robocal::io::all_or_nothing(|| match cli.command {
         Command::Fk(a) => fk::run(a),
         Command::Ik(a) => ik::run(a),
         Command::Import(a) => import::run(a),
@@ -98,7 +99,7 @@ pub fn main() -> ExitCode {
     match result {
         Ok(()) => code,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", capped(&format!("{e:#}")));
             ExitCode::from(1)
         }
     }
@@ -121,3 +122,17 @@ fn quiet_on_closed_stdout() {
         default(info);
     }));
 }
+
+/// A message of at most [`MAX_MESSAGE`] characters: a megabyte of header, key or cell is
+/// cut, with the length said, not echoed whole.
+fn capped(msg: &str) -> String {
+    let n = msg.chars().count();
+    if n <= MAX_MESSAGE {
+        return msg.to_string();
+    }
+    let head: String = msg.chars().take(MAX_MESSAGE).collect();
+    format!("{head}... (cut: the message has {n} characters)")
+}
+
+/// The longest error message printed whole (characters).
+const MAX_MESSAGE: usize = 2000;

@@ -5,11 +5,11 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 
 /// `r` with "writing PATH" as context, unless its error already names `path` (an OS error
-/// from [`crate::io::write_atomic`]): a path is named once.
-pub fn writing<T>(r: crate::error::Result<T>, path: &Path) -> Result<T> {
+/// from [`robocal::io::write_atomic`]): a path is named once.
+pub fn writing<T>(r: robocal::error::Result<T>, path: &Path) -> Result<T> {
     match r {
-        Err(crate::error::Error::Io { path: p, cause }) if p == path => {
-            Err(crate::error::Error::Io { path: p, cause }.into())
+        Err(robocal::error::Error::Io { path: p, cause }) if p == path => {
+            Err(robocal::error::Error::Io { path: p, cause }.into())
         }
         r => r.with_context(|| format!("writing {}", path.display())),
     }
@@ -74,6 +74,43 @@ pub fn parse_list(s: &str, what: &str, expected: usize) -> Result<Vec<f64>> {
     Ok(vals)
 }
 
+/// Joints given on the command line (deg, mm for prismatic joints), within the bounds a
+/// file's joints have (4 turns, 100 m).
+pub fn joints_arg(robot: &robocal::model::Robot, s: &str, what: &str) -> Result<Vec<f64>> {
+    use robocal::model::{JointType, MAX_JOINT_DEG, MAX_LENGTH_MM};
+    let q = parse_list(s, what, robot.dof())?;
+    for (i, (v, j)) in q.iter().zip(robot.joints()).enumerate() {
+        let max = match j.joint_type {
+            JointType::Revolute => MAX_JOINT_DEG,
+            JointType::Prismatic => MAX_LENGTH_MM,
+        };
+        if v.abs() > max {
+            bail!(
+                "{what}: value {} ({v:e}) is beyond the bound of {max}",
+                i + 1
+            );
+        }
+    }
+    Ok(q)
+}
+
+/// A pose given on the command line: x, y, z (mm) within 100 m and rz, ry, rx (deg) within 2
+/// turns, as a measurement file's.
+pub fn pose_arg(s: &str, what: &str) -> Result<Vec<f64>> {
+    use robocal::model::{MAX_ANGLE_DEG, MAX_LENGTH_MM};
+    let v = parse_list(s, what, 6)?;
+    for (i, x) in v.iter().enumerate() {
+        let max = if i < 3 { MAX_LENGTH_MM } else { MAX_ANGLE_DEG };
+        if x.abs() > max {
+            bail!(
+                "{what}: value {} ({x:e}) is beyond the bound of {max}",
+                i + 1
+            );
+        }
+    }
+    Ok(v)
+}
+
 /// A cell as JSON: a number when it reads as one, else a string.
 pub fn json_cell(cell: &str) -> serde_json::Value {
     match cell.parse::<f64>() {
@@ -110,14 +147,14 @@ pub fn emit(
         b.push(b'\n');
         b
     } else {
-        let mut w = crate::data::table::CsvOut::new(headers)?;
+        let mut w = robocal::data::table::CsvOut::new(headers)?;
         for r in rows {
             w.row(r)?;
         }
         w.into_bytes()?
     };
     match out {
-        Some(p) => writing(crate::io::write_atomic(p, &bytes), p),
+        Some(p) => writing(robocal::io::write_atomic(p, &bytes), p),
         None => {
             use std::io::Write;
             std::io::stdout()

@@ -23,8 +23,9 @@ fn resolved(p: &Path) -> Option<PathBuf> {
 /// A flag and its path; None for an optional path not given.
 pub type Named<'a> = Option<(&'a str, &'a Path)>;
 
-/// Refuses outputs that resolve to an input of the command or to another output. Each entry
-/// is a flag and its path ([`req`], [`opt`]).
+/// Refuses outputs that resolve to an input of the command or to another output, an output
+/// file that is an existing folder, and a `--plot` folder that is an existing file. Each
+/// entry is a flag and its path ([`req`], [`opt`]).
 pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
     let ins: Vec<(&str, &Path, PathBuf)> = inputs
         .iter()
@@ -33,6 +34,17 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
         .collect();
     let mut seen: Vec<(&str, &Path, PathBuf)> = Vec::new();
     for (flag, path) in outputs.iter().flatten() {
+        // `--plot` names a folder of pictures; every other output is a file.
+        let folder = *flag == "--plot";
+        if folder && path.is_file() {
+            bail!(
+                "{flag} {} is a file: give a folder for the pictures",
+                path.display()
+            );
+        }
+        if !folder && path.is_dir() {
+            bail!("{flag} {} is a folder: give a file path", path.display());
+        }
         let Some(r) = resolved(path) else { continue };
         if let Some((f, p, _)) = ins.iter().find(|(_, _, i)| *i == r) {
             bail!(

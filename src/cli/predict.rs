@@ -1,12 +1,12 @@
 //! `robocal predict`, and loading a compensator for the commands that run one.
 
 use super::output::{OutputArgs, num};
-use crate::kinematics::pose_to_file;
-use crate::model::{Robot, robot_to_toml};
-use crate::neural::compensator::Compensator;
-use crate::neural::predict::PredictWorkspace;
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use robocal::kinematics::pose_to_file;
+use robocal::model::{Robot, robot_to_toml};
+use robocal::neural::compensator::Compensator;
+use robocal::neural::predict::PredictWorkspace;
 use std::path::{Path, PathBuf};
 
 /// Loads a compensator to use beside `robot` (read from `robot_path`): its joints must be
@@ -66,7 +66,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
             a.joints.display()
         );
     }
-    headers.extend(crate::data::POSE_COLUMNS.iter().map(|s| s.to_string()));
+    headers.extend(robocal::data::POSE_COLUMNS.iter().map(|s| s.to_string()));
     headers.push(DOMAIN_COLUMN.into());
     let mut ws = PredictWorkspace::default();
     let mut out = Vec::with_capacity(rows.len());
@@ -105,7 +105,7 @@ pub fn warn_outside(path: &Path, lines: &[usize], column: bool) {
              the network extrapolates there, its correction fades{}",
             path.display(),
             lines.len(),
-            crate::data::measurement::list_lines(lines),
+            robocal::data::measurement::list_lines(lines),
             if column {
                 format!("; see the `{DOMAIN_COLUMN}` column")
             } else {

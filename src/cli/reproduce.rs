@@ -1,13 +1,13 @@
 //! `robocal reproduce`: the thesis's case studies (identification) on the shipped sets, with
 //! the thesis's figures beside ours, and the same protocols over many seeds.
 
-use crate::evaluate::ErrorStats;
-use crate::model::read_robot;
-use crate::reproduce::{
-    Case, CaseRun, load_shipped, median_range, run_case, runs_over_seeds, thesis_figures,
-};
 use anyhow::{Context, Result};
 use clap::Args;
+use robocal::evaluate::ErrorStats;
+use robocal::model::read_robot;
+use robocal::reproduce::{
+    Case, CaseRun, load_shipped, median_range, run_case, runs_over_seeds, thesis_figures,
+};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -227,7 +227,7 @@ pub fn run(a: ReproduceArgs) -> Result<()> {
     if let Some(p) = &a.report {
         let mut b = serde_json::to_vec_pretty(&serde_json::Value::Object(report))?;
         b.push(b'\n');
-        crate::io::write_atomic(p, &b)?;
+        robocal::io::write_atomic(p, &b)?;
     }
     Ok(())
 }

@@ -1,13 +1,14 @@
 //! `robocal simulate`: measurements of a virtual robot.
 
+use super::choices::Observe;
 use super::output::writing;
-use crate::data::JointInfo;
-use crate::data::measurement::MeasurementWriter;
-use crate::kinematics::tool_pose;
-use crate::model::{read_robot, write_robot};
-use crate::sim::{Deviations, NonGeometric, Observe, Region, Simulation};
 use anyhow::{Context, Result};
 use clap::Args;
+use robocal::data::JointInfo;
+use robocal::data::measurement::MeasurementWriter;
+use robocal::kinematics::tool_pose;
+use robocal::model::{read_robot, write_robot};
+use robocal::sim::{Deviations, NonGeometric, Region, Simulation};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -89,7 +90,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         seed: a.seed,
         sigma_position_mm: a.sigma_pos,
         sigma_rotation_rad: a.sigma_rot * 1e-3,
-        observe: a.measure,
+        observe: a.measure.into(),
     };
     // Rows stream to the files as they are drawn: a million of them need no memory.
     let joints = JointInfo::of(&nominal);

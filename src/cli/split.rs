@@ -1,10 +1,10 @@
 //! `robocal split`: a seeded random split of a measurement set (calibration / validation).
 
 use super::data_args::{DataArgs, joints_of};
-use crate::data::Table;
-use crate::data::measurement::{split, write_measurements};
 use anyhow::{Result, bail};
 use clap::Args;
+use robocal::data::Table;
+use robocal::data::measurement::{split, write_measurements};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -56,6 +56,16 @@ pub fn run(a: SplitArgs) -> Result<()> {
     let joints = joints_of(a.robot.as_ref(), n)?;
     let set = a.data.read(&a.input, &joints)?;
     let (x, y) = split(&set, a.fraction, a.seed);
+    for (part, flag) in [(&x, "--out-a"), (&y, "--out-b")] {
+        if part.rows.is_empty() {
+            bail!(
+                "{flag} would get no rows ({} rows, --fraction {}): a file without rows is \
+                 refused by every command",
+                set.rows.len(),
+                a.fraction
+            );
+        }
+    }
     write_measurements(&x, &joints, &a.out_a)?;
     write_measurements(&y, &joints, &a.out_b)?;
     eprintln!(

@@ -1,7 +1,7 @@
 //! Shared output of the fitting commands: the before/after statistics table and JSON reports.
 
-use crate::evaluate::ErrorStats;
 use anyhow::Result;
+use robocal::evaluate::ErrorStats;
 use serde_json::Value;
 use std::path::Path;
 
@@ -37,5 +37,5 @@ pub fn stats_json(s: &ErrorStats) -> Value {
 pub fn write_json(path: &Path, v: &Value) -> Result<()> {
     let mut b = serde_json::to_vec_pretty(v)?;
     b.push(b'\n');
-    super::output::writing(crate::io::write_atomic(path, &b), path)
+    super::output::writing(robocal::io::write_atomic(path, &b), path)
 }

@@ -3,17 +3,17 @@
 use super::compensator_args::{CompensatorArgs, progress_bar};
 use super::data_args::{DataArgs, SigmaArgs};
 use super::summary::{print_stats, stats_json, write_json};
-use crate::evaluate::{row_errors, summarize};
-use crate::identify::Measure;
-use crate::kinematics::tool_pose;
-use crate::neural::compensator::{Compensator, Network};
-use crate::neural::predict::PredictWorkspace;
-use crate::neural::train::Phase2;
-use crate::neural::tuning::RACE_FOLDS;
-use crate::neural::tuning::{Score, Selection};
-use crate::plot::{ErrorRun, error_figures, training_figure};
 use anyhow::{Context, Result};
 use clap::Args;
+use robocal::evaluate::{row_errors, summarize};
+use robocal::identify::Measure;
+use robocal::kinematics::tool_pose;
+use robocal::neural::compensator::{Compensator, Network};
+use robocal::neural::predict::PredictWorkspace;
+use robocal::neural::train::Phase2;
+use robocal::neural::tuning::RACE_FOLDS;
+use robocal::neural::tuning::{Score, Selection};
+use robocal::plot::{ErrorRun, error_figures, training_figure};
 use serde_json::json;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -118,6 +118,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         &a.read,
         &a.out,
         a.report.as_ref(),
+        a.plot.as_ref(),
     )?;
     let terminal = std::io::stderr().is_terminal();
     let opts = a.build.options(a.sigma.sigmas(), terminal)?;
@@ -247,7 +248,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             "rows_outside_domain": outside,
         }));
     }
-    let table: Vec<(&str, &str, &crate::evaluate::ErrorStats)> = stat_rows
+    let table: Vec<(&str, &str, &robocal::evaluate::ErrorStats)> = stat_rows
         .iter()
         .flat_map(|(n, b, a, _)| [(*n, "model", b), (*n, "+net", a)])
         .collect();

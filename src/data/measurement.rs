@@ -336,14 +336,37 @@ pub fn parse_measurements(
                 )?;
             }
         }
-        if let (Some(i), Some(v)) = (spidx, m.sigma_position) {
-            for k in 0..3 {
-                bound(i[k], v[k], 1e3, "position standard deviation (1 m)")?;
-            }
-        }
-        if let (Some(i), Some(v)) = (saidx, m.sigma_rotation) {
-            for k in 0..3 {
-                bound(i[k], v[k], 1.0, "orientation standard deviation (1 rad)")?;
+        // Standard deviations between 1 nm (1 nrad) and 1 m (1 rad): a smaller one weighs its
+        // row by 1e18 and more, which no instrument justifies.
+        for (idx, v, min, max, what) in [
+            (
+                spidx,
+                m.sigma_position,
+                1e-6,
+                1e3,
+                "position standard deviation (1 nm to 1 m)",
+            ),
+            (
+                saidx,
+                m.sigma_rotation,
+                1e-9,
+                1.0,
+                "orientation standard deviation (1 nrad to 1 rad)",
+            ),
+        ] {
+            if let (Some(i), Some(v)) = (idx, v) {
+                for k in 0..3 {
+                    bound(i[k], v[k], max, what)?;
+                    if v[k] < min {
+                        return Err(Error::input(
+                            t.location(r, i[k]),
+                            format!(
+                                "`{}` is below the bound of a {what}",
+                                shown(&t.rows[r][i[k]])
+                            ),
+                        ));
+                    }
+                }
             }
         }
         if let Some(i) = didx {

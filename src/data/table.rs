@@ -162,7 +162,11 @@ impl Table {
                 Location::at(&self.path, 1, name),
                 format!(
                     "missing column (the header has: {})",
-                    self.headers.join(", ")
+                    self.headers
+                        .iter()
+                        .map(|h| shown(h))
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ),
             )
         })

@@ -21,7 +21,7 @@ use crate::model::Robot;
 use nalgebra::{DMatrix, DVector, Matrix6xX, Vector3};
 
 /// How measurements are compared with the model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Measure {
     /// Position and orientation of each row.

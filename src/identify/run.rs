@@ -15,7 +15,7 @@ use crate::stats::median;
 use nalgebra::Matrix6xX;
 
 /// Robust loss for iteratively reweighted least squares.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum RobustLoss {
     /// Quadratic within k robust sigmas, linear beyond (k = 1.345).

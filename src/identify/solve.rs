@@ -13,7 +13,7 @@ use crate::model::{ParamId, Robot};
 use nalgebra::{DMatrix, DVector};
 
 /// Identification method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// Levenberg-Marquardt.

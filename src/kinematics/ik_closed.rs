@@ -227,29 +227,69 @@ impl SphericalWristIk {
     }
 
     /// Every solution within the joint limits, including the copies shifted by multiples of
-    /// 360 deg that the limits allow. Solutions within 1e-9 rad of each other are merged.
-    pub fn solve(&self, target: &Pose, out: &mut Vec<[f64; 6]>) {
+    /// 360 deg that the limits allow; solutions equal modulo 360 deg (within 1e-9 rad) are
+    /// merged first, so the copies are distinct. At most [`MAX_SOLUTIONS`] are listed: false
+    /// when more exist (joint ranges of many turns; see [`SphericalWristIk::solve_nearest`]).
+    pub fn solve(&self, target: &Pose, out: &mut Vec<[f64; 6]>) -> bool {
         let mut raw = Vec::with_capacity(8);
         self.solve_unlimited(target, &mut raw);
         out.clear();
-        for q in &raw {
-            self.push_copies(q, out);
+        for q in distinct_mod_turn(&raw) {
+            if !self.push_copies(&q, out) {
+                return false;
+            }
         }
+        true
     }
 
-    /// Pushes every 2 pi copy of `q` within the limits (tolerance 1e-9 rad).
-    fn push_copies(&self, q: &[f64; 6], out: &mut Vec<[f64; 6]>) {
+    /// The solution within the limits nearest `reference` (rad, Euclidean over the joints):
+    /// each joint's copy is chosen on its own, so ranges of many turns cost nothing.
+    pub fn solve_nearest(&self, target: &Pose, reference: &[f64]) -> Option<[f64; 6]> {
+        const TOL: f64 = 1e-9;
+        let tau = 2.0 * PI;
+        let mut raw = Vec::with_capacity(8);
+        self.solve_unlimited(target, &mut raw);
+        let mut best: Option<(f64, [f64; 6])> = None;
+        'raw: for q in &raw {
+            let mut cand = *q;
+            let mut dist = 0.0;
+            for j in 0..6 {
+                let [lo, hi] = self.limits[j];
+                let kmin = ((lo - TOL - q[j]) / tau).ceil();
+                let kmax = ((hi + TOL - q[j]) / tau).floor();
+                if kmin > kmax {
+                    continue 'raw;
+                }
+                let k = ((reference[j] - q[j]) / tau).round().clamp(kmin, kmax);
+                cand[j] = q[j] + k * tau;
+                dist += (cand[j] - reference[j]).powi(2);
+            }
+            if best.is_none_or(|(d, _)| dist < d) {
+                best = Some((dist, cand));
+            }
+        }
+        best.map(|(_, q)| q)
+    }
+
+    /// Pushes every 2 pi copy of `q` within the limits (tolerance 1e-9 rad); false, with
+    /// nothing pushed, when `out` would pass [`MAX_SOLUTIONS`].
+    fn push_copies(&self, q: &[f64; 6], out: &mut Vec<[f64; 6]>) -> bool {
         const TOL: f64 = 1e-9;
         let tau = 2.0 * PI;
         let mut ranges = [(0i64, -1i64); 6];
+        let mut count = 1usize;
         for j in 0..6 {
             let [lo, hi] = self.limits[j];
             let kmin = ((lo - TOL - q[j]) / tau).ceil() as i64;
             let kmax = ((hi + TOL - q[j]) / tau).floor() as i64;
             if kmin > kmax {
-                return;
+                return true;
             }
             ranges[j] = (kmin, kmax);
+            count = count.saturating_mul((kmax - kmin + 1) as usize);
+        }
+        if out.len().saturating_add(count) > MAX_SOLUTIONS {
+            return false;
         }
         let mut k = ranges.map(|r| r.0);
         loop {
@@ -257,17 +297,12 @@ impl SphericalWristIk {
             for j in 0..6 {
                 cand[j] += k[j] as f64 * tau;
             }
-            let dup = out
-                .iter()
-                .any(|s| s.iter().zip(&cand).all(|(a, b)| (a - b).abs() < TOL));
-            if !dup {
-                out.push(cand);
-            }
+            out.push(cand);
             // Odometer over the copy indices.
             let mut j = 0;
             loop {
                 if j == 6 {
-                    return;
+                    return true;
                 }
                 if k[j] < ranges[j].1 {
                     k[j] += 1;
@@ -278,4 +313,24 @@ impl SphericalWristIk {
             }
         }
     }
+}
+
+/// Most solutions [`SphericalWristIk::solve`] lists for one pose.
+pub const MAX_SOLUTIONS: usize = 10_000;
+
+/// `raw` without solutions equal to an earlier one modulo 2 pi on every joint (1e-9 rad).
+fn distinct_mod_turn(raw: &[[f64; 6]]) -> Vec<[f64; 6]> {
+    let tau = 2.0 * PI;
+    let same = |a: &[f64; 6], b: &[f64; 6]| {
+        a.iter()
+            .zip(b)
+            .all(|(x, y)| ((x - y + PI).rem_euclid(tau) - PI).abs() < 1e-9)
+    };
+    let mut out: Vec<[f64; 6]> = Vec::with_capacity(raw.len());
+    for q in raw {
+        if !out.iter().any(|o| same(o, q)) {
+            out.push(*q);
+        }
+    }
+    out
 }

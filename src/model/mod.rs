@@ -6,5 +6,7 @@ pub mod robot;
 pub mod row;
 
 pub use file::{read_robot, robot_to_toml, write_robot};
-pub use robot::{Joint, JointType, ParamId, Robot, Slot};
+pub use robot::{
+    Joint, JointType, MAX_ANGLE_DEG, MAX_JOINT_DEG, MAX_LENGTH_MM, ParamId, Robot, Slot,
+};
 pub use row::{Convention, Field, Row};

@@ -184,20 +184,20 @@ impl Domain {
 
     /// True when the sizes fit `dof` joints and `inputs` features and every number is finite.
     pub fn is_valid(&self, dof: usize, inputs: usize) -> bool {
+        let bound = super::weights::VALUE_BOUND;
         self.joint_min.len() == dof
             && self.joint_max.len() == dof
             && self
                 .joint_min
                 .iter()
                 .zip(&self.joint_max)
-                .all(|(a, b)| a.is_finite() && b.is_finite() && a <= b)
-            && self.radius.is_finite()
-            && self.radius >= 0.0
+                .all(|(a, b)| a.abs() <= bound && b.abs() <= bound && a <= b)
+            && (0.0..=bound).contains(&self.radius)
             && !self.inputs.is_empty()
             && self
                 .inputs
                 .iter()
-                .all(|x| x.len() == inputs && x.iter().all(|v| v.is_finite()))
+                .all(|x| x.len() == inputs && x.iter().all(|v| v.abs() <= bound))
     }
 }
 

@@ -189,21 +189,31 @@ impl Compensator {
             Form::Joint => no == c.robot.dof() && c.rbf.is_none(),
             Form::Pose => no == 3 || no == 6,
         };
-        let norms_ok = c.input_norm.len() == ni
-            && c.output_norm.len() == no
-            && c.input_norm.is_valid()
-            && c.output_norm.is_valid();
-        if ni != c.encoding.len(&c.robot) || !outputs_ok || !norms_ok {
+        let norms_fit = c.input_norm.len() == ni && c.output_norm.len() == no;
+        if ni != c.encoding.len(&c.robot) || !outputs_ok || !norms_fit {
             return Err(bad(format!(
                 "a {ni}-{nh}-{no} {}-form network on {} inputs, with normalisations of {} \
-                 inputs and {} outputs (finite, positive scales: {}), does not fit its \
-                 {}-joint robot",
+                 inputs and {} outputs, does not fit its {}-joint robot",
                 c.form.name(),
                 c.encoding.name(),
                 c.input_norm.len(),
                 c.output_norm.len(),
-                c.input_norm.is_valid() && c.output_norm.is_valid(),
                 c.robot.dof()
+            )));
+        }
+        // The outputs are corrections (mm, mrad, or um for prismatic joints): none reaches
+        // 100 m or 100 rad.
+        let physical = crate::model::MAX_LENGTH_MM;
+        let outputs_bounded = c
+            .output_norm
+            .offset
+            .iter()
+            .chain(&c.output_norm.scale)
+            .all(|v| v.abs() <= physical);
+        if !c.input_norm.is_valid() || !c.output_norm.is_valid() || !outputs_bounded {
+            return Err(bad(format!(
+                "a normalisation holds a number out of bounds (scales positive, inputs within \
+                 1e9, outputs within {physical:e})"
             )));
         }
         if !c.domain.is_valid(c.robot.dof(), ni) {

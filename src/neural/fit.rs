@@ -97,7 +97,10 @@ pub(crate) fn fit_with(
                 hidden: settings.hidden,
                 penalty: settings.penalty,
                 seed: train_opts.seed.wrapping_add(m as u64 * 7919),
-                progress: train_opts.progress && settings.members == 1,
+                progress: train_opts
+                    .progress
+                    .clone()
+                    .filter(|_| settings.members == 1),
                 ..train_opts.clone()
             };
             train(&problem.samples, outputs, &opts)

@@ -38,6 +38,28 @@ pub enum Phase2 {
 /// epoch costs more than a whole L-BFGS run.
 pub const LM_BUDGET: f64 = 3e7;
 
+/// Where training stands, told after every epoch (and once more, `finished`, at the end).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Epoch {
+    /// Epochs done of both phases, out of at most `total`.
+    pub done: usize,
+    pub total: usize,
+    /// Mean squared normalised residual of the training and the held-out rows.
+    pub train_mse: f64,
+    pub validation_mse: f64,
+    pub finished: bool,
+}
+
+/// A callback told each [`Epoch`] (a progress bar, a log): the library draws nothing itself.
+#[derive(Clone)]
+pub struct Progress(pub std::sync::Arc<dyn Fn(&Epoch) + Send + Sync>);
+
+impl std::fmt::Debug for Progress {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Progress(callback)")
+    }
+}
+
 /// Training settings.
 #[derive(Debug, Clone)]
 pub struct TrainOptions {
@@ -61,8 +83,8 @@ pub struct TrainOptions {
     /// L2 weight penalty lambda (see [`super::samples`]); 0: none.
     pub penalty: f64,
     pub phase2: Phase2,
-    /// Show a progress bar (on a terminal).
-    pub progress: bool,
+    /// Told every epoch; None: nothing is told.
+    pub progress: Option<Progress>,
     /// Weights to start from instead of the seeded initial ones (a warm start: the same
     /// network trained with another penalty); ignored when their shape does not fit.
     pub start: Option<Weights>,
@@ -84,7 +106,7 @@ impl Default for TrainOptions {
             validation_fraction: 0.0,
             penalty: 0.0,
             phase2: Phase2::Auto,
-            progress: false,
+            progress: None,
             start: None,
             rbf_hyper: None,
         }
@@ -341,15 +363,17 @@ pub fn train(
         }
     };
 
-    let bar = if opts.progress {
-        let b = indicatif::ProgressBar::new((opts.momentum_epochs + opts.max_epochs) as u64);
-        b.set_style(
-            indicatif::ProgressStyle::with_template("{bar:30} epoch {pos}/{len} {msg}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
+    let total = opts.momentum_epochs + opts.max_epochs;
+    let tell = |done: usize, train_mse: f64, validation_mse: f64, finished: bool| {
+        if let Some(p) = &opts.progress {
+            (p.0)(&Epoch {
+                done,
+                total,
+                train_mse,
+                validation_mse,
+                finished,
+            });
+        }
     };
     let mut curve = Vec::new();
     let mut best = Best::new(val(&start), start.clone());
@@ -367,8 +391,7 @@ pub fn train(
             momentum_epochs = epoch;
             let v = val(w);
             curve.push((epoch, train_mse, v));
-            bar.set_position(epoch as u64);
-            bar.set_message(format!("train {train_mse:.3e} validation {v:.3e}"));
+            tell(epoch, train_mse, v, false);
             let fails = best.record(v, w, 0.0);
             if train_mse <= opts.goal {
                 stop = Some(TrainStop::Goal);
@@ -400,8 +423,7 @@ pub fn train(
         let train_mse = objective - per_component * weight_norm2(w);
         let v = if sv.is_empty() { objective } else { val(w) };
         curve.push((momentum_epochs + epoch, train_mse, v));
-        bar.set_position((opts.momentum_epochs + epoch) as u64);
-        bar.set_message(format!("train {train_mse:.3e} validation {v:.3e}"));
+        tell(opts.momentum_epochs + epoch, train_mse, v, false);
         let fails = best.record(v, w, gain);
         if train_mse <= opts.goal {
             Some(TrainStop::Goal)
@@ -488,7 +510,7 @@ pub fn train(
             }
         }
     }
-    bar.finish_and_clear();
+    tell(total, f64::NAN, f64::NAN, true);
     let w = best.weights;
     if w.to_vector().iter().any(|v| !v.is_finite()) {
         return Err(Error::NotConverged(

@@ -238,7 +238,7 @@ impl Cv<'_> {
                         ..settings.clone()
                     };
                     let train = TrainOptions {
-                        progress: false,
+                        progress: None,
                         rbf_hyper: Some(self.hyper(settings.encoding, start)?),
                         ..self.opts.train.clone()
                     };
@@ -333,7 +333,7 @@ impl Cv<'_> {
         let train = TrainOptions {
             momentum_epochs: 0,
             max_epochs: epochs,
-            progress: false,
+            progress: None,
             start: start.map(|(w, _)| w),
             ..self.opts.train.clone()
         };

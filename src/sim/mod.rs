@@ -21,7 +21,7 @@ use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 /// What the virtual sensor reports.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Observe {
     /// Position and orientation.
     Pose,
@@ -210,6 +210,15 @@ impl Simulation<'_> {
                 }
             }
             previous = q.clone();
+            // The bound a measurement file's positions have: the data must read back.
+            let far = crate::model::MAX_LENGTH_MM;
+            if pose.translation.vector.iter().any(|v| v.abs() > far) {
+                return Err(Error::Invalid(format!(
+                    "configuration {}: the simulated tool lies beyond {far} mm, the bound of a \
+                     measured position",
+                    k + 1
+                )));
+            }
             emit(m, t)?;
         }
         Ok(())

@@ -138,6 +138,14 @@ impl NonGeometric {
                 ));
             }
         }
+        for (k, g) in self.gear.iter().enumerate() {
+            if self.gear[..k].iter().any(|h| h.joint == g.joint) {
+                return Err(format!(
+                    "gear: joint {} is given twice (one [[gear]] table per joint)",
+                    g.joint
+                ));
+            }
+        }
         for g in &self.gear {
             if g.joint == 0 || g.joint > n {
                 return Err(format!("gear: joint {} does not exist (1..{n})", g.joint));
