@@ -366,11 +366,8 @@ fn resign(mut v: serde_json::Value) -> String {
     serde_json::to_string_pretty(&v).unwrap()
 }
 
-/// Racing in the default selection on Case D's training poses: candidates clearly worse on
-/// the first folds are dropped there (never chosen, no full score), every candidate has one
-/// outcome, and the model alone is scored as given and refined.
-#[test]
-fn default_selection_races_candidates() {
+/// Case D's FANUC identified (joint offsets) on its calibration poses, and its training set.
+fn case_d_offsets() -> (robocal::model::Robot, robocal::data::MeasurementSet) {
     let nominal = read_robot(root().join("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
     let rd = |p: &str| read_canonical(&root().join(p), &nominal).unwrap();
     let (cal, train) = (
@@ -381,7 +378,15 @@ fn default_selection_races_candidates() {
         params: "offsets".into(),
         ..Default::default()
     };
-    let model = identify(&nominal, &cal, &params).unwrap().robot;
+    (identify(&nominal, &cal, &params).unwrap().robot, train)
+}
+
+/// Racing in the default selection on Case D's training poses: candidates clearly worse on
+/// the first folds are dropped there (never chosen, no full score), every candidate has one
+/// outcome, and the model alone is scored as given and refined.
+#[test]
+fn default_selection_races_candidates() {
+    let (model, train) = case_d_offsets();
     let (_, report) =
         Compensator::train(&model, &train, &CompensatorOptions::default(), &|_, _| {}).unwrap();
     let sel = report.selection.expect("defaults are cross-validated");
@@ -413,22 +418,12 @@ fn default_selection_races_candidates() {
 }
 
 /// A mis-measured training row (3 mm off in x) is listed as an outlier of the
-/// cross-validated error, by its line, and the clean set lists none; kept by default, left out of the final fit with
-/// `drop_outliers`, where the compensated pose of that configuration then lies nearer its
-/// true measurement.
+/// cross-validated error, by its line, and the clean set lists none; kept by default, left
+/// out of the final fit with `drop_outliers`, where the compensated pose of that
+/// configuration then lies nearer its true measurement.
 #[test]
 fn a_mis_measured_training_row_is_listed_and_can_be_left_out() {
-    let nominal = read_robot(root().join("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
-    let rd = |p: &str| read_canonical(&root().join(p), &nominal).unwrap();
-    let (cal, clean) = (
-        rd("datasets/case_d/calibration.csv"),
-        rd("datasets/case_d/training.csv"),
-    );
-    let params = Options {
-        params: "offsets".into(),
-        ..Default::default()
-    };
-    let model = identify(&nominal, &cal, &params).unwrap().robot;
+    let (model, clean) = case_d_offsets();
     let bad = 40;
     let mut train = clean.clone();
     if let Some(p) = train.rows[bad].position.as_mut() {

@@ -358,22 +358,37 @@ fn nongeometric_values_are_finite_and_bounded_at_load() {
         "datasets/nongeometric/fanuc_compliance_gear.toml",
         "link_masses_kg",
     );
+    // The line of a key in the shipped text.
+    let line_of = |key: &str| {
+        text.lines()
+            .position(|l| l.trim_start().starts_with(key))
+            .unwrap()
+            + 1
+    };
+    let gear_line = format!(
+        "gear_nan.toml:{}: field `amplitude1_mrad`",
+        line_of("amplitude1_mrad")
+    );
+    let mass_line = format!(
+        "mass_huge.toml:{}: field `link_masses_kg`",
+        line_of("link_masses_kg")
+    );
     for (name, bad, expect) in [
         (
             "gear_nan.toml",
             text.replacen("amplitude1_mrad = 0.05", "amplitude1_mrad = nan", 1),
-            "amplitudes must be finite",
+            vec!["amplitudes must be finite", gear_line.as_str()],
         ),
         (
             "mass_huge.toml",
             text.replacen(&masses, "link_masses_kg = [1e308, 1, 1, 1, 1, 1]", 1),
-            "masses must lie in",
+            vec!["masses must lie in", mass_line.as_str()],
         ),
     ] {
         let p = common::tmp(name);
         std::fs::write(&p, bad).unwrap();
         let out = common::tmp(&format!("{name}.csv"));
-        refused(
+        refused_saying(
             &[
                 "simulate",
                 "--robot",
@@ -387,7 +402,7 @@ fn nongeometric_values_are_finite_and_bounded_at_load() {
                 "--out",
                 out.to_str().unwrap(),
             ],
-            expect,
+            &expect,
         );
         assert!(!out.exists(), "no NaN poses written");
     }
@@ -687,30 +702,18 @@ fn second_review_round() {
     assert!(t.elapsed().as_secs() < 10, "{:?}", t.elapsed());
     // An output that is a folder, or --plot equal to --out: refused before anything runs.
     std::fs::create_dir(p("folder")).unwrap();
+    let (a_toml, folder) = (p("a.toml"), p("folder"));
+    let identify_with = |flag: &'static str, path: &str| -> Vec<String> {
+        [
+            "identify", "--robot", fanuc, "--data", data, "--out", &a_toml, flag, path,
+        ]
+        .map(String::from)
+        .to_vec()
+    };
     for args in [
-        vec![
-            "identify",
-            "--robot",
-            fanuc,
-            "--data",
-            data,
-            "--out",
-            &p("a.toml"),
-            "--report",
-            &p("folder"),
-        ],
-        vec![
-            "identify",
-            "--robot",
-            fanuc,
-            "--data",
-            data,
-            "--out",
-            &p("a.toml"),
-            "--plot",
-            &p("a.toml"),
-        ],
-        vec![
+        identify_with("--report", &folder),
+        identify_with("--plot", &a_toml),
+        [
             "split",
             data,
             "--seed",
@@ -718,9 +721,12 @@ fn second_review_round() {
             "--out-a",
             &p("b.csv"),
             "--out-b",
-            &p("folder"),
-        ],
+            &folder,
+        ]
+        .map(String::from)
+        .to_vec(),
     ] {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
         refused(&args, "--");
         assert!(!dir.path().join("a.toml").exists() && !dir.path().join("b.csv").exists());
     }

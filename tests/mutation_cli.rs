@@ -10,6 +10,28 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::{Path, PathBuf};
 
+/// `train` with every choice fixed and two epochs: a compensator in milliseconds.
+const CHEAP_TRAIN: &[&str] = &[
+    "--network",
+    "mlp",
+    "--form",
+    "pose",
+    "--encoding",
+    "angles",
+    "--hidden",
+    "2",
+    "--penalty",
+    "1",
+    "--members",
+    "1",
+    "--refine",
+    "none",
+    "--max-epochs",
+    "2",
+    "--momentum-epochs",
+    "2",
+];
+
 /// Cases in the test suite (each one run of the binary; CASES in the environment for more).
 const CASES: usize = 300;
 
@@ -51,33 +73,17 @@ fn mutated_inputs_never_crash_a_command() {
     let p = |n: &str| d.join(n).to_str().unwrap().to_string();
     let fanuc = "datasets/robots/fanuc_r2000ib_210f.toml";
     // A small compensator to mutate and to use.
-    let o = robocal(&[
+    let base = p("base.rcal");
+    let mut args = vec![
         "train",
         "--robot",
         fanuc,
         "--data",
         "datasets/case_d/training.csv",
-        "--network",
-        "mlp",
-        "--form",
-        "pose",
-        "--encoding",
-        "angles",
-        "--hidden",
-        "2",
-        "--penalty",
-        "1",
-        "--members",
-        "1",
-        "--refine",
-        "none",
-        "--max-epochs",
-        "2",
-        "--momentum-epochs",
-        "2",
-        "--out",
-        &p("base.rcal"),
-    ]);
+    ];
+    args.extend_from_slice(CHEAP_TRAIN);
+    args.extend(["--out", &base]);
+    let o = robocal(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     let inputs = vec![
         Input {
@@ -180,33 +186,12 @@ fn mutated_inputs_never_crash_a_command() {
             "--report",
             "OUT",
         ],
-        vec![
-            "train",
-            "--robot",
-            "ROBOT",
-            "--data",
-            "DATA",
-            "--network",
-            "mlp",
-            "--form",
-            "pose",
-            "--encoding",
-            "angles",
-            "--hidden",
-            "2",
-            "--penalty",
-            "1",
-            "--members",
-            "1",
-            "--refine",
-            "none",
-            "--max-epochs",
-            "2",
-            "--momentum-epochs",
-            "2",
-            "--out",
-            "OUT",
-        ],
+        [
+            &["train", "--robot", "ROBOT", "--data", "DATA"][..],
+            CHEAP_TRAIN,
+            &["--out", "OUT"],
+        ]
+        .concat(),
         vec![
             "predict",
             "--compensator",

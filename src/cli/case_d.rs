@@ -92,9 +92,10 @@ fn plot(dir: &Path, datasets: &Path, rows: &[Row]) -> Result<usize> {
     let mut figs = 0;
     for set in Robotset::ALL {
         let data = load(datasets, set, &nominal)?;
+        // Picture names: case_d_test, case_d_nongeometric_test, ...
         let (tag, name) = match set {
             Robotset::CaseD => ("case_d", "Case D"),
-            Robotset::NonGeometric => ("nongeometric", "non-geometric robot"),
+            Robotset::NonGeometric => ("case_d_nongeometric", "non-geometric robot"),
         };
         let mine: Vec<&Row> = rows.iter().filter(|r| r.set == set).collect();
         let runs: Vec<ErrorRun> = mine
@@ -106,7 +107,7 @@ fn plot(dir: &Path, datasets: &Path, rows: &[Row]) -> Result<usize> {
             .collect();
         figs += error_figures(
             dir,
-            &format!("case_d_{tag}_test"),
+            &format!("{tag}_test"),
             &format!("{name} test truth"),
             &data.test_truth,
             &runs,
@@ -120,7 +121,7 @@ fn plot(dir: &Path, datasets: &Path, rows: &[Row]) -> Result<usize> {
                 };
                 training_figure(
                     dir,
-                    &format!("case_d_{tag}_{stage}"),
+                    &format!("{tag}_{stage}"),
                     &format!("{name}, {}", r.stage.label()),
                     &t.networks[0], // not empty: filtered above
                 )?;

@@ -117,6 +117,15 @@ impl RowFile {
     }
 }
 
+/// A number as a message shows it: 1e308 in exponent form, not as 309 digits.
+fn short(v: f64) -> String {
+    if v.abs() >= 1e6 {
+        format!("{v:e}")
+    } else {
+        v.to_string()
+    }
+}
+
 /// Reads a robot file.
 pub fn read_robot(path: impl AsRef<Path>) -> Result<Robot> {
     let path = path.as_ref();
@@ -168,7 +177,8 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
                 return Err(Error::input(
                     at(value.span(), key),
                     format!(
-                        "{what}: {key} = {v} {} is beyond the physical bound of {bound} {}",
+                        "{what}: {key} = {} {} is beyond the physical bound of {bound} {}",
+                        short(v),
                         field.file_unit(),
                         field.file_unit()
                     ),
@@ -239,8 +249,8 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
                 at_limits,
                 format!(
                     "{what}: limits [{}, {}] beyond +-{bound} {}",
-                    limits[0],
-                    limits[1],
+                    short(limits[0]),
+                    short(limits[1]),
                     joint_type.file_unit()
                 ),
             ));

@@ -143,12 +143,16 @@ pub fn weights_from_record(
     let d = device(false)?;
     let record =
         burn::store::ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(bytes.to_vec()))
-            .map_err(|e| Error::Invalid(format!("the network record is corrupt: {e:?}")))?;
+            .map_err(|e| {
+                let why: String = format!("{e:?}").chars().take(200).collect();
+                Error::Invalid(format!("the network record is corrupt: {why}"))
+            })?;
     let m = Mlp::new(&d, inputs, hidden, outputs)
         .try_load_record(record)
-        .map_err(|e| {
+        .map_err(|_| {
             Error::Invalid(format!(
-                "the network record does not fit a {inputs}-{hidden}-{outputs} network: {e:?}"
+                "the network record does not fit a {inputs}-{hidden}-{outputs} network (its \
+                 tensors have other shapes)"
             ))
         })?;
     m.weights()

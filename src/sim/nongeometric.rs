@@ -95,19 +95,37 @@ impl NonGeometric {
     /// Reads a non-geometric error file and checks it against the robot.
     pub fn read(path: impl AsRef<Path>, robot: &Robot) -> Result<Self> {
         let path = path.as_ref();
-        let ng: NonGeometric = crate::io::parse_toml(&crate::io::read_text(path)?, path)?;
-        ng.check(robot)
-            .map_err(|m| Error::input(Location::file(path), m))?;
+        let text = crate::io::read_text(path)?;
+        let ng: NonGeometric = crate::io::parse_toml(&text, path)?;
+        ng.check(robot).map_err(|m| {
+            let (line, field) = locate(&text, &m);
+            Error::input(
+                Location {
+                    file: path.to_path_buf(),
+                    line,
+                    field,
+                },
+                m,
+            )
+        })?;
         Ok(ng)
     }
 
-    /// Checks list lengths and joint numbers against the robot.
+    /// Checks list lengths, joint numbers and bounds against the robot; the message starts
+    /// with the table (`compliance`, `gear of joint N`, `backlash`) and names the key at
+    /// fault after "key " where one is.
     pub fn check(&self, robot: &Robot) -> std::result::Result<(), String> {
         let n = robot.dof();
         if let Some(c) = &self.compliance {
             if c.link_masses_kg.len() != n || c.mrad_per_knm.len() != n {
+                let key = if c.link_masses_kg.len() != n {
+                    "link_masses_kg"
+                } else {
+                    "mrad_per_knm"
+                };
                 return Err(format!(
-                    "compliance: link_masses_kg and mrad_per_knm need {n} values each (one per joint)"
+                    "compliance: key {key}: link_masses_kg and mrad_per_knm need {n} values each \
+                     (one per joint)"
                 ));
             }
             let all = c
@@ -119,22 +137,40 @@ impl NonGeometric {
                 || c.payload_kg < 0.0
                 || all.clone().any(|v| !v.is_finite())
             {
-                return Err(
-                    "compliance: values must be finite and the payload non-negative".into(),
-                );
+                let key = if !c.payload_kg.is_finite() || c.payload_kg < 0.0 {
+                    "payload_kg"
+                } else if c.link_masses_kg.iter().any(|v| !v.is_finite()) {
+                    "link_masses_kg"
+                } else if c.mrad_per_knm.iter().any(|v| !v.is_finite()) {
+                    "mrad_per_knm"
+                } else {
+                    "gravity"
+                };
+                return Err(format!(
+                    "compliance: key {key}: values must be finite and the payload non-negative"
+                ));
             }
             // 1e308 kg passed and gave NaN poses: keep to what a robot can carry and bend.
-            let masses = c
+            let key = if c
                 .link_masses_kg
                 .iter()
-                .chain(std::iter::once(&c.payload_kg));
-            if masses.clone().any(|m| !(0.0..=MAX_MASS_KG).contains(m))
-                || c.mrad_per_knm.iter().any(|v| v.abs() > MAX_MRAD)
-                || c.gravity.iter().any(|v| v.abs() > MAX_GRAVITY)
+                .any(|m| !(0.0..=MAX_MASS_KG).contains(m))
             {
+                Some("link_masses_kg")
+            } else if !(0.0..=MAX_MASS_KG).contains(&c.payload_kg) {
+                Some("payload_kg")
+            } else if c.mrad_per_knm.iter().any(|v| v.abs() > MAX_MRAD) {
+                Some("mrad_per_knm")
+            } else if c.gravity.iter().any(|v| v.abs() > MAX_GRAVITY) {
+                Some("gravity")
+            } else {
+                None
+            };
+            if let Some(key) = key {
                 return Err(format!(
-                    "compliance: masses must lie in [0, {MAX_MASS_KG}] kg, compliances within \
-                     +-{MAX_MRAD} mrad per kN m and gravity within +-{MAX_GRAVITY} m/s^2"
+                    "compliance: key {key}: masses must lie in [0, {MAX_MASS_KG}] kg, \
+                     compliances within +-{MAX_MRAD} mrad per kN m and gravity within \
+                     +-{MAX_GRAVITY} m/s^2"
                 ));
             }
         }
@@ -156,16 +192,18 @@ impl NonGeometric {
                 g.amplitude2_mrad,
                 g.phase2_deg,
             ];
-            if values.iter().any(|v| !v.is_finite())
-                || g.amplitude1_mrad.abs() > MAX_MRAD
-                || g.amplitude2_mrad.abs() > MAX_MRAD
-                || g.phase1_deg.abs() > 720.0
-                || g.phase2_deg.abs() > 720.0
-            {
+            let keys = [
+                "amplitude1_mrad",
+                "phase1_deg",
+                "amplitude2_mrad",
+                "phase2_deg",
+            ];
+            let max = [MAX_MRAD, 720.0, MAX_MRAD, 720.0];
+            if let Some(k) = (0..4).find(|&k| values[k].is_nan() || values[k].abs() > max[k]) {
                 return Err(format!(
-                    "gear of joint {}: amplitudes must be finite and within +-{MAX_MRAD} mrad, \
-                     phases within +-720 deg",
-                    g.joint
+                    "gear of joint {}: key {}: amplitudes must be finite and within \
+                     +-{MAX_MRAD} mrad, phases within +-720 deg",
+                    g.joint, keys[k]
                 ));
             }
         }
@@ -176,7 +214,7 @@ impl NonGeometric {
                     .any(|v| !v.is_finite() || *v < 0.0 || *v > MAX_MRAD))
         {
             return Err(format!(
-                "backlash: mrad needs {n} values in [0, {MAX_MRAD}]"
+                "backlash: key mrad: mrad needs {n} values in [0, {MAX_MRAD}]"
             ));
         }
         Ok(())
@@ -246,4 +284,49 @@ pub fn gravity_torques(robot: &Robot, c: &Compliance, q: &[f64], ws: &mut Frames
                 .sum()
         })
         .collect()
+}
+
+/// The line and key of a [`NonGeometric::check`] message in the file's text: the key's line
+/// within its table (`[compliance]`, the `[[gear]]` of that joint, `[backlash]`).
+fn locate(text: &str, message: &str) -> (Option<usize>, Option<String>) {
+    let key = message
+        .split("key ")
+        .nth(1)
+        .and_then(|r| r.split(':').next())
+        .map(|k| k.trim().to_string());
+    let lines: Vec<&str> = text.lines().collect();
+    // Where the table starts.
+    let start = if let Some(rest) = message.strip_prefix("gear of joint ") {
+        let joint: String = rest.chars().take_while(char::is_ascii_digit).collect();
+        let mut in_gear = None;
+        let mut found = None;
+        for (i, l) in lines.iter().enumerate() {
+            let t = l.trim();
+            if t.starts_with("[[gear]]") {
+                in_gear = Some(i);
+            } else if t.starts_with('[') {
+                in_gear = None;
+            } else if let Some(g) = in_gear
+                && t.starts_with("joint")
+                && t.split('=').nth(1).map(|v| v.trim()) == Some(joint.as_str())
+            {
+                found = Some(g);
+                break;
+            }
+        }
+        found
+    } else {
+        let table = message.split(':').next().unwrap_or("");
+        lines.iter().position(|l| l.trim() == format!("[{table}]"))
+    };
+    let line = match (&key, start) {
+        (Some(k), Some(s)) => lines[s..]
+            .iter()
+            .position(|l| l.trim_start().starts_with(k.as_str()))
+            .map(|i| s + i + 1)
+            .or(Some(s + 1)),
+        (None, Some(s)) => Some(s + 1),
+        _ => None,
+    };
+    (line, key)
 }
