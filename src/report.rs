@@ -299,7 +299,7 @@ pub fn render(dir: &Path) -> Result<String> {
     let figures = read_manifest(dir)?;
     if reports.is_empty() && figures.is_empty() {
         return Err(Error::Invalid(format!(
-            "{}: no reports (*.json from --report) and no pictures (figures.json from --plot)",
+            "{}: no reports (*.json) and no pictures (figures.json)",
             dir.display()
         )));
     }

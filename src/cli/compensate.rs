@@ -5,7 +5,7 @@ use super::predict::load_compensator;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use nalgebra::Vector3;
-use robocal::compensation::{CalibratedModel, Desired, FakeTargetSolver};
+use robocal::compensation::{CalibratedModel, Desired, Failure, FakeTargetSolver};
 use robocal::data::{POSE_COLUMNS, Table, joint_columns};
 use robocal::kinematics::{pose_from_file, pose_to_file};
 use robocal::model::read_robot;
@@ -234,7 +234,12 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
             failed.len()
         );
         for (line, why) in failed.iter().take(20) {
-            msg.push_str(&format!("\n  {}:{line}: {why}", a.targets.display()));
+            // Where this command's seed joints come from.
+            let hint = match why {
+                Failure::NoSeed => " (give q1..qN columns or --seed)",
+                _ => "",
+            };
+            msg.push_str(&format!("\n  {}:{line}: {why}{hint}", a.targets.display()));
         }
         if failed.len() > 20 {
             msg.push_str(&format!("\n  ... and {} more", failed.len() - 20));

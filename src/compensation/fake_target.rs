@@ -89,8 +89,7 @@ impl std::fmt::Display for Failure {
         match self {
             Failure::NoSeed => write!(
                 f,
-                "no-seed: a position-only target needs seed joints (q1..qN columns or --seed) \
-                 for its orientation"
+                "no-seed: a position-only target needs seed joints for its orientation"
             ),
             Failure::OutsideLimits(j) => write!(
                 f,

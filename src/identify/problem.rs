@@ -104,7 +104,7 @@ impl<'a> Observations<'a> {
                 Ok(())
             } else {
                 Err(Error::Invalid(format!(
-                    "{}: --measure {} needs {what} in every row",
+                    "{}: measuring by {} needs {what} in every row",
                     set.source.display(),
                     measure.name()
                 )))

@@ -181,7 +181,7 @@ pub fn solve_gradient(
         let (step, new_robot, new_cost) = if gn {
             let chol = ne.a.clone().cholesky().ok_or_else(|| {
                 Error::NotConverged(format!(
-                    "Gauss-Newton: J^T W J is singular at iteration {iter} (rank loss among {}); use --method lm",
+                    "Gauss-Newton: J^T W J is singular at iteration {iter} (rank loss among {}); Levenberg-Marquardt (method lm) damps it",
                     names(&ids)
                 ))
             })?;
@@ -221,7 +221,7 @@ pub fn solve_gradient(
                 None => {
                     return Err(Error::NotConverged(format!(
                         "Gauss-Newton diverged at iteration {iter}: no fraction of its step lowers the cost \
-                         ({:.6e}); use --method lm",
+                         ({:.6e}); Levenberg-Marquardt (method lm) damps the step",
                         ne.cost
                     )));
                 }

@@ -699,8 +699,8 @@ pub fn select_settings(
             // The network is fixed: the best of its own candidates, which need pose-form MLPs.
             if !(first..candidates.len()).any(|i| candidates[i].score.is_some()) {
                 return Err(Error::Invalid(
-                    "--network mix: no pose-form MLP was fitted to mix the RBF network with \
-                     (--members 0, or every MLP candidate failed)"
+                    "a mixed network: no pose-form MLP was fitted to mix the RBF network with \
+                     (no members asked for, or every MLP candidate failed)"
                         .into(),
                 ));
             }
