@@ -4,7 +4,7 @@
 //! limits); else the nominal model's closed form (`--nominal`) refined numerically on the
 //! robot; else numerical IK from a seed (`--seed`, or the row's own q1..qN columns).
 
-use super::output::{OutputArgs, joints_arg, num, pose_arg};
+use super::output::{OutputArgs, joints_arg, num, pose_arg, pose_bound};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use robocal::data::{POSE_COLUMNS, Table, joint_columns};
@@ -12,7 +12,7 @@ use robocal::kinematics::ik_closed::MAX_SOLUTIONS;
 use robocal::kinematics::{
     IkOptions, IkTarget, IkWorkspace, Pose, SphericalWristIk, pose_from_file, solve_numeric,
 };
-use robocal::model::{MAX_ANGLE_DEG, MAX_LENGTH_MM, Robot, read_robot};
+use robocal::model::{Robot, read_robot};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -209,7 +209,7 @@ pub fn run(a: IkArgs) -> Result<()> {
             for r in 0..t.rows.len() {
                 let v = t.numbers(r, &idx)?;
                 for (k, x) in v.iter().enumerate() {
-                    let max = if k < 3 { MAX_LENGTH_MM } else { MAX_ANGLE_DEG };
+                    let max = pose_bound(k);
                     if x.abs() > max {
                         bail!(
                             "{}:{}: field `{}`: {x:e} is beyond the bound of {max}",

@@ -94,13 +94,18 @@ pub fn joints_arg(robot: &robocal::model::Robot, s: &str, what: &str) -> Result<
     Ok(q)
 }
 
+/// The bound of pose value `k` of x, y, z (mm), rz, ry, rx (deg): 100 m, 2 turns.
+pub fn pose_bound(k: usize) -> f64 {
+    use robocal::model::{MAX_ANGLE_DEG, MAX_LENGTH_MM};
+    if k < 3 { MAX_LENGTH_MM } else { MAX_ANGLE_DEG }
+}
+
 /// A pose given on the command line: x, y, z (mm) within 100 m and rz, ry, rx (deg) within 2
 /// turns, as a measurement file's.
 pub fn pose_arg(s: &str, what: &str) -> Result<Vec<f64>> {
-    use robocal::model::{MAX_ANGLE_DEG, MAX_LENGTH_MM};
     let v = parse_list(s, what, 6)?;
     for (i, x) in v.iter().enumerate() {
-        let max = if i < 3 { MAX_LENGTH_MM } else { MAX_ANGLE_DEG };
+        let max = pose_bound(i);
         if x.abs() > max {
             bail!(
                 "{what}: value {} ({x:e}) is beyond the bound of {max}",

@@ -264,6 +264,20 @@ pub fn parse_measurements(
             let v = t.numbers(r, &idx)?;
             Ok(Vector3::new(f(v[0]), f(v[1]), f(v[2])))
         };
+        // Physical bounds, after unit conversion (mm, rad): a finite 1e300 would otherwise
+        // reach the solvers (and read as a perfect fit).
+        let bound = |col: usize, v: f64, max: f64, what: &str| -> Result<()> {
+            if v.abs() > max {
+                return Err(Error::input(
+                    t.location(r, col),
+                    format!(
+                        "`{}` is beyond the bound of a {what}",
+                        shown(&t.rows[r][col])
+                    ),
+                ));
+            }
+            Ok(())
+        };
         let mut m = Measurement::new(q);
         m.line = t.lines[r];
         if let Some(i) = pidx {
@@ -271,6 +285,14 @@ pub fn parse_measurements(
         }
         if let Some(i) = aidx {
             let a = vec3(i, &|v| au.to_rad(v))?;
+            for k in 0..3 {
+                bound(
+                    i[k],
+                    a[k],
+                    crate::model::file::MAX_ANGLE_DEG.to_radians(),
+                    "orientation angle (2 turns)",
+                )?;
+            }
             // Columns are the angles about x, y, z; each convention takes them in its order.
             let ordered = match euler {
                 EulerConvention::Zyx => [a.z, a.y, a.x],
@@ -296,20 +318,6 @@ pub fn parse_measurements(
                 ));
             }
         }
-        // Physical bounds, after unit conversion (mm, rad): a finite 1e300 would otherwise
-        // reach the solvers (and read as a perfect fit).
-        let bound = |col: usize, v: f64, max: f64, what: &str| -> Result<()> {
-            if v.abs() > max {
-                return Err(Error::input(
-                    t.location(r, col),
-                    format!(
-                        "`{}` is beyond the bound of a {what}",
-                        shown(&t.rows[r][col])
-                    ),
-                ));
-            }
-            Ok(())
-        };
         let (max_mm, max_joint) = (
             crate::model::file::MAX_LENGTH_MM,
             crate::model::file::MAX_JOINT_DEG.to_radians(),
@@ -323,17 +331,6 @@ pub fn parse_measurements(
         if let (Some(i), Some(p)) = (pidx, m.position) {
             for k in 0..3 {
                 bound(i[k], p[k], max_mm, "position (100 m)")?;
-            }
-        }
-        if let Some(i) = aidx {
-            for (k, col) in i.iter().enumerate() {
-                let v = au.to_rad(t.number(r, *col)?);
-                bound(
-                    i[k],
-                    v,
-                    crate::model::file::MAX_ANGLE_DEG.to_radians(),
-                    "orientation angle (2 turns)",
-                )?;
             }
         }
         // Standard deviations between 1 nm (1 nrad) and 1 m (1 rad): a smaller one weighs its
@@ -521,6 +518,8 @@ impl Layout {
     /// The header row (joints in file units: deg, or mm for prismatic).
     pub fn headers(&self, joints: &[JointInfo]) -> Vec<String> {
         let mut headers: Vec<String> = Vec::new();
+        let joints = joint_columns(joints.len());
+        let joints: Vec<&str> = joints.iter().map(String::as_str).collect();
         let mut push = |on: bool, names: &[&str]| {
             if on {
                 headers.extend(names.iter().map(|s| s.to_string()));
@@ -529,12 +528,7 @@ impl Layout {
         push(self.id, &["id"]);
         push(self.set, &["set"]);
         push(self.pair, &["pair"]);
-        headers.extend(joint_columns(joints.len()));
-        let mut push = |on: bool, names: &[&str]| {
-            if on {
-                headers.extend(names.iter().map(|s| s.to_string()));
-            }
-        };
+        push(true, &joints);
         push(self.position, &["x", "y", "z"]);
         push(self.rotation, &["rz", "ry", "rx"]);
         push(self.distance, &["distance"]);
@@ -617,7 +611,6 @@ pub struct MeasurementWriter {
     w: csv::Writer<crate::io::AtomicWriter>,
     layout: Layout,
     joints: Vec<JointInfo>,
-    path: PathBuf,
 }
 
 impl MeasurementWriter {
@@ -629,19 +622,18 @@ impl MeasurementWriter {
             w,
             layout,
             joints: joints.to_vec(),
-            path: path.to_path_buf(),
         })
     }
 
     pub fn write(&mut self, m: &Measurement) -> Result<()> {
-        let path = &self.path;
+        let cells = self.layout.cells(m, &self.joints);
         self.w
-            .write_record(self.layout.cells(m, &self.joints))
-            .map_err(|e| Error::Invalid(format!("{}: {e}", path.display())))
+            .write_record(cells)
+            .map_err(|e| Error::Invalid(format!("{}: {e}", self.w.get_ref().path().display())))
     }
 
     pub fn finish(self) -> Result<()> {
-        let path = self.path;
+        let path = self.w.get_ref().path().to_path_buf();
         self.w
             .into_inner()
             .map_err(|e| Error::Invalid(format!("{}: {}", path.display(), e.error())))?

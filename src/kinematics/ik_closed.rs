@@ -245,7 +245,6 @@ impl SphericalWristIk {
     /// The solution within the limits nearest `reference` (rad, Euclidean over the joints):
     /// each joint's copy is chosen on its own, so ranges of many turns cost nothing.
     pub fn solve_nearest(&self, target: &Pose, reference: &[f64]) -> Option<[f64; 6]> {
-        const TOL: f64 = 1e-9;
         let tau = 2.0 * PI;
         let mut raw = Vec::with_capacity(8);
         self.solve_unlimited(target, &mut raw);
@@ -254,13 +253,12 @@ impl SphericalWristIk {
             let mut cand = *q;
             let mut dist = 0.0;
             for j in 0..6 {
-                let [lo, hi] = self.limits[j];
-                let kmin = ((lo - TOL - q[j]) / tau).ceil();
-                let kmax = ((hi + TOL - q[j]) / tau).floor();
-                if kmin > kmax {
+                let Some((kmin, kmax)) = self.turns(j, q[j]) else {
                     continue 'raw;
-                }
-                let k = ((reference[j] - q[j]) / tau).round().clamp(kmin, kmax);
+                };
+                let k = ((reference[j] - q[j]) / tau)
+                    .round()
+                    .clamp(kmin as f64, kmax as f64);
                 cand[j] = q[j] + k * tau;
                 dist += (cand[j] - reference[j]).powi(2);
             }
@@ -271,20 +269,27 @@ impl SphericalWristIk {
         best.map(|(_, q)| q)
     }
 
+    /// The range of whole turns k for which joint `j` at `v + 2 pi k` (rad) lies within its
+    /// limits (tolerance 1e-9 rad); None when no copy does.
+    fn turns(&self, j: usize, v: f64) -> Option<(i64, i64)> {
+        const TOL: f64 = 1e-9;
+        let tau = 2.0 * PI;
+        let [lo, hi] = self.limits[j];
+        let kmin = ((lo - TOL - v) / tau).ceil() as i64;
+        let kmax = ((hi + TOL - v) / tau).floor() as i64;
+        (kmin <= kmax).then_some((kmin, kmax))
+    }
+
     /// Pushes every 2 pi copy of `q` within the limits (tolerance 1e-9 rad); false, with
     /// nothing pushed, when `out` would pass [`MAX_SOLUTIONS`].
     fn push_copies(&self, q: &[f64; 6], out: &mut Vec<[f64; 6]>) -> bool {
-        const TOL: f64 = 1e-9;
         let tau = 2.0 * PI;
         let mut ranges = [(0i64, -1i64); 6];
         let mut count = 1usize;
         for j in 0..6 {
-            let [lo, hi] = self.limits[j];
-            let kmin = ((lo - TOL - q[j]) / tau).ceil() as i64;
-            let kmax = ((hi + TOL - q[j]) / tau).floor() as i64;
-            if kmin > kmax {
+            let Some((kmin, kmax)) = self.turns(j, q[j]) else {
                 return true;
-            }
+            };
             ranges[j] = (kmin, kmax);
             count = count.saturating_mul((kmax - kmin + 1) as usize);
         }

@@ -124,13 +124,22 @@ pub(crate) fn subset(set: &MeasurementSet, keep: impl Fn(usize) -> bool) -> Meas
     }
 }
 
-fn sums(set: &MeasurementSet, predict: impl FnMut(&[f64]) -> crate::Pose) -> Result<Sums> {
+/// Each held-out row's errors under `predict`: pose where the set has orientations, else
+/// position.
+fn held_errors(
+    set: &MeasurementSet,
+    predict: impl FnMut(&[f64]) -> crate::Pose,
+) -> Result<Vec<crate::evaluate::RowError>> {
     let measure = if set.has_rotation() {
         Measure::Pose
     } else {
         Measure::Position
     };
-    let rows = row_errors(set, measure, predict)?;
+    row_errors(set, measure, predict)
+}
+
+fn sums(set: &MeasurementSet, predict: impl FnMut(&[f64]) -> crate::Pose) -> Result<Sums> {
+    let rows = held_errors(set, predict)?;
     let mut s = Sums::default();
     for r in rows {
         s.pos += r.position_mm.unwrap_or(0.0).powi(2);
@@ -771,12 +780,7 @@ pub fn select_settings(
             let model = model.as_ref().map_err(|e| Error::Invalid(e.to_string()))?;
             let c = cv.fit(f, s, model, round)?;
             let mut ws = Default::default();
-            let measure = if set.has_rotation() {
-                Measure::Pose
-            } else {
-                Measure::Position
-            };
-            let errors = row_errors(&cv.held[f], measure, |q| c.predict(q, &mut ws))?;
+            let errors = held_errors(&cv.held[f], |q| c.predict(q, &mut ws))?;
             let rows = (0..set.rows.len()).filter(|&i| fold_of[i] == f);
             for (i, e) in rows.zip(errors) {
                 held[i] = (e.position_mm.unwrap_or(0.0), e.orientation_deg);

@@ -92,129 +92,112 @@ pub struct NonGeometric {
 }
 
 impl NonGeometric {
-    /// Reads a non-geometric error file and checks it against the robot.
+    /// Reads a non-geometric error file and checks it against the robot; a fault names the
+    /// line and key of the value at fault.
     pub fn read(path: impl AsRef<Path>, robot: &Robot) -> Result<Self> {
         let path = path.as_ref();
         let text = crate::io::read_text(path)?;
         let ng: NonGeometric = crate::io::parse_toml(&text, path)?;
-        ng.check(robot).map_err(|m| {
-            let (line, field) = locate(&text, &m);
+        ng.check(robot).map_err(|f| {
             Error::input(
                 Location {
                     file: path.to_path_buf(),
-                    line,
-                    field,
+                    line: f.line_in(&text),
+                    field: Some(f.key.to_string()),
                 },
-                m,
+                f.to_string(),
             )
         })?;
         Ok(ng)
     }
 
-    /// Checks list lengths, joint numbers and bounds against the robot; the message starts
-    /// with the table (`compliance`, `gear of joint N`, `backlash`) and names the key at
-    /// fault after "key " where one is.
-    pub fn check(&self, robot: &Robot) -> std::result::Result<(), String> {
+    /// Checks list lengths, joint numbers and bounds against the robot.
+    pub fn check(&self, robot: &Robot) -> std::result::Result<(), Fault> {
         let n = robot.dof();
         if let Some(c) = &self.compliance {
-            if c.link_masses_kg.len() != n || c.mrad_per_knm.len() != n {
-                let key = if c.link_masses_kg.len() != n {
-                    "link_masses_kg"
-                } else {
-                    "mrad_per_knm"
-                };
-                return Err(format!(
-                    "compliance: key {key}: link_masses_kg and mrad_per_knm need {n} values each \
-                     (one per joint)"
-                ));
+            for (key, values) in [
+                ("link_masses_kg", &c.link_masses_kg),
+                ("mrad_per_knm", &c.mrad_per_knm),
+            ] {
+                if values.len() != n {
+                    return Err(Fault::new(
+                        Table::Compliance,
+                        key,
+                        format!(
+                            "link_masses_kg and mrad_per_knm need {n} values each (one per joint)"
+                        ),
+                    ));
+                }
             }
-            let all = c
-                .link_masses_kg
-                .iter()
-                .chain(&c.mrad_per_knm)
-                .chain(&c.gravity);
-            if !c.payload_kg.is_finite()
-                || c.payload_kg < 0.0
-                || all.clone().any(|v| !v.is_finite())
-            {
-                let key = if !c.payload_kg.is_finite() || c.payload_kg < 0.0 {
-                    "payload_kg"
-                } else if c.link_masses_kg.iter().any(|v| !v.is_finite()) {
-                    "link_masses_kg"
-                } else if c.mrad_per_knm.iter().any(|v| !v.is_finite()) {
-                    "mrad_per_knm"
-                } else {
-                    "gravity"
-                };
-                return Err(format!(
-                    "compliance: key {key}: values must be finite and the payload non-negative"
-                ));
-            }
-            // 1e308 kg passed and gave NaN poses: keep to what a robot can carry and bend.
-            let key = if c
-                .link_masses_kg
-                .iter()
-                .any(|m| !(0.0..=MAX_MASS_KG).contains(m))
-            {
-                Some("link_masses_kg")
-            } else if !(0.0..=MAX_MASS_KG).contains(&c.payload_kg) {
-                Some("payload_kg")
-            } else if c.mrad_per_knm.iter().any(|v| v.abs() > MAX_MRAD) {
-                Some("mrad_per_knm")
-            } else if c.gravity.iter().any(|v| v.abs() > MAX_GRAVITY) {
-                Some("gravity")
-            } else {
-                None
-            };
-            if let Some(key) = key {
-                return Err(format!(
-                    "compliance: key {key}: masses must lie in [0, {MAX_MASS_KG}] kg, \
-                     compliances within +-{MAX_MRAD} mrad per kN m and gravity within \
-                     +-{MAX_GRAVITY} m/s^2"
-                ));
+            // 1e308 kg passed and gave NaN poses: keep to what a robot can carry and bend
+            // (a NaN lies in no range).
+            let payload = [c.payload_kg];
+            let ranges: [(&str, &[f64], f64, f64); 4] = [
+                ("link_masses_kg", &c.link_masses_kg, 0.0, MAX_MASS_KG),
+                ("payload_kg", &payload, 0.0, MAX_MASS_KG),
+                ("mrad_per_knm", &c.mrad_per_knm, -MAX_MRAD, MAX_MRAD),
+                ("gravity", &c.gravity, -MAX_GRAVITY, MAX_GRAVITY),
+            ];
+            for (key, values, lo, hi) in ranges {
+                if values.iter().any(|v| !(lo..=hi).contains(v)) {
+                    return Err(Fault::new(
+                        Table::Compliance,
+                        key,
+                        format!(
+                            "masses must lie in [0, {MAX_MASS_KG}] kg, compliances within \
+                             +-{MAX_MRAD} mrad per kN m and gravity within +-{MAX_GRAVITY} m/s^2"
+                        ),
+                    ));
+                }
             }
         }
         for (k, g) in self.gear.iter().enumerate() {
+            let table = Table::Gear(k);
             if self.gear[..k].iter().any(|h| h.joint == g.joint) {
-                return Err(format!(
-                    "gear: joint {} is given twice (one [[gear]] table per joint)",
-                    g.joint
+                return Err(Fault::new(
+                    table,
+                    "joint",
+                    format!(
+                        "joint {} is given twice (one [[gear]] table per joint)",
+                        g.joint
+                    ),
                 ));
             }
-        }
-        for g in &self.gear {
             if g.joint == 0 || g.joint > n {
-                return Err(format!("gear: joint {} does not exist (1..{n})", g.joint));
+                return Err(Fault::new(
+                    table,
+                    "joint",
+                    format!("joint {} does not exist (1..{n})", g.joint),
+                ));
             }
             let values = [
-                g.amplitude1_mrad,
-                g.phase1_deg,
-                g.amplitude2_mrad,
-                g.phase2_deg,
+                ("amplitude1_mrad", g.amplitude1_mrad, MAX_MRAD),
+                ("phase1_deg", g.phase1_deg, 720.0),
+                ("amplitude2_mrad", g.amplitude2_mrad, MAX_MRAD),
+                ("phase2_deg", g.phase2_deg, 720.0),
             ];
-            let keys = [
-                "amplitude1_mrad",
-                "phase1_deg",
-                "amplitude2_mrad",
-                "phase2_deg",
-            ];
-            let max = [MAX_MRAD, 720.0, MAX_MRAD, 720.0];
-            if let Some(k) = (0..4).find(|&k| values[k].is_nan() || values[k].abs() > max[k]) {
-                return Err(format!(
-                    "gear of joint {}: key {}: amplitudes must be finite and within \
-                     +-{MAX_MRAD} mrad, phases within +-720 deg",
-                    g.joint, keys[k]
+            if let Some((key, ..)) = values
+                .iter()
+                .find(|(_, v, max)| v.is_nan() || v.abs() > *max)
+            {
+                return Err(Fault::new(
+                    table,
+                    key,
+                    format!(
+                        "joint {}: amplitudes must be finite and within +-{MAX_MRAD} mrad, \
+                         phases within +-720 deg",
+                        g.joint
+                    ),
                 ));
             }
         }
         if let Some(b) = &self.backlash
-            && (b.mrad.len() != n
-                || b.mrad
-                    .iter()
-                    .any(|v| !v.is_finite() || *v < 0.0 || *v > MAX_MRAD))
+            && (b.mrad.len() != n || b.mrad.iter().any(|v| !(0.0..=MAX_MRAD).contains(v)))
         {
-            return Err(format!(
-                "backlash: key mrad: mrad needs {n} values in [0, {MAX_MRAD}]"
+            return Err(Fault::new(
+                Table::Backlash,
+                "mrad",
+                format!("mrad needs {n} values in [0, {MAX_MRAD}]"),
             ));
         }
         Ok(())
@@ -286,47 +269,69 @@ pub fn gravity_torques(robot: &Robot, c: &Compliance, q: &[f64], ws: &mut Frames
         .collect()
 }
 
-/// The line and key of a [`NonGeometric::check`] message in the file's text: the key's line
-/// within its table (`[compliance]`, the `[[gear]]` of that joint, `[backlash]`).
-fn locate(text: &str, message: &str) -> (Option<usize>, Option<String>) {
-    let key = message
-        .split("key ")
-        .nth(1)
-        .and_then(|r| r.split(':').next())
-        .map(|k| k.trim().to_string());
-    let lines: Vec<&str> = text.lines().collect();
-    // Where the table starts.
-    let start = if let Some(rest) = message.strip_prefix("gear of joint ") {
-        let joint: String = rest.chars().take_while(char::is_ascii_digit).collect();
-        let mut in_gear = None;
-        let mut found = None;
-        for (i, l) in lines.iter().enumerate() {
-            let t = l.trim();
-            if t.starts_with("[[gear]]") {
-                in_gear = Some(i);
-            } else if t.starts_with('[') {
-                in_gear = None;
-            } else if let Some(g) = in_gear
-                && t.starts_with("joint")
-                && t.split('=').nth(1).map(|v| v.trim()) == Some(joint.as_str())
-            {
-                found = Some(g);
-                break;
-            }
+/// The table of a non-geometric file a [`Fault`] lies in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Table {
+    Compliance,
+    /// The k-th `[[gear]]` table (0-based).
+    Gear(usize),
+    Backlash,
+}
+
+/// What [`NonGeometric::check`] found wrong: the table, the key and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fault {
+    pub table: Table,
+    pub key: &'static str,
+    pub message: String,
+}
+
+impl Fault {
+    fn new(table: Table, key: &'static str, message: String) -> Self {
+        Fault {
+            table,
+            key,
+            message,
         }
-        found
-    } else {
-        let table = message.split(':').next().unwrap_or("");
-        lines.iter().position(|l| l.trim() == format!("[{table}]"))
-    };
-    let line = match (&key, start) {
-        (Some(k), Some(s)) => lines[s..]
+    }
+
+    /// The 1-based line of the key in the file's `text`: the first line starting with the
+    /// key after its table's header (the header's own line when the key is absent).
+    pub fn line_in(&self, text: &str) -> Option<usize> {
+        let lines: Vec<&str> = text.lines().collect();
+        let headers = lines
             .iter()
-            .position(|l| l.trim_start().starts_with(k.as_str()))
-            .map(|i| s + i + 1)
-            .or(Some(s + 1)),
-        (None, Some(s)) => Some(s + 1),
-        _ => None,
-    };
-    (line, key)
+            .enumerate()
+            .filter(|(_, l)| l.trim_start().starts_with('['));
+        let start = match self.table {
+            Table::Compliance => headers.clone().find(|(_, l)| l.trim() == "[compliance]"),
+            Table::Backlash => headers.clone().find(|(_, l)| l.trim() == "[backlash]"),
+            Table::Gear(k) => headers
+                .clone()
+                .filter(|(_, l)| l.trim() == "[[gear]]")
+                .nth(k),
+        }?
+        .0;
+        let end = headers
+            .map(|(i, _)| i)
+            .find(|&i| i > start)
+            .unwrap_or(lines.len());
+        let at = (start + 1..end).find(|&i| {
+            let l = lines[i].trim_start();
+            l.strip_prefix(self.key)
+                .is_some_and(|r| r.trim_start().starts_with('='))
+        });
+        Some(at.unwrap_or(start) + 1)
+    }
+}
+
+impl std::fmt::Display for Fault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let table = match self.table {
+            Table::Compliance => "compliance".to_string(),
+            Table::Gear(_) => "gear".to_string(),
+            Table::Backlash => "backlash".to_string(),
+        };
+        write!(f, "{table}: {}", self.message)
+    }
 }
