@@ -1,18 +1,15 @@
 //! `robocal ik`: inverse kinematics of one pose or of a CSV batch.
 //!
-//! Method, per target: the closed form when the robot has one (every solution within the
-//! limits); else the nominal model's closed form (`--nominal`) refined numerically on the
-//! robot; else numerical IK from a seed (`--seed`, or the row's own q1..qN columns).
+//! The strategy is the library's (`kinematics::ik`): the closed form when the robot has one;
+//! else the nominal model's closed form (`--nominal`) refined numerically on the robot; else
+//! numerical IK from a seed (`--seed`, or the row's own q1..qN columns).
 
 use super::output::{OutputArgs, joints_arg, num, pose_arg, pose_bound};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use robocal::data::{POSE_COLUMNS, Table, joint_columns};
-use robocal::kinematics::ik_closed::MAX_SOLUTIONS;
-use robocal::kinematics::{
-    IkOptions, IkTarget, IkWorkspace, Pose, SphericalWristIk, pose_from_file, solve_numeric,
-};
-use robocal::model::{Robot, read_robot};
+use robocal::kinematics::{IkFailure, IkOptions, IkSolver, IkStart, RigidModel, pose_from_file};
+use robocal::model::read_robot;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -41,111 +38,13 @@ pub struct IkArgs {
     output: OutputArgs,
 }
 
-/// How solutions are found for this robot.
-enum Method {
-    Closed(SphericalWristIk),
-    Nominal(SphericalWristIk),
-    Seeded,
-}
-
-struct Solver<'a> {
-    robot: &'a Robot,
-    method: Method,
-    ws: IkWorkspace,
-    opts: IkOptions,
-}
-
-impl Solver<'_> {
-    /// Solutions (internal units) for one target, or the reason there are none.
-    /// With `all`, every solution; else (closed form) the one nearest `seed`, or `mid`.
-    fn solve(
-        &mut self,
-        target: &Pose,
-        seed: Option<&[f64]>,
-        all: bool,
-        mid: &[f64],
-    ) -> Result<Vec<Vec<f64>>, String> {
-        let unreachable = || "unreachable: no solution within the joint limits".to_string();
-        let candidates: Vec<Vec<f64>> = match &self.method {
-            Method::Closed(ik) if all => {
-                let mut out = Vec::new();
-                if !ik.solve(target, &mut out) {
-                    return Err(format!(
-                        "more than {MAX_SOLUTIONS} solutions within the joint limits (ranges of \
-                         many turns): leave out --all for the one nearest the seed"
-                    ));
-                }
-                if out.is_empty() {
-                    return Err(unreachable());
-                }
-                out.into_iter().map(|q| q.to_vec()).collect()
-            }
-            Method::Closed(ik) => match ik.solve_nearest(target, seed.unwrap_or(mid)) {
-                Some(q) => vec![q.to_vec()],
-                None => return Err(unreachable()),
-            },
-            Method::Nominal(ik) => {
-                let mut seeds = Vec::new();
-                ik.solve_unlimited(target, &mut seeds);
-                let mut seeds: Vec<Vec<f64>> = seeds.into_iter().map(|q| q.to_vec()).collect();
-                if let Some(s) = seed {
-                    seeds.insert(0, s.to_vec());
-                }
-                self.refine(target, &seeds)?
-            }
-            Method::Seeded => {
-                let s = seed.ok_or("no seed: give --seed or q1..qN columns")?;
-                self.refine(target, &[s.to_vec()])?
-            }
-        };
-        Ok(candidates)
+/// The library's message, with the flags that would help.
+fn explain(f: &IkFailure) -> String {
+    match f {
+        IkFailure::NoSeed => "no seed: give --seed or q1..qN columns".into(),
+        IkFailure::TooMany => format!("{f}: leave out --all for the one nearest the seed"),
+        other => other.to_string(),
     }
-
-    /// Numerical solves from each seed; converged, within-limit, distinct solutions.
-    fn refine(&mut self, target: &Pose, seeds: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, String> {
-        let mut sols: Vec<Vec<f64>> = Vec::new();
-        let mut last_err =
-            String::from("unreachable: the closed form of the nominal model has no solution");
-        for s in seeds {
-            match solve_numeric(
-                self.robot,
-                &IkTarget::Pose(*target),
-                s,
-                &self.opts,
-                &mut self.ws,
-            ) {
-                Ok(sol) if sol.outside_limits.is_empty() => {
-                    let dup = sols
-                        .iter()
-                        .any(|o| o.iter().zip(&sol.q).all(|(a, b)| (a - b).abs() < 1e-7));
-                    if !dup {
-                        sols.push(sol.q);
-                    }
-                }
-                Ok(sol) => {
-                    last_err = format!(
-                        "solution outside the limits of joint(s) {:?}",
-                        sol.outside_limits.iter().map(|j| j + 1).collect::<Vec<_>>()
-                    )
-                }
-                Err(e) => last_err = e.to_string(),
-            }
-        }
-        if sols.is_empty() {
-            Err(last_err)
-        } else {
-            Ok(sols)
-        }
-    }
-}
-
-/// Index of the solution nearest `reference` (internal units).
-fn nearest(sols: &[Vec<f64>], reference: &[f64]) -> usize {
-    let dist =
-        |q: &Vec<f64>| -> f64 { q.iter().zip(reference).map(|(a, b)| (a - b).powi(2)).sum() };
-    (0..sols.len())
-        .min_by(|&i, &j| dist(&sols[i]).total_cmp(&dist(&sols[j])))
-        .unwrap_or(0)
 }
 
 pub fn run(a: IkArgs) -> Result<()> {
@@ -165,29 +64,18 @@ pub fn run(a: IkArgs) -> Result<()> {
         Some(s) => Some(robot.joints_to_internal(&joints_arg(&robot, s, "--seed")?)),
         None => None,
     };
-    let method = match SphericalWristIk::new(&robot) {
-        Ok(ik) => Method::Closed(ik),
-        Err(why) => match &a.nominal {
-            Some(p) => {
-                let nominal = read_robot(p)?;
-                if nominal.dof() != n {
-                    bail!(
-                        "{}: {} joints, the robot has {n}",
-                        p.display(),
-                        nominal.dof()
-                    );
-                }
-                let ik = SphericalWristIk::new(&nominal).with_context(|| {
-                    format!("{}: the nominal model has no closed form", p.display())
-                })?;
-                Method::Nominal(ik)
-            }
-            None => {
-                eprintln!("note: {why}; solving numerically from the seed");
-                Method::Seeded
-            }
-        },
+    let nominal = match &a.nominal {
+        Some(p) => Some(read_robot(p)?),
+        None => None,
     };
+    let start = IkStart::choose(&robot, nominal.as_ref()).with_context(|| {
+        a.nominal
+            .as_ref()
+            .map_or_else(String::new, |p| p.display().to_string())
+    })?;
+    if let IkStart::Seed(why) = &start {
+        eprintln!("note: {why}; solving numerically from the seed");
+    }
 
     // Inputs: headers, cells, target pose (file units), per-row seed (internal units).
     let (mut headers, rows, targets, row_seeds, lines) = match (&a.pose, &a.poses) {
@@ -257,29 +145,25 @@ pub fn run(a: IkArgs) -> Result<()> {
         }
     }
 
-    let mid = robot.mid_joints();
-    let mut solver = Solver {
-        robot: &robot,
-        method,
-        ws: IkWorkspace::new(&robot),
-        opts: IkOptions::default(),
-    };
+    let mut solver = IkSolver::new(RigidModel::new(&robot), start, IkOptions::default());
     let mut out_rows = Vec::new();
     let mut failed = Vec::new();
     for (k, (cells, v)) in rows.iter().zip(&targets).enumerate() {
         let target = pose_from_file([v[0], v[1], v[2], v[3], v[4], v[5]]);
         let seed = row_seeds[k].as_deref().or(global_seed.as_deref());
-        match solver.solve(&target, seed, a.all, &mid) {
+        let solved = if a.all {
+            solver.all(&target, seed)
+        } else {
+            solver
+                .nearest(&target, seed, None)
+                .map(|s| vec![s.solution.q])
+        };
+        match solved.map_err(|f| explain(&f)) {
             Ok(sols) => {
-                let chosen: Vec<usize> = if a.all {
-                    (0..sols.len()).collect()
-                } else {
-                    vec![nearest(&sols, seed.unwrap_or(&mid))]
-                };
-                for (s, &i) in chosen.iter().enumerate() {
+                for (s, q) in sols.iter().enumerate() {
                     let mut row = cells.clone();
                     row.push((s + 1).to_string());
-                    let q = robot.joints_to_file(&sols[i]);
+                    let q = robot.joints_to_file(q);
                     row.extend(q.iter().map(|x| num(*x, a.output.decimals)));
                     row.push("ok".into());
                     out_rows.push(row);

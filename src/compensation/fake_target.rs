@@ -1,8 +1,8 @@
 //! Fake targets for an unmodified controller (thesis 2.7): for a desired tool pose T, the
 //! joints q* at which the calibrated model reaches T, and the pose FK_nominal(q*) to command.
 //!
-//! Per target:
-//! 1. the nominal closed form (App. B) gives the seed q0: the solution on the seed joints'
+//! Per target, with the IK strategy `ik` shares ([`crate::kinematics::ik`]):
+//! 1. the nominal closed form (App. B) gives the start q0: the solution on the seed joints'
 //!    branch nearest them (without a seed: the solution nearest the middle of the joint
 //!    ranges), within the limits if one is; its [`Branch`] is the configuration the
 //!    controller is asked to keep. Out of the nominal's reach, the
@@ -15,8 +15,7 @@
 use super::model::CalibratedModel;
 use crate::error::{Error, Result};
 use crate::kinematics::{
-    Branch, IkBuffers, IkOptions, IkTarget, Pose, SphericalWristIk, ToolModel, solve_model,
-    tool_pose,
+    Branch, IkFailure, IkOptions, IkSolver, IkStart, Pose, SphericalWristIk, ToolModel, tool_pose,
 };
 use crate::model::Robot;
 use nalgebra::{Translation3, Vector3};
@@ -109,18 +108,17 @@ impl std::fmt::Display for Failure {
     }
 }
 
-/// The per-target solver: nominal closed form, calibrated model, reused buffers.
+/// The per-target solver: the shared IK strategy ([`IkSolver`], started by the nominal
+/// closed form) over the calibrated model, with reused buffers.
 pub struct FakeTargetSolver<'a> {
     nominal: &'a Robot,
     closed: SphericalWristIk,
-    model: CalibratedModel<'a>,
-    opts: IkOptions,
-    buffers: IkBuffers,
+    ik: IkSolver<CalibratedModel<'a>>,
     sols: Vec<(Branch, [f64; 6])>,
-    mid: Vec<f64>,
 }
 
-/// Distance (rad) from `a` to `b` with each revolute joint's difference wrapped to [-pi, pi].
+/// Distance (rad) from `a` to `b` with each revolute joint's difference wrapped to [-pi, pi]:
+/// whether two joint vectors are one configuration of the controller.
 fn wrapped_distance(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
@@ -137,67 +135,22 @@ impl<'a> FakeTargetSolver<'a> {
     /// one. Both must have the same joints.
     pub fn new(nominal: &'a Robot, model: CalibratedModel<'a>) -> Result<Self> {
         let closed = SphericalWristIk::new(nominal)?;
-        let cal = model.robot();
-        if !cal.same_joints(nominal) {
+        if !model.robot().same_joints(nominal) {
             return Err(Error::Invalid(
                 "the calibrated model's joints differ from the nominal model's".into(),
             ));
         }
-        let mid = nominal.mid_joints();
+        let opts = IkOptions {
+            tol_position_mm: 1e-6,
+            tol_rotation_rad: 1e-9,
+            ..IkOptions::default()
+        };
         Ok(FakeTargetSolver {
             nominal,
+            ik: IkSolver::new(model, IkStart::Nominal(closed.clone()), opts),
             closed,
-            buffers: IkBuffers::new(nominal.dof()),
-            model,
-            opts: IkOptions {
-                tol_position_mm: 1e-6,
-                tol_rotation_rad: 1e-9,
-                ..IkOptions::default()
-            },
             sols: Vec::with_capacity(8),
-            mid,
         })
-    }
-
-    /// The nominal closed form's solution for `target` nearest `reference` (rad), on branch
-    /// `only` if given, and its branch. Each solution is taken in the 2 pi copy nearest the
-    /// reference, or the next one when that leaves the limits. Solutions within the nominal
-    /// limits come first; one outside them still seeds the calibrated model, whose solution
-    /// may be inside.
-    fn nominal_start(
-        &mut self,
-        target: &Pose,
-        reference: &[f64],
-        only: Option<Branch>,
-    ) -> Option<(Branch, Vec<f64>)> {
-        self.closed.solve_branches(target, &mut self.sols);
-        let mut best: Option<((bool, f64), Branch, [f64; 6])> = None;
-        for &(b, mut q) in &self.sols {
-            if only.is_some_and(|o| o != b) {
-                continue;
-            }
-            for (j, (v, r)) in q.iter_mut().zip(reference).enumerate() {
-                *v += ((r - *v) / (2.0 * PI)).round() * 2.0 * PI;
-                let [lo, hi] = self.nominal.joints()[j].limits_internal();
-                if *v > hi && *v - 2.0 * PI >= lo {
-                    *v -= 2.0 * PI;
-                } else if *v < lo && *v + 2.0 * PI <= hi {
-                    *v += 2.0 * PI;
-                }
-            }
-            let outside = !self.nominal.joints_outside_limits(&q).is_empty();
-            let d = wrapped_distance(&q, reference)
-                + q.iter()
-                    .zip(reference)
-                    .map(|(a, b)| (a - b).abs())
-                    .sum::<f64>()
-                    * 1e-9;
-            let key = (outside, d);
-            if best.as_ref().is_none_or(|(bk, ..)| key < *bk) {
-                best = Some((key, b, q));
-            }
-        }
-        best.map(|(_, b, q)| (b, q.to_vec()))
     }
 
     /// The branch of the nominal closed form that returns `q` (mod 2 pi) for FK_nominal(q);
@@ -236,50 +189,38 @@ impl<'a> FakeTargetSolver<'a> {
             Desired::Pose(p) => *p,
             Desired::Position(x) => {
                 let s = seed.ok_or(Failure::NoSeed)?;
-                let r = self.model.pose(s).rotation;
+                let r = self.ik.model().pose(s).rotation;
                 Pose::from_parts(Translation3::from(*x), r)
             }
         };
-        let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
         // A seed fixes the branch (the configuration the robot program was taught in).
         let seed_branch = seed.and_then(|s| self.branch_of(s));
-        let (branch, q0) = match self.nominal_start(&target, &reference, seed_branch) {
-            Some(s) => s,
-            None => {
-                let s = seed.ok_or_else(|| {
+        let solved = self
+            .ik
+            .nearest(&target, seed, seed_branch)
+            .map_err(|e| match e {
+                IkFailure::NoSeed | IkFailure::Unreachable(_) | IkFailure::TooMany => {
                     Failure::Unreachable(
                         "out of the nominal model's reach; seed joints would let the \
                          calibrated model try"
                             .into(),
                     )
-                })?;
-                let b = self.branch_of(s).ok_or_else(|| {
-                    Failure::Unreachable(
-                        "out of the nominal model's reach, and the seed is at a singularity".into(),
-                    )
-                })?;
-                (b, s.to_vec())
+                }
+                IkFailure::NotConverged(m) => Failure::NotConverged(m),
+                IkFailure::OutsideLimits(j) => Failure::OutsideLimits(j),
+            })?;
+        // Out of the nominal's reach the seed started the solve; its branch is the one kept.
+        let branch = match solved.branch.or(seed_branch) {
+            Some(b) => b,
+            None => {
+                return Err(Failure::Unreachable(
+                    "out of the nominal model's reach, and the seed is at a singularity".into(),
+                ));
             }
         };
-        let sol = solve_model(
-            &mut self.model,
-            &IkTarget::Pose(target),
-            &q0,
-            &self.opts,
-            &mut self.buffers,
-        )
-        .map_err(|e| match e {
-            Error::NotConverged(m) => Failure::NotConverged(m),
-            other => Failure::NotConverged(other.to_string()),
-        })?;
-        // The calibrated model's limits and the controller's (usually the same).
-        let mut outside = sol.outside_limits.clone();
-        for j in self.nominal.joints_outside_limits(&sol.q) {
-            if !outside.contains(&j) {
-                outside.push(j);
-            }
-        }
-        outside.sort_unstable();
+        let sol = solved.solution;
+        // The controller's limits (usually the calibrated model's, which the solve kept).
+        let outside = self.nominal.joints_outside_limits(&sol.q);
         if !outside.is_empty() {
             return Err(Failure::OutsideLimits(outside));
         }

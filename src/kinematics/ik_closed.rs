@@ -245,28 +245,41 @@ impl SphericalWristIk {
     /// The solution within the limits nearest `reference` (rad, Euclidean over the joints):
     /// each joint's copy is chosen on its own, so ranges of many turns cost nothing.
     pub fn solve_nearest(&self, target: &Pose, reference: &[f64]) -> Option<[f64; 6]> {
-        let tau = 2.0 * PI;
         let mut raw = Vec::with_capacity(8);
         self.solve_unlimited(target, &mut raw);
         let mut best: Option<(f64, [f64; 6])> = None;
-        'raw: for q in &raw {
-            let mut cand = *q;
-            let mut dist = 0.0;
-            for j in 0..6 {
-                let Some((kmin, kmax)) = self.turns(j, q[j]) else {
-                    continue 'raw;
-                };
-                let k = ((reference[j] - q[j]) / tau)
-                    .round()
-                    .clamp(kmin as f64, kmax as f64);
-                cand[j] = q[j] + k * tau;
-                dist += (cand[j] - reference[j]).powi(2);
+        for q in &raw {
+            let (cand, inside) = self.nearest_copy(q, reference);
+            if !inside {
+                continue;
             }
+            let dist = super::ik::joint_distance(&cand, reference);
             if best.is_none_or(|(d, _)| dist < d) {
                 best = Some((dist, cand));
             }
         }
         best.map(|(_, q)| q)
+    }
+
+    /// The copy of `q` (each joint shifted by whole turns) nearest `reference` (rad) joint by
+    /// joint among the copies within the limits, and true; when some joint has no copy within
+    /// its limits, the copy nearest `reference` and false.
+    pub fn nearest_copy(&self, q: &[f64; 6], reference: &[f64]) -> ([f64; 6], bool) {
+        let tau = 2.0 * PI;
+        let mut cand = *q;
+        let mut inside = true;
+        for j in 0..6 {
+            let k = ((reference[j] - q[j]) / tau).round();
+            let k = match self.turns(j, q[j]) {
+                Some((kmin, kmax)) => k.clamp(kmin as f64, kmax as f64),
+                None => {
+                    inside = false;
+                    k
+                }
+            };
+            cand[j] = q[j] + k * tau;
+        }
+        (cand, inside)
     }
 
     /// The range of whole turns k for which joint `j` at `v + 2 pi k` (rad) lies within its

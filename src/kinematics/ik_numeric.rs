@@ -79,13 +79,45 @@ pub trait ToolModel {
     fn jacobian(&mut self, q: &[f64], jac: &mut Matrix6xX<f64>);
 }
 
-/// The rigid kinematic model as a [`ToolModel`].
+/// The rigid kinematic model as a [`ToolModel`], with its frames.
 pub struct RigidModel<'a> {
-    pub robot: &'a Robot,
-    pub frames: &'a mut Frames,
+    robot: &'a Robot,
+    frames: Frames,
+}
+
+impl<'a> RigidModel<'a> {
+    /// The rigid model of `robot`.
+    pub fn new(robot: &'a Robot) -> Self {
+        RigidModel {
+            robot,
+            frames: Frames::new(robot),
+        }
+    }
 }
 
 impl ToolModel for RigidModel<'_> {
+    fn robot(&self) -> &Robot {
+        self.robot
+    }
+
+    fn pose(&mut self, q: &[f64]) -> Pose {
+        frames(self.robot, q, &mut self.frames);
+        self.frames.tool
+    }
+
+    fn jacobian(&mut self, q: &[f64], jac: &mut Matrix6xX<f64>) {
+        frames(self.robot, q, &mut self.frames);
+        joint_jacobian(self.robot, &self.frames, jac);
+    }
+}
+
+/// The rigid model over a workspace's frames ([`solve_numeric`]).
+struct WorkspaceRigid<'a> {
+    robot: &'a Robot,
+    frames: &'a mut Frames,
+}
+
+impl ToolModel for WorkspaceRigid<'_> {
     fn robot(&self) -> &Robot {
         self.robot
     }
@@ -101,37 +133,51 @@ impl ToolModel for RigidModel<'_> {
     }
 }
 
-/// The solver's own buffers, reused across solves of one robot.
+/// Scratch space for numerical IK, reused across solves of one robot: the rigid model's
+/// frames (used by [`solve_numeric`] only) and the LM solver's matrices and vectors, so that
+/// a solve allocates only the joints it returns.
 #[derive(Debug, Clone)]
-pub struct IkBuffers {
+pub struct IkWorkspace {
+    frames: Frames,
+    lm: LmBuffers,
+}
+
+/// The LM solver's matrices and vectors.
+#[derive(Debug, Clone)]
+struct LmBuffers {
     jac: Matrix6xX<f64>,
     q: Vec<f64>,
     trial: Vec<f64>,
+    /// J^T J (N x N).
+    a: DMatrix<f64>,
+    /// J^T e (N).
+    g: DVector<f64>,
+    /// The damped normal matrix, then its Cholesky factor (N x N).
+    m: DMatrix<f64>,
+    /// The step (N).
+    dq: DVector<f64>,
 }
 
-impl IkBuffers {
-    /// Buffers for `n` joints.
-    pub fn new(n: usize) -> Self {
-        IkBuffers {
+impl LmBuffers {
+    fn new(n: usize) -> Self {
+        LmBuffers {
             jac: Matrix6xX::zeros(n),
             q: vec![0.0; n],
             trial: vec![0.0; n],
+            a: DMatrix::zeros(n, n),
+            g: DVector::zeros(n),
+            m: DMatrix::zeros(n, n),
+            dq: DVector::zeros(n),
         }
     }
 }
 
-/// Scratch space for numerical IK of the rigid model, reused across solves of one robot.
-#[derive(Debug, Clone)]
-pub struct IkWorkspace {
-    frames: Frames,
-    buffers: IkBuffers,
-}
-
 impl IkWorkspace {
+    /// A workspace for `robot`'s joints.
     pub fn new(robot: &Robot) -> Self {
         IkWorkspace {
             frames: Frames::new(robot),
-            buffers: IkBuffers::new(robot.dof()),
+            lm: LmBuffers::new(robot.dof()),
         }
     }
 }
@@ -161,11 +207,14 @@ pub fn solve_numeric(
     opts: &IkOptions,
     ws: &mut IkWorkspace,
 ) -> Result<IkSolution> {
-    let mut model = RigidModel {
+    if ws.frames.joint.len() != robot.dof() {
+        *ws = IkWorkspace::new(robot);
+    }
+    let mut model = WorkspaceRigid {
         robot,
         frames: &mut ws.frames,
     };
-    solve_model(&mut model, target, seed, opts, &mut ws.buffers)
+    solve_lm(&mut model, target, seed, opts, &mut ws.lm)
 }
 
 /// Solves for joints that put the tool of `model` on `target`, starting from `seed`
@@ -175,11 +224,21 @@ pub fn solve_model<M: ToolModel>(
     target: &IkTarget,
     seed: &[f64],
     opts: &IkOptions,
-    ws: &mut IkBuffers,
+    ws: &mut IkWorkspace,
+) -> Result<IkSolution> {
+    solve_lm(model, target, seed, opts, &mut ws.lm)
+}
+
+fn solve_lm<M: ToolModel>(
+    model: &mut M,
+    target: &IkTarget,
+    seed: &[f64],
+    opts: &IkOptions,
+    ws: &mut LmBuffers,
 ) -> Result<IkSolution> {
     let n = model.robot().dof();
     if ws.q.len() != n {
-        *ws = IkBuffers::new(n);
+        *ws = LmBuffers::new(n);
     }
     if seed.len() != n {
         return Err(Error::Invalid(format!(
@@ -198,8 +257,6 @@ pub fn solve_model<M: ToolModel>(
         let rot = e.fixed_rows::<3>(3).norm() / l;
         (pos, rot)
     };
-    let mut a = DMatrix::<f64>::zeros(n, n);
-    let mut g = DVector::<f64>::zeros(n);
     for iter in 0..=opts.max_iterations {
         let (pos, rot) = errors(&e);
         if pos <= opts.tol_position_mm && rot <= opts.tol_rotation_rad {
@@ -214,22 +271,28 @@ pub fn solve_model<M: ToolModel>(
         } else {
             ws.jac.fixed_rows_mut::<3>(3).scale_mut(l);
         }
-        a.gemm_tr(1.0, &ws.jac, &ws.jac, 0.0);
-        g.gemv_tr(1.0, &ws.jac, &e, 0.0);
+        ws.a.gemm_tr(1.0, &ws.jac, &ws.jac, 0.0);
+        ws.g.gemv_tr(1.0, &ws.jac, &e, 0.0);
         // Inner loop: raise lambda until a step lowers the cost.
         let mut improved = false;
         while lambda < 1e12 {
-            let mut m = a.clone();
+            ws.m.copy_from(&ws.a);
             for k in 0..n {
-                m[(k, k)] += lambda * a[(k, k)].max(1e-9);
+                ws.m[(k, k)] += lambda * ws.a[(k, k)].max(1e-9);
             }
+            // The factorisation takes the matrix and gives it back, so no step allocates
+            // (except after a failed factorisation, which consumed it).
+            let m = std::mem::replace(&mut ws.m, DMatrix::zeros(0, 0));
             let Some(chol) = m.cholesky() else {
+                ws.m = DMatrix::zeros(n, n);
                 lambda *= 10.0;
                 continue;
             };
-            let dq = chol.solve(&g);
+            ws.dq.copy_from(&ws.g);
+            chol.solve_mut(&mut ws.dq);
+            ws.m = chol.unpack_dirty();
             for k in 0..n {
-                ws.trial[k] = ws.q[k] + dq[k];
+                ws.trial[k] = ws.q[k] + ws.dq[k];
             }
             let e_new = residual(model, target, &ws.trial, l);
             let c_new = e_new.norm_squared();

@@ -3,16 +3,17 @@
 //! Joint vectors are in internal units: rad for revolute joints, mm for prismatic ones.
 
 pub mod fk;
+pub mod ik;
 pub mod ik_closed;
 pub mod ik_numeric;
 pub mod jacobian;
 pub mod subproblems;
 
 pub use fk::{Frames, frames, tool_pose};
+pub use ik::{IkFailure, IkSolver, IkStart, Solved, joint_distance};
 pub use ik_closed::{Branch, SphericalWristIk};
 pub use ik_numeric::{
-    IkBuffers, IkOptions, IkSolution, IkTarget, IkWorkspace, RigidModel, ToolModel, solve_model,
-    solve_numeric,
+    IkOptions, IkSolution, IkTarget, IkWorkspace, RigidModel, ToolModel, solve_model, solve_numeric,
 };
 pub use jacobian::joint_jacobian;
 

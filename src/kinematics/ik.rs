@@ -1,0 +1,343 @@
+//! The inverse-kinematics strategy shared by `robocal ik` and target compensation: where a
+//! solve starts and which solution is returned. Joints in internal units (rad, mm).
+//!
+//! 1. A model with a closed form of its own ([`IkStart::Exact`], thesis App. B) is solved by
+//!    it; no numerical solve.
+//! 2. Else the closed form of a nearby model (the nominal, [`IkStart::Nominal`]) gives the
+//!    starts: each of its solutions in the whole-turn copy nearest the reference joints
+//!    ([`SphericalWristIk::nearest_copy`]), copies within the limits first, then by
+//!    [`joint_distance`] to the reference. Numerical IK of the model ([`solve_model`]) refines
+//!    them in that order.
+//! 3. Where no closed form gives a start ([`IkStart::Seed`], or a pose out of the nominal's
+//!    reach), the caller's seed joints start the numerical solve.
+//!
+//! The reference is the seed when one is given, else the middle of the joint ranges.
+//! [`IkSolver::nearest`] returns the first solution within the limits (the nearest, for a
+//! closed form); [`IkSolver::all`] every distinct one.
+
+use super::Pose;
+use super::ik_closed::{Branch, MAX_SOLUTIONS, SphericalWristIk};
+use super::ik_numeric::{IkOptions, IkSolution, IkTarget, IkWorkspace, ToolModel, solve_model};
+use crate::error::{Error, Result};
+use crate::geometry::rotation::rotation_vector;
+use crate::model::Robot;
+
+/// Two solutions closer than this in every joint (rad or mm) are one.
+const SAME_SOLUTION: f64 = 1e-7;
+
+/// Euclidean distance between two joint vectors (rad and mm, as they are): the distance the
+/// strategy uses to choose among solutions and starts. Whole turns count: a solution 360 deg
+/// away is a different motion of the robot.
+pub fn joint_distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Where the solves start.
+#[derive(Debug, Clone)]
+pub enum IkStart {
+    /// The model's own closed form: exact solutions, no numerical solve.
+    Exact(SphericalWristIk),
+    /// Another model's (the nominal's) closed form starts numerical solves of the model.
+    Nominal(SphericalWristIk),
+    /// Only the caller's seed starts the numerical solve; the text says why the model has no
+    /// closed form.
+    Seed(String),
+}
+
+impl IkStart {
+    /// The model's own closed form when it has one; else `nominal`'s (an error when that has
+    /// none or other joints); else the seed.
+    pub fn choose(robot: &Robot, nominal: Option<&Robot>) -> Result<IkStart> {
+        match SphericalWristIk::new(robot) {
+            Ok(ik) => Ok(IkStart::Exact(ik)),
+            Err(why) => match nominal {
+                Some(nom) => {
+                    if !nom.same_joints(robot) {
+                        return Err(Error::Invalid(format!(
+                            "the nominal model's joints differ from the robot's in number or type ({} and {} joints)",
+                            nom.dof(),
+                            robot.dof()
+                        )));
+                    }
+                    let ik = SphericalWristIk::new(nom).map_err(|e| {
+                        Error::Invalid(format!("the nominal model has no closed form: {e}"))
+                    })?;
+                    Ok(IkStart::Nominal(ik))
+                }
+                None => Ok(IkStart::Seed(why.to_string())),
+            },
+        }
+    }
+
+    /// The closed form that gives starts or solutions, if any.
+    pub fn closed_form(&self) -> Option<&SphericalWristIk> {
+        match self {
+            IkStart::Exact(ik) | IkStart::Nominal(ik) => Some(ik),
+            IkStart::Seed(_) => None,
+        }
+    }
+}
+
+/// Why a target has no solution.
+#[derive(Debug, Clone, PartialEq)]
+pub enum IkFailure {
+    /// Numerical IK needs seed joints and none were given.
+    NoSeed,
+    /// The closed form has no solution (within the limits, for an exact one).
+    Unreachable(String),
+    /// More than [`MAX_SOLUTIONS`] solutions within the limits (ranges of many turns).
+    TooMany,
+    /// No numerical solve converged; the last one's report.
+    NotConverged(String),
+    /// The best solution leaves the limits of these 0-based joints.
+    OutsideLimits(Vec<usize>),
+}
+
+impl std::fmt::Display for IkFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            IkFailure::NoSeed => write!(f, "no seed joints to start the numerical solve"),
+            IkFailure::Unreachable(m) => write!(f, "unreachable: {m}"),
+            IkFailure::TooMany => write!(
+                f,
+                "more than {MAX_SOLUTIONS} solutions within the joint limits (ranges of many \
+                 turns); only the nearest one can be given"
+            ),
+            IkFailure::NotConverged(m) => write!(f, "{m}"),
+            IkFailure::OutsideLimits(j) => write!(
+                f,
+                "solution outside the limits of joint(s) {:?}",
+                j.iter().map(|j| j + 1).collect::<Vec<_>>()
+            ),
+        }
+    }
+}
+
+/// A solution and the closed form's branch it comes from (none for a seeded solve).
+#[derive(Debug, Clone)]
+pub struct Solved {
+    /// The solution (joints rad or mm, remaining errors, joints outside the limits).
+    pub solution: IkSolution,
+    /// The closed form's branch of the solution or of its start.
+    pub branch: Option<Branch>,
+}
+
+/// The strategy over a model `M` (the rigid model, or a compensator in series with one),
+/// with its reused buffers.
+pub struct IkSolver<M: ToolModel> {
+    model: M,
+    start: IkStart,
+    opts: IkOptions,
+    ws: IkWorkspace,
+    branches: Vec<(Branch, [f64; 6])>,
+    copies: Vec<[f64; 6]>,
+    mid: Vec<f64>,
+}
+
+impl<M: ToolModel> IkSolver<M> {
+    /// A solver of `model` starting as `start` says, numerical solves to `opts`.
+    pub fn new(model: M, start: IkStart, opts: IkOptions) -> Self {
+        let robot = model.robot();
+        let ws = IkWorkspace::new(robot);
+        let mid = robot.mid_joints();
+        IkSolver {
+            model,
+            start,
+            opts,
+            ws,
+            branches: Vec::with_capacity(8),
+            copies: Vec::new(),
+            mid,
+        }
+    }
+
+    /// The model solved for.
+    pub fn model(&mut self) -> &mut M {
+        &mut self.model
+    }
+
+    /// Where the solves start.
+    pub fn start(&self) -> &IkStart {
+        &self.start
+    }
+
+    /// The middle of the model's joint ranges (rad, mm): the reference without a seed.
+    pub fn mid(&self) -> &[f64] {
+        &self.mid
+    }
+
+    /// The closed form's solutions for `target` (on `branch` if given), each in its copy
+    /// nearest `reference`, ordered: within the limits first, then by distance.
+    fn starts(
+        &mut self,
+        target: &Pose,
+        reference: &[f64],
+        branch: Option<Branch>,
+    ) -> Vec<(bool, f64, Branch, [f64; 6])> {
+        let Some(ik) = self.start.closed_form() else {
+            return Vec::new();
+        };
+        ik.solve_branches(target, &mut self.branches);
+        let mut starts: Vec<(bool, f64, Branch, [f64; 6])> = self
+            .branches
+            .iter()
+            .filter(|(b, _)| branch.is_none_or(|o| o == *b))
+            .map(|(b, q)| {
+                let (c, inside) = ik.nearest_copy(q, reference);
+                (!inside, joint_distance(&c, reference), *b, c)
+            })
+            .collect();
+        starts.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        starts
+    }
+
+    fn exact(&mut self, target: &Pose, q: &[f64], branch: Option<Branch>) -> Solved {
+        let p = self.model.pose(q);
+        let robot = self.model.robot();
+        Solved {
+            solution: IkSolution {
+                q: q.to_vec(),
+                iterations: 0,
+                position_error_mm: (target.translation.vector - p.translation.vector).norm(),
+                rotation_error_rad: rotation_vector(&(target.rotation * p.rotation.inverse()))
+                    .norm(),
+                outside_limits: robot.joints_outside_limits(q),
+            },
+            branch,
+        }
+    }
+
+    fn refine(&mut self, target: &Pose, start: &[f64]) -> Result<IkSolution> {
+        solve_model(
+            &mut self.model,
+            &IkTarget::Pose(*target),
+            start,
+            &self.opts,
+            &mut self.ws,
+        )
+    }
+
+    /// The solution nearest `seed` (or the middle of the ranges), on `branch` if given: for
+    /// an exact closed form the nearest within the limits; else the first start (in the
+    /// order above) whose numerical solve converges within the limits.
+    pub fn nearest(
+        &mut self,
+        target: &Pose,
+        seed: Option<&[f64]>,
+        branch: Option<Branch>,
+    ) -> std::result::Result<Solved, IkFailure> {
+        let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
+        let starts = self.starts(target, &reference, branch);
+        if let IkStart::Exact(_) = self.start {
+            return match starts.first() {
+                Some((false, _, b, q)) => Ok(self.exact(target, q, Some(*b))),
+                _ => Err(IkFailure::Unreachable(
+                    "no solution within the joint limits".into(),
+                )),
+            };
+        }
+        let starts: Vec<(Option<Branch>, Vec<f64>)> = if starts.is_empty() {
+            match seed {
+                Some(s) => vec![(None, s.to_vec())],
+                None if matches!(self.start, IkStart::Seed(_)) => return Err(IkFailure::NoSeed),
+                None => {
+                    return Err(IkFailure::Unreachable(
+                        "the closed form of the nominal model has no solution".into(),
+                    ));
+                }
+            }
+        } else {
+            starts
+                .into_iter()
+                .map(|(_, _, b, q)| (Some(b), q.to_vec()))
+                .collect()
+        };
+        let mut failure = None;
+        for (b, q0) in &starts {
+            match self.refine(target, q0) {
+                Ok(sol) if sol.outside_limits.is_empty() => {
+                    return Ok(Solved {
+                        solution: sol,
+                        branch: *b,
+                    });
+                }
+                Ok(sol) => {
+                    if !matches!(failure, Some(IkFailure::OutsideLimits(_))) {
+                        failure = Some(IkFailure::OutsideLimits(sol.outside_limits));
+                    }
+                }
+                Err(e) => {
+                    if failure.is_none() {
+                        failure = Some(IkFailure::NotConverged(e.to_string()));
+                    }
+                }
+            }
+        }
+        Err(failure.unwrap_or(IkFailure::NoSeed))
+    }
+
+    /// Every distinct solution within the limits: for an exact closed form every whole-turn
+    /// copy the limits allow (at most [`MAX_SOLUTIONS`]); else one numerical solve from each
+    /// start (or from the seed).
+    pub fn all(
+        &mut self,
+        target: &Pose,
+        seed: Option<&[f64]>,
+    ) -> std::result::Result<Vec<Vec<f64>>, IkFailure> {
+        if let IkStart::Exact(ik) = &self.start {
+            if !ik.solve(target, &mut self.copies) {
+                return Err(IkFailure::TooMany);
+            }
+            if self.copies.is_empty() {
+                return Err(IkFailure::Unreachable(
+                    "no solution within the joint limits".into(),
+                ));
+            }
+            return Ok(self.copies.iter().map(|q| q.to_vec()).collect());
+        }
+        let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
+        let mut starts: Vec<Vec<f64>> = self
+            .starts(target, &reference, None)
+            .into_iter()
+            .map(|(_, _, _, q)| q.to_vec())
+            .collect();
+        if starts.is_empty() {
+            match seed {
+                Some(s) => starts.push(s.to_vec()),
+                None if matches!(self.start, IkStart::Seed(_)) => return Err(IkFailure::NoSeed),
+                None => {
+                    return Err(IkFailure::Unreachable(
+                        "the closed form of the nominal model has no solution".into(),
+                    ));
+                }
+            }
+        }
+        let mut sols: Vec<Vec<f64>> = Vec::new();
+        let mut failure = None;
+        for q0 in &starts {
+            match self.refine(target, q0) {
+                Ok(sol) if sol.outside_limits.is_empty() => {
+                    let dup = sols.iter().any(|o| {
+                        o.iter()
+                            .zip(&sol.q)
+                            .all(|(a, b)| (a - b).abs() < SAME_SOLUTION)
+                    });
+                    if !dup {
+                        sols.push(sol.q);
+                    }
+                }
+                Ok(sol) => failure = Some(IkFailure::OutsideLimits(sol.outside_limits)),
+                Err(e) => failure = Some(IkFailure::NotConverged(e.to_string())),
+            }
+        }
+        if sols.is_empty() {
+            Err(failure.unwrap_or(IkFailure::NoSeed))
+        } else {
+            Ok(sols)
+        }
+    }
+}
