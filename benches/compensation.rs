@@ -4,7 +4,8 @@
 //! 4 networks, full refined).
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use robocal::compensation::{CalibratedModel, Desired, FakeTargetSolver};
+use robocal::compensation::{CalibratedModel, FakeTargetSolver};
+use robocal::data::Target;
 use robocal::data::read_canonical;
 use robocal::identify::{Options, identify};
 use robocal::kinematics::Pose;
@@ -69,7 +70,7 @@ fn compensation(c: &mut Criterion) {
                 let (t, q) = &targets[k % targets.len()];
                 k += 1;
                 // A few targets near singularities fail; timing them is fair too.
-                let _ = black_box(solver.solve(&Desired::Pose(*t), Some(q)));
+                let _ = black_box(solver.solve(&Target::Pose(*t), Some(q)));
             })
         });
     }

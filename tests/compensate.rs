@@ -3,7 +3,8 @@
 //! compensated) model reached on test data; the fake target is what the nominal controller
 //! turns back into those joints; impossible targets are failures, never commands.
 
-use robocal::compensation::{CalibratedModel, Desired, Failure, FakeTargetSolver};
+use robocal::compensation::{CalibratedModel, Failure, FakeTargetSolver};
+use robocal::data::Target;
 use robocal::data::{MeasurementSet, read_canonical};
 use robocal::geometry::rotation::rotation_vector;
 use robocal::identify::{Measure, Options, identify};
@@ -82,9 +83,9 @@ fn true_errors(
     for m in &s.test_truth.rows {
         let want = truth_pose(m);
         let desired = if position_only {
-            Desired::Position(want.translation.vector)
+            Target::Position(want.translation.vector)
         } else {
-            Desired::Pose(want)
+            Target::Pose(want)
         };
         let seed = seeded.then_some(m.q.as_slice());
         let cmd = match solver.solve(&desired, seed) {
@@ -272,18 +273,18 @@ fn impossible_targets_are_failures_not_commands() {
     let mut solver = FakeTargetSolver::new(&s.nominal, CalibratedModel::rigid(&robot)).unwrap();
     let far = Pose::translation(1.0e5, 0.0, 0.0);
     assert!(matches!(
-        solver.solve(&Desired::Pose(far), None),
+        solver.solve(&Target::Pose(far), None),
         Err(Failure::Unreachable(_))
     ));
     // A far target with a seed: the calibrated model's IK cannot reach it either.
     let seed = s.test_truth.rows[0].q.clone();
     assert!(matches!(
-        solver.solve(&Desired::Pose(far), Some(&seed)),
+        solver.solve(&Target::Pose(far), Some(&seed)),
         Err(Failure::NotConverged(_))
     ));
     let p = truth_pose(&s.test_truth.rows[0]).translation.vector;
     assert_eq!(
-        solver.solve(&Desired::Position(p), None).unwrap_err(),
+        solver.solve(&Target::Position(p), None).unwrap_err(),
         Failure::NoSeed
     );
     // A pose the calibrated model reaches only with joint 2 beyond its upper limit; the
@@ -295,13 +296,13 @@ fn impossible_targets_are_failures_not_commands() {
     let target = tool_pose(&robot, &beyond);
     assert_eq!(
         solver
-            .solve(&Desired::Pose(target), Some(&inside))
+            .solve(&Target::Pose(target), Some(&inside))
             .unwrap_err(),
         Failure::OutsideLimits(vec![1])
     );
     // The same pose moved back inside is solved.
     let target = tool_pose(&robot, &inside);
-    assert!(solver.solve(&Desired::Pose(target), Some(&inside)).is_ok());
+    assert!(solver.solve(&Target::Pose(target), Some(&inside)).is_ok());
 }
 
 #[test]

@@ -227,12 +227,28 @@ fn bad_input_names_file_line_and_column() {
     ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("no closed form"), "{}", stderr(&o));
-    // Output columns in the input (a previous output fed back in) are refused.
-    std::fs::write(&bad, "x,y,z,status\n1,2,3,ok\n").unwrap();
+    // Output columns in the input (a previous output fed back in) are kept under
+    // `input_<name>`, as in every command that carries columns; a name that would still
+    // appear twice is refused.
+    let out = tmp("carried.csv");
+    std::fs::write(&bad, "x,y,z,rz,ry,rx,status\n2000,0,1500,90,0,90,taught\n").unwrap();
+    let o = compensate(&model, &bad, &["--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let written = std::fs::read_to_string(&out).unwrap();
+    let header = written.lines().next().unwrap();
+    assert!(
+        header.contains("input_status") && written.contains("taught"),
+        "{written}"
+    );
+    std::fs::write(
+        &bad,
+        "x,y,z,rz,ry,rx,status,input_status\n2000,0,1500,90,0,90,a,b\n",
+    )
+    .unwrap();
     let o = compensate(&model, &bad, &[]);
     assert_eq!(o.status.code(), Some(1));
     assert!(
-        stderr(&o).contains("column `status` clashes"),
+        stderr(&o).contains("field `input_status`: this column would appear twice"),
         "{}",
         stderr(&o)
     );

@@ -4,10 +4,9 @@ use super::output::{OutputArgs, joints_arg, num};
 use super::predict::load_compensator;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use nalgebra::Vector3;
-use robocal::compensation::{CalibratedModel, Desired, Failure, FakeTargetSolver};
-use robocal::data::{POSE_COLUMNS, Table, joint_columns};
-use robocal::kinematics::{pose_from_file, pose_to_file};
+use robocal::compensation::{CalibratedModel, Failure, FakeTargetSolver};
+use robocal::data::{POSE_COLUMNS, TargetTable, joint_columns};
+use robocal::kinematics::pose_to_file;
 use robocal::model::read_robot;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -81,74 +80,21 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         None => None,
     };
 
-    let t = Table::read(&a.targets)?;
-    let pos_idx: Vec<usize> = POSE_COLUMNS[..3]
-        .iter()
-        .map(|c| t.require(c))
-        .collect::<Result<_, _>>()?;
-    let rot_present: Vec<bool> = POSE_COLUMNS[3..]
-        .iter()
-        .map(|c| t.column(c).is_some())
-        .collect();
-    let with_orientation = rot_present.iter().all(|&p| p);
-    if !with_orientation && rot_present.iter().any(|&p| p) {
-        // Names the first missing orientation column.
-        for c in &POSE_COLUMNS[3..] {
-            t.require(c)?;
-        }
-    }
-    let rot_idx: Vec<usize> = if with_orientation {
-        POSE_COLUMNS[3..]
-            .iter()
-            .map(|c| t.require(c))
-            .collect::<Result<_, _>>()?
-    } else {
-        Vec::new()
-    };
-    let qcols = joint_columns(n);
-    let seed_idx: Vec<Option<usize>> = qcols.iter().map(|c| t.column(c)).collect();
-    let row_seeds = match seed_idx.iter().filter(|c| c.is_some()).count() {
-        0 => false,
-        k if k == n => true,
-        _ => {
-            for c in &qcols {
-                t.require(c)?;
-            }
-            bail!("seed columns q1..q{n} must be all present or all absent")
-        }
-    };
-
-    let mut headers = t.headers.clone();
-    if row_seeds {
-        for h in headers.iter_mut() {
-            if qcols.contains(h) {
-                *h = format!("seed_{h}");
-            }
-        }
-    }
-    let mut added: Vec<String> = Vec::new();
+    let tt = TargetTable::read(&a.targets, &nominal, true)?;
+    let with_orientation = tt.with_orientation;
+    let mut written: Vec<String> = Vec::new();
     if !with_orientation {
-        added.extend(POSE_COLUMNS[3..].iter().map(|s| s.to_string()));
+        written.extend(POSE_COLUMNS[3..].iter().map(|s| s.to_string()));
     }
-    added.push("branch".into());
-    added.extend(qcols.iter().cloned());
-    added.extend(POSE_COLUMNS.iter().map(|c| format!("cmd_{c}")));
-    added.extend(["residual_mm".into(), "residual_deg".into(), "status".into()]);
+    written.push("branch".into());
+    written.extend(joint_columns(n));
+    written.extend(POSE_COLUMNS.iter().map(|c| format!("cmd_{c}")));
+    written.extend(["residual_mm".into(), "residual_deg".into(), "status".into()]);
     if comp.is_some() {
-        added.push(super::predict::DOMAIN_COLUMN.into());
+        written.push(super::predict::DOMAIN_COLUMN.into());
     }
-    // Carried columns must not collide with what is written (e.g. a previous output fed
-    // back in): the CSV would be ambiguous and JSON would keep only one of them.
-    for (k, h) in headers.iter().enumerate() {
-        if added.contains(h) || headers[..k].contains(h) {
-            bail!(
-                "{}:1: column `{}` clashes with a column compensate writes; rename or remove it",
-                a.targets.display(),
-                t.headers[k]
-            );
-        }
-    }
-    headers.extend(added);
+    let headers = tt.output_headers(&written)?;
+    let t = &tt.table;
 
     let bar = if std::io::stderr().is_terminal() && t.rows.len() >= 1000 {
         indicatif::ProgressBar::new(t.rows.len() as u64)
@@ -163,21 +109,8 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     let mut dws = robocal::neural::predict::PredictWorkspace::default();
     for r in 0..t.rows.len() {
         bar.inc(1);
-        let p = t.numbers(r, &pos_idx)?;
-        let desired = if with_orientation {
-            let o = t.numbers(r, &rot_idx)?;
-            Desired::Pose(pose_from_file([p[0], p[1], p[2], o[0], o[1], o[2]]))
-        } else {
-            Desired::Position(Vector3::new(p[0], p[1], p[2]))
-        };
-        // A row whose seed cells are all empty has no seed of its own.
-        let idx: Vec<usize> = seed_idx.iter().flatten().copied().collect();
-        let own_seed = if row_seeds && idx.iter().any(|&c| !t.rows[r][c].trim().is_empty()) {
-            Some(nominal.joints_to_internal(&t.numbers(r, &idx)?))
-        } else {
-            None
-        };
-        let seed = own_seed.as_deref().or(global_seed.as_deref());
+        let desired = tt.targets[r];
+        let seed = tt.seeds[r].as_deref().or(global_seed.as_deref());
         let mut row = t.rows[r].clone();
         match solver.solve(&desired, seed) {
             Ok(c) => {

@@ -4,10 +4,10 @@
 //! else the nominal model's closed form (`--nominal`) refined numerically on the robot; else
 //! numerical IK from a seed (`--seed`, or the row's own q1..qN columns).
 
-use super::output::{OutputArgs, joints_arg, num, pose_arg, pose_bound};
+use super::output::{OutputArgs, joints_arg, num, pose_arg};
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use robocal::data::{POSE_COLUMNS, Table, joint_columns};
+use robocal::data::{POSE_COLUMNS, Target, TargetTable, joint_columns};
 use robocal::kinematics::{IkFailure, IkOptions, IkSolver, IkStart, RigidModel, pose_from_file};
 use robocal::model::read_robot;
 use std::path::PathBuf;
@@ -59,7 +59,6 @@ pub fn run(a: IkArgs) -> Result<()> {
     )?;
     let robot = read_robot(&a.robot)?;
     let n = robot.dof();
-    let qcols = joint_columns(n);
     let global_seed = match &a.seed {
         Some(s) => Some(robot.joints_to_internal(&joints_arg(&robot, s, "--seed")?)),
         None => None,
@@ -77,82 +76,42 @@ pub fn run(a: IkArgs) -> Result<()> {
         eprintln!("note: {why}; solving numerically from the seed");
     }
 
-    // Inputs: headers, cells, target pose (file units), per-row seed (internal units).
-    let (mut headers, rows, targets, row_seeds, lines) = match (&a.pose, &a.poses) {
+    let mut written = vec!["solution".to_string()];
+    written.extend(joint_columns(n));
+    written.push("status".into());
+    // Inputs: headers, cells, targets, per-row seed (internal units), file lines.
+    let (headers, rows, targets, row_seeds, lines) = match (&a.pose, &a.poses) {
         (Some(p), _) => {
             let v = pose_arg(p, "--pose")?;
-            let headers: Vec<String> = POSE_COLUMNS.iter().map(|s| s.to_string()).collect();
+            let mut headers: Vec<String> = POSE_COLUMNS.iter().map(|s| s.to_string()).collect();
+            headers.extend(written);
             let cells = v.iter().map(|x| num(*x, None)).collect();
-            (headers, vec![cells], vec![v], vec![None], vec![0])
+            let target = pose_from_file([v[0], v[1], v[2], v[3], v[4], v[5]]);
+            (headers, vec![cells], vec![target], vec![None], vec![0])
         }
         (None, Some(path)) => {
-            let t = Table::read(path)?;
-            let idx: Vec<usize> = POSE_COLUMNS
+            let t = TargetTable::read(path, &robot, false)?;
+            let headers = t.output_headers(&written)?;
+            let targets = t
+                .targets
                 .iter()
-                .map(|c| t.require(c))
-                .collect::<Result<_, _>>()?;
-            let seed_idx: Option<Vec<usize>> = qcols.iter().map(|c| t.column(c)).collect();
-            let mut targets = Vec::new();
-            let mut seeds = Vec::new();
-            for r in 0..t.rows.len() {
-                let v = t.numbers(r, &idx)?;
-                for (k, x) in v.iter().enumerate() {
-                    let max = pose_bound(k);
-                    if x.abs() > max {
-                        bail!(
-                            "{}:{}: field `{}`: {x:e} is beyond the bound of {max}",
-                            path.display(),
-                            t.lines[r],
-                            POSE_COLUMNS[k]
-                        );
-                    }
-                }
-                targets.push(v);
-                seeds.push(match &seed_idx {
-                    Some(si) => Some(robot.joints_to_internal(&t.numbers(r, si)?)),
-                    None => None,
-                });
-            }
-            let mut headers = t.headers.clone();
-            for h in headers.iter_mut() {
-                if seed_idx.is_some() && qcols.contains(h) {
-                    *h = format!("seed_{h}");
-                }
-                // The output's own columns: an input column of the same name keeps its
-                // values under another name instead of appearing twice.
-                if h == "solution" || h == "status" {
-                    *h = format!("input_{h}");
-                }
-            }
-            (headers, t.rows.clone(), targets, seeds, t.lines.clone())
+                .map(|x| match x {
+                    Target::Pose(p) => *p,
+                    Target::Position(_) => unreachable!("orientation columns are required"),
+                })
+                .collect();
+            (headers, t.table.rows, targets, t.seeds, t.table.lines)
         }
         (None, None) => unreachable!("clap requires one input"),
     };
-    headers.push("solution".into());
-    headers.extend(qcols.iter().cloned());
-    headers.push("status".into());
-    // After the renames no column may appear twice (an input holding both `status` and
-    // `input_status`, or `seed_q1` and `q1`): refused, not written twice.
-    for (i, h) in headers.iter().enumerate() {
-        if headers[..i].contains(h) {
-            bail!(
-                "{}: column `{h}` would appear twice in the output (the input's own, renamed \
-                 or not, and one ik writes); rename or drop it",
-                a.poses
-                    .as_ref()
-                    .map_or_else(|| "--pose".into(), |p| p.display().to_string())
-            );
-        }
-    }
 
     let mut solver = IkSolver::new(RigidModel::new(&robot), start, IkOptions::default());
     let mut out_rows = Vec::new();
     let mut failed = Vec::new();
-    for (k, (cells, v)) in rows.iter().zip(&targets).enumerate() {
-        let target = pose_from_file([v[0], v[1], v[2], v[3], v[4], v[5]]);
+    for (k, (cells, target)) in rows.iter().zip(&targets).enumerate() {
         let seed = row_seeds[k].as_deref().or(global_seed.as_deref());
         let solved = if a.all {
-            solver.all(&target, seed)
+            solver.all(target, seed)
         } else {
             solver
                 .nearest(&target, seed, None)

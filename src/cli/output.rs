@@ -77,13 +77,9 @@ pub fn parse_list(s: &str, what: &str, expected: usize) -> Result<Vec<f64>> {
 /// Joints given on the command line (deg, mm for prismatic joints), within the bounds a
 /// file's joints have (4 turns, 100 m).
 pub fn joints_arg(robot: &robocal::model::Robot, s: &str, what: &str) -> Result<Vec<f64>> {
-    use robocal::model::{JointType, MAX_JOINT_DEG, MAX_LENGTH_MM};
     let q = parse_list(s, what, robot.dof())?;
     for (i, (v, j)) in q.iter().zip(robot.joints()).enumerate() {
-        let max = match j.joint_type {
-            JointType::Revolute => MAX_JOINT_DEG,
-            JointType::Prismatic => MAX_LENGTH_MM,
-        };
+        let max = robocal::data::joints::joint_bound(j.joint_type);
         if v.abs() > max {
             bail!(
                 "{what}: value {} ({v:e}) is beyond the bound of {max}",
@@ -94,18 +90,12 @@ pub fn joints_arg(robot: &robocal::model::Robot, s: &str, what: &str) -> Result<
     Ok(q)
 }
 
-/// The bound of pose value `k` of x, y, z (mm), rz, ry, rx (deg): 100 m, 2 turns.
-pub fn pose_bound(k: usize) -> f64 {
-    use robocal::model::{MAX_ANGLE_DEG, MAX_LENGTH_MM};
-    if k < 3 { MAX_LENGTH_MM } else { MAX_ANGLE_DEG }
-}
-
 /// A pose given on the command line: x, y, z (mm) within 100 m and rz, ry, rx (deg) within 2
 /// turns, as a measurement file's.
 pub fn pose_arg(s: &str, what: &str) -> Result<Vec<f64>> {
     let v = parse_list(s, what, 6)?;
     for (i, x) in v.iter().enumerate() {
-        let max = pose_bound(i);
+        let max = robocal::data::targets::pose_bound(i);
         if x.abs() > max {
             bail!(
                 "{what}: value {} ({x:e}) is beyond the bound of {max}",

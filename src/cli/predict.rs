@@ -1,30 +1,24 @@
 //! `robocal predict`, and loading a compensator for the commands that run one.
 
 use super::output::{OutputArgs, num};
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
+use robocal::data::JointTable;
 use robocal::kinematics::pose_to_file;
-use robocal::model::{Robot, robot_to_toml};
+use robocal::model::Robot;
 use robocal::neural::compensator::Compensator;
 use robocal::neural::predict::PredictWorkspace;
 use std::path::{Path, PathBuf};
 
-/// Loads a compensator to use beside `robot` (read from `robot_path`): its joints must be
-/// the robot's. With it, a note for the user when it runs with a model other than that file's.
+/// Loads a compensator to use beside `robot` (read from `robot_path`), with a note for the
+/// user when it runs with a model other than that file's.
 pub fn load_compensator(
     path: &Path,
     robot_path: &Path,
     robot: &Robot,
 ) -> Result<(Compensator, Option<String>)> {
-    let c = Compensator::load(path)?;
-    if !c.robot.same_joints(robot) {
-        bail!(
-            "{}: the compensator was trained for a robot with other joints than {}",
-            path.display(),
-            robot_path.display()
-        );
-    }
-    let note = (robot_to_toml(&c.robot) != robot_to_toml(robot)).then(|| {
+    let c = Compensator::load_for(path, robot)?;
+    let note = c.runs_another_model(robot).then(|| {
         format!(
             "note: the compensator runs in series with its own model (embedded; refined in \
              training), not with {}",
@@ -57,17 +51,15 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
         &[opt("--out", a.output.out.as_ref())],
     )?;
     let c = Compensator::load(&a.compensator)?;
-    let (mut headers, rows, joints, lines) = super::fk::joint_table(&a.joints, c.robot.dof())?;
-    super::fk::warn_if_radians(&a.joints, &c.robot, &joints);
-    if headers.iter().any(|h| h == DOMAIN_COLUMN) {
-        bail!(
-            "{}: the input already has a column `{DOMAIN_COLUMN}`, which would be written; \
-             rename or drop it",
-            a.joints.display()
-        );
-    }
-    headers.extend(robocal::data::POSE_COLUMNS.iter().map(|s| s.to_string()));
-    headers.push(DOMAIN_COLUMN.into());
+    let t = JointTable::read(&a.joints, &c.robot)?;
+    super::fk::warn_if_radians(&a.joints, &c.robot, &t);
+    let mut written: Vec<String> = robocal::data::POSE_COLUMNS
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    written.push(DOMAIN_COLUMN.into());
+    let headers = t.output_headers(&written)?;
+    let (rows, joints, lines) = (t.table.rows, t.joints, t.table.lines);
     let mut ws = PredictWorkspace::default();
     let mut out = Vec::with_capacity(rows.len());
     let mut outside = Vec::new();

@@ -13,25 +13,17 @@
 //!    A target failing any step is a [`Failure`], never a command.
 
 use super::model::CalibratedModel;
+use crate::data::Target;
 use crate::error::{Error, Result};
 use crate::kinematics::{
     Branch, IkFailure, IkOptions, IkSolver, IkStart, Pose, SphericalWristIk, ToolModel, tool_pose,
 };
 use crate::model::Robot;
-use nalgebra::{Translation3, Vector3};
+use nalgebra::Translation3;
 use std::f64::consts::PI;
 
 /// Largest difference (rad) between q* and the controller's solution for F on the same branch.
 const SAME_JOINTS_RAD: f64 = 1e-6;
-
-/// A desired tool pose.
-#[derive(Debug, Clone, Copy)]
-pub enum Desired {
-    /// Position (mm) and orientation.
-    Pose(Pose),
-    /// Position only (mm); the orientation is the calibrated model's at the seed joints.
-    Position(Vector3<f64>),
-}
 
 /// A solved target.
 #[derive(Debug, Clone)]
@@ -173,7 +165,7 @@ impl<'a> FakeTargetSolver<'a> {
     /// The command for one desired pose; `seed` (rad, mm) chooses the branch and turns.
     pub fn solve(
         &mut self,
-        desired: &Desired,
+        desired: &Target,
         seed: Option<&[f64]>,
     ) -> std::result::Result<Command, Failure> {
         let n = self.nominal.dof();
@@ -186,8 +178,8 @@ impl<'a> FakeTargetSolver<'a> {
             )));
         }
         let target = match desired {
-            Desired::Pose(p) => *p,
-            Desired::Position(x) => {
+            Target::Pose(p) => *p,
+            Target::Position(x) => {
                 let s = seed.ok_or(Failure::NoSeed)?;
                 let r = self.ik.model().pose(s).rotation;
                 Pose::from_parts(Translation3::from(*x), r)

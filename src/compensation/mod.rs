@@ -6,5 +6,5 @@
 pub mod fake_target;
 pub mod model;
 
-pub use fake_target::{Command, Desired, Failure, FakeTargetSolver};
+pub use fake_target::{Command, Failure, FakeTargetSolver};
 pub use model::CalibratedModel;

@@ -21,20 +21,10 @@ use super::ik_numeric::{IkOptions, IkSolution, IkTarget, IkWorkspace, ToolModel,
 use crate::error::{Error, Result};
 use crate::geometry::rotation::rotation_vector;
 use crate::model::Robot;
+pub use crate::model::joint_distance;
 
 /// Two solutions closer than this in every joint (rad or mm) are one.
 const SAME_SOLUTION: f64 = 1e-7;
-
-/// Euclidean distance between two joint vectors (rad and mm, as they are): the distance the
-/// strategy uses to choose among solutions and starts. Whole turns count: a solution 360 deg
-/// away is a different motion of the robot.
-pub fn joint_distance(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).powi(2))
-        .sum::<f64>()
-        .sqrt()
-}
 
 /// Where the solves start.
 #[derive(Debug, Clone)]

@@ -253,7 +253,7 @@ impl SphericalWristIk {
             if !inside {
                 continue;
             }
-            let dist = super::ik::joint_distance(&cand, reference);
+            let dist = crate::model::joint_distance(&cand, reference);
             if best.is_none_or(|(d, _)| dist < d) {
                 best = Some((dist, cand));
             }

@@ -8,5 +8,6 @@ pub mod row;
 pub use file::{read_robot, robot_to_toml, write_robot};
 pub use robot::{
     Joint, JointType, MAX_ANGLE_DEG, MAX_JOINT_DEG, MAX_LENGTH_MM, ParamId, Robot, Slot,
+    joint_distance,
 };
 pub use row::{Convention, Field, Row};

@@ -459,3 +459,14 @@ impl Chain {
         }
     }
 }
+
+/// Euclidean distance between two joint vectors (rad and mm, as they are): the distance the
+/// IK strategy uses to choose among solutions and starts. Whole turns count: a solution
+/// 360 deg away is a different motion of the robot.
+pub fn joint_distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}

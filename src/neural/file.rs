@@ -15,7 +15,7 @@ use super::net::{record_bytes, weights_from_record};
 use super::rbf::Rbf;
 use super::weights::{Affine, VALUE_BOUND};
 use crate::error::{Error, Location, Result};
-use crate::model::robot_to_toml;
+use crate::model::{Robot, robot_to_toml};
 use serde_json::Value;
 use std::path::Path;
 
@@ -87,6 +87,30 @@ impl Compensator {
     pub fn load(path: &Path) -> Result<Compensator> {
         let text = crate::io::read_text(path)?;
         Self::from_file_text(&text, path)
+    }
+
+    /// Reads a compensator file to run with `robot`'s joints: a compensator trained for other
+    /// joints (number or type) is an error naming the file.
+    pub fn load_for(path: &Path, robot: &Robot) -> Result<Compensator> {
+        let c = Self::load(path)?;
+        if !c.robot.same_joints(robot) {
+            return Err(Error::input(
+                Location::file(path),
+                format!(
+                    "the compensator was trained for a robot with other joints ({}) than the \
+                     robot given ({})",
+                    c.robot.dof(),
+                    robot.dof()
+                ),
+            ));
+        }
+        Ok(c)
+    }
+
+    /// Whether the compensator's own model (embedded, possibly refined in training) differs
+    /// from `robot`: the compensator always runs in series with its own.
+    pub fn runs_another_model(&self, robot: &Robot) -> bool {
+        robot_to_toml(&self.robot) != robot_to_toml(robot)
     }
 
     /// Parses a compensator file's text; `path` names it in errors.

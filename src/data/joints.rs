@@ -1,0 +1,92 @@
+//! Tables of joint vectors (`fk`, `predict`): columns q1..qN (deg; mm for prismatic joints),
+//! every other column carried into the output.
+
+use super::table::Table;
+use super::{joint_columns, output_headers};
+use crate::error::{Error, Location, Result};
+use crate::model::{JointType, MAX_JOINT_DEG, MAX_LENGTH_MM, Robot};
+use std::path::Path;
+
+/// The bound of a joint value in file units: 4 turns (deg) for a revolute joint, 100 m (mm)
+/// for a prismatic one, as in measurement files.
+pub fn joint_bound(joint_type: JointType) -> f64 {
+    match joint_type {
+        JointType::Revolute => MAX_JOINT_DEG,
+        JointType::Prismatic => MAX_LENGTH_MM,
+    }
+}
+
+/// Row `r`'s values of columns `cols` as joints of `robot` (file units), each within
+/// [`joint_bound`].
+pub(super) fn row_joints(t: &Table, r: usize, cols: &[usize], robot: &Robot) -> Result<Vec<f64>> {
+    let q = t.numbers(r, cols)?;
+    for ((v, &c), j) in q.iter().zip(cols).zip(robot.joints()) {
+        let max = joint_bound(j.joint_type);
+        if v.abs() > max {
+            return Err(Error::input(
+                t.location(r, c),
+                format!("{v:e} is beyond the bound of {max}"),
+            ));
+        }
+    }
+    Ok(q)
+}
+
+/// A CSV of joint vectors.
+#[derive(Debug, Clone)]
+pub struct JointTable {
+    /// The file as read; its cells are carried into outputs.
+    pub table: Table,
+    /// Each row's joints (file units: deg, mm).
+    pub joints: Vec<Vec<f64>>,
+}
+
+impl JointTable {
+    /// Reads `path`: columns q1..qN of `robot` required, each value within [`joint_bound`].
+    pub fn read(path: impl AsRef<Path>, robot: &Robot) -> Result<JointTable> {
+        JointTable::from_table(Table::read(path)?, robot)
+    }
+
+    /// The joint table of an already parsed table (for example from [`Table::parse`]).
+    pub fn from_table(table: Table, robot: &Robot) -> Result<JointTable> {
+        let idx: Vec<usize> = joint_columns(robot.dof())
+            .iter()
+            .map(|c| table.require(c))
+            .collect::<Result<_>>()?;
+        let joints = (0..table.rows.len())
+            .map(|r| row_joints(&table, r, &idx, robot))
+            .collect::<Result<_>>()?;
+        Ok(JointTable { table, joints })
+    }
+
+    /// Row `r`'s joints in internal units (rad, mm).
+    pub fn internal(&self, r: usize, robot: &Robot) -> Vec<f64> {
+        robot.joints_to_internal(&self.joints[r])
+    }
+
+    /// The output's header: the carried columns, then `written` (see [`output_headers`]).
+    pub fn output_headers(&self, written: &[String]) -> Result<Vec<String>> {
+        output_headers(&self.table, self.table.headers.clone(), written)
+    }
+
+    /// Whether the degree columns probably hold radians: every revolute angle lies within
+    /// one turn in radians (|q| <= 2 pi) and some exceed 1 (the joint unit of most
+    /// controllers' logs; read as degrees they give plausible but wrong poses).
+    pub fn looks_like_radians(&self, robot: &Robot) -> bool {
+        let revolute: Vec<usize> = (0..robot.dof())
+            .filter(|&j| robot.joints()[j].joint_type == JointType::Revolute)
+            .collect();
+        let mut max: Option<f64> = None;
+        for q in &self.joints {
+            for &j in &revolute {
+                max = Some(max.unwrap_or(0.0).max(q[j].abs()));
+            }
+        }
+        max.is_some_and(|m| m > 1.0 && m <= std::f64::consts::TAU)
+    }
+}
+
+/// The location of a table's header cell, for messages about its columns.
+pub(super) fn header_location(t: &Table, column: &str) -> Location {
+    Location::at(&t.path, 1, column)
+}
