@@ -3,7 +3,6 @@
 //! Units: files and the command line use mm and degrees; everything inside uses mm and
 //! radians. Poses are [`geometry::Pose`] (a rotation matrix and a translation in mm).
 
-pub mod case_d;
 pub mod compensation;
 pub mod data;
 pub mod error;
@@ -18,9 +17,9 @@ pub mod neural;
 pub mod plot;
 #[cfg(feature = "report")]
 pub mod report;
-pub mod reproduce;
 pub mod sim;
 pub mod stats;
+pub mod studies;
 
 pub use error::{Error, Result};
 pub use geometry::Pose;

@@ -1,7 +1,6 @@
 //! The compensator: the Case D targets (issue 5, item 6), save -> load gives identical
 //! predictions, and damaged files are refused.
 
-use robocal::case_d::{Robotset, Stage, find, run};
 use robocal::data::read_canonical;
 use robocal::identify::{Options, identify};
 use robocal::model::read_robot;
@@ -9,13 +8,14 @@ use robocal::neural::compensator::{Compensator, CompensatorOptions, Form, Settin
 use robocal::neural::encoding::Encoding;
 use robocal::neural::predict::PredictWorkspace;
 use robocal::neural::train::TrainOptions;
+use robocal::studies::case_d::{Robotset, Stage, find, run};
 use std::path::{Path, PathBuf};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn mean(rows: &[robocal::case_d::Row], set: Robotset, stage: Stage) -> f64 {
+fn mean(rows: &[robocal::studies::case_d::Row], set: Robotset, stage: Stage) -> f64 {
     find(rows, set, stage)
         .and_then(|r| r.truth.position_mm)
         .map(|p| p.mean)

@@ -9,8 +9,8 @@ use robocal::identify::identifiability::DropReason;
 use robocal::identify::{Measure, Method, Options, RobustLoss, SolveOptions, identify};
 use robocal::kinematics::{Pose, tool_pose};
 use robocal::model::{Robot, read_robot};
-use robocal::reproduce::{Case, median_range, over_seeds};
 use robocal::sim::{Deviations, NonGeometric, Observe, Region, Simulation};
+use robocal::studies::reproduce::{Case, median_range, over_seeds};
 use std::path::{Path, PathBuf};
 
 fn root() -> PathBuf {

@@ -326,7 +326,7 @@ const LAYERS: &[&[&str]] = &[
     &["neural"],
     &["compensation"],
     &["plot", "report"],
-    &["case_d", "reproduce"],
+    &["studies"],
     &["cli"],
 ];
 

@@ -6,10 +6,9 @@ use super::data_args::SigmaArgs;
 use super::summary::write_json;
 use anyhow::{Context, Result};
 use clap::Args;
-use robocal::case_d::{Robotset, Row, Stage, find, load, run};
 use robocal::evaluate::ErrorStats;
-use robocal::model::read_robot;
 use robocal::plot::{ErrorRun, error_figures, training_figure};
+use robocal::studies::case_d::{Robotset, Row, Stage, find, load, run};
 use serde_json::json;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -88,7 +87,7 @@ fn print_set(rows: &[Row], set: Robotset) {
 
 /// Per set: the test errors of every stage, and the training curves of the network stages.
 fn plot(dir: &Path, datasets: &Path, rows: &[Row]) -> Result<usize> {
-    let nominal = read_robot(datasets.join("robots/fanuc_r2000ib_210f.toml"))?;
+    let nominal = robocal::studies::thesis::fanuc(&datasets)?;
     let mut figs = 0;
     for set in Robotset::ALL {
         let data = load(datasets, set, &nominal)?;

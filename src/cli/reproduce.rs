@@ -5,7 +5,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use robocal::evaluate::ErrorStats;
 use robocal::model::read_robot;
-use robocal::reproduce::{
+use robocal::studies::reproduce::{
     Case, CaseRun, load_shipped, median_range, run_case, runs_over_seeds, thesis_figures,
 };
 use serde_json::json;
@@ -127,7 +127,7 @@ pub fn run(a: ReproduceArgs) -> Result<()> {
     let read = files_under(&a.datasets);
     let inputs: Vec<_> = read.iter().map(|p| req("--datasets", p)).collect();
     guard(&inputs, &[opt("--report", a.report.as_ref())])?;
-    let robot_path = a.datasets.join("robots/fanuc_r2000ib_210f.toml");
+    let robot_path = a.datasets.join(robocal::studies::thesis::FANUC);
     let nominal = read_robot(&robot_path).with_context(|| {
         format!(
             "run from the repository root, or give --datasets ({})",

@@ -2,7 +2,7 @@
 //! protocols over many seeds, so that one lucky draw proves nothing.
 //!
 //! Protocols (thesis 6.2-6.4 and the thesis notes): the FANUC R-2000iB/210F with thesis
-//! Table 6.1 deviations, the LTD500 + T-Mac noise (0.033 mm, 0.174 mrad), configurations
+//! Table 6.1 deviations, the LTD500 + T-Mac noise ([`thesis::tracker_noise`]), configurations
 //! uniform within the joint ranges (Case D: its focused region), `full` identification by LM:
 //! - A: 20 position-only calibration + 15 validation measurements, measure position;
 //! - B-sim: 20 full-pose calibration + 50 validation measurements, measure pose;
@@ -13,6 +13,7 @@
 //! For seed s the calibration set uses simulation seed 1000 s + 1 and the validation set
 //! 1000 s + 2; s runs over 1..=N, fixed in advance.
 
+use super::thesis;
 use crate::data::MeasurementSet;
 use crate::error::Result;
 use crate::evaluate::{ErrorStats, evaluate_model};
@@ -111,14 +112,14 @@ pub fn load_shipped(datasets: &Path, case: Case, robot: &Robot) -> Result<CaseDa
 
 /// Simulates a case's data for one seed (see the module docs for the seeds).
 pub fn simulate_case(nominal: &Robot, datasets: &Path, case: Case, seed: u64) -> Result<CaseData> {
-    let truth =
-        Deviations::read(datasets.join("deviations/table_6_1.toml"), nominal)?.apply(nominal)?;
+    let truth = Deviations::read(datasets.join(thesis::TABLE_6_1), nominal)?.apply(nominal)?;
     let region = match case {
-        Case::D => Region::read(datasets.join("regions/case_d_focused.toml"), nominal)?,
+        Case::D => Region::read(datasets.join(thesis::CASE_D_REGION), nominal)?,
         _ => Region::limits(nominal),
     };
     let (n_cal, n_val, observe, _, _) = case.design();
     let ng = NonGeometric::default();
+    let noise = thesis::tracker_noise();
     let sim = |count, seed| {
         Simulation {
             truth: &truth,
@@ -126,8 +127,8 @@ pub fn simulate_case(nominal: &Robot, datasets: &Path, case: Case, seed: u64) ->
             region: &region,
             count,
             seed,
-            sigma_position_mm: 0.033,
-            sigma_rotation_rad: 0.174e-3,
+            sigma_position_mm: noise.position_mm,
+            sigma_rotation_rad: noise.rotation_rad,
             observe,
         }
         .run(PathBuf::from(format!("case_{}_seed_{seed}", case.name())))
@@ -265,8 +266,16 @@ pub fn thesis_figures(case: Case) -> &'static [(&'static str, f64, f64)] {
         ],
         Case::C => &[("validation RMS distance mm", 3.0457, 0.1079)],
         Case::D => &[
-            ("position mm (offsets)", 6.7929, 0.2183),
-            ("orientation deg (offsets)", 0.8386, 0.2585),
+            (
+                "position mm (offsets)",
+                thesis::TABLE_6_6_NOMINAL.0,
+                thesis::TABLE_6_6_OFFSETS.0,
+            ),
+            (
+                "orientation deg (offsets)",
+                thesis::TABLE_6_6_NOMINAL.1,
+                thesis::TABLE_6_6_OFFSETS.1,
+            ),
         ],
     }
 }

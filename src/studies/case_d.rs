@@ -8,12 +8,13 @@
 //! together with the network ([`CompensatorOptions::refine`]): "offsets + network" re-estimates
 //! the offsets only, "full geometric + network" the full set.
 
+use super::thesis;
 use crate::data::{MeasurementSet, read_canonical};
 use crate::error::Result;
 use crate::evaluate::{ErrorStats, RowError, row_errors, summarize};
 use crate::identify::{Measure, Options, identify};
 use crate::kinematics::tool_pose;
-use crate::model::{Robot, read_robot};
+use crate::model::Robot;
 use crate::neural::compensator::{Compensator, CompensatorOptions, Refine};
 use crate::neural::fit::CompensatorReport;
 use crate::neural::predict::PredictWorkspace;
@@ -84,9 +85,9 @@ impl Stage {
     /// errors, which match per-coordinate means against the measurements (thesis notes).
     pub fn thesis(self, set: Robotset) -> Option<(f64, f64)> {
         match (set, self) {
-            (Robotset::CaseD, Stage::Nominal) => Some((6.7929, 0.8386)),
-            (Robotset::CaseD, Stage::Offsets) => Some((0.2183, 0.2585)),
-            (Robotset::CaseD, Stage::OffsetsNetwork) => Some((0.0336, 0.0160)),
+            (Robotset::CaseD, Stage::Nominal) => Some(thesis::TABLE_6_6_NOMINAL),
+            (Robotset::CaseD, Stage::Offsets) => Some(thesis::TABLE_6_6_OFFSETS),
+            (Robotset::CaseD, Stage::OffsetsNetwork) => Some(thesis::TABLE_6_6_OFFSETS_NETWORK),
             _ => None,
         }
     }
@@ -189,10 +190,9 @@ pub fn run_set(
     Ok(rows)
 }
 
-/// Runs the protocol on both shipped sets; the nominal robot is
-/// `datasets/robots/fanuc_r2000ib_210f.toml`.
+/// Runs the protocol on both shipped sets; the nominal robot is [`thesis::FANUC`].
 pub fn run(datasets: &Path, opts: &CompensatorOptions) -> Result<Vec<Row>> {
-    let nominal = read_robot(datasets.join("robots/fanuc_r2000ib_210f.toml"))?;
+    let nominal = thesis::fanuc(datasets)?;
     let mut rows = Vec::new();
     for set in Robotset::ALL {
         let data = load(datasets, set, &nominal)?;
