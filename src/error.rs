@@ -5,6 +5,10 @@
 
 use std::path::PathBuf;
 
+/// The name errors give to data that came from memory (text or bytes given in code) instead
+/// of a file: `<in memory>:3: field `x`: ...`.
+pub const IN_MEMORY: &str = "<in memory>";
+
 /// Where in an input file a problem sits.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Location {

@@ -8,7 +8,7 @@
 use super::joint_columns;
 use super::profile::{AngleUnit, Profile};
 use super::table::{CsvOut, Table, shown};
-use crate::error::{Error, Location, Result};
+use crate::error::{Error, IN_MEMORY, Location, Result};
 use crate::geometry::Pose;
 use crate::geometry::rotation::{EulerConvention, rotation_to_zyx};
 use crate::model::{JointType, Robot};
@@ -69,6 +69,7 @@ impl Measurement {
 /// A measurement file's rows.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeasurementSet {
+    /// The file the rows were read from ([`IN_MEMORY`] for a set built in code).
     pub source: PathBuf,
     pub rows: Vec<Measurement>,
     /// Names of the carried-through columns.
@@ -76,14 +77,39 @@ pub struct MeasurementSet {
 }
 
 impl MeasurementSet {
+    /// A set built in code; its rows' `line` fields are theirs to set (0 for none), and
+    /// errors name the set [`IN_MEMORY`].
+    pub fn from_rows(rows: Vec<Measurement>) -> MeasurementSet {
+        MeasurementSet {
+            source: PathBuf::from(IN_MEMORY),
+            rows,
+            extra_columns: Vec::new(),
+        }
+    }
+
+    /// Parses canonical measurement CSV given as text (in code) for `robot`, with the rules
+    /// of [`read_measurements`] and default options; errors name [`IN_MEMORY`] and the line.
+    pub fn from_csv(text: &str, robot: &Robot) -> Result<(MeasurementSet, ReadReport)> {
+        let t = Table::parse(text.as_bytes(), Path::new(IN_MEMORY), b',', false)?;
+        parse_measurements(
+            &t,
+            &JointInfo::of(robot),
+            &Profile::default(),
+            &ReadOptions::default(),
+        )
+    }
+
+    /// Whether every row has a measured position.
     pub fn has_position(&self) -> bool {
         !self.rows.is_empty() && self.rows.iter().all(|r| r.position.is_some())
     }
 
+    /// Whether every row has a measured orientation.
     pub fn has_rotation(&self) -> bool {
         !self.rows.is_empty() && self.rows.iter().all(|r| r.rotation.is_some())
     }
 
+    /// Whether some row has a measured distance.
     pub fn has_distance(&self) -> bool {
         self.rows.iter().any(|r| r.distance.is_some())
     }

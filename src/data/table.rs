@@ -1,7 +1,7 @@
 //! A CSV table read whole, with the line of every row, so that every error can name the file,
 //! the line and the column.
 
-use crate::error::{Error, Location, Result};
+use crate::error::{Error, IN_MEMORY, Location, Result};
 use std::path::{Path, PathBuf};
 
 /// A CSV file: header row and text cells.
@@ -26,7 +26,17 @@ impl Table {
     pub fn read(path: impl AsRef<Path>) -> Result<Table> {
         let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        let t = Table::parse(&bytes, path, b',', false)?;
+        Table::checked(&bytes, path)
+    }
+
+    /// A comma-separated table given as text (in code), with the rules of [`Table::read`];
+    /// errors name it [`IN_MEMORY`].
+    pub fn from_text(text: &str) -> Result<Table> {
+        Table::checked(text.as_bytes(), Path::new(IN_MEMORY))
+    }
+
+    fn checked(bytes: &[u8], path: &Path) -> Result<Table> {
+        let t = Table::parse(bytes, path, b',', false)?;
         t.reject_malformed()?;
         if t.rows.is_empty() {
             // A header alone is a file cut short or a template, never an empty batch to skip.

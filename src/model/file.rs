@@ -28,7 +28,7 @@
 
 use super::robot::{Joint, JointType, Robot};
 use super::row::{Convention, Field, Row};
-use crate::error::{Error, Location, Result};
+use crate::error::{Error, IN_MEMORY, Location, Result};
 use crate::io::line_of;
 use serde::Deserialize;
 use std::fmt::Write as _;
@@ -130,6 +130,13 @@ fn short(v: f64) -> String {
 pub fn read_robot(path: impl AsRef<Path>) -> Result<Robot> {
     let path = path.as_ref();
     parse_robot(&crate::io::read_text(path)?, path)
+}
+
+impl Robot {
+    /// Parses robot-file text given in code (TOML; mm, deg); errors name [`IN_MEMORY`].
+    pub fn from_toml(text: &str) -> Result<Robot> {
+        parse_robot(text, Path::new(IN_MEMORY))
+    }
 }
 
 /// Parses robot-file text; `path` is used in error messages.

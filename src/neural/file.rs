@@ -14,7 +14,7 @@ use super::encoding::Encoding;
 use super::net::{record_bytes, weights_from_record};
 use super::rbf::Rbf;
 use super::weights::{Affine, VALUE_BOUND};
-use crate::error::{Error, Location, Result};
+use crate::error::{Error, IN_MEMORY, Location, Result};
 use crate::model::{Robot, robot_to_toml};
 use serde_json::Value;
 use std::path::Path;
@@ -111,6 +111,23 @@ impl Compensator {
     /// from `robot`: the compensator always runs in series with its own.
     pub fn runs_another_model(&self, robot: &Robot) -> bool {
         robot_to_toml(&self.robot) != robot_to_toml(robot)
+    }
+
+    /// Parses a compensator file's text given in code; errors name [`IN_MEMORY`].
+    pub fn from_text(text: &str) -> Result<Compensator> {
+        Self::from_file_text(text, Path::new(IN_MEMORY))
+    }
+
+    /// Parses a compensator file's bytes given in code (UTF-8 JSON); errors name
+    /// [`IN_MEMORY`].
+    pub fn from_bytes(bytes: &[u8]) -> Result<Compensator> {
+        let text = std::str::from_utf8(bytes).map_err(|e| {
+            Error::input(
+                Location::file(IN_MEMORY),
+                format!("not a compensator file: not UTF-8 text ({e})"),
+            )
+        })?;
+        Self::from_text(text)
     }
 
     /// Parses a compensator file's text; `path` names it in errors.
