@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 
 /// The name errors give to data that came from memory (text or bytes given in code) instead
-/// of a file: `<in memory>:3: field `x`: ...`.
+/// of a file: ``<in memory>:3: field `x`: ...``.
 pub const IN_MEMORY: &str = "<in memory>";
 
 /// Where in an input file a problem sits.
@@ -21,6 +21,7 @@ pub struct Location {
 }
 
 impl Location {
+    /// A whole file, with no line or field.
     pub fn file(file: impl Into<PathBuf>) -> Self {
         Location {
             file: file.into(),
@@ -29,6 +30,7 @@ impl Location {
         }
     }
 
+    /// A field or column on a 1-based `line` of `file`.
     pub fn at(file: impl Into<PathBuf>, line: usize, field: impl Into<String>) -> Self {
         Location {
             file: file.into(),
@@ -58,6 +60,7 @@ impl std::fmt::Display for Location {
     }
 }
 
+/// Everything that can go wrong in the library.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// A file could not be read or written.
@@ -65,13 +68,20 @@ pub enum Error {
     /// print it twice.)
     #[error("{path}: {cause}")]
     Io {
+        /// The file or directory that was being read or written.
         path: PathBuf,
+        /// The operating system's error.
         cause: std::io::Error,
     },
 
     /// Input that does not parse or does not make sense, with its location.
     #[error("{location}: {message}")]
-    Input { location: Location, message: String },
+    Input {
+        /// Where in the input the problem sits.
+        location: Location,
+        /// What is wrong there.
+        message: String,
+    },
 
     /// A robot model that is inconsistent (not tied to a file).
     #[error("invalid robot model: {0}")]
@@ -91,6 +101,7 @@ pub enum Error {
 }
 
 impl Error {
+    /// An [`Error::Input`] at `location`.
     pub fn input(location: Location, message: impl Into<String>) -> Self {
         Error::Input {
             location,
@@ -98,6 +109,7 @@ impl Error {
         }
     }
 
+    /// An [`Error::Io`] on `path`.
     pub fn io(path: impl Into<PathBuf>, cause: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
@@ -106,4 +118,5 @@ impl Error {
     }
 }
 
+/// The library's result type, with [`Error`] as its error.
 pub type Result<T> = std::result::Result<T, Error>;

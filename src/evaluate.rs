@@ -17,20 +17,24 @@ use crate::geometry::rotation::angle_between;
 use crate::identify::problem::Measure;
 use crate::kinematics::{Pose, tool_pose};
 use crate::model::Robot;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Mean, RMS, 95th percentile and max of a list of errors.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
+    /// Mean error (in the unit of the errors: mm or deg).
     pub mean: f64,
+    /// Root mean square error (unit of the errors).
     pub rms: f64,
     /// The 95th percentile (nearest rank: the smallest error that at least 95 % of the errors
     /// do not exceed).
     pub p95: f64,
+    /// Largest error (unit of the errors; 0 or more).
     pub max: f64,
 }
 
 impl Summary {
+    /// The summary of the errors `v` (non-negative, mm or deg); None when `v` is empty.
     pub fn of(v: &[f64]) -> Option<Summary> {
         if v.is_empty() {
             return None;
@@ -49,7 +53,7 @@ impl Summary {
 }
 
 /// Statistics of one model on one set.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ErrorStats {
     /// Rows (or pairs) evaluated.
     pub count: usize,
@@ -69,8 +73,12 @@ pub struct ErrorStats {
 pub struct RowError {
     /// Line of the row (of row b for a pair).
     pub line: usize,
+    /// Position error (mm): norm of measured minus predicted position, or for a pair the
+    /// error of the displacement's length; None when not measured.
     pub position_mm: Option<f64>,
+    /// |dx|, |dy|, |dz| of the position (or displacement) error (mm); None for distances.
     pub abs_xyz_mm: Option<[f64; 3]>,
+    /// Orientation error (deg): angle of R_meas R_pred^T; None when not measured.
     pub orientation_deg: Option<f64>,
 }
 

@@ -9,6 +9,16 @@ fn json(p: &std::path::Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
 }
 
+/// The statistics of a typed report's accuracy row (`data`, `model`).
+fn accuracy<'a>(r: &'a serde_json::Value, data: &str, model: &str) -> &'a serde_json::Value {
+    &r["accuracy"]
+        .as_array()
+        .expect("an accuracy table")
+        .iter()
+        .find(|a| a["data"] == data && a["model"] == model)
+        .unwrap_or_else(|| panic!("no accuracy row {data} / {model}"))["stats"]
+}
+
 #[test]
 fn identify_train_evaluate_and_predict() {
     let model = tmp("d_offsets.toml");
@@ -58,12 +68,13 @@ fn identify_train_evaluate_and_predict() {
     );
     assert!(out.contains("networks: 2 x "), "{out}");
     let r = json(&report);
-    let stats = &r["statistics"][1];
-    assert_eq!(stats["set"], "validation");
-    let before = stats["model"]["position_mm"]["mean"].as_f64().unwrap();
-    let after = stats["compensated"]["position_mm"]["mean"]
-        .as_f64()
-        .unwrap();
+    assert_eq!(r["kind"], "train");
+    let (model_stats, net_stats) = (
+        accuracy(&r, "validation", "model"),
+        accuracy(&r, "validation", "+net"),
+    );
+    let before = model_stats["position_mm"]["mean"].as_f64().unwrap();
+    let after = net_stats["position_mm"]["mean"].as_f64().unwrap();
     assert!(after < 0.1 * before, "{before} -> {after}");
     assert_eq!(r["training"]["settings"]["form"], "joint");
     assert!(
@@ -98,12 +109,9 @@ fn identify_train_evaluate_and_predict() {
     // Every figure train reports for the held-out rows is evaluate's on those rows (1e-9).
     let e = json(&ev);
     for (kind, (a, b)) in [
-        ("position_mm", (&e["compensated"], &stats["compensated"])),
-        ("position_mm", (&e["validation"], &stats["model"])),
-        (
-            "orientation_deg",
-            (&e["compensated"], &stats["compensated"]),
-        ),
+        ("position_mm", (accuracy(&e, "data", "+net"), net_stats)),
+        ("position_mm", (accuracy(&e, "data", "model"), model_stats)),
+        ("orientation_deg", (accuracy(&e, "data", "+net"), net_stats)),
     ] {
         for f in ["mean", "rms", "p95", "max"] {
             let (x, y) = (a[kind][f].as_f64().unwrap(), b[kind][f].as_f64().unwrap());
@@ -303,7 +311,13 @@ fn case_d_prints_table_6_6_beside_ours_and_reports_every_row() {
         assert!(out.contains(s), "missing `{s}` in\n{out}");
     }
     let r = json(&report);
-    let rows = r["rows"].as_array().unwrap();
+    assert_eq!(r["kind"], "case_d");
+    let rows: Vec<&serde_json::Value> = r["sets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|s| s["rows"].as_array().unwrap())
+        .collect();
     assert_eq!(rows.len(), 10);
     assert!(
         rows.iter()

@@ -9,6 +9,16 @@ fn text(o: &std::process::Output) -> (String, String) {
 
 const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
 
+/// The statistics of a typed report's accuracy row (`data`, `model`).
+fn accuracy<'a>(r: &'a serde_json::Value, data: &str, model: &str) -> &'a serde_json::Value {
+    &r["accuracy"]
+        .as_array()
+        .expect("an accuracy table")
+        .iter()
+        .find(|a| a["data"] == data && a["model"] == model)
+        .unwrap_or_else(|| panic!("no accuracy row {data} / {model}"))["stats"]
+}
+
 #[test]
 fn identify_writes_a_robot_and_a_report_that_evaluate_confirms() {
     let out = tmp("b.toml");
@@ -38,14 +48,16 @@ fn identify_writes_a_robot_and_a_report_that_evaluate_confirms() {
     );
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(r["kind"], "identify");
     for key in ["calibration", "validation"] {
         for stat in ["mean", "rms", "max"] {
+            let a = accuracy(&r, key, "after");
             assert!(
-                r[key]["position_mm"][stat].is_number(),
+                a["position_mm"][stat].is_number(),
                 "{key}.position_mm.{stat}"
             );
             assert!(
-                r[key]["orientation_deg"][stat].is_number(),
+                a["orientation_deg"][stat].is_number(),
                 "{key}.orientation_deg.{stat}"
             );
         }
@@ -61,7 +73,9 @@ fn identify_writes_a_robot_and_a_report_that_evaluate_confirms() {
     assert!(r["condition_number"].as_f64().unwrap() > 1.0);
     assert!(r["iterations"].as_u64().unwrap() > 0);
     assert_eq!(r["stop_reason"], "function");
-    let val_mean = r["validation"]["position_mm"]["mean"].as_f64().unwrap();
+    let val_mean = accuracy(&r, "validation", "after")["position_mm"]["mean"]
+        .as_f64()
+        .unwrap();
     assert!(val_mean < 0.1, "{val_mean}");
 
     // The written robot is a normal robot file: evaluate gives the same validation figure.
@@ -78,7 +92,9 @@ fn identify_writes_a_robot_and_a_report_that_evaluate_confirms() {
     assert!(o.status.success(), "{}", text(&o).1);
     let e: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&eval_report).unwrap()).unwrap();
-    let m = e["validation"]["position_mm"]["mean"].as_f64().unwrap();
+    let m = accuracy(&e, "data", "model")["position_mm"]["mean"]
+        .as_f64()
+        .unwrap();
     assert!((m - val_mean).abs() < 1e-9, "{m} vs {val_mean}");
 }
 
@@ -118,7 +134,12 @@ fn identify_on_real_ur10_through_the_profile_with_a_split() {
     assert!(o.status.success(), "{}", text(&o).1);
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
-    assert!(r["validation"]["position_mm"]["rms"].as_f64().unwrap() <= 0.5);
+    assert!(
+        accuracy(&r, "validation", "after")["position_mm"]["rms"]
+            .as_f64()
+            .unwrap()
+            <= 0.5
+    );
     assert!(r["registration_rms_mm"].as_f64().unwrap() < 5.0);
 }
 

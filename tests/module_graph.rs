@@ -325,8 +325,9 @@ const LAYERS: &[&[&str]] = &[
     &["identify", "sim", "evaluate"],
     &["neural"],
     &["compensation"],
-    &["plot", "report"],
+    &["plot"],
     &["studies"],
+    &["reports"],
     &["cli"],
 ];
 

@@ -188,8 +188,9 @@ fn report_page_shows_tables_and_pictures_in_a_browser() {
     assert!(dom.matches("<table").count() >= 3, "tables in the DOM");
     for want in [
         "Accuracy",
-        "calibration_before",
+        "calibration",
         "validation",
+        "condition_number_all_candidates",
         "base.x",
         "condition_number",
     ] {

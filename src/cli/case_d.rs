@@ -3,13 +3,14 @@
 
 use super::compensator_args::CompensatorArgs;
 use super::data_args::SigmaArgs;
-use super::summary::write_json;
+use super::summary::write_report;
 use anyhow::{Context, Result};
 use clap::Args;
 use robocal::evaluate::ErrorStats;
 use robocal::plot::{ErrorRun, error_figures, training_figure};
-use robocal::studies::case_d::{Robotset, Row, Stage, find, load, run};
-use serde_json::json;
+use robocal::reports::studies::CaseDSet;
+use robocal::reports::{CaseDReport, Report};
+use robocal::studies::case_d::{Robotset, Row, Stage, load, run};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
@@ -40,12 +41,8 @@ fn rot(s: &ErrorStats) -> f64 {
     s.orientation_deg.map_or(f64::NAN, |p| p.mean)
 }
 
-fn print_set(rows: &[Row], set: Robotset) {
-    let test = rows
-        .iter()
-        .find(|r| r.set == set)
-        .map_or(0, |r| r.truth.count);
-    println!("\n{} - {test} unseen test poses", set.title());
+fn print_set(s: &CaseDSet) {
+    println!("\n{} - {} unseen test poses", s.title, s.test_rows);
     println!(
         "{:<26} | {:>17} | {:>27} | {:>27}",
         "model", "thesis Table 6.6", "vs truth", "vs measured"
@@ -54,16 +51,14 @@ fn print_set(rows: &[Row], set: Robotset) {
         "{:<26} | {:>8} {:>8} | {:>8} {:>8} {:>9} | {:>8} {:>8} {:>9}",
         "", "mm", "deg", "mean mm", "coord mm", "mean deg", "mean mm", "coord mm", "mean deg"
     );
-    for stage in Stage::ALL {
-        let Some(r) = find(rows, set, stage) else {
-            continue;
+    for r in &s.rows {
+        let thesis = match (r.thesis_mm, r.thesis_deg) {
+            (Some(p), Some(o)) => format!("{p:>8.4} {o:>8.4}"),
+            _ => format!("{:>17}", "-"),
         };
-        let thesis = stage.thesis(set).map_or(format!("{:>17}", "-"), |(p, o)| {
-            format!("{p:>8.4} {o:>8.4}")
-        });
         println!(
             "{:<26} | {thesis} | {:>8.4} {:>8.4} {:>9.4} | {:>8.4} {:>8.4} {:>9.4}",
-            stage.label(),
+            r.label,
             pos(&r.truth),
             pc(&r.truth),
             rot(&r.truth),
@@ -72,13 +67,7 @@ fn print_set(rows: &[Row], set: Robotset) {
             rot(&r.measured)
         );
     }
-    let ratio = |a: Stage, b: Stage| -> Option<f64> {
-        Some(pos(&find(rows, set, a)?.truth) / pos(&find(rows, set, b)?.truth))
-    };
-    if let (Some(o), Some(f)) = (
-        ratio(Stage::Offsets, Stage::OffsetsNetwork),
-        ratio(Stage::Full, Stage::FullNetwork),
-    ) {
+    if let (Some(o), Some(f)) = (s.gain_after_offsets, s.gain_after_full) {
         println!(
             "the compensator lowers the mean position error vs truth {o:.1}x after offsets, {f:.1}x after full identification"
         );
@@ -87,7 +76,7 @@ fn print_set(rows: &[Row], set: Robotset) {
 
 /// Per set: the test errors of every stage, and the training curves of the network stages.
 fn plot(dir: &Path, datasets: &Path, rows: &[Row]) -> Result<usize> {
-    let nominal = robocal::studies::thesis::fanuc(&datasets)?;
+    let nominal = robocal::studies::thesis::fanuc(datasets)?;
     let mut figs = 0;
     for set in Robotset::ALL {
         let data = load(datasets, set, &nominal)?;
@@ -157,15 +146,11 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
          identified parameters chosen by cross-validation unless fixed by flags).",
         a.build.seed
     );
-    for set in Robotset::ALL {
-        for r in rows.iter().filter(|r| r.set == set) {
-            if let Some(t) = &r.training {
-                println!(
-                    "  {}, {}: {}",
-                    set.folder(),
-                    r.stage.label(),
-                    t.settings.describe()
-                );
+    let report = CaseDReport::new(a.build.seed, &rows);
+    for s in &report.sets {
+        for r in &s.rows {
+            if let Some(settings) = &r.settings {
+                println!("  {}, {}: {settings}", s.set.folder(), r.label);
             }
         }
     }
@@ -173,15 +158,15 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
         "Errors on the test poses: mean Euclidean position (mm), mean per coordinate |dx|,|dy|,|dz| \
          (mm, the thesis's measure), mean orientation angle (deg)."
     );
-    for set in Robotset::ALL {
-        print_set(&rows, set);
+    for s in &report.sets {
+        print_set(s);
     }
     if let Some(dir) = &a.plot {
         let figs = plot(dir, &a.datasets, &rows)?;
         println!("\nplots: {figs} pictures in {}", dir.display());
     }
     if let Some(p) = &a.report {
-        write_json(p, &json!({"seed": a.build.seed, "rows": rows}))?;
+        write_report(p, &Report::CaseD(report))?;
     }
     Ok(())
 }

@@ -8,6 +8,8 @@ use robocal::compensation::{CalibratedModel, Failure, FakeTargetSolver};
 use robocal::data::{POSE_COLUMNS, TargetTable, joint_columns};
 use robocal::kinematics::pose_to_file;
 use robocal::model::read_robot;
+use robocal::reports::compensate::TargetFailure;
+use robocal::reports::{CompensateReport, Report};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -34,6 +36,9 @@ pub struct CompensateArgs {
     seed: Option<String>,
     #[command(flatten)]
     output: OutputArgs,
+    /// JSON report (typed: `kind` compensate; counts, shifts, failures, domain).
+    #[arg(long)]
+    report: Option<PathBuf>,
 }
 
 /// Runs `compensate`; `Some(message)` when some targets have no command (the others are
@@ -47,7 +52,10 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
             opt("--compensator", a.compensator.as_ref()),
             req("--targets", &a.targets),
         ],
-        &[opt("--out", a.output.out.as_ref())],
+        &[
+            opt("--out", a.output.out.as_ref()),
+            opt("--report", a.report.as_ref()),
+        ],
     )?;
     let nominal = read_robot(&a.nominal)?;
     let robot = read_robot(&a.robot)?;
@@ -59,15 +67,15 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
             a.robot.display()
         );
     }
-    let comp = match &a.compensator {
+    let (comp, note) = match &a.compensator {
         Some(p) => {
             let (c, note) = load_compensator(p, &a.robot, &robot)?;
-            if let Some(note) = note {
+            if let Some(note) = &note {
                 eprintln!("{note}");
             }
-            Some(c)
+            (Some(c), note)
         }
-        None => None,
+        None => (None, None),
     };
     let model = match &comp {
         Some(c) => CalibratedModel::compensated(c),
@@ -151,14 +159,44 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         .context("writing the commands")?;
     super::predict::warn_outside(&a.targets, &outside, true);
     let total = t.rows.len();
-    if !shifts.is_empty() {
-        let mean = shifts.iter().sum::<f64>() / shifts.len() as f64;
-        let max = shifts.iter().copied().fold(0.0, f64::max);
+    let (mean, max) = if shifts.is_empty() {
+        (None, None)
+    } else {
+        (
+            Some(shifts.iter().sum::<f64>() / shifts.len() as f64),
+            Some(shifts.iter().copied().fold(0.0, f64::max)),
+        )
+    };
+    let report = CompensateReport {
+        nominal: a.nominal.display().to_string(),
+        robot: a.robot.display().to_string(),
+        compensator: a.compensator.as_ref().map(|p| p.display().to_string()),
+        targets: a.targets.display().to_string(),
+        output: a.output.out.as_ref().map(|p| p.display().to_string()),
+        total,
+        solved: shifts.len(),
+        shift_mean_mm: mean,
+        shift_max_mm: max,
+        failures: failed
+            .iter()
+            .map(|(line, why)| TargetFailure {
+                line: *line,
+                status: why.code().into(),
+                message: why.to_string(),
+            })
+            .collect(),
+        lines_outside_domain: outside,
+        note,
+    };
+    if let (Some(mean), Some(max)) = (report.shift_mean_mm, report.shift_max_mm) {
         eprintln!(
             "compensate: {} of {total} targets solved; the commands move the tool positions by \
              {mean:.3} mm on average (max {max:.3} mm) from the desired ones",
-            shifts.len()
+            report.solved
         );
+    }
+    if let Some(p) = &a.report {
+        super::summary::write_report(p, &Report::Compensate(report))?;
     }
     if !failed.is_empty() {
         let mut msg = format!(

@@ -2,7 +2,7 @@
 
 use super::data_args::{DataArgs, read_set};
 use super::predict::{load_compensator, warn_outside};
-use super::summary::{print_stats, stats_json, write_json};
+use super::summary::{print_stats, write_report};
 use anyhow::Result;
 use clap::Args;
 use robocal::evaluate::{row_errors, summarize};
@@ -11,7 +11,7 @@ use robocal::kinematics::tool_pose;
 use robocal::model::read_robot;
 use robocal::neural::predict::PredictWorkspace;
 use robocal::plot::{ErrorRun, error_figures};
-use serde_json::json;
+use robocal::reports::{Accuracy, EvaluateReport, Report};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -29,7 +29,7 @@ pub struct EvaluateArgs {
     read: DataArgs,
     #[arg(long, value_enum)]
     measure: Option<super::choices::Measure>,
-    /// JSON report (`validation` holds the statistics, `compensated` those with the
+    /// JSON report (typed: `kind` evaluate, the `accuracy` rows of the model and of the
     /// compensator).
     #[arg(long)]
     report: Option<PathBuf>,
@@ -89,20 +89,33 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         None => None,
     };
     let compensated = net_rows.as_deref().map(summarize);
-    let mut table = vec![("data", "model", &s)];
-    if let Some(c) = &compensated {
-        table.push(("data", "+net", c));
+    let mut accuracy = vec![Accuracy::new("data", "model", s)];
+    if let Some(c) = compensated {
+        accuracy.push(Accuracy {
+            rows_outside_domain: Some(outside.len()),
+            ..Accuracy::new("data", "+net", c)
+        });
     }
-    print_stats(&table);
-    for (what, st) in [
-        ("model", Some(&s)),
-        ("with the compensator", compensated.as_ref()),
-    ] {
-        if let Some(c) = st.and_then(|st| st.position_per_coordinate_mean_mm) {
+    let report = EvaluateReport {
+        robot: a.robot.display().to_string(),
+        compensator: a.compensator.as_ref().map(|p| p.display().to_string()),
+        data: a.data.display().to_string(),
+        rows: set.rows.len(),
+        measure: m,
+        accuracy,
+        lines_outside_domain: outside.clone(),
+        note,
+    };
+    print_stats(&report.accuracy);
+    for (what, row) in ["model", "with the compensator"]
+        .iter()
+        .zip(&report.accuracy)
+    {
+        if let Some(c) = row.stats.position_per_coordinate_mean_mm {
             println!("mean per-coordinate position error |dx|,|dy|,|dz| ({what}): {c:.4} mm");
         }
     }
-    if let Some(note) = note {
+    if let Some(note) = &report.note {
         println!("{note}");
     }
     warn_outside(&a.data, &outside, false);
@@ -121,14 +134,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         println!("plots: {} pictures in {}", figs.len(), dir.display());
     }
     if let Some(path) = &a.report {
-        let mut v =
-            json!({"robot": a.robot, "data": a.data, "measure": m, "validation": stats_json(&s)});
-        if let (Some(p), Some(c)) = (&a.compensator, &compensated) {
-            v["compensator"] = json!(p);
-            v["compensated"] = stats_json(c);
-            v["rows_outside_domain"] = json!(outside.len());
-        }
-        write_json(path, &v)?;
+        write_report(path, &Report::Evaluate(report))?;
     }
     Ok(())
 }

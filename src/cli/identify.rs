@@ -2,17 +2,17 @@
 
 use super::choices::{Measure, Method, RobustLoss};
 use super::data_args::{DataArgs, SigmaArgs, open_fit};
-use super::summary::{print_stats, stats_json, write_json};
+use super::summary::{print_stats, write_report};
 use anyhow::Result;
 use clap::Args;
 use robocal::data::MeasurementSet;
 use robocal::evaluate::{RowError, row_errors, summarize};
-use robocal::identify::identifiability::DropReason;
-use robocal::identify::{Identified, Options, SolveOptions, identify};
+use robocal::identify::{Options, SolveOptions, identify};
 use robocal::kinematics::tool_pose;
 use robocal::model::write_robot;
 use robocal::plot::{ErrorRun, error_figures};
-use serde_json::{Value, json};
+use robocal::reports::identify::IdentifyFiles;
+use robocal::reports::{Accuracy, IdentifyReport, Report};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -107,20 +107,32 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     let val_stats = val_rows
         .as_ref()
         .map(|(b, af)| (summarize(b), summarize(af)));
-    print_identified(&a, &cal, &id);
-    let mut rows = vec![
-        ("calibration", "before", &cal_before),
-        ("calibration", "after", &cal_after),
+    let mut accuracy = vec![
+        Accuracy::new("calibration", "before", cal_before),
+        Accuracy::new("calibration", "after", cal_after),
     ];
-    if let Some((b, af)) = &val_stats {
-        rows.push(("validation", "before", b));
-        rows.push(("validation", "after", af));
+    if let Some((b, af)) = val_stats {
+        accuracy.push(Accuracy::new("validation", "before", b));
+        accuracy.push(Accuracy::new("validation", "after", af));
     }
-    print_stats(&rows);
-    for n in &id.notes {
+    let report = IdentifyReport::new(
+        &id,
+        &opts,
+        IdentifyFiles {
+            robot: a.robot.display().to_string(),
+            data: a.data.display().to_string(),
+            validation: a.validate.as_ref().map(|p| p.display().to_string()),
+            output: a.out.display().to_string(),
+        },
+        cal.rows.len(),
+        accuracy,
+    );
+    print_identified(&report);
+    print_stats(&report.accuracy);
+    for n in &report.notes {
         println!("note: {n}");
     }
-    for w in &id.warnings {
+    for w in &report.warnings {
         eprintln!("warning: {w}");
     }
     println!("wrote {}", a.out.display());
@@ -156,130 +168,84 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         println!("plots: {figs} pictures in {}", dir.display());
     }
     if let Some(path) = &a.report {
-        let params = id.robot.parameters();
-        let dropped: Vec<Value> = id
-            .identifiability
-            .dropped
-            .iter()
-            .map(|d| match &d.reason {
-                DropReason::NoEffect => json!({"name": params[d.param].name(), "reason": "no effect"}),
-                DropReason::Regroups(g) => json!({
-                    "name": params[d.param].name(),
-                    "reason": "regroups",
-                    "regroups_with": g.iter().map(|(p, c)| json!({"name": params[*p].name(), "coefficient": c})).collect::<Vec<_>>(),
-                }),
-            })
-            .collect();
-        let ident = &id.identifiability;
-        let v = json!({
-            "robot": a.robot, "data": a.data, "validation_data": a.validate,
-            "measure": m, "method": robocal::identify::Method::from(a.method), "params": a.params,
-            "calibration": stats_json(&cal_after),
-            "calibration_before": stats_json(&cal_before),
-            "validation": val_stats.as_ref().map(|(_, af)| stats_json(af)),
-            "validation_before": val_stats.as_ref().map(|(b, _)| stats_json(b)),
-            "parameters": id.parameters,
-            "dropped": dropped,
-            "condition_number": finite_or_null(ident.selected_condition_number),
-            "condition_number_all_candidates": finite_or_null(ident.condition_number),
-            "rank": ident.rank,
-            "rank_pivoted_qr": ident.rank_pivoted_qr,
-            "singular_values": ident.singular_values,
-            "iterations": id.solution.iterations,
-            "stop_reason": id.solution.stop,
-            "variance_factor": finite_or_null(id.variance_factor),
-            "correlations": id.correlations.iter().map(|(x, y, r)| json!({"a": x, "b": y, "correlation": r})).collect::<Vec<_>>(),
-            "outliers": id.outliers,
-            "robust": a.robust.map(robocal::identify::RobustLoss::from), "robust_rounds": id.robust_rounds,
-            "registration_rms_mm": id.registration.as_ref().map(|r| r.rms_mm),
-            "notes": id.notes,
-            "warnings": id.warnings,
-        });
-        write_json(path, &v)?;
+        write_report(path, &Report::Identify(report))?;
     }
     Ok(())
 }
 
-fn finite_or_null(v: f64) -> Value {
-    if v.is_finite() { json!(v) } else { Value::Null }
-}
-
-fn print_identified(a: &IdentifyArgs, cal: &MeasurementSet, id: &Identified) {
-    let params = id.robot.parameters();
-    let ident = &id.identifiability;
+fn print_identified(r: &IdentifyReport) {
     println!(
         "identify: {} rows of {}, measure {}, method {:?}, parameters `{}`",
-        cal.rows.len(),
-        a.data.display(),
-        id.measure.name(),
-        a.method,
-        a.params
+        r.rows,
+        r.data,
+        r.measure.name(),
+        r.method,
+        r.params
     );
-    if let Some(r) = &id.registration {
+    if let Some(rms) = r.registration_rms_mm {
         println!(
-            "registration of the base{}: RMS {:.4} mm",
-            if r.tool.is_some() { " and tool" } else { "" },
-            r.rms_mm
+            "registration of the base{}: RMS {rms:.4} mm",
+            if r.registration_tool { " and tool" } else { "" },
         );
     }
     println!(
         "identifiability: {} candidates, rank {} (SVD) / {} (pivoted QR), condition number {:.4e} \
          (column-scaled); identifiable set: {} parameters, condition number {:.4e}",
-        ident.candidates.len(),
-        ident.rank,
-        ident.rank_pivoted_qr,
-        ident.condition_number,
-        ident.selected.len(),
-        ident.selected_condition_number
+        r.candidates,
+        r.rank,
+        r.rank_pivoted_qr,
+        r.condition_number_all_candidates,
+        r.identifiable,
+        r.condition_number
     );
-    for d in &ident.dropped {
-        let why = match &d.reason {
-            DropReason::NoEffect => "no effect on these measurements".to_string(),
-            DropReason::Regroups(g) => format!(
+    for d in &r.dropped {
+        let why = if d.reason == "no effect" {
+            "no effect on these measurements".to_string()
+        } else {
+            format!(
                 "regroups with {}",
-                g.iter()
-                    .map(|(p, c)| format!("{:+.4} {}", c, params[*p].name()))
+                d.regroups_with
+                    .iter()
+                    .map(|g| format!("{:+.4} {}", g.coefficient, g.name))
                     .collect::<Vec<_>>()
                     .join(" ")
-            ),
+            )
         };
-        println!("  left out {:<12} {why}", params[d.param].name());
+        println!("  left out {:<12} {why}", d.name);
     }
     println!(
         "solution: {} iterations, {}; variance factor s^2 = {:.4}",
-        id.solution.iterations,
-        id.solution.stop.describe(),
-        id.variance_factor
+        r.iterations, r.stop, r.variance_factor
     );
     println!(
         "{:<12} {:<4} {:>14} {:>14} {:>12}",
         "parameter", "unit", "nominal", "estimate", "std"
     );
-    for p in &id.parameters {
+    for p in &r.parameters {
         println!(
             "{:<12} {:<4} {:>14.6} {:>14.6} {:>12.6}",
             p.name, p.unit, p.nominal, p.estimate, p.std
         );
     }
-    if !id.correlations.is_empty() {
-        let list: Vec<String> = id
+    if !r.correlations.is_empty() {
+        let list: Vec<String> = r
             .correlations
             .iter()
-            .map(|(x, y, r)| format!("{x}/{y} {r:+.3}"))
+            .map(|c| format!("{}/{} {:+.3}", c.a, c.b, c.correlation))
             .collect();
         println!("correlated (|r| > 0.9): {}", list.join(", "));
     }
-    if id.outliers.is_empty() {
-        println!("outliers (> {} robust sigmas): none", a.outlier_k);
+    if r.outliers.is_empty() {
+        println!("outliers (> {} robust sigmas): none", r.outlier_k);
     } else {
-        let lines: Vec<String> = id
+        let lines: Vec<String> = r
             .outliers
             .iter()
             .map(|o| format!("line {} ({:.1})", o.line, o.robust_sigmas))
             .collect();
         println!(
             "outliers (> {} robust sigmas): {}",
-            a.outlier_k,
+            r.outlier_k,
             lines.join(", ")
         );
     }

@@ -114,7 +114,7 @@ pub fn run(a: IkArgs) -> Result<()> {
             solver.all(target, seed)
         } else {
             solver
-                .nearest(&target, seed, None)
+                .nearest(target, seed, None)
                 .map(|s| vec![s.solution.q])
         };
         match solved.map_err(|f| explain(&f)) {

@@ -26,7 +26,7 @@ pub fn run(a: ReportArgs) -> Result<()> {
         .collect();
     let inputs: Vec<_> = read.iter().map(|p| req("run folder", p)).collect();
     guard(&inputs, &[req("--out", &a.out)])?;
-    let html = robocal::report::render(&a.run_dir)?;
+    let html = robocal::reports::html::render(&a.run_dir)?;
     super::output::writing(robocal::io::write_atomic(&a.out, html.as_bytes()), &a.out)?;
     println!("wrote {} ({} kB)", a.out.display(), html.len() / 1024);
     Ok(())

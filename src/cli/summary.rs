@@ -1,8 +1,8 @@
-//! Shared output of the fitting commands: the before/after statistics table and JSON reports.
+//! Shared output of the fitting commands: the accuracy table and the typed JSON reports.
 
 use anyhow::Result;
 use robocal::evaluate::ErrorStats;
-use serde_json::Value;
+use robocal::reports::{Accuracy, Report};
 use std::path::Path;
 
 fn fmt_stats(s: &ErrorStats) -> (String, String) {
@@ -18,24 +18,19 @@ fn fmt_stats(s: &ErrorStats) -> (String, String) {
     (p, r)
 }
 
-/// Prints a before/after table of error statistics.
-pub fn print_stats(rows: &[(&str, &str, &ErrorStats)]) {
+/// Prints a report's accuracy table (before/after pairs of error statistics).
+pub fn print_stats(rows: &[Accuracy]) {
     println!(
         "{:<12} {:<7} {:>39}   {:>26}",
         "set", "model", "position mm: mean rms p95 max", "orientation deg: mean rms max"
     );
-    for (set, model, s) in rows {
-        let (p, r) = fmt_stats(s);
-        println!("{set:<12} {model:<7} {p:>39}   {r:>26}");
+    for r in rows {
+        let (p, o) = fmt_stats(&r.stats);
+        println!("{:<12} {:<7} {p:>39}   {o:>26}", r.data, r.model);
     }
 }
 
-pub fn stats_json(s: &ErrorStats) -> Value {
-    serde_json::to_value(s).unwrap_or(Value::Null)
-}
-
-pub fn write_json(path: &Path, v: &Value) -> Result<()> {
-    let mut b = serde_json::to_vec_pretty(v)?;
-    b.push(b'\n');
-    super::output::writing(robocal::io::write_atomic(path, &b), path)
+/// Writes a typed report (JSON).
+pub fn write_report(path: &Path, r: &Report) -> Result<()> {
+    super::output::writing(r.save(path), path)
 }

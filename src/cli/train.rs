@@ -2,7 +2,7 @@
 
 use super::compensator_args::{CompensatorArgs, progress_bar};
 use super::data_args::{DataArgs, SigmaArgs};
-use super::summary::{print_stats, stats_json, write_json};
+use super::summary::{print_stats, write_report};
 use anyhow::{Context, Result};
 use clap::Args;
 use robocal::evaluate::{row_errors, summarize};
@@ -14,7 +14,7 @@ use robocal::neural::train::Phase2;
 use robocal::neural::tuning::RACE_FOLDS;
 use robocal::neural::tuning::{Score, Selection};
 use robocal::plot::{ErrorRun, error_figures, training_figure};
-use serde_json::json;
+use robocal::reports::{Accuracy, Report, TrainReport};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -209,8 +209,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         figs += 1;
     }
     let mut ws = PredictWorkspace::default();
-    let mut rows = vec![];
-    let mut stat_rows = vec![];
+    let mut accuracy = Vec::new();
     for (name, s) in [("training", Some(&set)), ("validation", val.as_ref())] {
         let Some(s) = s else { continue };
         let m = Measure::default_for(s);
@@ -242,21 +241,32 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             .len();
         }
         let (before, after) = (summarize(&before_rows), summarize(&after_rows));
-        stat_rows.push((name, before, after, outside));
-        rows.push(json!({
-            "set": name, "model": stats_json(&before), "compensated": stats_json(&after),
-            "rows_outside_domain": outside,
-        }));
+        accuracy.push(Accuracy::new(name, "model", before));
+        accuracy.push(Accuracy {
+            rows_outside_domain: Some(outside),
+            ..Accuracy::new(name, "+net", after)
+        });
     }
-    let table: Vec<(&str, &str, &robocal::evaluate::ErrorStats)> = stat_rows
-        .iter()
-        .flat_map(|(n, b, a, _)| [(*n, "model", b), (*n, "+net", a)])
-        .collect();
-    print_stats(&table);
-    for (name, _, _, outside) in &stat_rows {
-        if *outside > 0 && *name != "training" {
+    let report = TrainReport::new(
+        &c,
+        report,
+        a.robot.display().to_string(),
+        a.data.display().to_string(),
+        set.rows.len(),
+        a.validate.as_ref().map(|p| p.display().to_string()),
+        a.out.display().to_string(),
+        seconds,
+        accuracy,
+    );
+    print_stats(&report.accuracy);
+    for r in &report.accuracy {
+        if let Some(outside) = r.rows_outside_domain
+            && outside > 0
+            && r.data != "training"
+        {
             eprintln!(
-                "warning: {outside} {name} row(s) lie outside the compensator's training domain"
+                "warning: {outside} {} row(s) lie outside the compensator's training domain",
+                r.data
             );
         }
     }
@@ -266,14 +276,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         println!("plots: {figs} pictures in {}", dir.display());
     }
     if let Some(p) = &a.report {
-        write_json(
-            p,
-            &json!({
-                "robot": a.robot, "data": a.data, "compensator": a.out,
-                "seconds": seconds,
-                "training": report, "statistics": rows,
-            }),
-        )?;
+        write_report(p, &Report::Train(report))?;
     }
     Ok(())
 }

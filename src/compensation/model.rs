@@ -10,16 +10,25 @@ use nalgebra::Matrix6xX;
 /// What the robot really does at joints q, as far as calibration knows.
 pub enum CalibratedModel<'a> {
     /// The identified kinematic model.
-    Rigid { robot: &'a Robot, frames: Frames },
+    Rigid {
+        /// The identified robot model.
+        robot: &'a Robot,
+        /// Forward-kinematics workspace sized for `robot`.
+        frames: Frames,
+    },
     /// A compensator in series with its model.
     Compensated {
+        /// The compensator: its embedded robot model and network.
         compensator: &'a Compensator,
+        /// Scratch space for the compensator's predictions.
         ws: Box<PredictWorkspace>,
+        /// Forward-kinematics workspace sized for the compensator's robot.
         frames: Frames,
     },
 }
 
 impl<'a> CalibratedModel<'a> {
+    /// The rigid model of `robot`, with a fresh workspace.
     pub fn rigid(robot: &'a Robot) -> Self {
         CalibratedModel::Rigid {
             robot,
@@ -27,6 +36,7 @@ impl<'a> CalibratedModel<'a> {
         }
     }
 
+    /// The model of `compensator` (rigid model plus network), with fresh workspaces.
     pub fn compensated(compensator: &'a Compensator) -> Self {
         CalibratedModel::Compensated {
             compensator,

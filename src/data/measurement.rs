@@ -20,8 +20,12 @@ use std::path::{Path, PathBuf};
 pub struct Measurement {
     /// 1-based line in the source file (0 for generated rows).
     pub line: usize,
+    /// Free-text row label from the `id` column, if any.
     pub id: Option<String>,
+    /// Free-text group label from the `set` column, if any.
     pub set: Option<String>,
+    /// Pair label from the `pair` column: the two rows sharing it form a relative or distance
+    /// pair (see [`pairs`](super::pairs)).
     pub pair: Option<String>,
     /// Joints (rad, or mm for prismatic).
     pub q: Vec<f64>,
@@ -71,6 +75,7 @@ impl Measurement {
 pub struct MeasurementSet {
     /// The file the rows were read from ([`IN_MEMORY`] for a set built in code).
     pub source: PathBuf,
+    /// The measured configurations, in file order.
     pub rows: Vec<Measurement>,
     /// Names of the carried-through columns.
     pub extra_columns: Vec<String>,
@@ -127,6 +132,7 @@ pub struct ReadOptions {
 /// What a read noticed: warnings, and the rows it dropped (with `skip_bad_rows`).
 #[derive(Debug, Clone, Default)]
 pub struct ReadReport {
+    /// Warnings for the user (joints outside limits, suspicious units, ...), one per message.
     pub warnings: Vec<String>,
     /// (line, reason) of each dropped row.
     pub skipped: Vec<(usize, String)>,
@@ -160,6 +166,7 @@ fn group(t: &Table, names: &[String; 3], what: &str) -> Result<Option<[usize; 3]
 /// What reading and writing need to know of each joint.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JointInfo {
+    /// Revolute (values in rad) or prismatic (values in mm).
     pub joint_type: JointType,
     /// Limits (rad or mm); None when no robot is known and limits cannot be checked.
     pub limits: Option<[f64; 2]>,
@@ -513,14 +520,23 @@ pub fn list_lines(lines: &[usize]) -> String {
 /// carried-through columns.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Layout {
+    /// Has an `id` column.
     pub id: bool,
+    /// Has a `set` column.
     pub set: bool,
+    /// Has a `pair` column.
     pub pair: bool,
+    /// Has the position columns `x, y, z` (mm).
     pub position: bool,
+    /// Has the orientation columns `rz, ry, rx` (deg, R = Rz Ry Rx).
     pub rotation: bool,
+    /// Has a `distance` column (mm).
     pub distance: bool,
+    /// Has the position sigma columns `sx, sy, sz` (mm).
     pub sigma_position: bool,
+    /// Has the orientation sigma columns `srx, sry, srz` (deg).
     pub sigma_rotation: bool,
+    /// Names of the carried-through columns, written last in this order.
     pub extra: Vec<String>,
 }
 
@@ -640,6 +656,8 @@ pub struct MeasurementWriter {
 }
 
 impl MeasurementWriter {
+    /// Starts a file at `path` with `layout`'s columns and writes its header row; nothing
+    /// appears at `path` until [`finish`](Self::finish).
     pub fn create(path: &Path, layout: Layout, joints: &[JointInfo]) -> Result<Self> {
         let mut w = csv::Writer::from_writer(crate::io::AtomicWriter::create(path)?);
         let csv_err = |e: csv::Error| Error::Invalid(format!("{}: {e}", path.display()));
@@ -651,6 +669,7 @@ impl MeasurementWriter {
         })
     }
 
+    /// Writes one row (in file units: deg, mm), blank where it lacks a group of the layout.
     pub fn write(&mut self, m: &Measurement) -> Result<()> {
         let cells = self.layout.cells(m, &self.joints);
         self.w
@@ -658,6 +677,7 @@ impl MeasurementWriter {
             .map_err(|e| Error::Invalid(format!("{}: {e}", self.w.get_ref().path().display())))
     }
 
+    /// Flushes the rows and moves the file into place (or stages it for the open transaction).
     pub fn finish(self) -> Result<()> {
         let path = self.w.get_ref().path().to_path_buf();
         self.w

@@ -11,7 +11,9 @@ use nalgebra::Vector3;
 /// One pair: row indices a and b.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Pair {
+    /// Index in the set's rows of the pair's first row.
     pub a: usize,
+    /// Index in the set's rows of the pair's second row (the one that carries a distance).
     pub b: usize,
 }
 

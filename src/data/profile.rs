@@ -26,7 +26,9 @@ use std::path::Path;
 /// The unit of an angle column.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum AngleUnit {
+    /// Degrees.
     Deg,
+    /// Radians.
     Rad,
 }
 
@@ -43,7 +45,9 @@ impl AngleUnit {
 /// The unit of a length column.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LengthUnit {
+    /// Millimetres.
     Mm,
+    /// Metres.
     M,
 }
 
@@ -62,26 +66,41 @@ impl LengthUnit {
 pub struct Columns {
     /// Joint columns in chain order; None means `q1..qN`.
     pub joints: Option<Vec<String>>,
+    /// Position x, y and z (length unit); default `x, y, z`.
     pub position: [String; 3],
     /// Angle about x, y and z (whatever the convention's order of composition).
     pub angles: [String; 3],
+    /// Standard deviations of x, y and z (length unit); default `sx, sy, sz`.
     pub sigma_position: [String; 3],
+    /// Standard deviations of the angles about x, y and z (angle unit); default
+    /// `srx, sry, srz`.
     pub sigma_angles: [String; 3],
+    /// Row label column; default `id`.
     pub id: String,
+    /// Group label column; default `set`.
     pub set: String,
+    /// Pair label column; default `pair`.
     pub pair: String,
+    /// Ball-bar distance column (length unit); default `distance`.
     pub distance: String,
 }
 
 /// An import profile; [`Profile::default`] is the canonical form.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Profile {
+    /// Field delimiter, one ASCII byte; default `,`.
     pub delimiter: u8,
+    /// Numbers are written with a decimal comma ("1,5" is 1.5); needs another delimiter.
     pub decimal_comma: bool,
+    /// Unit of revolute joint values (prismatic joints use `length_unit`).
     pub joint_unit: AngleUnit,
+    /// Unit of positions, their sigmas, distances and prismatic joints.
     pub length_unit: LengthUnit,
+    /// Unit of orientation angles and their sigmas.
     pub angle_unit: AngleUnit,
+    /// How the three orientation angles compose into a rotation.
     pub euler: EulerConvention,
+    /// Column name of each field.
     pub columns: Columns,
 }
 

@@ -7,8 +7,11 @@ use std::path::{Path, PathBuf};
 /// A CSV file: header row and text cells.
 #[derive(Debug, Clone)]
 pub struct Table {
+    /// The file read ([`IN_MEMORY`] for text given in code); errors name it.
     pub path: PathBuf,
+    /// Column names from the header row.
     pub headers: Vec<String>,
+    /// Text cells of each data row, one per header.
     pub rows: Vec<Vec<String>>,
     /// 1-based file line of each row.
     pub lines: Vec<usize>,
@@ -242,6 +245,7 @@ pub struct CsvOut {
 }
 
 impl CsvOut {
+    /// Starts the output with the header row `headers`.
     pub fn new(headers: &[String]) -> Result<Self> {
         let mut w = csv::Writer::from_writer(Vec::new());
         w.write_record(headers)
@@ -249,12 +253,14 @@ impl CsvOut {
         Ok(CsvOut { w })
     }
 
+    /// Appends one row of cells.
     pub fn row(&mut self, cells: &[String]) -> Result<()> {
         self.w
             .write_record(cells)
             .map_err(|e| Error::Invalid(format!("CSV output: {e}")))
     }
 
+    /// The CSV text written so far.
     pub fn into_bytes(self) -> Result<Vec<u8>> {
         self.w
             .into_inner()

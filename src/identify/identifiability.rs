@@ -42,6 +42,7 @@ pub enum DropReason {
 pub struct Dropped {
     /// Index into `Robot::parameters`.
     pub param: usize,
+    /// Why it is left out: no effect, or what it regroups with.
     pub reason: DropReason,
 }
 
@@ -62,6 +63,7 @@ pub struct Identifiability {
     pub selected: Vec<usize>,
     /// Condition number of the selected columns (scaled).
     pub selected_condition_number: f64,
+    /// The candidates left out of `selected`, in priority order, with the reason.
     pub dropped: Vec<Dropped>,
 }
 

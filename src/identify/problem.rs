@@ -21,7 +21,7 @@ use crate::model::Robot;
 use nalgebra::{DMatrix, DVector, Matrix6xX, Vector3};
 
 /// How measurements are compared with the model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Measure {
     /// Position and orientation of each row.
@@ -48,6 +48,7 @@ impl Measure {
         }
     }
 
+    /// Lower-case name, as in files and on the command line.
     pub fn name(self) -> &'static str {
         match self {
             Measure::Pose => "pose",
@@ -81,8 +82,12 @@ impl Default for Sigmas {
 /// One observation: its row(s) and the inverse sigma of each residual component.
 #[derive(Debug, Clone)]
 pub struct Observation {
+    /// Index of the measured row (the pair's first row for relative and distance).
     pub a: usize,
+    /// Index of the pair's second row; None for single-row measures.
     pub b: Option<usize>,
+    /// 1/sigma of each residual component, in the order of the residual (1/mm for position
+    /// components, 1/rad for orientation ones); unused components are 1.
     pub inv_sigma: [f64; 6],
     /// Robust weight (IRLS), 1 by default.
     pub weight: f64,
@@ -91,8 +96,11 @@ pub struct Observation {
 /// The observations of a measurement set under one measure.
 #[derive(Debug, Clone)]
 pub struct Observations<'a> {
+    /// The measurement set the observations index into.
     pub set: &'a MeasurementSet,
+    /// How the rows are compared with the model.
     pub measure: Measure,
+    /// One observation per row, or per pair for relative and distance.
     pub items: Vec<Observation>,
 }
 
@@ -208,6 +216,7 @@ impl<'a> Observations<'a> {
         self.items.len() * self.dim()
     }
 
+    /// Whether there are no observations.
     pub fn is_empty(&self) -> bool {
         self.items.is_empty()
     }
@@ -223,6 +232,7 @@ pub struct Workspace {
 }
 
 impl Workspace {
+    /// A workspace sized for `robot`.
     pub fn new(robot: &Robot) -> Self {
         Workspace {
             fa: Frames::new(robot),
@@ -365,8 +375,12 @@ pub fn cost(robot: &Robot, obs: &Observations, ws: &mut Workspace) -> f64 {
 /// Normal equations of the weighted problem: A = J_w^T J_w, g = J_w^T r_w, and the cost.
 #[derive(Debug, Clone)]
 pub struct Normal {
+    /// A = J_w^T J_w (k x k, k = `cols.len()`; entry (i, j) per unit of parameter i times
+    /// unit of parameter j, mm or rad).
     pub a: DMatrix<f64>,
+    /// g = J_w^T r_w (k entries, each per unit of its parameter).
     pub g: DVector<f64>,
+    /// Weighted sum of squares sum r_w^2 (dimensionless).
     pub cost: f64,
 }
 

@@ -15,7 +15,7 @@ use crate::stats::median;
 use nalgebra::Matrix6xX;
 
 /// Robust loss for iteratively reweighted least squares.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum RobustLoss {
     /// Quadratic within k robust sigmas, linear beyond (k = 1.345).
@@ -47,8 +47,11 @@ pub struct Options {
     pub params: String,
     /// How to compare measurements; None: the richest the data supports.
     pub measure: Option<Measure>,
+    /// Set-level sigmas (mm, rad) for rows without their own.
     pub sigmas: Sigmas,
+    /// Solver, tolerances and iteration limit.
     pub solve: SolveOptions,
+    /// Robust loss for iteratively reweighted least squares; None: plain least squares.
     pub robust: Option<RobustLoss>,
     /// Register a 6-DOF transform base (and tool) to the measured positions first.
     pub register: bool,
@@ -75,19 +78,24 @@ impl Default for Options {
 }
 
 /// One identified parameter, in file units (mm or deg).
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct ParamReport {
+    /// Parameter name: `a3`, `theta1`, `base.x`, ...
     pub name: String,
-    pub unit: &'static str,
+    /// Its file unit: `mm` or `deg`.
+    pub unit: String,
+    /// Value in the nominal (start) model (mm or deg).
     pub nominal: f64,
+    /// Identified value (mm or deg).
     pub estimate: f64,
     /// One standard deviation, s^2 (J^T W J)^-1.
     pub std: f64,
 }
 
 /// A row whose residual is far out.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Outlier {
+    /// 1-based line of the row in the measurement file (of row b for a pair).
     pub line: usize,
     /// Its weighted residual in robust sigmas.
     pub robust_sigmas: f64,
@@ -96,16 +104,23 @@ pub struct Outlier {
 /// The outcome of an identification.
 #[derive(Debug, Clone)]
 pub struct Identified {
+    /// The identified model (base or tool rows possibly re-expressed as 6-DOF transforms).
     pub robot: Robot,
+    /// How measurements were compared with the model.
     pub measure: Measure,
+    /// What the data could identify, and the subset that was solved for.
     pub identifiability: Identifiability,
+    /// The final solve (after the last robust reweighting round).
     pub solution: Solution,
     /// a-posteriori variance factor s^2 = cost / (m - n); near 1 when the sigmas are right.
     pub variance_factor: f64,
+    /// The solved parameters, in the order of the identifiable subset.
     pub parameters: Vec<ParamReport>,
     /// Pairs of parameters with |correlation| > 0.9.
     pub correlations: Vec<(String, String, f64)>,
+    /// Rows (or pairs) beyond `outlier_k` robust sigmas, without robust weights.
     pub outliers: Vec<Outlier>,
+    /// The registered base (and tool), when registration ran.
     pub registration: Option<Registration>,
     /// Robust reweighting rounds (0 without a robust loss).
     pub robust_rounds: usize,
@@ -300,7 +315,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         .enumerate()
         .map(|(i, id)| ParamReport {
             name: id.name(),
-            unit: id.field.file_unit(),
+            unit: id.field.file_unit().to_string(),
             nominal: file_value(id, nominal.param(*id)),
             estimate: file_value(id, solution.robot.param(*id)),
             std: file_value(id, cov[(i, i)].sqrt()),

@@ -13,7 +13,7 @@ use crate::model::{ParamId, Robot};
 use nalgebra::{DMatrix, DVector};
 
 /// Identification method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// Levenberg-Marquardt.
@@ -25,7 +25,7 @@ pub enum Method {
 }
 
 /// Why a solve stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum StopReason {
     /// The residual is orthogonal to every Jacobian column (gradient tolerance).
@@ -43,6 +43,7 @@ pub enum StopReason {
 }
 
 impl StopReason {
+    /// A short sentence for reports: which test stopped the solve.
     pub fn describe(self) -> &'static str {
         match self {
             StopReason::Gradient => "gradient tolerance reached",
@@ -58,7 +59,9 @@ impl StopReason {
 /// Tolerances and limits.
 #[derive(Debug, Clone, Copy)]
 pub struct SolveOptions {
+    /// Which solver runs.
     pub method: Method,
+    /// Iteration limit (Nelder-Mead: simplex iterations).
     pub max_iterations: usize,
     /// Relative decrease of the cost below which the solve stops.
     pub ftol: f64,
@@ -83,8 +86,11 @@ impl Default for SolveOptions {
 /// A finished solve.
 #[derive(Debug, Clone)]
 pub struct Solution {
+    /// The robot with the free parameters at their solved values.
     pub robot: Robot,
+    /// Iterations run.
     pub iterations: usize,
+    /// Which test stopped the solve.
     pub stop: StopReason,
     /// Final weighted sum of squares.
     pub cost: f64,

@@ -31,8 +31,11 @@ const STRUCTURE_TOL: f64 = 1e-7;
 /// from singularities, which is what target compensation relies on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Branch {
+    /// Root of the joint-1 equation, 0 or 1.
     pub shoulder: u8,
+    /// Root of the joint-3 (elbow) subproblem, 0 or 1.
     pub elbow: u8,
+    /// Root of the joints 4-5 subproblem (wrist flip), 0 or 1.
     pub wrist: u8,
 }
 

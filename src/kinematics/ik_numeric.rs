@@ -59,6 +59,7 @@ pub struct IkSolution {
     /// Joints (rad or mm). Revolute joints are moved by multiples of 2 pi into their limits
     /// where that is possible.
     pub q: Vec<f64>,
+    /// LM iterations run.
     pub iterations: usize,
     /// Remaining position error (mm).
     pub position_error_mm: f64,

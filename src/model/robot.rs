@@ -12,7 +12,9 @@ use crate::geometry::Pose;
 /// Revolute joints add their variable to theta; prismatic joints add it to d.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum JointType {
+    /// Rotates: the variable (rad inside, deg in files) adds to theta.
     Revolute,
+    /// Slides: the variable (mm) adds to d.
     Prismatic,
 }
 
@@ -25,6 +27,7 @@ pub const MAX_ANGLE_DEG: f64 = 720.0;
 pub const MAX_JOINT_DEG: f64 = 1440.0;
 
 impl JointType {
+    /// Lower-case name, as in robot files: `revolute` or `prismatic`.
     pub fn name(self) -> &'static str {
         match self {
             JointType::Revolute => "revolute",
@@ -60,7 +63,9 @@ impl JointType {
 /// One joint: its row, its type and its limits.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Joint {
+    /// The joint's row: its convention and constant field values (mm, deg).
     pub row: Row,
+    /// Whether the joint variable is an angle or a length.
     pub joint_type: JointType,
     /// Lower and upper limit of the joint variable, in file units (deg or mm).
     pub limits: [f64; 2],
@@ -76,16 +81,20 @@ impl Joint {
 /// Where a parameter sits in the chain.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Slot {
+    /// The base row (T_R).
     Base,
     /// Joint index, 0-based (joint 1 is `Joint(0)`).
     Joint(usize),
+    /// The tool row (T_T).
     Tool,
 }
 
 /// A named model parameter: a field of a row.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ParamId {
+    /// The row the parameter belongs to.
     pub slot: Slot,
+    /// The parameter's field in that row.
     pub field: Field,
 }
 
@@ -212,18 +221,22 @@ impl Robot {
         })
     }
 
+    /// The robot's name (from its file, or given in code).
     pub fn name(&self) -> &str {
         &self.name
     }
 
+    /// The base row (T_R: world to the frame before joint 1).
     pub fn base(&self) -> &Row {
         &self.base
     }
 
+    /// The tool row (T_T: last joint's frame to the tool frame).
     pub fn tool(&self) -> &Row {
         &self.tool
     }
 
+    /// The joints in chain order (joint 1 first).
     pub fn joints(&self) -> &[Joint] {
         &self.joints
     }

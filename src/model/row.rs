@@ -35,6 +35,7 @@ impl Convention {
         }
     }
 
+    /// Lower-case name, as in robot files: `mdh`, `hayati`, `dh`, `transform`.
     pub fn name(self) -> &'static str {
         match self {
             Convention::Mdh => "mdh",
@@ -44,6 +45,7 @@ impl Convention {
         }
     }
 
+    /// The convention of a [`name`](Self::name); None for an unknown name.
     pub fn from_name(s: &str) -> Option<Self> {
         [
             Convention::Mdh,
@@ -69,20 +71,33 @@ impl Convention {
 /// A numeric field of a row.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Field {
+    /// Link length a: translation along x (mm).
     A,
+    /// Link twist alpha: rotation about x (deg in files, rad inside).
     Alpha,
+    /// Link offset d: translation along z (mm); a prismatic joint's variable adds to it.
     D,
+    /// Joint angle offset theta: rotation about z (deg in files, rad inside); a revolute
+    /// joint's variable adds to it.
     Theta,
+    /// Hayati twist beta: rotation about y (deg in files, rad inside).
     Beta,
+    /// Transform translation along x (mm).
     X,
+    /// Transform translation along y (mm).
     Y,
+    /// Transform translation along z (mm).
     Z,
+    /// Transform rotation about z, first of Z-Y-X (deg in files, rad inside).
     Rz,
+    /// Transform rotation about y, second of Z-Y-X (deg in files, rad inside).
     Ry,
+    /// Transform rotation about x, third of Z-Y-X (deg in files, rad inside).
     Rx,
 }
 
 impl Field {
+    /// Every field, in declaration order.
     pub const ALL: [Field; 11] = [
         Field::A,
         Field::Alpha,
@@ -97,6 +112,7 @@ impl Field {
         Field::Rx,
     ];
 
+    /// Lower-case name, as in robot files and parameter names: `a`, `alpha`, ..., `rx`.
     pub fn name(self) -> &'static str {
         match self {
             Field::A => "a",
@@ -113,6 +129,7 @@ impl Field {
         }
     }
 
+    /// The field of a [`name`](Self::name); None for an unknown name.
     pub fn from_name(s: &str) -> Option<Self> {
         Field::ALL.into_iter().find(|f| f.name() == s)
     }
@@ -163,6 +180,7 @@ impl Row {
         row
     }
 
+    /// The row's convention.
     pub fn convention(&self) -> Convention {
         self.convention
     }
@@ -249,11 +267,13 @@ impl Row {
 /// A row split around its joint variable; see [`Row::split`].
 #[derive(Debug, Clone)]
 pub struct Split {
+    /// The part of the row before RotZ(theta) TransZ(d) (mm, rad).
     pub pre: Pose,
     /// rad
     pub theta: f64,
     /// mm
     pub d: f64,
+    /// The part of the row after RotZ(theta) TransZ(d) (identity except for standard DH).
     pub post: Pose,
 }
 

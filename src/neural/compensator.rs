@@ -23,7 +23,9 @@ use crate::model::Robot;
 /// A trained compensator.
 #[derive(Debug, Clone)]
 pub struct Compensator {
+    /// What the networks correct: joints or the tool pose.
     pub form: Form,
+    /// How joints become network inputs.
     pub encoding: Encoding,
     /// The model the networks run in series with (refined in training when asked).
     pub robot: Robot,
@@ -32,12 +34,17 @@ pub struct Compensator {
     pub members: Vec<Weights>,
     /// An RBF network, alone or with the MLPs.
     pub rbf: Option<Rbf>,
+    /// Standardisation of the input features (encoded joints) fitted on the training rows.
     pub input_norm: Affine,
+    /// Map from the networks' unit-scale outputs to raw outputs: pose form dp (mm) and dr
+    /// (mrad); joint form dq (mrad, or um for prismatic joints).
     pub output_norm: Affine,
+    /// Where the networks have seen data; beyond it their correction fades out.
     pub domain: Domain,
 }
 
 impl Compensator {
+    /// Number of network inputs (encoded features).
     pub fn inputs(&self) -> usize {
         self.input_norm.len()
     }
@@ -47,6 +54,7 @@ impl Compensator {
         self.members.first().map_or(0, |w| w.hidden())
     }
 
+    /// Number of network outputs (pose form: 3 or 6; joint form: the joints).
     pub fn outputs(&self) -> usize {
         self.output_norm.len()
     }

@@ -18,10 +18,14 @@ use crate::model::Robot;
 /// The training domain (joints in rad or mm; distances in normalised input units).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Domain {
+    /// Smallest training value of each joint (rad or mm).
     pub joint_min: Vec<f64>,
+    /// Largest training value of each joint (rad or mm).
     pub joint_max: Vec<f64>,
     /// The distinct training configurations as normalised network inputs.
     pub inputs: Vec<Vec<f64>>,
+    /// Largest trusted distance to the nearest training configuration (normalised input
+    /// units): the 99th percentile of the nearest-neighbour distances (module doc).
     pub radius: f64,
 }
 
@@ -32,12 +36,14 @@ pub struct DomainCheck {
     pub joints_outside: Vec<usize>,
     /// Distance to the nearest training configuration (normalised input units).
     pub nearest: f64,
+    /// The domain's radius (normalised input units).
     pub radius: f64,
     /// The weight of the network's correction there (module doc).
     pub weight: f64,
 }
 
 impl DomainCheck {
+    /// Whether every joint is within its training range and `nearest` is within `radius`.
     pub fn inside(&self) -> bool {
         self.joints_outside.is_empty() && self.nearest <= self.radius
     }

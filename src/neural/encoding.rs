@@ -21,8 +21,10 @@ pub enum Encoding {
 }
 
 impl Encoding {
+    /// Every encoding.
     pub const ALL: [Encoding; 3] = [Encoding::SinCos, Encoding::Angles, Encoding::Gravity];
 
+    /// Lower-case name, as in files and on the command line.
     pub fn name(self) -> &'static str {
         match self {
             Encoding::SinCos => "sincos",

@@ -16,19 +16,22 @@ use crate::identify::Sigmas;
 use crate::model::Robot;
 
 /// What training did.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct CompensatorReport {
+    /// The settings the compensator was fitted with.
     pub settings: Settings,
     /// The cross-validation that chose the settings, when anything was left to choose.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub selection: Option<Selection>,
     /// The training of each ensemble member.
     pub networks: Vec<TrainReport>,
+    /// The model parameters refinement re-estimated (empty without refinement).
     pub refined: Vec<RefinedParam>,
     /// What the user should know (refinement kept or dropped, ill-conditioning).
     pub notes: Vec<String>,
     /// Wall-clock seconds of the cross-validation and of the final fit.
     pub selection_seconds: f64,
+    /// Wall-clock seconds of the final fit (s).
     pub fit_seconds: f64,
 }
 

@@ -11,7 +11,9 @@ use std::collections::VecDeque;
 /// What the callback decides after an iteration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Next {
+    /// Run another iteration.
     Continue,
+    /// Stop now and return the current point ([`LbfgsStop::Callback`]).
     Stop,
 }
 

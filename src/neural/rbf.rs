@@ -52,6 +52,7 @@ pub struct Rbf {
     pub weights: Vec<Vec<f64>>,
     /// Signal and noise variances, s^2 and sigma^2 (unit-scale outputs squared).
     pub signal_variance: f64,
+    /// Noise variance sigma^2 (unit-scale outputs squared).
     pub noise_variance: f64,
 }
 
@@ -59,6 +60,7 @@ pub struct Rbf {
 pub type Hyper = DVector<f64>;
 
 impl Rbf {
+    /// Number of hidden units (centres).
     pub fn units(&self) -> usize {
         self.centres.len()
     }
@@ -320,6 +322,7 @@ pub struct Pairs {
 }
 
 impl Pairs {
+    /// The pairs of the rows `rows` of the inputs `x` (normalised input units).
     pub fn new(x: &[Vec<f64>], rows: &[usize]) -> Pairs {
         let n = rows.len();
         let d = x.first().map_or(0, |r| r.len());

@@ -22,11 +22,15 @@ use crate::model::Robot;
 pub const RANK_TOLERANCE: f64 = 1e-2;
 
 /// A model parameter re-estimated for the network (file units: mm or deg).
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RefinedParam {
+    /// Parameter name: `a3`, `theta1`, `base.x`, ...
     pub name: String,
-    pub unit: &'static str,
+    /// Its file unit: `mm` or `deg`.
+    pub unit: String,
+    /// Value in the given model (mm or deg).
     pub before: f64,
+    /// Re-estimated value (mm or deg).
     pub after: f64,
     /// One standard deviation of the re-estimate (file units).
     pub std: f64,
@@ -57,7 +61,7 @@ pub fn refine(
         .iter()
         .map(|p| RefinedParam {
             name: p.name.clone(),
-            unit: p.unit,
+            unit: p.unit.clone(),
             before: p.nominal,
             after: p.estimate,
             std: p.std,

@@ -19,18 +19,24 @@ use nalgebra::{DMatrix, DVector};
 /// share a group and are never split between training and held-out parts).
 #[derive(Debug, Clone, Default)]
 pub struct Samples {
+    /// Normalised network inputs, one vector per sample.
     pub x: Vec<Vec<f64>>,
+    /// Unit-scale targets, one vector per sample.
     pub b: Vec<Vec<f64>>,
+    /// Per-sample maps A_k from network outputs to target rows (rows of b x outputs); None
+    /// means A_k = I.
     pub maps: Option<Vec<DMatrix<f64>>>,
     /// Group of each sample; empty: every sample its own group.
     pub groups: Vec<usize>,
 }
 
 impl Samples {
+    /// Number of samples.
     pub fn len(&self) -> usize {
         self.x.len()
     }
 
+    /// Whether there are no samples.
     pub fn is_empty(&self) -> bool {
         self.x.is_empty()
     }
@@ -213,6 +219,7 @@ pub struct Batch<'a> {
 }
 
 impl<'a> Batch<'a> {
+    /// The matrices of `s` and workspaces sized for networks shaped as `w`.
     pub fn new(s: &'a Samples, w: &Weights) -> Self {
         let (n, rows) = (s.len(), s.rows());
         let (nh, ni, no) = (w.hidden(), w.inputs(), w.outputs());

@@ -5,7 +5,7 @@ use super::rbf::Hyper;
 use super::settings::Settings;
 
 /// A training row whose cross-validated error marks it an outlier.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Outlier {
     /// Index of the row in the training set (0-based).
     pub row: usize,
@@ -13,6 +13,7 @@ pub struct Outlier {
     pub line: usize,
     /// The chosen candidate's held-out errors on the row (mm, deg).
     pub position_mm: f64,
+    /// Held-out orientation error on the row (deg); None for position-only data.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub orientation_deg: Option<f64>,
     /// The larger error in robust sigmas of its own column.
@@ -20,26 +21,31 @@ pub struct Outlier {
 }
 
 /// Cross-validated errors of one candidate (mm, deg; RMS over every held-out row).
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Score {
+    /// RMS position error (mm).
     pub position_rms_mm: f64,
+    /// RMS orientation error (deg); None for position-only data.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub orientation_rms_deg: Option<f64>,
 }
 
 /// One cross-validated candidate.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Candidate {
+    /// The search stage that proposed it (1 to 5, see [`super::tuning`]).
     pub stage: usize,
+    /// The settings tried.
     pub settings: Settings,
     /// None when the candidate failed on some fold (see `error`) or was dropped early
     /// (see `pruned`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub score: Option<Score>,
+    /// Why the candidate failed on some fold (the last failure's message), if it did.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
     /// Set instead of `score` when the candidate was dropped after the first
-    /// [`RACE_FOLDS`] folds: its errors on those folds.
+    /// [`RACE_FOLDS`](super::tuning::RACE_FOLDS) folds: its errors on those folds.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pruned: Option<Score>,
     /// Sums over the race folds, the yardstick for later candidates.
@@ -48,14 +54,18 @@ pub struct Candidate {
 }
 
 /// What cross-validation did.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Selection {
+    /// Number of cross-validation folds k.
     pub folds: usize,
     /// The model alone on the same held-out rows.
     pub model: Score,
+    /// Every candidate, in the order tried.
     pub candidates: Vec<Candidate>,
     /// Index of the chosen candidate.
     pub chosen: usize,
+    /// What the user should know about the choice (ensemble size, no network, refinement
+    /// dropped, outliers found).
     pub notes: Vec<String>,
     /// Training rows beyond `outlier_k` robust sigmas of the chosen candidate's held-out
     /// errors (the final fit leaves them out when the options say so).

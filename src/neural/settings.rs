@@ -26,8 +26,10 @@ pub enum Form {
 }
 
 impl Form {
+    /// Every form, joint first.
     pub const ALL: [Form; 2] = [Form::Joint, Form::Pose];
 
+    /// Lower-case name, as in files and on the command line.
     pub fn name(self) -> &'static str {
         match self {
             Form::Pose => "pose",
@@ -56,6 +58,7 @@ pub enum Network {
 }
 
 impl Network {
+    /// Lower-case name, as in files and on the command line.
     pub fn name(self) -> &'static str {
         match self {
             Network::Mlp => "mlp",
@@ -66,11 +69,15 @@ impl Network {
 }
 
 /// One complete choice of how to build a compensator.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Settings {
+    /// The network kind.
     pub network: Network,
+    /// Where the network's output acts.
     pub form: Form,
+    /// How joints become network inputs.
     pub encoding: Encoding,
+    /// Hidden units of each MLP.
     pub hidden: usize,
     /// L2 weight penalty lambda (see [`super::samples`]).
     pub penalty: f64,
@@ -168,11 +175,18 @@ pub struct CompensatorOptions {
     /// The RBF network's search start ([`super::rbf::STARTS`]); None: cross-validation
     /// decides where it runs, else the highest likelihood.
     pub rbf_start: Option<usize>,
+    /// Where the network's output acts; None: cross-validation decides.
     pub form: Option<Form>,
+    /// How joints become network inputs; None: cross-validation decides.
     pub encoding: Option<Encoding>,
+    /// Hidden units of each MLP; None: cross-validation decides.
     pub hidden: Option<usize>,
+    /// L2 weight penalty lambda (dimensionless, see [`super::samples`]); None:
+    /// cross-validation decides.
     pub penalty: Option<f64>,
+    /// MLPs in the ensemble (0: no MLP); None: cross-validation decides.
     pub members: Option<usize>,
+    /// Whether and which model parameters to re-estimate before training.
     pub refine: Refine,
     /// Tracker sigmas for rows that carry none (refinement).
     pub sigmas: Sigmas,

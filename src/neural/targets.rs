@@ -30,8 +30,12 @@ use std::collections::HashMap;
 /// A network's training problem.
 #[derive(Debug, Clone)]
 pub struct Problem {
+    /// Normalised inputs, unit-scale targets, maps (joint form) and configuration groups.
     pub samples: Samples,
+    /// Standardisation of the encoded input features.
     pub input_norm: Affine,
+    /// Map from unit-scale outputs to raw outputs: pose form dp (mm), dr (mrad); joint form
+    /// dq (mrad, or um for prismatic joints).
     pub output_norm: Affine,
 }
 

@@ -43,10 +43,14 @@ pub const LM_BUDGET: f64 = 3e7;
 pub struct Epoch {
     /// Epochs done of both phases, out of at most `total`.
     pub done: usize,
+    /// Most epochs of both phases: phase-1 epochs plus the phase-2 limit.
     pub total: usize,
     /// Mean squared normalised residual of the training and the held-out rows.
     pub train_mse: f64,
+    /// Held-out MSE (normalised outputs); without a held-out part, the penalised training
+    /// objective per residual component.
     pub validation_mse: f64,
+    /// True on the last report, after training ended.
     pub finished: bool,
 }
 
@@ -63,7 +67,9 @@ impl std::fmt::Debug for Progress {
 /// Training settings.
 #[derive(Debug, Clone)]
 pub struct TrainOptions {
+    /// Hidden units of the MLP.
     pub hidden: usize,
+    /// Seed of the initial weights and of the held-out draw.
     pub seed: u64,
     /// Phase-1 epochs (full batch).
     pub momentum_epochs: usize,
@@ -82,6 +88,7 @@ pub struct TrainOptions {
     pub validation_fraction: f64,
     /// L2 weight penalty lambda (see [`super::samples`]); 0: none.
     pub penalty: f64,
+    /// The weight-refining method of phase 2.
     pub phase2: Phase2,
     /// Told every epoch; None: nothing is told.
     pub progress: Option<Progress>,
@@ -114,18 +121,23 @@ impl Default for TrainOptions {
 }
 
 /// Why training stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum TrainStop {
+    /// The training MSE reached `goal`.
     Goal,
+    /// The gradient fell below `min_grad`.
     MinGradient,
+    /// The held-out error did not improve for `max_fail` epochs in a row (best epoch kept).
     ValidationFailures,
+    /// The phase-2 epoch limit `max_epochs` was reached.
     MaxEpochs,
     /// mu exceeded 1e10 (LM), or no step lowers the error (L-BFGS line search).
     MuMax,
 }
 
 impl TrainStop {
+    /// A short phrase for reports: why training stopped.
     pub fn describe(self) -> &'static str {
         match self {
             TrainStop::Goal => "performance goal reached",
@@ -138,9 +150,11 @@ impl TrainStop {
 }
 
 /// What training did.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct TrainReport {
+    /// Why training stopped.
     pub stop: TrainStop,
+    /// Phase-1 (momentum) epochs run.
     pub momentum_epochs: usize,
     /// Phase-2 epochs (L-BFGS: iterations).
     pub lm_epochs: usize,
@@ -149,6 +163,7 @@ pub struct TrainReport {
     /// Final MSE (normalised outputs, no penalty) on the training part, and on the held-out
     /// part when there is one.
     pub train_mse: f64,
+    /// Final MSE on the held-out part (normalised outputs); None when nothing was held out.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub validation_mse: Option<f64>,
     /// (epoch, training MSE, validation MSE) over both phases.

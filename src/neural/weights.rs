@@ -22,14 +22,17 @@ fn sigmoid(z: f64) -> f64 {
 }
 
 impl Weights {
+    /// Number of inputs (columns of W1).
     pub fn inputs(&self) -> usize {
         self.w1.ncols()
     }
 
+    /// Number of hidden units (rows of W1).
     pub fn hidden(&self) -> usize {
         self.w1.nrows()
     }
 
+    /// Number of outputs (rows of W2).
     pub fn outputs(&self) -> usize {
         self.w2.nrows()
     }
@@ -40,6 +43,7 @@ impl Weights {
         h * i + h + o * h + o
     }
 
+    /// Whether the network has no weights or biases at all.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -89,7 +93,7 @@ impl Weights {
     }
 
     /// Outputs at `x` into `y` and their derivatives by the inputs into `jac` (outputs x
-    /// inputs): dy_k/dx_i = sum_j W2[k,j] h_j (1 - h_j) W1[j,i]. Does not allocate.
+    /// inputs): `dy_k/dx_i = sum_j W2[k,j] h_j (1 - h_j) W1[j,i]`. Does not allocate.
     pub fn input_jacobian_into(
         &self,
         x: &[f64],
@@ -122,8 +126,8 @@ impl Weights {
     /// in the order of [`Weights::to_vector`]) into `jac` rows `row0..row0 + outputs`; one
     /// forward pass serves both, and nothing is allocated.
     ///
-    /// dy_k/dW2[k,j] = h_j, dy_k/db2[k] = 1, dy_k/dW1[j,i] = W2[k,j] h_j (1 - h_j) x_i,
-    /// dy_k/db1[j] = W2[k,j] h_j (1 - h_j).
+    /// `dy_k/dW2[k,j] = h_j`, `dy_k/db2[k] = 1`, `dy_k/dW1[j,i] = W2[k,j] h_j (1 - h_j) x_i`,
+    /// `dy_k/db1[j] = W2[k,j] h_j (1 - h_j)`.
     pub fn jacobian_into(
         &self,
         x: &[f64],
@@ -162,7 +166,9 @@ pub const VALUE_BOUND: f64 = 1e9;
 /// data and stored with the network.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Affine {
+    /// Subtracted from each raw feature (raw units).
     pub offset: Vec<f64>,
+    /// Divides each centred feature (raw units per normalised unit).
     pub scale: Vec<f64>,
 }
 
@@ -192,10 +198,12 @@ impl Affine {
         }
     }
 
+    /// Number of features.
     pub fn len(&self) -> usize {
         self.offset.len()
     }
 
+    /// Whether there are no features.
     pub fn is_empty(&self) -> bool {
         self.offset.is_empty()
     }

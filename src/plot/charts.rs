@@ -58,9 +58,11 @@ const LOG_RATIO: f64 = 20.0;
 /// Named series of values with one unit.
 #[derive(Debug, Clone)]
 pub struct Series {
+    /// Legend name, e.g. "nominal" or "identified".
     pub label: String,
     /// 1-based position of each value in its data (the x of per-measurement plots).
     pub rows: Vec<usize>,
+    /// The values, in the unit of the chart that shows them (e.g. mm or deg).
     pub values: Vec<f64>,
 }
 
@@ -79,11 +81,13 @@ fn wants_log(series: &[Series]) -> bool {
 
 /// Error of every measurement, one line per series (thesis Figs. 6.1, 6.3, 6.5).
 pub struct ErrorSeries {
+    /// Title drawn above the chart.
     pub title: String,
     /// Axis title with unit, e.g. "position error (mm)".
     pub y_label: String,
     /// Unit for the legend's means, e.g. "mm".
     pub unit: String,
+    /// One line per series.
     pub series: Vec<Series>,
 }
 
@@ -171,10 +175,13 @@ impl ErrorSeries {
 /// One histogram panel per series, each on its own range (before and after often differ by
 /// orders of magnitude).
 pub struct Histograms {
+    /// Title drawn above the panels.
     pub title: String,
     /// Axis title with unit, e.g. "position error (mm)".
     pub x_label: String,
+    /// Unit of the values, e.g. "mm".
     pub unit: String,
+    /// One panel per series.
     pub series: Vec<Series>,
 }
 
@@ -230,6 +237,7 @@ impl Chart for Histograms {
 
 /// Mean squared error by epoch, training and validation, both phases.
 pub struct TrainingCurve {
+    /// Title drawn above the chart.
     pub title: String,
     /// (epoch, training MSE, validation MSE) (normalised outputs).
     pub curve: Vec<(usize, f64, f64)>,
@@ -292,6 +300,7 @@ impl Chart for TrainingCurve {
 
 /// Tool positions seen from above (x-y) and from the side (x-z), coloured by error.
 pub struct Scatter {
+    /// Title drawn above the two views.
     pub title: String,
     /// Tool positions (mm).
     pub points: Vec<[f64; 3]>,

@@ -10,7 +10,9 @@ use std::path::Path;
 
 /// The errors of several predictors on one set, each named (e.g. "nominal", "identified").
 pub struct ErrorRun<'a> {
+    /// The predictor's name, used in legends and panel titles.
     pub label: &'a str,
+    /// Its error on every row (or pair) of the set, in row order.
     pub errors: &'a [RowError],
 }
 

@@ -33,6 +33,7 @@ fn register_font() {
 
 /// A chart that can draw itself on any plotters backend.
 pub trait Chart {
+    /// Draws the chart over the whole of `root`.
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB>;
 }
 
@@ -51,7 +52,9 @@ pub struct Figure {
     pub png: String,
     /// SVG file name, relative to the folder.
     pub svg: String,
+    /// Title drawn on the picture and shown in the report.
     pub title: String,
+    /// What the picture shows (data, units), for the report.
     pub caption: String,
 }
 

@@ -37,6 +37,7 @@ impl Deviations {
         Deviations::parse(&crate::io::read_text(path)?, path, robot)
     }
 
+    /// Parses deviations text (mm, mrad) for `robot`; `path` is used in messages.
     pub fn parse(text: &str, path: &Path, robot: &Robot) -> Result<Self> {
         let table: toml::Table = crate::io::parse_toml(text, path)?;
         let mut flat = Vec::new();

@@ -121,21 +121,28 @@ pub fn actual_pose(
 pub struct Simulation<'a> {
     /// The true robot (nominal model plus deviations).
     pub truth: &'a Robot,
+    /// Non-geometric errors of the true robot (compliance, gears, backlash).
     pub nongeometric: &'a NonGeometric,
+    /// Joint ranges the configurations are drawn from (rad or mm).
     pub region: &'a Region,
+    /// Number of configurations (rows) to simulate.
     pub count: usize,
+    /// Seed of the configuration and noise streams.
     pub seed: u64,
     /// Noise on each position coordinate (mm).
     pub sigma_position_mm: f64,
     /// Noise on each rotation-vector component (rad).
     pub sigma_rotation_rad: f64,
+    /// What the virtual sensor reports.
     pub observe: Observe,
 }
 
 /// Measured rows and their noise-free truth (same configurations, same order).
 #[derive(Debug, Clone)]
 pub struct SimOutput {
+    /// The rows as the sensor reports them: true pose plus noise, with their sigmas.
     pub measured: MeasurementSet,
+    /// The noise-free poses of the true robot.
     pub truth: MeasurementSet,
 }
 
@@ -242,6 +249,8 @@ impl Simulation<'_> {
         (measured, truth)
     }
 
+    /// All rows of [`Simulation::run_each`] in memory, both sets naming `source` as their
+    /// file.
     pub fn run(&self, source: PathBuf) -> Result<SimOutput> {
         let mut measured = Vec::with_capacity(self.count);
         let mut truth = Vec::with_capacity(self.count);

@@ -46,10 +46,13 @@ pub const MAX_GRAVITY: f64 = 100.0;
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Compliance {
+    /// Payload mass at the tool origin (kg).
     pub payload_kg: f64,
+    /// Mass of each link (kg), placed midway between its joint origin and the next.
     pub link_masses_kg: Vec<f64>,
     /// Compliance of each joint, mrad per kN m.
     pub mrad_per_knm: Vec<f64>,
+    /// Gravity acceleration in the base frame (m/s^2); default [0, 0, -9.81].
     #[serde(default = "default_gravity")]
     pub gravity: [f64; 3],
 }
@@ -64,16 +67,21 @@ fn default_gravity() -> [f64; 3] {
 pub struct Gear {
     /// 1-based joint number.
     pub joint: usize,
+    /// Amplitude A1 of the once-per-revolution term (mrad).
     #[serde(default)]
     pub amplitude1_mrad: f64,
+    /// Phase phi1 of the once-per-revolution term (deg).
     #[serde(default)]
     pub phase1_deg: f64,
+    /// Amplitude A2 of the twice-per-revolution term (mrad).
     #[serde(default)]
     pub amplitude2_mrad: f64,
+    /// Phase phi2 of the twice-per-revolution term (deg).
     #[serde(default)]
     pub phase2_deg: f64,
 }
 
+/// Backlash: each joint is off by half its play, with the sign of its last motion.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Backlash {
@@ -85,9 +93,12 @@ pub struct Backlash {
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct NonGeometric {
+    /// Gravity compliance of the joints, if any.
     pub compliance: Option<Compliance>,
+    /// Transmission errors, at most one per joint.
     #[serde(default)]
     pub gear: Vec<Gear>,
+    /// Joint backlash, if any.
     pub backlash: Option<Backlash>,
 }
 
@@ -203,6 +214,7 @@ impl NonGeometric {
         Ok(())
     }
 
+    /// Whether there is no term at all (the true robot is then purely geometric).
     pub fn is_empty(&self) -> bool {
         self.compliance.is_none() && self.gear.is_empty() && self.backlash.is_none()
     }
@@ -272,17 +284,22 @@ pub fn gravity_torques(robot: &Robot, c: &Compliance, q: &[f64], ws: &mut Frames
 /// The table of a non-geometric file a [`Fault`] lies in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Table {
+    /// The `[compliance]` table.
     Compliance,
     /// The k-th `[[gear]]` table (0-based).
     Gear(usize),
+    /// The `[backlash]` table.
     Backlash,
 }
 
 /// What [`NonGeometric::check`] found wrong: the table, the key and why.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Fault {
+    /// The table the faulty value lies in.
     pub table: Table,
+    /// The key at fault, e.g. `mrad_per_knm`.
     pub key: &'static str,
+    /// Why the value is refused.
     pub message: String,
 }
 

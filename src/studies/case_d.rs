@@ -21,7 +21,7 @@ use crate::neural::predict::PredictWorkspace;
 use std::path::Path;
 
 /// One shipped data set of the protocol.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Robotset {
     /// `datasets/case_d`: Table 6.1 deviations, the focused region.
@@ -32,8 +32,10 @@ pub enum Robotset {
 }
 
 impl Robotset {
+    /// Both sets, Case D first.
     pub const ALL: [Robotset; 2] = [Robotset::CaseD, Robotset::NonGeometric];
 
+    /// The set's folder under `datasets/`.
     pub fn folder(self) -> &'static str {
         match self {
             Robotset::CaseD => "case_d",
@@ -41,6 +43,7 @@ impl Robotset {
         }
     }
 
+    /// A one-line title for reports.
     pub fn title(self) -> &'static str {
         match self {
             Robotset::CaseD => "Case D (Table 6.1 deviations, focused region)",
@@ -52,17 +55,23 @@ impl Robotset {
 }
 
 /// A model of the protocol.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Stage {
+    /// The nominal robot, uncalibrated.
     Nominal,
+    /// Joint offsets identified on the calibration poses.
     Offsets,
+    /// The joint-offset model with a compensator trained on the training poses.
     OffsetsNetwork,
+    /// The full identifiable parameter set identified on the calibration poses.
     Full,
+    /// The full geometric model with a compensator trained on the training poses.
     FullNetwork,
 }
 
 impl Stage {
+    /// Every stage, in the order of the result table.
     pub const ALL: [Stage; 5] = [
         Stage::Nominal,
         Stage::Offsets,
@@ -71,6 +80,7 @@ impl Stage {
         Stage::FullNetwork,
     ];
 
+    /// The stage's name in reports, e.g. "joint offsets + network".
     pub fn label(self) -> &'static str {
         match self {
             Stage::Nominal => "nominal model",
@@ -94,9 +104,11 @@ impl Stage {
 }
 
 /// One row of the result.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Row {
+    /// The data set.
     pub set: Robotset,
+    /// The model evaluated.
     pub stage: Stage,
     /// Test set against its noise-free truth.
     pub truth: ErrorStats,
@@ -112,9 +124,13 @@ pub struct Row {
 
 /// The shipped files of one set.
 pub struct SetData {
+    /// The 30 calibration poses (`calibration.csv`), for identification.
     pub calibration: MeasurementSet,
+    /// The 150 training poses (`training.csv`), for the compensators.
     pub training: MeasurementSet,
+    /// The unseen test poses as measured, with noise (`test.csv`).
     pub test: MeasurementSet,
+    /// The same test poses without noise (`test_truth.csv`).
     pub test_truth: MeasurementSet,
 }
 

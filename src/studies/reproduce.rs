@@ -25,15 +25,21 @@ use std::path::{Path, PathBuf};
 /// One case study's protocol.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Case {
+    /// Case A: position-only measurements, identification by position.
     A,
+    /// Case B simulated: full-pose measurements, identification by pose.
     BSim,
+    /// Case C: positions of consecutive configurations, identification by relative position.
     C,
+    /// Case D: full poses in the focused region, joint offsets only.
     D,
 }
 
 impl Case {
+    /// Every case, in thesis order.
     pub const ALL: [Case; 4] = [Case::A, Case::BSim, Case::C, Case::D];
 
+    /// The case's name in reports: `A`, `B-sim`, `C`, `D`.
     pub fn name(self) -> &'static str {
         match self {
             Case::A => "A",
@@ -76,19 +82,26 @@ impl Case {
 /// A calibration and validation set with the truth of the validation rows.
 #[derive(Debug, Clone)]
 pub struct CaseData {
+    /// The measured calibration rows, for identification.
     pub calibration: MeasurementSet,
+    /// The measured validation rows (Case D: the test rows), with noise.
     pub validation: MeasurementSet,
+    /// The same validation rows without noise.
     pub validation_truth: MeasurementSet,
 }
 
 /// The outcome of one protocol run.
 #[derive(Debug, Clone)]
 pub struct CaseRun {
+    /// The case run.
     pub case: Case,
+    /// The nominal model on the calibration rows.
     pub calibration_before: ErrorStats,
+    /// The identified model on the calibration rows.
     pub calibration_after: ErrorStats,
-    /// Against the noisy validation measurements.
+    /// The nominal model against the noisy validation measurements.
     pub validation_before: ErrorStats,
+    /// The identified model against the noisy validation measurements.
     pub validation_after: ErrorStats,
     /// Against the noise-free truth of the validation rows.
     pub validation_truth_after: ErrorStats,
@@ -277,5 +290,140 @@ pub fn thesis_figures(case: Case) -> &'static [(&'static str, f64, f64)] {
                 thesis::TABLE_6_6_OFFSETS.1,
             ),
         ],
+    }
+}
+
+fn pc(s: &ErrorStats) -> f64 {
+    s.position_per_coordinate_mean_mm.unwrap_or(f64::NAN)
+}
+fn pos(s: &ErrorStats) -> f64 {
+    s.position_mm.map_or(f64::NAN, |p| p.mean)
+}
+fn rms(s: &ErrorStats) -> f64 {
+    s.position_mm.map_or(f64::NAN, |p| p.rms)
+}
+fn rot(s: &ErrorStats) -> f64 {
+    s.orientation_deg.map_or(f64::NAN, |p| p.mean)
+}
+
+/// The figures of a shipped run that match the thesis's: (what, ours before vs measured,
+/// ours after vs measured, ours after vs truth; NaN where the thesis's protocol has none).
+pub fn figures(run: &CaseRun) -> Vec<(&'static str, f64, f64, f64)> {
+    let (cb, ca, vb, va, vt) = (
+        &run.calibration_before,
+        &run.calibration_after,
+        &run.validation_before,
+        &run.validation_after,
+        &run.validation_truth_after,
+    );
+    let na = f64::NAN;
+    match run.case {
+        Case::A => vec![
+            (
+                "calibration position, mean per coordinate mm",
+                pc(cb),
+                pc(ca),
+                na,
+            ),
+            (
+                "validation position, mean per coordinate mm",
+                pc(vb),
+                pc(va),
+                pc(vt),
+            ),
+            (
+                "validation position, mean Euclidean mm",
+                pos(vb),
+                pos(va),
+                pos(vt),
+            ),
+        ],
+        Case::BSim => vec![
+            (
+                "calibration position, mean per coordinate mm",
+                pc(cb),
+                pc(ca),
+                na,
+            ),
+            (
+                "calibration orientation, mean angle deg",
+                rot(cb),
+                rot(ca),
+                na,
+            ),
+            (
+                "validation position, mean Euclidean mm",
+                pos(vb),
+                pos(va),
+                pos(vt),
+            ),
+            (
+                "validation orientation, mean angle deg",
+                rot(vb),
+                rot(va),
+                rot(vt),
+            ),
+        ],
+        Case::C => vec![(
+            "validation RMS distance error mm",
+            rms(vb),
+            rms(va),
+            rms(vt),
+        )],
+        Case::D => vec![
+            (
+                "test position, mean per coordinate mm",
+                pc(vb),
+                pc(va),
+                pc(vt),
+            ),
+            (
+                "test position, mean Euclidean mm",
+                pos(vb),
+                pos(va),
+                pos(vt),
+            ),
+            (
+                "test orientation, mean angle deg",
+                rot(vb),
+                rot(va),
+                rot(vt),
+            ),
+        ],
+    }
+}
+
+/// The figures the repeated protocol reports for `case` over its runs: (what, one value per
+/// run). Case D is not repeated (its shipped run is the thesis's comparison).
+pub fn seed_figures(case: Case, runs: &[CaseRun]) -> Vec<(&'static str, Vec<f64>)> {
+    let of = |f: &dyn Fn(&CaseRun) -> f64| runs.iter().map(f).collect::<Vec<f64>>();
+    match case {
+        Case::A => vec![(
+            "validation mean per-coordinate error vs truth mm",
+            of(&|r| pc(&r.validation_truth_after)),
+        )],
+        Case::BSim => vec![
+            (
+                "variance factor (1 = noise floor)",
+                of(&|r| r.variance_factor),
+            ),
+            (
+                "validation mean position error vs truth mm",
+                of(&|r| pos(&r.validation_truth_after)),
+            ),
+            (
+                "validation mean position error vs measured mm",
+                of(&|r| pos(&r.validation_after)),
+            ),
+            (
+                "noise floor: truth vs measured mm",
+                of(&|r| pos(&r.validation_noise_floor)),
+            ),
+        ],
+        Case::C => vec![(
+            "validation RMS distance error vs truth mm",
+            of(&|r| rms(&r.validation_truth_after)),
+        )],
+        Case::D => Vec::new(),
     }
 }

@@ -1,0 +1,43 @@
+//! The report of `compensate`.
+
+use serde::{Deserialize, Serialize};
+
+/// A target without a command.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TargetFailure {
+    /// Its line in the target file.
+    pub line: usize,
+    /// The status column's code (`unreachable`, `not-converged`, ...).
+    pub status: String,
+    /// Why, in words.
+    pub message: String,
+}
+
+/// What `compensate` did.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CompensateReport {
+    /// The controller's nominal robot file.
+    pub nominal: String,
+    /// The calibrated robot file.
+    pub robot: String,
+    /// The compensator file, if one was inverted.
+    pub compensator: Option<String>,
+    /// The target file.
+    pub targets: String,
+    /// The commands file written (none: standard output).
+    pub output: Option<String>,
+    /// Target rows.
+    pub total: usize,
+    /// Targets with a command.
+    pub solved: usize,
+    /// Mean distance between commanded and desired tool positions (mm), over the solved.
+    pub shift_mean_mm: Option<f64>,
+    /// Largest such distance (mm).
+    pub shift_max_mm: Option<f64>,
+    /// Targets without a command, and why.
+    pub failures: Vec<TargetFailure>,
+    /// Lines of the solved targets outside the compensator's training domain.
+    pub lines_outside_domain: Vec<usize>,
+    /// A note on the model the compensator runs with, if it is not the robot file's.
+    pub note: Option<String>,
+}

@@ -1,0 +1,411 @@
+//! `robocal report`: one self-contained HTML page from a run folder, for a person to read.
+//!
+//! The folder holds the typed JSON reports ([`Report`]: `--report` of identify, train,
+//! evaluate, compensate, case-d and reproduce) and pictures (`--plot`, listed in
+//! `figures.json`). Each report's accuracy rows ([`Report::accuracy`]) make its accuracy
+//! table; its other fields follow in the order the type declares them: lists of records
+//! (parameters, correlations, ...) as tables, other values in a key-value table, absent
+//! values as "none", infinite ones as "inf", numbers to 5 significant digits. Pictures are
+//! embedded as base64 PNG, so the page needs no other file and no network. A JSON file that
+//! is not a robocal report is an error naming it.
+
+use super::{Accuracy, Node, Report};
+use crate::error::{Error, Result};
+use crate::plot::{Figure, read_manifest};
+use base64::Engine;
+use std::fmt::Write;
+use std::path::Path;
+
+/// Escapes text for HTML.
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// A number to 5 significant digits; integers as integers; |x| < 1e-12 (float noise in mm,
+/// rad or a coefficient) as 0.
+fn number(x: f64) -> String {
+    if x.abs() < 1e-12 {
+        "0".into()
+    } else if x.fract() == 0.0 && x.abs() < 1e15 {
+        format!("{x:.0}")
+    } else if x.abs() >= 1e-3 && x.abs() < 1e6 {
+        let digits = (4 - x.abs().log10().floor() as i32).clamp(0, 8) as usize;
+        format!("{x:.digits$}")
+    } else {
+        format!("{x:.4e}")
+    }
+}
+
+/// A cell: "none" for an absent value, numbers to 5 significant digits, lists joined (lists
+/// of records: each record's values joined, records separated by semicolons).
+fn cell(v: &Node) -> String {
+    match v {
+        Node::Null => "none".into(),
+        Node::Number(x) => number(*x),
+        Node::Text(s) => esc(s),
+        Node::Bool(b) => if *b { "yes" } else { "no" }.into(),
+        Node::List(a) if a.is_empty() => "none".into(),
+        Node::List(a) => {
+            let items: Vec<String> = a
+                .iter()
+                .map(|x| match x {
+                    Node::Record(r) => r.iter().map(|(_, v)| cell(v)).collect::<Vec<_>>().join(" "),
+                    other => cell(other),
+                })
+                .collect();
+            let sep = if a.iter().any(|x| matches!(x, Node::Record(_))) {
+                "; "
+            } else {
+                ", "
+            };
+            if items.len() > 12 {
+                format!("{} ... ({} values)", items[..12].join(sep), items.len())
+            } else {
+                items.join(sep)
+            }
+        }
+        Node::Record(r) => r
+            .iter()
+            .map(|(k, v)| format!("{} {}", esc(k), cell(v)))
+            .collect::<Vec<_>>()
+            .join(", "),
+    }
+}
+
+fn stats_table(rows: &[Accuracy], html: &mut String) {
+    let outside = rows.iter().any(|r| r.rows_outside_domain.is_some());
+    html.push_str(
+        "<table class=\"stats\"><thead><tr><th>data</th><th>model</th><th>rows</th>\
+         <th>mean position (mm)</th><th>rms position (mm)</th><th>p95 position (mm)</th>\
+         <th>max position (mm)</th><th>mean per coordinate (mm)</th>\
+         <th>mean orientation (deg)</th><th>max orientation (deg)</th>",
+    );
+    if outside {
+        html.push_str("<th>rows outside the training domain</th>");
+    }
+    html.push_str("</tr></thead><tbody>");
+    let opt = |v: Option<f64>| v.map_or_else(|| "none".to_string(), number);
+    for r in rows {
+        let s = &r.stats;
+        let p = s.position_mm;
+        let o = s.orientation_deg;
+        let _ = write!(
+            html,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>\
+             <td>{}</td><td>{}</td><td>{}</td>",
+            esc(&r.data),
+            esc(&r.model),
+            s.count,
+            opt(p.map(|p| p.mean)),
+            opt(p.map(|p| p.rms)),
+            opt(p.map(|p| p.p95)),
+            opt(p.map(|p| p.max)),
+            opt(s.position_per_coordinate_mean_mm),
+            opt(o.map(|o| o.mean)),
+            opt(o.map(|o| o.max)),
+        );
+        if outside {
+            let _ = write!(
+                html,
+                "<td>{}</td>",
+                opt(r.rows_outside_domain.map(|n| n as f64))
+            );
+        }
+        html.push_str("</tr>");
+    }
+    html.push_str("</tbody></table>\n");
+}
+
+/// Records nested deeper than this many leaves get their own section instead of columns.
+const WIDE: usize = 12;
+
+/// The scalar leaves of a record as (dotted name, value), in order: nested small records are
+/// flattened, wide ones and lists of records are left out.
+fn leaves<'a>(v: &'a Node, prefix: &str, out: &mut Vec<(String, &'a Node)>) {
+    if let Node::Record(m) = v {
+        for (k, x) in m {
+            let name = if prefix.is_empty() {
+                k.clone()
+            } else {
+                format!("{prefix}.{k}")
+            };
+            match x {
+                Node::Record(_) if count_leaves(x) > WIDE => {}
+                Node::Record(_) => leaves(x, &name, out),
+                Node::List(_) if is_records(x) && !is_small_records(x) => {}
+                Node::List(a) if a.len() > LONG => {}
+                _ => out.push((name, x)),
+            }
+        }
+    }
+}
+
+fn count_leaves(v: &Node) -> usize {
+    match v {
+        Node::Record(m) => m.iter().map(|(_, x)| count_leaves(x)).sum(),
+        _ => 1,
+    }
+}
+
+/// Long numeric series (training curves) are summarised rather than tabulated.
+const LONG: usize = 40;
+
+fn is_records(v: &Node) -> bool {
+    matches!(v, Node::List(a) if a.iter().any(|x| matches!(x, Node::Record(_))))
+}
+
+/// A short list of small records (a regrouping's terms): shown in one cell.
+fn is_small_records(v: &Node) -> bool {
+    matches!(v, Node::List(a) if a.len() <= 12
+        && a.iter().all(|x| matches!(x, Node::Record(r) if r.len() <= 4
+            && r.iter().all(|(_, f)| !matches!(f, Node::Record(_) | Node::List(_))))))
+}
+
+fn section(title: &str, m: &[(String, Node)], depth: usize, html: &mut String) {
+    let h = (depth + 2).min(6);
+    let _ = writeln!(html, "<h{h}>{}</h{h}>", esc(title));
+    let scalars: Vec<&(String, Node)> = m
+        .iter()
+        .filter(|(_, v)| match v {
+            Node::List(a) => {
+                a.len() <= LONG && !is_records(v) && !a.iter().any(|x| matches!(x, Node::List(_)))
+            }
+            Node::Record(_) => false,
+            _ => true,
+        })
+        .collect();
+    if !scalars.is_empty() {
+        html.push_str("<table class=\"kv\"><tbody>");
+        for (k, v) in scalars {
+            let _ = write!(html, "<tr><th>{}</th><td>{}</td></tr>", esc(k), cell(v));
+        }
+        html.push_str("</tbody></table>\n");
+    }
+    for (k, v) in m {
+        match v {
+            Node::List(a) if is_records(v) => {
+                let mut cols: Vec<String> = Vec::new();
+                for r in a {
+                    let mut l = Vec::new();
+                    leaves(r, "", &mut l);
+                    for (n, _) in l {
+                        if !cols.contains(&n) {
+                            cols.push(n);
+                        }
+                    }
+                }
+                let h2 = (h + 1).min(6);
+                let _ = write!(html, "<h{h2}>{}</h{h2}>", esc(k));
+                if !cols.is_empty() {
+                    html.push_str("<table class=\"records\"><thead><tr>");
+                    for c in &cols {
+                        let _ = write!(html, "<th>{}</th>", esc(c));
+                    }
+                    html.push_str("</tr></thead><tbody>");
+                    for r in a {
+                        let mut l = Vec::new();
+                        leaves(r, "", &mut l);
+                        html.push_str("<tr>");
+                        for c in &cols {
+                            let v = l
+                                .iter()
+                                .find(|(n, _)| n == c)
+                                .map_or(&Node::Null, |(_, v)| v);
+                            let _ = write!(html, "<td>{}</td>", cell(v));
+                        }
+                        html.push_str("</tr>");
+                    }
+                    html.push_str("</tbody></table>\n");
+                }
+                // What did not fit in columns: wide records and lists of records, per row.
+                for (i, r) in a.iter().enumerate() {
+                    let Node::Record(fields) = r else { continue };
+                    let name = fields
+                        .iter()
+                        .find_map(|(_, v)| match v {
+                            Node::Text(t) => Some(t.clone()),
+                            _ => None,
+                        })
+                        .unwrap_or_else(|| format!("{}", i + 1));
+                    for (fk, fv) in fields {
+                        let wide = matches!(fv, Node::Record(_)) && count_leaves(fv) > WIDE;
+                        if wide || (is_records(fv) && !is_small_records(fv)) {
+                            let sub = [(fk.clone(), fv.clone())];
+                            let title = format!("{k} {name}");
+                            section(&title, &sub, depth + 1, html);
+                        }
+                    }
+                }
+            }
+            Node::List(a) if a.len() > LONG || a.iter().any(|x| matches!(x, Node::List(_))) => {
+                let _ = writeln!(
+                    html,
+                    "<p class=\"note\">{}: {} entries (see the figures)</p>",
+                    esc(k),
+                    a.len()
+                );
+            }
+            Node::Record(sub) => section(k, sub, depth + 1, html),
+            _ => {}
+        }
+    }
+}
+
+/// The largest page `report` writes (bytes).
+pub const MAX_PAGE_BYTES: u64 = 256 << 20;
+
+/// The largest picture or report a page embeds (bytes).
+pub const MAX_EMBED_BYTES: u64 = 32 << 20;
+
+/// `name` from a run folder's figure list as a path inside `dir`: a name that leads out of
+/// the folder (`/etc/hostname`, `../x.png`, a link to elsewhere) is refused.
+fn inside(dir: &Path, name: &str) -> Result<std::path::PathBuf> {
+    let path = dir.join(name);
+    let outside = || {
+        Error::Invalid(format!(
+            "{}: `{name}` lies outside the run folder; only pictures inside it are embedded",
+            crate::plot::manifest_path(dir).display()
+        ))
+    };
+    let root = dir.canonicalize().map_err(|e| Error::io(dir, e))?;
+    let real = path.canonicalize().map_err(|e| Error::io(&path, e))?;
+    if !real.starts_with(&root) {
+        return Err(outside());
+    }
+    Ok(path)
+}
+
+fn figure(dir: &Path, f: &Figure, html: &mut String) -> Result<()> {
+    let path = inside(dir, &f.png)?;
+    let bytes = crate::io::read_capped(&path, MAX_EMBED_BYTES)?;
+    let b64 = base64::engine::general_purpose::STANDARD.encode(bytes);
+    let _ = writeln!(
+        html,
+        "<figure><img src=\"data:image/png;base64,{b64}\" alt=\"{}\"><figcaption><b>{}.</b> {} \
+         <span class=\"file\">({}, {})</span></figcaption></figure>",
+        esc(&f.title),
+        esc(&f.title),
+        esc(&f.caption),
+        esc(&f.png),
+        esc(&f.svg)
+    );
+    Ok(())
+}
+
+const STYLE: &str = "body{font-family:system-ui,'DejaVu Sans',sans-serif;max-width:1180px;\
+margin:2em auto;padding:0 1em;color:#222}h1{font-size:1.7em}h2{border-bottom:2px solid #ccc;\
+padding-bottom:.2em;margin-top:2em}table{border-collapse:collapse;margin:.6em 0 1.2em;\
+font-size:.9em}th,td{border:1px solid #ccc;padding:.25em .6em;text-align:left;\
+vertical-align:top}table.records{display:block;overflow-x:auto}td{font-variant-numeric:tabular-nums}table.stats td:not(:first-child)\
+{text-align:right}thead th{background:#f0f3f7}table.kv th{background:#f7f7f7;font-weight:600}\
+figure{margin:1.5em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption{font-size:.9em;\
+color:#444;margin-top:.3em}.file,.note{color:#777;font-size:.85em}";
+
+/// The page for run folder `dir`: every `*.json` report (but `figures.json`) and every
+/// listed picture. An empty folder is an error.
+pub fn render(dir: &Path) -> Result<String> {
+    let mut reports: Vec<_> = std::fs::read_dir(dir)
+        .map_err(|e| Error::io(dir, e))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension().is_some_and(|e| e == "json")
+                && p.file_name().is_some_and(|n| n != "figures.json")
+        })
+        .collect();
+    reports.sort();
+    let figures = read_manifest(dir)?;
+    if reports.is_empty() && figures.is_empty() {
+        return Err(Error::Invalid(format!(
+            "{}: no reports (*.json) and no pictures (figures.json)",
+            dir.display()
+        )));
+    }
+    let mut html = String::new();
+    let _ = write!(
+        html,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>robocal report: \
+         {0}</title><style>{STYLE}</style></head><body>\n<h1>robocal report: {0}</h1>\n<p>{1} \
+         report(s) and {2} figure(s) from <code>{0}</code>, made by robocal {3}. Lengths in mm, \
+         angles in degrees.</p>\n",
+        esc(&dir.display().to_string()),
+        reports.len(),
+        figures.len(),
+        env!("CARGO_PKG_VERSION")
+    );
+    for path in &reports {
+        let bytes = crate::io::read_capped(path, MAX_EMBED_BYTES)?;
+        let text = String::from_utf8(bytes)
+            .map_err(|_| Error::Invalid(format!("{}: not UTF-8 text", path.display())))?;
+        let report = Report::from_json(&text, path)?;
+        let name = path
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        let _ = writeln!(
+            html,
+            "<h2>Report {} (<code>{}</code>)</h2>",
+            esc(&name),
+            report.kind()
+        );
+        let accuracy = report.accuracy();
+        if !accuracy.is_empty() {
+            html.push_str("<h3>Accuracy</h3>\n");
+            stats_table(&accuracy, &mut html);
+        }
+        if let Node::Record(fields) = report.to_node()? {
+            let details: Vec<(String, Node)> = fields
+                .into_iter()
+                .filter(|(k, _)| k != "kind" && k != "accuracy")
+                .collect();
+            section("Details", &details, 1, &mut html);
+        }
+    }
+    if !figures.is_empty() {
+        html.push_str("<h2>Figures</h2>\n");
+        for f in &figures {
+            figure(dir, f, &mut html)?;
+            if html.len() as u64 > MAX_PAGE_BYTES {
+                return Err(Error::Invalid(format!(
+                    "{}: the page would pass {} MB ({} pictures listed); list fewer",
+                    crate::plot::manifest_path(dir).display(),
+                    MAX_PAGE_BYTES >> 20,
+                    figures.len()
+                )));
+            }
+        }
+    }
+    html.push_str("</body></html>\n");
+    Ok(html)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_spell_out_none_and_round_numbers() {
+        assert_eq!(cell(&Node::Null), "none");
+        assert_eq!(cell(&Node::List(Vec::new())), "none");
+        assert_eq!(cell(&Node::Text("inf".into())), "inf");
+        assert_eq!(number(-2.5105e-14), "0");
+        assert_eq!(number(30.0), "30");
+        assert_eq!(number(0.45381234), "0.45381");
+        assert_eq!(number(12.7709), "12.771");
+        assert_eq!(number(-2.3592e-4), "-2.3592e-4");
+        assert_eq!(number(1.23456789e7), "1.2346e7");
+        assert_eq!(number(1.23e7), "12300000");
+        let terms = Node::List(vec![
+            Node::Record(vec![
+                ("name".into(), Node::Text("base.rz".into())),
+                ("coefficient".into(), Node::Number(1.0)),
+            ]),
+            Node::Record(vec![
+                ("name".into(), Node::Text("base.ry".into())),
+                ("coefficient".into(), Node::Number(0.0010751)),
+            ]),
+        ]);
+        assert_eq!(cell(&terms), "base.rz 1; base.ry 0.0010751");
+    }
+}

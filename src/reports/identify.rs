@@ -1,0 +1,222 @@
+//! The reports of `identify` and `evaluate`.
+
+use super::{Accuracy, number};
+use crate::identify::identifiability::DropReason;
+use crate::identify::run::{Outlier, ParamReport};
+use crate::identify::{Identified, Measure, Method, Options, RobustLoss, StopReason};
+use serde::{Deserialize, Serialize};
+
+/// A candidate parameter left out of the identifiable set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DroppedParam {
+    /// Its name (`a3`, `tool.rz`, ...).
+    pub name: String,
+    /// `no effect` (its Jacobian column is zero) or `regroups` (a combination of others).
+    pub reason: String,
+    /// The kept parameters it moves with, for `regroups`.
+    pub regroups_with: Vec<Regroup>,
+}
+
+/// One term of a regrouping: the dropped parameter's column equals the sum of coefficient
+/// times these columns (column-scaled).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Regroup {
+    /// The kept parameter.
+    pub name: String,
+    /// Its coefficient (no unit: columns are scaled).
+    pub coefficient: f64,
+}
+
+/// Two identified parameters whose estimates are strongly correlated (|r| > 0.9).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Correlation {
+    /// The first parameter.
+    pub a: String,
+    /// The second parameter.
+    pub b: String,
+    /// Their correlation coefficient (-1 to 1).
+    pub correlation: f64,
+}
+
+/// What `identify` did and found.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct IdentifyReport {
+    /// The nominal robot file.
+    pub robot: String,
+    /// The calibration measurements.
+    pub data: String,
+    /// Their rows.
+    pub rows: usize,
+    /// The validation measurements, if given.
+    pub validation_data: Option<String>,
+    /// How measurements were compared with the model.
+    pub measure: Measure,
+    /// The solver.
+    pub method: Method,
+    /// The parameter selection asked for.
+    pub params: String,
+    /// Errors before (nominal) and after (identified), calibration and validation.
+    pub accuracy: Vec<Accuracy>,
+    /// RMS of the registration of the tracker's frame (mm), when it was registered.
+    pub registration_rms_mm: Option<f64>,
+    /// Whether the registration also fitted the tool.
+    pub registration_tool: bool,
+    /// Candidate parameters.
+    pub candidates: usize,
+    /// Rank of the candidates' scaled Jacobian (SVD).
+    pub rank: usize,
+    /// Its rank from QR with column pivoting.
+    pub rank_pivoted_qr: usize,
+    /// Condition number of all candidates' scaled Jacobian (`inf` when rank-deficient).
+    #[serde(with = "number")]
+    pub condition_number_all_candidates: f64,
+    /// Parameters identified (the identifiable set).
+    pub identifiable: usize,
+    /// Condition number of the identifiable set's scaled Jacobian.
+    #[serde(with = "number")]
+    pub condition_number: f64,
+    /// Candidates left out, and why.
+    pub dropped: Vec<DroppedParam>,
+    /// Solver iterations.
+    pub iterations: usize,
+    /// Why the solver stopped.
+    pub stop_reason: StopReason,
+    /// The same, in words.
+    pub stop: String,
+    /// A-posteriori variance factor s^2 (1 when the residuals are the stated noise).
+    #[serde(with = "number")]
+    pub variance_factor: f64,
+    /// Every identified parameter: nominal, estimate, standard deviation (file units).
+    pub parameters: Vec<ParamReport>,
+    /// Strongly correlated pairs (|r| > 0.9).
+    pub correlations: Vec<Correlation>,
+    /// The outlier cut (robust sigmas; `inf`: none are listed).
+    #[serde(with = "number")]
+    pub outlier_k: f64,
+    /// Rows beyond the cut.
+    pub outliers: Vec<Outlier>,
+    /// The robust loss, if one was used.
+    pub robust: Option<RobustLoss>,
+    /// Reweighting rounds of the robust loss.
+    pub robust_rounds: usize,
+    /// Singular values of the candidates' scaled Jacobian, largest first.
+    pub singular_values: Vec<f64>,
+    /// Notes (frames completed, parameters converted, ...).
+    pub notes: Vec<String>,
+    /// Warnings (ill-conditioning, outliers, ...).
+    pub warnings: Vec<String>,
+    /// The robot file written.
+    pub output: String,
+}
+
+/// The files an identification read and wrote, as the user named them.
+#[derive(Debug, Clone, Default)]
+pub struct IdentifyFiles {
+    /// The nominal robot file.
+    pub robot: String,
+    /// The calibration measurements.
+    pub data: String,
+    /// The validation measurements.
+    pub validation: Option<String>,
+    /// The robot file written.
+    pub output: String,
+}
+
+impl IdentifyReport {
+    /// The report of `id`, found with `opts` on `rows` rows; `accuracy` the before/after
+    /// table.
+    pub fn new(
+        id: &Identified,
+        opts: &Options,
+        files: IdentifyFiles,
+        rows: usize,
+        accuracy: Vec<Accuracy>,
+    ) -> IdentifyReport {
+        let params = id.robot.parameters();
+        let ident = &id.identifiability;
+        let dropped = ident
+            .dropped
+            .iter()
+            .map(|d| match &d.reason {
+                DropReason::NoEffect => DroppedParam {
+                    name: params[d.param].name(),
+                    reason: "no effect".into(),
+                    regroups_with: Vec::new(),
+                },
+                DropReason::Regroups(g) => DroppedParam {
+                    name: params[d.param].name(),
+                    reason: "regroups".into(),
+                    regroups_with: g
+                        .iter()
+                        .map(|(p, c)| Regroup {
+                            name: params[*p].name(),
+                            coefficient: *c,
+                        })
+                        .collect(),
+                },
+            })
+            .collect();
+        IdentifyReport {
+            robot: files.robot,
+            data: files.data,
+            rows,
+            validation_data: files.validation,
+            measure: id.measure,
+            method: opts.solve.method,
+            params: opts.params.clone(),
+            accuracy,
+            registration_rms_mm: id.registration.as_ref().map(|r| r.rms_mm),
+            registration_tool: id.registration.as_ref().is_some_and(|r| r.tool.is_some()),
+            candidates: ident.candidates.len(),
+            rank: ident.rank,
+            rank_pivoted_qr: ident.rank_pivoted_qr,
+            condition_number_all_candidates: ident.condition_number,
+            identifiable: ident.selected.len(),
+            condition_number: ident.selected_condition_number,
+            dropped,
+            iterations: id.solution.iterations,
+            stop_reason: id.solution.stop,
+            stop: id.solution.stop.describe().into(),
+            variance_factor: id.variance_factor,
+            parameters: id.parameters.clone(),
+            correlations: id
+                .correlations
+                .iter()
+                .map(|(a, b, r)| Correlation {
+                    a: a.clone(),
+                    b: b.clone(),
+                    correlation: *r,
+                })
+                .collect(),
+            outlier_k: opts.outlier_k,
+            outliers: id.outliers.clone(),
+            robust: opts.robust,
+            robust_rounds: id.robust_rounds,
+            singular_values: ident.singular_values.clone(),
+            notes: id.notes.clone(),
+            warnings: id.warnings.clone(),
+            output: files.output,
+        }
+    }
+}
+
+/// What `evaluate` measured.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct EvaluateReport {
+    /// The robot file.
+    pub robot: String,
+    /// The compensator file, if one was evaluated.
+    pub compensator: Option<String>,
+    /// The measurements.
+    pub data: String,
+    /// Their rows.
+    pub rows: usize,
+    /// How measurements were compared with the model.
+    pub measure: Measure,
+    /// The model's errors, and with the compensator (`+net`).
+    pub accuracy: Vec<Accuracy>,
+    /// Lines of the rows outside the compensator's training domain.
+    pub lines_outside_domain: Vec<usize>,
+    /// A note on the model the compensator runs with, if it is not the robot file's.
+    pub note: Option<String>,
+}

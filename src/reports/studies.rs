@@ -1,0 +1,235 @@
+//! The reports of `case-d` and `reproduce`.
+
+use super::{Accuracy, number};
+use crate::evaluate::ErrorStats;
+use crate::neural::fit::CompensatorReport;
+use crate::studies::case_d::{Robotset, Row, Stage, find};
+use crate::studies::reproduce::{
+    Case, CaseData, CaseRun, figures, median_range, seed_figures, thesis_figures,
+};
+use serde::{Deserialize, Serialize};
+
+/// One model of the Case D protocol on one set.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CaseDRow {
+    /// The model.
+    pub stage: Stage,
+    /// The model in words.
+    pub label: String,
+    /// Thesis Table 6.6: mean position error (mm), where the thesis has one.
+    pub thesis_mm: Option<f64>,
+    /// Thesis Table 6.6: mean orientation error (deg).
+    pub thesis_deg: Option<f64>,
+    /// Test poses against their noise-free truth (mm, deg).
+    pub truth: ErrorStats,
+    /// Test poses against the noisy measurements (mm, deg).
+    pub measured: ErrorStats,
+    /// The compensator's settings, for the network rows.
+    pub settings: Option<String>,
+    /// The compensator's training, for the network rows.
+    pub training: Option<CompensatorReport>,
+}
+
+/// One data set of the Case D protocol.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CaseDSet {
+    /// The set.
+    pub set: Robotset,
+    /// The set in words.
+    pub title: String,
+    /// Its unseen test poses.
+    pub test_rows: usize,
+    /// Every model, nominal to full geometric + network.
+    pub rows: Vec<CaseDRow>,
+    /// Mean position error vs truth, offsets over offsets + network (times).
+    pub gain_after_offsets: Option<f64>,
+    /// The same after full identification (times).
+    pub gain_after_full: Option<f64>,
+}
+
+/// What `case-d` found.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CaseDReport {
+    /// The training seed.
+    pub seed: u64,
+    /// Case D, then the non-geometric robot.
+    pub sets: Vec<CaseDSet>,
+}
+
+fn mean_mm(s: &ErrorStats) -> f64 {
+    s.position_mm.map_or(f64::NAN, |p| p.mean)
+}
+
+impl CaseDReport {
+    /// The report of the protocol's `rows` (from `studies::case_d::run`).
+    pub fn new(seed: u64, rows: &[Row]) -> CaseDReport {
+        let sets = Robotset::ALL
+            .iter()
+            .map(|&set| {
+                let gain = |a: Stage, b: Stage| -> Option<f64> {
+                    Some(mean_mm(&find(rows, set, a)?.truth) / mean_mm(&find(rows, set, b)?.truth))
+                };
+                let mine: Vec<&Row> = rows.iter().filter(|r| r.set == set).collect();
+                CaseDSet {
+                    set,
+                    title: set.title().into(),
+                    test_rows: mine.first().map_or(0, |r| r.truth.count),
+                    rows: mine
+                        .iter()
+                        .map(|r| CaseDRow {
+                            stage: r.stage,
+                            label: r.stage.label().into(),
+                            thesis_mm: r.stage.thesis(set).map(|t| t.0),
+                            thesis_deg: r.stage.thesis(set).map(|t| t.1),
+                            truth: r.truth,
+                            measured: r.measured,
+                            settings: r.training.as_ref().map(|t| t.settings.describe()),
+                            training: r.training.clone(),
+                        })
+                        .collect(),
+                    gain_after_offsets: gain(Stage::Offsets, Stage::OffsetsNetwork),
+                    gain_after_full: gain(Stage::Full, Stage::FullNetwork),
+                }
+            })
+            .collect();
+        CaseDReport { seed, sets }
+    }
+
+    /// Every model's errors against the truth, then against the measurements, per set.
+    pub fn accuracy(&self) -> Vec<Accuracy> {
+        let mut out = Vec::new();
+        for s in &self.sets {
+            for (what, pick) in [("test vs truth", true), ("test vs measured", false)] {
+                for r in &s.rows {
+                    out.push(Accuracy::new(
+                        &format!("{}: {what}", s.set.folder()),
+                        &r.label,
+                        if pick { r.truth } else { r.measured },
+                    ));
+                }
+            }
+        }
+        out
+    }
+}
+
+/// One of the thesis's published figures.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ThesisFigure {
+    /// What it measures.
+    pub figure: String,
+    /// Before identification.
+    pub before: f64,
+    /// After identification.
+    pub after: f64,
+}
+
+/// One of our figures beside the thesis's.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReproduceFigure {
+    /// What it measures (unit in the text).
+    pub figure: String,
+    /// The nominal model against the measurements.
+    #[serde(with = "number")]
+    pub before: f64,
+    /// The identified model against the measurements.
+    #[serde(with = "number")]
+    pub after: f64,
+    /// The identified model against the noise-free truth, where the protocol has one.
+    pub after_vs_truth: Option<f64>,
+}
+
+/// One case study on its shipped set.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ReproduceCase {
+    /// `A`, `B-sim`, `C` or `D`.
+    pub case: String,
+    /// Calibration rows.
+    pub calibration_rows: usize,
+    /// Validation (Case D: test) rows.
+    pub validation_rows: usize,
+    /// The fit's a-posteriori variance factor.
+    #[serde(with = "number")]
+    pub variance_factor: f64,
+    /// The thesis's figures.
+    pub thesis: Vec<ThesisFigure>,
+    /// Ours.
+    pub figures: Vec<ReproduceFigure>,
+}
+
+impl ReproduceCase {
+    /// The report of `run` on the shipped `data`.
+    pub fn new(data: &CaseData, run: &CaseRun) -> ReproduceCase {
+        ReproduceCase {
+            case: run.case.name().into(),
+            calibration_rows: data.calibration.rows.len(),
+            validation_rows: data.validation.rows.len(),
+            variance_factor: run.variance_factor,
+            thesis: thesis_figures(run.case)
+                .iter()
+                .map(|(f, b, a)| ThesisFigure {
+                    figure: (*f).into(),
+                    before: *b,
+                    after: *a,
+                })
+                .collect(),
+            figures: figures(run)
+                .into_iter()
+                .map(|(f, b, a, t)| ReproduceFigure {
+                    figure: f.into(),
+                    before: b,
+                    after: a,
+                    after_vs_truth: (!t.is_nan()).then_some(t),
+                })
+                .collect(),
+        }
+    }
+}
+
+/// A figure of a protocol repeated over seeds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SeedFigure {
+    /// The case.
+    pub case: String,
+    /// What it measures (unit in the text).
+    pub figure: String,
+    /// Median over the seeds.
+    #[serde(with = "number")]
+    pub median: f64,
+    /// Smallest.
+    #[serde(with = "number")]
+    pub min: f64,
+    /// Largest.
+    #[serde(with = "number")]
+    pub max: f64,
+}
+
+impl SeedFigure {
+    /// The figures of `case` over `runs` (one run per seed).
+    pub fn of(case: Case, runs: &[CaseRun]) -> Vec<SeedFigure> {
+        seed_figures(case, runs)
+            .into_iter()
+            .map(|(f, v)| {
+                let (median, min, max) = median_range(&v);
+                SeedFigure {
+                    case: case.name().into(),
+                    figure: f.into(),
+                    median,
+                    min,
+                    max,
+                }
+            })
+            .collect()
+    }
+}
+
+/// What `reproduce` found.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ReproduceReport {
+    /// Each case on its shipped set.
+    pub cases: Vec<ReproduceCase>,
+    /// Seeds of the repeated protocols (1..=seeds).
+    pub seeds: u64,
+    /// The repeated protocols' figures.
+    pub over_seeds: Vec<SeedFigure>,
+}

@@ -1,0 +1,85 @@
+//! The report of `train`.
+
+use super::Accuracy;
+use crate::neural::compensator::Compensator;
+use crate::neural::fit::CompensatorReport;
+use serde::{Deserialize, Serialize};
+
+/// The RBF network of a compensator, as `train` shows it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RbfSummary {
+    /// Gaussian units (one per training row).
+    pub units: usize,
+    /// Width per input (standardised inputs).
+    pub widths: Vec<f64>,
+    /// The Gaussian process's noise variance (standardised outputs).
+    pub noise_variance: f64,
+    /// Its signal variance (standardised outputs).
+    pub signal_variance: f64,
+}
+
+/// What `train` did and found.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct TrainReport {
+    /// The model's robot file.
+    pub robot: String,
+    /// The training measurements.
+    pub data: String,
+    /// Their rows.
+    pub rows: usize,
+    /// The validation measurements, if given.
+    pub validation_data: Option<String>,
+    /// The compensator file written.
+    pub compensator: String,
+    /// The settings used, in one line (`pose/gravity/64 penalty 0.333 x4 + rbf start 1`).
+    pub settings: String,
+    /// Input encoding of the networks.
+    pub encoding: String,
+    /// MLP shape: inputs, hidden units, outputs.
+    pub shape: [usize; 3],
+    /// The RBF network, if the compensator has one.
+    pub rbf: Option<RbfSummary>,
+    /// Wall time of the whole training (s).
+    pub seconds: f64,
+    /// The model's errors and the compensated ones (`+net`), training and validation rows.
+    pub accuracy: Vec<Accuracy>,
+    /// Cross-validation, refinement and every network's training.
+    pub training: CompensatorReport,
+}
+
+impl TrainReport {
+    /// The parts that come from the compensator `c` and its training `report`; files, rows,
+    /// time and accuracy are the caller's.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        c: &Compensator,
+        report: CompensatorReport,
+        robot: String,
+        data: String,
+        rows: usize,
+        validation_data: Option<String>,
+        compensator: String,
+        seconds: f64,
+        accuracy: Vec<Accuracy>,
+    ) -> TrainReport {
+        TrainReport {
+            robot,
+            data,
+            rows,
+            validation_data,
+            compensator,
+            settings: report.settings.describe(),
+            encoding: c.encoding.name().into(),
+            shape: [c.inputs(), c.hidden(), c.outputs()],
+            rbf: c.rbf.as_ref().map(|r| RbfSummary {
+                units: r.units(),
+                widths: r.widths.clone(),
+                noise_variance: r.noise_variance,
+                signal_variance: r.signal_variance,
+            }),
+            seconds,
+            accuracy,
+            training: report,
+        }
+    }
+}
