@@ -23,26 +23,22 @@
 //! on [`RACE_FOLDS`] folds first and dropped there when it is more than [`RACE_MARGIN`] worse
 //! than the best so far on the same folds. The chosen settings are then fitted in full.
 
-use super::compensator::Compensator;
+mod cv;
+mod rows;
+
 use super::encoding::Encoding;
 use super::parallel::parallel_map;
-use super::rbf::{self, Hyper};
-use super::refine::refine;
+use super::rbf::{self};
 use super::selection::Sums;
 pub use super::selection::{Candidate, Outlier, Score, Selection};
 pub use super::settings::OUTLIER_K;
 use super::settings::{CompensatorOptions, Form, Network, Refine, Settings};
-use super::targets::build;
-use super::train::TrainOptions;
-use super::weights::Weights;
 use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
-use crate::evaluate::row_errors;
-use crate::identify::Measure;
 use crate::model::Robot;
-use rand::SeedableRng;
-use rand::seq::SliceRandom;
-use rand_chacha::ChaCha8Rng;
+use cv::{Cv, searches};
+pub use rows::{folds, outliers_of, subset};
+use rows::{held_errors, sums};
 use std::collections::HashMap;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -95,289 +91,6 @@ pub const RBF_MAX_ROWS: usize = 3000;
 pub const ENSEMBLE: usize = 4;
 /// The parameters refined when refinement is left to cross-validation.
 pub const AUTO_REFINE: &str = "full";
-
-/// Fold of each row: whole configurations, shuffled by `seed`, dealt round-robin.
-pub fn folds(set: &MeasurementSet, k: usize, seed: u64) -> Vec<usize> {
-    let groups = super::targets::configuration_groups(set);
-    let mut ids: Vec<usize> = groups.clone();
-    ids.sort_unstable();
-    ids.dedup();
-    ids.shuffle(&mut ChaCha8Rng::seed_from_u64(seed ^ 0xf01d));
-    let mut fold_of_group = vec![0; ids.len()];
-    for (i, g) in ids.iter().enumerate() {
-        fold_of_group[*g] = i % k;
-    }
-    groups.iter().map(|g| fold_of_group[*g]).collect()
-}
-
-pub(crate) fn subset(set: &MeasurementSet, keep: impl Fn(usize) -> bool) -> MeasurementSet {
-    MeasurementSet {
-        source: set.source.clone(),
-        rows: set
-            .rows
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| keep(*i))
-            .map(|(_, m)| m.clone())
-            .collect(),
-        extra_columns: set.extra_columns.clone(),
-    }
-}
-
-/// Each held-out row's errors under `predict`: pose where the set has orientations, else
-/// position.
-fn held_errors(
-    set: &MeasurementSet,
-    predict: impl FnMut(&[f64]) -> crate::Pose,
-) -> Result<Vec<crate::evaluate::RowError>> {
-    let measure = if set.has_rotation() {
-        Measure::Pose
-    } else {
-        Measure::Position
-    };
-    row_errors(set, measure, predict)
-}
-
-fn sums(set: &MeasurementSet, predict: impl FnMut(&[f64]) -> crate::Pose) -> Result<Sums> {
-    let rows = held_errors(set, predict)?;
-    let mut s = Sums::default();
-    for r in rows {
-        s.pos += r.position_mm.unwrap_or(0.0).powi(2);
-        if let Some(o) = r.orientation_deg {
-            s.rot += o * o;
-            s.with_rotation = true;
-        }
-        s.rows += 1;
-    }
-    Ok(s)
-}
-
-/// The cross-validation workspace: folds, each fold's training and held-out rows, and the
-/// refined models of each fold (computed once per refinement).
-struct Cv<'a> {
-    robot: &'a Robot,
-    train: Vec<MeasurementSet>,
-    held: Vec<MeasurementSet>,
-    opts: &'a CompensatorOptions,
-    /// The network of each (single-network settings, fold) fitted so far: an ensemble
-    /// candidate of the same settings reuses it as its first member.
-    /// With it, the phase-2 epochs behind it (a warm start's included).
-    nets: Mutex<HashMap<(String, usize), Worked>>,
-    /// Single networks by (settings but the penalty, fold): the warm starts of candidates
-    /// that differ from them by the penalty only.
-    warm: Mutex<HashMap<(String, usize), Vec<WarmStart>>>,
-    /// Every MLP candidate's fold fit by (settings, fold): a mixed candidate adds an RBF
-    /// network to it instead of training it again.
-    fitted: Mutex<HashMap<(String, usize), Compensator>>,
-    /// All training rows: the RBF hyperparameters are searched on them once per (encoding,
-    /// start); the folds fit only the weights.
-    set: &'a MeasurementSet,
-    hypers: Mutex<HashMap<(Encoding, usize), std::result::Result<Hyper, String>>>,
-    /// The RBF network alone of each (refinement, encoding, start, fold).
-    rbf_fits: Mutex<HashMap<RbfKey, Compensator>>,
-}
-
-/// (refinement, encoding, search start, fold) of a fold's RBF fit.
-type RbfKey = (Option<String>, Encoding, usize, usize);
-
-/// A network and the phase-2 epochs behind it.
-type Worked = (Weights, usize);
-
-/// A fitted single network: (evaluation round, penalty, weights, phase-2 epochs behind it).
-type WarmStart = (usize, f64, Weights, usize);
-
-impl Cv<'_> {
-    fn model(&self, fold: usize, spec: &Option<String>) -> Result<Robot> {
-        match spec {
-            None => Ok(self.robot.clone()),
-            Some(s) => Ok(refine(self.robot, &self.train[fold], s, self.opts.sigmas)?.0),
-        }
-    }
-
-    /// The RBF hyperparameters of `encoding` from search start `start` on all training rows
-    /// (searched once, then cached).
-    fn hyper(&self, encoding: Encoding, start: usize) -> Result<Hyper> {
-        if let Ok(h) = self.hypers.lock()
-            && let Some(r) = h.get(&(encoding, start))
-        {
-            return r.clone().map_err(Error::Invalid);
-        }
-        let found = build(self.robot, self.set, Form::Pose, encoding)
-            .and_then(|p| rbf::search(&p.samples, start, self.opts.train.seed))
-            .map(|f| f.hyper)
-            .map_err(|e| e.to_string());
-        if let Ok(mut h) = self.hypers.lock() {
-            h.insert((encoding, start), found.clone());
-        }
-        found.map_err(Error::Invalid)
-    }
-
-    /// Held-out sums of `settings` on one fold; warm starts come from rounds before `round`.
-    fn run(&self, fold: usize, settings: &Settings, model: &Robot, round: usize) -> Result<Sums> {
-        let c = self.fit(fold, settings, model, round)?;
-        let mut ws = Default::default();
-        sums(&self.held[fold], |q| c.predict(q, &mut ws))
-    }
-
-    /// The compensator of `settings` fitted on one fold's training rows.
-    fn fit(
-        &self,
-        fold: usize,
-        settings: &Settings,
-        model: &Robot,
-        round: usize,
-    ) -> Result<Compensator> {
-        if settings.has_rbf() {
-            let start = settings.rbf_start.unwrap_or(0);
-            // The RBF network of one fold, shared by the candidate alone and mixed: one
-            // factorisation per (refinement, encoding, start, fold).
-            let key = (settings.refine.clone(), settings.encoding, start, fold);
-            let cached = self.rbf_fits.lock().ok().and_then(|f| f.get(&key).cloned());
-            let alone = match cached {
-                Some(c) => c,
-                None => {
-                    let rbf = Settings {
-                        network: Network::Rbf,
-                        form: Form::Pose,
-                        hidden: 0,
-                        penalty: 0.0,
-                        members: 1,
-                        rbf_start: Some(start),
-                        refine: None,
-                        ..settings.clone()
-                    };
-                    let train = TrainOptions {
-                        progress: None,
-                        rbf_hyper: Some(self.hyper(settings.encoding, start)?),
-                        ..self.opts.train.clone()
-                    };
-                    let c = super::fit::fit_with(
-                        model,
-                        &self.train[fold],
-                        &rbf,
-                        &train,
-                        false,
-                        false,
-                        0,
-                    )?
-                    .0;
-                    if let Ok(mut f) = self.rbf_fits.lock() {
-                        f.insert(key, c.clone());
-                    }
-                    c
-                }
-            };
-            if settings.network != Network::Mix || settings.members == 0 {
-                return Ok(alone);
-            }
-            // The MLPs' fit has the same normalisations (same rows, model, form and inputs).
-            let mlp = Settings {
-                network: Network::Mlp,
-                rbf_start: None,
-                ..settings.clone()
-            };
-            let mut c = self.fit(fold, &mlp, model, round)?;
-            c.rbf = alone.rbf;
-            return Ok(c);
-        }
-        let key_all = (settings.describe(), fold);
-        if let Ok(f) = self.fitted.lock()
-            && let Some(c) = f.get(&key_all)
-        {
-            return Ok(c.clone());
-        }
-        let plain = Settings {
-            refine: None,
-            ..settings.clone()
-        };
-        let shape = (
-            Settings {
-                members: 1,
-                penalty: 0.0,
-                ..settings.clone()
-            }
-            .describe(),
-            fold,
-        );
-        // Phase 1 (momentum) is left out of the candidates' fits: after it the weight-refining
-        // phase reaches the same networks (held-out RMS equal to 1e-4 mm on real data), and it
-        // costs most of a fit's time. The chosen settings are then fitted with both phases.
-        // A single network whose settings differ from an earlier one's by the penalty only
-        // starts from that network (the nearest penalty): a penalty path, as glmnet walks it,
-        // needs a third of the work from a neighbour's optimum.
-        let start = match self.warm.lock() {
-            Ok(w) if settings.members == 1 && self.opts.budget => w.get(&shape).and_then(|list| {
-                list.iter()
-                    .filter(|(r, ..)| *r < round)
-                    .min_by(|a, b| {
-                        let d = |p: f64| (p.max(1e-300) / settings.penalty.max(1e-300)).ln().abs();
-                        d(a.1).total_cmp(&d(b.1)).then(a.1.total_cmp(&b.1))
-                    })
-                    .map(|(_, _, w, e)| (w.clone(), *e))
-            }),
-            _ => None,
-        };
-        // The key keeps the refinement: a network is only valid for the model it was trained on.
-        let key = (
-            Settings {
-                members: 1,
-                ..settings.clone()
-            }
-            .describe(),
-            fold,
-        );
-        let done: Option<Worked> = self.nets.lock().ok().and_then(|n| n.get(&key).cloned());
-        let reuse = usize::from(done.is_some()).min(plain.members);
-        let rows = self.train[fold].rows.len();
-        // Members of one candidate get equal work: networks added to a reused (possibly
-        // warm-started) one train as many epochs from scratch as lie behind it, or the
-        // ensemble would be judged on weaker members than the single network it is held
-        // against.
-        let (epochs, behind) = match (&start, &done) {
-            _ if !self.opts.budget => (self.opts.train.max_epochs, 0),
-            (Some((_, e)), _) => (budget_epochs(CV_WORK / 3, rows, 4, 10), *e),
-            (None, Some((_, e))) if reuse > 0 => (*e, 0),
-            _ => (budget_epochs(CV_WORK, rows, 10, 25), 0),
-        };
-        let train = TrainOptions {
-            momentum_epochs: 0,
-            max_epochs: epochs,
-            progress: None,
-            start: start.map(|(w, _)| w),
-            ..self.opts.train.clone()
-        };
-        let (mut c, ..) = super::fit::fit_with(
-            model,
-            &self.train[fold],
-            &plain,
-            &train,
-            false,
-            false,
-            reuse,
-        )?;
-        let mut members: Vec<Weights> = done.into_iter().take(reuse).map(|(w, _)| w).collect();
-        members.append(&mut c.members);
-        c.members = members;
-        if plain.members == 1
-            && let Ok(mut n) = self.nets.lock()
-        {
-            let work = behind + epochs;
-            n.insert(key, (c.members[0].clone(), work));
-            if let Ok(mut w) = self.warm.lock() {
-                w.entry(shape).or_default().push((
-                    round,
-                    settings.penalty,
-                    c.members[0].clone(),
-                    work,
-                ));
-            }
-        }
-        if let Ok(mut f) = self.fitted.lock() {
-            f.insert(key_all, c.clone());
-        }
-        Ok(c)
-    }
-}
 
 /// The settings to fit: `opts`'s fixed choices, the rest chosen by cross-validation on `set`
 /// (None when nothing was left to choose).
@@ -824,32 +537,6 @@ pub fn select_settings(
     ))
 }
 
-/// The rows of `set` whose held-out errors `held` (mm, deg per row) lie beyond `k` robust
-/// sigmas (1.4826 x the median) of their column; none for an infinite or NaN `k`.
-pub fn outliers_of(set: &MeasurementSet, held: &[(f64, Option<f64>)], k: f64) -> Vec<Outlier> {
-    if !k.is_finite() {
-        return Vec::new();
-    }
-    let scale = |v: Vec<f64>| (!v.is_empty()).then(|| 1.4826 * crate::stats::median(&v));
-    let pos = scale(held.iter().map(|h| h.0).collect()).unwrap_or(0.0);
-    let rot = scale(held.iter().filter_map(|h| h.1).collect()).unwrap_or(0.0);
-    let sigmas = |e: f64, s: f64| if s > 0.0 { e / s } else { 0.0 };
-    held.iter()
-        .zip(&set.rows)
-        .enumerate()
-        .filter_map(|(row, (&(p, r), m))| {
-            let z = sigmas(p, pos).max(r.map_or(0.0, |r| sigmas(r, rot)));
-            (z > k).then_some(Outlier {
-                row,
-                line: m.line,
-                position_mm: p,
-                orientation_deg: r,
-                robust_sigmas: z,
-            })
-        })
-        .collect()
-}
-
 /// The best-scored pose-form MLP candidate, the partner of a mixed candidate.
 fn best_pose_mlp(candidates: &[Candidate]) -> Option<usize> {
     (0..candidates.len())
@@ -860,32 +547,6 @@ fn best_pose_mlp(candidates: &[Candidate]) -> Option<usize> {
         .fold(None, |b: Option<usize>, i| {
             Some(b.map_or(i, |b| better(candidates, b, i..i + 1)))
         })
-}
-
-/// The RBF hyperparameter searches `list` needs, run in parallel before its fold fits
-/// (which would otherwise wait on one another for them).
-fn searches(cv: &Cv, list: &[Settings]) {
-    let mut keys: Vec<(Encoding, usize)> = list
-        .iter()
-        .filter(|s| s.has_rbf())
-        .map(|s| (s.encoding, s.rbf_start.unwrap_or(0)))
-        .collect();
-    keys.sort_by_key(|(e, k)| (e.name(), *k));
-    keys.dedup();
-    // Errors are cached with the results and reported by the candidates.
-    let _ = parallel_map(keys.len(), |i| cv.hyper(keys[i].0, keys[i].1));
-}
-
-/// `base` with one setting changed to each of `values`.
-fn vary<T: Clone>(base: &Settings, values: &[T], set: impl Fn(&mut Settings, T)) -> Vec<Settings> {
-    values
-        .iter()
-        .map(|v| {
-            let mut s = base.clone();
-            set(&mut s, v.clone());
-            s
-        })
-        .collect()
 }
 
 /// Cross-validated position RMS of candidate `i` (mm); infinite when it has no score.
@@ -931,47 +592,21 @@ fn failed(candidates: &[Candidate]) -> Error {
     ))
 }
 
+/// `base` with one setting changed to each of `values`.
+fn vary<T: Clone>(base: &Settings, values: &[T], set: impl Fn(&mut Settings, T)) -> Vec<Settings> {
+    values
+        .iter()
+        .map(|v| {
+            let mut s = base.clone();
+            set(&mut s, v.clone());
+            s
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::data::Measurement;
-
-    #[test]
-    fn folds_keep_repeated_configurations_together_and_balance() {
-        // 30 configurations, the first 10 measured three times.
-        let mut rows = Vec::new();
-        for k in 0..30 {
-            let times = if k < 10 { 3 } else { 1 };
-            for _ in 0..times {
-                rows.push(Measurement::new(vec![k as f64 * 0.01, 0.2, 0.3]));
-            }
-        }
-        let set = MeasurementSet {
-            source: "x.csv".into(),
-            rows,
-            extra_columns: Vec::new(),
-        };
-        let f = folds(&set, 5, 7);
-        assert_eq!(f.len(), 50);
-        for (i, a) in set.rows.iter().enumerate() {
-            for (j, b) in set.rows.iter().enumerate() {
-                if a.q == b.q {
-                    assert_eq!(f[i], f[j], "rows {i} and {j} repeat one configuration");
-                }
-            }
-        }
-        // Configurations are dealt round-robin: 6 per fold.
-        let groups = |k: usize| {
-            let mut q: Vec<String> = (0..50)
-                .filter(|&i| f[i] == k)
-                .map(|i| format!("{:?}", set.rows[i].q))
-                .collect();
-            q.dedup();
-            q.len()
-        };
-        assert!((0..5).all(|k| groups(k) == 6));
-        assert_ne!(f, folds(&set, 5, 8), "the seed shuffles");
-    }
 
     #[test]
     fn penalties_keep_three_significant_digits() {

@@ -1,0 +1,267 @@
+//! The cross-validation workspace: each fold's training and held-out rows, refined models,
+//! and the fits (networks, warm starts, RBF hyperparameters) that candidates share.
+
+use super::rows::sums;
+use super::{CV_WORK, budget_epochs};
+use crate::data::MeasurementSet;
+use crate::error::{Error, Result};
+use crate::model::Robot;
+use crate::neural::compensator::Compensator;
+use crate::neural::encoding::Encoding;
+use crate::neural::parallel::parallel_map;
+use crate::neural::rbf::{self, Hyper};
+use crate::neural::refine::refine;
+use crate::neural::selection::Sums;
+use crate::neural::settings::{CompensatorOptions, Form, Network, Settings};
+use crate::neural::targets::build;
+use crate::neural::train::TrainOptions;
+use crate::neural::weights::Weights;
+use std::collections::HashMap;
+use std::sync::Mutex;
+
+/// The cross-validation workspace: folds, each fold's training and held-out rows, and the
+/// refined models of each fold (computed once per refinement).
+pub(super) struct Cv<'a> {
+    pub(super) robot: &'a Robot,
+    pub(super) train: Vec<MeasurementSet>,
+    pub(super) held: Vec<MeasurementSet>,
+    pub(super) opts: &'a CompensatorOptions,
+    /// The network of each (single-network settings, fold) fitted so far: an ensemble
+    /// candidate of the same settings reuses it as its first member.
+    /// With it, the phase-2 epochs behind it (a warm start's included).
+    pub(super) nets: Mutex<HashMap<(String, usize), Worked>>,
+    /// Single networks by (settings but the penalty, fold): the warm starts of candidates
+    /// that differ from them by the penalty only.
+    pub(super) warm: Mutex<HashMap<(String, usize), Vec<WarmStart>>>,
+    /// Every MLP candidate's fold fit by (settings, fold): a mixed candidate adds an RBF
+    /// network to it instead of training it again.
+    pub(super) fitted: Mutex<HashMap<(String, usize), Compensator>>,
+    /// All training rows: the RBF hyperparameters are searched on them once per (encoding,
+    /// start); the folds fit only the weights.
+    pub(super) set: &'a MeasurementSet,
+    pub(super) hypers: Mutex<HashMap<(Encoding, usize), std::result::Result<Hyper, String>>>,
+    /// The RBF network alone of each (refinement, encoding, start, fold).
+    pub(super) rbf_fits: Mutex<HashMap<RbfKey, Compensator>>,
+}
+
+/// (refinement, encoding, search start, fold) of a fold's RBF fit.
+pub(super) type RbfKey = (Option<String>, Encoding, usize, usize);
+
+/// A network and the phase-2 epochs behind it.
+pub(super) type Worked = (Weights, usize);
+
+/// A fitted single network: (evaluation round, penalty, weights, phase-2 epochs behind it).
+pub(super) type WarmStart = (usize, f64, Weights, usize);
+
+impl Cv<'_> {
+    pub(super) fn model(&self, fold: usize, spec: &Option<String>) -> Result<Robot> {
+        match spec {
+            None => Ok(self.robot.clone()),
+            Some(s) => Ok(refine(self.robot, &self.train[fold], s, self.opts.sigmas)?.0),
+        }
+    }
+
+    /// The RBF hyperparameters of `encoding` from search start `start` on all training rows
+    /// (searched once, then cached).
+    pub(super) fn hyper(&self, encoding: Encoding, start: usize) -> Result<Hyper> {
+        if let Ok(h) = self.hypers.lock()
+            && let Some(r) = h.get(&(encoding, start))
+        {
+            return r.clone().map_err(Error::Invalid);
+        }
+        let found = build(self.robot, self.set, Form::Pose, encoding)
+            .and_then(|p| rbf::search(&p.samples, start, self.opts.train.seed))
+            .map(|f| f.hyper)
+            .map_err(|e| e.to_string());
+        if let Ok(mut h) = self.hypers.lock() {
+            h.insert((encoding, start), found.clone());
+        }
+        found.map_err(Error::Invalid)
+    }
+
+    /// Held-out sums of `settings` on one fold; warm starts come from rounds before `round`.
+    pub(super) fn run(
+        &self,
+        fold: usize,
+        settings: &Settings,
+        model: &Robot,
+        round: usize,
+    ) -> Result<Sums> {
+        let c = self.fit(fold, settings, model, round)?;
+        let mut ws = Default::default();
+        sums(&self.held[fold], |q| c.predict(q, &mut ws))
+    }
+
+    /// The compensator of `settings` fitted on one fold's training rows.
+    pub(super) fn fit(
+        &self,
+        fold: usize,
+        settings: &Settings,
+        model: &Robot,
+        round: usize,
+    ) -> Result<Compensator> {
+        if settings.has_rbf() {
+            let start = settings.rbf_start.unwrap_or(0);
+            // The RBF network of one fold, shared by the candidate alone and mixed: one
+            // factorisation per (refinement, encoding, start, fold).
+            let key = (settings.refine.clone(), settings.encoding, start, fold);
+            let cached = self.rbf_fits.lock().ok().and_then(|f| f.get(&key).cloned());
+            let alone = match cached {
+                Some(c) => c,
+                None => {
+                    let rbf = Settings {
+                        network: Network::Rbf,
+                        form: Form::Pose,
+                        hidden: 0,
+                        penalty: 0.0,
+                        members: 1,
+                        rbf_start: Some(start),
+                        refine: None,
+                        ..settings.clone()
+                    };
+                    let train = TrainOptions {
+                        progress: None,
+                        rbf_hyper: Some(self.hyper(settings.encoding, start)?),
+                        ..self.opts.train.clone()
+                    };
+                    let c = crate::neural::fit::fit_with(
+                        model,
+                        &self.train[fold],
+                        &rbf,
+                        &train,
+                        false,
+                        false,
+                        0,
+                    )?
+                    .0;
+                    if let Ok(mut f) = self.rbf_fits.lock() {
+                        f.insert(key, c.clone());
+                    }
+                    c
+                }
+            };
+            if settings.network != Network::Mix || settings.members == 0 {
+                return Ok(alone);
+            }
+            // The MLPs' fit has the same normalisations (same rows, model, form and inputs).
+            let mlp = Settings {
+                network: Network::Mlp,
+                rbf_start: None,
+                ..settings.clone()
+            };
+            let mut c = self.fit(fold, &mlp, model, round)?;
+            c.rbf = alone.rbf;
+            return Ok(c);
+        }
+        let key_all = (settings.describe(), fold);
+        if let Ok(f) = self.fitted.lock()
+            && let Some(c) = f.get(&key_all)
+        {
+            return Ok(c.clone());
+        }
+        let plain = Settings {
+            refine: None,
+            ..settings.clone()
+        };
+        let shape = (
+            Settings {
+                members: 1,
+                penalty: 0.0,
+                ..settings.clone()
+            }
+            .describe(),
+            fold,
+        );
+        // Phase 1 (momentum) is left out of the candidates' fits: after it the weight-refining
+        // phase reaches the same networks (held-out RMS equal to 1e-4 mm on real data), and it
+        // costs most of a fit's time. The chosen settings are then fitted with both phases.
+        // A single network whose settings differ from an earlier one's by the penalty only
+        // starts from that network (the nearest penalty): a penalty path, as glmnet walks it,
+        // needs a third of the work from a neighbour's optimum.
+        let start = match self.warm.lock() {
+            Ok(w) if settings.members == 1 && self.opts.budget => w.get(&shape).and_then(|list| {
+                list.iter()
+                    .filter(|(r, ..)| *r < round)
+                    .min_by(|a, b| {
+                        let d = |p: f64| (p.max(1e-300) / settings.penalty.max(1e-300)).ln().abs();
+                        d(a.1).total_cmp(&d(b.1)).then(a.1.total_cmp(&b.1))
+                    })
+                    .map(|(_, _, w, e)| (w.clone(), *e))
+            }),
+            _ => None,
+        };
+        // The key keeps the refinement: a network is only valid for the model it was trained on.
+        let key = (
+            Settings {
+                members: 1,
+                ..settings.clone()
+            }
+            .describe(),
+            fold,
+        );
+        let done: Option<Worked> = self.nets.lock().ok().and_then(|n| n.get(&key).cloned());
+        let reuse = usize::from(done.is_some()).min(plain.members);
+        let rows = self.train[fold].rows.len();
+        // Members of one candidate get equal work: networks added to a reused (possibly
+        // warm-started) one train as many epochs from scratch as lie behind it, or the
+        // ensemble would be judged on weaker members than the single network it is held
+        // against.
+        let (epochs, behind) = match (&start, &done) {
+            _ if !self.opts.budget => (self.opts.train.max_epochs, 0),
+            (Some((_, e)), _) => (budget_epochs(CV_WORK / 3, rows, 4, 10), *e),
+            (None, Some((_, e))) if reuse > 0 => (*e, 0),
+            _ => (budget_epochs(CV_WORK, rows, 10, 25), 0),
+        };
+        let train = TrainOptions {
+            momentum_epochs: 0,
+            max_epochs: epochs,
+            progress: None,
+            start: start.map(|(w, _)| w),
+            ..self.opts.train.clone()
+        };
+        let (mut c, ..) = crate::neural::fit::fit_with(
+            model,
+            &self.train[fold],
+            &plain,
+            &train,
+            false,
+            false,
+            reuse,
+        )?;
+        let mut members: Vec<Weights> = done.into_iter().take(reuse).map(|(w, _)| w).collect();
+        members.append(&mut c.members);
+        c.members = members;
+        if plain.members == 1
+            && let Ok(mut n) = self.nets.lock()
+        {
+            let work = behind + epochs;
+            n.insert(key, (c.members[0].clone(), work));
+            if let Ok(mut w) = self.warm.lock() {
+                w.entry(shape).or_default().push((
+                    round,
+                    settings.penalty,
+                    c.members[0].clone(),
+                    work,
+                ));
+            }
+        }
+        if let Ok(mut f) = self.fitted.lock() {
+            f.insert(key_all, c.clone());
+        }
+        Ok(c)
+    }
+}
+
+/// The RBF hyperparameter searches `list` needs, run in parallel before its fold fits
+/// (which would otherwise wait on one another for them).
+pub(super) fn searches(cv: &Cv, list: &[Settings]) {
+    let mut keys: Vec<(Encoding, usize)> = list
+        .iter()
+        .filter(|s| s.has_rbf())
+        .map(|s| (s.encoding, s.rbf_start.unwrap_or(0)))
+        .collect();
+    keys.sort_by_key(|(e, k)| (e.name(), *k));
+    keys.dedup();
+    // Errors are cached with the results and reported by the candidates.
+    let _ = parallel_map(keys.len(), |i| cv.hyper(keys[i].0, keys[i].1));
+}

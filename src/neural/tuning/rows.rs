@@ -1,0 +1,141 @@
+//! The rows of cross-validation: folds of whole configurations, subsets, held-out errors
+//! and their sums, and the rows whose held-out error is far out.
+
+use crate::data::MeasurementSet;
+use crate::error::Result;
+use crate::evaluate::row_errors;
+use crate::identify::Measure;
+use crate::neural::selection::Outlier;
+use crate::neural::selection::Sums;
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+
+/// Fold of each row: whole configurations, shuffled by `seed`, dealt round-robin.
+pub fn folds(set: &MeasurementSet, k: usize, seed: u64) -> Vec<usize> {
+    let groups = crate::neural::targets::configuration_groups(set);
+    let mut ids: Vec<usize> = groups.clone();
+    ids.sort_unstable();
+    ids.dedup();
+    ids.shuffle(&mut ChaCha8Rng::seed_from_u64(seed ^ 0xf01d));
+    let mut fold_of_group = vec![0; ids.len()];
+    for (i, g) in ids.iter().enumerate() {
+        fold_of_group[*g] = i % k;
+    }
+    groups.iter().map(|g| fold_of_group[*g]).collect()
+}
+
+/// The rows of `set` whose index `keep` accepts, in order (same source and columns).
+pub fn subset(set: &MeasurementSet, keep: impl Fn(usize) -> bool) -> MeasurementSet {
+    MeasurementSet {
+        source: set.source.clone(),
+        rows: set
+            .rows
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| keep(*i))
+            .map(|(_, m)| m.clone())
+            .collect(),
+        extra_columns: set.extra_columns.clone(),
+    }
+}
+
+/// Each held-out row's errors under `predict`: pose where the set has orientations, else
+/// position.
+pub(super) fn held_errors(
+    set: &MeasurementSet,
+    predict: impl FnMut(&[f64]) -> crate::Pose,
+) -> Result<Vec<crate::evaluate::RowError>> {
+    let measure = if set.has_rotation() {
+        Measure::Pose
+    } else {
+        Measure::Position
+    };
+    row_errors(set, measure, predict)
+}
+
+pub(super) fn sums(
+    set: &MeasurementSet,
+    predict: impl FnMut(&[f64]) -> crate::Pose,
+) -> Result<Sums> {
+    let rows = held_errors(set, predict)?;
+    let mut s = Sums::default();
+    for r in rows {
+        s.pos += r.position_mm.unwrap_or(0.0).powi(2);
+        if let Some(o) = r.orientation_deg {
+            s.rot += o * o;
+            s.with_rotation = true;
+        }
+        s.rows += 1;
+    }
+    Ok(s)
+}
+
+/// The rows of `set` whose held-out errors `held` (mm, deg per row) lie beyond `k` robust
+/// sigmas (1.4826 x the median) of their column; none for an infinite or NaN `k`.
+pub fn outliers_of(set: &MeasurementSet, held: &[(f64, Option<f64>)], k: f64) -> Vec<Outlier> {
+    if !k.is_finite() {
+        return Vec::new();
+    }
+    let scale = |v: Vec<f64>| (!v.is_empty()).then(|| 1.4826 * crate::stats::median(&v));
+    let pos = scale(held.iter().map(|h| h.0).collect()).unwrap_or(0.0);
+    let rot = scale(held.iter().filter_map(|h| h.1).collect()).unwrap_or(0.0);
+    let sigmas = |e: f64, s: f64| if s > 0.0 { e / s } else { 0.0 };
+    held.iter()
+        .zip(&set.rows)
+        .enumerate()
+        .filter_map(|(row, (&(p, r), m))| {
+            let z = sigmas(p, pos).max(r.map_or(0.0, |r| sigmas(r, rot)));
+            (z > k).then_some(Outlier {
+                row,
+                line: m.line,
+                position_mm: p,
+                orientation_deg: r,
+                robust_sigmas: z,
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::Measurement;
+
+    #[test]
+    fn folds_keep_repeated_configurations_together_and_balance() {
+        // 30 configurations, the first 10 measured three times.
+        let mut rows = Vec::new();
+        for k in 0..30 {
+            let times = if k < 10 { 3 } else { 1 };
+            for _ in 0..times {
+                rows.push(Measurement::new(vec![k as f64 * 0.01, 0.2, 0.3]));
+            }
+        }
+        let set = MeasurementSet {
+            source: "x.csv".into(),
+            rows,
+            extra_columns: Vec::new(),
+        };
+        let f = folds(&set, 5, 7);
+        assert_eq!(f.len(), 50);
+        for (i, a) in set.rows.iter().enumerate() {
+            for (j, b) in set.rows.iter().enumerate() {
+                if a.q == b.q {
+                    assert_eq!(f[i], f[j], "rows {i} and {j} repeat one configuration");
+                }
+            }
+        }
+        // Configurations are dealt round-robin: 6 per fold.
+        let groups = |k: usize| {
+            let mut q: Vec<String> = (0..50)
+                .filter(|&i| f[i] == k)
+                .map(|i| format!("{:?}", set.rows[i].q))
+                .collect();
+            q.dedup();
+            q.len()
+        };
+        assert!((0..5).all(|k| groups(k) == 6));
+        assert_ne!(f, folds(&set, 5, 8), "the seed shuffles");
+    }
+}
