@@ -15,7 +15,7 @@
 //! - A dropped column's regrouping: the least-squares combination of kept columns that
 //!   reproduces it, in parameter units (`theta_R = 1.000 theta1`).
 
-use super::problem::{Observations, Workspace, observation_r};
+use super::problem::{IdentifyWorkspace, Observations, observation_r};
 use crate::model::Robot;
 use nalgebra::{DMatrix, DVector};
 
@@ -94,7 +94,7 @@ pub fn analyse(
     candidates: &[usize],
     tolerance: f64,
 ) -> Identifiability {
-    let mut ws = Workspace::new(robot);
+    let mut ws = IdentifyWorkspace::new(robot);
     let r = observation_r(robot, obs, candidates, &mut ws);
     let k = candidates.len();
     let norms: Vec<f64> = (0..k).map(|j| r.column(j).norm()).collect();

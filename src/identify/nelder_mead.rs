@@ -8,7 +8,7 @@
 //! it restarts once from the best vertex, as is customary, to guard against a degenerate
 //! simplex.
 
-use super::problem::{Observations, Workspace, cost};
+use super::problem::{IdentifyWorkspace, Observations, cost};
 use super::solve::{Solution, SolveOptions, StopReason, free_values, with_values};
 use crate::error::{Error, Result};
 use crate::model::Robot;
@@ -32,7 +32,7 @@ pub fn solve_nelder_mead(
         ids.iter()
             .map(|id| if id.field.is_angle() { 1e-3 } else { 1.0 }),
     );
-    let mut ws = Workspace::new(robot);
+    let mut ws = IdentifyWorkspace::new(robot);
     let mut evaluations = 0usize;
     let mut f = |y: &DVector<f64>| -> Result<f64> {
         evaluations += 1;
@@ -137,7 +137,7 @@ pub fn solve_nelder_mead(
     }
     let x = &x0 + best.component_mul(&scale);
     let robot_out = with_values(robot, &ids, &x)?;
-    let final_cost = cost(&robot_out, obs, &mut Workspace::new(robot));
+    let final_cost = cost(&robot_out, obs, &mut IdentifyWorkspace::new(robot));
     Ok(Solution {
         robot: robot_out,
         iterations,

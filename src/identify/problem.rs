@@ -224,17 +224,17 @@ impl<'a> Observations<'a> {
 
 /// Scratch space for evaluating observations.
 #[derive(Debug, Clone)]
-pub struct Workspace {
+pub struct IdentifyWorkspace {
     fa: Frames,
     fb: Frames,
     ja: Matrix6xX<f64>,
     jb: Matrix6xX<f64>,
 }
 
-impl Workspace {
+impl IdentifyWorkspace {
     /// A workspace sized for `robot`.
     pub fn new(robot: &Robot) -> Self {
-        Workspace {
+        IdentifyWorkspace {
             fa: Frames::new(robot),
             fb: Frames::new(robot),
             ja: Matrix6xX::zeros(0),
@@ -250,7 +250,7 @@ pub fn residual(
     obs: &Observations,
     o: &Observation,
     cols: Option<&[usize]>,
-    ws: &mut Workspace,
+    ws: &mut IdentifyWorkspace,
     r: &mut [f64; 6],
     jac: &mut Matrix6xX<f64>,
 ) {
@@ -330,7 +330,7 @@ pub fn for_each_block(
     robot: &Robot,
     obs: &Observations,
     cols: Option<&[usize]>,
-    ws: &mut Workspace,
+    ws: &mut IdentifyWorkspace,
     mut sink: impl FnMut(&DMatrix<f64>, &DVector<f64>, usize),
 ) {
     let k = cols.map_or(0, |c| c.len());
@@ -364,7 +364,7 @@ pub fn for_each_block(
 }
 
 /// Weighted sum of squares sum r_w^2 (chi-square when the sigmas are right).
-pub fn cost(robot: &Robot, obs: &Observations, ws: &mut Workspace) -> f64 {
+pub fn cost(robot: &Robot, obs: &Observations, ws: &mut IdentifyWorkspace) -> f64 {
     let mut total = 0.0;
     for_each_block(robot, obs, None, ws, |_, r, rows| {
         total += r.rows(0, rows).norm_squared();
@@ -389,12 +389,36 @@ pub fn normal_equations(
     robot: &Robot,
     obs: &Observations,
     cols: &[usize],
-    ws: &mut Workspace,
+    ws: &mut IdentifyWorkspace,
 ) -> Normal {
     let k = cols.len();
-    let mut a = DMatrix::<f64>::zeros(k, k);
-    let mut g = DVector::<f64>::zeros(k);
+    let mut out = Normal {
+        a: DMatrix::zeros(k, k),
+        g: DVector::zeros(k),
+        cost: 0.0,
+    };
+    normal_equations_into(robot, obs, cols, ws, &mut out);
+    out
+}
+
+/// [`normal_equations`] into `out`, reusing its matrix and vector (resized if `cols` has
+/// another length).
+pub fn normal_equations_into(
+    robot: &Robot,
+    obs: &Observations,
+    cols: &[usize],
+    ws: &mut IdentifyWorkspace,
+    out: &mut Normal,
+) {
+    let k = cols.len();
+    if out.a.nrows() != k || out.a.ncols() != k {
+        out.a = DMatrix::zeros(k, k);
+        out.g = DVector::zeros(k);
+    }
+    out.a.fill(0.0);
+    out.g.fill(0.0);
     let mut total = 0.0;
+    let (a, g) = (&mut out.a, &mut out.g);
     for_each_block(robot, obs, Some(cols), ws, |jb, rb, rows| {
         let j = jb.rows(0, rows);
         let r = rb.rows(0, rows);
@@ -402,7 +426,7 @@ pub fn normal_equations(
         g.gemv_tr(1.0, &j, &r, 1.0);
         total += r.norm_squared();
     });
-    Normal { a, g, cost: total }
+    out.cost = total;
 }
 
 /// The k x k triangular factor R of the weighted observation matrix (Phi_w = Q R), built
@@ -411,7 +435,7 @@ pub fn observation_r(
     robot: &Robot,
     obs: &Observations,
     cols: &[usize],
-    ws: &mut Workspace,
+    ws: &mut IdentifyWorkspace,
 ) -> DMatrix<f64> {
     let k = cols.len();
     let mut r = DMatrix::<f64>::zeros(0, k);

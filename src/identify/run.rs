@@ -4,7 +4,7 @@
 
 use super::identifiability::{CONDITION_WARNING, Identifiability, analyse};
 use super::nelder_mead::solve_nelder_mead;
-use super::problem::{Measure, Observations, Sigmas, Workspace, residual};
+use super::problem::{IdentifyWorkspace, Measure, Observations, Sigmas, residual};
 use super::register::{Registration, register};
 use super::select::select;
 use super::solve::{Method, Solution, SolveOptions, StopReason, covariance, solve_gradient};
@@ -132,7 +132,7 @@ pub struct Identified {
 
 /// Weighted residual norm of every observation, divided by sqrt(dim).
 fn normalized_residuals(robot: &Robot, obs: &Observations) -> Vec<f64> {
-    let mut ws = Workspace::new(robot);
+    let mut ws = IdentifyWorkspace::new(robot);
     let mut r = [0.0; 6];
     let mut jac = Matrix6xX::zeros(0);
     let dim = obs.dim();

@@ -7,7 +7,9 @@
 //! that fails even with heavy damping (rank loss) and a Gauss-Newton step that no halving can
 //! make descend (divergence) are errors, never results.
 
-use super::problem::{Observations, Workspace, cost, normal_equations};
+use super::problem::{
+    IdentifyWorkspace, Normal, Observations, cost, normal_equations, normal_equations_into,
+};
 use crate::error::{Error, Result};
 use crate::model::{ParamId, Robot};
 use nalgebra::{DMatrix, DVector};
@@ -140,7 +142,7 @@ pub fn solve_gradient(
     opts: &SolveOptions,
 ) -> Result<Solution> {
     let (ids, mut x) = free_values(robot, cols);
-    let mut ws = Workspace::new(robot);
+    let mut ws = IdentifyWorkspace::new(robot);
     let mut current = robot.clone();
     let mut ne = normal_equations(&current, obs, cols, &mut ws);
     let mut evaluations = 1;
@@ -150,9 +152,14 @@ pub fn solve_gradient(
             ne.cost
         )));
     }
-    let gn = opts.method == Method::Gn;
-    let mut lambda = 1e-3;
     let k = ids.len();
+    let mut step = StepBuffers::new(k);
+    let mut lambda = 1e-3;
+    let problem = Problem {
+        robot,
+        obs,
+        ids: &ids,
+    };
     for iter in 0..opts.max_iterations {
         if ne.cost == 0.0 {
             return Ok(finished(
@@ -183,104 +190,47 @@ pub fn solve_gradient(
                 evaluations,
             ));
         }
-        let diag: Vec<f64> = (0..k).map(|i| ne.a[(i, i)].max(1e-300)).collect();
-        let (step, new_robot, new_cost) = if gn {
-            let chol = ne.a.clone().cholesky().ok_or_else(|| {
-                Error::NotConverged(format!(
-                    "Gauss-Newton: J^T W J is singular at iteration {iter} (rank loss among {}); Levenberg-Marquardt (method lm) damps it",
-                    names(&ids)
-                ))
-            })?;
-            let full = chol.solve(&ne.g);
-            let mut t = 1.0;
-            let mut found = None;
-            for _ in 0..30 {
-                let step = &full * t;
-                // A step beyond the robot's bounds (100 m, 2 turns) is a failed step.
-                let Ok(cand) = with_values(robot, &ids, &(&x + &step)) else {
-                    t *= 0.5;
-                    continue;
-                };
-                let c = cost(&cand, obs, &mut ws);
-                evaluations += 1;
-                if c.is_finite() && c <= ne.cost {
-                    found = Some((step, cand, c));
-                    break;
-                }
-                t *= 0.5;
-            }
-            match found {
-                Some(f) => f,
-                None if full
-                    .iter()
-                    .zip(x.iter())
-                    .all(|(d, v)| d.abs() <= 1e3 * opts.xtol * (1.0 + v.abs())) =>
-                {
-                    return Ok(finished(
-                        current,
-                        iter,
-                        StopReason::Precision,
-                        ne.cost,
-                        evaluations,
-                    ));
-                }
-                None => {
-                    return Err(Error::NotConverged(format!(
-                        "Gauss-Newton diverged at iteration {iter}: no fraction of its step lowers the cost \
-                         ({:.6e}); Levenberg-Marquardt (method lm) damps the step",
-                        ne.cost
-                    )));
-                }
-            }
+        let outcome = if opts.method == Method::Gn {
+            gn_step(
+                &problem,
+                &ne,
+                &x,
+                iter,
+                opts,
+                &mut step,
+                &mut ws,
+                &mut evaluations,
+            )?
         } else {
-            let mut found = None;
-            while lambda < 1e16 {
-                let mut m = ne.a.clone();
-                for (i, d) in diag.iter().enumerate() {
-                    m[(i, i)] += lambda * d;
-                }
-                let Some(chol) = m.cholesky() else {
-                    lambda *= 10.0;
-                    continue;
-                };
-                let step = chol.solve(&ne.g);
-                let Ok(cand) = with_values(robot, &ids, &(&x + &step)) else {
-                    lambda *= 10.0;
-                    continue;
-                };
-                let c = cost(&cand, obs, &mut ws);
-                evaluations += 1;
-                if c.is_finite() && c < ne.cost {
-                    found = Some((step, cand, c));
-                    break;
-                }
-                lambda *= 10.0;
-            }
-            match found {
-                Some(f) => {
-                    lambda = (lambda / 10.0).max(1e-15);
-                    f
-                }
-                None => {
-                    return Ok(finished(
-                        current,
-                        iter,
-                        StopReason::Precision,
-                        ne.cost,
-                        evaluations,
-                    ));
-                }
-            }
+            lm_step(
+                &problem,
+                &ne,
+                &x,
+                &mut lambda,
+                &mut step,
+                &mut ws,
+                &mut evaluations,
+            )
+        };
+        let Some((new_robot, new_cost)) = outcome else {
+            return Ok(finished(
+                current,
+                iter,
+                StopReason::Precision,
+                ne.cost,
+                evaluations,
+            ));
         };
         let decrease = ne.cost - new_cost;
         let small_step = step
+            .step
             .iter()
             .zip(x.iter())
             .all(|(d, v)| d.abs() <= opts.xtol * (1.0 + v.abs()));
-        x += &step;
+        x += &step.step;
         current = new_robot;
         let old_cost = ne.cost;
-        ne = normal_equations(&current, obs, cols, &mut ws);
+        normal_equations_into(&current, obs, cols, &mut ws, &mut ne);
         evaluations += 1;
         if !ne.cost.is_finite() {
             return Err(Error::NotConverged(format!(
@@ -317,6 +267,148 @@ pub fn solve_gradient(
     ))
 }
 
+/// What a step is taken on: the model, the observations and the free parameters.
+struct Problem<'a> {
+    robot: &'a Robot,
+    obs: &'a Observations<'a>,
+    ids: &'a [ParamId],
+}
+
+/// The step's matrices and vectors, reused across iterations: the damped normal matrix
+/// (then its Cholesky factor), the step and the trial parameters (mm, rad).
+struct StepBuffers {
+    m: DMatrix<f64>,
+    step: DVector<f64>,
+    trial: DVector<f64>,
+}
+
+impl StepBuffers {
+    fn new(k: usize) -> Self {
+        StepBuffers {
+            m: DMatrix::zeros(k, k),
+            step: DVector::zeros(k),
+            trial: DVector::zeros(k),
+        }
+    }
+
+    /// Solves `m` step = g into `step`, factorising `m` in place; false when `m` is not
+    /// positive definite.
+    fn solve(&mut self, g: &DVector<f64>) -> bool {
+        let k = g.len();
+        let m = std::mem::replace(&mut self.m, DMatrix::zeros(0, 0));
+        match m.cholesky() {
+            Some(chol) => {
+                self.step.copy_from(g);
+                chol.solve_mut(&mut self.step);
+                self.m = chol.unpack_dirty();
+                true
+            }
+            None => {
+                self.m = DMatrix::zeros(k, k);
+                false
+            }
+        }
+    }
+
+    /// The model at x + t step and its cost, or None when that model leaves the robot's
+    /// bounds (100 m, 2 turns: a failed step).
+    fn trial(
+        &mut self,
+        p: &Problem,
+        x: &DVector<f64>,
+        t: f64,
+        ws: &mut IdentifyWorkspace,
+    ) -> Option<(Robot, f64)> {
+        self.trial.copy_from(x);
+        self.trial.axpy(t, &self.step, 1.0);
+        let cand = with_values(p.robot, p.ids, &self.trial).ok()?;
+        let c = cost(&cand, p.obs, ws);
+        Some((cand, c))
+    }
+}
+
+/// One Gauss-Newton step with step halving: the model and cost of the first fraction of the
+/// full step that does not raise the cost (`step` holds that fraction), None when no
+/// fraction does and the step is already negligible; an error when J^T W J is singular or
+/// no fraction helps.
+#[allow(clippy::too_many_arguments)]
+fn gn_step(
+    p: &Problem,
+    ne: &Normal,
+    x: &DVector<f64>,
+    iter: usize,
+    opts: &SolveOptions,
+    b: &mut StepBuffers,
+    ws: &mut IdentifyWorkspace,
+    evaluations: &mut usize,
+) -> Result<Option<(Robot, f64)>> {
+    b.m.copy_from(&ne.a);
+    if !b.solve(&ne.g) {
+        return Err(Error::NotConverged(format!(
+            "Gauss-Newton: J^T W J is singular at iteration {iter} (rank loss among {}); Levenberg-Marquardt (method lm) damps it",
+            names(p.ids)
+        )));
+    }
+    let mut t = 1.0;
+    for _ in 0..30 {
+        if let Some((cand, c)) = b.trial(p, x, t, ws) {
+            *evaluations += 1;
+            if c.is_finite() && c <= ne.cost {
+                b.step.scale_mut(t);
+                return Ok(Some((cand, c)));
+            }
+        }
+        t *= 0.5;
+    }
+    if b.step
+        .iter()
+        .zip(x.iter())
+        .all(|(d, v)| d.abs() <= 1e3 * opts.xtol * (1.0 + v.abs()))
+    {
+        return Ok(None);
+    }
+    Err(Error::NotConverged(format!(
+        "Gauss-Newton diverged at iteration {iter}: no fraction of its step lowers the cost \
+         ({:.6e}); Levenberg-Marquardt (method lm) damps the step",
+        ne.cost
+    )))
+}
+
+/// One Levenberg-Marquardt step (thesis 4.1; damping lambda diag(J^T W J), raised tenfold
+/// until the cost falls, lowered tenfold after a success): the new model and cost (`step`
+/// holds the step), None when no damping lowers the cost.
+fn lm_step(
+    p: &Problem,
+    ne: &Normal,
+    x: &DVector<f64>,
+    lambda: &mut f64,
+    b: &mut StepBuffers,
+    ws: &mut IdentifyWorkspace,
+    evaluations: &mut usize,
+) -> Option<(Robot, f64)> {
+    while *lambda < 1e16 {
+        b.m.copy_from(&ne.a);
+        for i in 0..ne.g.len() {
+            b.m[(i, i)] += *lambda * ne.a[(i, i)].max(1e-300);
+        }
+        if !b.solve(&ne.g) {
+            *lambda *= 10.0;
+            continue;
+        }
+        let Some((cand, c)) = b.trial(p, x, 1.0, ws) else {
+            *lambda *= 10.0;
+            continue;
+        };
+        *evaluations += 1;
+        if c.is_finite() && c < ne.cost {
+            *lambda = (*lambda / 10.0).max(1e-15);
+            return Some((cand, c));
+        }
+        *lambda *= 10.0;
+    }
+    None
+}
+
 /// Covariance of the free parameters at `robot`: s^2 (J^T W J)^-1 with the a-posteriori
 /// variance factor s^2 = cost / (m - n) (1 when the sigmas are right). Returns the matrix
 /// (internal units) and s^2; an error when J^T W J is singular (rank loss at the solution).
@@ -325,7 +417,7 @@ pub fn covariance(
     obs: &Observations,
     cols: &[usize],
 ) -> Result<(DMatrix<f64>, f64)> {
-    let mut ws = Workspace::new(robot);
+    let mut ws = IdentifyWorkspace::new(robot);
     let ne = normal_equations(robot, obs, cols, &mut ws);
     let m = obs.len();
     let n = cols.len();

@@ -95,7 +95,7 @@ impl Samples {
         if self.is_empty() {
             return 0.0;
         }
-        let mut ws = Scratch::new(w, self.rows());
+        let mut ws = SamplesWorkspace::new(w, self.rows());
         let mut sum = 0.0;
         for k in 0..self.len() {
             w.forward_into(&self.x[k], &mut ws.h, &mut ws.y);
@@ -122,7 +122,7 @@ pub fn penalty_mask(w: &Weights) -> DVector<f64> {
 }
 
 /// Buffers of one forward and backward pass.
-struct Scratch {
+struct SamplesWorkspace {
     h: Vec<f64>,
     y: Vec<f64>,
     r: Vec<f64>,
@@ -130,9 +130,9 @@ struct Scratch {
     gz: Vec<f64>,
 }
 
-impl Scratch {
+impl SamplesWorkspace {
     fn new(w: &Weights, rows: usize) -> Self {
-        Scratch {
+        SamplesWorkspace {
             h: vec![0.0; w.hidden()],
             y: vec![0.0; w.outputs()],
             r: vec![0.0; rows],
@@ -148,7 +148,7 @@ pub fn objective(s: &Samples, w: &Weights, lambda: f64, grad: &mut DVector<f64>)
     let (nh, ni, no) = (w.hidden(), w.inputs(), w.outputs());
     let (off_b1, off_w2, off_b2) = (nh * ni, nh * ni + nh, nh * ni + nh + no * nh);
     let m = s.components().max(1) as f64;
-    let mut ws = Scratch::new(w, s.rows());
+    let mut ws = SamplesWorkspace::new(w, s.rows());
     grad.fill(0.0);
     let mut sum = 0.0;
     for k in 0..s.len() {
