@@ -1,0 +1,202 @@
+//! Measurement sets: joint configurations with what a sensor observed there.
+//!
+//! One row is one configuration. It may carry a position (mm), an orientation, a ball-bar
+//! distance (mm, on the second row of a pair) and per-row standard deviations. How the rows are
+//! used (full pose, position, orientation, relative position, distance) is chosen by the
+//! consumer; [`pairs`](super::pairs) groups rows for relative and distance use.
+
+mod read;
+mod write;
+
+pub use read::{ReadOptions, ReadReport, parse_measurements, read_canonical, read_measurements};
+pub use write::{Layout, MeasurementWriter, measurements_to_csv, write_measurements};
+
+use super::profile::Profile;
+use super::table::Table;
+use crate::error::{IN_MEMORY, Result};
+use crate::geometry::Pose;
+use crate::model::{JointType, Robot};
+use nalgebra::{Rotation3, Translation3, Vector3};
+use std::path::{Path, PathBuf};
+
+/// One measured configuration (internal units: rad, mm).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measurement {
+    /// 1-based line in the source file (0 for generated rows).
+    pub line: usize,
+    /// Free-text row label from the `id` column, if any.
+    pub id: Option<String>,
+    /// Free-text group label from the `set` column, if any.
+    pub set: Option<String>,
+    /// Pair label from the `pair` column: the two rows sharing it form a relative or distance
+    /// pair (see [`pairs`](super::pairs)).
+    pub pair: Option<String>,
+    /// Joints (rad, or mm for prismatic).
+    pub q: Vec<f64>,
+    /// Measured tool position (mm).
+    pub position: Option<Vector3<f64>>,
+    /// Measured tool orientation.
+    pub rotation: Option<Rotation3<f64>>,
+    /// Measured distance to the other row of its pair (mm), as a ball-bar gives.
+    pub distance: Option<f64>,
+    /// Standard deviation of each position coordinate (mm).
+    pub sigma_position: Option<Vector3<f64>>,
+    /// Standard deviation of each orientation component (rad).
+    pub sigma_rotation: Option<Vector3<f64>>,
+    /// Cells of the carried-through columns.
+    pub extra: Vec<String>,
+}
+
+impl Measurement {
+    /// A row with joints only.
+    pub fn new(q: Vec<f64>) -> Self {
+        Measurement {
+            line: 0,
+            id: None,
+            set: None,
+            pair: None,
+            q,
+            position: None,
+            rotation: None,
+            distance: None,
+            sigma_position: None,
+            sigma_rotation: None,
+            extra: Vec::new(),
+        }
+    }
+
+    /// The measured pose, when both position and orientation are present.
+    pub fn pose(&self) -> Option<Pose> {
+        Some(Pose::from_parts(
+            Translation3::from(self.position?),
+            self.rotation?,
+        ))
+    }
+}
+
+/// A measurement file's rows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeasurementSet {
+    /// The file the rows were read from ([`IN_MEMORY`] for a set built in code).
+    pub source: PathBuf,
+    /// The measured configurations, in file order.
+    pub rows: Vec<Measurement>,
+    /// Names of the carried-through columns.
+    pub extra_columns: Vec<String>,
+}
+
+impl MeasurementSet {
+    /// A set built in code; its rows' `line` fields are theirs to set (0 for none), and
+    /// errors name the set [`IN_MEMORY`].
+    pub fn from_rows(rows: Vec<Measurement>) -> MeasurementSet {
+        MeasurementSet {
+            source: PathBuf::from(IN_MEMORY),
+            rows,
+            extra_columns: Vec::new(),
+        }
+    }
+
+    /// Parses canonical measurement CSV given as text (in code) for `robot`, with the rules
+    /// of [`read_measurements`] and default options; errors name [`IN_MEMORY`] and the line.
+    pub fn from_csv(text: &str, robot: &Robot) -> Result<(MeasurementSet, ReadReport)> {
+        let t = Table::parse(text.as_bytes(), Path::new(IN_MEMORY), b',', false)?;
+        parse_measurements(
+            &t,
+            &JointInfo::of(robot),
+            &Profile::default(),
+            &ReadOptions::default(),
+        )
+    }
+
+    /// Whether every row has a measured position.
+    pub fn has_position(&self) -> bool {
+        !self.rows.is_empty() && self.rows.iter().all(|r| r.position.is_some())
+    }
+
+    /// Whether every row has a measured orientation.
+    pub fn has_rotation(&self) -> bool {
+        !self.rows.is_empty() && self.rows.iter().all(|r| r.rotation.is_some())
+    }
+
+    /// Whether some row has a measured distance.
+    pub fn has_distance(&self) -> bool {
+        self.rows.iter().any(|r| r.distance.is_some())
+    }
+}
+
+/// What reading and writing need to know of each joint.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointInfo {
+    /// Revolute (values in rad) or prismatic (values in mm).
+    pub joint_type: JointType,
+    /// Limits (rad or mm); None when no robot is known and limits cannot be checked.
+    pub limits: Option<[f64; 2]>,
+}
+
+impl JointInfo {
+    /// The joints of a robot, with their limits.
+    pub fn of(robot: &Robot) -> Vec<JointInfo> {
+        robot
+            .joints()
+            .iter()
+            .map(|j| JointInfo {
+                joint_type: j.joint_type,
+                limits: Some(j.limits_internal()),
+            })
+            .collect()
+    }
+
+    /// N revolute joints without limits (for reading without a robot file).
+    pub fn revolute(n: usize) -> Vec<JointInfo> {
+        vec![
+            JointInfo {
+                joint_type: JointType::Revolute,
+                limits: None,
+            };
+            n
+        ]
+    }
+
+    fn outside(joints: &[JointInfo], q: &[f64]) -> bool {
+        joints.iter().zip(q).any(|(j, v)| {
+            j.limits
+                .is_some_and(|[lo, hi]| *v < lo - 1e-9 || *v > hi + 1e-9)
+        })
+    }
+}
+
+/// "2, 5, 9" (at most 20 lines, then "...").
+pub fn list_lines(lines: &[usize]) -> String {
+    let mut s: Vec<String> = lines.iter().take(20).map(|l| l.to_string()).collect();
+    if lines.len() > 20 {
+        s.push(format!("... ({} more)", lines.len() - 20));
+    }
+    s.join(", ")
+}
+
+/// Splits a set into two by a seeded random draw: `fraction` of the rows (rounded) go to the
+/// first part; both keep file order.
+pub fn split(set: &MeasurementSet, fraction: f64, seed: u64) -> (MeasurementSet, MeasurementSet) {
+    use rand::SeedableRng;
+    use rand::seq::SliceRandom;
+    let n = set.rows.len();
+    let mut idx: Vec<usize> = (0..n).collect();
+    idx.shuffle(&mut rand_chacha::ChaCha8Rng::seed_from_u64(seed));
+    let k = ((n as f64) * fraction.clamp(0.0, 1.0)).round() as usize;
+    let mut first = vec![false; n];
+    for &i in &idx[..k] {
+        first[i] = true;
+    }
+    let part = |want: bool| MeasurementSet {
+        source: set.source.clone(),
+        rows: set
+            .rows
+            .iter()
+            .zip(&first)
+            .filter(|(_, f)| **f == want)
+            .map(|(m, _)| m.clone())
+            .collect(),
+        extra_columns: set.extra_columns.clone(),
+    };
+    (part(true), part(false))
+}

@@ -1,0 +1,426 @@
+//! Reading measurement files: columns through a profile, units converted to mm and rad,
+//! every value bounded, and what the read noticed (warnings, dropped rows).
+
+use super::{JointInfo, Measurement, MeasurementSet, list_lines};
+use crate::data::joint_columns;
+use crate::data::profile::{AngleUnit, Profile};
+use crate::data::table::{Table, shown};
+use crate::error::{Error, Location, Result};
+use crate::geometry::rotation::EulerConvention;
+use crate::model::{JointType, MAX_LENGTH_MM, Robot};
+use nalgebra::Vector3;
+use std::path::Path;
+
+/// How strictly rows are read.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ReadOptions {
+    /// Joints outside the limits are an error instead of a warning.
+    pub strict: bool,
+    /// Rows that do not parse are dropped and listed instead of stopping the read.
+    pub skip_bad_rows: bool,
+}
+
+/// What a read noticed: warnings, and the rows it dropped (with `skip_bad_rows`).
+#[derive(Debug, Clone, Default)]
+pub struct ReadReport {
+    /// Warnings for the user (joints outside limits, suspicious units, ...), one per message.
+    pub warnings: Vec<String>,
+    /// (line, reason) of each dropped row.
+    pub skipped: Vec<(usize, String)>,
+}
+
+/// Column indices of one group of three (x, y, z style); all present or all absent.
+fn group(t: &Table, names: &[String; 3], what: &str) -> Result<Option<[usize; 3]>> {
+    let idx: Vec<Option<usize>> = names.iter().map(|n| t.column(n)).collect();
+    match idx.iter().filter(|i| i.is_some()).count() {
+        0 => Ok(None),
+        3 => Ok(Some([
+            idx[0].unwrap_or(0),
+            idx[1].unwrap_or(0),
+            idx[2].unwrap_or(0),
+        ])),
+        _ => {
+            let missing: Vec<&str> = names
+                .iter()
+                .zip(&idx)
+                .filter(|(_, i)| i.is_none())
+                .map(|(n, _)| n.as_str())
+                .collect();
+            Err(Error::input(
+                Location::at(&t.path, 1, missing.join(", ")),
+                format!("{what} columns must come as a group of three; missing column(s)"),
+            ))
+        }
+    }
+}
+
+/// Reads a measurement file for `robot` through `profile` ([`Profile::default`] reads
+/// canonical CSV).
+pub fn read_measurements(
+    path: &Path,
+    robot: &Robot,
+    profile: &Profile,
+    opts: &ReadOptions,
+) -> Result<(MeasurementSet, ReadReport)> {
+    let t = Table::read_with(path, profile.delimiter, profile.decimal_comma)?;
+    parse_measurements(&t, &JointInfo::of(robot), profile, opts)
+}
+
+/// Reads a canonical CSV measurement file (the shipped sets) with default options; what the
+/// read noticed is dropped, so use [`read_measurements`] for user data.
+pub fn read_canonical(path: &Path, robot: &Robot) -> Result<MeasurementSet> {
+    Ok(read_measurements(path, robot, &Profile::default(), &ReadOptions::default())?.0)
+}
+
+/// The columns a table's measurements are read from (indices into its header).
+struct Columns {
+    joints: Vec<usize>,
+    position: Option<[usize; 3]>,
+    angles: Option<[usize; 3]>,
+    sigma_position: Option<[usize; 3]>,
+    sigma_angles: Option<[usize; 3]>,
+    distance: Option<usize>,
+    id: Option<usize>,
+    set: Option<usize>,
+    pair: Option<usize>,
+    /// The carried-through columns: every other one.
+    extra: Vec<usize>,
+}
+
+impl Columns {
+    /// The profile's columns in `t` for `n` joints; a missing joint column, a partial group
+    /// or no measurement column at all is an error naming the file.
+    fn resolve(t: &Table, n: usize, profile: &Profile) -> Result<Columns> {
+        let cols = &profile.columns;
+        let joint_names = cols.joints.clone().unwrap_or_else(|| joint_columns(n));
+        if joint_names.len() != n {
+            return Err(Error::input(
+                Location::file(&t.path),
+                format!(
+                    "the profile names {} joint columns, the robot has {n} joints",
+                    joint_names.len()
+                ),
+            ));
+        }
+        let joints: Vec<usize> = joint_names
+            .iter()
+            .map(|c| t.require(c))
+            .collect::<Result<_>>()?;
+        let position = group(t, &cols.position, "position")?;
+        let angles = group(t, &cols.angles, "orientation")?;
+        let sigma_position = group(t, &cols.sigma_position, "position sigma")?;
+        let sigma_angles = group(t, &cols.sigma_angles, "orientation sigma")?;
+        let distance = t.column(&cols.distance);
+        if position.is_none() && angles.is_none() && distance.is_none() {
+            return Err(Error::input(
+                Location::file(&t.path),
+                format!(
+                    "no measurement columns: expected position ({}), orientation ({}) or distance ({})",
+                    cols.position.join(", "),
+                    cols.angles.join(", "),
+                    cols.distance
+                ),
+            ));
+        }
+        let (id, set, pair) = (
+            t.column(&cols.id),
+            t.column(&cols.set),
+            t.column(&cols.pair),
+        );
+        let mut used: Vec<usize> = joints.clone();
+        for g in [position, angles, sigma_position, sigma_angles]
+            .into_iter()
+            .flatten()
+        {
+            used.extend(g);
+        }
+        used.extend([distance, id, set, pair].into_iter().flatten());
+        let extra = (0..t.headers.len()).filter(|i| !used.contains(i)).collect();
+        Ok(Columns {
+            joints,
+            position,
+            angles,
+            sigma_position,
+            sigma_angles,
+            distance,
+            id,
+            set,
+            pair,
+            extra,
+        })
+    }
+}
+
+/// Row `r`'s cell at `col` beyond `max` (after unit conversion: mm, rad) as an error: a
+/// finite 1e300 would otherwise reach the solvers (and read as a perfect fit).
+fn bound(t: &Table, r: usize, col: usize, v: f64, max: f64, what: &str) -> Result<()> {
+    if v.abs() > max {
+        return Err(Error::input(
+            t.location(r, col),
+            format!(
+                "`{}` is beyond the bound of a {what}",
+                shown(&t.rows[r][col])
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Row `r` of `t` as a measurement (internal units), every value within its bounds.
+fn parse_row(
+    t: &Table,
+    r: usize,
+    c: &Columns,
+    joints: &[JointInfo],
+    profile: &Profile,
+) -> Result<Measurement> {
+    let (lu, au) = (profile.length_unit, profile.angle_unit);
+    let raw = t.numbers(r, &c.joints)?;
+    let q: Vec<f64> = raw
+        .iter()
+        .zip(joints)
+        .map(|(&v, j)| match j.joint_type {
+            JointType::Revolute => profile.joint_unit.to_rad(v),
+            JointType::Prismatic => lu.to_mm(v),
+        })
+        .collect();
+    let vec3 = |idx: [usize; 3], f: &dyn Fn(f64) -> f64| -> Result<Vector3<f64>> {
+        let v = t.numbers(r, &idx)?;
+        Ok(Vector3::new(f(v[0]), f(v[1]), f(v[2])))
+    };
+    let mut m = Measurement::new(q);
+    m.line = t.lines[r];
+    if let Some(i) = c.position {
+        m.position = Some(vec3(i, &|v| lu.to_mm(v))?);
+    }
+    if let Some(i) = c.angles {
+        let a = vec3(i, &|v| au.to_rad(v))?;
+        for k in 0..3 {
+            bound(
+                t,
+                r,
+                i[k],
+                a[k],
+                crate::model::file::MAX_ANGLE_DEG.to_radians(),
+                "orientation angle (2 turns)",
+            )?;
+        }
+        // Columns are the angles about x, y, z; each convention takes them in its order.
+        let ordered = match profile.euler {
+            EulerConvention::Zyx => [a.z, a.y, a.x],
+            EulerConvention::XyzIntrinsic | EulerConvention::XyzExtrinsic => [a.x, a.y, a.z],
+        };
+        m.rotation = Some(profile.euler.to_rotation(ordered));
+    }
+    if let Some(i) = c.sigma_position {
+        m.sigma_position = Some(vec3(i, &|v| lu.to_mm(v))?);
+    }
+    if let Some(i) = c.sigma_angles {
+        m.sigma_rotation = Some(vec3(i, &|v| au.to_rad(v))?);
+    }
+    check_bounds(t, r, c, &m, joints)?;
+    if let Some(i) = c.distance {
+        m.distance = t.optional_number(r, i)?;
+        if let Some(d) = m.distance {
+            bound(t, r, i, lu.to_mm(d), MAX_LENGTH_MM, "distance (100 m)")?;
+        }
+        if m.distance.is_some_and(|d| d < 0.0) {
+            return Err(Error::input(
+                t.location(r, i),
+                "a distance cannot be negative",
+            ));
+        }
+        m.distance = m.distance.map(|d| lu.to_mm(d));
+    }
+    let text = |i: Option<usize>| i.map(|i| t.rows[r][i].clone()).filter(|s| !s.is_empty());
+    m.id = text(c.id);
+    m.set = text(c.set);
+    m.pair = text(c.pair);
+    m.extra = c
+        .extra
+        .iter()
+        .map(|&i| {
+            let cell = &t.rows[r][i];
+            // Numbers written with a decimal comma are carried as canonical numbers.
+            if t.decimal_comma && cell.replace(',', ".").parse::<f64>().is_ok() {
+                cell.replace(',', ".")
+            } else {
+                cell.clone()
+            }
+        })
+        .collect();
+    Ok(m)
+}
+
+/// The bounds of a parsed row's values (mm, rad): standard deviations positive, joints
+/// within 4 turns (100 m), positions within 100 m, standard deviations from 1 nm (1 nrad)
+/// to 1 m (1 rad): a smaller one weighs its row by 1e18 and more, which no instrument
+/// justifies.
+fn check_bounds(
+    t: &Table,
+    r: usize,
+    c: &Columns,
+    m: &Measurement,
+    joints: &[JointInfo],
+) -> Result<()> {
+    for (idx, v) in [c.sigma_position, c.sigma_angles]
+        .iter()
+        .zip([m.sigma_position, m.sigma_rotation])
+        .filter_map(|(i, v)| i.zip(v))
+    {
+        if let Some(k) = (0..3).find(|&k| v[k] <= 0.0) {
+            return Err(Error::input(
+                t.location(r, idx[k]),
+                "a standard deviation must be positive",
+            ));
+        }
+    }
+    let max_joint = crate::model::file::MAX_JOINT_DEG.to_radians();
+    for ((&col, &v), j) in c.joints.iter().zip(&m.q).zip(joints) {
+        match j.joint_type {
+            JointType::Revolute => bound(t, r, col, v, max_joint, "joint angle (4 turns)")?,
+            JointType::Prismatic => bound(t, r, col, v, MAX_LENGTH_MM, "joint length (100 m)")?,
+        }
+    }
+    if let (Some(i), Some(p)) = (c.position, m.position) {
+        for k in 0..3 {
+            bound(t, r, i[k], p[k], MAX_LENGTH_MM, "position (100 m)")?;
+        }
+    }
+    for (idx, v, min, max, what) in [
+        (
+            c.sigma_position,
+            m.sigma_position,
+            1e-6,
+            1e3,
+            "position standard deviation (1 nm to 1 m)",
+        ),
+        (
+            c.sigma_angles,
+            m.sigma_rotation,
+            1e-9,
+            1.0,
+            "orientation standard deviation (1 nrad to 1 rad)",
+        ),
+    ] {
+        if let (Some(i), Some(v)) = (idx, v) {
+            for k in 0..3 {
+                bound(t, r, i[k], v[k], max, what)?;
+                if v[k] < min {
+                    return Err(Error::input(
+                        t.location(r, i[k]),
+                        format!(
+                            "`{}` is below the bound of a {what}",
+                            shown(&t.rows[r][i[k]])
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Warnings (errors with `strict`) about the rows as a whole: joints outside the limits, and
+/// joint values that look like the other angle unit.
+fn check_joints(
+    t: &Table,
+    rows: &[Measurement],
+    joints: &[JointInfo],
+    profile: &Profile,
+    opts: &ReadOptions,
+    report: &mut ReadReport,
+) -> Result<()> {
+    let outside: Vec<usize> = rows
+        .iter()
+        .filter(|m| JointInfo::outside(joints, &m.q))
+        .map(|m| m.line)
+        .collect();
+    if !outside.is_empty() {
+        let msg = format!(
+            "{} row(s) have joints outside the robot's limits (lines {})",
+            outside.len(),
+            list_lines(&outside)
+        );
+        if opts.strict {
+            return Err(Error::input(Location::file(&t.path), msg));
+        }
+        report.warnings.push(msg);
+    }
+    // Units that look wrong: the largest revolute joint value, in the file's unit.
+    let in_file_unit = |q: f64| match profile.joint_unit {
+        AngleUnit::Deg => q.to_degrees().abs(),
+        AngleUnit::Rad => q.abs(),
+    };
+    let max_joint = rows
+        .iter()
+        .flat_map(|m| m.q.iter().zip(joints))
+        .filter(|(_, j)| j.joint_type == JointType::Revolute)
+        .map(|(&q, _)| in_file_unit(q))
+        .fold(0.0, f64::max);
+    if profile.joint_unit == AngleUnit::Deg
+        && rows.len() >= 3
+        && max_joint > 0.0
+        && max_joint <= 6.3
+    {
+        report.warnings.push(
+            "every joint value is within +-6.3 although the file's joints are in degrees: \
+             are they radians? (set joint_unit = \"rad\" in a profile)"
+                .to_string(),
+        );
+    }
+    if profile.joint_unit == AngleUnit::Rad && max_joint > 7.0 {
+        report.warnings.push(format!(
+            "joint values reach {max_joint:.1} although the file's joints are in radians: are they degrees?"
+        ));
+    }
+    Ok(())
+}
+
+/// Turns a table into measurements; see [`read_measurements`].
+pub fn parse_measurements(
+    t: &Table,
+    joints: &[JointInfo],
+    profile: &Profile,
+    opts: &ReadOptions,
+) -> Result<(MeasurementSet, ReadReport)> {
+    let c = Columns::resolve(t, joints.len(), profile)?;
+    let cols = &profile.columns;
+    let mut report = ReadReport::default();
+    if c.sigma_position.is_none() && cols.sigma_position[0] != "sx" {
+        report.warnings.push(format!(
+            "no position sigma columns ({}) in this file: the set-level sigma applies",
+            cols.sigma_position.join(", ")
+        ));
+    }
+    if !opts.skip_bad_rows {
+        t.reject_malformed()?;
+    }
+    let mut bad: Vec<(usize, String)> = t
+        .malformed
+        .iter()
+        .map(|(line, msg)| (*line, format!("{}:{line}: {msg}", t.path.display())))
+        .collect();
+    let mut rows = Vec::with_capacity(t.rows.len());
+    for r in 0..t.rows.len() {
+        match parse_row(t, r, &c, joints, profile) {
+            Ok(m) => rows.push(m),
+            Err(e) if opts.skip_bad_rows => bad.push((t.lines[r], e.to_string())),
+            Err(e) => return Err(e),
+        }
+    }
+    bad.sort_by_key(|(line, _)| *line);
+    report.skipped = bad;
+    if rows.is_empty() {
+        return Err(Error::input(Location::file(&t.path), "no measurement rows"));
+    }
+    check_joints(t, &rows, joints, profile, opts, &mut report)?;
+    Ok((
+        MeasurementSet {
+            source: t.path.clone(),
+            rows,
+            extra_columns: c.extra.iter().map(|&i| t.headers[i].clone()).collect(),
+        },
+        report,
+    ))
+}

@@ -1,0 +1,179 @@
+//! Writing measurement files: canonical CSV, whole or streamed row by row.
+
+use super::{JointInfo, Measurement, MeasurementSet};
+use crate::data::joint_columns;
+use crate::data::table::CsvOut;
+use crate::error::{Error, Result};
+use crate::geometry::rotation::rotation_to_zyx;
+use std::path::Path;
+
+/// The columns of a canonical measurement CSV: which optional groups it has, and the
+/// carried-through columns.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Layout {
+    /// Has an `id` column.
+    pub id: bool,
+    /// Has a `set` column.
+    pub set: bool,
+    /// Has a `pair` column.
+    pub pair: bool,
+    /// Has the position columns `x, y, z` (mm).
+    pub position: bool,
+    /// Has the orientation columns `rz, ry, rx` (deg, R = Rz Ry Rx).
+    pub rotation: bool,
+    /// Has a `distance` column (mm).
+    pub distance: bool,
+    /// Has the position sigma columns `sx, sy, sz` (mm).
+    pub sigma_position: bool,
+    /// Has the orientation sigma columns `srx, sry, srz` (deg).
+    pub sigma_rotation: bool,
+    /// Names of the carried-through columns, written last in this order.
+    pub extra: Vec<String>,
+}
+
+impl Layout {
+    /// The groups some row of `set` has.
+    pub fn of(set: &MeasurementSet) -> Layout {
+        let any = |f: &dyn Fn(&Measurement) -> bool| set.rows.iter().any(f);
+        Layout {
+            id: any(&|m| m.id.is_some()),
+            set: any(&|m| m.set.is_some()),
+            pair: any(&|m| m.pair.is_some()),
+            position: any(&|m| m.position.is_some()),
+            rotation: any(&|m| m.rotation.is_some()),
+            distance: any(&|m| m.distance.is_some()),
+            sigma_position: any(&|m| m.sigma_position.is_some()),
+            sigma_rotation: any(&|m| m.sigma_rotation.is_some()),
+            extra: set.extra_columns.clone(),
+        }
+    }
+
+    /// The header row (joints in file units: deg, or mm for prismatic).
+    pub fn headers(&self, joints: &[JointInfo]) -> Vec<String> {
+        let mut headers: Vec<String> = Vec::new();
+        let joints = joint_columns(joints.len());
+        let joints: Vec<&str> = joints.iter().map(String::as_str).collect();
+        let mut push = |on: bool, names: &[&str]| {
+            if on {
+                headers.extend(names.iter().map(|s| s.to_string()));
+            }
+        };
+        push(self.id, &["id"]);
+        push(self.set, &["set"]);
+        push(self.pair, &["pair"]);
+        push(true, &joints);
+        push(self.position, &["x", "y", "z"]);
+        push(self.rotation, &["rz", "ry", "rx"]);
+        push(self.distance, &["distance"]);
+        push(self.sigma_position, &["sx", "sy", "sz"]);
+        push(self.sigma_rotation, &["srx", "sry", "srz"]);
+        headers.extend(self.extra.iter().cloned());
+        headers
+    }
+
+    /// The cells of one row (mm, deg), blank where the row lacks a group the layout has.
+    pub fn cells(&self, m: &Measurement, joints: &[JointInfo]) -> Vec<String> {
+        let num = |v: f64| format!("{v}");
+        let mut c: Vec<String> = Vec::new();
+        let text = |o: &Option<String>| o.clone().unwrap_or_default();
+        if self.id {
+            c.push(text(&m.id));
+        }
+        if self.set {
+            c.push(text(&m.set));
+        }
+        if self.pair {
+            c.push(text(&m.pair));
+        }
+        c.extend(
+            m.q.iter()
+                .zip(joints)
+                .map(|(&v, j)| num(j.joint_type.to_file(v))),
+        );
+        let opt3 = |c: &mut Vec<String>, on: bool, v: Option<[f64; 3]>| {
+            if on {
+                match v {
+                    Some(v) => c.extend(v.map(num)),
+                    None => c.extend([String::new(), String::new(), String::new()]),
+                }
+            }
+        };
+        opt3(&mut c, self.position, m.position.map(|p| [p.x, p.y, p.z]));
+        opt3(
+            &mut c,
+            self.rotation,
+            m.rotation.map(|r| rotation_to_zyx(&r).map(f64::to_degrees)),
+        );
+        if self.distance {
+            c.push(m.distance.map(num).unwrap_or_default());
+        }
+        opt3(
+            &mut c,
+            self.sigma_position,
+            m.sigma_position.map(|s| [s.x, s.y, s.z]),
+        );
+        opt3(
+            &mut c,
+            self.sigma_rotation,
+            m.sigma_rotation
+                .map(|s| [s.x, s.y, s.z].map(f64::to_degrees)),
+        );
+        c.extend(m.extra.iter().cloned());
+        c
+    }
+}
+
+/// A set as canonical CSV bytes.
+pub fn measurements_to_csv(set: &MeasurementSet, joints: &[JointInfo]) -> Result<Vec<u8>> {
+    let layout = Layout::of(set);
+    let mut out = CsvOut::new(&layout.headers(joints))?;
+    for m in &set.rows {
+        out.row(&layout.cells(m, joints))?;
+    }
+    out.into_bytes()
+}
+
+/// Writes a set as canonical CSV, atomically.
+pub fn write_measurements(set: &MeasurementSet, joints: &[JointInfo], path: &Path) -> Result<()> {
+    crate::io::write_atomic(path, &measurements_to_csv(set, joints)?)
+}
+
+/// Canonical CSV streamed row by row to a file that appears whole on
+/// [`MeasurementWriter::finish`] (a million simulated rows need no memory).
+pub struct MeasurementWriter {
+    w: csv::Writer<crate::io::AtomicWriter>,
+    layout: Layout,
+    joints: Vec<JointInfo>,
+}
+
+impl MeasurementWriter {
+    /// Starts a file at `path` with `layout`'s columns and writes its header row; nothing
+    /// appears at `path` until [`finish`](Self::finish).
+    pub fn create(path: &Path, layout: Layout, joints: &[JointInfo]) -> Result<Self> {
+        let mut w = csv::Writer::from_writer(crate::io::AtomicWriter::create(path)?);
+        let csv_err = |e: csv::Error| Error::Invalid(format!("{}: {e}", path.display()));
+        w.write_record(layout.headers(joints)).map_err(csv_err)?;
+        Ok(MeasurementWriter {
+            w,
+            layout,
+            joints: joints.to_vec(),
+        })
+    }
+
+    /// Writes one row (in file units: deg, mm), blank where it lacks a group of the layout.
+    pub fn write(&mut self, m: &Measurement) -> Result<()> {
+        let cells = self.layout.cells(m, &self.joints);
+        self.w
+            .write_record(cells)
+            .map_err(|e| Error::Invalid(format!("{}: {e}", self.w.get_ref().path().display())))
+    }
+
+    /// Flushes the rows and moves the file into place (or stages it for the open transaction).
+    pub fn finish(self) -> Result<()> {
+        let path = self.w.get_ref().path().to_path_buf();
+        self.w
+            .into_inner()
+            .map_err(|e| Error::Invalid(format!("{}: {}", path.display(), e.error())))?
+            .finish()
+    }
+}
