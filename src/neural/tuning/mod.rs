@@ -100,72 +100,19 @@ pub fn select_settings(
     opts: &CompensatorOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<(Settings, Option<Selection>)> {
-    let refines: Vec<Option<String>> = match &opts.refine {
-        Refine::Off => vec![None],
-        Refine::Auto => vec![None, Some(AUTO_REFINE.into())],
-        Refine::Params(p) => vec![None, Some(p.clone())],
-    };
-    let rbf_only = opts.network == Some(Network::Rbf);
-    let mix_only = opts.network == Some(Network::Mix);
-    if (rbf_only || mix_only) && opts.form == Some(Form::Joint) {
-        return Err(Error::Invalid(
-            "an RBF network acts on the pose residual: it has no joint form".into(),
-        ));
-    }
-    let forms: Vec<Form> = match opts.form {
-        Some(f) => vec![f],
-        None if rbf_only || mix_only => vec![Form::Pose],
-        None => Form::ALL.to_vec(),
-    };
-    let encodings: Vec<Encoding> = opts.encoding.map_or(Encoding::ALL.to_vec(), |e| vec![e]);
-    let fixed = |v: Option<usize>, all: &[usize]| v.map_or(all.to_vec(), |h| vec![h]);
-    let hiddens: Vec<usize> = if rbf_only {
-        vec![0]
-    } else {
-        fixed(opts.hidden, &HIDDEN)
-    };
-    let penalties: Vec<f64> = match opts.penalty {
-        _ if rbf_only => vec![0.0],
-        Some(p) => vec![p],
-        None => PENALTIES.to_vec(),
-    };
-    let base = if rbf_only {
-        Settings {
-            network: Network::Rbf,
-            form: Form::Pose,
-            encoding: opts.encoding.unwrap_or(Encoding::Angles),
-            hidden: 0,
-            penalty: 0.0,
-            members: opts.members.unwrap_or(1).min(1),
-            rbf_start: opts.rbf_start,
-            refine: refines[0].clone(),
-        }
-    } else {
-        Settings {
-            network: Network::Mlp,
-            form: forms[0],
-            encoding: opts.encoding.unwrap_or(Encoding::Gravity),
-            hidden: opts.hidden.unwrap_or(HIDDEN[1]),
-            penalty: opts.penalty.unwrap_or(PENALTIES[1]),
-            members: opts.members.unwrap_or(1),
-            rbf_start: opts.rbf_start,
-            refine: refines[0].clone(),
-        }
-    };
-    let starts: Vec<usize> = opts
-        .rbf_start
-        .map_or((0..rbf::STARTS.len()).collect(), |k| vec![k]);
-    // An RBF network (alone or with the MLPs) is tried where the network is left open, on
-    // the pose form, while its kernel matrix stays small.
-    let try_rbf =
-        opts.network.is_none() && forms.contains(&Form::Pose) && set.rows.len() <= RBF_MAX_ROWS;
-    let open = refines.len() > 1
-        || forms.len() > 1
-        || encodings.len() > 1
-        || hiddens.len() > 1
-        || penalties.len() > 1
-        || opts.members.is_none()
-        || try_rbf;
+    let Space {
+        refines,
+        rbf_only,
+        mix_only,
+        forms,
+        encodings,
+        hiddens,
+        penalties,
+        base,
+        starts,
+        try_rbf,
+        open,
+    } = Space::of(opts, set)?;
     if !open {
         // Nothing to choose (a fixed mix keeps the start of highest likelihood).
         let network = opts.network.unwrap_or(Network::Mlp);
@@ -215,92 +162,21 @@ pub fn select_settings(
         .iter()
         .map(|spec| parallel_map(k, |f| cv.model(f, spec)))
         .collect();
-    let done = AtomicUsize::new(0);
     let mut candidates: Vec<Candidate> = Vec::new();
     // Each candidate is first scored on the race folds; one that is already clearly worse
     // there than the best so far on the same folds is dropped before the other folds.
-    let race = if k > RACE_FOLDS { RACE_FOLDS } else { k };
+    let racer = Race {
+        cv: &cv,
+        refines: &refines,
+        refined: &refined,
+        k,
+        race: if k > RACE_FOLDS { RACE_FOLDS } else { k },
+        done: AtomicUsize::new(0),
+        rounds: &rounds,
+        progress,
+    };
     let evaluate = |stage: usize, list: Vec<Settings>, candidates: &mut Vec<Candidate>| {
-        let list: Vec<Settings> = list
-            .into_iter()
-            .filter(|s| !candidates.iter().any(|c| &c.settings == s))
-            .collect();
-        let total_now = done.load(Ordering::Relaxed) + list.len() * k;
-        let round = rounds.fetch_add(1, Ordering::Relaxed);
-        let run = |jobs: &[(usize, usize)]| {
-            parallel_map(jobs.len(), |j| {
-                let (c, f) = jobs[j];
-                let s = &list[c];
-                let r_idx = refines.iter().position(|r| r == &s.refine).unwrap_or(0);
-                let out = match &refined[r_idx][f] {
-                    Ok(m) => cv.run(f, s, m, round),
-                    Err(e) => Err(Error::Invalid(e.to_string())),
-                };
-                progress(done.fetch_add(1, Ordering::Relaxed) + 1, total_now);
-                out
-            })
-        };
-        let fold_jobs = |cs: &[usize], fs: std::ops::Range<usize>| -> Vec<(usize, usize)> {
-            cs.iter()
-                .flat_map(|&c| fs.clone().map(move |f| (c, f)))
-                .collect()
-        };
-        let all: Vec<usize> = (0..list.len()).collect();
-        let first = fold_jobs(&all, 0..race);
-        let mut results: HashMap<(usize, usize), Result<Sums>> =
-            first.iter().copied().zip(run(&first)).collect();
-        let race_sums = |c: usize, results: &HashMap<(usize, usize), Result<Sums>>| {
-            let mut t = Sums::default();
-            for f in 0..race {
-                t.add(*results[&(c, f)].as_ref().ok()?);
-            }
-            Some(t)
-        };
-        let rms = |t: &Sums| t.score().position_rms_mm;
-        let reference = candidates
-            .iter()
-            .filter(|c| c.score.is_some())
-            .filter_map(|c| c.race.as_ref().map(rms))
-            .chain(
-                all.iter()
-                    .filter_map(|&c| race_sums(c, &results).as_ref().map(rms)),
-            )
-            .fold(f64::INFINITY, f64::min);
-        let survivors: Vec<usize> = all
-            .iter()
-            .copied()
-            .filter(|&c| {
-                // The model alone fits nothing: nothing to save by dropping it.
-                race_sums(c, &results).is_some_and(|t| {
-                    list[c].members == 0 || rms(&t) <= reference * (1.0 + RACE_MARGIN)
-                })
-            })
-            .collect();
-        let rest = fold_jobs(&survivors, race..k);
-        results.extend(rest.iter().copied().zip(run(&rest)));
-        progress(total_now, total_now);
-        done.store(total_now, Ordering::Relaxed);
-        for (c, s) in list.into_iter().enumerate() {
-            let raced = race_sums(c, &results);
-            let mut total = Sums::default();
-            let mut error = None;
-            for f in 0..k {
-                match results.get(&(c, f)) {
-                    Some(Ok(x)) => total.add(*x),
-                    Some(Err(e)) => error = Some(e.to_string()),
-                    None => {}
-                }
-            }
-            let kept = survivors.contains(&c);
-            candidates.push(Candidate {
-                stage,
-                settings: s,
-                score: (error.is_none() && kept).then(|| total.score()),
-                pruned: (error.is_none() && !kept).then(|| total.score()),
-                error,
-                race: raced,
-            });
-        }
+        racer.evaluate(stage, list, candidates)
     };
     if rbf_only {
         // A fixed RBF network: its encoding and search start are open.
@@ -535,6 +411,216 @@ pub fn select_settings(
             rbf_hyper,
         }),
     ))
+}
+
+/// What the options leave open: the lists each stage of the search draws from, the
+/// settings it starts from, and whether anything is open at all.
+struct Space {
+    refines: Vec<Option<String>>,
+    rbf_only: bool,
+    mix_only: bool,
+    forms: Vec<Form>,
+    encodings: Vec<Encoding>,
+    hiddens: Vec<usize>,
+    penalties: Vec<f64>,
+    base: Settings,
+    starts: Vec<usize>,
+    try_rbf: bool,
+    open: bool,
+}
+
+impl Space {
+    fn of(opts: &CompensatorOptions, set: &MeasurementSet) -> Result<Space> {
+        let refines: Vec<Option<String>> = match &opts.refine {
+            Refine::Off => vec![None],
+            Refine::Auto => vec![None, Some(AUTO_REFINE.into())],
+            Refine::Params(p) => vec![None, Some(p.clone())],
+        };
+        let rbf_only = opts.network == Some(Network::Rbf);
+        let mix_only = opts.network == Some(Network::Mix);
+        if (rbf_only || mix_only) && opts.form == Some(Form::Joint) {
+            return Err(Error::Invalid(
+                "an RBF network acts on the pose residual: it has no joint form".into(),
+            ));
+        }
+        let forms: Vec<Form> = match opts.form {
+            Some(f) => vec![f],
+            None if rbf_only || mix_only => vec![Form::Pose],
+            None => Form::ALL.to_vec(),
+        };
+        let encodings: Vec<Encoding> = opts.encoding.map_or(Encoding::ALL.to_vec(), |e| vec![e]);
+        let fixed = |v: Option<usize>, all: &[usize]| v.map_or(all.to_vec(), |h| vec![h]);
+        let hiddens: Vec<usize> = if rbf_only {
+            vec![0]
+        } else {
+            fixed(opts.hidden, &HIDDEN)
+        };
+        let penalties: Vec<f64> = match opts.penalty {
+            _ if rbf_only => vec![0.0],
+            Some(p) => vec![p],
+            None => PENALTIES.to_vec(),
+        };
+        let base = if rbf_only {
+            Settings {
+                network: Network::Rbf,
+                form: Form::Pose,
+                encoding: opts.encoding.unwrap_or(Encoding::Angles),
+                hidden: 0,
+                penalty: 0.0,
+                members: opts.members.unwrap_or(1).min(1),
+                rbf_start: opts.rbf_start,
+                refine: refines[0].clone(),
+            }
+        } else {
+            Settings {
+                network: Network::Mlp,
+                form: forms[0],
+                encoding: opts.encoding.unwrap_or(Encoding::Gravity),
+                hidden: opts.hidden.unwrap_or(HIDDEN[1]),
+                penalty: opts.penalty.unwrap_or(PENALTIES[1]),
+                members: opts.members.unwrap_or(1),
+                rbf_start: opts.rbf_start,
+                refine: refines[0].clone(),
+            }
+        };
+        let starts: Vec<usize> = opts
+            .rbf_start
+            .map_or((0..rbf::STARTS.len()).collect(), |k| vec![k]);
+        // An RBF network (alone or with the MLPs) is tried where the network is left open, on
+        // the pose form, while its kernel matrix stays small.
+        let try_rbf =
+            opts.network.is_none() && forms.contains(&Form::Pose) && set.rows.len() <= RBF_MAX_ROWS;
+        let open = refines.len() > 1
+            || forms.len() > 1
+            || encodings.len() > 1
+            || hiddens.len() > 1
+            || penalties.len() > 1
+            || opts.members.is_none()
+            || try_rbf;
+        Ok(Space {
+            refines,
+            rbf_only,
+            mix_only,
+            forms,
+            encodings,
+            hiddens,
+            penalties,
+            base,
+            starts,
+            try_rbf,
+            open,
+        })
+    }
+}
+
+/// The race that scores candidates: each is fitted on the race folds first and dropped there
+/// when clearly worse than the best so far on the same folds ([`RACE_MARGIN`]); survivors
+/// are fitted on the other folds.
+struct Race<'a, 'c> {
+    cv: &'a Cv<'c>,
+    refines: &'a [Option<String>],
+    /// Each refinement's model per fold.
+    refined: &'a [Vec<Result<Robot>>],
+    /// Folds.
+    k: usize,
+    /// Race folds.
+    race: usize,
+    /// Fold fits done (for progress).
+    done: AtomicUsize,
+    /// Evaluation rounds so far (warm starts come from earlier rounds).
+    rounds: &'a AtomicUsize,
+    progress: &'a (dyn Fn(usize, usize) + Sync),
+}
+
+impl Race<'_, '_> {
+    /// Scores the settings of `list` not yet in `candidates` and appends them (stage
+    /// `stage`).
+    fn evaluate(&self, stage: usize, list: Vec<Settings>, candidates: &mut Vec<Candidate>) {
+        let list: Vec<Settings> = list
+            .into_iter()
+            .filter(|s| !candidates.iter().any(|c| &c.settings == s))
+            .collect();
+        let total_now = self.done.load(Ordering::Relaxed) + list.len() * self.k;
+        let round = self.rounds.fetch_add(1, Ordering::Relaxed);
+        let run = |jobs: &[(usize, usize)]| {
+            parallel_map(jobs.len(), |j| {
+                let (c, f) = jobs[j];
+                let s = &list[c];
+                let r_idx = self
+                    .refines
+                    .iter()
+                    .position(|r| r == &s.refine)
+                    .unwrap_or(0);
+                let out = match &self.refined[r_idx][f] {
+                    Ok(m) => self.cv.run(f, s, m, round),
+                    Err(e) => Err(Error::Invalid(e.to_string())),
+                };
+                (self.progress)(self.done.fetch_add(1, Ordering::Relaxed) + 1, total_now);
+                out
+            })
+        };
+        let fold_jobs = |cs: &[usize], fs: std::ops::Range<usize>| -> Vec<(usize, usize)> {
+            cs.iter()
+                .flat_map(|&c| fs.clone().map(move |f| (c, f)))
+                .collect()
+        };
+        let all: Vec<usize> = (0..list.len()).collect();
+        let first = fold_jobs(&all, 0..self.race);
+        let mut results: HashMap<(usize, usize), Result<Sums>> =
+            first.iter().copied().zip(run(&first)).collect();
+        let race_sums = |c: usize, results: &HashMap<(usize, usize), Result<Sums>>| {
+            let mut t = Sums::default();
+            for f in 0..self.race {
+                t.add(*results[&(c, f)].as_ref().ok()?);
+            }
+            Some(t)
+        };
+        let rms = |t: &Sums| t.score().position_rms_mm;
+        let reference = candidates
+            .iter()
+            .filter(|c| c.score.is_some())
+            .filter_map(|c| c.race.as_ref().map(rms))
+            .chain(
+                all.iter()
+                    .filter_map(|&c| race_sums(c, &results).as_ref().map(rms)),
+            )
+            .fold(f64::INFINITY, f64::min);
+        let survivors: Vec<usize> = all
+            .iter()
+            .copied()
+            .filter(|&c| {
+                // The model alone fits nothing: nothing to save by dropping it.
+                race_sums(c, &results).is_some_and(|t| {
+                    list[c].members == 0 || rms(&t) <= reference * (1.0 + RACE_MARGIN)
+                })
+            })
+            .collect();
+        let rest = fold_jobs(&survivors, self.race..self.k);
+        results.extend(rest.iter().copied().zip(run(&rest)));
+        (self.progress)(total_now, total_now);
+        self.done.store(total_now, Ordering::Relaxed);
+        for (c, s) in list.into_iter().enumerate() {
+            let raced = race_sums(c, &results);
+            let mut total = Sums::default();
+            let mut error = None;
+            for f in 0..self.k {
+                match results.get(&(c, f)) {
+                    Some(Ok(x)) => total.add(*x),
+                    Some(Err(e)) => error = Some(e.to_string()),
+                    None => {}
+                }
+            }
+            let kept = survivors.contains(&c);
+            candidates.push(Candidate {
+                stage,
+                settings: s,
+                score: (error.is_none() && kept).then(|| total.score()),
+                pruned: (error.is_none() && !kept).then(|| total.score()),
+                error,
+                race: raced,
+            });
+        }
+    }
 }
 
 /// The best-scored pose-form MLP candidate, the partner of a mixed candidate.
