@@ -4,10 +4,10 @@ use super::output::{OutputArgs, joints_arg, num};
 use super::predict::load_compensator;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use robocal::compensation::{CalibratedModel, Failure, FakeTargetSolver};
+use robocal::compensation::{CalibratedModel, Command, Failure, FakeTargetSolver};
 use robocal::data::{POSE_COLUMNS, TargetTable, joint_columns};
 use robocal::kinematics::pose_to_file;
-use robocal::model::read_robot;
+use robocal::model::{Robot, read_robot};
 use robocal::reports::compensate::TargetFailure;
 use robocal::reports::{CompensateReport, Report};
 use std::io::IsTerminal;
@@ -90,17 +90,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
 
     let tt = TargetTable::read(&a.targets, &nominal, true)?;
     let with_orientation = tt.with_orientation;
-    let mut written: Vec<String> = Vec::new();
-    if !with_orientation {
-        written.extend(POSE_COLUMNS[3..].iter().map(|s| s.to_string()));
-    }
-    written.push("branch".into());
-    written.extend(joint_columns(n));
-    written.extend(POSE_COLUMNS.iter().map(|c| format!("cmd_{c}")));
-    written.extend(["residual_mm".into(), "residual_deg".into(), "status".into()]);
-    if comp.is_some() {
-        written.push(super::predict::DOMAIN_COLUMN.into());
-    }
+    let written = written_columns(n, with_orientation, comp.is_some());
     let headers = tt.output_headers(&written)?;
     let t = &tt.table;
 
@@ -122,16 +112,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         let mut row = t.rows[r].clone();
         match solver.solve(&desired, seed) {
             Ok(c) => {
-                let want = pose_to_file(&c.desired);
-                if !with_orientation {
-                    row.extend(want[3..].iter().map(|v| num(*v, d)));
-                }
-                row.push(c.branch.to_string());
-                row.extend(nominal.joints_to_file(&c.q).iter().map(|v| num(*v, d)));
-                row.extend(pose_to_file(&c.fake).iter().map(|v| num(*v, d)));
-                row.push(num(c.position_residual_mm, Some(9)));
-                row.push(num(c.rotation_residual_rad.to_degrees(), Some(9)));
-                row.push("ok".into());
+                row.extend(command_cells(&c, &nominal, with_orientation, d));
                 if let Some(cm) = &comp {
                     let check = cm.domain_check(&c.q, &mut dws);
                     if !check.inside() {
@@ -198,24 +179,65 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     if let Some(p) = &a.report {
         super::summary::write_report(p, &Report::Compensate(report))?;
     }
-    if !failed.is_empty() {
-        let mut msg = format!(
-            "{} of {total} targets have no command (marked in the status column, the rest were \
-             written):",
-            failed.len()
-        );
-        for (line, why) in failed.iter().take(20) {
-            // Where this command's seed joints come from.
-            let hint = match why {
-                Failure::NoSeed => " (give q1..qN columns or --seed)",
-                _ => "",
-            };
-            msg.push_str(&format!("\n  {}:{line}: {why}{hint}", a.targets.display()));
-        }
-        if failed.len() > 20 {
-            msg.push_str(&format!("\n  ... and {} more", failed.len() - 20));
-        }
-        return Ok(Some(msg));
+    Ok((!failed.is_empty()).then(|| failure_message(&a.targets, &failed, total)))
+}
+
+/// The columns compensate writes after the target file's: for position targets the
+/// orientation used, the branch, the joints, the command, the residuals and the status, and
+/// with a compensator the domain.
+fn written_columns(n: usize, with_orientation: bool, domain: bool) -> Vec<String> {
+    let mut written: Vec<String> = Vec::new();
+    if !with_orientation {
+        written.extend(POSE_COLUMNS[3..].iter().map(|s| s.to_string()));
     }
-    Ok(None)
+    written.push("branch".into());
+    written.extend(joint_columns(n));
+    written.extend(POSE_COLUMNS.iter().map(|c| format!("cmd_{c}")));
+    written.extend(["residual_mm".into(), "residual_deg".into(), "status".into()]);
+    if domain {
+        written.push(super::predict::DOMAIN_COLUMN.into());
+    }
+    written
+}
+
+/// The cells of a solved target, in [`written_columns`]' order (without the domain).
+fn command_cells(
+    c: &Command,
+    nominal: &Robot,
+    with_orientation: bool,
+    d: Option<usize>,
+) -> Vec<String> {
+    let mut row = Vec::new();
+    let want = pose_to_file(&c.desired);
+    if !with_orientation {
+        row.extend(want[3..].iter().map(|v| num(*v, d)));
+    }
+    row.push(c.branch.to_string());
+    row.extend(nominal.joints_to_file(&c.q).iter().map(|v| num(*v, d)));
+    row.extend(pose_to_file(&c.fake).iter().map(|v| num(*v, d)));
+    row.push(num(c.position_residual_mm, Some(9)));
+    row.push(num(c.rotation_residual_rad.to_degrees(), Some(9)));
+    row.push("ok".into());
+    row
+}
+
+/// The message of a run where some targets have no command: the first 20 by line.
+fn failure_message(targets: &std::path::Path, failed: &[(usize, Failure)], total: usize) -> String {
+    let mut msg = format!(
+        "{} of {total} targets have no command (marked in the status column, the rest were \
+         written):",
+        failed.len()
+    );
+    for (line, why) in failed.iter().take(20) {
+        // Where this command's seed joints come from.
+        let hint = match why {
+            Failure::NoSeed => " (give q1..qN columns or --seed)",
+            _ => "",
+        };
+        msg.push_str(&format!("\n  {}:{line}: {why}{hint}", targets.display()));
+    }
+    if failed.len() > 20 {
+        msg.push_str(&format!("\n  ... and {} more", failed.len() - 20));
+    }
+    msg
 }
