@@ -186,6 +186,149 @@ fn complete_frames(robot: &Robot, chosen: &[usize]) -> Result<(Robot, Vec<String
     Ok((out, notes))
 }
 
+/// The selection `chosen` (indices into `nominal`'s parameters) in the `completed` model:
+/// a base or tool row converted to a transform contributes all its fields.
+fn selection_in(nominal: &Robot, completed: &Robot, chosen: Vec<usize>) -> Result<Vec<usize>> {
+    if completed.parameters() == nominal.parameters() {
+        return Ok(chosen);
+    }
+    let old = nominal.parameters();
+    let names: Vec<String> = chosen.iter().map(|&c| old[c].name()).collect();
+    let mut spec: Vec<String> = names
+        .into_iter()
+        .filter(|n| !n.starts_with("base.") && !n.starts_with("tool."))
+        .collect();
+    for (slot, word) in [(Slot::Base, "base"), (Slot::Tool, "tool")] {
+        if chosen.iter().any(|&c| old[c].slot == slot) {
+            spec.push(word.into());
+        }
+    }
+    select(completed, &spec.join(","))
+}
+
+/// Refuses data with no more independent residual components than `k` identifiable
+/// parameters. Rows that repeat one configuration add no independent equation: 20
+/// measurements of one pose give 6 equations, whatever their number.
+fn enough_equations(set: &MeasurementSet, obs: &Observations, k: usize) -> Result<()> {
+    let distinct = {
+        let mut keys: Vec<Vec<i64>> = set
+            .rows
+            .iter()
+            .map(|m| m.q.iter().map(|v| (v * 1e9).round() as i64).collect())
+            .collect();
+        keys.sort_unstable();
+        keys.dedup();
+        keys.len()
+    };
+    let per_row = obs.len().div_ceil(set.rows.len().max(1));
+    if distinct * per_row <= k {
+        return Err(Error::Invalid(format!(
+            "{}: {} rows hold {distinct} distinct configuration(s), at most {} independent \
+             residual components for {k} identifiable parameters: more measurements of distinct \
+             configurations are needed",
+            set.source.display(),
+            set.rows.len(),
+            distinct * per_row,
+        )));
+    }
+    if obs.len() <= k {
+        return Err(Error::Invalid(format!(
+            "{} residual components for {k} identifiable parameters: more measurements are needed",
+            obs.len(),
+        )));
+    }
+    Ok(())
+}
+
+/// The solve from `start` (Nelder-Mead or a gradient method), and with a robust loss its
+/// iteratively reweighted rounds (weights from the residuals in robust sigmas, 1.4826 x the
+/// median; at most 30 rounds, until no weight moves by 1e-6); the rounds taken.
+fn solve_robust(
+    start: &Robot,
+    obs: &mut Observations,
+    cols: &[usize],
+    opts: &Options,
+) -> Result<(Solution, usize)> {
+    let run = |start: &Robot, obs: &Observations| -> Result<Solution> {
+        match opts.solve.method {
+            Method::Nm => solve_nelder_mead(start, obs, cols, &opts.solve),
+            _ => solve_gradient(start, obs, cols, &opts.solve),
+        }
+    };
+    let mut solution = run(start, obs)?;
+    let mut robust_rounds = 0;
+    if let Some(loss) = opts.robust {
+        for _ in 0..30 {
+            robust_rounds += 1;
+            let e = normalized_residuals(&solution.robot, obs);
+            let scale = (1.4826 * median(&e)).max(1e-12);
+            let mut change: f64 = 0.0;
+            for (o, ei) in obs.items.iter_mut().zip(&e) {
+                let w = loss.weight(ei / scale);
+                change = change.max((w - o.weight).abs());
+                o.weight = w;
+            }
+            solution = run(&solution.robot, obs)?;
+            if change < 1e-6 {
+                break;
+            }
+        }
+    }
+    Ok((solution, robust_rounds))
+}
+
+/// Each identified parameter's nominal value, estimate and standard deviation (file units,
+/// from the covariance `cov`), and the pairs correlated beyond |r| > 0.9.
+fn parameter_reports(
+    nominal: &Robot,
+    estimate: &Robot,
+    ids: &[ParamId],
+    cov: &nalgebra::DMatrix<f64>,
+) -> (Vec<ParamReport>, Vec<(String, String, f64)>) {
+    let parameters = ids
+        .iter()
+        .enumerate()
+        .map(|(i, id)| ParamReport {
+            name: id.name(),
+            unit: id.field.file_unit().to_string(),
+            nominal: file_value(id, nominal.param(*id)),
+            estimate: file_value(id, estimate.param(*id)),
+            std: file_value(id, cov[(i, i)].sqrt()),
+        })
+        .collect();
+    let mut correlations = Vec::new();
+    for i in 0..ids.len() {
+        for j in i + 1..ids.len() {
+            let rho = cov[(i, j)] / (cov[(i, i)] * cov[(j, j)]).sqrt();
+            if rho.abs() > 0.9 {
+                correlations.push((ids[i].name(), ids[j].name(), rho));
+            }
+        }
+    }
+    (parameters, correlations)
+}
+
+/// Rows whose residual lies beyond `k` robust sigmas (1.4826 x the median), on the
+/// residuals unweighted by a robust loss.
+fn outliers(set: &MeasurementSet, obs: &Observations, robot: &Robot, k: f64) -> Vec<Outlier> {
+    let mut plain = obs.clone();
+    for o in plain.items.iter_mut() {
+        o.weight = 1.0;
+    }
+    let e = normalized_residuals(robot, &plain);
+    let scale = (1.4826 * median(&e)).max(1e-300);
+    plain
+        .items
+        .iter()
+        .zip(&e)
+        .filter(|(_, ei)| **ei > k * scale)
+        .map(|(o, ei)| Outlier {
+            line: set.rows[o.b.unwrap_or(o.a)].line,
+            robust_sigmas: ei / scale,
+        })
+        .collect()
+}
+
 /// Identifies `nominal`'s selected parameters from `set`.
 pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result<Identified> {
     let measure = opts.measure.unwrap_or_else(|| Measure::default_for(set));
@@ -193,23 +336,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
     let chosen = select(nominal, &opts.params)?;
     let (completed, notes) = complete_frames(nominal, &chosen)?;
     let mut warnings = Vec::new();
-    // The selection in the completed model: converted rows contribute all their fields.
-    let candidates = if completed.parameters() == nominal.parameters() {
-        chosen
-    } else {
-        let old = nominal.parameters();
-        let names: Vec<String> = chosen.iter().map(|&c| old[c].name()).collect();
-        let mut spec: Vec<String> = names
-            .into_iter()
-            .filter(|n| !n.starts_with("base.") && !n.starts_with("tool."))
-            .collect();
-        for (slot, word) in [(Slot::Base, "base"), (Slot::Tool, "tool")] {
-            if chosen.iter().any(|&c| old[c].slot == slot) {
-                spec.push(word.into());
-            }
-        }
-        select(&completed, &spec.join(","))?
-    };
+    let candidates = selection_in(nominal, &completed, chosen)?;
     let nominal = &completed;
     let params = nominal.parameters();
 
@@ -236,37 +363,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
             "the data identify none of the selected parameters".into(),
         ));
     }
-    // Rows that repeat one configuration add no independent equation: 20 measurements of one
-    // pose give 6 equations, whatever their number.
-    let distinct = {
-        let mut keys: Vec<Vec<i64>> = set
-            .rows
-            .iter()
-            .map(|m| m.q.iter().map(|v| (v * 1e9).round() as i64).collect())
-            .collect();
-        keys.sort_unstable();
-        keys.dedup();
-        keys.len()
-    };
-    let per_row = obs.len().div_ceil(set.rows.len().max(1));
-    if distinct * per_row <= cols.len() {
-        return Err(Error::Invalid(format!(
-            "{}: {} rows hold {distinct} distinct configuration(s), at most {} independent \
-             residual components for {} identifiable parameters: more measurements of distinct \
-             configurations are needed",
-            set.source.display(),
-            set.rows.len(),
-            distinct * per_row,
-            cols.len()
-        )));
-    }
-    if obs.len() <= cols.len() {
-        return Err(Error::Invalid(format!(
-            "{} residual components for {} identifiable parameters: more measurements are needed",
-            obs.len(),
-            cols.len()
-        )));
-    }
+    enough_equations(set, &obs, cols.len())?;
     if ident.selected_condition_number > CONDITION_WARNING {
         warnings.push(format!(
             "the identifiable set is ill-conditioned (condition number {:.3e} > {CONDITION_WARNING:.0e} \
@@ -276,31 +373,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         ));
     }
 
-    let run = |start: &Robot, obs: &Observations| -> Result<Solution> {
-        match opts.solve.method {
-            Method::Nm => solve_nelder_mead(start, obs, &cols, &opts.solve),
-            _ => solve_gradient(start, obs, &cols, &opts.solve),
-        }
-    };
-    let mut solution = run(&start, &obs)?;
-    let mut robust_rounds = 0;
-    if let Some(loss) = opts.robust {
-        for _ in 0..30 {
-            robust_rounds += 1;
-            let e = normalized_residuals(&solution.robot, &obs);
-            let scale = (1.4826 * median(&e)).max(1e-12);
-            let mut change: f64 = 0.0;
-            for (o, ei) in obs.items.iter_mut().zip(&e) {
-                let w = loss.weight(ei / scale);
-                change = change.max((w - o.weight).abs());
-                o.weight = w;
-            }
-            solution = run(&solution.robot, &obs)?;
-            if change < 1e-6 {
-                break;
-            }
-        }
-    }
+    let (solution, robust_rounds) = solve_robust(&start, &mut obs, &cols, opts)?;
     if solution.stop == StopReason::MaxIterations {
         warnings.push(format!(
             "stopped at the iteration limit ({}) before any tolerance: the result may be unconverged",
@@ -310,43 +383,8 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
 
     let (cov, s2) = covariance(&solution.robot, &obs, &cols)?;
     let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
-    let parameters = ids
-        .iter()
-        .enumerate()
-        .map(|(i, id)| ParamReport {
-            name: id.name(),
-            unit: id.field.file_unit().to_string(),
-            nominal: file_value(id, nominal.param(*id)),
-            estimate: file_value(id, solution.robot.param(*id)),
-            std: file_value(id, cov[(i, i)].sqrt()),
-        })
-        .collect();
-    let mut correlations = Vec::new();
-    for i in 0..ids.len() {
-        for j in i + 1..ids.len() {
-            let rho = cov[(i, j)] / (cov[(i, i)] * cov[(j, j)]).sqrt();
-            if rho.abs() > 0.9 {
-                correlations.push((ids[i].name(), ids[j].name(), rho));
-            }
-        }
-    }
-    // Outliers on the unweighted-by-robustness residuals.
-    let mut plain = obs.clone();
-    for o in plain.items.iter_mut() {
-        o.weight = 1.0;
-    }
-    let e = normalized_residuals(&solution.robot, &plain);
-    let scale = (1.4826 * median(&e)).max(1e-300);
-    let outliers = plain
-        .items
-        .iter()
-        .zip(&e)
-        .filter(|(_, ei)| **ei > opts.outlier_k * scale)
-        .map(|(o, ei)| Outlier {
-            line: set.rows[o.b.unwrap_or(o.a)].line,
-            robust_sigmas: ei / scale,
-        })
-        .collect();
+    let (parameters, correlations) = parameter_reports(nominal, &solution.robot, &ids, &cov);
+    let outliers = outliers(set, &obs, &solution.robot, opts.outlier_k);
     Ok(Identified {
         robot: solution.robot.clone(),
         measure,
