@@ -320,14 +320,8 @@ pub fn holdout(s: &Samples, fraction: f64, seed: u64) -> (Vec<usize>, Vec<usize>
     (0..n).partition(|&k| !held.contains(&s.group(k)))
 }
 
-/// Trains a network with `hidden` sigmoid units on `samples` (normalised inputs, targets of
-/// unit scale): phase 1 momentum, phase 2 LM or L-BFGS, both on the penalised objective,
-/// stopping on the thesis's rules; the weights of the best held-out epoch are returned.
-pub fn train(
-    samples: &Samples,
-    outputs: usize,
-    opts: &TrainOptions,
-) -> Result<(Weights, TrainReport)> {
+/// Refuses samples too few or of unequal shapes, and a network without hidden units.
+fn check_samples(samples: &Samples, outputs: usize, opts: &TrainOptions) -> Result<()> {
     let n = samples.len();
     if samples.b.len() != n || n < 4 {
         return Err(Error::Invalid(format!(
@@ -348,6 +342,116 @@ pub fn train(
             "the hidden layer needs at least one unit".into(),
         ));
     }
+    Ok(())
+}
+
+/// What phase 2 reports after each epoch: (epoch, weights, penalised objective, patience,
+/// least relative gain that counts as progress) -> a reason to stop, if any.
+type Record<'a> = dyn FnMut(usize, &Weights, f64, usize, f64) -> Option<TrainStop> + 'a;
+
+/// Phase 2 by Levenberg-Marquardt (MATLAB trainlm) from `w`; the epochs taken in `epochs`.
+fn phase2_lm(
+    mut w: Weights,
+    st: &Samples,
+    lambda: f64,
+    opts: &TrainOptions,
+    epochs: &mut usize,
+    record: &mut Record,
+) -> TrainStop {
+    let components = st.components() as f64;
+    let mut perf = penalised_sum(&w, st, lambda);
+    let mut mu = 1e-3;
+    loop {
+        if *epochs >= opts.max_epochs {
+            return TrainStop::MaxEpochs;
+        }
+        match lm_step(&w, perf, st, &mut mu, opts.min_grad, lambda) {
+            LmOutcome::MinGradient => return TrainStop::MinGradient,
+            LmOutcome::MuMax => return TrainStop::MuMax,
+            LmOutcome::Step(next, sum) => {
+                *epochs += 1;
+                (w, perf) = (next, sum);
+                if let Some(stop) = record(*epochs, &w, sum / components, opts.max_fail, 0.0) {
+                    return stop;
+                }
+            }
+        }
+    }
+}
+
+/// Phase 2 by L-BFGS from `w`. Without maps the outputs are linear in the output layer:
+/// L-BFGS moves the hidden layer only and the output layer is solved exactly every time
+/// (variable projection). The iterations taken in `epochs`.
+fn phase2_lbfgs(
+    w: Weights,
+    st: &Samples,
+    lambda: f64,
+    opts: &TrainOptions,
+    epochs: &mut usize,
+    record: &mut Record,
+) -> TrainStop {
+    let components = st.components() as f64;
+    let shape = w.clone();
+    let mut batch = Batch::new(st, &w);
+    let project = st.maps.is_none();
+    let hidden_len = w.hidden() * (w.inputs() + 1);
+    let x0 = if project {
+        w.to_vector().rows(0, hidden_len).into_owned()
+    } else {
+        w.to_vector()
+    };
+    let full = std::cell::RefCell::new(w.to_vector());
+    let mut grad_full = DVector::zeros(w.len());
+    let weights_of = |v: &DVector<f64>| -> Weights {
+        let mut f = full.borrow_mut();
+        f.rows_mut(0, v.len()).copy_from(v);
+        shape.from_vector(&f)
+    };
+    let mut stop = None;
+    let (_, _, why) = lbfgs::minimize(
+        x0,
+        10,
+        opts.max_epochs * 10,
+        // The objective is a mean: its gradient is 2 / M times LM's J^T e.
+        opts.min_grad * 2.0 / components,
+        |v, g| {
+            let mut w = weights_of(v);
+            if project {
+                let f = batch.objective_projected(&mut w, lambda, &mut grad_full);
+                full.borrow_mut().copy_from(&w.to_vector());
+                g.copy_from(&grad_full.rows(0, hidden_len));
+                f
+            } else {
+                batch.objective(&w, lambda, g)
+            }
+        },
+        |it, f, v| {
+            *epochs = it;
+            let w = weights_of(v);
+            stop = record(it, &w, f, opts.max_fail * 10, LBFGS_MIN_GAIN);
+            if stop.is_some() {
+                Next::Stop
+            } else {
+                Next::Continue
+            }
+        },
+    );
+    stop.unwrap_or(match why {
+        LbfgsStop::MinGradient => TrainStop::MinGradient,
+        LbfgsStop::LineSearch => TrainStop::MuMax,
+        LbfgsStop::MaxIterations | LbfgsStop::Callback => TrainStop::MaxEpochs,
+    })
+}
+
+/// Trains a network with `hidden` sigmoid units on `samples` (normalised inputs, targets of
+/// unit scale): phase 1 momentum, phase 2 LM or L-BFGS, both on the penalised objective,
+/// stopping on the thesis's rules; the weights of the best held-out epoch are returned.
+pub fn train(
+    samples: &Samples,
+    outputs: usize,
+    opts: &TrainOptions,
+) -> Result<(Weights, TrainReport)> {
+    check_samples(samples, outputs, opts)?;
     let lambda = opts.penalty;
     let (ti, vi) = holdout(samples, opts.validation_fraction, opts.seed);
     // Nothing held out (the default): train on the samples themselves, not on a copy.
@@ -449,81 +553,10 @@ pub fn train(
         }
     };
     if stop.is_none() {
-        match phase2 {
-            Phase2::Lm | Phase2::Auto => {
-                let mut w = w;
-                let mut perf = penalised_sum(&w, &st, lambda);
-                let mut mu = 1e-3;
-                while stop.is_none() {
-                    if epochs >= opts.max_epochs {
-                        stop = Some(TrainStop::MaxEpochs);
-                        break;
-                    }
-                    match lm_step(&w, perf, &st, &mut mu, opts.min_grad, lambda) {
-                        LmOutcome::MinGradient => stop = Some(TrainStop::MinGradient),
-                        LmOutcome::MuMax => stop = Some(TrainStop::MuMax),
-                        LmOutcome::Step(next, sum) => {
-                            epochs += 1;
-                            (w, perf) = (next, sum);
-                            stop = record(epochs, &w, sum / components, opts.max_fail, 0.0);
-                        }
-                    }
-                }
-            }
-            Phase2::Lbfgs => {
-                let shape = w.clone();
-                let mut batch = Batch::new(&st, &w);
-                // Without maps the outputs are linear in the output layer: L-BFGS moves the
-                // hidden layer only and the output layer is solved exactly every time.
-                let project = st.maps.is_none();
-                let hidden_len = w.hidden() * (w.inputs() + 1);
-                let x0 = if project {
-                    w.to_vector().rows(0, hidden_len).into_owned()
-                } else {
-                    w.to_vector()
-                };
-                let full = std::cell::RefCell::new(w.to_vector());
-                let mut grad_full = DVector::zeros(w.len());
-                let weights_of = |v: &DVector<f64>| -> Weights {
-                    let mut f = full.borrow_mut();
-                    f.rows_mut(0, v.len()).copy_from(v);
-                    shape.from_vector(&f)
-                };
-                let (_, _, why) = lbfgs::minimize(
-                    x0,
-                    10,
-                    opts.max_epochs * 10,
-                    // The objective is a mean: its gradient is 2 / M times LM's J^T e.
-                    opts.min_grad * 2.0 / components,
-                    |v, g| {
-                        let mut w = weights_of(v);
-                        if project {
-                            let f = batch.objective_projected(&mut w, lambda, &mut grad_full);
-                            full.borrow_mut().copy_from(&w.to_vector());
-                            g.copy_from(&grad_full.rows(0, hidden_len));
-                            f
-                        } else {
-                            batch.objective(&w, lambda, g)
-                        }
-                    },
-                    |it, f, v| {
-                        epochs = it;
-                        let w = weights_of(v);
-                        stop = record(it, &w, f, opts.max_fail * 10, LBFGS_MIN_GAIN);
-                        if stop.is_some() {
-                            Next::Stop
-                        } else {
-                            Next::Continue
-                        }
-                    },
-                );
-                stop = stop.or(match why {
-                    LbfgsStop::MinGradient => Some(TrainStop::MinGradient),
-                    LbfgsStop::LineSearch => Some(TrainStop::MuMax),
-                    LbfgsStop::MaxIterations | LbfgsStop::Callback => Some(TrainStop::MaxEpochs),
-                });
-            }
-        }
+        stop = Some(match phase2 {
+            Phase2::Lm | Phase2::Auto => phase2_lm(w, &st, lambda, opts, &mut epochs, &mut record),
+            Phase2::Lbfgs => phase2_lbfgs(w, &st, lambda, opts, &mut epochs, &mut record),
+        });
     }
     tell(total, f64::NAN, f64::NAN, true);
     let w = best.weights;
