@@ -141,153 +141,12 @@ impl Robot {
 
 /// Parses robot-file text; `path` is used in error messages.
 pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
-    let at = |span: std::ops::Range<usize>, field: &str| {
-        Location::at(path, line_of(text, span.start), field)
-    };
     let file: RobotFile = crate::io::parse_toml(text, path)?;
-
-    let row_of = |rf: &RowFile, what: &str, is_joint: bool| -> Result<(Row, JointType, [f64; 2])> {
-        let conv_name = rf.convention.get_ref();
-        let conv = Convention::from_name(conv_name).ok_or_else(|| {
-            Error::input(
-                at(rf.convention.span(), "convention"),
-                format!("{what}: unknown convention `{conv_name}` (expected mdh, hayati, dh or transform)"),
-            )
-        })?;
-        let mut row = Row::zero(conv);
-        for (field, value) in rf.values() {
-            let key = field.name();
-            if !conv.fields().contains(&field) {
-                let allowed: Vec<_> = conv.fields().iter().map(|f| f.name()).collect();
-                return Err(Error::input(
-                    at(value.span(), key),
-                    format!(
-                        "{what}: a {} row has no field `{key}` (its fields: {})",
-                        conv.name(),
-                        allowed.join(", ")
-                    ),
-                ));
-            }
-            let v = value.get_ref().0;
-            if !v.is_finite() {
-                return Err(Error::input(
-                    at(value.span(), key),
-                    format!("{what}: {key} must be finite"),
-                ));
-            }
-            let bound = if field.is_angle() {
-                MAX_ANGLE_DEG
-            } else {
-                MAX_LENGTH_MM
-            };
-            if v.abs() > bound {
-                return Err(Error::input(
-                    at(value.span(), key),
-                    format!(
-                        "{what}: {key} = {} {} is beyond the physical bound of {bound} {}",
-                        short(v),
-                        field.file_unit(),
-                        field.file_unit()
-                    ),
-                ));
-            }
-            row.set_file_value(field, v);
-        }
-        let joint_type = match &rf.joint_type {
-            None => JointType::Revolute,
-            Some(t) if !is_joint => {
-                return Err(Error::input(
-                    at(t.span(), "type"),
-                    format!("{what}: only joints have a type"),
-                ));
-            }
-            Some(t) => match t.get_ref().as_str() {
-                "revolute" => JointType::Revolute,
-                "prismatic" => JointType::Prismatic,
-                other => {
-                    return Err(Error::input(
-                        at(t.span(), "type"),
-                        format!(
-                            "{what}: unknown joint type `{other}` (expected revolute or prismatic)"
-                        ),
-                    ));
-                }
-            },
-        };
-        let limits = match &rf.limits {
-            None if is_joint => {
-                return Err(Error::input(
-                    Location::at(path, line_of(text, rf.convention.span().start), "limits"),
-                    format!(
-                        "{what}: missing `limits = [min, max]` ({})",
-                        joint_type.file_unit()
-                    ),
-                ));
-            }
-            None => [0.0, 0.0],
-            Some(l) if !is_joint => {
-                return Err(Error::input(
-                    at(l.span(), "limits"),
-                    format!("{what}: only joints have limits"),
-                ));
-            }
-            Some(l) => match l.get_ref().as_slice() {
-                [lo, hi] if lo.0.is_finite() && hi.0.is_finite() && lo.0 <= hi.0 => [lo.0, hi.0],
-                _ => {
-                    return Err(Error::input(
-                        at(l.span(), "limits"),
-                        format!("{what}: limits must be [min, max] with finite min <= max"),
-                    ));
-                }
-            },
-        };
-        // Searches over the joint range (IK seeds, branch scans) take time in proportion to
-        // its width: +-1e8 deg took minutes. No joint turns more than a few times.
-        let bound = match joint_type {
-            JointType::Revolute => MAX_JOINT_DEG,
-            JointType::Prismatic => MAX_LENGTH_MM,
-        };
-        if limits.iter().any(|v| v.abs() > bound) {
-            let at_limits = rf.limits.as_ref().map_or(
-                Location::at(path, line_of(text, rf.convention.span().start), "limits"),
-                |l| at(l.span(), "limits"),
-            );
-            return Err(Error::input(
-                at_limits,
-                format!(
-                    "{what}: limits [{}, {}] beyond +-{bound} {}",
-                    short(limits[0]),
-                    short(limits[1]),
-                    joint_type.file_unit()
-                ),
-            ));
-        }
-        if is_joint {
-            match (conv, joint_type) {
-                (Convention::Transform, _) => {
-                    return Err(Error::input(
-                        at(rf.convention.span(), "convention"),
-                        format!(
-                            "{what}: a joint cannot be a 6-DOF transform; use mdh, hayati or dh"
-                        ),
-                    ));
-                }
-                (Convention::Hayati, JointType::Prismatic) => {
-                    return Err(Error::input(
-                        at(rf.convention.span(), "type"),
-                        format!("{what}: a Hayati row has no d, so it cannot be prismatic"),
-                    ));
-                }
-                _ => {}
-            }
-        }
-        Ok((row, joint_type, limits))
-    };
-
+    let rows = RowReader { text, path };
     let fixed = |r: &Option<Spanned<RowFile>>, what: &str| -> Result<Row> {
         match r {
             None => Ok(Row::zero(Convention::Transform)),
-            Some(r) => row_of(r.get_ref(), what, false).map(|(row, _, _)| row),
+            Some(r) => rows.row(r.get_ref(), what, false).map(|(row, _, _)| row),
         }
     };
     let base = fixed(&file.base, "base")?;
@@ -300,7 +159,7 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
     }
     let mut joints = Vec::with_capacity(file.joint.len());
     for (i, j) in file.joint.iter().enumerate() {
-        let (row, joint_type, limits) = row_of(j.get_ref(), &format!("joint {}", i + 1), true)?;
+        let (row, joint_type, limits) = rows.row(j.get_ref(), &format!("joint {}", i + 1), true)?;
         joints.push(Joint {
             row,
             joint_type,
@@ -314,6 +173,190 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
     });
     Robot::new(name, base, joints, tool)
         .map_err(|e| Error::input(Location::file(path), e.to_string()))
+}
+
+/// Reads the rows of one robot file, naming the line and field of every error.
+struct RowReader<'a> {
+    text: &'a str,
+    path: &'a Path,
+}
+
+impl RowReader<'_> {
+    fn at(&self, span: std::ops::Range<usize>, field: &str) -> Location {
+        Location::at(self.path, line_of(self.text, span.start), field)
+    }
+
+    /// A base, tool (`is_joint` false) or joint row: its values (file units: mm, deg), its
+    /// joint type and its limits.
+    fn row(&self, rf: &RowFile, what: &str, is_joint: bool) -> Result<(Row, JointType, [f64; 2])> {
+        let conv_name = rf.convention.get_ref();
+        let conv = Convention::from_name(conv_name).ok_or_else(|| {
+            Error::input(
+                self.at(rf.convention.span(), "convention"),
+                format!("{what}: unknown convention `{conv_name}` (expected mdh, hayati, dh or transform)"),
+            )
+        })?;
+        let row = self.values(rf, what, conv)?;
+        let joint_type = self.joint_type(rf, what, is_joint)?;
+        let limits = self.limits(rf, what, is_joint, joint_type)?;
+        if is_joint {
+            match (conv, joint_type) {
+                (Convention::Transform, _) => {
+                    return Err(Error::input(
+                        self.at(rf.convention.span(), "convention"),
+                        format!(
+                            "{what}: a joint cannot be a 6-DOF transform; use mdh, hayati or dh"
+                        ),
+                    ));
+                }
+                (Convention::Hayati, JointType::Prismatic) => {
+                    return Err(Error::input(
+                        self.at(rf.convention.span(), "type"),
+                        format!("{what}: a Hayati row has no d, so it cannot be prismatic"),
+                    ));
+                }
+                _ => {}
+            }
+        }
+        Ok((row, joint_type, limits))
+    }
+
+    /// The row's fields: each one of its convention's, finite and within 100 m (2 turns).
+    fn values(&self, rf: &RowFile, what: &str, conv: Convention) -> Result<Row> {
+        let mut row = Row::zero(conv);
+        for (field, value) in rf.values() {
+            let key = field.name();
+            if !conv.fields().contains(&field) {
+                let allowed: Vec<_> = conv.fields().iter().map(|f| f.name()).collect();
+                return Err(Error::input(
+                    self.at(value.span(), key),
+                    format!(
+                        "{what}: a {} row has no field `{key}` (its fields: {})",
+                        conv.name(),
+                        allowed.join(", ")
+                    ),
+                ));
+            }
+            let v = value.get_ref().0;
+            if !v.is_finite() {
+                return Err(Error::input(
+                    self.at(value.span(), key),
+                    format!("{what}: {key} must be finite"),
+                ));
+            }
+            let bound = if field.is_angle() {
+                MAX_ANGLE_DEG
+            } else {
+                MAX_LENGTH_MM
+            };
+            if v.abs() > bound {
+                return Err(Error::input(
+                    self.at(value.span(), key),
+                    format!(
+                        "{what}: {key} = {} {} is beyond the physical bound of {bound} {}",
+                        short(v),
+                        field.file_unit(),
+                        field.file_unit()
+                    ),
+                ));
+            }
+            row.set_file_value(field, v);
+        }
+        Ok(row)
+    }
+
+    /// The joint type (revolute unless said); only joints have one.
+    fn joint_type(&self, rf: &RowFile, what: &str, is_joint: bool) -> Result<JointType> {
+        Ok(match &rf.joint_type {
+            None => JointType::Revolute,
+            Some(t) if !is_joint => {
+                return Err(Error::input(
+                    self.at(t.span(), "type"),
+                    format!("{what}: only joints have a type"),
+                ));
+            }
+            Some(t) => match t.get_ref().as_str() {
+                "revolute" => JointType::Revolute,
+                "prismatic" => JointType::Prismatic,
+                other => {
+                    return Err(Error::input(
+                        self.at(t.span(), "type"),
+                        format!(
+                            "{what}: unknown joint type `{other}` (expected revolute or prismatic)"
+                        ),
+                    ));
+                }
+            },
+        })
+    }
+
+    /// The joint limits (deg or mm): required for a joint, finite, ordered, within 4 turns
+    /// (100 m); only joints have them.
+    fn limits(
+        &self,
+        rf: &RowFile,
+        what: &str,
+        is_joint: bool,
+        joint_type: JointType,
+    ) -> Result<[f64; 2]> {
+        let limits = match &rf.limits {
+            None if is_joint => {
+                return Err(Error::input(
+                    Location::at(
+                        self.path,
+                        line_of(self.text, rf.convention.span().start),
+                        "limits",
+                    ),
+                    format!(
+                        "{what}: missing `limits = [min, max]` ({})",
+                        joint_type.file_unit()
+                    ),
+                ));
+            }
+            None => [0.0, 0.0],
+            Some(l) if !is_joint => {
+                return Err(Error::input(
+                    self.at(l.span(), "limits"),
+                    format!("{what}: only joints have limits"),
+                ));
+            }
+            Some(l) => match l.get_ref().as_slice() {
+                [lo, hi] if lo.0.is_finite() && hi.0.is_finite() && lo.0 <= hi.0 => [lo.0, hi.0],
+                _ => {
+                    return Err(Error::input(
+                        self.at(l.span(), "limits"),
+                        format!("{what}: limits must be [min, max] with finite min <= max"),
+                    ));
+                }
+            },
+        };
+        // Searches over the joint range (IK seeds, branch scans) take time in proportion to
+        // its width: +-1e8 deg took minutes. No joint turns more than a few times.
+        let bound = match joint_type {
+            JointType::Revolute => MAX_JOINT_DEG,
+            JointType::Prismatic => MAX_LENGTH_MM,
+        };
+        if limits.iter().any(|v| v.abs() > bound) {
+            let at_limits = rf.limits.as_ref().map_or(
+                Location::at(
+                    self.path,
+                    line_of(self.text, rf.convention.span().start),
+                    "limits",
+                ),
+                |l| self.at(l.span(), "limits"),
+            );
+            return Err(Error::input(
+                at_limits,
+                format!(
+                    "{what}: limits [{}, {}] beyond +-{bound} {}",
+                    short(limits[0]),
+                    short(limits[1]),
+                    joint_type.file_unit()
+                ),
+            ));
+        }
+        Ok(limits)
+    }
 }
 
 /// Shortest decimal that reads back to the same f64, always with a decimal point or exponent
