@@ -110,40 +110,8 @@ fn print_selection(sel: &Selection) {
     }
 }
 
-pub fn run_train(a: TrainArgs) -> Result<()> {
-    let (robot, set, val) = super::data_args::open_fit(
-        &a.robot,
-        &a.data,
-        a.validate.as_ref(),
-        &a.read,
-        &a.out,
-        a.report.as_ref(),
-        a.plot.as_ref(),
-    )?;
-    let terminal = std::io::stderr().is_terminal();
-    let opts = a.build.options(a.sigma.sigmas(), terminal)?;
-    let bar = progress_bar(terminal);
-    let started = std::time::Instant::now();
-    let (c, report) = Compensator::train(&robot, &set, &opts, &|done, total| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    })
-    .with_context(|| format!("training on {}", a.data.display()))?;
-    let seconds = started.elapsed().as_secs_f64();
-    bar.finish_and_clear();
-    println!(
-        "train: {} rows of {}, model {}",
-        set.rows.len(),
-        a.data.display(),
-        a.robot.display()
-    );
-    if let Some(sel) = &report.selection {
-        print_selection(sel);
-    }
-    println!("settings: {}", report.settings.describe());
-    for n in &report.notes {
-        println!("note: {n}");
-    }
+/// Prints the refined parameters, the RBF network and the MLPs of a finished training.
+fn print_fit(c: &Compensator, report: &robocal::neural::fit::CompensatorReport, seconds: f64) {
     if !report.refined.is_empty() {
         println!(
             "refined on the training rows (exact identification, {} parameters):",
@@ -201,6 +169,43 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             stops.into_iter().collect::<Vec<_>>().join(", "),
         );
     }
+}
+
+pub fn run_train(a: TrainArgs) -> Result<()> {
+    let (robot, set, val) = super::data_args::open_fit(
+        &a.robot,
+        &a.data,
+        a.validate.as_ref(),
+        &a.read,
+        &a.out,
+        a.report.as_ref(),
+        a.plot.as_ref(),
+    )?;
+    let terminal = std::io::stderr().is_terminal();
+    let opts = a.build.options(a.sigma.sigmas(), terminal)?;
+    let bar = progress_bar(terminal);
+    let started = std::time::Instant::now();
+    let (c, report) = Compensator::train(&robot, &set, &opts, &|done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })
+    .with_context(|| format!("training on {}", a.data.display()))?;
+    let seconds = started.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    println!(
+        "train: {} rows of {}, model {}",
+        set.rows.len(),
+        a.data.display(),
+        a.robot.display()
+    );
+    if let Some(sel) = &report.selection {
+        print_selection(sel);
+    }
+    println!("settings: {}", report.settings.describe());
+    for n in &report.notes {
+        println!("note: {n}");
+    }
+    print_fit(&c, &report, seconds);
     let mut figs = 0;
     if let Some(dir) = &a.plot
         && let Some(first) = report.networks.first()
