@@ -19,7 +19,7 @@ fn main() -> robocal::Result<()> {
     let mut ik = IkSolver::new(RigidModel::new(&robot), start, IkOptions::default());
     let every = ik.all(&pose, None).expect("the pose is reachable");
     println!("IK: {} solutions within the joint limits", every.len());
-    let nearest = ik.nearest(&pose, Some(&q), None).expect("reachable");
+    let nearest = ik.nearest(&pose, Some(&q)).expect("reachable");
     let back = robot.joints_to_file(&nearest.solution.q);
     println!("IK nearest the seed: {back:.3?} deg");
 

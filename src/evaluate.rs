@@ -23,13 +23,17 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
     /// Mean error (in the unit of the errors: mm or deg).
+    #[serde(with = "crate::io::json_number")]
     pub mean: f64,
     /// Root mean square error (unit of the errors).
+    #[serde(with = "crate::io::json_number")]
     pub rms: f64,
     /// The 95th percentile (nearest rank: the smallest error that at least 95 % of the errors
     /// do not exceed).
+    #[serde(with = "crate::io::json_number")]
     pub p95: f64,
     /// Largest error (unit of the errors; 0 or more).
+    #[serde(with = "crate::io::json_number")]
     pub max: f64,
 }
 
@@ -58,13 +62,17 @@ pub struct ErrorStats {
     /// Rows (or pairs) evaluated.
     pub count: usize,
     /// Position error (mm): Euclidean norm, or the displacement-length error for pairs.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub position_mm: Option<Summary>,
     /// Mean of |dx|, |dy|, |dz| over all coordinates (mm): the thesis's figure.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        with = "crate::io::json_number::option"
+    )]
     pub position_per_coordinate_mean_mm: Option<f64>,
     /// Orientation error (deg).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub orientation_deg: Option<Summary>,
 }
 

@@ -1,22 +1,12 @@
 //! `robocal train`, `predict`, `evaluate --compensator` and `case-d` from the command line.
 
 mod common;
-use common::{robocal, stderr, stdout, tmp};
+use common::{accuracy, robocal, stderr, stdout, tmp};
 
 const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
 
 fn json(p: &std::path::Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
-}
-
-/// The statistics of a typed report's accuracy row (`data`, `model`).
-fn accuracy<'a>(r: &'a serde_json::Value, data: &str, model: &str) -> &'a serde_json::Value {
-    &r["accuracy"]
-        .as_array()
-        .expect("an accuracy table")
-        .iter()
-        .find(|a| a["data"] == data && a["model"] == model)
-        .unwrap_or_else(|| panic!("no accuracy row {data} / {model}"))["stats"]
 }
 
 #[test]
@@ -311,7 +301,7 @@ fn case_d_prints_table_6_6_beside_ours_and_reports_every_row() {
         assert!(out.contains(s), "missing `{s}` in\n{out}");
     }
     let r = json(&report);
-    assert_eq!(r["kind"], "case_d");
+    assert_eq!(r["kind"], "case-d");
     let rows: Vec<&serde_json::Value> = r["sets"]
         .as_array()
         .unwrap()

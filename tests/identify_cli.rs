@@ -1,23 +1,13 @@
 //! `robocal identify`, `evaluate`, `split` and `reproduce` from the command line.
 
 mod common;
-use common::{robocal, stderr, stdout, tmp};
+use common::{accuracy, robocal, stderr, stdout, tmp};
 
 fn text(o: &std::process::Output) -> (String, String) {
     (stdout(o), stderr(o))
 }
 
 const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
-
-/// The statistics of a typed report's accuracy row (`data`, `model`).
-fn accuracy<'a>(r: &'a serde_json::Value, data: &str, model: &str) -> &'a serde_json::Value {
-    &r["accuracy"]
-        .as_array()
-        .expect("an accuracy table")
-        .iter()
-        .find(|a| a["data"] == data && a["model"] == model)
-        .unwrap_or_else(|| panic!("no accuracy row {data} / {model}"))["stats"]
-}
 
 #[test]
 fn identify_writes_a_robot_and_a_report_that_evaluate_confirms() {

@@ -319,3 +319,71 @@ fn numeric_ik_position_only_leaves_orientation_free() {
     .unwrap();
     assert!((tool_pose(&robot, &sol.q).translation.vector - p).norm() < 1e-6);
 }
+
+/// The shared strategy on a calibrated model without a closed form: `nearest` returns the
+/// converged solution nearest the seed, `all` lists it among the others, `from_nearest_start`
+/// keeps the branch it is given, and a seed of the wrong length is a failure, not a panic.
+#[test]
+fn ik_strategy_nearest_all_and_branch() {
+    use robocal::kinematics::{IkFailure, IkSolver, IkStart, RigidModel, tool_pose};
+    let nominal = robot_file("fanuc_r2000ib_210f.toml");
+    let real = fanuc_table_6_1();
+    let start = IkStart::choose(&real, Some(&nominal)).unwrap();
+    assert!(matches!(start, IkStart::Nominal(_)));
+    let closed = SphericalWristIk::new(&nominal).unwrap();
+    let mut solver = IkSolver::new(RigidModel::new(&real), start, IkOptions::default());
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let mut branches = Vec::new();
+    for _ in 0..40 {
+        let q: Vec<f64> = real
+            .joints()
+            .iter()
+            .map(|j| {
+                let [lo, hi] = j.limits_internal();
+                let (lo, hi) = (lo.max(-2.5), hi.min(2.5));
+                lo + (hi - lo) * (0.15 + 0.7 * rng.random::<f64>())
+            })
+            .collect();
+        let target = tool_pose(&real, &q);
+        // A seed near q: the nearest solution is q itself.
+        let seed: Vec<f64> = q.iter().map(|v| v + 0.02).collect();
+        let got = solver.nearest(&target, Some(&seed)).unwrap().solution.q;
+        let d = q
+            .iter()
+            .zip(&got)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(d < 1e-8, "nearest: {got:?} vs {q:?}");
+        let all = solver.all(&target, Some(&seed)).unwrap();
+        assert!(
+            all.iter()
+                .any(|s| s.iter().zip(&q).all(|(a, b)| (a - b).abs() < 1e-8))
+        );
+        // On q's own nominal branch, one solve from that branch's start gives q back.
+        closed.solve_branches(&tool_pose(&nominal, &q), &mut branches);
+        let b = branches
+            .iter()
+            .find(|(_, s)| s.iter().zip(&q).all(|(a, b)| (a - b).abs() < 1e-9))
+            .map(|(b, _)| *b)
+            .expect("q is one of the nominal's solutions for its own pose");
+        let one = solver
+            .from_nearest_start(&target, Some(&q), Some(b))
+            .unwrap();
+        assert_eq!(one.branch, Some(b));
+        let d = q
+            .iter()
+            .zip(&one.solution.q)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(d < 1e-7, "branch start: {:?} vs {q:?}", one.solution.q);
+    }
+    let target = tool_pose(&real, &real.mid_joints());
+    assert!(matches!(
+        solver.nearest(&target, Some(&[0.0; 3])),
+        Err(IkFailure::BadSeed(_))
+    ));
+    assert!(matches!(
+        solver.from_nearest_start(&target, Some(&[0.0; 7]), None),
+        Err(IkFailure::BadSeed(_))
+    ));
+}

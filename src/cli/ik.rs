@@ -43,6 +43,7 @@ fn explain(f: &IkFailure) -> String {
     match f {
         IkFailure::NoSeed => "no seed: give --seed or q1..qN columns".into(),
         IkFailure::TooMany => format!("{f}: leave out --all for the one nearest the seed"),
+        IkFailure::BadSeed(_) => format!("{f} (--seed or the q1..qN columns)"),
         other => other.to_string(),
     }
 }
@@ -113,9 +114,7 @@ pub fn run(a: IkArgs) -> Result<()> {
         let solved = if a.all {
             solver.all(target, seed)
         } else {
-            solver
-                .nearest(target, seed, None)
-                .map(|s| vec![s.solution.q])
+            solver.nearest(target, seed).map(|s| vec![s.solution.q])
         };
         match solved.map_err(|f| explain(&f)) {
             Ok(sols) => {

@@ -100,8 +100,8 @@ impl std::fmt::Display for Failure {
     }
 }
 
-/// The per-target solver: the shared IK strategy ([`IkSolver`], started by the nominal
-/// closed form) over the calibrated model, with reused buffers.
+/// The per-target solver: the shared IK strategy ([`IkSolver::from_nearest_start`], started
+/// by the nominal closed form) over the calibrated model, with reused buffers.
 pub struct FakeTargetSolver<'a> {
     nominal: &'a Robot,
     closed: SphericalWristIk,
@@ -187,32 +187,46 @@ impl<'a> FakeTargetSolver<'a> {
         };
         // A seed fixes the branch (the configuration the robot program was taught in).
         let seed_branch = seed.and_then(|s| self.branch_of(s));
-        let solved = self
-            .ik
-            .nearest(&target, seed, seed_branch)
-            .map_err(|e| match e {
-                IkFailure::NoSeed | IkFailure::Unreachable(_) | IkFailure::TooMany => {
-                    Failure::Unreachable(
+        if !self.ik.reachable(&target, seed_branch) {
+            // The seed starts the calibrated model's solve; its branch is the one kept.
+            match seed {
+                None => {
+                    return Err(Failure::Unreachable(
                         "out of the nominal model's reach; seed joints would let the \
                          calibrated model try"
                             .into(),
-                    )
+                    ));
                 }
-                IkFailure::NotConverged(m) => Failure::NotConverged(m),
-                IkFailure::OutsideLimits(j) => Failure::OutsideLimits(j),
-            })?;
-        // Out of the nominal's reach the seed started the solve; its branch is the one kept.
-        let branch = match solved.branch.or(seed_branch) {
-            Some(b) => b,
-            None => {
-                return Err(Failure::Unreachable(
-                    "out of the nominal model's reach, and the seed is at a singularity".into(),
-                ));
+                Some(_) if seed_branch.is_none() => {
+                    return Err(Failure::Unreachable(
+                        "out of the nominal model's reach, and the seed is at a singularity".into(),
+                    ));
+                }
+                Some(_) => {}
             }
+        }
+        let solved = self
+            .ik
+            .from_nearest_start(&target, seed, seed_branch)
+            .map_err(|e| match e {
+                IkFailure::NotConverged(m) => Failure::NotConverged(m),
+                IkFailure::BadSeed(m) => Failure::BadSeed(m),
+                other => Failure::Unreachable(other.to_string()),
+            })?;
+        let Some(branch) = solved.branch.or(seed_branch) else {
+            return Err(Failure::Unreachable(
+                "out of the nominal model's reach, and the seed is at a singularity".into(),
+            ));
         };
         let sol = solved.solution;
-        // The controller's limits (usually the calibrated model's, which the solve kept).
-        let outside = self.nominal.joints_outside_limits(&sol.q);
+        // The calibrated model's limits and the controller's (usually the same).
+        let mut outside = sol.outside_limits.clone();
+        for j in self.nominal.joints_outside_limits(&sol.q) {
+            if !outside.contains(&j) {
+                outside.push(j);
+            }
+        }
+        outside.sort_unstable();
         if !outside.is_empty() {
             return Err(Failure::OutsideLimits(outside));
         }

@@ -7,13 +7,15 @@
 //!    starts: each of its solutions in the whole-turn copy nearest the reference joints
 //!    ([`SphericalWristIk::nearest_copy`]), copies within the limits first, then by
 //!    [`joint_distance`] to the reference. Numerical IK of the model ([`solve_model`]) refines
-//!    them in that order.
-//! 3. Where no closed form gives a start ([`IkStart::Seed`], or a pose out of the nominal's
-//!    reach), the caller's seed joints start the numerical solve.
+//!    them.
+//! 3. The caller's seed joints start a numerical solve too, and the only one where no closed
+//!    form gives a start ([`IkStart::Seed`], or a pose out of the nominal's reach).
 //!
 //! The reference is the seed when one is given, else the middle of the joint ranges.
-//! [`IkSolver::nearest`] returns the first solution within the limits (the nearest, for a
-//! closed form); [`IkSolver::all`] every distinct one.
+//! [`IkSolver::nearest`] (`robocal ik`) refines the seed and every start and returns the
+//! converged solution within the limits nearest the reference; [`IkSolver::all`] every
+//! distinct one; [`IkSolver::from_nearest_start`] (target compensation) solves once from the
+//! nearest start on a given branch, the configuration the controller keeps.
 
 use super::Pose;
 use super::ik_closed::{Branch, MAX_SOLUTIONS, SphericalWristIk};
@@ -77,6 +79,8 @@ impl IkStart {
 pub enum IkFailure {
     /// Numerical IK needs seed joints and none were given.
     NoSeed,
+    /// Seed joints that do not fit the robot.
+    BadSeed(String),
     /// The closed form has no solution (within the limits, for an exact one).
     Unreachable(String),
     /// More than [`MAX_SOLUTIONS`] solutions within the limits (ranges of many turns).
@@ -91,11 +95,12 @@ impl std::fmt::Display for IkFailure {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             IkFailure::NoSeed => write!(f, "no seed joints to start the numerical solve"),
+            IkFailure::BadSeed(m) => write!(f, "bad seed: {m}"),
             IkFailure::Unreachable(m) => write!(f, "unreachable: {m}"),
             IkFailure::TooMany => write!(
                 f,
                 "more than {MAX_SOLUTIONS} solutions within the joint limits (ranges of many \
-                 turns); only the nearest one can be given"
+                 turns)"
             ),
             IkFailure::NotConverged(m) => write!(f, "{m}"),
             IkFailure::OutsideLimits(j) => write!(
@@ -211,18 +216,95 @@ impl<M: ToolModel> IkSolver<M> {
         )
     }
 
-    /// The solution nearest `seed` (or the middle of the ranges), on `branch` if given: for
-    /// an exact closed form the nearest within the limits; else the first start (in the
-    /// order above) whose numerical solve converges within the limits.
+    /// A seed of the wrong length as a failure (before it reaches an index).
+    fn check_seed(&self, seed: Option<&[f64]>) -> std::result::Result<(), IkFailure> {
+        match seed {
+            Some(s) if s.len() != self.mid.len() => Err(IkFailure::BadSeed(format!(
+                "{} seed joints for a robot with {}",
+                s.len(),
+                self.mid.len()
+            ))),
+            _ => Ok(()),
+        }
+    }
+
+    /// Whether the closed form (exact or nominal) has a solution for `target`, on `branch`
+    /// if given, whatever the limits.
+    pub fn reachable(&mut self, target: &Pose, branch: Option<Branch>) -> bool {
+        let Some(ik) = self.start.closed_form() else {
+            return false;
+        };
+        ik.solve_branches(target, &mut self.branches);
+        self.branches
+            .iter()
+            .any(|(b, _)| branch.is_none_or(|o| o == *b))
+    }
+
+    /// Why there is no start at all: no closed-form solution, and no seed.
+    fn no_start(&self) -> IkFailure {
+        match self.start {
+            IkStart::Seed(_) => IkFailure::NoSeed,
+            _ => IkFailure::Unreachable(
+                "the closed form of the nominal model has no solution".into(),
+            ),
+        }
+    }
+
+    /// Every distinct converged solution within the limits, one numerical solve from the
+    /// seed (when given) and from each closed-form start; the last failure when none.
+    fn refined(
+        &mut self,
+        target: &Pose,
+        seed: Option<&[f64]>,
+        reference: &[f64],
+    ) -> std::result::Result<Vec<IkSolution>, IkFailure> {
+        let mut starts: Vec<Vec<f64>> = seed.map(<[f64]>::to_vec).into_iter().collect();
+        starts.extend(
+            self.starts(target, reference, None)
+                .into_iter()
+                .map(|(_, _, _, q)| q.to_vec()),
+        );
+        let mut failure = if starts.is_empty() {
+            return Err(self.no_start());
+        } else {
+            self.no_start()
+        };
+        let mut sols: Vec<IkSolution> = Vec::new();
+        for q0 in &starts {
+            match self.refine(target, q0) {
+                Ok(sol) if sol.outside_limits.is_empty() => {
+                    let dup = sols.iter().any(|o| {
+                        o.q.iter()
+                            .zip(&sol.q)
+                            .all(|(a, b)| (a - b).abs() < SAME_SOLUTION)
+                    });
+                    if !dup {
+                        sols.push(sol);
+                    }
+                }
+                Ok(sol) => failure = IkFailure::OutsideLimits(sol.outside_limits),
+                Err(e) => failure = IkFailure::NotConverged(e.to_string()),
+            }
+        }
+        if sols.is_empty() {
+            Err(failure)
+        } else {
+            Ok(sols)
+        }
+    }
+
+    /// The solution within the limits nearest `seed` (or the middle of the ranges), by
+    /// [`joint_distance`]: for an exact closed form the nearest of its solutions; else the
+    /// nearest of the numerical solves from the seed and from every closed-form start.
     pub fn nearest(
         &mut self,
         target: &Pose,
         seed: Option<&[f64]>,
-        branch: Option<Branch>,
     ) -> std::result::Result<Solved, IkFailure> {
+        self.check_seed(seed)?;
         let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
-        let starts = self.starts(target, &reference, branch);
         if let IkStart::Exact(_) = self.start {
+            let starts = self.starts(target, &reference, None);
             return match starts.first() {
                 Some((false, _, b, q)) => Ok(self.exact(target, q, Some(*b))),
                 _ => Err(IkFailure::Unreachable(
@@ -230,54 +312,62 @@ impl<M: ToolModel> IkSolver<M> {
                 )),
             };
         }
-        let starts: Vec<(Option<Branch>, Vec<f64>)> = if starts.is_empty() {
-            match seed {
-                Some(s) => vec![(None, s.to_vec())],
-                None if matches!(self.start, IkStart::Seed(_)) => return Err(IkFailure::NoSeed),
-                None => {
-                    return Err(IkFailure::Unreachable(
-                        "the closed form of the nominal model has no solution".into(),
-                    ));
-                }
-            }
-        } else {
-            starts
-                .into_iter()
-                .map(|(_, _, b, q)| (Some(b), q.to_vec()))
-                .collect()
+        let sols = self.refined(target, seed, &reference)?;
+        let best = sols
+            .into_iter()
+            .min_by(|a, b| {
+                joint_distance(&a.q, &reference).total_cmp(&joint_distance(&b.q, &reference))
+            })
+            .expect("refined returns at least one solution");
+        Ok(Solved {
+            solution: best,
+            branch: None,
+        })
+    }
+
+    /// One solve from the closed-form start nearest `seed` (or the middle of the ranges) on
+    /// `branch` if given, within the limits if one is; the seed starts it where the closed
+    /// form has no solution. The start's branch is the configuration kept (target
+    /// compensation: the controller's), so no other start is tried. The solution may leave
+    /// the limits (see its `outside_limits`).
+    pub fn from_nearest_start(
+        &mut self,
+        target: &Pose,
+        seed: Option<&[f64]>,
+        branch: Option<Branch>,
+    ) -> std::result::Result<Solved, IkFailure> {
+        self.check_seed(seed)?;
+        let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
+        let (b, q0) = match self.starts(target, &reference, branch).first() {
+            Some((_, _, b, q)) => (Some(*b), q.to_vec()),
+            None => match seed {
+                Some(s) => (None, s.to_vec()),
+                None => return Err(self.no_start()),
+            },
         };
-        let mut failure = None;
-        for (b, q0) in &starts {
-            match self.refine(target, q0) {
-                Ok(sol) if sol.outside_limits.is_empty() => {
-                    return Ok(Solved {
-                        solution: sol,
-                        branch: *b,
-                    });
-                }
-                Ok(sol) => {
-                    if !matches!(failure, Some(IkFailure::OutsideLimits(_))) {
-                        failure = Some(IkFailure::OutsideLimits(sol.outside_limits));
-                    }
-                }
-                Err(e) => {
-                    if failure.is_none() {
-                        failure = Some(IkFailure::NotConverged(e.to_string()));
-                    }
-                }
-            }
+        if let IkStart::Exact(_) = self.start
+            && b.is_some()
+        {
+            return Ok(self.exact(target, &q0, b));
         }
-        Err(failure.unwrap_or(IkFailure::NoSeed))
+        let solution = self
+            .refine(target, &q0)
+            .map_err(|e| IkFailure::NotConverged(e.to_string()))?;
+        Ok(Solved {
+            solution,
+            branch: b,
+        })
     }
 
     /// Every distinct solution within the limits: for an exact closed form every whole-turn
-    /// copy the limits allow (at most [`MAX_SOLUTIONS`]); else one numerical solve from each
-    /// start (or from the seed).
+    /// copy the limits allow (at most [`MAX_SOLUTIONS`]); else one numerical solve from the
+    /// seed and from each closed-form start.
     pub fn all(
         &mut self,
         target: &Pose,
         seed: Option<&[f64]>,
     ) -> std::result::Result<Vec<Vec<f64>>, IkFailure> {
+        self.check_seed(seed)?;
         if let IkStart::Exact(ik) = &self.start {
             if !ik.solve(target, &mut self.copies) {
                 return Err(IkFailure::TooMany);
@@ -290,44 +380,10 @@ impl<M: ToolModel> IkSolver<M> {
             return Ok(self.copies.iter().map(|q| q.to_vec()).collect());
         }
         let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
-        let mut starts: Vec<Vec<f64>> = self
-            .starts(target, &reference, None)
+        Ok(self
+            .refined(target, seed, &reference)?
             .into_iter()
-            .map(|(_, _, _, q)| q.to_vec())
-            .collect();
-        if starts.is_empty() {
-            match seed {
-                Some(s) => starts.push(s.to_vec()),
-                None if matches!(self.start, IkStart::Seed(_)) => return Err(IkFailure::NoSeed),
-                None => {
-                    return Err(IkFailure::Unreachable(
-                        "the closed form of the nominal model has no solution".into(),
-                    ));
-                }
-            }
-        }
-        let mut sols: Vec<Vec<f64>> = Vec::new();
-        let mut failure = None;
-        for q0 in &starts {
-            match self.refine(target, q0) {
-                Ok(sol) if sol.outside_limits.is_empty() => {
-                    let dup = sols.iter().any(|o| {
-                        o.iter()
-                            .zip(&sol.q)
-                            .all(|(a, b)| (a - b).abs() < SAME_SOLUTION)
-                    });
-                    if !dup {
-                        sols.push(sol.q);
-                    }
-                }
-                Ok(sol) => failure = Some(IkFailure::OutsideLimits(sol.outside_limits)),
-                Err(e) => failure = Some(IkFailure::NotConverged(e.to_string())),
-            }
-        }
-        if sols.is_empty() {
-            Err(failure.unwrap_or(IkFailure::NoSeed))
-        } else {
-            Ok(sols)
-        }
+            .map(|s| s.q)
+            .collect())
     }
 }

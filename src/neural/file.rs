@@ -94,13 +94,23 @@ impl Compensator {
     pub fn load_for(path: &Path, robot: &Robot) -> Result<Compensator> {
         let c = Self::load(path)?;
         if !c.robot.same_joints(robot) {
+            // R revolute, P prismatic, joint by joint.
+            let kinds = |r: &Robot| -> String {
+                r.joints()
+                    .iter()
+                    .map(|j| match j.joint_type {
+                        crate::model::JointType::Revolute => 'R',
+                        crate::model::JointType::Prismatic => 'P',
+                    })
+                    .collect()
+            };
             return Err(Error::input(
                 Location::file(path),
                 format!(
                     "the compensator was trained for a robot with other joints ({}) than the \
                      robot given ({})",
-                    c.robot.dof(),
-                    robot.dof()
+                    kinds(&c.robot),
+                    kinds(robot)
                 ),
             ));
         }

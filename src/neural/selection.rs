@@ -71,6 +71,7 @@ pub struct Selection {
     /// errors (the final fit leaves them out when the options say so).
     pub outliers: Vec<Outlier>,
     /// The cut, robust sigmas (infinite: no row is left out).
+    #[serde(with = "crate::io::json_number")]
     pub outlier_k: f64,
     /// The chosen RBF network's hyperparameters, searched on every row for the model as
     /// given (the final fit reuses them when nothing is refined).

@@ -31,8 +31,10 @@ pub struct CompensateReport {
     /// Targets with a command.
     pub solved: usize,
     /// Mean distance between commanded and desired tool positions (mm), over the solved.
+    #[serde(with = "crate::io::json_number::option")]
     pub shift_mean_mm: Option<f64>,
     /// Largest such distance (mm).
+    #[serde(with = "crate::io::json_number::option")]
     pub shift_max_mm: Option<f64>,
     /// Targets without a command, and why.
     pub failures: Vec<TargetFailure>,

@@ -53,6 +53,9 @@ fn cell(v: &Node) -> String {
                 .iter()
                 .map(|x| match x {
                     Node::Record(r) => r.iter().map(|(_, v)| cell(v)).collect::<Vec<_>>().join(" "),
+                    Node::List(l) => {
+                        format!("({})", l.iter().map(cell).collect::<Vec<_>>().join(" "))
+                    }
                     other => cell(other),
                 })
                 .collect();
@@ -122,8 +125,15 @@ fn stats_table(rows: &[Accuracy], html: &mut String) {
 /// Records nested deeper than this many leaves get their own section instead of columns.
 const WIDE: usize = 12;
 
+/// Where a record's wide parts are: its own sections below the table.
+static BELOW: std::sync::LazyLock<Node> = std::sync::LazyLock::new(|| Node::Text("(below)".into()));
+/// Where a record's long series are: the JSON report (and its figures).
+static IN_FILE: std::sync::LazyLock<Node> =
+    std::sync::LazyLock::new(|| Node::Text("(in the JSON report)".into()));
+
 /// The scalar leaves of a record as (dotted name, value), in order: nested small records are
-/// flattened, wide ones and lists of records are left out.
+/// flattened; wide ones and lists of records (shown in sections below) and long series (left
+/// in the JSON report) say so.
 fn leaves<'a>(v: &'a Node, prefix: &str, out: &mut Vec<(String, &'a Node)>) {
     if let Node::Record(m) = v {
         for (k, x) in m {
@@ -133,10 +143,10 @@ fn leaves<'a>(v: &'a Node, prefix: &str, out: &mut Vec<(String, &'a Node)>) {
                 format!("{prefix}.{k}")
             };
             match x {
-                Node::Record(_) if count_leaves(x) > WIDE => {}
+                Node::Record(_) if count_leaves(x) > WIDE => out.push((name, &BELOW)),
                 Node::Record(_) => leaves(x, &name, out),
-                Node::List(_) if is_records(x) && !is_small_records(x) => {}
-                Node::List(a) if a.len() > LONG => {}
+                Node::List(_) if is_records(x) && !is_small_records(x) => out.push((name, &BELOW)),
+                Node::List(a) if a.len() > LONG => out.push((name, &IN_FILE)),
                 _ => out.push((name, x)),
             }
         }
@@ -243,7 +253,7 @@ fn section(title: &str, m: &[(String, Node)], depth: usize, html: &mut String) {
             Node::List(a) if a.len() > LONG || a.iter().any(|x| matches!(x, Node::List(_))) => {
                 let _ = writeln!(
                     html,
-                    "<p class=\"note\">{}: {} entries (see the figures)</p>",
+                    "<p class=\"note\">{}: {} entries (in the JSON report)</p>",
                     esc(k),
                     a.len()
                 );
@@ -360,6 +370,13 @@ pub fn render(dir: &Path) -> Result<String> {
                 .filter(|(k, _)| k != "kind" && k != "accuracy")
                 .collect();
             section("Details", &details, 1, &mut html);
+        }
+        if html.len() as u64 > MAX_PAGE_BYTES {
+            return Err(Error::Invalid(format!(
+                "{}: the page would pass {} MB; report fewer runs per folder",
+                path.display(),
+                MAX_PAGE_BYTES >> 20
+            )));
         }
     }
     if !figures.is_empty() {

@@ -1,6 +1,6 @@
 //! The reports of `identify` and `evaluate`.
 
-use super::{Accuracy, number};
+use super::Accuracy;
 use crate::identify::identifiability::DropReason;
 use crate::identify::run::{Outlier, ParamReport};
 use crate::identify::{Identified, Measure, Method, Options, RobustLoss, StopReason};
@@ -58,6 +58,7 @@ pub struct IdentifyReport {
     /// Errors before (nominal) and after (identified), calibration and validation.
     pub accuracy: Vec<Accuracy>,
     /// RMS of the registration of the tracker's frame (mm), when it was registered.
+    #[serde(with = "crate::io::json_number::option")]
     pub registration_rms_mm: Option<f64>,
     /// Whether the registration also fitted the tool.
     pub registration_tool: bool,
@@ -68,12 +69,12 @@ pub struct IdentifyReport {
     /// Its rank from QR with column pivoting.
     pub rank_pivoted_qr: usize,
     /// Condition number of all candidates' scaled Jacobian (`inf` when rank-deficient).
-    #[serde(with = "number")]
+    #[serde(with = "crate::io::json_number")]
     pub condition_number_all_candidates: f64,
     /// Parameters identified (the identifiable set).
     pub identifiable: usize,
     /// Condition number of the identifiable set's scaled Jacobian.
-    #[serde(with = "number")]
+    #[serde(with = "crate::io::json_number")]
     pub condition_number: f64,
     /// Candidates left out, and why.
     pub dropped: Vec<DroppedParam>,
@@ -84,14 +85,14 @@ pub struct IdentifyReport {
     /// The same, in words.
     pub stop: String,
     /// A-posteriori variance factor s^2 (1 when the residuals are the stated noise).
-    #[serde(with = "number")]
+    #[serde(with = "crate::io::json_number")]
     pub variance_factor: f64,
     /// Every identified parameter: nominal, estimate, standard deviation (file units).
     pub parameters: Vec<ParamReport>,
     /// Strongly correlated pairs (|r| > 0.9).
     pub correlations: Vec<Correlation>,
     /// The outlier cut (robust sigmas; `inf`: none are listed).
-    #[serde(with = "number")]
+    #[serde(with = "crate::io::json_number")]
     pub outlier_k: f64,
     /// Rows beyond the cut.
     pub outliers: Vec<Outlier>,

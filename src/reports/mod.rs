@@ -13,7 +13,6 @@ pub mod compensate;
 pub mod html;
 pub mod identify;
 mod node;
-pub mod number;
 pub mod studies;
 pub mod train;
 
@@ -69,6 +68,7 @@ pub enum Report {
     /// `robocal compensate`.
     Compensate(CompensateReport),
     /// `robocal case-d`.
+    #[serde(rename = "case-d")]
     CaseD(CaseDReport),
     /// `robocal reproduce`.
     Reproduce(ReproduceReport),
@@ -142,7 +142,7 @@ mod tests {
 
     #[derive(Debug, PartialEq, Serialize, Deserialize)]
     struct Cond {
-        #[serde(with = "number")]
+        #[serde(with = "crate::io::json_number")]
         value: f64,
         zebra: Option<f64>,
         apple: usize,

@@ -1,6 +1,6 @@
 //! The reports of `case-d` and `reproduce`.
 
-use super::{Accuracy, number};
+use super::Accuracy;
 use crate::evaluate::ErrorStats;
 use crate::neural::fit::CompensatorReport;
 use crate::studies::case_d::{Robotset, Row, Stage, find};
@@ -17,8 +17,10 @@ pub struct CaseDRow {
     /// The model in words.
     pub label: String,
     /// Thesis Table 6.6: mean position error (mm), where the thesis has one.
+    #[serde(with = "crate::io::json_number::option")]
     pub thesis_mm: Option<f64>,
     /// Thesis Table 6.6: mean orientation error (deg).
+    #[serde(with = "crate::io::json_number::option")]
     pub thesis_deg: Option<f64>,
     /// Test poses against their noise-free truth (mm, deg).
     pub truth: ErrorStats,
@@ -42,8 +44,10 @@ pub struct CaseDSet {
     /// Every model, nominal to full geometric + network.
     pub rows: Vec<CaseDRow>,
     /// Mean position error vs truth, offsets over offsets + network (times).
+    #[serde(with = "crate::io::json_number::option")]
     pub gain_after_offsets: Option<f64>,
     /// The same after full identification (times).
+    #[serde(with = "crate::io::json_number::option")]
     pub gain_after_full: Option<f64>,
 }
 
@@ -130,12 +134,13 @@ pub struct ReproduceFigure {
     /// What it measures (unit in the text).
     pub figure: String,
     /// The nominal model against the measurements.
-    #[serde(with = "number")]
+    #[serde(with = "crate::io::json_number")]
     pub before: f64,
     /// The identified model against the measurements.
-    #[serde(with = "number")]
+    #[serde(with = "crate::io::json_number")]
     pub after: f64,
     /// The identified model against the noise-free truth, where the protocol has one.
+    #[serde(with = "crate::io::json_number::option")]
     pub after_vs_truth: Option<f64>,
 }
 
@@ -149,7 +154,7 @@ pub struct ReproduceCase {
     /// Validation (Case D: test) rows.
     pub validation_rows: usize,
     /// The fit's a-posteriori variance factor.
-    #[serde(with = "number")]
+    #[serde(with = "crate::io::json_number")]
     pub variance_factor: f64,
     /// The thesis's figures.
     pub thesis: Vec<ThesisFigure>,
@@ -194,13 +199,13 @@ pub struct SeedFigure {
     /// What it measures (unit in the text).
     pub figure: String,
     /// Median over the seeds.
-    #[serde(with = "number")]
+    #[serde(with = "crate::io::json_number")]
     pub median: f64,
     /// Smallest.
-    #[serde(with = "number")]
+    #[serde(with = "crate::io::json_number")]
     pub min: f64,
     /// Largest.
-    #[serde(with = "number")]
+    #[serde(with = "crate::io::json_number")]
     pub max: f64,
 }
 

@@ -117,3 +117,13 @@ pub fn mutate(base: &[u8], edits: &[(usize, u8, u8)]) -> Vec<u8> {
     }
     v
 }
+
+/// The statistics of a typed report's accuracy row (`data`, `model`).
+pub fn accuracy<'a>(r: &'a serde_json::Value, data: &str, model: &str) -> &'a serde_json::Value {
+    &r["accuracy"]
+        .as_array()
+        .expect("an accuracy table")
+        .iter()
+        .find(|a| a["data"] == data && a["model"] == model)
+        .unwrap_or_else(|| panic!("no accuracy row {data} / {model}"))["stats"]
+}

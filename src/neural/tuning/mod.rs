@@ -5,11 +5,13 @@
 //! Folds are drawn by a seeded shuffle of whole configurations (rows that repeat a joint
 //! configuration stay in one fold). Every candidate is fitted on k - 1 folds (refinement
 //! included, so a refined model is judged on rows it never saw) and scored on the held-out
-//! fold through the exact compensated prediction ([`Compensator::predict`], the code path of
-//! `predict` and `evaluate`, except the training-domain fade: candidates carry no domain, whose
-//! nearest-neighbour search would cost more than the fit, so their correction is never
-//! faded); the score is the RMS position error over all held-out rows (mm),
-//! orientation RMS reported beside it.
+//! fold through the exact compensated prediction ([`Compensator::predict`], the code path
+//! of `predict` and `evaluate`, except the training-domain fade: candidates carry no domain,
+//! whose nearest-neighbour search would cost more than the fit, so their correction is never
+//! faded); the score is the RMS position error over all held-out rows (mm), orientation RMS
+//! reported beside it.
+//!
+//! [`Compensator::predict`]: crate::neural::compensator::Compensator::predict
 //!
 //! The search is staged to stay cheap, each step starting from the best so far: (1) the forms
 //! with gravity inputs at the middle size and penalty, then the penalty decade and the other
@@ -394,7 +396,7 @@ pub fn select_settings(
                 "left out of the final fit"
             } else {
                 "kept (a mis-measured row, or a sharp feature of the robot; check them, or \
-                 leave them out with --drop-outliers)"
+                 ask for them to be dropped from the final fit)"
             }
         ));
     }
