@@ -22,12 +22,14 @@
 //! Torque model (documented assumption, not a dynamic model): link k's mass sits at the midpoint
 //! between the origins of joint frames k and k+1 (the tool origin after the last joint), the
 //! payload at the tool origin; the gravity torque about joint j's axis z_j through o_j is
-//! tau_j = z_j . sum_{k >= j} (c_k - o_j) x (m_k g)  [N m, lengths in m]
+//! tau_j = z_j . sum_{k >= j} (c_k - o_j) x (m_k g)  [N m, lengths in m] (for a prismatic
+//! joint the force along its axis, N; the model's routine, `kinematics::gravity`)
 //! and the joint deflects by compliance_j * tau_j in the direction of the torque.
 //! Gear error: dq = A1 sin(q + phi1) + A2 sin(2 q + phi2).
 //! Backlash: dq = +-play/2, the sign of the joint's last motion (from q = 0 for the first row).
 
 use crate::error::{Error, Location, Result};
+use crate::kinematics::gravity::PointMass;
 use crate::kinematics::{Frames, frames};
 use crate::model::Robot;
 use nalgebra::Vector3;
@@ -251,11 +253,12 @@ impl NonGeometric {
     }
 }
 
-/// Gravity torque about every joint axis (N m) at joints `q` (rad); see the module docs.
+/// Gravity torque about every joint axis (N m; N along a prismatic one) at joints `q` (rad),
+/// from the masses of the module docs, by the model's own torque routine
+/// ([`crate::kinematics::gravity::gravity_torques`]).
 pub fn gravity_torques(robot: &Robot, c: &Compliance, q: &[f64], ws: &mut Frames) -> Vec<f64> {
     frames(robot, q, ws);
     let n = robot.dof();
-    let g = Vector3::from(c.gravity);
     let origin = |k: usize| {
         if k < n {
             ws.joint[k].translation.vector
@@ -263,22 +266,29 @@ pub fn gravity_torques(robot: &Robot, c: &Compliance, q: &[f64], ws: &mut Frames
             ws.tool.translation.vector
         }
     };
-    // Mass points (mm) and masses (kg): links, then the payload.
-    let mut points: Vec<(usize, Vector3<f64>, f64)> = (0..n)
-        .map(|k| (k, (origin(k) + origin(k + 1)) * 0.5, c.link_masses_kg[k]))
-        .collect();
-    points.push((n, origin(n), c.payload_kg));
-    (0..n)
-        .map(|j| {
-            let z: Vector3<f64> = ws.joint[j].rotation.matrix().column(2).into();
-            let o = origin(j);
-            points
-                .iter()
-                .filter(|(k, _, _)| *k >= j)
-                .map(|(_, p, m)| z.dot(&((p - o) * 1e-3).cross(&(g * *m))))
-                .sum()
+    // Link k's mass midway between joint origins k and k + 1 (carried by joints 0..=k),
+    // then the payload at the tool origin (carried by all).
+    let mut points: Vec<PointMass> = (0..n)
+        .map(|k| PointMass {
+            mass_kg: c.link_masses_kg[k],
+            position_mm: (origin(k) + origin(k + 1)) * 0.5,
+            carried_by: k + 1,
         })
-        .collect()
+        .collect();
+    points.push(PointMass {
+        mass_kg: c.payload_kg,
+        position_mm: origin(n),
+        carried_by: n,
+    });
+    let mut tau = vec![0.0; n];
+    crate::kinematics::gravity::gravity_torques(
+        robot,
+        ws,
+        &Vector3::from(c.gravity),
+        &points,
+        &mut tau,
+    );
+    tau
 }
 
 /// The table of a non-geometric file a [`Fault`] lies in.
