@@ -36,6 +36,29 @@ fn axis(frames: &Frames, j: usize) -> (Vector3<f64>, Vector3<f64>) {
     (f.rotation.matrix().column(2).into(), f.translation.vector)
 }
 
+/// The point masses of `robot`'s mass properties at the configuration of `frames` into
+/// `out` (none when the robot has no masses): each link's centre of mass carried by its
+/// joint frame, the payload's by the tool frame. Allocates only when `out` must grow.
+pub fn mass_points(robot: &Robot, frames: &Frames, out: &mut Vec<PointMass>) {
+    out.clear();
+    let Some(m) = robot.masses() else {
+        return;
+    };
+    let n = robot.dof();
+    for (k, b) in m.links.iter().enumerate() {
+        out.push(PointMass {
+            mass_kg: b.mass_kg,
+            position_mm: frames.joint[k].transform_point(&b.com_mm.into()).coords,
+            carried_by: k + 1,
+        });
+    }
+    out.push(PointMass {
+        mass_kg: m.payload.mass_kg,
+        position_mm: frames.tool.transform_point(&m.payload.com_mm.into()).coords,
+        carried_by: n,
+    });
+}
+
 /// The gravity force of every joint into `out` (N m for revolute joints, N for prismatic
 /// ones) from `points` at the configuration of `frames`, gravity `g` (m/s^2, world). Does
 /// not allocate.

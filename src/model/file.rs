@@ -26,10 +26,12 @@
 //! convention does not have is an error. Writing uses the shortest decimal form that reads
 //! back to the same bits, so write -> read is lossless.
 
+use super::mass::{BodyMass, MassProperties};
 use super::robot::{Joint, JointType, Robot};
 use super::row::{Convention, Field, Row};
 use crate::error::{Error, IN_MEMORY, Location, Result};
 use crate::io::line_of;
+use nalgebra::Vector3;
 use serde::Deserialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -71,6 +73,19 @@ struct RobotFile {
     #[serde(default)]
     joint: Vec<Spanned<RowFile>>,
     tool: Option<Spanned<RowFile>>,
+    mass: Option<MassFile>,
+}
+
+/// The `[mass]` table ([`super::mass`]).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MassFile {
+    gravity: Option<Spanned<Vec<Number>>>,
+    link_kg: Spanned<Vec<Number>>,
+    link_com_mm: Spanned<Vec<Vec<Number>>>,
+    #[serde(default)]
+    payload_kg: Option<Spanned<Number>>,
+    payload_com_mm: Option<Spanned<Vec<Number>>>,
 }
 
 #[derive(Deserialize)]
@@ -171,8 +186,17 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default()
     });
-    Robot::new(name, base, joints, tool)
-        .map_err(|e| Error::input(Location::file(path), e.to_string()))
+    let robot = Robot::new(name, base, joints, tool)
+        .map_err(|e| Error::input(Location::file(path), e.to_string()))?;
+    match &file.mass {
+        None => Ok(robot),
+        Some(m) => {
+            let masses = rows.masses(m, robot.dof())?;
+            robot
+                .with_masses(Some(masses))
+                .map_err(|e| Error::input(rows.at(m.link_kg.span(), "link_kg"), e.to_string()))
+        }
+    }
 }
 
 /// Reads the rows of one robot file, naming the line and field of every error.
@@ -184,6 +208,72 @@ struct RowReader<'a> {
 impl RowReader<'_> {
     fn at(&self, span: std::ops::Range<usize>, field: &str) -> Location {
         Location::at(self.path, line_of(self.text, span.start), field)
+    }
+
+    /// The `[mass]` table for `n` joints: masses in [0, 1e5] kg, centres of mass of three
+    /// coordinates within 100 m, gravity of three components within 100 m/s^2.
+    fn masses(&self, m: &MassFile, n: usize) -> Result<MassProperties> {
+        let three = |v: &[Number], span: std::ops::Range<usize>, key: &str| match v {
+            [x, y, z] => Ok(Vector3::new(x.0, y.0, z.0)),
+            _ => Err(Error::input(
+                self.at(span, key),
+                format!("[mass]: {key} needs 3 values, got {}", v.len()),
+            )),
+        };
+        let kg = m.link_kg.get_ref();
+        let com = m.link_com_mm.get_ref();
+        if kg.len() != n || com.len() != n {
+            return Err(Error::input(
+                self.at(m.link_kg.span(), "link_kg"),
+                format!(
+                    "[mass]: {} link masses and {} centres of mass for a robot with {n} joints",
+                    kg.len(),
+                    com.len()
+                ),
+            ));
+        }
+        let links = kg
+            .iter()
+            .zip(com)
+            .map(|(k, c)| {
+                Ok(BodyMass {
+                    mass_kg: k.0,
+                    com_mm: three(c, m.link_com_mm.span(), "link_com_mm")?,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let payload = BodyMass {
+            mass_kg: m.payload_kg.as_ref().map_or(0.0, |p| p.get_ref().0),
+            com_mm: match &m.payload_com_mm {
+                Some(c) => three(c.get_ref(), c.span(), "payload_com_mm")?,
+                None => Vector3::zeros(),
+            },
+        };
+        let gravity = match &m.gravity {
+            Some(g) => three(g.get_ref(), g.span(), "gravity")?,
+            None => Vector3::new(0.0, 0.0, -9.81),
+        };
+        let props = MassProperties {
+            links,
+            payload,
+            gravity,
+        };
+        match props.fault(n) {
+            Some(f) => {
+                // The line of the value at fault.
+                let at = if let (true, Some(g)) = (f.starts_with("gravity"), &m.gravity) {
+                    self.at(g.span(), "gravity")
+                } else if let (true, Some(p)) = (f.starts_with("payload"), &m.payload_kg) {
+                    self.at(p.span(), "payload_kg")
+                } else if f.contains("centre of mass") {
+                    self.at(m.link_com_mm.span(), "link_com_mm")
+                } else {
+                    self.at(m.link_kg.span(), "link_kg")
+                };
+                Err(Error::input(at, format!("[mass]: {f}")))
+            }
+            None => Ok(props),
+        }
     }
 
     /// A base, tool (`is_joint` false) or joint row: its values (file units: mm, deg), its
@@ -406,6 +496,31 @@ pub fn robot_to_toml(robot: &Robot) -> String {
     }
     let _ = writeln!(s, "\n[tool]");
     write_row(&mut s, robot.tool());
+    if let Some(m) = robot.masses() {
+        let v3 = |v: &Vector3<f64>| {
+            format!(
+                "[{}, {}, {}]",
+                float_text(v.x),
+                float_text(v.y),
+                float_text(v.z)
+            )
+        };
+        let list =
+            |f: &dyn Fn(&BodyMass) -> String| m.links.iter().map(f).collect::<Vec<_>>().join(", ");
+        let _ = writeln!(
+            s,
+            "\n[mass]  # kg; centres of mass in mm, each in its joint's frame"
+        );
+        let _ = writeln!(s, "gravity = {}  # m/s^2, base frame", v3(&m.gravity));
+        let _ = writeln!(s, "link_kg = [{}]", list(&|b| float_text(b.mass_kg)));
+        let _ = writeln!(s, "link_com_mm = [{}]", list(&|b| v3(&b.com_mm)));
+        let _ = writeln!(s, "payload_kg = {}", float_text(m.payload.mass_kg));
+        let _ = writeln!(
+            s,
+            "payload_com_mm = {}  # tool frame",
+            v3(&m.payload.com_mm)
+        );
+    }
     s
 }
 

@@ -2,10 +2,12 @@
 
 pub(crate) mod axes;
 pub mod file;
+pub mod mass;
 pub mod robot;
 pub mod row;
 
 pub use file::{read_robot, robot_to_toml, write_robot};
+pub use mass::{BodyMass, MassProperties};
 pub use robot::{
     Joint, JointType, MAX_ANGLE_DEG, MAX_JOINT_DEG, MAX_LENGTH_MM, ParamId, Robot, Slot,
     joint_distance,

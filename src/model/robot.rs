@@ -5,6 +5,7 @@
 //! compiled chain of constant transforms that forward kinematics runs through.
 
 use super::axes::{Anchor, ParamAxis};
+use super::mass::MassProperties;
 use super::row::{Convention, Field, Row, apply_z};
 use crate::error::{Error, Result};
 use crate::geometry::Pose;
@@ -143,6 +144,8 @@ pub struct Robot {
     base: Row,
     joints: Vec<Joint>,
     tool: Row,
+    /// Mass properties, for gravity torques (none: a rigid, massless model).
+    masses: Option<MassProperties>,
     chain: Chain,
 }
 
@@ -152,6 +155,7 @@ impl PartialEq for Robot {
             && self.base == other.base
             && self.joints == other.joints
             && self.tool == other.tool
+            && self.masses == other.masses
     }
 }
 
@@ -217,8 +221,26 @@ impl Robot {
             base,
             joints,
             tool,
+            masses: None,
             chain,
         })
+    }
+
+    /// A copy with these mass properties (none: massless); properties for another joint
+    /// count, or out of their bounds, are an error.
+    pub fn with_masses(&self, masses: Option<MassProperties>) -> Result<Robot> {
+        if let Some(f) = masses.as_ref().and_then(|m| m.fault(self.dof())) {
+            return Err(Error::Model(format!("mass properties: {f}")));
+        }
+        Ok(Robot {
+            masses,
+            ..self.clone()
+        })
+    }
+
+    /// The mass properties, if the robot has them.
+    pub fn masses(&self) -> Option<&MassProperties> {
+        self.masses.as_ref()
     }
 
     /// The robot's name (from its file, or given in code).
@@ -334,7 +356,7 @@ impl Robot {
                 return Err(Error::Invalid(format!("no parameter {}", id.name())));
             }
         }
-        Robot::new(self.name.clone(), base, joints, tool)
+        Robot::new(self.name.clone(), base, joints, tool)?.with_masses(self.masses.clone())
     }
 
     /// A copy whose base or tool row is replaced by the 6-DOF transform with the same pose.
@@ -365,7 +387,8 @@ impl Robot {
         } else {
             (self.base.clone(), new)
         };
-        Robot::new(self.name.clone(), base, self.joints.clone(), tool)
+        Robot::new(self.name.clone(), base, self.joints.clone(), tool)?
+            .with_masses(self.masses.clone())
     }
 
     /// Whether `other` has the same number and types of joints (so joint vectors fit both).

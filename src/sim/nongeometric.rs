@@ -36,13 +36,10 @@ use nalgebra::Vector3;
 use serde::Deserialize;
 use std::path::Path;
 
-/// Largest mass (kg) of a link or payload: heavier than any robot lifts.
-pub const MAX_MASS_KG: f64 = 1e5;
+pub use crate::model::mass::{MAX_GRAVITY, MAX_MASS_KG};
 /// Largest joint error term (mrad: compliance per kN m, gear amplitude, backlash): a radian,
 /// far beyond any real joint.
 pub const MAX_MRAD: f64 = 1e3;
-/// Largest gravity component (m/s^2).
-pub const MAX_GRAVITY: f64 = 100.0;
 
 /// Gravity compliance: deflection proportional to a static gravity torque.
 #[derive(Debug, Clone, PartialEq, Deserialize)]

@@ -1,0 +1,129 @@
+//! The model's mass properties (robot files' `[mass]` table) and gravity torques, checked
+//! against the simulator's compliance model and for their error messages.
+
+use nalgebra::Vector3;
+use robocal::kinematics::gravity::{gravity_torques, mass_points};
+use robocal::kinematics::{Frames, frames};
+use robocal::model::file::parse_robot;
+use robocal::model::{BodyMass, MassProperties, robot_to_toml};
+use robocal::sim::nongeometric::Compliance;
+use std::path::Path;
+
+fn fanuc_text() -> String {
+    std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/fanuc_r2000ib_210f.toml"),
+    )
+    .unwrap()
+}
+
+/// Masses at the simulator's points (midway between joint origins, payload at the tool
+/// origin) written as centres of mass in the joint frames: the model's torques are the
+/// simulator's at every configuration.
+#[test]
+fn file_masses_give_the_simulators_torques() {
+    let robot = parse_robot(&fanuc_text(), Path::new("fanuc.toml")).unwrap();
+    let n = robot.dof();
+    let sim = Compliance {
+        payload_kg: 210.0,
+        link_masses_kg: vec![400.0, 200.0, 250.0, 30.0, 20.0, 5.0],
+        mrad_per_knm: vec![0.0; 6],
+        gravity: [0.0, 0.0, -9.81],
+    };
+    let mut f = Frames::new(&robot);
+    frames(&robot, &[0.1, 0.2, -0.3, 0.4, 0.5, 0.6], &mut f);
+    let origin = |f: &Frames, k: usize| {
+        if k < n {
+            f.joint[k].translation.vector
+        } else {
+            f.tool.translation.vector
+        }
+    };
+    let links = (0..n)
+        .map(|k| {
+            let mid = (origin(&f, k) + origin(&f, k + 1)) * 0.5;
+            BodyMass {
+                mass_kg: sim.link_masses_kg[k],
+                com_mm: f.joint[k].inverse_transform_point(&mid.into()).coords,
+            }
+        })
+        .collect();
+    let masses = MassProperties {
+        links,
+        payload: BodyMass {
+            mass_kg: sim.payload_kg,
+            com_mm: Vector3::zeros(),
+        },
+        gravity: Vector3::from(sim.gravity),
+    };
+    let model = robot.with_masses(Some(masses)).unwrap();
+    // Through the file and back: the same robot.
+    let text = robot_to_toml(&model);
+    assert!(text.contains("[mass]"), "{text}");
+    let back = parse_robot(&text, Path::new("back.toml")).unwrap();
+    assert_eq!(back, model);
+    let mut points = Vec::new();
+    let mut tau = vec![0.0; n];
+    for s in 0..20 {
+        let q: Vec<f64> = (0..n)
+            .map(|j| ((s * 7 + j * 3) % 11) as f64 * 0.2 - 1.0)
+            .collect();
+        frames(&back, &q, &mut f);
+        mass_points(&back, &f, &mut points);
+        gravity_torques(
+            &back,
+            &f,
+            &back.masses().unwrap().gravity,
+            &points,
+            &mut tau,
+        );
+        let want = robocal::sim::nongeometric::gravity_torques(&robot, &sim, &q, &mut f);
+        for j in 0..n {
+            assert!(
+                (tau[j] - want[j]).abs() <= 1e-9 * (1.0 + want[j].abs()),
+                "joint {}: model {} vs simulator {}",
+                j + 1,
+                tau[j],
+                want[j]
+            );
+        }
+    }
+}
+
+#[test]
+fn bad_mass_tables_name_their_line_and_field() {
+    let base = fanuc_text();
+    // (table, message, line of the value at fault counted from the table's header)
+    for (table, want, offset) in [
+        (
+            "[mass]\nlink_kg = [1, 2, 3]\nlink_com_mm = [[0, 0, 0]]\n",
+            "field `link_kg`: [mass]: 3 link masses and 1 centres of mass",
+            1,
+        ),
+        (
+            "[mass]\nlink_kg = [1, 2, 3, 4, 5, -6]\nlink_com_mm = [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]]\n",
+            "link 6: mass -6 kg outside [0, 100000]",
+            1,
+        ),
+        (
+            "[mass]\nlink_kg = [1, 2, 3, 4, 5, 6]\nlink_com_mm = [[0, 0, 0], [0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]]\n",
+            "field `link_com_mm`: [mass]: link_com_mm needs 3 values, got 2",
+            2,
+        ),
+        (
+            "[mass]\nlink_kg = [1, 2, 3, 4, 5, 6]\nlink_com_mm = [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]]\ngravity = [0, 0, -1e3]\n",
+            "field `gravity`: [mass]: gravity components beyond 100 m/s^2",
+            3,
+        ),
+    ] {
+        let text = format!("{base}\n{table}");
+        let line = text.lines().count() - table.lines().count() + 1;
+        let e = parse_robot(&text, Path::new("r.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(want), "{e}");
+        assert!(
+            e.starts_with(&format!("r.toml:{}:", line + offset)),
+            "{e} (table at line {line})"
+        );
+    }
+}
