@@ -127,3 +127,33 @@ fn bad_mass_tables_name_their_line_and_field() {
         );
     }
 }
+
+/// Identification changes the geometry, never the masses: the robot it writes keeps them.
+#[test]
+fn identification_keeps_the_masses() {
+    let robot = parse_robot(&fanuc_text(), Path::new("fanuc.toml")).unwrap();
+    let masses = MassProperties {
+        links: (0..6)
+            .map(|k| BodyMass {
+                mass_kg: 10.0 * (k + 1) as f64,
+                com_mm: Vector3::new(100.0, -20.0 * k as f64, 5.0),
+            })
+            .collect(),
+        payload: BodyMass {
+            mass_kg: 7.5,
+            com_mm: Vector3::new(0.0, 0.0, 40.0),
+        },
+        gravity: Vector3::new(0.0, 0.0, -9.81),
+    };
+    let robot = robot.with_masses(Some(masses.clone())).unwrap();
+    let data = robocal::data::read_canonical(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/case_d/calibration.csv"),
+        &robot,
+    )
+    .unwrap();
+    let id = robocal::identify::identify(&robot, &data, &Default::default()).unwrap();
+    assert_ne!(id.robot.base(), robot.base(), "the full set moved the base");
+    assert_eq!(id.robot.masses(), Some(&masses));
+    let back = parse_robot(&robot_to_toml(&id.robot), Path::new("id.toml")).unwrap();
+    assert_eq!(back.masses(), Some(&masses));
+}
