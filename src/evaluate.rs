@@ -76,6 +76,29 @@ pub struct ErrorStats {
     pub orientation_deg: Option<Summary>,
 }
 
+impl ErrorStats {
+    /// Mean position error (mm); NaN when the rows have no position.
+    pub fn position_mean_mm(&self) -> f64 {
+        self.position_mm.map_or(f64::NAN, |p| p.mean)
+    }
+
+    /// RMS position error (mm); NaN when the rows have no position.
+    pub fn position_rms_mm(&self) -> f64 {
+        self.position_mm.map_or(f64::NAN, |p| p.rms)
+    }
+
+    /// Mean per-coordinate position error |dx|, |dy|, |dz| (mm, the thesis's figure); NaN
+    /// when the rows have no position.
+    pub fn per_coordinate_mm(&self) -> f64 {
+        self.position_per_coordinate_mean_mm.unwrap_or(f64::NAN)
+    }
+
+    /// Mean orientation error (deg); NaN when the rows have no orientation.
+    pub fn orientation_mean_deg(&self) -> f64 {
+        self.orientation_deg.map_or(f64::NAN, |o| o.mean)
+    }
+}
+
 /// The error of one row (or pair).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RowError {

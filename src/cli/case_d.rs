@@ -6,7 +6,6 @@ use super::data_args::SigmaArgs;
 use super::summary::write_report;
 use anyhow::{Context, Result};
 use clap::Args;
-use robocal::evaluate::ErrorStats;
 use robocal::plot::{ErrorRun, error_figures, training_figure};
 use robocal::reports::studies::CaseDSet;
 use robocal::reports::{CaseDReport, Report};
@@ -31,16 +30,6 @@ pub struct CaseDArgs {
     plot: Option<PathBuf>,
 }
 
-fn pos(s: &ErrorStats) -> f64 {
-    s.position_mm.map_or(f64::NAN, |p| p.mean)
-}
-fn pc(s: &ErrorStats) -> f64 {
-    s.position_per_coordinate_mean_mm.unwrap_or(f64::NAN)
-}
-fn rot(s: &ErrorStats) -> f64 {
-    s.orientation_deg.map_or(f64::NAN, |p| p.mean)
-}
-
 fn print_set(s: &CaseDSet) {
     println!("\n{} - {} unseen test poses", s.title, s.test_rows);
     println!(
@@ -59,12 +48,12 @@ fn print_set(s: &CaseDSet) {
         println!(
             "{:<26} | {thesis} | {:>8.4} {:>8.4} {:>9.4} | {:>8.4} {:>8.4} {:>9.4}",
             r.label,
-            pos(&r.truth),
-            pc(&r.truth),
-            rot(&r.truth),
-            pos(&r.measured),
-            pc(&r.measured),
-            rot(&r.measured)
+            r.truth.position_mean_mm(),
+            r.truth.per_coordinate_mm(),
+            r.truth.orientation_mean_deg(),
+            r.measured.position_mean_mm(),
+            r.measured.per_coordinate_mm(),
+            r.measured.orientation_mean_deg()
         );
     }
     if let (Some(o), Some(f)) = (s.gain_after_offsets, s.gain_after_full) {

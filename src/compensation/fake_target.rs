@@ -187,31 +187,22 @@ impl<'a> FakeTargetSolver<'a> {
         };
         // A seed fixes the branch (the configuration the robot program was taught in).
         let seed_branch = seed.and_then(|s| self.branch_of(s));
-        if !self.ik.reachable(&target, seed_branch) {
-            // The seed starts the calibrated model's solve; its branch is the one kept.
-            match seed {
-                None => {
-                    return Err(Failure::Unreachable(
-                        "out of the nominal model's reach; seed joints would let the \
-                         calibrated model try"
-                            .into(),
-                    ));
-                }
-                Some(_) if seed_branch.is_none() => {
-                    return Err(Failure::Unreachable(
-                        "out of the nominal model's reach, and the seed is at a singularity".into(),
-                    ));
-                }
-                Some(_) => {}
-            }
-        }
         let solved = self
             .ik
             .from_nearest_start(&target, seed, seed_branch)
             .map_err(|e| match e {
                 IkFailure::NotConverged(m) => Failure::NotConverged(m),
                 IkFailure::BadSeed(m) => Failure::BadSeed(m),
-                other => Failure::Unreachable(other.to_string()),
+                // No closed-form start on the seed's branch, and the seed could not start
+                // the solve either: there is none, or it is at a singularity (no branch).
+                _ if seed.is_none() => Failure::Unreachable(
+                    "out of the nominal model's reach; seed joints would let the calibrated \
+                     model try"
+                        .into(),
+                ),
+                _ => Failure::Unreachable(
+                    "out of the nominal model's reach, and the seed is at a singularity".into(),
+                ),
             })?;
         let Some(branch) = solved.branch.or(seed_branch) else {
             return Err(Failure::Unreachable(

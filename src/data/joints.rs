@@ -3,7 +3,7 @@
 
 use super::table::Table;
 use super::{joint_columns, output_headers};
-use crate::error::{Error, Location, Result};
+use crate::error::{Error, Result};
 use crate::model::{JointType, MAX_JOINT_DEG, MAX_LENGTH_MM, Robot};
 use std::path::Path;
 
@@ -84,9 +84,4 @@ impl JointTable {
         }
         max.is_some_and(|m| m > 1.0 && m <= std::f64::consts::TAU)
     }
-}
-
-/// The location of a table's header cell, for messages about its columns.
-pub(super) fn header_location(t: &Table, column: &str) -> Location {
-    Location::at(&t.path, 1, column)
 }

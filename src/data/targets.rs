@@ -4,10 +4,10 @@
 //! are all empty has no seed. Other columns are carried into the output, the seed columns
 //! renamed seed_q1..seed_qN.
 
-use super::joints::{header_location, row_joints};
+use super::joints::row_joints;
 use super::table::Table;
 use super::{POSE_COLUMNS, joint_columns, output_headers};
-use crate::error::{Error, Result};
+use crate::error::{Error, Location, Result};
 use crate::geometry::{Pose, pose_from_file};
 use crate::model::{MAX_ANGLE_DEG, MAX_LENGTH_MM, Robot};
 use nalgebra::Vector3;
@@ -83,7 +83,7 @@ impl TargetTable {
                     .find(|c| table.column(c).is_none())
                     .expect("some seed column is missing");
                 return Err(Error::input(
-                    header_location(&table, missing),
+                    Location::at(&table.path, 1, missing.as_str()),
                     format!(
                         "missing column: seed columns q1..q{n} must be all present or all absent"
                     ),

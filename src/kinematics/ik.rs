@@ -228,18 +228,6 @@ impl<M: ToolModel> IkSolver<M> {
         }
     }
 
-    /// Whether the closed form (exact or nominal) has a solution for `target`, on `branch`
-    /// if given, whatever the limits.
-    pub fn reachable(&mut self, target: &Pose, branch: Option<Branch>) -> bool {
-        let Some(ik) = self.start.closed_form() else {
-            return false;
-        };
-        ik.solve_branches(target, &mut self.branches);
-        self.branches
-            .iter()
-            .any(|(b, _)| branch.is_none_or(|o| o == *b))
-    }
-
     /// Why there is no start at all: no closed-form solution, and no seed.
     fn no_start(&self) -> IkFailure {
         match self.start {
@@ -326,10 +314,11 @@ impl<M: ToolModel> IkSolver<M> {
     }
 
     /// One solve from the closed-form start nearest `seed` (or the middle of the ranges) on
-    /// `branch` if given, within the limits if one is; the seed starts it where the closed
-    /// form has no solution. The start's branch is the configuration kept (target
-    /// compensation: the controller's), so no other start is tried. The solution may leave
-    /// the limits (see its `outside_limits`).
+    /// `branch` if given, within the limits if one is. The start's branch is the
+    /// configuration kept (target compensation: the controller's), so no other start is
+    /// tried; where the closed form has no solution the seed starts the solve, but only with
+    /// a `branch` (the seed's) to keep. The solution may leave the limits (see its
+    /// `outside_limits`).
     pub fn from_nearest_start(
         &mut self,
         target: &Pose,
@@ -340,9 +329,9 @@ impl<M: ToolModel> IkSolver<M> {
         let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
         let (b, q0) = match self.starts(target, &reference, branch).first() {
             Some((_, _, b, q)) => (Some(*b), q.to_vec()),
-            None => match seed {
-                Some(s) => (None, s.to_vec()),
-                None => return Err(self.no_start()),
+            None => match (seed, branch) {
+                (Some(s), Some(_)) => (None, s.to_vec()),
+                _ => return Err(self.no_start()),
             },
         };
         if let IkStart::Exact(_) = self.start

@@ -60,10 +60,6 @@ pub struct CaseDReport {
     pub sets: Vec<CaseDSet>,
 }
 
-fn mean_mm(s: &ErrorStats) -> f64 {
-    s.position_mm.map_or(f64::NAN, |p| p.mean)
-}
-
 impl CaseDReport {
     /// The report of the protocol's `rows` (from `studies::case_d::run`).
     pub fn new(seed: u64, rows: &[Row]) -> CaseDReport {
@@ -71,7 +67,10 @@ impl CaseDReport {
             .iter()
             .map(|&set| {
                 let gain = |a: Stage, b: Stage| -> Option<f64> {
-                    Some(mean_mm(&find(rows, set, a)?.truth) / mean_mm(&find(rows, set, b)?.truth))
+                    Some(
+                        find(rows, set, a)?.truth.position_mean_mm()
+                            / find(rows, set, b)?.truth.position_mean_mm(),
+                    )
                 };
                 let mine: Vec<&Row> = rows.iter().filter(|r| r.set == set).collect();
                 CaseDSet {

@@ -211,20 +211,12 @@ pub fn noise_floor(
 /// C: validation RMS of the relative-distance error against the truth (mm);
 /// D: test mean position error against the truth (mm).
 pub fn headline(run: &CaseRun) -> f64 {
+    let t = &run.validation_truth_after;
     match run.case {
-        Case::A => run
-            .validation_truth_after
-            .position_per_coordinate_mean_mm
-            .unwrap_or(f64::NAN),
+        Case::A => t.per_coordinate_mm(),
         Case::BSim => run.variance_factor,
-        Case::C => run
-            .validation_truth_after
-            .position_mm
-            .map_or(f64::NAN, |s| s.rms),
-        Case::D => run
-            .validation_truth_after
-            .position_mm
-            .map_or(f64::NAN, |s| s.mean),
+        Case::C => t.position_rms_mm(),
+        Case::D => t.position_mean_mm(),
     }
 }
 
@@ -293,22 +285,16 @@ pub fn thesis_figures(case: Case) -> &'static [(&'static str, f64, f64)] {
     }
 }
 
-fn pc(s: &ErrorStats) -> f64 {
-    s.position_per_coordinate_mean_mm.unwrap_or(f64::NAN)
-}
-fn pos(s: &ErrorStats) -> f64 {
-    s.position_mm.map_or(f64::NAN, |p| p.mean)
-}
-fn rms(s: &ErrorStats) -> f64 {
-    s.position_mm.map_or(f64::NAN, |p| p.rms)
-}
-fn rot(s: &ErrorStats) -> f64 {
-    s.orientation_deg.map_or(f64::NAN, |p| p.mean)
-}
-
 /// The figures of a shipped run that match the thesis's: (what, ours before vs measured,
 /// ours after vs measured, ours after vs truth; NaN where the thesis's protocol has none).
 pub fn figures(run: &CaseRun) -> Vec<(&'static str, f64, f64, f64)> {
+    // The figures of one statistics block (NaN where the rows lack them).
+    let (pc, pos, rms, rot) = (
+        ErrorStats::per_coordinate_mm,
+        ErrorStats::position_mean_mm,
+        ErrorStats::position_rms_mm,
+        ErrorStats::orientation_mean_deg,
+    );
     let (cb, ca, vb, va, vt) = (
         &run.calibration_before,
         &run.calibration_after,
@@ -396,6 +382,12 @@ pub fn figures(run: &CaseRun) -> Vec<(&'static str, f64, f64, f64)> {
 /// The figures the repeated protocol reports for `case` over its runs: (what, one value per
 /// run). Case D is not repeated (its shipped run is the thesis's comparison).
 pub fn seed_figures(case: Case, runs: &[CaseRun]) -> Vec<(&'static str, Vec<f64>)> {
+    // The figures of one statistics block (NaN where the rows lack them).
+    let (pc, pos, rms) = (
+        ErrorStats::per_coordinate_mm,
+        ErrorStats::position_mean_mm,
+        ErrorStats::position_rms_mm,
+    );
     let of = |f: &dyn Fn(&CaseRun) -> f64| runs.iter().map(f).collect::<Vec<f64>>();
     match case {
         Case::A => vec![(
