@@ -63,28 +63,28 @@ fn file_masses_give_the_simulators_torques() {
     assert_eq!(back, model);
     let mut points = Vec::new();
     let mut tau = vec![0.0; n];
+    let mut f = Frames::new(&back);
+    let mut f2 = Frames::new(&robot);
     for s in 0..20 {
         let q: Vec<f64> = (0..n)
             .map(|j| ((s * 7 + j * 3) % 11) as f64 * 0.2 - 1.0)
             .collect();
         frames(&back, &q, &mut f);
-        mass_points(&back, &f, &mut points);
-        gravity_torques(
-            &back,
-            &f,
-            &back.masses().unwrap().gravity,
-            &points,
-            &mut tau,
-        );
-        let want = robocal::sim::nongeometric::gravity_torques(&robot, &sim, &q, &mut f);
-        for j in 0..n {
-            assert!(
-                (tau[j] - want[j]).abs() <= 1e-9 * (1.0 + want[j].abs()),
-                "joint {}: model {} vs simulator {}",
-                j + 1,
-                tau[j],
-                want[j]
-            );
+        assert!(f.load.active && !f.load.compliant);
+        mass_points(&back, &f.joint, &f.tool, &mut points);
+        gravity_torques(&back, &f.joint, &f.load.gravity, &points, &mut tau);
+        let want = robocal::sim::nongeometric::gravity_torques(&robot, &sim, &q, &mut f2);
+        // The point-mass routine and the load's suffix sums (what the compliant model runs).
+        for (what, got) in [("points", &tau), ("load", &f.load.torque)] {
+            for j in 0..n {
+                assert!(
+                    (got[j] - want[j]).abs() <= 1e-9 * (1.0 + want[j].abs()),
+                    "{what}: joint {}: model {} vs simulator {}",
+                    j + 1,
+                    got[j],
+                    want[j]
+                );
+            }
         }
     }
 }

@@ -28,7 +28,8 @@ pub struct IdentifyArgs {
     validate: Option<PathBuf>,
     #[command(flatten)]
     read: DataArgs,
-    /// Parameters: offsets | full | base | tool | joints | names, comma-separated.
+    /// Parameters: offsets | full | base | tool | joints | compliance | names, comma-separated
+    /// (`compliance`: the joint compliances c1..cN, for a robot file with a [mass] table).
     #[arg(long, default_value = "full")]
     params: String,
     /// How to compare measurements (default: pose if the data has orientations, else position).

@@ -7,14 +7,20 @@
 //! origin: rows 0-2 in mm per mm or mm per rad, rows 3-5 the tool's angular velocity
 //! (rad per unit), both in world coordinates.
 
+use crate::kinematics::jacobian::axis_column;
+use crate::kinematics::load::{Load, Twist};
 use crate::kinematics::{Frames, Pose};
 use crate::model::Robot;
-use crate::model::axes::Anchor;
+use crate::model::axes::{Anchor, ParamAxis};
 use nalgebra::{Matrix6xX, Point3, Vector3};
 
 /// Fills `out` (6 x cols.len()) with the columns of the parameters `cols` (indices into
 /// [`Robot::parameters`]) at the configuration whose frames are in `frames`. Does not allocate
 /// when `out` already has the right size.
+///
+/// For a compliant robot (q' = q + c tau(q)), a geometric parameter's column is its rigid
+/// column at the reached joints plus J' C d tau / d p (it moves the masses and axes the
+/// torques come from); a compliance c_j's column is J'_j tau_j.
 pub fn parameter_jacobian(
     robot: &Robot,
     frames: &Frames,
@@ -26,28 +32,81 @@ pub fn parameter_jacobian(
     }
     let chain = robot.chain();
     let n = robot.dof();
-    let identity = Pose::identity();
+    let load = &frames.load;
     let p = frames.tool.translation.vector;
     for (k, &col) in cols.iter().enumerate() {
-        let axis = &chain.axes[col];
-        let f: &Pose = match axis.anchor {
-            Anchor::World => &identity,
-            Anchor::Entry(0) => &chain.base,
-            Anchor::Entry(i) => &frames.link[i - 1],
-            Anchor::Joint(i) => &frames.joint[i],
-            Anchor::ToolEntry => &frames.link[n - 1],
-        };
-        let w: Vector3<f64> = f.rotation * axis.u;
         let mut c = out.column_mut(k);
+        let Some(axis) = chain.axes.get(col) else {
+            // The compliances follow the row parameters, c1..cN.
+            let j = col - chain.axes.len();
+            c.copy_from(&(axis_column(robot, frames, j) * load.torque[j]));
+            continue;
+        };
+        let (w, at) = screw(robot, &frames.joint, &frames.link, axis);
         if axis.rotation {
-            let at = (f * Point3::from(axis.c)).coords;
             c.fixed_rows_mut::<3>(0).copy_from(&w.cross(&(p - at)));
             c.fixed_rows_mut::<3>(3).copy_from(&w);
         } else {
             c.fixed_rows_mut::<3>(0).copy_from(&w);
             c.fixed_rows_mut::<3>(3).fill(0.0);
         }
+        if load.compliant
+            && let Some(t) = twist(robot, load, axis, n)
+        {
+            for j in 0..n {
+                let cj = robot.compliance().map_or(0.0, |c| c.joint(j));
+                if cj != 0.0 {
+                    c += axis_column(robot, frames, j) * (cj * load.torque_change(j, &t));
+                }
+            }
+        }
     }
+}
+
+/// A parameter's screw in the frames `joint`, `link` (world): its unit direction w and, for
+/// a rotation, a point on its line (mm).
+fn screw(
+    robot: &Robot,
+    joint: &[Pose],
+    link: &[Pose],
+    axis: &ParamAxis,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let chain = robot.chain();
+    let identity = Pose::identity();
+    let f: &Pose = match axis.anchor {
+        Anchor::World => &identity,
+        Anchor::Entry(0) => &chain.base,
+        Anchor::Entry(i) => &link[i - 1],
+        Anchor::Joint(i) => &joint[i],
+        Anchor::ToolEntry => &link[robot.dof() - 1],
+    };
+    let w: Vector3<f64> = f.rotation * axis.u;
+    (w, (f * Point3::from(axis.c)).coords)
+}
+
+/// The motion a parameter gives the commanded configuration's frames, for the change of
+/// its gravity torques; None for a base parameter, which moves gravity with the chain.
+fn twist(robot: &Robot, load: &Load, axis: &ParamAxis, n: usize) -> Option<Twist> {
+    let first = match axis.anchor {
+        Anchor::World => return None,
+        Anchor::Entry(i) => i,
+        Anchor::Joint(i) => i + 1,
+        Anchor::ToolEntry => n,
+    };
+    let (w, at) = screw(robot, &load.joint, &load.link, axis);
+    Some(if axis.rotation {
+        Twist {
+            first,
+            v: -w.cross(&at),
+            w,
+        }
+    } else {
+        Twist {
+            first,
+            v: w,
+            w: Vector3::zeros(),
+        }
+    })
 }
 
 #[cfg(test)]
@@ -137,7 +196,12 @@ rx = -30.0
             frames(robot, &q, &mut ws);
             parameter_jacobian(robot, &ws, &cols, &mut jac);
             for (k, id) in params.iter().enumerate() {
-                let h = if id.field.is_angle() { 1e-6 } else { 1e-4 };
+                let h = match id.field {
+                    // 1e-3 mrad per kN m.
+                    crate::model::Field::C => 1e-9,
+                    f if f.is_angle() => 1e-6,
+                    _ => 1e-4,
+                };
                 let v = robot.param(*id);
                 let plus = tool_pose(&robot.with_param(*id, v + h).unwrap(), &q);
                 let minus = tool_pose(&robot.with_param(*id, v - h).unwrap(), &q);
@@ -145,9 +209,15 @@ rx = -30.0
                 let dr = rotation_vector(&(plus.rotation * minus.rotation.inverse())) / (2.0 * h);
                 let col = jac.column(k);
                 let (jp, jr) = (col.fixed_rows::<3>(0), col.fixed_rows::<3>(3));
-                // Relative to the column's size (and to 1 for columns that vanish).
-                let scale_p = dp.norm().max(1.0);
-                let scale_r = dr.norm().max(1e-3);
+                // Relative to the column's size (and to 1 for columns that vanish; a
+                // compliance's column is per rad per N m, so its floor is 1e6 times larger).
+                let unit = if id.field == crate::model::Field::C {
+                    1e6
+                } else {
+                    1.0
+                };
+                let scale_p = dp.norm().max(unit);
+                let scale_r = dr.norm().max(1e-3 * unit);
                 assert!(
                     (jp - dp).norm() / scale_p < 1e-6,
                     "{}: {jp:?} vs {dp:?}",
@@ -188,5 +258,54 @@ rx = -30.0
         let r = parse_robot(&dh_ends, Path::new("dh.toml")).unwrap();
         assert_eq!(r.base().convention(), crate::model::Convention::Dh);
         check(&r, 3);
+    }
+
+    /// `robot` with masses on every link and the payload, gravity tilted, and compliances
+    /// large enough (deflections of mrad) that a missing term of the Jacobian shows.
+    fn compliant(robot: &Robot) -> Robot {
+        use crate::model::{BodyMass, Compliance, MassProperties};
+        let n = robot.dof();
+        let links = (0..n)
+            .map(|k| BodyMass {
+                mass_kg: 60.0 - 8.0 * k as f64,
+                com_mm: Vector3::new(120.0 - 30.0 * k as f64, -40.0 + 15.0 * k as f64, 25.0),
+            })
+            .collect();
+        let masses = MassProperties {
+            links,
+            payload: BodyMass {
+                mass_kg: 80.0,
+                com_mm: Vector3::new(10.0, 20.0, 150.0),
+            },
+            gravity: Vector3::new(0.6, -0.4, -9.78),
+        };
+        let c: Vec<f64> = (0..n).map(|j| 0.3 + 0.15 * j as f64).collect();
+        robot
+            .with_masses(Some(masses))
+            .unwrap()
+            .with_compliance(Some(Compliance::from_file_units(&c)))
+            .unwrap()
+    }
+
+    #[test]
+    fn compliant_jacobian_matches_central_differences_for_every_parameter_kind() {
+        // Every row kind, a prismatic joint, and the compliances c1..cN themselves.
+        let robot = compliant(&parse_robot(MIXED, Path::new("mixed.toml")).unwrap());
+        assert!(robot.is_compliant());
+        assert_eq!(
+            robot
+                .parameters()
+                .iter()
+                .filter(|p| p.field == crate::model::Field::C)
+                .count(),
+            6
+        );
+        check(&robot, 4);
+        let fanuc = crate::model::read_robot(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/datasets/robots/fanuc_r2000ib_210f.toml"
+        ))
+        .unwrap();
+        check(&compliant(&fanuc), 5);
     }
 }

@@ -11,7 +11,7 @@
 use super::problem::{IdentifyWorkspace, Observations, cost};
 use super::solve::{Solution, SolveOptions, StopReason, free_values, with_values};
 use crate::error::{Error, Result};
-use crate::model::Robot;
+use crate::model::{Field, Robot};
 use nalgebra::DVector;
 
 const REFLECT: f64 = 1.0;
@@ -29,8 +29,12 @@ pub fn solve_nelder_mead(
     let (ids, x0) = free_values(robot, cols);
     let scale = DVector::from_iterator(
         ids.len(),
-        ids.iter()
-            .map(|id| if id.field.is_angle() { 1e-3 } else { 1.0 }),
+        ids.iter().map(|id| match id.field {
+            // 0.1 mrad per kN m: a typical joint compliance (rad per N m).
+            Field::C => 1e-7,
+            f if f.is_angle() => 1e-3,
+            _ => 1.0,
+        }),
     );
     let mut ws = IdentifyWorkspace::new(robot);
     let mut evaluations = 0usize;

@@ -150,11 +150,7 @@ fn normalized_residuals(robot: &Robot, obs: &Observations) -> Vec<f64> {
 }
 
 pub(crate) fn file_value(id: &ParamId, v: f64) -> f64 {
-    if id.field.is_angle() {
-        v.to_degrees()
-    } else {
-        v
-    }
+    id.field.to_file(v)
 }
 
 /// A base or tool row in a DH-type convention, fully selected, becomes the equivalent 6-DOF

@@ -3,8 +3,10 @@
 //! A selection is a comma-separated list of groups and names:
 //! - `offsets`: the joints' zero offsets (theta of revolute joints, d of prismatic ones),
 //!   level-1 calibration (thesis Case D);
-//! - `full`: every parameter of base, joints and tool (reduced later to an identifiable set);
-//! - `base`, `tool`: every parameter of that row; `joints`: every joint parameter;
+//! - `full`: every geometric parameter of base, joints and tool (reduced later to an
+//!   identifiable set);
+//! - `base`, `tool`: every parameter of that row; `joints`: every geometric joint parameter;
+//! - `compliance`: the joint compliances c1..cN (a robot with mass properties);
 //! - parameter names: `a2`, `alpha3`, `beta3`, `base.x`, `tool.rz`, `thetaR`, ...
 //!
 //! Priority (thesis 4.3.4: parameters the controller holds come first), highest first:
@@ -14,7 +16,8 @@
 //! 2. joint zero offsets (controller mastering data);
 //! 3. the other joint parameters, in chain order;
 //! 4. base and tool rows given in a DH-type convention (the thesis's frames R and T), so that
-//!    theta_R and d_R regroup with theta_1 and d_1 as in thesis eq. 4.44.
+//!    theta_R and d_R regroup with theta_1 and d_1 as in thesis eq. 4.44;
+//! 5. compliances: a deflection the geometry can express is left to the geometry.
 
 use crate::error::{Error, Result};
 use crate::model::{Convention, Field, JointType, ParamId, Robot, Slot};
@@ -36,6 +39,7 @@ pub fn priority(robot: &Robot, id: &ParamId) -> u8 {
         Slot::Base if robot.base().convention() == Convention::Transform => 0,
         Slot::Tool if robot.tool().convention() == Convention::Transform => 0,
         Slot::Base | Slot::Tool => 3,
+        Slot::Joint(_) if id.field == Field::C => 4,
         Slot::Joint(_) if is_offset(robot, id) => 1,
         Slot::Joint(_) => 2,
     }
@@ -56,15 +60,28 @@ pub fn select(robot: &Robot, spec: &str) -> Result<Vec<usize>> {
         };
         match item {
             "offsets" => pick(&|id| is_offset(robot, id), &mut chosen),
-            "full" => pick(&|_| true, &mut chosen),
+            "full" => pick(&|id| id.field != Field::C, &mut chosen),
             "base" => pick(&|id| id.slot == Slot::Base, &mut chosen),
             "tool" => pick(&|id| id.slot == Slot::Tool, &mut chosen),
-            "joints" => pick(&|id| matches!(id.slot, Slot::Joint(_)), &mut chosen),
+            "joints" => pick(
+                &|id| matches!(id.slot, Slot::Joint(_)) && id.field != Field::C,
+                &mut chosen,
+            ),
+            "compliance" => {
+                if robot.masses().is_none() {
+                    return Err(Error::Invalid(
+                        "`compliance` needs the robot's mass properties (a [mass] table in its \
+                         file): the compliances scale gravity torques"
+                            .into(),
+                    ));
+                }
+                pick(&|id| id.field == Field::C, &mut chosen)
+            }
             name => {
                 let id = robot.find_param(name).ok_or_else(|| {
                     let names: Vec<String> = params.iter().map(|p| p.name()).collect();
                     Error::Invalid(format!(
-                        "unknown parameter or group `{name}`: use offsets, full, base, tool, joints or one of {}",
+                        "unknown parameter or group `{name}`: use offsets, full, base, tool, joints, compliance or one of {}",
                         names.join(", ")
                     ))
                 })?;

@@ -1,12 +1,16 @@
-//! Forward kinematics, thesis eq. 3.12-3.13: T = T_R T_1 ... T_N T_T.
+//! Forward kinematics, thesis eq. 3.12-3.13: T = T_R T_1 ... T_N T_T; for a compliant robot
+//! at the joints it reaches under gravity, q' = q + c tau(q) ([`crate::model::compliance`]).
 
 use super::Pose;
+use super::load::{Load, torque};
 use crate::model::Robot;
 
-/// The tool pose (mm, in the base row's reference frame) for joints `q` (rad or mm).
+/// The tool pose (mm, in the base row's reference frame) for commanded joints `q` (rad or
+/// mm); for a compliant robot, the pose it reaches under gravity.
 ///
 /// Runs through the robot's compiled chain: one constant transform and one RotZ TransZ per
-/// joint. Does not allocate. Panics if `q.len()` differs from the robot's joint count.
+/// joint (a compliant robot: three passes, for the masses, the torques and the deflected
+/// chain). Does not allocate. Panics if `q.len()` differs from the robot's joint count.
 pub fn tool_pose(robot: &Robot, q: &[f64]) -> Pose {
     let chain = robot.chain();
     assert_eq!(
@@ -14,6 +18,9 @@ pub fn tool_pose(robot: &Robot, q: &[f64]) -> Pose {
         chain.links.len(),
         "joint vector length differs from the robot's DOF"
     );
+    if robot.is_compliant() {
+        return compliant_tool_pose(robot, q);
+    }
     let mut t = chain.head;
     for (i, (link, &qi)) in chain.links.iter().zip(q).enumerate() {
         chain.apply_joint(&mut t, i, qi);
@@ -22,7 +29,44 @@ pub fn tool_pose(robot: &Robot, q: &[f64]) -> Pose {
     t
 }
 
-/// Every intermediate frame of one configuration; a workspace reused across calls.
+/// [`tool_pose`] of a compliant robot without a workspace: the same sums, in the same order,
+/// as [`Load`], so both give the same bits.
+fn compliant_tool_pose(robot: &Robot, q: &[f64]) -> Pose {
+    let chain = robot.chain();
+    let (Some(m), Some(c)) = (robot.masses(), robot.compliance()) else {
+        unreachable!("a compliant robot has masses and compliances");
+    };
+    let g = chain.base.rotation * m.gravity;
+    let (mut mass, mut moment) = (0.0, nalgebra::Vector3::zeros());
+    let mut t = chain.head;
+    for (i, (link, &qi)) in chain.links.iter().zip(q).enumerate() {
+        chain.apply_joint(&mut t, i, qi);
+        let b = &m.links[i];
+        mass += b.mass_kg;
+        moment += t.transform_point(&b.com_mm.into()).coords * b.mass_kg;
+        t *= link.next;
+    }
+    mass += m.payload.mass_kg;
+    moment += t.transform_point(&m.payload.com_mm.into()).coords * m.payload.mass_kg;
+    let (mut rigid, mut loaded) = (chain.head, chain.head);
+    for (i, (link, &qi)) in chain.links.iter().zip(q).enumerate() {
+        chain.apply_joint(&mut rigid, i, qi);
+        let z = rigid.rotation.matrix().column(2).into();
+        let o = rigid.translation.vector;
+        let tau = torque(!link.prismatic, &z, &o, mass, &moment, &g);
+        chain.apply_joint(&mut loaded, i, qi + c.joint(i) * tau);
+        let b = &m.links[i];
+        mass -= b.mass_kg;
+        moment -= rigid.transform_point(&b.com_mm.into()).coords * b.mass_kg;
+        rigid *= link.next;
+        loaded *= link.next;
+    }
+    loaded
+}
+
+/// Every intermediate frame of one configuration; a workspace reused across calls. For a
+/// compliant robot these are the frames it reaches under gravity; `load` holds the commanded
+/// configuration's frames, torques and deflections.
 #[derive(Debug, Clone)]
 pub struct Frames {
     /// For joint i, the frame whose z axis is the joint's axis, with its origin on that axis
@@ -32,6 +76,8 @@ pub struct Frames {
     pub link: Vec<Pose>,
     /// The tool frame.
     pub tool: Pose,
+    /// The gravity load, for a robot with mass properties (`load.active`).
+    pub load: Load,
 }
 
 impl Frames {
@@ -42,12 +88,28 @@ impl Frames {
             joint: vec![Pose::identity(); n],
             link: vec![Pose::identity(); n],
             tool: Pose::identity(),
+            load: Load::new(robot),
         }
     }
 }
 
-/// Fills `out` with every frame of configuration `q` (rad or mm). Does not allocate.
-/// Panics if `q.len()` or `out` does not fit the robot.
+/// Walks the chain at joints `q`, storing every frame.
+fn walk(robot: &Robot, q: &[f64], joint: &mut [Pose], link: &mut [Pose], tool: &mut Pose) {
+    let chain = robot.chain();
+    let mut t = chain.head;
+    for (i, l) in chain.links.iter().enumerate() {
+        chain.apply_joint(&mut t, i, q[i]);
+        joint[i] = t;
+        link[i] = t * l.post;
+        t *= l.next;
+    }
+    *tool = t;
+}
+
+/// Fills `out` with every frame of commanded configuration `q` (rad or mm): for a robot with
+/// masses also its gravity load, and for a compliant robot the frames of the joints it
+/// reaches (with the deflection's Jacobian, for [`super::joint_jacobian`]). Does not
+/// allocate. Panics if `q.len()` or `out` does not fit the robot.
 pub fn frames(robot: &Robot, q: &[f64], out: &mut Frames) {
     let chain = robot.chain();
     assert_eq!(
@@ -60,12 +122,26 @@ pub fn frames(robot: &Robot, q: &[f64], out: &mut Frames) {
         chain.links.len(),
         "workspace made for another robot"
     );
-    let mut t = chain.head;
-    for (i, link) in chain.links.iter().enumerate() {
-        chain.apply_joint(&mut t, i, q[i]);
-        out.joint[i] = t;
-        out.link[i] = t * link.post;
-        t *= link.next;
+    if robot.masses().is_none() {
+        out.load.active = false;
+        out.load.compliant = false;
+        walk(robot, q, &mut out.joint, &mut out.link, &mut out.tool);
+        return;
     }
-    out.tool = t;
+    let load = &mut out.load;
+    walk(robot, q, &mut load.joint, &mut load.link, &mut load.tool);
+    load.compute(robot, q, true);
+    if load.compliant {
+        walk(
+            robot,
+            &load.reached,
+            &mut out.joint,
+            &mut out.link,
+            &mut out.tool,
+        );
+    } else {
+        out.joint.copy_from_slice(&load.joint);
+        out.link.copy_from_slice(&load.link);
+        out.tool = load.tool;
+    }
 }

@@ -14,32 +14,33 @@
 //! moves joint j's axis with them, a rigid motion that leaves a prismatic j's force and the
 //! lever arms p_k - o_j unchanged but turns z_j x (p_k - o_j) about z_i.
 
-use super::fk::Frames;
+use super::Pose;
 use crate::model::{JointType, Robot};
 use nalgebra::{DMatrix, Vector3};
 
-/// A point mass and the joints that carry it.
+/// A point mass and the frame it rides on.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PointMass {
     /// Its mass (kg).
     pub mass_kg: f64,
     /// Where it is (mm, world).
     pub position_mm: Vector3<f64>,
-    /// How many joints carry it: joints 0..carried_by (link k's mass: k + 1; the payload:
-    /// every joint).
-    pub carried_by: usize,
+    /// The frame it rides on: joint frame k (0-based, link k's mass), or N for the tool frame
+    /// (the payload). Joints 0..=min(frame, N - 1) carry it.
+    pub frame: usize,
 }
 
-/// Joint j's axis direction (unit) and a point on it (mm), world, from `frames`.
-fn axis(frames: &Frames, j: usize) -> (Vector3<f64>, Vector3<f64>) {
-    let f = &frames.joint[j];
+/// Joint j's axis direction (unit) and a point on it (mm), world, from its joint frame.
+pub(crate) fn axis(joint: &[Pose], j: usize) -> (Vector3<f64>, Vector3<f64>) {
+    let f = &joint[j];
     (f.rotation.matrix().column(2).into(), f.translation.vector)
 }
 
-/// The point masses of `robot`'s mass properties at the configuration of `frames` into
-/// `out` (none when the robot has no masses): each link's centre of mass carried by its
-/// joint frame, the payload's by the tool frame. Allocates only when `out` must grow.
-pub fn mass_points(robot: &Robot, frames: &Frames, out: &mut Vec<PointMass>) {
+/// The point masses of `robot`'s mass properties in the joint frames `joint` and tool frame
+/// `tool` (world) into `out` (none when the robot has no masses): each link's centre of mass
+/// carried by its joint frame, the payload's by the tool frame. Allocates only when `out` must
+/// grow.
+pub fn mass_points(robot: &Robot, joint: &[Pose], tool: &Pose, out: &mut Vec<PointMass>) {
     out.clear();
     let Some(m) = robot.masses() else {
         return;
@@ -48,33 +49,33 @@ pub fn mass_points(robot: &Robot, frames: &Frames, out: &mut Vec<PointMass>) {
     for (k, b) in m.links.iter().enumerate() {
         out.push(PointMass {
             mass_kg: b.mass_kg,
-            position_mm: frames.joint[k].transform_point(&b.com_mm.into()).coords,
-            carried_by: k + 1,
+            position_mm: joint[k].transform_point(&b.com_mm.into()).coords,
+            frame: k,
         });
     }
     out.push(PointMass {
         mass_kg: m.payload.mass_kg,
-        position_mm: frames.tool.transform_point(&m.payload.com_mm.into()).coords,
-        carried_by: n,
+        position_mm: tool.transform_point(&m.payload.com_mm.into()).coords,
+        frame: n,
     });
 }
 
 /// The gravity force of every joint into `out` (N m for revolute joints, N for prismatic
-/// ones) from `points` at the configuration of `frames`, gravity `g` (m/s^2, world). Does
-/// not allocate.
+/// ones) from `points`, the joint axes those of the joint frames `joint` (world), gravity `g`
+/// (m/s^2, world). Does not allocate.
 pub fn gravity_torques(
     robot: &Robot,
-    frames: &Frames,
+    joint: &[Pose],
     g: &Vector3<f64>,
     points: &[PointMass],
     out: &mut [f64],
 ) {
-    for (j, (tau, joint)) in out.iter_mut().zip(robot.joints()).enumerate() {
-        let (z, o) = axis(frames, j);
+    for (j, (tau, jt)) in out.iter_mut().zip(robot.joints()).enumerate() {
+        let (z, o) = axis(joint, j);
         *tau = points
             .iter()
-            .filter(|p| p.carried_by > j)
-            .map(|p| match joint.joint_type {
+            .filter(|p| p.frame >= j)
+            .map(|p| match jt.joint_type {
                 JointType::Revolute => z.dot(&((p.position_mm - o) * 1e-3).cross(&(g * p.mass_kg))),
                 JointType::Prismatic => (g * p.mass_kg).dot(&z),
             })
@@ -83,10 +84,10 @@ pub fn gravity_torques(
 }
 
 /// d tau_j / d q_i of [`gravity_torques`] into `out` (n x n; N m per rad, N m per mm, N per
-/// rad or N per mm as the joints are), at the configuration of `frames`.
+/// rad or N per mm as the joints are), at the configuration of the joint frames `joint`.
 pub fn gravity_torque_jacobian(
     robot: &Robot,
-    frames: &Frames,
+    joint: &[Pose],
     g: &Vector3<f64>,
     points: &[PointMass],
     out: &mut DMatrix<f64>,
@@ -95,15 +96,12 @@ pub fn gravity_torque_jacobian(
     let n = joints.len();
     out.fill(0.0);
     for j in 0..n {
-        let (zj, oj) = axis(frames, j);
+        let (zj, oj) = axis(joint, j);
         for i in 0..n {
-            let (zi, oi) = axis(frames, i);
+            let (zi, oi) = axis(joint, i);
             let revolute_i = joints[i].joint_type == JointType::Revolute;
             let mut d = 0.0;
-            for p in points
-                .iter()
-                .filter(|p| p.carried_by > j && p.carried_by > i)
-            {
+            for p in points.iter().filter(|p| p.frame >= j && p.frame >= i) {
                 let f = g * p.mass_kg;
                 let r = (p.position_mm - oj) * 1e-3;
                 d += match (joints[j].joint_type, i < j, revolute_i) {
@@ -129,7 +127,7 @@ pub fn gravity_torque_jacobian(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::frames;
+    use crate::kinematics::{Frames, frames};
     use crate::model::read_robot;
 
     /// Masses midway along each link of `robot` at `q` and a payload at the tool.
@@ -146,13 +144,13 @@ mod tests {
             .map(|k| PointMass {
                 mass_kg: 10.0 + 7.0 * k as f64,
                 position_mm: (origin(k) + origin(k + 1)) * 0.5,
-                carried_by: k + 1,
+                frame: k,
             })
             .collect();
         v.push(PointMass {
             mass_kg: 50.0,
             position_mm: origin(n),
-            carried_by: n,
+            frame: n,
         });
         v
     }
@@ -187,37 +185,30 @@ mod tests {
             let q: Vec<f64> = (0..n).map(|j| 0.3 + 0.2 * j as f64).collect();
             let mut f = Frames::new(&robot);
             frames(&robot, &q, &mut f);
-            // The masses ride with their links, fixed in the frame of the last joint that
-            // carries them (the payload in the tool frame): (mass, carried by, frame, local).
-            let frame_of = |f: &Frames, k: usize, payload: bool| {
-                if payload { f.tool } else { f.joint[k - 1] }
-            };
-            let local: Vec<(f64, usize, bool, Vector3<f64>)> = masses(&robot, &f)
+            // The masses ride with their frames: (mass, frame, coordinates in it).
+            let frame_of = |f: &Frames, k: usize| if k == n { f.tool } else { f.joint[k] };
+            let local: Vec<(f64, usize, Vector3<f64>)> = masses(&robot, &f)
                 .iter()
-                .enumerate()
-                .map(|(idx, p)| {
-                    let payload = idx == n;
-                    let frame = frame_of(&f, p.carried_by, payload);
+                .map(|p| {
+                    let frame = frame_of(&f, p.frame);
                     let l = frame.inverse_transform_point(&p.position_mm.into()).coords;
-                    (p.mass_kg, p.carried_by, payload, l)
+                    (p.mass_kg, p.frame, l)
                 })
                 .collect();
             let at = |q: &[f64], f: &mut Frames| -> Vec<PointMass> {
                 frames(&robot, q, f);
                 local
                     .iter()
-                    .map(|&(mass_kg, carried_by, payload, l)| PointMass {
+                    .map(|&(mass_kg, frame, l)| PointMass {
                         mass_kg,
-                        position_mm: frame_of(f, carried_by, payload)
-                            .transform_point(&l.into())
-                            .coords,
-                        carried_by,
+                        position_mm: frame_of(f, frame).transform_point(&l.into()).coords,
+                        frame,
                     })
                     .collect()
             };
             let mut jac = DMatrix::zeros(n, n);
             let pts = at(&q, &mut f);
-            gravity_torque_jacobian(&robot, &f, &g, &pts, &mut jac);
+            gravity_torque_jacobian(&robot, &f.joint, &g, &pts, &mut jac);
             let h = 1e-6;
             let mut worst: f64 = 0.0;
             for i in 0..n {
@@ -226,9 +217,9 @@ mod tests {
                 qm[i] -= h;
                 let (mut tp, mut tm) = (vec![0.0; n], vec![0.0; n]);
                 let pp = at(&qp, &mut f);
-                gravity_torques(&robot, &f, &g, &pp, &mut tp);
+                gravity_torques(&robot, &f.joint, &g, &pp, &mut tp);
                 let pm = at(&qm, &mut f);
-                gravity_torques(&robot, &f, &g, &pm, &mut tm);
+                gravity_torques(&robot, &f.joint, &g, &pm, &mut tm);
                 for j in 0..n {
                     let fd = (tp[j] - tm[j]) / (2.0 * h);
                     worst = worst.max((fd - jac[(j, i)]).abs() / (1.0 + fd.abs()));
@@ -246,16 +237,22 @@ mod tests {
         let robot = read_robot(root.join("ur10.toml")).unwrap();
         let mut f = Frames::new(&robot);
         frames(&robot, &[0.0; 6], &mut f);
-        let (z, o) = axis(&f, 1);
+        let (z, o) = axis(&f.joint, 1);
         // A point 1 m from the axis, perpendicular to it and to gravity.
         let arm = z.cross(&Vector3::z()).normalize() * 1000.0;
         let p = PointMass {
             mass_kg: 10.0,
             position_mm: o + arm,
-            carried_by: 6,
+            frame: 5,
         };
         let mut tau = vec![0.0; 6];
-        gravity_torques(&robot, &f, &Vector3::new(0.0, 0.0, -9.81), &[p], &mut tau);
+        gravity_torques(
+            &robot,
+            &f.joint,
+            &Vector3::new(0.0, 0.0, -9.81),
+            &[p],
+            &mut tau,
+        );
         assert!((tau[1].abs() - 98.1).abs() < 1e-9, "{tau:?}");
         // Joint 1's axis is vertical: gravity exerts no torque about it.
         assert!(tau[0].abs() < 1e-9, "{tau:?}");

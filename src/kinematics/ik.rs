@@ -33,7 +33,8 @@ const SAME_SOLUTION: f64 = 1e-7;
 pub enum IkStart {
     /// The model's own closed form: exact solutions, no numerical solve.
     Exact(SphericalWristIk),
-    /// Another model's (the nominal's) closed form starts numerical solves of the model.
+    /// A rigid model's closed form starts numerical solves of the model: the nominal's, or
+    /// for a compliant robot its own without the compliances.
     Nominal(SphericalWristIk),
     /// Only the caller's seed starts the numerical solve; the text says why the model has no
     /// closed form.
@@ -41,11 +42,17 @@ pub enum IkStart {
 }
 
 impl IkStart {
-    /// The model's own closed form when it has one; else `nominal`'s (an error when that has
-    /// none or other joints); else the seed.
+    /// The model's own closed form when it has one; for a compliant robot, the closed form
+    /// of its rigid self as the start of numerical solves; else `nominal`'s (an error when
+    /// that has none or other joints); else the seed.
     pub fn choose(robot: &Robot, nominal: Option<&Robot>) -> Result<IkStart> {
-        match SphericalWristIk::new(robot) {
-            Ok(ik) => Ok(IkStart::Exact(ik)),
+        let own = if robot.is_compliant() {
+            SphericalWristIk::new(&robot.rigid()).map(IkStart::Nominal)
+        } else {
+            SphericalWristIk::new(robot).map(IkStart::Exact)
+        };
+        match own {
+            Ok(start) => Ok(start),
             Err(why) => match nominal {
                 Some(nom) => {
                     if !nom.same_joints(robot) {

@@ -8,6 +8,7 @@ pub mod ik;
 pub mod ik_closed;
 pub mod ik_numeric;
 pub mod jacobian;
+pub mod load;
 pub mod subproblems;
 
 pub use fk::{Frames, frames, tool_pose};

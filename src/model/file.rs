@@ -26,6 +26,7 @@
 //! convention does not have is an error. Writing uses the shortest decimal form that reads
 //! back to the same bits, so write -> read is lossless.
 
+use super::compliance::Compliance;
 use super::mass::{BodyMass, MassProperties};
 use super::robot::{Joint, JointType, Robot};
 use super::row::{Convention, Field, Row};
@@ -74,6 +75,14 @@ struct RobotFile {
     joint: Vec<Spanned<RowFile>>,
     tool: Option<Spanned<RowFile>>,
     mass: Option<MassFile>,
+    compliance: Option<Spanned<ComplianceFile>>,
+}
+
+/// The `[compliance]` table ([`super::compliance`]).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ComplianceFile {
+    joints: Spanned<Vec<Number>>,
 }
 
 /// The `[mass]` table ([`super::mass`]).
@@ -188,13 +197,28 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
     });
     let robot = Robot::new(name, base, joints, tool)
         .map_err(|e| Error::input(Location::file(path), e.to_string()))?;
-    match &file.mass {
-        None => Ok(robot),
+    let robot = match &file.mass {
+        None => robot,
         Some(m) => {
             let masses = rows.masses(m, robot.dof())?;
             robot
                 .with_masses(Some(masses))
-                .map_err(|e| Error::input(rows.at(m.link_kg.span(), "link_kg"), e.to_string()))
+                .map_err(|e| Error::input(rows.at(m.link_kg.span(), "link_kg"), e.to_string()))?
+        }
+    };
+    match &file.compliance {
+        None => Ok(robot),
+        Some(c) => {
+            let values = c.get_ref().joints.get_ref();
+            let at = if robot.masses().is_none() {
+                rows.at(c.span(), "compliance")
+            } else {
+                rows.at(c.get_ref().joints.span(), "joints")
+            };
+            let file: Vec<f64> = values.iter().map(|v| v.0).collect();
+            robot
+                .with_compliance(Some(Compliance::from_file_units(&file)))
+                .map_err(|e| Error::input(at, format!("[compliance]: {e}")))
         }
     }
 }
@@ -519,6 +543,15 @@ pub fn robot_to_toml(robot: &Robot) -> String {
             s,
             "payload_com_mm = {}  # tool frame",
             v3(&m.payload.com_mm)
+        );
+    }
+    if let Some(c) = robot.compliance() {
+        let values: Vec<String> = c.file.iter().map(|&v| float_text(v)).collect();
+        let _ = writeln!(s, "\n[compliance]");
+        let _ = writeln!(
+            s,
+            "joints = [{}]  # mrad per kN m (um per kN for a prismatic joint)",
+            values.join(", ")
         );
     }
     s

@@ -1,11 +1,13 @@
 //! Robot models: rows, joints, named parameters and robot files.
 
 pub(crate) mod axes;
+pub mod compliance;
 pub mod file;
 pub mod mass;
 pub mod robot;
 pub mod row;
 
+pub use compliance::Compliance;
 pub use file::{read_robot, robot_to_toml, write_robot};
 pub use mass::{BodyMass, MassProperties};
 pub use robot::{

@@ -5,6 +5,7 @@
 //! compiled chain of constant transforms that forward kinematics runs through.
 
 use super::axes::{Anchor, ParamAxis};
+use super::compliance::Compliance;
 use super::mass::MassProperties;
 use super::row::{Convention, Field, Row, apply_z};
 use crate::error::{Error, Result};
@@ -146,6 +147,8 @@ pub struct Robot {
     tool: Row,
     /// Mass properties, for gravity torques (none: a rigid, massless model).
     masses: Option<MassProperties>,
+    /// Joint compliances (none: rigid joints); only with mass properties.
+    compliance: Option<Compliance>,
     chain: Chain,
 }
 
@@ -156,6 +159,7 @@ impl PartialEq for Robot {
             && self.joints == other.joints
             && self.tool == other.tool
             && self.masses == other.masses
+            && self.compliance == other.compliance
     }
 }
 
@@ -222,15 +226,22 @@ impl Robot {
             joints,
             tool,
             masses: None,
+            compliance: None,
             chain,
         })
     }
 
     /// A copy with these mass properties (none: massless); properties for another joint
-    /// count, or out of their bounds, are an error.
+    /// count, or out of their bounds, are an error, and so is removing the masses of a robot
+    /// with compliances (they would have no torque to act on).
     pub fn with_masses(&self, masses: Option<MassProperties>) -> Result<Robot> {
         if let Some(f) = masses.as_ref().and_then(|m| m.fault(self.dof())) {
             return Err(Error::Model(format!("mass properties: {f}")));
+        }
+        if masses.is_none() && self.compliance.is_some() {
+            return Err(Error::Model(
+                "joint compliances need mass properties (a [mass] table)".into(),
+            ));
         }
         Ok(Robot {
             masses,
@@ -241,6 +252,44 @@ impl Robot {
     /// The mass properties, if the robot has them.
     pub fn masses(&self) -> Option<&MassProperties> {
         self.masses.as_ref()
+    }
+
+    /// A copy with these joint compliances (none: rigid joints). Compliances need mass
+    /// properties; compliances for another joint count, or out of their bounds, are an error.
+    pub fn with_compliance(&self, compliance: Option<Compliance>) -> Result<Robot> {
+        if let Some(c) = &compliance {
+            if self.masses.is_none() {
+                return Err(Error::Model(
+                    "joint compliances need mass properties (a [mass] table)".into(),
+                ));
+            }
+            if let Some(f) = c.fault(self.dof()) {
+                return Err(Error::Model(format!("compliance: {f}")));
+            }
+        }
+        Ok(Robot {
+            compliance,
+            ..self.clone()
+        })
+    }
+
+    /// The joint compliances, if the robot has them.
+    pub fn compliance(&self) -> Option<&Compliance> {
+        self.compliance.as_ref()
+    }
+
+    /// The same robot with rigid joints (its compliances removed, its masses kept).
+    pub fn rigid(&self) -> Robot {
+        Robot {
+            compliance: None,
+            ..self.clone()
+        }
+    }
+
+    /// Whether the robot's joints bend under gravity: it has masses and a non-zero
+    /// compliance. Forward kinematics then runs q' = q + c tau(q) ([`super::compliance`]).
+    pub fn is_compliant(&self) -> bool {
+        self.masses.is_some() && self.compliance.as_ref().is_some_and(|c| !c.is_zero())
     }
 
     /// The robot's name (from its file, or given in code).
@@ -281,7 +330,8 @@ impl Robot {
     }
 
     /// Every parameter of the model, in chain order (base, joints 1..N, tool) and, within a
-    /// row, in the order of its transform product.
+    /// row, in the order of its transform product; then, for a robot with mass properties,
+    /// the joint compliances c1..cN.
     pub fn parameters(&self) -> Vec<ParamId> {
         let mut out = Vec::new();
         let mut push = |slot: Slot, row: &Row| {
@@ -294,6 +344,13 @@ impl Robot {
             push(Slot::Joint(i), &j.row);
         }
         push(Slot::Tool, &self.tool);
+        // A robot with masses has a compliance per joint (zero until identified).
+        if self.masses.is_some() {
+            out.extend((0..self.dof()).map(|i| ParamId {
+                slot: Slot::Joint(i),
+                field: Field::C,
+            }));
+        }
         out
     }
 
@@ -325,12 +382,22 @@ impl Robot {
         };
         let field = Field::from_name(field)?;
         let id = ParamId { slot, field };
+        if field == Field::C {
+            return self.parameters().contains(&id).then_some(id);
+        }
         self.row(slot)?.file_value(field).map(|_| id)
     }
 
-    /// A parameter's value in internal units (mm or rad).
+    /// A parameter's value in internal units (mm, rad; a compliance in rad per N m).
     pub fn param(&self, id: ParamId) -> f64 {
-        self.row(id.slot).map_or(0.0, |r| r.value(id.field))
+        match (id.field, id.slot) {
+            (Field::C, Slot::Joint(i)) => self
+                .compliance
+                .as_ref()
+                .filter(|c| i < c.file.len())
+                .map_or(0.0, |c| c.joint(i)),
+            _ => self.row(id.slot).map_or(0.0, |r| r.value(id.field)),
+        }
     }
 
     /// A copy with one parameter set, in internal units (mm or rad).
@@ -338,12 +405,27 @@ impl Robot {
         self.with_params(&[(id, value)])
     }
 
-    /// A copy with several parameters set, in internal units (mm or rad).
+    /// A copy with several parameters set, in internal units (mm, rad; a compliance in rad
+    /// per N m).
     pub fn with_params(&self, values: &[(ParamId, f64)]) -> Result<Robot> {
         let mut base = self.base.clone();
         let mut joints = self.joints.clone();
         let mut tool = self.tool.clone();
+        let mut compliance = self.compliance.clone();
         for &(id, v) in values {
+            if id.field == Field::C {
+                match id.slot {
+                    Slot::Joint(i) if i < self.dof() && self.masses.is_some() => {
+                        compliance
+                            .get_or_insert_with(|| Compliance {
+                                file: vec![0.0; self.dof()],
+                            })
+                            .set_joint(i, v);
+                        continue;
+                    }
+                    _ => return Err(Error::Invalid(format!("no parameter {}", id.name()))),
+                }
+            }
             let row = match id.slot {
                 Slot::Base => &mut base,
                 Slot::Tool => &mut tool,
@@ -356,7 +438,9 @@ impl Robot {
                 return Err(Error::Invalid(format!("no parameter {}", id.name())));
             }
         }
-        Robot::new(self.name.clone(), base, joints, tool)?.with_masses(self.masses.clone())
+        Robot::new(self.name.clone(), base, joints, tool)?
+            .with_masses(self.masses.clone())?
+            .with_compliance(compliance)
     }
 
     /// A copy whose base or tool row is replaced by the 6-DOF transform with the same pose.
@@ -388,7 +472,8 @@ impl Robot {
             (self.base.clone(), new)
         };
         Robot::new(self.name.clone(), base, self.joints.clone(), tool)?
-            .with_masses(self.masses.clone())
+            .with_masses(self.masses.clone())?
+            .with_compliance(self.compliance.clone())
     }
 
     /// Whether `other` has the same number and types of joints (so joint vectors fit both).

@@ -94,11 +94,15 @@ pub enum Field {
     Ry,
     /// Transform rotation about x, third of Z-Y-X (deg in files, rad inside).
     Rx,
+    /// A joint's compliance c (mrad per kN m in files, rad per N m inside; um per kN and mm
+    /// per N for a prismatic joint): not a row field but a parameter of the joint
+    /// ([`super::compliance`]).
+    C,
 }
 
 impl Field {
     /// Every field, in declaration order.
-    pub const ALL: [Field; 11] = [
+    pub const ALL: [Field; 12] = [
         Field::A,
         Field::Alpha,
         Field::D,
@@ -110,6 +114,7 @@ impl Field {
         Field::Rz,
         Field::Ry,
         Field::Rx,
+        Field::C,
     ];
 
     /// Lower-case name, as in robot files and parameter names: `a`, `alpha`, ..., `rx`.
@@ -126,6 +131,7 @@ impl Field {
             Field::Rz => "rz",
             Field::Ry => "ry",
             Field::Rx => "rx",
+            Field::C => "c",
         }
     }
 
@@ -142,9 +148,34 @@ impl Field {
         )
     }
 
-    /// The unit this field has in files and on the command line.
+    /// The unit this field has in files and on the command line (a compliance's is that of
+    /// a revolute joint; a prismatic joint's is um per kN).
     pub fn file_unit(self) -> &'static str {
-        if self.is_angle() { "deg" } else { "mm" }
+        match self {
+            Field::C => "mrad/kNm",
+            f if f.is_angle() => "deg",
+            _ => "mm",
+        }
+    }
+
+    /// A value converted from internal units (rad, mm, rad per N m) to file units (deg, mm,
+    /// mrad per kN m).
+    pub fn to_file(self, v: f64) -> f64 {
+        match self {
+            Field::C => v * super::compliance::FILE_PER_INTERNAL,
+            f if f.is_angle() => v.to_degrees(),
+            _ => v,
+        }
+    }
+
+    /// A value converted from file units (deg, mm, mrad per kN m) to internal units (rad, mm,
+    /// rad per N m).
+    pub fn to_internal(self, v: f64) -> f64 {
+        match self {
+            Field::C => v / super::compliance::FILE_PER_INTERNAL,
+            f if f.is_angle() => v.to_radians(),
+            _ => v,
+        }
     }
 }
 

@@ -6,7 +6,7 @@
 //! payload_kg = 210.0           # at the tool origin
 //! link_masses_kg = [400.0, 200.0, 250.0, 30.0, 20.0, 5.0]
 //! mrad_per_knm = [0.0, 0.05, 0.08, 0.0, 0.0, 0.0]
-//! gravity = [0.0, 0.0, -9.81]  # m/s^2 in the base frame (default: -z)
+//! gravity = [0.0, 0.0, -9.81]  # m/s^2 in the base frame, after the base row (default: -z)
 //!
 //! [[gear]]                     # transmission error of one joint (rad = mrad * 1e-3)
 //! joint = 1                    # 1-based
@@ -31,7 +31,7 @@
 use crate::error::{Error, Location, Result};
 use crate::kinematics::gravity::PointMass;
 use crate::kinematics::{Frames, frames};
-use crate::model::Robot;
+use crate::model::{BodyMass, MassProperties, Robot};
 use nalgebra::Vector3;
 use serde::Deserialize;
 use std::path::Path;
@@ -54,6 +54,50 @@ pub struct Compliance {
     /// Gravity acceleration in the base frame (m/s^2); default [0, 0, -9.81].
     #[serde(default = "default_gravity")]
     pub gravity: [f64; 3],
+}
+
+impl Compliance {
+    /// This compliance model as the model's own ([`crate::model::compliance`]): the robot
+    /// with mass properties where the simulator puts its masses (link k's midway between
+    /// joint origins k and k + 1, written in joint frame k at q = 0, which is exact at every
+    /// configuration when joint k + 1 is revolute, its origin being fixed in frame k; the
+    /// payload at the tool origin) and the same compliances. Its `tool_pose` is then the
+    /// simulator's pose with this compliance alone.
+    pub fn on_robot(&self, robot: &Robot) -> Result<Robot> {
+        let n = robot.dof();
+        let mut f = Frames::new(robot);
+        frames(&robot.rigid(), &vec![0.0; n], &mut f);
+        let origin = |k: usize| {
+            if k < n {
+                f.joint[k].translation.vector
+            } else {
+                f.tool.translation.vector
+            }
+        };
+        let links = (0..n)
+            .map(|k| {
+                let mid = (origin(k) + origin(k + 1)) * 0.5;
+                BodyMass {
+                    mass_kg: self.link_masses_kg.get(k).copied().unwrap_or(0.0),
+                    com_mm: f.joint[k].inverse_transform_point(&mid.into()).coords,
+                }
+            })
+            .collect();
+        let masses = MassProperties {
+            links,
+            payload: BodyMass {
+                mass_kg: self.payload_kg,
+                com_mm: Vector3::zeros(),
+            },
+            gravity: Vector3::from(self.gravity),
+        };
+        robot
+            .with_compliance(None)?
+            .with_masses(Some(masses))?
+            .with_compliance(Some(crate::model::Compliance::from_file_units(
+                &self.mrad_per_knm,
+            )))
+    }
 }
 
 fn default_gravity() -> [f64; 3] {
@@ -269,22 +313,18 @@ pub fn gravity_torques(robot: &Robot, c: &Compliance, q: &[f64], ws: &mut Frames
         .map(|k| PointMass {
             mass_kg: c.link_masses_kg[k],
             position_mm: (origin(k) + origin(k + 1)) * 0.5,
-            carried_by: k + 1,
+            frame: k,
         })
         .collect();
     points.push(PointMass {
         mass_kg: c.payload_kg,
         position_mm: origin(n),
-        carried_by: n,
+        frame: n,
     });
     let mut tau = vec![0.0; n];
-    crate::kinematics::gravity::gravity_torques(
-        robot,
-        ws,
-        &Vector3::from(c.gravity),
-        &points,
-        &mut tau,
-    );
+    // Gravity is given in the robot's base frame (after the base row), as in robot files.
+    let g = robot.base().transform().rotation * Vector3::from(c.gravity);
+    crate::kinematics::gravity::gravity_torques(robot, &ws.joint, &g, &points, &mut tau);
     tau
 }
 

@@ -1,0 +1,368 @@
+//! Joint compliance in the model (issue 14): q' = q + c tau(q). The model against the
+//! simulator's compliance, its forward kinematics with and without a workspace, its joint
+//! Jacobian against central differences, inverse kinematics round trips, and robot files.
+
+use nalgebra::Matrix6xX;
+use robocal::geometry::rotation::rotation_vector;
+use robocal::kinematics::{
+    Frames, IkOptions, IkSolver, IkStart, RigidModel, frames, joint_jacobian, tool_pose,
+};
+use robocal::model::file::parse_robot;
+use robocal::model::{Compliance, Robot, read_robot, robot_to_toml};
+use robocal::sim::NonGeometric;
+use std::path::Path;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn fanuc() -> Robot {
+    read_robot(root().join("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap()
+}
+
+/// The shipped non-geometric robot's compliance alone (no gear errors).
+fn compliance_only(robot: &Robot) -> NonGeometric {
+    let ng = NonGeometric::read(
+        root().join("datasets/nongeometric/fanuc_compliance_gear.toml"),
+        robot,
+    )
+    .unwrap();
+    NonGeometric {
+        compliance: ng.compliance,
+        ..Default::default()
+    }
+}
+
+/// Configurations spread over 80% of the FANUC's joint ranges (rad).
+fn configurations(count: usize) -> Vec<Vec<f64>> {
+    let robot = fanuc();
+    (0..count)
+        .map(|s| {
+            (0..6)
+                .map(|j| {
+                    let [lo, hi] = robot.joints()[j].limits_internal();
+                    let t = ((s * 7 + j * 5) % 13) as f64 / 12.0;
+                    0.5 * (lo + hi) + 0.8 * (t - 0.5) * (hi - lo)
+                })
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn the_model_reaches_the_simulators_pose() {
+    let truth = fanuc();
+    let ng = compliance_only(&truth);
+    let model = ng.compliance.as_ref().unwrap().on_robot(&truth).unwrap();
+    assert!(model.is_compliant());
+    let mut ws = Frames::new(&truth);
+    let mut largest: f64 = 0.0;
+    for q in configurations(30) {
+        let want = robocal::sim::actual_pose(&truth, &ng, &q, &q, &mut ws);
+        let got = tool_pose(&model, &q);
+        let rigid = tool_pose(&truth, &q);
+        largest = largest.max((want.translation.vector - rigid.translation.vector).norm());
+        let dp = (got.translation.vector - want.translation.vector).norm();
+        let dr = rotation_vector(&(got.rotation * want.rotation.inverse())).norm();
+        assert!(dp < 1e-9 && dr < 1e-12, "{dp} mm, {dr} rad at {q:?}");
+    }
+    // The compliance moves the tool by tenths of a mm: the check above is not vacuous.
+    assert!(largest > 0.2, "largest deflection {largest} mm");
+}
+
+#[test]
+fn frames_and_tool_pose_agree_to_the_bit() {
+    let truth = fanuc();
+    let model = compliance_only(&truth)
+        .compliance
+        .unwrap()
+        .on_robot(&truth)
+        .unwrap();
+    let mut f = Frames::new(&model);
+    for q in configurations(20) {
+        frames(&model, &q, &mut f);
+        assert!(f.load.compliant);
+        assert_eq!(f.tool, tool_pose(&model, &q));
+        // The load's commanded frames are the rigid robot's.
+        assert_eq!(f.load.tool, tool_pose(&model.rigid(), &q));
+    }
+}
+
+#[test]
+fn joint_jacobian_of_a_compliant_robot_matches_central_differences() {
+    let truth = fanuc();
+    let model = compliance_only(&truth)
+        .compliance
+        .unwrap()
+        .on_robot(&truth)
+        .unwrap();
+    let mut f = Frames::new(&model);
+    let mut jac = Matrix6xX::zeros(6);
+    let mut rigid_jac = Matrix6xX::zeros(6);
+    let mut rigid_f = Frames::new(&model);
+    let mut worst: f64 = 0.0;
+    let mut correction: f64 = 0.0;
+    for q in configurations(10) {
+        frames(&model, &q, &mut f);
+        joint_jacobian(&model, &f, &mut jac);
+        frames(&model.rigid(), &q, &mut rigid_f);
+        joint_jacobian(&model.rigid(), &rigid_f, &mut rigid_jac);
+        for i in 0..6 {
+            let h = 1e-6;
+            let (mut qp, mut qm) = (q.clone(), q.clone());
+            qp[i] += h;
+            qm[i] -= h;
+            let (p, m) = (tool_pose(&model, &qp), tool_pose(&model, &qm));
+            let dp = (p.translation.vector - m.translation.vector) / (2.0 * h);
+            let dr = rotation_vector(&(p.rotation * m.rotation.inverse())) / (2.0 * h);
+            let col = jac.column(i);
+            let scale = dp.norm().max(1.0);
+            worst = worst.max((col.fixed_rows::<3>(0) - dp).norm() / scale);
+            worst = worst.max((col.fixed_rows::<3>(3) - dr).norm());
+            correction = correction
+                .max((col.fixed_rows::<3>(0) - rigid_jac.column(i).fixed_rows::<3>(0)).norm());
+        }
+    }
+    assert!(worst < 1e-7, "worst relative difference {worst}");
+    // The compliant Jacobian differs from the rigid one by more than the tolerance.
+    assert!(correction > 1e-3, "largest correction {correction} mm/rad");
+}
+
+#[test]
+fn inverse_kinematics_of_a_compliant_robot_round_trips() {
+    let truth = fanuc();
+    let model = compliance_only(&truth)
+        .compliance
+        .unwrap()
+        .on_robot(&truth)
+        .unwrap();
+    let start = IkStart::choose(&model, None).unwrap();
+    assert!(
+        matches!(start, IkStart::Nominal(_)),
+        "the rigid closed form starts a numerical solve"
+    );
+    let mut solver = IkSolver::new(RigidModel::new(&model), start, IkOptions::default());
+    for q in configurations(15) {
+        let target = tool_pose(&model, &q);
+        let solved = solver
+            .nearest(&target, Some(&q))
+            .unwrap_or_else(|e| panic!("{q:?}: {e}"));
+        let back = tool_pose(&model, &solved.solution.q);
+        let dp = (back.translation.vector - target.translation.vector).norm();
+        assert!(dp < 1e-6, "{dp} mm");
+        let dq: f64 = solved
+            .solution
+            .q
+            .iter()
+            .zip(&q)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(dq < 1e-7, "joints {dq} rad from the commanded ones");
+    }
+}
+
+#[test]
+fn robot_files_keep_compliances_and_refuse_bad_ones() {
+    let truth = fanuc();
+    let model = compliance_only(&truth)
+        .compliance
+        .unwrap()
+        .on_robot(&truth)
+        .unwrap();
+    let text = robot_to_toml(&model);
+    assert!(text.contains("[compliance]"), "{text}");
+    let back = parse_robot(&text, Path::new("back.toml")).unwrap();
+    assert_eq!(back, model);
+    assert_eq!(back.compliance(), model.compliance());
+    let c = model.find_param("c3").unwrap();
+    assert!((model.param(c) - 0.08e-6).abs() < 1e-20);
+
+    let plain =
+        std::fs::read_to_string(root().join("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
+    let mass = "[mass]\nlink_kg = [1, 2, 3, 4, 5, 6]\nlink_com_mm = [[0, 0, 0], [0, 0, 0], \
+                [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]]\n";
+    for (tables, want, line_of) in [
+        (
+            "[compliance]\njoints = [0, 0.05, 0.08, 0, 0, 0]\n".to_string(),
+            "joint compliances need mass properties",
+            "[compliance]",
+        ),
+        (
+            format!("{mass}[compliance]\njoints = [0, 0.05]\n"),
+            "2 compliances for a robot with 6 joints",
+            "joints =",
+        ),
+        (
+            format!("{mass}[compliance]\njoints = [0, 0.05, 2e3, 0, 0, 0]\n"),
+            "joint 3: compliance 2000 mrad per kN m",
+            "joints =",
+        ),
+    ] {
+        let text = format!("{plain}\n{tables}");
+        let line = text.lines().position(|l| l.starts_with(line_of)).unwrap() + 1;
+        let e = parse_robot(&text, Path::new("r.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(want), "{e}");
+        assert!(
+            e.starts_with(&format!("r.toml:{line}:")),
+            "{e} (want line {line})"
+        );
+    }
+    // Compliances are parameters of a robot with masses only.
+    assert!(truth.find_param("c2").is_none());
+    assert!(robocal::identify::select::select(&truth, "full,compliance").is_err());
+}
+
+mod recovery {
+    use super::*;
+    use robocal::data::MeasurementSet;
+    use robocal::identify::{Options, identify};
+    use robocal::sim::{Deviations, Observe, Region, Simulation};
+    use std::path::PathBuf;
+
+    fn simulate(
+        truth: &Robot,
+        ng: &NonGeometric,
+        count: usize,
+        seed: u64,
+    ) -> (MeasurementSet, MeasurementSet) {
+        let region = Region::limits(truth);
+        let out = Simulation {
+            truth,
+            nongeometric: ng,
+            region: &region,
+            count,
+            seed,
+            sigma_position_mm: 0.033,
+            sigma_rotation_rad: 0.174e-3,
+            observe: Observe::Pose,
+        }
+        .run(PathBuf::from("sim"))
+        .unwrap();
+        (out.measured, out.truth)
+    }
+
+    fn mean_error(robot: &Robot, truth: &MeasurementSet) -> f64 {
+        truth
+            .rows
+            .iter()
+            .map(|r| (tool_pose(robot, &r.q).translation.vector - r.position.unwrap()).norm())
+            .sum::<f64>()
+            / truth.rows.len() as f64
+    }
+
+    #[test]
+    fn compliances_are_recovered_over_seeds() {
+        let nominal = fanuc();
+        let truth = Deviations::read(root().join("datasets/deviations/table_6_1.toml"), &nominal)
+            .unwrap()
+            .apply(&nominal)
+            .unwrap();
+        let ng = NonGeometric::read(
+            root().join("datasets/nongeometric/fanuc_compliance_gear.toml"),
+            &truth,
+        )
+        .unwrap();
+        let gears = NonGeometric {
+            compliance: None,
+            ..ng.clone()
+        };
+        let sim = ng.compliance.clone().unwrap();
+        let with_masses = sim
+            .on_robot(&nominal)
+            .unwrap()
+            .with_compliance(None)
+            .unwrap();
+        let (_, test) = simulate(&truth, &ng, 300, 9999);
+        let (_, test_gears) = simulate(&truth, &gears, 300, 9999);
+        let compliance_only = NonGeometric {
+            compliance: ng.compliance.clone(),
+            ..Default::default()
+        };
+        let opts = Options {
+            params: "full,compliance".into(),
+            ..Options::default()
+        };
+        let z_of = |id: &robocal::identify::Identified| -> Vec<(usize, f64)> {
+            id.parameters
+                .iter()
+                .filter(|p| p.name.starts_with('c'))
+                .map(|p| {
+                    let j: usize = p.name[1..].parse().unwrap();
+                    (j, (p.estimate - sim.mrad_per_knm[j - 1]) / p.std)
+                })
+                .collect()
+        };
+        let (mut full_e, mut comp_e, mut floor_e) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut z_gears, mut z_only) = (Vec::new(), Vec::new());
+        for seed in 0..20u64 {
+            let (cal, _) = simulate(&truth, &ng, 30, 1000 + seed);
+            let (cal_floor, _) = simulate(&truth, &gears, 30, 1000 + seed);
+            let (cal_c, _) = simulate(&truth, &compliance_only, 30, 1000 + seed);
+            let full = identify(&nominal, &cal, &Options::default()).unwrap();
+            let floor = identify(&nominal, &cal_floor, &Options::default()).unwrap();
+            let comp = identify(&with_masses, &cal, &opts).unwrap();
+            let only = identify(&with_masses, &cal_c, &opts).unwrap();
+            // c1 has no effect (joint 1 is vertical); c2..c6 are identified.
+            assert_eq!(z_of(&only).len(), 5);
+            full_e.push(mean_error(&full.robot, &test));
+            comp_e.push(mean_error(&comp.robot, &test));
+            floor_e.push(mean_error(&floor.robot, &test_gears));
+            z_gears.extend(z_of(&comp));
+            z_only.extend(z_of(&only));
+        }
+        let median = |v: &mut Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            0.5 * (v[9] + v[10])
+        };
+        let worst = |z: &[(usize, f64)], j: usize| {
+            z.iter()
+                .filter(|(k, _)| *k == j)
+                .map(|(_, z)| z.abs())
+                .fold(0.0, f64::max)
+        };
+        let (full_m, comp_m, floor_m) = (
+            median(&mut full_e),
+            median(&mut comp_e),
+            median(&mut floor_e),
+        );
+        println!(
+            "test mean error vs truth over 20 seeds (median mm): full {full_m:.4}, \
+             full+compliance {comp_m:.4}, floor (geometry fit without compliance) {floor_m:.4}"
+        );
+        for j in 2..=6 {
+            println!(
+                "c{j}: largest |estimate - true| / std: compliance alone {:.2}, with gear errors {:.2}",
+                worst(&z_only, j),
+                worst(&z_gears, j)
+            );
+        }
+        // Compliance alone: the model is complete, so every estimate is within 3 reported
+        // standard deviations of the truth.
+        let beyond: Vec<_> = z_only.iter().filter(|(_, z)| z.abs() > 3.0).collect();
+        assert!(beyond.is_empty(), "beyond 3 sigma: {beyond:?}");
+        // With gear errors too: at the floor the geometry reaches without the compliance,
+        // and far below the geometry alone.
+        assert!(comp_m <= 1.1 * floor_m, "{comp_m} vs floor {floor_m}");
+        assert!(comp_m <= 0.3 * full_m, "{comp_m} vs full {full_m}");
+    }
+}
+
+#[test]
+fn the_shipped_nominal_with_masses_is_the_simulators() {
+    let nominal = fanuc();
+    let ng = compliance_only(&nominal);
+    let want = ng
+        .compliance
+        .unwrap()
+        .on_robot(&nominal)
+        .unwrap()
+        .with_compliance(None)
+        .unwrap();
+    let shipped =
+        read_robot(root().join("datasets/nongeometric_robot/nominal_masses.toml")).unwrap();
+    assert_eq!(shipped, want);
+    let c = Compliance::from_file_units(&[0.0; 6]);
+    assert!(!shipped.with_compliance(Some(c)).unwrap().is_compliant());
+}
