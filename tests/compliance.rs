@@ -209,9 +209,15 @@ fn robot_files_keep_compliances_and_refuse_bad_ones() {
             "{e} (want line {line})"
         );
     }
-    // Compliances are parameters of a robot with masses only.
+    // Joint compliances are parameters of a robot with masses only; without, the
+    // mass-free coefficients are.
     assert!(truth.find_param("c2").is_none());
-    assert!(robocal::identify::select::select(&truth, "full,compliance").is_err());
+    assert!(truth.find_param("k2.mx3").is_some());
+    assert!(model.find_param("k2.mx3").is_none());
+    let params = truth.parameters();
+    let chosen = robocal::identify::select::select(&truth, "compliance").unwrap();
+    assert_eq!(params[chosen[0]].name(), "k1.m1");
+    assert_eq!(params[*chosen.last().unwrap()].name(), "k6.mzP");
 }
 
 mod recovery {
@@ -295,6 +301,7 @@ mod recovery {
                 .collect()
         };
         let (mut full_e, mut comp_e, mut floor_e) = (Vec::new(), Vec::new(), Vec::new());
+        let mut free_e = Vec::new();
         let (mut z_gears, mut z_only) = (Vec::new(), Vec::new());
         for seed in 0..20u64 {
             let (cal, _) = simulate(&truth, &ng, 30, 1000 + seed);
@@ -304,6 +311,8 @@ mod recovery {
             let floor = identify(&nominal, &cal_floor, &Options::default()).unwrap();
             let comp = identify(&with_masses, &cal, &opts).unwrap();
             let only = identify(&with_masses, &cal_c, &opts).unwrap();
+            let free = identify(&nominal, &cal, &opts).unwrap();
+            free_e.push(mean_error(&free.robot, &test));
             // c1 has no effect (joint 1 is vertical); c2..c6 are identified.
             assert_eq!(z_of(&only).len(), 5);
             full_e.push(mean_error(&full.robot, &test));
@@ -327,9 +336,16 @@ mod recovery {
             median(&mut comp_e),
             median(&mut floor_e),
         );
+        let free_range = (
+            free_e.iter().copied().fold(f64::INFINITY, f64::min),
+            free_e.iter().copied().fold(0.0, f64::max),
+        );
+        let free_m = median(&mut free_e);
         println!(
             "test mean error vs truth over 20 seeds (median mm): full {full_m:.4}, \
-             full+compliance {comp_m:.4}, floor (geometry fit without compliance) {floor_m:.4}"
+             full+compliance {comp_m:.4} (masses known), {free_m:.4} (without masses, range \
+             {:.4}-{:.4}), floor (geometry fit without compliance) {floor_m:.4}",
+            free_range.0, free_range.1
         );
         for j in 2..=6 {
             println!(
@@ -365,4 +381,70 @@ fn the_shipped_nominal_with_masses_is_the_simulators() {
     assert_eq!(shipped, want);
     let c = Compliance::from_file_units(&[0.0; 6]);
     assert!(!shipped.with_compliance(Some(c)).unwrap().is_compliant());
+}
+
+/// Without masses: the mass-free coefficients identified from the shipped non-geometric
+/// robot's calibration set, their file round trip, and forward kinematics with and without a
+/// workspace.
+#[test]
+fn mass_free_compliance_is_identified_written_and_read_back() {
+    use robocal::data::read_canonical;
+    use robocal::identify::{Options, identify};
+    let nominal = fanuc();
+    let dir = root().join("datasets/nongeometric_robot");
+    let cal = read_canonical(&dir.join("calibration.csv"), &nominal).unwrap();
+    let test = read_canonical(&dir.join("test_truth.csv"), &nominal).unwrap();
+    let opts = Options {
+        params: "full,compliance".into(),
+        ..Options::default()
+    };
+    let id = identify(&nominal, &cal, &opts).unwrap();
+    let full = identify(&nominal, &cal, &Options::default()).unwrap();
+    let robot = &id.robot;
+    assert!(robot.is_compliant() && robot.masses().is_none());
+    // Joint 1 is vertical: none of its coefficients has an effect.
+    assert!(id.parameters.iter().all(|p| !p.name.starts_with("k1.")));
+    assert!(id.parameters.iter().any(|p| p.name.starts_with("k2.")));
+    let text = robot_to_toml(robot);
+    assert!(text.contains("moments = ["), "{text}");
+    let back = parse_robot(&text, Path::new("back.toml")).unwrap();
+    assert_eq!(&back, robot);
+    let mut f = Frames::new(robot);
+    let mean = |r: &Robot| {
+        test.rows
+            .iter()
+            .map(|row| (tool_pose(r, &row.q).translation.vector - row.position.unwrap()).norm())
+            .sum::<f64>()
+            / test.rows.len() as f64
+    };
+    for row in &test.rows {
+        frames(&back, &row.q, &mut f);
+        assert_eq!(f.tool, tool_pose(&back, &row.q));
+    }
+    let (e_full, e_free) = (mean(&full.robot), mean(&back));
+    println!(
+        "validation mean vs truth: full {e_full:.4} mm, full + mass-free compliance {e_free:.4} mm"
+    );
+    assert!(e_free < 0.5 * e_full, "{e_free} vs {e_full}");
+
+    // A [mass] table may give gravity alone (a wall mount without known masses): the
+    // mass-free coefficients then act along that gravity.
+    let plain =
+        std::fs::read_to_string(root().join("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
+    let wall = parse_robot(
+        &format!("{plain}\n[mass]\ngravity = [9.81, 0.0, 0.0]\n"),
+        Path::new("wall.toml"),
+    )
+    .unwrap();
+    assert!(!wall.masses().unwrap().has_mass());
+    assert!(wall.find_param("k1.mx2").is_some() && wall.find_param("c1").is_none());
+    let bad = format!("{plain}\n[compliance]\nmoments = [[[1, 2, 3, 4]]]\n");
+    let line = bad.lines().position(|l| l.starts_with("moments")).unwrap() + 1;
+    let e = parse_robot(&bad, Path::new("r.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with(&format!("r.toml:{line}:")) && e.contains("moments need 6 lists"),
+        "{e}"
+    );
 }

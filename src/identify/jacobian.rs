@@ -8,7 +8,7 @@
 //! (rad per unit), both in world coordinates.
 
 use crate::kinematics::jacobian::axis_column;
-use crate::kinematics::load::{Load, Twist};
+use crate::kinematics::load::{Load, Twist, gravity_of, moment_sensitivity};
 use crate::kinematics::{Frames, Pose};
 use crate::model::Robot;
 use crate::model::axes::{Anchor, ParamAxis};
@@ -37,9 +37,10 @@ pub fn parameter_jacobian(
     for (k, &col) in cols.iter().enumerate() {
         let mut c = out.column_mut(k);
         let Some(axis) = chain.axes.get(col) else {
-            // The compliances follow the row parameters, c1..cN.
-            let j = col - chain.axes.len();
-            c.copy_from(&(axis_column(robot, frames, j) * load.torque[j]));
+            // The compliance parameters follow the row parameters: c1..cN (a robot with
+            // masses) or k_jbi (joint j, bodies b = j..=N, parts i = 0..4).
+            let (j, per_unit) = compliance_column(robot, frames, col - chain.axes.len(), n);
+            c.copy_from(&(axis_column(robot, frames, j) * per_unit));
             continue;
         };
         let (w, at) = screw(robot, &frames.joint, &frames.link, axis);
@@ -54,13 +55,41 @@ pub fn parameter_jacobian(
             && let Some(t) = twist(robot, load, axis, n)
         {
             for j in 0..n {
-                let cj = robot.compliance().map_or(0.0, |c| c.joint(j));
-                if cj != 0.0 {
-                    c += axis_column(robot, frames, j) * (cj * load.torque_change(j, &t));
+                let d = load.deflection_change(j, &t);
+                if d != 0.0 {
+                    c += axis_column(robot, frames, j) * d;
                 }
             }
         }
     }
+}
+
+/// The joint a compliance parameter deflects and its deflection per unit of it: c_j's is
+/// tau_j; k_jbi's is [`Load::moment_sensitivity`]. `k` counts the compliance parameters in
+/// the order of [`Robot::parameters`].
+fn compliance_column(robot: &Robot, frames: &Frames, k: usize, n: usize) -> (usize, f64) {
+    let load = &frames.load;
+    if robot.masses().is_some_and(|m| m.has_mass()) {
+        return (k, load.torque[k]);
+    }
+    // A robot whose joints do not yet deflect: its frames are the commanded ones.
+    let (joint, tool) = if load.compliant {
+        (&load.joint[..], &load.tool)
+    } else {
+        (&frames.joint[..], &frames.tool)
+    };
+    let g = robot.chain().base.rotation * gravity_of(robot);
+    let mut rest = k;
+    for j in 0..n {
+        let here = 4 * (n - j + 1);
+        if rest < here {
+            let (b, i) = (j + rest / 4, rest % 4);
+            let revolute = robot.joints()[j].joint_type == crate::model::JointType::Revolute;
+            return (j, moment_sensitivity(joint, tool, &g, revolute, j, b, i));
+        }
+        rest -= here;
+    }
+    unreachable!("compliance parameter {k} beyond the robot's {n} joints")
 }
 
 /// A parameter's screw in the frames `joint`, `link` (world): its unit direction w and, for
@@ -197,8 +226,9 @@ rx = -30.0
             parameter_jacobian(robot, &ws, &cols, &mut jac);
             for (k, id) in params.iter().enumerate() {
                 let h = match id.field {
-                    // 1e-3 mrad per kN m.
+                    // 1e-3 mrad per kN m; 1 mrad per kN m times kg (or kg m).
                     crate::model::Field::C => 1e-9,
+                    crate::model::Field::K { .. } => 1e-6,
                     f if f.is_angle() => 1e-6,
                     _ => 1e-4,
                 };
@@ -210,9 +240,10 @@ rx = -30.0
                 let col = jac.column(k);
                 let (jp, jr) = (col.fixed_rows::<3>(0), col.fixed_rows::<3>(3));
                 // Relative to the column's size (and to 1 for columns that vanish; a
-                // compliance's column is per rad per N m, so its floor is 1e6 times larger).
+                // compliance's column is mm per rad per N m, some 1e7 where it does not
+                // vanish, and its differences carry 1e-4 of rounding, so its floor is 1e3).
                 let unit = if id.field == crate::model::Field::C {
-                    1e6
+                    1e3
                 } else {
                     1.0
                 };
@@ -220,8 +251,9 @@ rx = -30.0
                 let scale_r = dr.norm().max(1e-3 * unit);
                 assert!(
                     (jp - dp).norm() / scale_p < 1e-6,
-                    "{}: {jp:?} vs {dp:?}",
-                    id.name()
+                    "{}: {:?} vs {dp:?}",
+                    id.name(),
+                    jp.clone_owned()
                 );
                 assert!(
                     (jr - dr).norm() / scale_r < 1e-6,
@@ -307,5 +339,48 @@ rx = -30.0
         ))
         .unwrap();
         check(&compliant(&fanuc), 5);
+    }
+
+    /// `robot` without masses, with a mass-free coefficient for every body each joint
+    /// carries (deflections of mrad).
+    fn with_moments(robot: &Robot) -> Robot {
+        use crate::model::Compliance;
+        let n = robot.dof();
+        let mut c = Compliance {
+            moments: vec![0.0; n * (n + 1) * 4],
+            ..Default::default()
+        };
+        for j in 0..n {
+            for b in j..=n {
+                for i in 0..4 {
+                    let at = crate::model::compliance::moment_index(n, j, b, i);
+                    // mrad per kN m times kg (i = 0) or kg m.
+                    c.moments[at] = if i == 0 { 40.0 } else { 12.0 }
+                        * (1.0 + 0.1 * (j + b + i) as f64)
+                        * if (j + b + i) % 2 == 0 { 1.0 } else { -1.0 };
+                }
+            }
+        }
+        robot.with_compliance(Some(c)).unwrap()
+    }
+
+    #[test]
+    fn mass_free_compliance_jacobian_matches_central_differences() {
+        let robot = with_moments(&parse_robot(MIXED, Path::new("mixed.toml")).unwrap());
+        assert!(robot.is_compliant() && robot.masses().is_none());
+        let k = robot
+            .parameters()
+            .iter()
+            .filter(|p| matches!(p.field, crate::model::Field::K { .. }))
+            .count();
+        // 4 per body each joint carries: 4 (7 + 6 + ... + 2).
+        assert_eq!(k, 4 * 27);
+        check(&robot, 6);
+        let fanuc = crate::model::read_robot(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/datasets/robots/fanuc_r2000ib_210f.toml"
+        ))
+        .unwrap();
+        check(&with_moments(&fanuc), 7);
     }
 }

@@ -6,7 +6,8 @@
 //! - `full`: every geometric parameter of base, joints and tool (reduced later to an
 //!   identifiable set);
 //! - `base`, `tool`: every parameter of that row; `joints`: every geometric joint parameter;
-//! - `compliance`: the joint compliances c1..cN (a robot with mass properties);
+//! - `compliance`: the joint compliances c1..cN (a robot with mass properties), or without
+//!   masses the mass-free coefficients k_jbi (see `model::compliance`);
 //! - parameter names: `a2`, `alpha3`, `beta3`, `base.x`, `tool.rz`, `thetaR`, ...
 //!
 //! Priority (thesis 4.3.4: parameters the controller holds come first), highest first:
@@ -33,13 +34,18 @@ pub fn is_offset(robot: &Robot, id: &ParamId) -> bool {
     }
 }
 
+/// True when `id` is a compliance parameter: c_j, or a mass-free coefficient k_jbi.
+pub fn is_compliance(id: &ParamId) -> bool {
+    matches!(id.field, Field::C | Field::K { .. })
+}
+
 /// Priority class of a parameter (0 is kept first); see the module docs.
 pub fn priority(robot: &Robot, id: &ParamId) -> u8 {
     match id.slot {
         Slot::Base if robot.base().convention() == Convention::Transform => 0,
         Slot::Tool if robot.tool().convention() == Convention::Transform => 0,
         Slot::Base | Slot::Tool => 3,
-        Slot::Joint(_) if id.field == Field::C => 4,
+        Slot::Joint(_) if is_compliance(id) => 4,
         Slot::Joint(_) if is_offset(robot, id) => 1,
         Slot::Joint(_) => 2,
     }
@@ -60,26 +66,24 @@ pub fn select(robot: &Robot, spec: &str) -> Result<Vec<usize>> {
         };
         match item {
             "offsets" => pick(&|id| is_offset(robot, id), &mut chosen),
-            "full" => pick(&|id| id.field != Field::C, &mut chosen),
+            "full" => pick(&|id| !is_compliance(id), &mut chosen),
             "base" => pick(&|id| id.slot == Slot::Base, &mut chosen),
             "tool" => pick(&|id| id.slot == Slot::Tool, &mut chosen),
             "joints" => pick(
-                &|id| matches!(id.slot, Slot::Joint(_)) && id.field != Field::C,
+                &|id| matches!(id.slot, Slot::Joint(_)) && !is_compliance(id),
                 &mut chosen,
             ),
-            "compliance" => {
-                if robot.masses().is_none() {
-                    return Err(Error::Invalid(
-                        "`compliance` needs the robot's mass properties (a [mass] table in its \
-                         file): the compliances scale gravity torques"
-                            .into(),
-                    ));
-                }
-                pick(&|id| id.field == Field::C, &mut chosen)
-            }
+            "compliance" => pick(&|id| is_compliance(id), &mut chosen),
             name => {
                 let id = robot.find_param(name).ok_or_else(|| {
-                    let names: Vec<String> = params.iter().map(|p| p.name()).collect();
+                    let mut names: Vec<String> = params
+                        .iter()
+                        .filter(|p| !matches!(p.field, Field::K { .. }))
+                        .map(|p| p.name())
+                        .collect();
+                    if params.iter().any(|p| matches!(p.field, Field::K { .. })) {
+                        names.push("k<joint>.<m|mx|my|mz><link|P> (e.g. k2.mx3)".into());
+                    }
                     Error::Invalid(format!(
                         "unknown parameter or group `{name}`: use offsets, full, base, tool, joints, compliance or one of {}",
                         names.join(", ")

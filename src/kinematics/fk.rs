@@ -2,7 +2,7 @@
 //! at the joints it reaches under gravity, q' = q + c tau(q) ([`crate::model::compliance`]).
 
 use super::Pose;
-use super::load::{Load, torque};
+use super::load::{Load, accumulate_moments, gravity_of, moment_deflection, torque};
 use crate::model::Robot;
 
 /// The tool pose (mm, in the base row's reference frame) for commanded joints `q` (rad or
@@ -30,34 +30,61 @@ pub fn tool_pose(robot: &Robot, q: &[f64]) -> Pose {
 }
 
 /// [`tool_pose`] of a compliant robot without a workspace: the same sums, in the same order,
-/// as [`Load`], so both give the same bits.
+/// as [`Load`], so both give the same bits. Joint compliances take two passes (the masses'
+/// totals, then the torques beside the deflected chain); mass-free coefficients one more
+/// walk per joint (the bodies it carries).
 fn compliant_tool_pose(robot: &Robot, q: &[f64]) -> Pose {
     let chain = robot.chain();
-    let (Some(m), Some(c)) = (robot.masses(), robot.compliance()) else {
-        unreachable!("a compliant robot has masses and compliances");
+    let Some(c) = robot.compliance() else {
+        unreachable!("a compliant robot has compliances");
     };
-    let g = chain.base.rotation * m.gravity;
+    let n = q.len();
+    let masses = robot.masses();
+    let g = chain.base.rotation * gravity_of(robot);
     let (mut mass, mut moment) = (0.0, nalgebra::Vector3::zeros());
     let mut t = chain.head;
-    for (i, (link, &qi)) in chain.links.iter().zip(q).enumerate() {
-        chain.apply_joint(&mut t, i, qi);
-        let b = &m.links[i];
-        mass += b.mass_kg;
-        moment += t.transform_point(&b.com_mm.into()).coords * b.mass_kg;
-        t *= link.next;
+    if let Some(m) = masses {
+        for (i, (link, &qi)) in chain.links.iter().zip(q).enumerate() {
+            chain.apply_joint(&mut t, i, qi);
+            let b = &m.links[i];
+            mass += b.mass_kg;
+            moment += t.transform_point(&b.com_mm.into()).coords * b.mass_kg;
+            t *= link.next;
+        }
+        mass += m.payload.mass_kg;
+        moment += t.transform_point(&m.payload.com_mm.into()).coords * m.payload.mass_kg;
     }
-    mass += m.payload.mass_kg;
-    moment += t.transform_point(&m.payload.com_mm.into()).coords * m.payload.mass_kg;
+    let moments = c.has_moments();
     let (mut rigid, mut loaded) = (chain.head, chain.head);
     for (i, (link, &qi)) in chain.links.iter().zip(q).enumerate() {
         chain.apply_joint(&mut rigid, i, qi);
         let z = rigid.rotation.matrix().column(2).into();
         let o = rigid.translation.vector;
-        let tau = torque(!link.prismatic, &z, &o, mass, &moment, &g);
-        chain.apply_joint(&mut loaded, i, qi + c.joint(i) * tau);
-        let b = &m.links[i];
-        mass -= b.mass_kg;
-        moment -= rigid.transform_point(&b.com_mm.into()).coords * b.mass_kg;
+        let mut dq = 0.0;
+        if let Some(m) = masses {
+            let tau = torque(!link.prismatic, &z, &o, mass, &moment, &g);
+            dq = c.joint(i) * tau;
+            let b = &m.links[i];
+            mass -= b.mass_kg;
+            moment -= rigid.transform_point(&b.com_mm.into()).coords * b.mass_kg;
+        }
+        if moments {
+            // The bodies joint i carries: its own frame on, walked again from it.
+            let (mut km, mut ks, mut kh) =
+                (0.0, nalgebra::Vector3::zeros(), nalgebra::Vector3::zeros());
+            let mut f = rigid;
+            accumulate_moments(c, n, i, i, &f, &mut km, &mut ks, &mut kh);
+            for (b, &qb) in q.iter().enumerate().skip(i + 1) {
+                f *= chain.links[b - 1].next;
+                chain.apply_joint(&mut f, b, qb);
+                accumulate_moments(c, n, i, b, &f, &mut km, &mut ks, &mut kh);
+            }
+            // The payload, on the tool frame.
+            f *= chain.links[n - 1].next;
+            accumulate_moments(c, n, i, n, &f, &mut km, &mut ks, &mut kh);
+            dq += moment_deflection(!link.prismatic, &z, &o, km, &ks, &kh, &g);
+        }
+        chain.apply_joint(&mut loaded, i, qi + dq);
         rigid *= link.next;
         loaded *= link.next;
     }
@@ -122,9 +149,10 @@ pub fn frames(robot: &Robot, q: &[f64], out: &mut Frames) {
         chain.links.len(),
         "workspace made for another robot"
     );
-    if robot.masses().is_none() {
+    if robot.masses().is_none() && !robot.is_compliant() {
         out.load.active = false;
         out.load.compliant = false;
+        out.load.moments = false;
         walk(robot, q, &mut out.joint, &mut out.link, &mut out.tool);
         return;
     }

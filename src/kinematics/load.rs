@@ -20,7 +20,7 @@
 
 use super::Pose;
 use super::gravity::{PointMass, mass_points};
-use crate::model::{JointType, Robot};
+use crate::model::{Compliance, JointType, Robot};
 use nalgebra::{DMatrix, Vector3};
 
 /// A small rigid motion of the chain from frame `first` on: the velocity of every point x
@@ -64,6 +64,16 @@ pub struct Load {
     /// D = C d tau / d q (n x n, rad per rad and the like): d q' / d q = I + D. Filled only
     /// for a compliant robot.
     pub deflection_jacobian: DMatrix<f64>,
+    /// Whether the robot has mass-free compliance coefficients ([`crate::model::compliance`]).
+    pub moments: bool,
+    /// c_j (internal units) of each joint, 0 without.
+    c: Vec<f64>,
+    /// Per joint j and body frame f >= j (at j (N + 1) + f), the sums over bodies b >= f of
+    /// k_jb0 (rad per N m times kg), k_jb0 o_b (times kg mm, world) and R_b (k_jb1, k_jb2,
+    /// k_jb3) (times kg m, world).
+    km: Vec<f64>,
+    ks: Vec<Vector3<f64>>,
+    kh: Vec<Vector3<f64>>,
     /// M_j (kg) for j = 0..=N.
     suffix_mass: Vec<f64>,
     /// S_j (kg mm, world) for j = 0..=N.
@@ -87,6 +97,11 @@ impl Load {
             deflection: vec![0.0; n],
             reached: vec![0.0; n],
             deflection_jacobian: DMatrix::zeros(n, n),
+            moments: false,
+            c: vec![0.0; n],
+            km: vec![0.0; n * (n + 1)],
+            ks: vec![Vector3::zeros(); n * (n + 1)],
+            kh: vec![Vector3::zeros(); n * (n + 1)],
             suffix_mass: vec![0.0; n + 1],
             suffix_moment: vec![Vector3::zeros(); n + 1],
             revolute: robot
@@ -99,55 +114,113 @@ impl Load {
 
     /// From the commanded frames already in `joint`, `link` and `tool`: points, torques,
     /// deflections and the joints reached `q + deflection`; with `jacobian`, also
-    /// [`Load::deflection_jacobian`]. The robot must have masses.
+    /// [`Load::deflection_jacobian`].
     pub(crate) fn compute(&mut self, robot: &Robot, q: &[f64], jacobian: bool) {
-        let Some(m) = robot.masses() else {
-            self.active = false;
-            return;
-        };
-        self.active = true;
-        self.compliant = robot.is_compliant();
-        self.gravity = robot.chain().base.rotation * m.gravity;
-        mass_points(robot, &self.joint, &self.tool, &mut self.points);
         let n = self.joint.len();
-        // Totals, then suffixes by removing the masses frame by frame (the order
-        // `fk::tool_pose` uses, so that both give the same bits).
-        let (mut mass, mut moment) = (0.0, Vector3::zeros());
-        for p in &self.points {
-            mass += p.mass_kg;
-            moment += p.position_mm * p.mass_kg;
+        self.active = robot.masses().is_some();
+        self.compliant = robot.is_compliant();
+        let comp = robot.compliance();
+        self.moments = comp.is_some_and(|c| c.has_moments());
+        self.gravity = robot.chain().base.rotation * gravity_of(robot);
+        for j in 0..n {
+            self.c[j] = comp.map_or(0.0, |c| c.joint(j));
         }
-        for (j, p) in self.points.iter().enumerate() {
-            self.suffix_mass[j] = mass;
-            self.suffix_moment[j] = moment;
-            if j < n {
-                mass -= p.mass_kg;
-                moment -= p.position_mm * p.mass_kg;
+        if self.active {
+            mass_points(robot, &self.joint, &self.tool, &mut self.points);
+            // Totals, then suffixes by removing the masses frame by frame (the order
+            // `fk::tool_pose` uses, so that both give the same bits).
+            let (mut mass, mut moment) = (0.0, Vector3::zeros());
+            for p in &self.points {
+                mass += p.mass_kg;
+                moment += p.position_mm * p.mass_kg;
+            }
+            for (j, p) in self.points.iter().enumerate() {
+                self.suffix_mass[j] = mass;
+                self.suffix_moment[j] = moment;
+                if j < n {
+                    mass -= p.mass_kg;
+                    moment -= p.position_mm * p.mass_kg;
+                }
+            }
+        }
+        if let (true, Some(c)) = (self.moments, comp) {
+            for j in 0..n {
+                let (mut m, mut sm, mut h) = (0.0, Vector3::zeros(), Vector3::zeros());
+                for b in (j..=n).rev() {
+                    let f = if b < n { &self.joint[b] } else { &self.tool };
+                    accumulate_moments(c, n, j, b, f, &mut m, &mut sm, &mut h);
+                    let at = j * (n + 1) + b;
+                    self.km[at] = m;
+                    self.ks[at] = sm;
+                    self.kh[at] = h;
+                }
             }
         }
         for (j, &qj) in q.iter().enumerate().take(n) {
             let (z, o) = super::gravity::axis(&self.joint, j);
-            self.torque[j] = torque(
-                self.revolute[j],
-                &z,
-                &o,
-                self.suffix_mass[j],
-                &self.suffix_moment[j],
-                &self.gravity,
-            );
-            let c = robot.compliance().map_or(0.0, |c| c.joint(j));
-            self.deflection[j] = c * self.torque[j];
+            self.torque[j] = if self.active {
+                torque(
+                    self.revolute[j],
+                    &z,
+                    &o,
+                    self.suffix_mass[j],
+                    &self.suffix_moment[j],
+                    &self.gravity,
+                )
+            } else {
+                0.0
+            };
+            self.deflection[j] = self.c[j] * self.torque[j];
+            if let (true, Some(c)) = (self.moments, comp) {
+                // Summed forward, body by body, as `fk::tool_pose` does (same bits).
+                let (mut m, mut sm, mut h) = (0.0, Vector3::zeros(), Vector3::zeros());
+                for b in j..=n {
+                    let f = if b < n { &self.joint[b] } else { &self.tool };
+                    accumulate_moments(c, n, j, b, f, &mut m, &mut sm, &mut h);
+                }
+                self.deflection[j] +=
+                    moment_deflection(self.revolute[j], &z, &o, m, &sm, &h, &self.gravity);
+            }
             self.reached[j] = qj + self.deflection[j];
         }
         if jacobian && self.compliant {
             for i in 0..n {
                 let t = self.joint_twist(i);
                 for j in 0..n {
-                    let c = robot.compliance().map_or(0.0, |c| c.joint(j));
-                    self.deflection_jacobian[(j, i)] = c * self.torque_change(j, &t);
+                    self.deflection_jacobian[(j, i)] = self.deflection_change(j, &t);
                 }
             }
         }
+    }
+
+    /// d delta_j for the motion `t` (rad or mm per unit of what moves): the change of joint
+    /// j's deflection, c_j d tau_j plus that of its mass-free terms.
+    pub fn deflection_change(&self, j: usize, t: &Twist) -> f64 {
+        let mut d = 0.0;
+        if self.active && self.c[j] != 0.0 {
+            d += self.c[j] * self.torque_change(j, t);
+        }
+        if self.moments {
+            let n = self.joint.len();
+            let (z, o) = super::gravity::axis(&self.joint, j);
+            let g = &self.gravity;
+            d += match (self.revolute[j], j >= t.first) {
+                (true, true) => {
+                    let at = j * (n + 1) + j;
+                    let r = (self.ks[at] - o * self.km[at]) * 1e-3 + self.kh[at];
+                    g.dot(&t.w.cross(&z.cross(&r)))
+                }
+                (true, false) => {
+                    let at = j * (n + 1) + t.first;
+                    let dm = (t.v * self.km[at] + t.w.cross(&self.ks[at])) * 1e-3
+                        + t.w.cross(&self.kh[at]);
+                    g.dot(&z.cross(&dm))
+                }
+                (false, true) => self.km[j * (n + 1) + j] * g.dot(&t.w.cross(&z)),
+                (false, false) => 0.0,
+            };
+        }
+        d
     }
 
     /// The motion of joint i's variable (per rad or per mm), at the commanded joints.
@@ -185,6 +258,84 @@ impl Load {
             (false, true) => self.suffix_mass[j] * g.dot(&t.w.cross(&z)),
             (false, false) => 0.0,
         }
+    }
+}
+
+/// d delta_j / d k_jbi: the deflection of joint j (revolute or not) per unit of its
+/// mass-free coefficient for body b (0..=N, N the payload) and part i (0: mass, 1-3: moment
+/// x, y, z) at the commanded configuration with joint frames `joint` and tool frame `tool`
+/// (world), gravity g (m/s^2, world): rad per (rad per N m) per kg, or per kg m.
+pub fn moment_sensitivity(
+    joint: &[Pose],
+    tool: &Pose,
+    g: &Vector3<f64>,
+    revolute: bool,
+    j: usize,
+    b: usize,
+    i: usize,
+) -> f64 {
+    let (z, o) = super::gravity::axis(joint, j);
+    let f = if b < joint.len() { &joint[b] } else { tool };
+    match (revolute, i) {
+        (true, 0) => g.dot(&z.cross(&(f.translation.vector - o))) * 1e-3,
+        (true, i) => {
+            let e: Vector3<f64> = f.rotation.matrix().column(i - 1).into();
+            g.dot(&z.cross(&e))
+        }
+        (false, 0) => g.dot(&z),
+        (false, _) => 0.0,
+    }
+}
+
+/// Adds body b's mass-free terms of joint j, its frame `f` (world), to the sums k0, k0 o
+/// and R k.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub(crate) fn accumulate_moments(
+    c: &Compliance,
+    n: usize,
+    j: usize,
+    b: usize,
+    f: &Pose,
+    m: &mut f64,
+    s: &mut Vector3<f64>,
+    h: &mut Vector3<f64>,
+) {
+    let k0 = c.moment(n, j, b, 0);
+    let k = Vector3::new(
+        c.moment(n, j, b, 1),
+        c.moment(n, j, b, 2),
+        c.moment(n, j, b, 3),
+    );
+    *m += k0;
+    *s += f.translation.vector * k0;
+    *h += f.rotation * k;
+}
+
+/// The robot's gravity (m/s^2, base frame): its mass properties', or -9.81 along z.
+pub fn gravity_of(robot: &Robot) -> Vector3<f64> {
+    robot
+        .masses()
+        .map_or(Vector3::new(0.0, 0.0, -9.81), |m| m.gravity)
+}
+
+/// The mass-free deflection of one joint (rad; mm if prismatic) with axis z through o
+/// (world) from the sums of its coefficients over the bodies it carries: k0 (rad per N m
+/// times kg), k0 o (times kg mm) and R k (times kg m), gravity g (m/s^2, world).
+#[inline]
+pub(crate) fn moment_deflection(
+    revolute: bool,
+    z: &Vector3<f64>,
+    o: &Vector3<f64>,
+    m: f64,
+    s: &Vector3<f64>,
+    h: &Vector3<f64>,
+    g: &Vector3<f64>,
+) -> f64 {
+    if revolute {
+        g.dot(&z.cross(&((s - o * m) * 1e-3 + h)))
+    } else {
+        m * g.dot(z)
     }
 }
 

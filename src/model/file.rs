@@ -74,7 +74,7 @@ struct RobotFile {
     #[serde(default)]
     joint: Vec<Spanned<RowFile>>,
     tool: Option<Spanned<RowFile>>,
-    mass: Option<MassFile>,
+    mass: Option<Spanned<MassFile>>,
     compliance: Option<Spanned<ComplianceFile>>,
 }
 
@@ -82,7 +82,8 @@ struct RobotFile {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ComplianceFile {
-    joints: Spanned<Vec<Number>>,
+    joints: Option<Spanned<Vec<Number>>>,
+    moments: Option<Spanned<Vec<Vec<Vec<Number>>>>>,
 }
 
 /// The `[mass]` table ([`super::mass`]).
@@ -90,8 +91,8 @@ struct ComplianceFile {
 #[serde(deny_unknown_fields)]
 struct MassFile {
     gravity: Option<Spanned<Vec<Number>>>,
-    link_kg: Spanned<Vec<Number>>,
-    link_com_mm: Spanned<Vec<Vec<Number>>>,
+    link_kg: Option<Spanned<Vec<Number>>>,
+    link_com_mm: Option<Spanned<Vec<Vec<Number>>>>,
     #[serde(default)]
     payload_kg: Option<Spanned<Number>>,
     payload_com_mm: Option<Spanned<Vec<Number>>>,
@@ -200,25 +201,54 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
     let robot = match &file.mass {
         None => robot,
         Some(m) => {
-            let masses = rows.masses(m, robot.dof())?;
+            let masses = rows.masses(m.get_ref(), m.span(), robot.dof())?;
             robot
                 .with_masses(Some(masses))
-                .map_err(|e| Error::input(rows.at(m.link_kg.span(), "link_kg"), e.to_string()))?
+                .map_err(|e| Error::input(rows.at(m.span(), "mass"), e.to_string()))?
         }
     };
     match &file.compliance {
         None => Ok(robot),
         Some(c) => {
-            let values = c.get_ref().joints.get_ref();
-            let at = if robot.masses().is_none() {
-                rows.at(c.span(), "compliance")
-            } else {
-                rows.at(c.get_ref().joints.span(), "joints")
-            };
-            let file: Vec<f64> = values.iter().map(|v| v.0).collect();
-            robot
-                .with_compliance(Some(Compliance::from_file_units(&file)))
-                .map_err(|e| Error::input(at, format!("[compliance]: {e}")))
+            let cf = c.get_ref();
+            let n = robot.dof();
+            let mut comp = Compliance::default();
+            if let Some(j) = &cf.joints {
+                comp.joints = j.get_ref().iter().map(|v| v.0).collect();
+            }
+            if let Some(m) = &cf.moments {
+                let shape = m.get_ref().len() == n
+                    && m.get_ref()
+                        .iter()
+                        .all(|bodies| bodies.len() == n + 1 && bodies.iter().all(|k| k.len() == 4));
+                if !shape {
+                    return Err(Error::input(
+                        rows.at(m.span(), "moments"),
+                        format!(
+                            "[compliance]: moments need {n} lists (one per joint) of {} bodies \
+                             (links 1..{n}, then the payload) of 4 values [k0, k1, k2, k3]",
+                            n + 1
+                        ),
+                    ));
+                }
+                comp.moments = m
+                    .get_ref()
+                    .iter()
+                    .flatten()
+                    .flatten()
+                    .map(|v| v.0)
+                    .collect();
+            }
+            robot.with_compliance(Some(comp)).map_err(|e| {
+                // The line of the list at fault (the table's header when masses are missing).
+                let text = e.to_string();
+                let at = match (&cf.joints, &cf.moments) {
+                    (_, Some(m)) if text.contains("moment") => rows.at(m.span(), "moments"),
+                    (Some(j), _) if robot.masses().is_some() => rows.at(j.span(), "joints"),
+                    _ => rows.at(c.span(), "compliance"),
+                };
+                Error::input(at, format!("[compliance]: {e}"))
+            })
         }
     }
 }
@@ -236,7 +266,24 @@ impl RowReader<'_> {
 
     /// The `[mass]` table for `n` joints: masses in [0, 1e5] kg, centres of mass of three
     /// coordinates within 100 m, gravity of three components within 100 m/s^2.
-    fn masses(&self, m: &MassFile, n: usize) -> Result<MassProperties> {
+    fn masses(
+        &self,
+        m: &MassFile,
+        table: std::ops::Range<usize>,
+        n: usize,
+    ) -> Result<MassProperties> {
+        // Masses are optional (a table may give gravity alone, for mass-free compliance).
+        let kg_span = m.link_kg.as_ref().map_or(table.clone(), |k| k.span());
+        let com_span = m.link_com_mm.as_ref().map_or(table.clone(), |c| c.span());
+        let zero = Number(0.0);
+        let kg: Vec<Number> = match &m.link_kg {
+            Some(k) => k.get_ref().clone(),
+            None => vec![zero; n],
+        };
+        let com: Vec<Vec<Number>> = match &m.link_com_mm {
+            Some(c) => c.get_ref().clone(),
+            None => vec![vec![zero; 3]; n],
+        };
         let three = |v: &[Number], span: std::ops::Range<usize>, key: &str| match v {
             [x, y, z] => Ok(Vector3::new(x.0, y.0, z.0)),
             _ => Err(Error::input(
@@ -244,11 +291,9 @@ impl RowReader<'_> {
                 format!("[mass]: {key} needs 3 values, got {}", v.len()),
             )),
         };
-        let kg = m.link_kg.get_ref();
-        let com = m.link_com_mm.get_ref();
         if kg.len() != n || com.len() != n {
             return Err(Error::input(
-                self.at(m.link_kg.span(), "link_kg"),
+                self.at(kg_span.clone(), "link_kg"),
                 format!(
                     "[mass]: {} link masses and {} centres of mass for a robot with {n} joints",
                     kg.len(),
@@ -262,7 +307,7 @@ impl RowReader<'_> {
             .map(|(k, c)| {
                 Ok(BodyMass {
                     mass_kg: k.0,
-                    com_mm: three(c, m.link_com_mm.span(), "link_com_mm")?,
+                    com_mm: three(&c, com_span.clone(), "link_com_mm")?,
                 })
             })
             .collect::<Result<Vec<_>>>()?;
@@ -290,9 +335,9 @@ impl RowReader<'_> {
                 } else if let (true, Some(p)) = (f.starts_with("payload"), &m.payload_kg) {
                     self.at(p.span(), "payload_kg")
                 } else if f.contains("centre of mass") {
-                    self.at(m.link_com_mm.span(), "link_com_mm")
+                    self.at(com_span, "link_com_mm")
                 } else {
-                    self.at(m.link_kg.span(), "link_kg")
+                    self.at(kg_span, "link_kg")
                 };
                 Err(Error::input(at, format!("[mass]: {f}")))
             }
@@ -546,13 +591,34 @@ pub fn robot_to_toml(robot: &Robot) -> String {
         );
     }
     if let Some(c) = robot.compliance() {
-        let values: Vec<String> = c.file.iter().map(|&v| float_text(v)).collect();
+        let list = |v: &[f64]| {
+            v.iter()
+                .map(|&x| float_text(x))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
         let _ = writeln!(s, "\n[compliance]");
-        let _ = writeln!(
-            s,
-            "joints = [{}]  # mrad per kN m (um per kN for a prismatic joint)",
-            values.join(", ")
-        );
+        if !c.joints.is_empty() {
+            let _ = writeln!(
+                s,
+                "joints = [{}]  # mrad per kN m (um per kN for a prismatic joint)",
+                list(&c.joints)
+            );
+        }
+        if !c.moments.is_empty() {
+            let n = robot.dof();
+            let _ = writeln!(
+                s,
+                "# per joint, per body (links 1..{n}, then the payload): [k0, k1, k2, k3], mrad per \
+                 kN m times kg (k0) and kg m (k1-k3)\nmoments = ["
+            );
+            for joint in c.moments.chunks(4 * (n + 1)) {
+                let bodies: Vec<String> =
+                    joint.chunks(4).map(|k| format!("[{}]", list(k))).collect();
+                let _ = writeln!(s, "  [{}],", bodies.join(", "));
+            }
+            let _ = writeln!(s, "]");
+        }
     }
     s
 }

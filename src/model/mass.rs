@@ -45,6 +45,11 @@ pub struct MassProperties {
 }
 
 impl MassProperties {
+    /// Whether any link or the payload has mass (a table may give gravity alone).
+    pub fn has_mass(&self) -> bool {
+        self.links.iter().any(|b| b.mass_kg > 0.0) || self.payload.mass_kg > 0.0
+    }
+
     /// What is wrong with these properties for a robot of `n` joints (a count that differs,
     /// a negative, huge or non-finite mass, a centre of mass beyond 100 m, gravity beyond
     /// 100 m/s^2), or None.

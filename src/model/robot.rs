@@ -7,7 +7,7 @@
 use super::axes::{Anchor, ParamAxis};
 use super::compliance::Compliance;
 use super::mass::MassProperties;
-use super::row::{Convention, Field, Row, apply_z};
+use super::row::{Convention, Field, PAYLOAD, Row, apply_z};
 use crate::error::{Error, Result};
 use crate::geometry::Pose;
 
@@ -101,8 +101,19 @@ pub struct ParamId {
 }
 
 impl ParamId {
-    /// The parameter's name: `a3`, `alpha2`, `theta1`, `beta3`, `base.x`, `tool.rz`, ...
+    /// The parameter's name: `a3`, `alpha2`, `theta1`, `beta3`, `base.x`, `tool.rz`, `c2`
+    /// (a compliance), `k2.mx3` (a mass-free compliance coefficient: joint 2, link 3's moment
+    /// along x; `k2.mP` the payload's mass), ...
     pub fn name(&self) -> String {
+        if let (Field::K { body, part }, Slot::Joint(j)) = (self.field, self.slot) {
+            let body = if body == PAYLOAD {
+                "P".to_string()
+            } else {
+                (body + 1).to_string()
+            };
+            let part = ["m", "mx", "my", "mz"][usize::from(part.min(3))];
+            return format!("k{}.{part}{body}", j + 1);
+        }
         match self.slot {
             Slot::Base => format!("base.{}", self.field.name()),
             Slot::Tool => format!("tool.{}", self.field.name()),
@@ -238,7 +249,12 @@ impl Robot {
         if let Some(f) = masses.as_ref().and_then(|m| m.fault(self.dof())) {
             return Err(Error::Model(format!("mass properties: {f}")));
         }
-        if masses.is_none() && self.compliance.is_some() {
+        if masses.is_none()
+            && self
+                .compliance
+                .as_ref()
+                .is_some_and(|c| !c.joints.is_empty())
+        {
             return Err(Error::Model(
                 "joint compliances need mass properties (a [mass] table)".into(),
             ));
@@ -258,7 +274,7 @@ impl Robot {
     /// properties; compliances for another joint count, or out of their bounds, are an error.
     pub fn with_compliance(&self, compliance: Option<Compliance>) -> Result<Robot> {
         if let Some(c) = &compliance {
-            if self.masses.is_none() {
+            if self.masses.is_none() && c.joints.iter().any(|&v| v != 0.0) {
                 return Err(Error::Model(
                     "joint compliances need mass properties (a [mass] table)".into(),
                 ));
@@ -286,10 +302,13 @@ impl Robot {
         }
     }
 
-    /// Whether the robot's joints bend under gravity: it has masses and a non-zero
-    /// compliance. Forward kinematics then runs q' = q + c tau(q) ([`super::compliance`]).
+    /// Whether the robot's joints bend under gravity: a non-zero compliance (joint
+    /// compliances with masses, or mass-free coefficients). Forward kinematics then runs
+    /// q' = q + delta(q) ([`super::compliance`]).
     pub fn is_compliant(&self) -> bool {
-        self.masses.is_some() && self.compliance.as_ref().is_some_and(|c| !c.is_zero())
+        self.compliance.as_ref().is_some_and(|c| {
+            c.has_moments() || (self.masses.is_some() && c.joints.iter().any(|&v| v != 0.0))
+        })
     }
 
     /// The robot's name (from its file, or given in code).
@@ -331,7 +350,8 @@ impl Robot {
 
     /// Every parameter of the model, in chain order (base, joints 1..N, tool) and, within a
     /// row, in the order of its transform product; then, for a robot with mass properties,
-    /// the joint compliances c1..cN.
+    /// the joint compliances c1..cN, or for one without, the mass-free coefficients k_jbi
+    /// ([`super::compliance`]).
     pub fn parameters(&self) -> Vec<ParamId> {
         let mut out = Vec::new();
         let mut push = |slot: Slot, row: &Row| {
@@ -344,12 +364,28 @@ impl Robot {
             push(Slot::Joint(i), &j.row);
         }
         push(Slot::Tool, &self.tool);
-        // A robot with masses has a compliance per joint (zero until identified).
-        if self.masses.is_some() {
-            out.extend((0..self.dof()).map(|i| ParamId {
+        // A robot with masses has a compliance per joint (zero until identified); one
+        // without has the mass-free coefficients of every body each joint carries.
+        let n = self.dof();
+        if self.masses.as_ref().is_some_and(|m| m.has_mass()) {
+            out.extend((0..n).map(|i| ParamId {
                 slot: Slot::Joint(i),
                 field: Field::C,
             }));
+        } else {
+            for j in 0..n {
+                for b in j..=n {
+                    for part in 0..4u8 {
+                        out.push(ParamId {
+                            slot: Slot::Joint(j),
+                            field: Field::K {
+                                body: body_code(b, n),
+                                part,
+                            },
+                        });
+                    }
+                }
+            }
         }
         out
     }
@@ -357,6 +393,14 @@ impl Robot {
     /// Finds a parameter by name: `a3`, `base.x`, `tool.rz`; the thesis's `dR`, `thetaR`
     /// (base) and `aT`, `alphaT` (tool) are accepted too.
     pub fn find_param(&self, name: &str) -> Option<ParamId> {
+        if let Some(rest) = name.strip_prefix('k')
+            && let Some((joint, body)) = rest.split_once('.')
+        {
+            return self
+                .parameters()
+                .into_iter()
+                .find(|p| p.name() == format!("k{joint}.{body}"));
+        }
         let (slot, field) = if let Some(f) = name.strip_prefix("base.") {
             (Slot::Base, f)
         } else if let Some(f) = name.strip_prefix("tool.") {
@@ -391,11 +435,17 @@ impl Robot {
     /// A parameter's value in internal units (mm, rad; a compliance in rad per N m).
     pub fn param(&self, id: ParamId) -> f64 {
         match (id.field, id.slot) {
-            (Field::C, Slot::Joint(i)) => self
-                .compliance
-                .as_ref()
-                .filter(|c| i < c.file.len())
-                .map_or(0.0, |c| c.joint(i)),
+            (Field::C, Slot::Joint(i)) => self.compliance.as_ref().map_or(0.0, |c| c.joint(i)),
+            (Field::K { body, part }, Slot::Joint(j)) => {
+                self.compliance.as_ref().map_or(0.0, |c| {
+                    c.moment(
+                        self.dof(),
+                        j,
+                        body_index(body, self.dof()),
+                        usize::from(part),
+                    )
+                })
+            }
             _ => self.row(id.slot).map_or(0.0, |r| r.value(id.field)),
         }
     }
@@ -413,18 +463,37 @@ impl Robot {
         let mut tool = self.tool.clone();
         let mut compliance = self.compliance.clone();
         for &(id, v) in values {
-            if id.field == Field::C {
-                match id.slot {
-                    Slot::Joint(i) if i < self.dof() && self.masses.is_some() => {
-                        compliance
-                            .get_or_insert_with(|| Compliance {
-                                file: vec![0.0; self.dof()],
-                            })
-                            .set_joint(i, v);
-                        continue;
-                    }
-                    _ => return Err(Error::Invalid(format!("no parameter {}", id.name()))),
+            let n = self.dof();
+            match (id.field, id.slot) {
+                (Field::C, Slot::Joint(i))
+                    if i < n && self.masses.as_ref().is_some_and(|m| m.has_mass()) =>
+                {
+                    let c = compliance.get_or_insert_with(Compliance::default);
+                    c.joints.resize(n, 0.0);
+                    c.joints[i] = Field::C.to_file(v);
+                    continue;
                 }
+                (Field::K { body, part }, Slot::Joint(j))
+                    if j < n
+                        && body_index(body, n) <= n
+                        && body_index(body, n) >= j
+                        && part < 4 =>
+                {
+                    let c = compliance.get_or_insert_with(Compliance::default);
+                    c.moments.resize(n * (n + 1) * 4, 0.0);
+                    let at = super::compliance::moment_index(
+                        n,
+                        j,
+                        body_index(body, n),
+                        usize::from(part),
+                    );
+                    c.moments[at] = id.field.to_file(v);
+                    continue;
+                }
+                (Field::C | Field::K { .. }, _) => {
+                    return Err(Error::Invalid(format!("no parameter {}", id.name())));
+                }
+                _ => {}
             }
             let row = match id.slot {
                 Slot::Base => &mut base,
@@ -578,6 +647,24 @@ impl Chain {
         } else {
             apply_z(t, l.theta + q, l.d);
         }
+    }
+}
+
+/// [`Field::K`]'s body code of body `b` (0-based link, or `n` for the payload).
+fn body_code(b: usize, n: usize) -> u8 {
+    if b == n {
+        PAYLOAD
+    } else {
+        u8::try_from(b).unwrap_or(PAYLOAD - 1)
+    }
+}
+
+/// The body index (0-based link, or `n` for the payload) of a [`Field::K`] body code.
+fn body_index(code: u8, n: usize) -> usize {
+    if code == PAYLOAD {
+        n
+    } else {
+        usize::from(code)
     }
 }
 

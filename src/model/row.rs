@@ -98,7 +98,19 @@ pub enum Field {
     /// per N for a prismatic joint): not a row field but a parameter of the joint
     /// ([`super::compliance`]).
     C,
+    /// A mass-free compliance coefficient of the joint ([`super::compliance`]): k_jbi for
+    /// body `body` (0-based link, or [`PAYLOAD`]) and part `part` (0: mass, mrad per kN m
+    /// times kg; 1-3: moment x, y, z, times kg m).
+    K {
+        /// The body: 0-based link, or [`PAYLOAD`].
+        body: u8,
+        /// 0: mass; 1, 2, 3: moment along x, y, z of the body's frame.
+        part: u8,
+    },
 }
+
+/// [`Field::K`]'s body number of the payload.
+pub const PAYLOAD: u8 = u8::MAX;
 
 impl Field {
     /// Every field, in declaration order.
@@ -132,6 +144,7 @@ impl Field {
             Field::Ry => "ry",
             Field::Rx => "rx",
             Field::C => "c",
+            Field::K { .. } => "k",
         }
     }
 
@@ -153,6 +166,8 @@ impl Field {
     pub fn file_unit(self) -> &'static str {
         match self {
             Field::C => "mrad/kNm",
+            Field::K { part: 0, .. } => "mrad/kNm*kg",
+            Field::K { .. } => "mrad/kNm*kg*m",
             f if f.is_angle() => "deg",
             _ => "mm",
         }
@@ -162,7 +177,7 @@ impl Field {
     /// mrad per kN m).
     pub fn to_file(self, v: f64) -> f64 {
         match self {
-            Field::C => v * super::compliance::FILE_PER_INTERNAL,
+            Field::C | Field::K { .. } => v * super::compliance::FILE_PER_INTERNAL,
             f if f.is_angle() => v.to_degrees(),
             _ => v,
         }
@@ -172,7 +187,7 @@ impl Field {
     /// rad per N m).
     pub fn to_internal(self, v: f64) -> f64 {
         match self {
-            Field::C => v / super::compliance::FILE_PER_INTERNAL,
+            Field::C | Field::K { .. } => v / super::compliance::FILE_PER_INTERNAL,
             f if f.is_angle() => v.to_radians(),
             _ => v,
         }
