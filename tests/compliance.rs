@@ -313,8 +313,10 @@ mod recovery {
             let only = identify(&with_masses, &cal_c, &opts).unwrap();
             let free = identify(&nominal, &cal, &opts).unwrap();
             free_e.push(mean_error(&free.robot, &test));
-            // c1 has no effect (joint 1 is vertical); c2..c6 are identified.
-            assert_eq!(z_of(&only).len(), 5);
+            // c1 has no effect (joint 1 is vertical); c2..c5 are identified; c6 (zero in
+            // truth) may be dropped as not significant.
+            let kept: Vec<usize> = z_of(&only).iter().map(|(j, _)| *j).collect();
+            assert!((2..=5).all(|j| kept.contains(&j)), "{kept:?}");
             full_e.push(mean_error(&full.robot, &test));
             comp_e.push(mean_error(&comp.robot, &test));
             floor_e.push(mean_error(&floor.robot, &test_gears));

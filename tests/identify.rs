@@ -154,7 +154,7 @@ fn identifiability_regroups_as_thesis_equation_4_44() {
             .iter()
             .map(|(p, c)| (names[*p].name(), *c))
             .collect::<Vec<_>>(),
-        DropReason::NoEffect => panic!("{name} has an effect"),
+        other => panic!("{name}: {other:?}"),
     };
     // theta_R and d_R regroup with theta1 and d1 (eq. 4.44), each with coefficient 1.
     for (dropped, kept) in [("base.theta", "theta1"), ("base.d", "d1")] {

@@ -202,6 +202,8 @@ fn print_identified(r: &IdentifyReport) {
     for d in &r.dropped {
         let why = if d.reason == "no effect" {
             "no effect on these measurements".to_string()
+        } else if let Some(t) = d.estimate_over_std {
+            format!("not significant (estimate {t:+.2} std), held at zero")
         } else {
             format!(
                 "regroups with {}",

@@ -35,6 +35,9 @@ pub enum DropReason {
     /// Its column is a combination of kept ones: `(parameter index, coefficient)`, with
     /// coefficient in units of the kept parameter per unit of the dropped one.
     Regroups(Vec<(usize, f64)>),
+    /// A compliance the data do not distinguish from zero: its estimate over its standard
+    /// deviation when dropped (below [`super::run::SIGNIFICANCE`] in magnitude).
+    NotSignificant(f64),
 }
 
 /// A parameter that the data cannot identify.
@@ -94,6 +97,16 @@ pub fn analyse(
     candidates: &[usize],
     tolerance: f64,
 ) -> Identifiability {
+    analyse_with(robot, obs, candidates, &|_| tolerance)
+}
+
+/// [`analyse`] with a tolerance per parameter (`tolerance(index into Robot::parameters)`).
+pub fn analyse_with(
+    robot: &Robot,
+    obs: &Observations,
+    candidates: &[usize],
+    tolerance: &dyn Fn(usize) -> f64,
+) -> Identifiability {
     let mut ws = IdentifyWorkspace::new(robot);
     let r = observation_r(robot, obs, candidates, &mut ws);
     let k = candidates.len();
@@ -146,7 +159,7 @@ pub fn analyse(
             }
         }
         let rest = v.norm();
-        if rest > tolerance.max(RANK_TOL) {
+        if rest > tolerance(candidates[nonzero[c]]).max(RANK_TOL) {
             basis.push(v / rest);
             kept.push(c);
         }

@@ -2,11 +2,11 @@
 //! frame, reduce to an identifiable subset, solve (optionally robustly), and report standard
 //! deviations, correlations and outliers.
 
-use super::identifiability::{CONDITION_WARNING, Identifiability, analyse};
+use super::identifiability::{CONDITION_WARNING, DropReason, Dropped, Identifiability, analyse};
 use super::nelder_mead::solve_nelder_mead;
 use super::problem::{IdentifyWorkspace, Measure, Observations, Sigmas, residual};
 use super::register::{Registration, register};
-use super::select::select;
+use super::select::{is_compliance, select};
 use super::solve::{Method, Solution, SolveOptions, StopReason, covariance, solve_gradient};
 use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
@@ -325,6 +325,59 @@ fn outliers(set: &MeasurementSet, obs: &Observations, robot: &Robot, k: f64) -> 
         .collect()
 }
 
+/// A compliance is kept only when its estimate is at least this many standard deviations
+/// from zero: a joint whose gravity torque is too small for the data (a light wrist) would
+/// otherwise fit noise, and run to its bound. On the shipped non-geometric robot (20 seeds of
+/// 30 poses, without masses) 3 gave a median validation error of 0.098 mm and a worst of
+/// 0.114; 2 gave 0.095 and 0.137; 1 gave 0.097 and 0.142: the worst case decides.
+pub const SIGNIFICANCE: f64 = 3.0;
+
+/// Backward elimination of compliances: while one has |estimate| < [`SIGNIFICANCE`] std,
+/// the least significant goes back to its start value (zero) and out of the set, and the
+/// rest is solved again from there. Returns the final solution, set, covariance and s^2.
+fn drop_insignificant(
+    start: &Robot,
+    mut solution: Solution,
+    obs: &mut Observations,
+    mut cols: Vec<usize>,
+    opts: &Options,
+    ident: &mut Identifiability,
+) -> Result<(Solution, Vec<usize>, nalgebra::DMatrix<f64>, f64)> {
+    let params = start.parameters();
+    loop {
+        let (cov, s2) = covariance(&solution.robot, obs, &cols)?;
+        let weakest = cols
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| is_compliance(&params[**c]))
+            .map(|(k, &c)| {
+                let id = params[c];
+                let std = cov[(k, k)].max(0.0).sqrt();
+                let t = (solution.robot.param(id) - start.param(id)) / std;
+                (k, c, t)
+            })
+            .filter(|(_, _, t)| t.is_nan() || t.abs() < SIGNIFICANCE)
+            .min_by(|a, b| a.2.abs().total_cmp(&b.2.abs()));
+        let Some((k, c, t)) = weakest else {
+            return Ok((solution, cols, cov, s2));
+        };
+        let id = params[c];
+        let reset = solution.robot.with_param(id, start.param(id))?;
+        cols.remove(k);
+        ident.selected.retain(|&p| p != c);
+        ident.dropped.push(Dropped {
+            param: c,
+            reason: DropReason::NotSignificant(t),
+        });
+        if cols.is_empty() {
+            let (cov, s2) = covariance(&reset, obs, &cols)?;
+            solution.robot = reset;
+            return Ok((solution, cols, cov, s2));
+        }
+        solution = solve_robust(&reset, obs, &cols, opts)?.0;
+    }
+}
+
 /// Identifies `nominal`'s selected parameters from `set`.
 pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result<Identified> {
     let measure = opts.measure.unwrap_or_else(|| Measure::default_for(set));
@@ -352,7 +405,43 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         registration = Some(reg);
     }
 
-    let ident = analyse(&start, &obs, &candidates, opts.rank_tolerance);
+    // Compliances scale what the geometry leaves: solve the geometry first, so that they
+    // start (at zero) from a fitted model rather than from the nominal's millimetres, where a
+    // weak deflection (a wrist's) can stand in for a geometric error and run to its bound.
+    // The geometric subset stays the one chosen at the nominal: at a fitted model, exactly
+    // dependent parameters (parallel axes' d) become merely ill-conditioned.
+    let mut notes = notes;
+    let geometric: Vec<usize> = candidates
+        .iter()
+        .copied()
+        .filter(|&c| !is_compliance(&params[c]))
+        .collect();
+    let mut ident = if geometric.len() < candidates.len() && !geometric.is_empty() {
+        let first = analyse(&start, &obs, &geometric, opts.rank_tolerance);
+        if !first.selected.is_empty() {
+            let (solution, _) = solve_robust(&start, &mut obs, &first.selected, opts)?;
+            start = solution.robot;
+            notes
+                .push("the geometry was solved first, then with the compliances from there".into());
+        }
+        let second: Vec<usize> = first
+            .selected
+            .iter()
+            .copied()
+            .chain(
+                candidates
+                    .iter()
+                    .copied()
+                    .filter(|&c| is_compliance(&params[c])),
+            )
+            .collect();
+        let mut ident = analyse(&start, &obs, &second, opts.rank_tolerance);
+        ident.candidates = candidates.clone();
+        ident.dropped.splice(0..0, first.dropped);
+        ident
+    } else {
+        analyse(&start, &obs, &candidates, opts.rank_tolerance)
+    };
     let cols = ident.selected.clone();
     if cols.is_empty() {
         return Err(Error::Invalid(
@@ -377,7 +466,8 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         ));
     }
 
-    let (cov, s2) = covariance(&solution.robot, &obs, &cols)?;
+    let (solution, cols, cov, s2) =
+        drop_insignificant(&start, solution, &mut obs, cols, opts, &mut ident)?;
     let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
     let (parameters, correlations) = parameter_reports(nominal, &solution.robot, &ids, &cov);
     let outliers = outliers(set, &obs, &solution.robot, opts.outlier_k);

@@ -11,10 +11,15 @@ use serde::{Deserialize, Serialize};
 pub struct DroppedParam {
     /// Its name (`a3`, `tool.rz`, ...).
     pub name: String,
-    /// `no effect` (its Jacobian column is zero) or `regroups` (a combination of others).
+    /// `no effect` (its Jacobian column is zero), `regroups` (a combination of others) or
+    /// `not significant` (a compliance whose estimate was within the significance level of
+    /// zero).
     pub reason: String,
     /// The kept parameters it moves with, for `regroups`.
     pub regroups_with: Vec<Regroup>,
+    /// Its estimate over its standard deviation when it was dropped, for `not significant`.
+    #[serde(default)]
+    pub estimate_over_std: Option<f64>,
 }
 
 /// One term of a regrouping: the dropped parameter's column equals the sum of coefficient
@@ -143,6 +148,13 @@ impl IdentifyReport {
                     name: params[d.param].name(),
                     reason: "no effect".into(),
                     regroups_with: Vec::new(),
+                    estimate_over_std: None,
+                },
+                DropReason::NotSignificant(t) => DroppedParam {
+                    name: params[d.param].name(),
+                    reason: "not significant".into(),
+                    regroups_with: Vec::new(),
+                    estimate_over_std: Some(*t),
                 },
                 DropReason::Regroups(g) => DroppedParam {
                     name: params[d.param].name(),
@@ -154,6 +166,7 @@ impl IdentifyReport {
                             coefficient: *c,
                         })
                         .collect(),
+                    estimate_over_std: None,
                 },
             })
             .collect();
