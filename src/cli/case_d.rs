@@ -33,11 +33,11 @@ pub struct CaseDArgs {
 fn print_set(s: &CaseDSet) {
     println!("\n{} - {} unseen test poses", s.title, s.test_rows);
     println!(
-        "{:<26} | {:>17} | {:>27} | {:>27}",
+        "{:<27} | {:>17} | {:>27} | {:>27}",
         "model", "thesis Table 6.6", "vs truth", "vs measured"
     );
     println!(
-        "{:<26} | {:>8} {:>8} | {:>8} {:>8} {:>9} | {:>8} {:>8} {:>9}",
+        "{:<27} | {:>8} {:>8} | {:>8} {:>8} {:>9} | {:>8} {:>8} {:>9}",
         "", "mm", "deg", "mean mm", "coord mm", "mean deg", "mean mm", "coord mm", "mean deg"
     );
     for r in &s.rows {
@@ -46,7 +46,7 @@ fn print_set(s: &CaseDSet) {
             _ => format!("{:>17}", "-"),
         };
         println!(
-            "{:<26} | {thesis} | {:>8.4} {:>8.4} {:>9.4} | {:>8.4} {:>8.4} {:>9.4}",
+            "{:<27} | {thesis} | {:>8.4} {:>8.4} {:>9.4} | {:>8.4} {:>8.4} {:>9.4}",
             r.label,
             r.truth.position_mean_mm(),
             r.truth.per_coordinate_mm(),
@@ -57,8 +57,12 @@ fn print_set(s: &CaseDSet) {
         );
     }
     if let (Some(o), Some(f)) = (s.gain_after_offsets, s.gain_after_full) {
+        let compliance = s
+            .gain_after_compliance
+            .map(|c| format!(", {c:.1}x after full + compliance"))
+            .unwrap_or_default();
         println!(
-            "the compensator lowers the mean position error vs truth {o:.1}x after offsets, {f:.1}x after full identification"
+            "the compensator lowers the mean position error vs truth {o:.1}x after offsets, {f:.1}x after full identification{compliance}"
         );
     }
 }
@@ -94,6 +98,7 @@ fn plot(dir: &Path, datasets: &Path, rows: &[Row]) -> Result<usize> {
             if let Some(t) = r.training.as_ref().filter(|t| !t.networks.is_empty()) {
                 let stage = match r.stage {
                     Stage::OffsetsNetwork => "offsets_network",
+                    Stage::FullComplianceNetwork => "compliance_network",
                     _ => "full_network",
                 };
                 training_figure(

@@ -49,6 +49,9 @@ pub struct CaseDSet {
     /// The same after full identification (times).
     #[serde(with = "crate::io::json_number::option")]
     pub gain_after_full: Option<f64>,
+    /// The same after full + compliance (times; the non-geometric robot only).
+    #[serde(default, with = "crate::io::json_number::option")]
+    pub gain_after_compliance: Option<f64>,
 }
 
 /// What `case-d` found.
@@ -92,6 +95,10 @@ impl CaseDReport {
                         .collect(),
                     gain_after_offsets: gain(Stage::Offsets, Stage::OffsetsNetwork),
                     gain_after_full: gain(Stage::Full, Stage::FullNetwork),
+                    gain_after_compliance: gain(
+                        Stage::FullCompliance,
+                        Stage::FullComplianceNetwork,
+                    ),
                 }
             })
             .collect();

@@ -68,16 +68,25 @@ pub enum Stage {
     Full,
     /// The full geometric model with a compensator trained on the training poses.
     FullNetwork,
+    /// The full set with the mass-free joint compliances (non-geometric robot only).
+    FullCompliance,
+    /// The full set with the joint compliances of known masses (non-geometric robot only).
+    FullComplianceMasses,
+    /// The mass-free compliant model with a compensator trained on the training poses.
+    FullComplianceNetwork,
 }
 
 impl Stage {
     /// Every stage, in the order of the result table.
-    pub const ALL: [Stage; 5] = [
+    pub const ALL: [Stage; 8] = [
         Stage::Nominal,
         Stage::Offsets,
         Stage::OffsetsNetwork,
         Stage::Full,
         Stage::FullNetwork,
+        Stage::FullCompliance,
+        Stage::FullComplianceMasses,
+        Stage::FullComplianceNetwork,
     ];
 
     /// The stage's name in reports, e.g. "joint offsets + network".
@@ -88,6 +97,9 @@ impl Stage {
             Stage::OffsetsNetwork => "joint offsets + network",
             Stage::Full => "full geometric",
             Stage::FullNetwork => "full geometric + network",
+            Stage::FullCompliance => "full + compliance",
+            Stage::FullComplianceMasses => "full + compliance (masses)",
+            Stage::FullComplianceNetwork => "full + compliance + network",
         }
     }
 
@@ -147,12 +159,15 @@ pub fn load(datasets: &Path, set: Robotset, nominal: &Robot) -> Result<SetData> 
 }
 
 /// Runs the protocol on one set; `opts.refine` is set per row (the parameters the model was
-/// identified with, kept where cross-validation favours them).
+/// identified with, kept where cross-validation favours them; the geometric ones for the
+/// compliant model). `with_masses`, for the non-geometric robot, is the nominal with the
+/// simulator's masses: the compliance rows run on that set only.
 pub fn run_set(
     nominal: &Robot,
     set: Robotset,
     data: &SetData,
     opts: &CompensatorOptions,
+    with_masses: Option<&Robot>,
 ) -> Result<Vec<Row>> {
     type Stats = (ErrorStats, ErrorStats, Vec<RowError>);
     let stats = |f: &mut dyn FnMut(&[f64]) -> crate::Pose| -> Result<Stats> {
@@ -163,7 +178,7 @@ pub fn run_set(
             truth,
         ))
     };
-    let identified = |params: &str| {
+    let identified_from = |nominal: &Robot, params: &str| {
         identify(
             nominal,
             &data.calibration,
@@ -174,6 +189,7 @@ pub fn run_set(
             },
         )
     };
+    let identified = |params: &str| identified_from(nominal, params);
     let mut rows = Vec::new();
     let mut push = |stage, (truth, measured, truth_errors): Stats, training| {
         rows.push(Row {
@@ -186,15 +202,32 @@ pub fn run_set(
         })
     };
     push(Stage::Nominal, stats(&mut |q| tool_pose(nominal, q))?, None);
+    let compliant = with_masses.is_some();
     for (params, plain, with) in [
         ("offsets", Stage::Offsets, Stage::OffsetsNetwork),
         ("full", Stage::Full, Stage::FullNetwork),
+        (
+            "full,compliance",
+            Stage::FullCompliance,
+            Stage::FullComplianceNetwork,
+        ),
     ] {
+        if plain == Stage::FullCompliance && !compliant {
+            continue;
+        }
         let model = identified(params)?.robot;
         push(plain, stats(&mut |q| tool_pose(&model, q))?, None);
+        if let (Stage::FullCompliance, Some(m)) = (plain, with_masses) {
+            let known = identified_from(m, params)?.robot;
+            push(
+                Stage::FullComplianceMasses,
+                stats(&mut |q| tool_pose(&known, q))?,
+                None,
+            );
+        }
         let o = CompensatorOptions {
             refine: match &opts.refine {
-                Refine::Auto => Refine::Params(params.into()),
+                Refine::Auto => Refine::Params(params.trim_end_matches(",compliance").into()),
                 explicit => explicit.clone(),
             },
             ..opts.clone()
@@ -209,10 +242,12 @@ pub fn run_set(
 /// Runs the protocol on both shipped sets; the nominal robot is [`thesis::FANUC`].
 pub fn run(datasets: &Path, opts: &CompensatorOptions) -> Result<Vec<Row>> {
     let nominal = thesis::fanuc(datasets)?;
+    let with_masses = crate::model::read_robot(datasets.join(thesis::NONGEOMETRIC_MASSES))?;
     let mut rows = Vec::new();
     for set in Robotset::ALL {
         let data = load(datasets, set, &nominal)?;
-        rows.extend(run_set(&nominal, set, &data, opts)?);
+        let masses = (set == Robotset::NonGeometric).then_some(&with_masses);
+        rows.extend(run_set(&nominal, set, &data, opts, masses)?);
     }
     Ok(rows)
 }

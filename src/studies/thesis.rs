@@ -13,6 +13,10 @@ pub const TABLE_6_1: &str = "deviations/table_6_1.toml";
 /// Case D's focused region of the joint space.
 pub const CASE_D_REGION: &str = "regions/case_d_focused.toml";
 
+/// The FANUC's nominal model with the shipped non-geometric robot's masses (the simulator's,
+/// for identifying its compliances with known masses).
+pub const NONGEOMETRIC_MASSES: &str = "nongeometric_robot/nominal_masses.toml";
+
 /// The FANUC's nominal model from `datasets` (the repository's `datasets/` folder).
 pub fn fanuc(datasets: &Path) -> Result<Robot> {
     read_robot(datasets.join(FANUC))
