@@ -1,6 +1,7 @@
 //! Identification speed: the analytic Jacobian (one and 1,000 configurations, every
-//! parameter), LM identification of Case D's 30 poses (`full` and `offsets`), and of the real
-//! UR10 Series A (11,911 poses, `full`).
+//! parameter), LM identification of Case D's 30 poses (`full` and `offsets`), of the
+//! non-geometric robot's 30 poses and of the real UR10 Series A (11,911 poses), geometry alone
+//! and with the joint compliances (known masses, and mass-free).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Matrix6xX;
@@ -72,6 +73,38 @@ fn case_d(c: &mut Criterion) {
     }
 }
 
+/// The non-geometric robot's 30 calibration poses: `full`, and `full,compliance` with the
+/// simulator's masses and without masses.
+fn compliance_30(c: &mut Criterion) {
+    let nominal = read_robot(path("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
+    let masses = read_robot(path("datasets/nongeometric_robot/nominal_masses.toml")).unwrap();
+    let (set, _) = read_measurements(
+        &path("datasets/nongeometric_robot/calibration.csv"),
+        &nominal,
+        &Profile::default(),
+        &Default::default(),
+    )
+    .unwrap();
+    for (name, robot, params) in [
+        ("full", &nominal, "full"),
+        ("full_compliance_masses", &masses, "full,compliance"),
+        ("full_compliance_mass_free", &nominal, "full,compliance"),
+    ] {
+        let opts = Options {
+            params: params.into(),
+            ..Default::default()
+        };
+        c.bench_function(&format!("identify_nongeometric_30_poses_{name}"), |b| {
+            b.iter(|| {
+                identify(robot, black_box(&set), &opts)
+                    .unwrap()
+                    .solution
+                    .iterations
+            })
+        });
+    }
+}
+
 fn ur10_series_a(c: &mut Criterion) {
     let robot = read_robot(path("datasets/robots/ur10.toml")).unwrap();
     let profile = Profile::read(path("datasets/profiles/ipa_ur10.toml")).unwrap();
@@ -82,17 +115,27 @@ fn ur10_series_a(c: &mut Criterion) {
         &Default::default(),
     )
     .unwrap();
-    let opts = Options::default();
+    let published = read_robot(path("datasets/robots/ur10_published_masses.toml")).unwrap();
     let mut g = c.benchmark_group("slow");
     g.sample_size(10);
-    g.bench_function("identify_ur10_series_a_11911_poses_full", |b| {
-        b.iter(|| {
-            identify(&robot, black_box(&set), &opts)
-                .unwrap()
-                .solution
-                .iterations
-        })
-    });
+    for (name, robot, params) in [
+        ("full", &robot, "full"),
+        ("full_compliance_masses", &published, "full,compliance"),
+        ("full_compliance_mass_free", &robot, "full,compliance"),
+    ] {
+        let opts = Options {
+            params: params.into(),
+            ..Default::default()
+        };
+        g.bench_function(format!("identify_ur10_series_a_11911_poses_{name}"), |b| {
+            b.iter(|| {
+                identify(robot, black_box(&set), &opts)
+                    .unwrap()
+                    .solution
+                    .iterations
+            })
+        });
+    }
     g.finish();
 }
 
@@ -101,6 +144,6 @@ criterion_group! {
     config = Criterion::default()
         .warm_up_time(std::time::Duration::from_millis(500))
         .measurement_time(std::time::Duration::from_secs(3));
-    targets = jacobian, case_d, ur10_series_a
+    targets = jacobian, case_d, compliance_30, ur10_series_a
 }
 criterion_main!(identification);

@@ -292,8 +292,10 @@ fn case_d_prints_table_6_6_beside_ours_and_reports_every_row() {
     assert!(o.status.success(), "{}", stderr(&o));
     for s in [
         "thesis Table 6.6",
-        "joint offsets + network    |   0.0336   0.0160",
+        "joint offsets + network     |   0.0336   0.0160",
         "full geometric + network",
+        "full + compliance (masses)",
+        "full + compliance + network",
         "non-geometric robot",
         "vs truth",
         "vs measured",
@@ -308,7 +310,8 @@ fn case_d_prints_table_6_6_beside_ours_and_reports_every_row() {
         .iter()
         .flat_map(|s| s["rows"].as_array().unwrap())
         .collect();
-    assert_eq!(rows.len(), 10);
+    // Five stages on Case D, eight on the non-geometric robot (its compliance rows).
+    assert_eq!(rows.len(), 13);
     assert!(
         rows.iter()
             .all(|r| r["truth"]["position_mm"]["mean"].is_f64()

@@ -166,14 +166,14 @@ pub fn analyse_with(
     }
     let kept_matrix = DMatrix::from_fn(scaled.nrows(), kept.len(), |i, c| scaled[(i, kept[c])]);
     let (_, selected_condition_number) = condition(&kept_matrix);
+    // One factorisation for every regrouping.
+    let svd = kept_matrix.clone().svd(true, true);
     for (c, &j) in nonzero.iter().enumerate() {
         if kept.contains(&c) {
             continue;
         }
         let target = scaled.column(c).into_owned();
-        let coeffs = kept_matrix
-            .clone()
-            .svd(true, true)
+        let coeffs = svd
             .solve(&target, 1e-12)
             .unwrap_or_else(|_| DVector::zeros(kept.len()));
         let max_c = coeffs.iter().map(|x| x.abs()).fold(0.0, f64::max);

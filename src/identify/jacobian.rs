@@ -57,7 +57,7 @@ pub fn parameter_jacobian(
             for j in 0..n {
                 let d = load.deflection_change(j, &t);
                 if d != 0.0 {
-                    c += axis_column(robot, frames, j) * d;
+                    c += load.columns[j] * d;
                 }
             }
         }

@@ -4,15 +4,20 @@
 
 use super::identifiability::{CONDITION_WARNING, DropReason, Dropped, Identifiability, analyse};
 use super::nelder_mead::solve_nelder_mead;
-use super::problem::{IdentifyWorkspace, Measure, Observations, Sigmas, residual};
+use super::problem::{
+    IdentifyWorkspace, Measure, Observations, Sigmas, cost, normal_equations, residual,
+};
 use super::register::{Registration, register};
 use super::select::{is_compliance, select};
-use super::solve::{Method, Solution, SolveOptions, StopReason, covariance, solve_gradient};
+use super::solve::{
+    Method, Solution, SolveOptions, StopReason, covariance, free_values, solve_gradient,
+    with_values,
+};
 use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
 use crate::model::{Convention, ParamId, Robot, Slot};
 use crate::stats::median;
-use nalgebra::Matrix6xX;
+use nalgebra::{DMatrix, DVector, Matrix6xX};
 
 /// Robust loss for iteratively reweighted least squares.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -332,9 +337,13 @@ fn outliers(set: &MeasurementSet, obs: &Observations, robot: &Robot, k: f64) -> 
 /// 0.114; 2 gave 0.095 and 0.137; 1 gave 0.097 and 0.142: the worst case decides.
 pub const SIGNIFICANCE: f64 = 3.0;
 
-/// Backward elimination of compliances: while one has |estimate| < [`SIGNIFICANCE`] std,
-/// the least significant goes back to its start value (zero) and out of the set, and the
-/// rest is solved again from there. Returns the final solution, set, covariance and s^2.
+/// Iterations of the geometry-only solve that precedes a solve with compliances.
+const STAGE_ONE_ITERATIONS: usize = 3;
+
+/// Backward elimination of compliances: while one has |estimate - its value in `start`| <
+/// [`SIGNIFICANCE`] std, the least significant goes back to its value in `start` (the
+/// nominal's: zero unless the file gave one) and out of the set, and the rest is solved again
+/// from there. Returns the final solution, set, covariance and s^2.
 fn drop_insignificant(
     start: &Robot,
     mut solution: Solution,
@@ -378,6 +387,70 @@ fn drop_insignificant(
     }
 }
 
+/// The compliances' screening before their nonlinear solve: at the fitted geometry `start`,
+/// one Gauss-Newton step of the linearised problem over `cols` gives every estimate and its
+/// standard deviation at once; the least significant compliance (|estimate| <
+/// [`SIGNIFICANCE`] std) leaves, the step is solved again without it, and so on. Only the
+/// small normal matrix is solved again, not the problem: a weak compliance never enters the
+/// nonlinear solve, where it would crawl towards its bound. Returns the columns kept and the
+/// model after the last step (the joint solve's start: the compliances are nearly linear).
+fn screen_compliances(
+    start: &Robot,
+    obs: &Observations,
+    mut cols: Vec<usize>,
+    ident: &mut Identifiability,
+) -> (Vec<usize>, Robot) {
+    let params = start.parameters();
+    let mut ws = IdentifyWorkspace::new(start);
+    let ne = normal_equations(start, obs, &cols, &mut ws);
+    // Positions in `ne` of the columns still in.
+    let mut live: Vec<usize> = (0..cols.len()).collect();
+    let m = obs.len();
+    let unchanged = |cols: Vec<usize>| (cols, start.clone());
+    loop {
+        let n = live.len();
+        if n == 0 || m <= n {
+            return unchanged(cols);
+        }
+        // Unit diagonal before factorising: mm, rad and rad per N m columns differ by orders.
+        let d: Vec<f64> = live.iter().map(|&i| ne.a[(i, i)].sqrt()).collect();
+        if d.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+            return unchanged(cols);
+        }
+        let a = DMatrix::from_fn(n, n, |i, j| ne.a[(live[i], live[j])] / (d[i] * d[j]));
+        let g = DVector::from_fn(n, |i, _| ne.g[live[i]] / d[i]);
+        let Some(chol) = a.cholesky() else {
+            return unchanged(cols);
+        };
+        let y = chol.solve(&g);
+        let inv = chol.inverse();
+        // The linearised cost after the step, and the variance factor it gives.
+        let s2 = ((ne.cost - g.dot(&y)) / (m - n) as f64).max(0.0);
+        let weakest = (0..n)
+            .filter(|&i| is_compliance(&params[cols[i]]))
+            .map(|i| {
+                let x = y[i] / d[i];
+                let std = (inv[(i, i)] * s2).sqrt() / d[i];
+                (i, x / std)
+            })
+            .filter(|(_, t)| t.is_nan() || t.abs() < SIGNIFICANCE)
+            .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()));
+        let Some((i, t)) = weakest else {
+            let (ids, x0) = free_values(start, &cols);
+            let x = DVector::from_fn(n, |k, _| x0[k] + y[k] / d[k]);
+            let stepped = with_values(start, &ids, &x).unwrap_or_else(|_| start.clone());
+            return (cols, stepped);
+        };
+        let c = cols.remove(i);
+        live.remove(i);
+        ident.selected.retain(|&p| p != c);
+        ident.dropped.push(Dropped {
+            param: c,
+            reason: DropReason::NotSignificant(t),
+        });
+    }
+}
+
 /// Identifies `nominal`'s selected parameters from `set`.
 pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result<Identified> {
     let measure = opts.measure.unwrap_or_else(|| Measure::default_for(set));
@@ -405,44 +478,44 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         registration = Some(reg);
     }
 
+    // Compliances are analysed with the rest at the (registered) nominal; they come last in
+    // priority, so the geometric subset is what it would be without them.
+    let mut notes = notes;
+    let mut ident = analyse(&start, &obs, &candidates, opts.rank_tolerance);
+    let mut cols = ident.selected.clone();
     // Compliances scale what the geometry leaves: solve the geometry first, so that they
     // start (at zero) from a fitted model rather than from the nominal's millimetres, where a
-    // weak deflection (a wrist's) can stand in for a geometric error and run to its bound.
-    // The geometric subset stays the one chosen at the nominal: at a fitted model, exactly
-    // dependent parameters (parallel axes' d) become merely ill-conditioned.
-    let mut notes = notes;
-    let geometric: Vec<usize> = candidates
+    // weak deflection (a wrist's) can stand in for a geometric error and run to its bound;
+    // then keep those the data find significant, before the joint solve.
+    let geometric: Vec<usize> = cols
         .iter()
         .copied()
         .filter(|&c| !is_compliance(&params[c]))
         .collect();
-    let mut ident = if geometric.len() < candidates.len() && !geometric.is_empty() {
-        let first = analyse(&start, &obs, &geometric, opts.rank_tolerance);
-        if !first.selected.is_empty() {
-            let (solution, _) = solve_robust(&start, &mut obs, &first.selected, opts)?;
+    if geometric.len() < cols.len() {
+        if !geometric.is_empty() {
+            // A few Levenberg-Marquardt steps bring the geometry close enough; the joint solve
+            // converges it with the compliances.
+            let rough = Options {
+                solve: SolveOptions {
+                    max_iterations: STAGE_ONE_ITERATIONS,
+                    ..opts.solve
+                },
+                ..opts.clone()
+            };
+            let (solution, _) = solve_robust(&start, &mut obs, &geometric, &rough)?;
             start = solution.robot;
             notes
                 .push("the geometry was solved first, then with the compliances from there".into());
         }
-        let second: Vec<usize> = first
-            .selected
-            .iter()
-            .copied()
-            .chain(
-                candidates
-                    .iter()
-                    .copied()
-                    .filter(|&c| is_compliance(&params[c])),
-            )
-            .collect();
-        let mut ident = analyse(&start, &obs, &second, opts.rank_tolerance);
-        ident.candidates = candidates.clone();
-        ident.dropped.splice(0..0, first.dropped);
-        ident
-    } else {
-        analyse(&start, &obs, &candidates, opts.rank_tolerance)
-    };
-    let cols = ident.selected.clone();
+        let (kept, stepped) = screen_compliances(&start, &obs, cols, &mut ident);
+        cols = kept;
+        // The joint solve starts from the screening's step when that lowers the cost.
+        let mut ws = IdentifyWorkspace::new(&start);
+        if cost(&stepped, &obs, &mut ws) < cost(&start, &obs, &mut ws) {
+            start = stepped;
+        }
+    }
     if cols.is_empty() {
         return Err(Error::Invalid(
             "the data identify none of the selected parameters".into(),
@@ -467,7 +540,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
     }
 
     let (solution, cols, cov, s2) =
-        drop_insignificant(&start, solution, &mut obs, cols, opts, &mut ident)?;
+        drop_insignificant(nominal, solution, &mut obs, cols, opts, &mut ident)?;
     let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
     let (parameters, correlations) = parameter_reports(nominal, &solution.robot, &ids, &cov);
     let outliers = outliers(set, &obs, &solution.robot, opts.outlier_k);

@@ -2,7 +2,7 @@
 //! at the joints it reaches under gravity, q' = q + c tau(q) ([`crate::model::compliance`]).
 
 use super::Pose;
-use super::load::{Load, accumulate_moments, gravity_of, moment_deflection, torque};
+use super::load::{Load, accumulate_moments, axis_column, gravity_of, moment_deflection, torque};
 use crate::model::Robot;
 
 /// The tool pose (mm, in the base row's reference frame) for commanded joints `q` (rad or
@@ -135,8 +135,7 @@ fn walk(robot: &Robot, q: &[f64], joint: &mut [Pose], link: &mut [Pose], tool: &
 
 /// Fills `out` with every frame of commanded configuration `q` (rad or mm): for a robot with
 /// masses also its gravity load, and for a compliant robot the frames of the joints it
-/// reaches (with the deflection's Jacobian, for [`super::joint_jacobian`]). Does not
-/// allocate. Panics if `q.len()` or `out` does not fit the robot.
+/// reaches. Does not allocate. Panics if `q.len()` or `out` does not fit the robot.
 pub fn frames(robot: &Robot, q: &[f64], out: &mut Frames) {
     let chain = robot.chain();
     assert_eq!(
@@ -158,7 +157,7 @@ pub fn frames(robot: &Robot, q: &[f64], out: &mut Frames) {
     }
     let load = &mut out.load;
     walk(robot, q, &mut load.joint, &mut load.link, &mut load.tool);
-    load.compute(robot, q, true);
+    load.compute(robot, q);
     if load.compliant {
         walk(
             robot,
@@ -167,6 +166,10 @@ pub fn frames(robot: &Robot, q: &[f64], out: &mut Frames) {
             &mut out.link,
             &mut out.tool,
         );
+        for (j, joint) in robot.joints().iter().enumerate() {
+            let revolute = joint.joint_type == crate::model::JointType::Revolute;
+            out.load.columns[j] = axis_column(&out.joint, &out.tool, revolute, j);
+        }
     } else {
         out.joint.copy_from_slice(&load.joint);
         out.link.copy_from_slice(&load.link);

@@ -21,7 +21,7 @@
 use super::Pose;
 use super::gravity::{PointMass, mass_points};
 use crate::model::{Compliance, JointType, Robot};
-use nalgebra::{DMatrix, Vector3};
+use nalgebra::Vector3;
 
 /// A small rigid motion of the chain from frame `first` on: the velocity of every point x
 /// of those frames is v + w x x (world), per unit of whatever moves them.
@@ -55,15 +55,17 @@ pub struct Load {
     pub gravity: Vector3<f64>,
     /// The point masses at the commanded joints.
     pub points: Vec<PointMass>,
+    /// Each joint's axis direction z_j and a point o_j on it (mm), at the commanded joints.
+    pub axes: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// J'_j: the tool's motion per unit of each reached joint value (world; rows 0-2 mm,
+    /// 3-5 rad), at the reached joints. Filled for a compliant robot.
+    pub columns: Vec<nalgebra::Vector6<f64>>,
     /// Gravity torque of each joint (N m; N for a prismatic joint).
     pub torque: Vec<f64>,
     /// Deflection of each joint, c_j tau_j (rad; mm for a prismatic joint).
     pub deflection: Vec<f64>,
     /// The joints the robot reaches, q + deflection (rad or mm).
     pub reached: Vec<f64>,
-    /// D = C d tau / d q (n x n, rad per rad and the like): d q' / d q = I + D. Filled only
-    /// for a compliant robot.
-    pub deflection_jacobian: DMatrix<f64>,
     /// Whether the robot has mass-free compliance coefficients ([`crate::model::compliance`]).
     pub moments: bool,
     /// c_j (internal units) of each joint, 0 without.
@@ -93,10 +95,11 @@ impl Load {
             tool: Pose::identity(),
             gravity: Vector3::zeros(),
             points: Vec::with_capacity(n + 1),
+            axes: vec![(Vector3::zeros(), Vector3::zeros()); n],
+            columns: vec![nalgebra::Vector6::zeros(); n],
             torque: vec![0.0; n],
             deflection: vec![0.0; n],
             reached: vec![0.0; n],
-            deflection_jacobian: DMatrix::zeros(n, n),
             moments: false,
             c: vec![0.0; n],
             km: vec![0.0; n * (n + 1)],
@@ -113,9 +116,8 @@ impl Load {
     }
 
     /// From the commanded frames already in `joint`, `link` and `tool`: points, torques,
-    /// deflections and the joints reached `q + deflection`; with `jacobian`, also
-    /// [`Load::deflection_jacobian`].
-    pub(crate) fn compute(&mut self, robot: &Robot, q: &[f64], jacobian: bool) {
+    /// deflections and the joints reached `q + deflection`.
+    pub(crate) fn compute(&mut self, robot: &Robot, q: &[f64]) {
         let n = self.joint.len();
         self.active = robot.masses().is_some();
         self.compliant = robot.is_compliant();
@@ -124,6 +126,7 @@ impl Load {
         self.gravity = robot.chain().base.rotation * gravity_of(robot);
         for j in 0..n {
             self.c[j] = comp.map_or(0.0, |c| c.joint(j));
+            self.axes[j] = super::gravity::axis(&self.joint, j);
         }
         if self.active {
             mass_points(robot, &self.joint, &self.tool, &mut self.points);
@@ -157,7 +160,7 @@ impl Load {
             }
         }
         for (j, &qj) in q.iter().enumerate().take(n) {
-            let (z, o) = super::gravity::axis(&self.joint, j);
+            let (z, o) = self.axes[j];
             self.torque[j] = if self.active {
                 torque(
                     self.revolute[j],
@@ -183,14 +186,6 @@ impl Load {
             }
             self.reached[j] = qj + self.deflection[j];
         }
-        if jacobian && self.compliant {
-            for i in 0..n {
-                let t = self.joint_twist(i);
-                for j in 0..n {
-                    self.deflection_jacobian[(j, i)] = self.deflection_change(j, &t);
-                }
-            }
-        }
     }
 
     /// d delta_j for the motion `t` (rad or mm per unit of what moves): the change of joint
@@ -202,7 +197,7 @@ impl Load {
         }
         if self.moments {
             let n = self.joint.len();
-            let (z, o) = super::gravity::axis(&self.joint, j);
+            let (z, o) = self.axes[j];
             let g = &self.gravity;
             d += match (self.revolute[j], j >= t.first) {
                 (true, true) => {
@@ -225,7 +220,7 @@ impl Load {
 
     /// The motion of joint i's variable (per rad or per mm), at the commanded joints.
     pub fn joint_twist(&self, i: usize) -> Twist {
-        let (z, o) = super::gravity::axis(&self.joint, i);
+        let (z, o) = self.axes[i];
         if self.revolute[i] {
             Twist {
                 first: i,
@@ -243,7 +238,7 @@ impl Load {
 
     /// d tau_j for the motion `t` (N m or N per unit of what moves), at the commanded joints.
     pub fn torque_change(&self, j: usize, t: &Twist) -> f64 {
-        let (z, o) = super::gravity::axis(&self.joint, j);
+        let (z, o) = self.axes[j];
         let g = &self.gravity;
         match (self.revolute[j], j >= t.first) {
             (true, true) => {
@@ -285,6 +280,25 @@ pub fn moment_sensitivity(
         (false, 0) => g.dot(&z),
         (false, _) => 0.0,
     }
+}
+
+/// The tool's motion per unit of joint i's value with joint frames `joint` and tool frame
+/// `tool` (world): [z_i x (p - o_i); z_i] (mm per rad, rad per rad), or [z_i; 0] for a
+/// prismatic joint.
+pub(crate) fn axis_column(
+    joint: &[Pose],
+    tool: &Pose,
+    revolute: bool,
+    i: usize,
+) -> nalgebra::Vector6<f64> {
+    let p = tool.translation.vector;
+    let (z, o) = super::gravity::axis(joint, i);
+    let (lin, ang) = if revolute {
+        (z.cross(&(p - o)), z)
+    } else {
+        (z, Vector3::zeros())
+    };
+    nalgebra::Vector6::new(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
 }
 
 /// Adds body b's mass-free terms of joint j, its frame `f` (world), to the sums k0, k0 o
