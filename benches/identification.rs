@@ -18,7 +18,9 @@ fn path(p: &str) -> std::path::PathBuf {
 
 fn jacobian(c: &mut Criterion) {
     let robot = read_robot(path("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
-    let cols: Vec<usize> = (0..robot.parameters().len()).collect();
+    // Every geometric parameter (32; the mass-free compliance coefficients are not in it).
+    let cols = robocal::identify::select::select(&robot, "full").unwrap();
+    assert_eq!(cols.len(), 32);
     let mut ws = Frames::new(&robot);
     let mut jac = Matrix6xX::zeros(cols.len());
     let q = [0.3, 0.2, -0.4, 1.0, 0.8, -0.6];
@@ -44,6 +46,25 @@ fn jacobian(c: &mut Criterion) {
                 s += jac[(0, 0)];
             }
             s
+        })
+    });
+    // The identified compliant model of the non-geometric robot (masses known, c2..c5): FK
+    // through the deflected chain and every geometric column with its compliance term, plus
+    // the compliances' own columns.
+    let masses = read_robot(path("datasets/nongeometric_robot/nominal_masses.toml")).unwrap();
+    let compliant = masses
+        .with_compliance(Some(robocal::model::Compliance::from_file_units(&[
+            0.0, 0.05, 0.08, 0.3, 0.5, 0.0,
+        ])))
+        .unwrap();
+    let cols = robocal::identify::select::select(&compliant, "full,compliance").unwrap();
+    let mut ws = Frames::new(&compliant);
+    let mut jac = Matrix6xX::zeros(cols.len());
+    c.bench_function("jacobian_full_compliance_one_configuration", |b| {
+        b.iter(|| {
+            frames(&compliant, black_box(&q), &mut ws);
+            parameter_jacobian(&compliant, &ws, &cols, &mut jac);
+            jac[(0, 0)]
         })
     });
 }

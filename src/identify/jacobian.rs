@@ -32,25 +32,45 @@ pub fn parameter_jacobian(
     }
     let chain = robot.chain();
     let n = robot.dof();
-    let load = &frames.load;
+    let identity = Pose::identity();
     let p = frames.tool.translation.vector;
+    let rows = chain.axes.len();
+    // The rigid columns first, in the tightest loop: most robots have nothing else.
     for (k, &col) in cols.iter().enumerate() {
-        let mut c = out.column_mut(k);
         let Some(axis) = chain.axes.get(col) else {
-            // The compliance parameters follow the row parameters: c1..cN (a robot with
-            // masses) or k_jbi (joint j, bodies b = j..=N, parts i = 0..4).
-            let (j, per_unit) = compliance_column(robot, frames, col - chain.axes.len(), n);
-            c.copy_from(&(axis_column(robot, frames, j) * per_unit));
             continue;
         };
-        let (w, at) = screw(robot, &frames.joint, &frames.link, axis);
+        let f: &Pose = match axis.anchor {
+            Anchor::World => &identity,
+            Anchor::Entry(0) => &chain.base,
+            Anchor::Entry(i) => &frames.link[i - 1],
+            Anchor::Joint(i) => &frames.joint[i],
+            Anchor::ToolEntry => &frames.link[n - 1],
+        };
+        let w: Vector3<f64> = f.rotation * axis.u;
+        let mut c = out.column_mut(k);
         if axis.rotation {
+            let at = (f * Point3::from(axis.c)).coords;
             c.fixed_rows_mut::<3>(0).copy_from(&w.cross(&(p - at)));
             c.fixed_rows_mut::<3>(3).copy_from(&w);
         } else {
             c.fixed_rows_mut::<3>(0).copy_from(&w);
             c.fixed_rows_mut::<3>(3).fill(0.0);
         }
+    }
+    let load = &frames.load;
+    if !load.compliant && cols.iter().all(|&c| c < rows) {
+        return;
+    }
+    for (k, &col) in cols.iter().enumerate() {
+        let mut c = out.column_mut(k);
+        let Some(axis) = chain.axes.get(col) else {
+            // The compliance parameters follow the row parameters: c1..cN (a robot with
+            // masses) or k_jbi (joint j, bodies b = j..=N, parts i = 0..4).
+            let (j, per_unit) = compliance_column(robot, frames, col - rows, n);
+            c.copy_from(&(axis_column(robot, frames, j) * per_unit));
+            continue;
+        };
         if load.compliant
             && let Some(t) = twist(robot, load, axis, n)
         {
@@ -93,7 +113,8 @@ fn compliance_column(robot: &Robot, frames: &Frames, k: usize, n: usize) -> (usi
 }
 
 /// A parameter's screw in the frames `joint`, `link` (world): its unit direction w and, for
-/// a rotation, a point on its line (mm).
+/// a rotation, a point on its line (mm; zero for a translation).
+#[inline]
 fn screw(
     robot: &Robot,
     joint: &[Pose],
@@ -110,7 +131,13 @@ fn screw(
         Anchor::ToolEntry => &link[robot.dof() - 1],
     };
     let w: Vector3<f64> = f.rotation * axis.u;
-    (w, (f * Point3::from(axis.c)).coords)
+    // A translation has no line: skip the point (half the columns, a hot loop).
+    let at = if axis.rotation {
+        (f * Point3::from(axis.c)).coords
+    } else {
+        Vector3::zeros()
+    };
+    (w, at)
 }
 
 /// The motion a parameter gives the commanded configuration's frames, for the change of

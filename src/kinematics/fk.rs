@@ -121,6 +121,7 @@ impl Frames {
 }
 
 /// Walks the chain at joints `q`, storing every frame.
+#[inline]
 fn walk(robot: &Robot, q: &[f64], joint: &mut [Pose], link: &mut [Pose], tool: &mut Pose) {
     let chain = robot.chain();
     let mut t = chain.head;

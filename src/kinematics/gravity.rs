@@ -31,6 +31,7 @@ pub struct PointMass {
 }
 
 /// Joint j's axis direction (unit) and a point on it (mm), world, from its joint frame.
+#[inline]
 pub(crate) fn axis(joint: &[Pose], j: usize) -> (Vector3<f64>, Vector3<f64>) {
     let f = &joint[j];
     (f.rotation.matrix().column(2).into(), f.translation.vector)

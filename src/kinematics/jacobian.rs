@@ -2,7 +2,7 @@
 
 use super::fk::Frames;
 use crate::model::{JointType, Robot};
-use nalgebra::{Matrix6xX, Vector6};
+use nalgebra::{Matrix6xX, Vector3, Vector6};
 
 /// Fills `jac` (6 x N) with the Jacobian of the tool pose with respect to the commanded
 /// joints at the configuration whose frames are in `frames`: rows 0-2 the tool origin's
@@ -18,9 +18,22 @@ pub fn joint_jacobian(robot: &Robot, frames: &Frames, jac: &mut Matrix6xX<f64>) 
     if jac.ncols() != n {
         jac.resize_horizontally_mut(n, 0.0);
     }
-    for i in 0..n {
-        let c = axis_column(robot, frames, i);
-        jac.column_mut(i).copy_from(&c);
+    let p = frames.tool.translation.vector;
+    for (i, joint) in robot.joints().iter().enumerate() {
+        let f = &frames.joint[i];
+        let z: Vector3<f64> = f.rotation.matrix().column(2).into();
+        let mut col = jac.column_mut(i);
+        match joint.joint_type {
+            JointType::Revolute => {
+                col.fixed_rows_mut::<3>(0)
+                    .copy_from(&z.cross(&(p - f.translation.vector)));
+                col.fixed_rows_mut::<3>(3).copy_from(&z);
+            }
+            JointType::Prismatic => {
+                col.fixed_rows_mut::<3>(0).copy_from(&z);
+                col.fixed_rows_mut::<3>(3).fill(0.0);
+            }
+        }
     }
     if frames.load.compliant {
         let load = &frames.load;
@@ -40,6 +53,7 @@ pub fn joint_jacobian(robot: &Robot, frames: &Frames, jac: &mut Matrix6xX<f64>) 
 
 /// The tool's motion per unit of joint i's reached value q'_i, from `frames`
 /// ([`super::load::axis_column`]).
+#[inline]
 pub(crate) fn axis_column(robot: &Robot, frames: &Frames, i: usize) -> Vector6<f64> {
     let revolute = robot.joints()[i].joint_type == JointType::Revolute;
     super::load::axis_column(&frames.joint, &frames.tool, revolute, i)

@@ -285,6 +285,7 @@ pub fn moment_sensitivity(
 /// The tool's motion per unit of joint i's value with joint frames `joint` and tool frame
 /// `tool` (world): [z_i x (p - o_i); z_i] (mm per rad, rad per rad), or [z_i; 0] for a
 /// prismatic joint.
+#[inline]
 pub(crate) fn axis_column(
     joint: &[Pose],
     tool: &Pose,
