@@ -57,7 +57,7 @@ fn compensation(c: &mut Criterion) {
         .collect();
     let mut g = c.benchmark_group("compensation");
     for (name, model) in [
-        ("fake_target_rigid", CalibratedModel::rigid(&robot)),
+        ("fake_target_rigid", CalibratedModel::identified(&robot)),
         (
             "fake_target_compensated",
             CalibratedModel::compensated(&comp),

@@ -20,7 +20,7 @@ fn main() -> robocal::Result<()> {
 
     // Desired poses (x, y, z mm; rz, ry, rx deg) with optional seed joints q1..q6 (deg).
     let targets = TargetTable::read("datasets/targets/fanuc_cell.csv", &nominal, true)?;
-    let mut solver = FakeTargetSolver::new(&nominal, CalibratedModel::rigid(&calibrated))?;
+    let mut solver = FakeTargetSolver::new(&nominal, CalibratedModel::identified(&calibrated))?;
     for (r, target) in targets.targets.iter().enumerate() {
         match solver.solve(target, targets.seeds[r].as_deref()) {
             Ok(c) => {

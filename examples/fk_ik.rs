@@ -3,7 +3,7 @@
 //!
 //! Run: `cargo run --release --example fk_ik`
 
-use robocal::kinematics::{IkOptions, IkSolver, IkStart, RigidModel, pose_to_file, tool_pose};
+use robocal::kinematics::{IkOptions, IkSolver, IkStart, RobotModel, pose_to_file, tool_pose};
 use robocal::model::read_robot;
 
 fn main() -> robocal::Result<()> {
@@ -16,7 +16,7 @@ fn main() -> robocal::Result<()> {
 
     // The IK strategy picks the robot's own closed form (thesis App. B) when it has one.
     let start = IkStart::choose(&robot, None)?;
-    let mut ik = IkSolver::new(RigidModel::new(&robot), start, IkOptions::default());
+    let mut ik = IkSolver::new(RobotModel::new(&robot), start, IkOptions::default());
     let every = ik.all(&pose, None).expect("the pose is reachable");
     println!("IK: {} solutions within the joint limits", every.len());
     let nearest = ik.nearest(&pose, Some(&q)).expect("reachable");

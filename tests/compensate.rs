@@ -192,7 +192,7 @@ fn true_robot_reaches_compensated_targets_within_the_model_accuracy() {
     let mut rigid_pose = |q: &[f64]| tool_pose(&robot, q);
     let (nominal_p, _) = true_errors(
         &s,
-        CalibratedModel::rigid(&s.nominal),
+        CalibratedModel::identified(&s.nominal),
         &mut nominal_pose,
         true,
         false,
@@ -206,7 +206,7 @@ fn true_robot_reaches_compensated_targets_within_the_model_accuracy() {
     );
     let (rigid_got_p, rigid_got_r) = true_errors(
         &s,
-        CalibratedModel::rigid(&robot),
+        CalibratedModel::identified(&robot),
         &mut rigid_pose,
         true,
         false,
@@ -252,7 +252,7 @@ fn geometric_deviations_are_compensated_to_the_noise_floor_without_seeds() {
     let (model_p, _) = model_errors(&s, &mut |q| tool_pose(&robot, q));
     let (got_p, _) = true_errors(
         &s,
-        CalibratedModel::rigid(&robot),
+        CalibratedModel::identified(&robot),
         &mut |q| tool_pose(&robot, q),
         false,
         false,
@@ -270,7 +270,8 @@ fn geometric_deviations_are_compensated_to_the_noise_floor_without_seeds() {
 fn impossible_targets_are_failures_not_commands() {
     let s = load("case_d", None);
     let robot = identified(&s);
-    let mut solver = FakeTargetSolver::new(&s.nominal, CalibratedModel::rigid(&robot)).unwrap();
+    let mut solver =
+        FakeTargetSolver::new(&s.nominal, CalibratedModel::identified(&robot)).unwrap();
     let far = Pose::translation(1.0e5, 0.0, 0.0);
     assert!(matches!(
         solver.solve(&Target::Pose(far), None),

@@ -44,6 +44,23 @@ fn case_d_targets_on_the_unseen_test_sets() {
         g(Stage::Full),
         g(Stage::FullNetwork)
     );
+    // Non-geometric robot with compliance (issue 14): the mass-free compliant model at least
+    // 3x below full geometric, known masses no worse than it, and the compensator on top
+    // never worse than the model it was trained on.
+    assert!(
+        g(Stage::FullCompliance) * 3.0 <= g(Stage::Full),
+        "full {} -> full + compliance {}",
+        g(Stage::Full),
+        g(Stage::FullCompliance)
+    );
+    assert!(g(Stage::FullComplianceMasses) <= g(Stage::FullCompliance));
+    assert!(g(Stage::FullComplianceNetwork) <= g(Stage::FullCompliance) * 1.02);
+    // Compliance rows run on the non-geometric robot only.
+    assert!(rows.iter().all(|r| r.set == Robotset::NonGeometric
+        || !matches!(
+            r.stage,
+            Stage::FullCompliance | Stage::FullComplianceMasses | Stage::FullComplianceNetwork
+        )));
     // The measured errors carry the tracker noise: never below the truth errors by much.
     for r in &rows {
         let (t, m) = (

@@ -5,7 +5,7 @@
 use nalgebra::Matrix6xX;
 use robocal::geometry::rotation::rotation_vector;
 use robocal::kinematics::{
-    Frames, IkOptions, IkSolver, IkStart, RigidModel, frames, joint_jacobian, tool_pose,
+    Frames, IkOptions, IkSolver, IkStart, RobotModel, frames, joint_jacobian, tool_pose,
 };
 use robocal::model::file::parse_robot;
 use robocal::model::{Compliance, Robot, read_robot, robot_to_toml};
@@ -141,7 +141,7 @@ fn inverse_kinematics_of_a_compliant_robot_round_trips() {
         matches!(start, IkStart::Nominal(_)),
         "the rigid closed form starts a numerical solve"
     );
-    let mut solver = IkSolver::new(RigidModel::new(&model), start, IkOptions::default());
+    let mut solver = IkSolver::new(RobotModel::new(&model), start, IkOptions::default());
     for q in configurations(15) {
         let target = tool_pose(&model, &q);
         let solved = solver
@@ -449,4 +449,35 @@ fn mass_free_compliance_is_identified_written_and_read_back() {
         e.starts_with(&format!("r.toml:{line}:")) && e.contains("moments need 6 lists"),
         "{e}"
     );
+}
+
+/// Target compensation on a compliant model: the joints commanded reach the desired pose
+/// through the deflected chain, and the fake target is the nominal's pose at those joints.
+#[test]
+fn compensation_inverts_the_compliant_model() {
+    use robocal::compensation::{CalibratedModel, FakeTargetSolver};
+    use robocal::data::targets::Target;
+    let nominal = fanuc();
+    let model = compliance_only(&nominal)
+        .compliance
+        .unwrap()
+        .on_robot(&nominal)
+        .unwrap();
+    let mut solver = FakeTargetSolver::new(&nominal, CalibratedModel::identified(&model)).unwrap();
+    let mut moved: f64 = 0.0;
+    for q in configurations(12) {
+        // A pose the rigid nominal reaches at q: the compliant robot needs other joints.
+        let desired = tool_pose(&nominal, &q);
+        let c = solver
+            .solve(&Target::Pose(desired), Some(&q))
+            .unwrap_or_else(|e| panic!("{q:?}: {e:?}"));
+        let reached = tool_pose(&model, &c.q);
+        assert!((reached.translation.vector - desired.translation.vector).norm() < 1e-6);
+        assert!(rotation_vector(&(reached.rotation * desired.rotation.inverse())).norm() < 1e-9);
+        let fake = tool_pose(&nominal, &c.q);
+        assert!((fake.translation.vector - c.fake.translation.vector).norm() < 1e-9);
+        moved = moved.max((fake.translation.vector - desired.translation.vector).norm());
+    }
+    // The compliance is worth compensating: the fake targets move by tenths of a mm.
+    assert!(moved > 0.2, "{moved} mm");
 }

@@ -325,13 +325,13 @@ fn numeric_ik_position_only_leaves_orientation_free() {
 /// keeps the branch it is given, and a seed of the wrong length is a failure, not a panic.
 #[test]
 fn ik_strategy_nearest_all_and_branch() {
-    use robocal::kinematics::{IkFailure, IkSolver, IkStart, RigidModel, tool_pose};
+    use robocal::kinematics::{IkFailure, IkSolver, IkStart, RobotModel, tool_pose};
     let nominal = robot_file("fanuc_r2000ib_210f.toml");
     let real = fanuc_table_6_1();
     let start = IkStart::choose(&real, Some(&nominal)).unwrap();
     assert!(matches!(start, IkStart::Nominal(_)));
     let closed = SphericalWristIk::new(&nominal).unwrap();
-    let mut solver = IkSolver::new(RigidModel::new(&real), start, IkOptions::default());
+    let mut solver = IkSolver::new(RobotModel::new(&real), start, IkOptions::default());
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     let mut branches = Vec::new();
     for _ in 0..40 {

@@ -79,7 +79,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     };
     let model = match &comp {
         Some(c) => CalibratedModel::compensated(c),
-        None => CalibratedModel::rigid(&robot),
+        None => CalibratedModel::identified(&robot),
     };
     let mut solver = FakeTargetSolver::new(&nominal, model)
         .with_context(|| format!("{}: no closed form to seed from", a.nominal.display()))?;

@@ -8,7 +8,7 @@ use super::output::{OutputArgs, joints_arg, num, pose_arg};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use robocal::data::{POSE_COLUMNS, Target, TargetTable, joint_columns};
-use robocal::kinematics::{IkFailure, IkOptions, IkSolver, IkStart, RigidModel, pose_from_file};
+use robocal::kinematics::{IkFailure, IkOptions, IkSolver, IkStart, RobotModel, pose_from_file};
 use robocal::model::read_robot;
 use std::path::PathBuf;
 
@@ -106,7 +106,7 @@ pub fn run(a: IkArgs) -> Result<()> {
         (None, None) => unreachable!("clap requires one input"),
     };
 
-    let mut solver = IkSolver::new(RigidModel::new(&robot), start, IkOptions::default());
+    let mut solver = IkSolver::new(RobotModel::new(&robot), start, IkOptions::default());
     let mut out_rows = Vec::new();
     let mut failed = Vec::new();
     for (k, (cells, target)) in rows.iter().zip(&targets).enumerate() {

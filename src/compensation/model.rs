@@ -1,5 +1,5 @@
-//! The calibrated forward model that target compensation inverts: the identified rigid model,
-//! or a compensator (its embedded model and network in series).
+//! The calibrated forward model that target compensation inverts: the identified model
+//! (rigid or compliant), or a compensator (its embedded model and network in series).
 
 use crate::kinematics::{Frames, Pose, ToolModel, frames, joint_jacobian};
 use crate::model::Robot;
@@ -9,8 +9,8 @@ use nalgebra::Matrix6xX;
 
 /// What the robot really does at joints q, as far as calibration knows.
 pub enum CalibratedModel<'a> {
-    /// The identified kinematic model.
-    Rigid {
+    /// The identified kinematic model (compliant when its file has compliances).
+    Identified {
         /// The identified robot model.
         robot: &'a Robot,
         /// Forward-kinematics workspace sized for `robot`.
@@ -28,15 +28,15 @@ pub enum CalibratedModel<'a> {
 }
 
 impl<'a> CalibratedModel<'a> {
-    /// The rigid model of `robot`, with a fresh workspace.
-    pub fn rigid(robot: &'a Robot) -> Self {
-        CalibratedModel::Rigid {
+    /// The kinematic model of `robot`, with a fresh workspace.
+    pub fn identified(robot: &'a Robot) -> Self {
+        CalibratedModel::Identified {
             robot,
             frames: Frames::new(robot),
         }
     }
 
-    /// The model of `compensator` (rigid model plus network), with fresh workspaces.
+    /// The model of `compensator` (its kinematic model plus network), with fresh workspaces.
     pub fn compensated(compensator: &'a Compensator) -> Self {
         CalibratedModel::Compensated {
             compensator,
@@ -49,14 +49,14 @@ impl<'a> CalibratedModel<'a> {
 impl ToolModel for CalibratedModel<'_> {
     fn robot(&self) -> &Robot {
         match self {
-            CalibratedModel::Rigid { robot, .. } => robot,
+            CalibratedModel::Identified { robot, .. } => robot,
             CalibratedModel::Compensated { compensator, .. } => &compensator.robot,
         }
     }
 
     fn pose(&mut self, q: &[f64]) -> Pose {
         match self {
-            CalibratedModel::Rigid { robot, frames: f } => {
+            CalibratedModel::Identified { robot, frames: f } => {
                 frames(robot, q, f);
                 f.tool
             }
@@ -68,7 +68,7 @@ impl ToolModel for CalibratedModel<'_> {
 
     fn jacobian(&mut self, q: &[f64], jac: &mut Matrix6xX<f64>) {
         match self {
-            CalibratedModel::Rigid { robot, frames: f } => {
+            CalibratedModel::Identified { robot, frames: f } => {
                 frames(robot, q, f);
                 joint_jacobian(robot, f, jac);
             }

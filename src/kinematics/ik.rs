@@ -128,7 +128,7 @@ pub struct Solved {
     pub branch: Option<Branch>,
 }
 
-/// The strategy over a model `M` (the rigid model, or a compensator in series with one),
+/// The strategy over a model `M` (the robot's kinematic model, or a compensator in series with one),
 /// with its reused buffers.
 pub struct IkSolver<M: ToolModel> {
     model: M,

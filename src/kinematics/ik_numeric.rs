@@ -6,8 +6,9 @@
 //! dq = J^T e with J the geometric Jacobian (orientation rows scaled by L). A solve either
 //! meets both tolerances or returns [`Error::NotConverged`] with the error it reached.
 //!
-//! The solver works on any [`ToolModel`] (a pose and its geometric Jacobian): the rigid model
-//! ([`solve_numeric`]) or a model with a neural compensator in series (see `compensation`).
+//! The solver works on any [`ToolModel`] (a pose and its geometric Jacobian): the robot's
+//! kinematic model, rigid or compliant ([`solve_numeric`]), or a model with a neural
+//! compensator in series (see `compensation`).
 //! An approximate Jacobian only slows convergence; the tolerances are checked on the model's
 //! own pose.
 
@@ -80,23 +81,23 @@ pub trait ToolModel {
     fn jacobian(&mut self, q: &[f64], jac: &mut Matrix6xX<f64>);
 }
 
-/// The rigid kinematic model as a [`ToolModel`], with its frames.
-pub struct RigidModel<'a> {
+/// The robot's kinematic model (rigid, or compliant when the robot has compliances) as a [`ToolModel`], with its frames.
+pub struct RobotModel<'a> {
     robot: &'a Robot,
     frames: Frames,
 }
 
-impl<'a> RigidModel<'a> {
-    /// The rigid model of `robot`.
+impl<'a> RobotModel<'a> {
+    /// The kinematic model of `robot`.
     pub fn new(robot: &'a Robot) -> Self {
-        RigidModel {
+        RobotModel {
             robot,
             frames: Frames::new(robot),
         }
     }
 }
 
-impl ToolModel for RigidModel<'_> {
+impl ToolModel for RobotModel<'_> {
     fn robot(&self) -> &Robot {
         self.robot
     }
@@ -112,13 +113,13 @@ impl ToolModel for RigidModel<'_> {
     }
 }
 
-/// The rigid model over a workspace's frames ([`solve_numeric`]).
-struct WorkspaceRigid<'a> {
+/// The kinematic model over a workspace's frames ([`solve_numeric`]).
+struct WorkspaceModel<'a> {
     robot: &'a Robot,
     frames: &'a mut Frames,
 }
 
-impl ToolModel for WorkspaceRigid<'_> {
+impl ToolModel for WorkspaceModel<'_> {
     fn robot(&self) -> &Robot {
         self.robot
     }
@@ -134,7 +135,7 @@ impl ToolModel for WorkspaceRigid<'_> {
     }
 }
 
-/// Scratch space for numerical IK, reused across solves of one robot: the rigid model's
+/// Scratch space for numerical IK, reused across solves of one robot: the kinematic model's
 /// frames (used by [`solve_numeric`] only) and the LM solver's matrices and vectors, so that
 /// a solve allocates only the joints it returns.
 #[derive(Debug, Clone)]
@@ -199,7 +200,7 @@ fn residual<M: ToolModel>(model: &mut M, target: &IkTarget, q: &[f64], scale: f6
     }
 }
 
-/// Solves for joints that put the tool of the rigid model on `target`, starting from `seed`
+/// Solves for joints that put the tool of the robot's kinematic model on `target`, starting from `seed`
 /// (rad or mm).
 pub fn solve_numeric(
     robot: &Robot,
@@ -211,7 +212,7 @@ pub fn solve_numeric(
     if ws.frames.joint.len() != robot.dof() {
         *ws = IkWorkspace::new(robot);
     }
-    let mut model = WorkspaceRigid {
+    let mut model = WorkspaceModel {
         robot,
         frames: &mut ws.frames,
     };

@@ -15,7 +15,7 @@ pub use fk::{Frames, frames, tool_pose};
 pub use ik::{IkFailure, IkSolver, IkStart, Solved, joint_distance};
 pub use ik_closed::{Branch, SphericalWristIk};
 pub use ik_numeric::{
-    IkOptions, IkSolution, IkTarget, IkWorkspace, RigidModel, ToolModel, solve_model, solve_numeric,
+    IkOptions, IkSolution, IkTarget, IkWorkspace, RobotModel, ToolModel, solve_model, solve_numeric,
 };
 pub use jacobian::joint_jacobian;
 
