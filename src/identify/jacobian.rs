@@ -74,8 +74,9 @@ pub fn parameter_jacobian(
         if load.compliant
             && let Some(t) = twist(robot, load, axis, n)
         {
+            let dm = load.moved_moment(&t);
             for j in 0..n {
-                let d = load.deflection_change(j, &t);
+                let d = load.deflection_change_moved(j, &t, &dm);
                 if d != 0.0 {
                     c += load.columns[j] * d;
                 }

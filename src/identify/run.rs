@@ -5,7 +5,7 @@
 use super::identifiability::{CONDITION_WARNING, DropReason, Dropped, Identifiability, analyse};
 use super::nelder_mead::solve_nelder_mead;
 use super::problem::{
-    IdentifyWorkspace, Measure, Observations, Sigmas, cost, normal_equations, residual,
+    IdentifyWorkspace, Measure, Observations, Sigmas, normal_equations, residual,
 };
 use super::register::{Registration, register};
 use super::select::{is_compliance, select};
@@ -338,7 +338,7 @@ fn outliers(set: &MeasurementSet, obs: &Observations, robot: &Robot, k: f64) -> 
 pub const SIGNIFICANCE: f64 = 3.0;
 
 /// Iterations of the geometry-only solve that precedes a solve with compliances.
-const STAGE_ONE_ITERATIONS: usize = 3;
+const STAGE_ONE_ITERATIONS: usize = 2;
 
 /// Backward elimination of compliances: while one has |estimate - its value in `start`| <
 /// [`SIGNIFICANCE`] std, the least significant goes back to its value in `start` (the
@@ -510,11 +510,9 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         }
         let (kept, stepped) = screen_compliances(&start, &obs, cols, &mut ident);
         cols = kept;
-        // The joint solve starts from the screening's step when that lowers the cost.
-        let mut ws = IdentifyWorkspace::new(&start);
-        if cost(&stepped, &obs, &mut ws) < cost(&start, &obs, &mut ws) {
-            start = stepped;
-        }
+        // The joint solve starts from the screening's Gauss-Newton step: the compliances
+        // are nearly linear there (Levenberg-Marquardt damps the step if not).
+        start = stepped;
     }
     if cols.is_empty() {
         return Err(Error::Invalid(

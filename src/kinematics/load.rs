@@ -76,6 +76,14 @@ pub struct Load {
     km: Vec<f64>,
     ks: Vec<Vector3<f64>>,
     kh: Vec<Vector3<f64>>,
+    /// Per joint, c_j d tau_j / d w for motions that carry its axis (first <= j), so that
+    /// the change is one dot product: c_j ((z_j x r_j) x g) 1e-3 (revolute, r_j = S_j -
+    /// M_j o_j) or c_j M_j (z_j x g) (prismatic); zero when c_j is.
+    carried: Vec<Vector3<f64>>,
+    /// Per joint, c_j d tau_j / d m for motions beyond it (first > j), m = M_f v + w x S_f
+    /// the moved masses' change of first moment: c_j (g x z_j) 1e-3 (revolute), zero
+    /// (prismatic).
+    beyond: Vec<Vector3<f64>>,
     /// M_j (kg) for j = 0..=N.
     suffix_mass: Vec<f64>,
     /// S_j (kg mm, world) for j = 0..=N.
@@ -105,6 +113,8 @@ impl Load {
             km: vec![0.0; n * (n + 1)],
             ks: vec![Vector3::zeros(); n * (n + 1)],
             kh: vec![Vector3::zeros(); n * (n + 1)],
+            carried: vec![Vector3::zeros(); n],
+            beyond: vec![Vector3::zeros(); n],
             suffix_mass: vec![0.0; n + 1],
             suffix_moment: vec![Vector3::zeros(); n + 1],
             revolute: robot
@@ -185,16 +195,43 @@ impl Load {
                     moment_deflection(self.revolute[j], &z, &o, m, &sm, &h, &self.gravity);
             }
             self.reached[j] = qj + self.deflection[j];
+            let c = self.c[j];
+            let g = self.gravity;
+            (self.carried[j], self.beyond[j]) = match (self.active && c != 0.0, self.revolute[j]) {
+                (false, _) => (Vector3::zeros(), Vector3::zeros()),
+                (true, true) => {
+                    let r = self.suffix_moment[j] - o * self.suffix_mass[j];
+                    (z.cross(&r).cross(&g) * (1e-3 * c), g.cross(&z) * (1e-3 * c))
+                }
+                (true, false) => (z.cross(&g) * (self.suffix_mass[j] * c), Vector3::zeros()),
+            };
         }
     }
 
     /// d delta_j for the motion `t` (rad or mm per unit of what moves): the change of joint
     /// j's deflection, c_j d tau_j plus that of its mass-free terms.
     pub fn deflection_change(&self, j: usize, t: &Twist) -> f64 {
-        let mut d = 0.0;
-        if self.active && self.c[j] != 0.0 {
-            d += self.c[j] * self.torque_change(j, t);
+        self.deflection_change_moved(j, t, &self.moved_moment(t))
+    }
+
+    /// The change of the first moment (kg mm, world) of the masses the motion `t` moves
+    /// without their joint's axis: M_f v + w x S_f, f = `t.first`. Shared by every joint
+    /// before f in [`Load::deflection_change_moved`].
+    pub fn moved_moment(&self, t: &Twist) -> Vector3<f64> {
+        if !self.active || t.first >= self.suffix_mass.len() {
+            return Vector3::zeros();
         }
+        t.v * self.suffix_mass[t.first] + t.w.cross(&self.suffix_moment[t.first])
+    }
+
+    /// [`Load::deflection_change`] with the motion's [`Load::moved_moment`] `dm` computed
+    /// once for all joints: a dot product per joint for the joint compliances.
+    pub fn deflection_change_moved(&self, j: usize, t: &Twist, dm: &Vector3<f64>) -> f64 {
+        let mut d = if j >= t.first {
+            t.w.dot(&self.carried[j])
+        } else {
+            dm.dot(&self.beyond[j])
+        };
         if self.moments {
             let n = self.joint.len();
             let (z, o) = self.axes[j];
