@@ -149,11 +149,20 @@ pub fn frames(robot: &Robot, q: &[f64], out: &mut Frames) {
         chain.links.len(),
         "workspace made for another robot"
     );
-    if robot.masses().is_none() && !robot.is_compliant() {
-        out.load.active = false;
-        out.load.compliant = false;
-        out.load.moments = false;
-        walk(robot, q, &mut out.joint, &mut out.link, &mut out.tool);
+    if robot.masses().is_none() && robot.compliance().is_none() {
+        // The rigid, massless robot of most calls: one walk, nothing else.
+        let load = &mut out.load;
+        if load.active || load.compliant || load.moments {
+            (load.active, load.compliant, load.moments) = (false, false, false);
+        }
+        let mut t = chain.head;
+        for (i, link) in chain.links.iter().enumerate() {
+            chain.apply_joint(&mut t, i, q[i]);
+            out.joint[i] = t;
+            out.link[i] = t * link.post;
+            t *= link.next;
+        }
+        out.tool = t;
         return;
     }
     let load = &mut out.load;

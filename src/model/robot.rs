@@ -266,6 +266,7 @@ impl Robot {
     }
 
     /// The mass properties, if the robot has them.
+    #[inline]
     pub fn masses(&self) -> Option<&MassProperties> {
         self.masses.as_ref()
     }
@@ -290,6 +291,7 @@ impl Robot {
     }
 
     /// The joint compliances, if the robot has them.
+    #[inline]
     pub fn compliance(&self) -> Option<&Compliance> {
         self.compliance.as_ref()
     }
@@ -305,6 +307,7 @@ impl Robot {
     /// Whether the robot's joints bend under gravity: a non-zero compliance (joint
     /// compliances with masses, or mass-free coefficients). Forward kinematics then runs
     /// q' = q + delta(q) ([`super::compliance`]).
+    #[inline]
     pub fn is_compliant(&self) -> bool {
         self.compliance.as_ref().is_some_and(|c| {
             c.has_moments() || (self.masses.is_some() && c.joints.iter().any(|&v| v != 0.0))
@@ -336,6 +339,7 @@ impl Robot {
         self.joints.len()
     }
 
+    #[inline]
     pub(crate) fn chain(&self) -> &Chain {
         &self.chain
     }
