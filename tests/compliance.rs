@@ -33,6 +33,15 @@ fn compliance_only(robot: &Robot) -> NonGeometric {
     }
 }
 
+/// `robot` with the shipped non-geometric robot's masses and compliances, as the model's own.
+fn compliant(robot: &Robot) -> Robot {
+    compliance_only(robot)
+        .compliance
+        .unwrap()
+        .on_robot(robot)
+        .unwrap()
+}
+
 /// Configurations spread over 80% of the FANUC's joint ranges (rad).
 fn configurations(count: usize) -> Vec<Vec<f64>> {
     let robot = fanuc();
@@ -73,11 +82,7 @@ fn the_model_reaches_the_simulators_pose() {
 #[test]
 fn frames_and_tool_pose_agree_to_the_bit() {
     let truth = fanuc();
-    let model = compliance_only(&truth)
-        .compliance
-        .unwrap()
-        .on_robot(&truth)
-        .unwrap();
+    let model = compliant(&truth);
     let mut f = Frames::new(&model);
     for q in configurations(20) {
         frames(&model, &q, &mut f);
@@ -91,11 +96,7 @@ fn frames_and_tool_pose_agree_to_the_bit() {
 #[test]
 fn joint_jacobian_of_a_compliant_robot_matches_central_differences() {
     let truth = fanuc();
-    let model = compliance_only(&truth)
-        .compliance
-        .unwrap()
-        .on_robot(&truth)
-        .unwrap();
+    let model = compliant(&truth);
     let mut f = Frames::new(&model);
     let mut jac = Matrix6xX::zeros(6);
     let mut rigid_jac = Matrix6xX::zeros(6);
@@ -131,11 +132,7 @@ fn joint_jacobian_of_a_compliant_robot_matches_central_differences() {
 #[test]
 fn inverse_kinematics_of_a_compliant_robot_round_trips() {
     let truth = fanuc();
-    let model = compliance_only(&truth)
-        .compliance
-        .unwrap()
-        .on_robot(&truth)
-        .unwrap();
+    let model = compliant(&truth);
     let start = IkStart::choose(&model, None).unwrap();
     assert!(
         matches!(start, IkStart::Nominal(_)),
@@ -164,11 +161,7 @@ fn inverse_kinematics_of_a_compliant_robot_round_trips() {
 #[test]
 fn robot_files_keep_compliances_and_refuse_bad_ones() {
     let truth = fanuc();
-    let model = compliance_only(&truth)
-        .compliance
-        .unwrap()
-        .on_robot(&truth)
-        .unwrap();
+    let model = compliant(&truth);
     let text = robot_to_toml(&model);
     assert!(text.contains("[compliance]"), "{text}");
     let back = parse_robot(&text, Path::new("back.toml")).unwrap();
@@ -458,11 +451,7 @@ fn compensation_inverts_the_compliant_model() {
     use robocal::compensation::{CalibratedModel, FakeTargetSolver};
     use robocal::data::targets::Target;
     let nominal = fanuc();
-    let model = compliance_only(&nominal)
-        .compliance
-        .unwrap()
-        .on_robot(&nominal)
-        .unwrap();
+    let model = compliant(&nominal);
     let mut solver = FakeTargetSolver::new(&nominal, CalibratedModel::identified(&model)).unwrap();
     let mut moved: f64 = 0.0;
     for q in configurations(12) {

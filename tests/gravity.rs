@@ -29,33 +29,26 @@ fn file_masses_give_the_simulators_torques() {
         mrad_per_knm: vec![0.0; 6],
         gravity: [0.0, 0.0, -9.81],
     };
-    let mut f = Frames::new(&robot);
-    frames(&robot, &[0.1, 0.2, -0.3, 0.4, 0.5, 0.6], &mut f);
-    let origin = |f: &Frames, k: usize| {
-        if k < n {
-            f.joint[k].translation.vector
+    // The simulator's masses as the model's (`Compliance::on_robot` writes them in the joint
+    // frames at q = 0): at another configuration they still sit midway between the joint
+    // origins.
+    let model = sim.on_robot(&robot).unwrap().with_compliance(None).unwrap();
+    let masses = model.masses().unwrap();
+    let mut f = Frames::new(&model);
+    frames(&model, &[0.1, 0.2, -0.3, 0.4, 0.5, 0.6], &mut f);
+    for k in 0..n {
+        let next = if k + 1 < n {
+            f.joint[k + 1].translation.vector
         } else {
             f.tool.translation.vector
-        }
-    };
-    let links = (0..n)
-        .map(|k| {
-            let mid = (origin(&f, k) + origin(&f, k + 1)) * 0.5;
-            BodyMass {
-                mass_kg: sim.link_masses_kg[k],
-                com_mm: f.joint[k].inverse_transform_point(&mid.into()).coords,
-            }
-        })
-        .collect();
-    let masses = MassProperties {
-        links,
-        payload: BodyMass {
-            mass_kg: sim.payload_kg,
-            com_mm: Vector3::zeros(),
-        },
-        gravity: Vector3::from(sim.gravity),
-    };
-    let model = robot.with_masses(Some(masses)).unwrap();
+        };
+        let mid = (f.joint[k].translation.vector + next) * 0.5;
+        let com = f.joint[k]
+            .transform_point(&masses.links[k].com_mm.into())
+            .coords;
+        assert!((com - mid).norm() < 1e-9, "link {}: {com} vs {mid}", k + 1);
+        assert_eq!(masses.links[k].mass_kg, sim.link_masses_kg[k]);
+    }
     // Through the file and back: the same robot.
     let text = robot_to_toml(&model);
     assert!(text.contains("[mass]"), "{text}");

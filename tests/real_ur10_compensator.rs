@@ -8,8 +8,11 @@
 //! alpha in {1e-3, 1e-1} (scikit-learn's convention); L-BFGS; size and penalty chosen on an
 //! inner 80/20 split; correction p += R_b dp, R = exp(R_b dr) R.
 
+mod common;
+
+use common::ur10::{SERIES_B, series, series_b_split};
+use robocal::data::MeasurementSet;
 use robocal::data::measurement::split;
-use robocal::data::{MeasurementSet, Profile, read_measurements};
 use robocal::evaluate::{ErrorStats, row_errors, summarize};
 use robocal::identify::{Measure, Options, identify};
 use robocal::model::{Robot, read_robot};
@@ -21,30 +24,11 @@ use robocal::neural::predict::PredictWorkspace;
 use robocal::neural::samples::objective;
 use robocal::neural::targets::build;
 use robocal::neural::train::initial_weights;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// A series of the shipped UR10 data set, imported through its profile.
-fn series(robot: &Robot, file: &str) -> MeasurementSet {
-    let profile = Profile::read(root().join("datasets/profiles/ipa_ur10.toml")).unwrap();
-    let path = root().join("datasets/ipa-ur10").join(file);
-    read_measurements(Path::new(&path), robot, &profile, &Default::default())
-        .unwrap()
-        .0
-}
-
-const SERIES_B: &str = "Series_B/measurements_joint_configurations.csv";
-
-/// Series B, split as in the README: (identification, pool, validation).
-fn series_b_split(robot: &Robot) -> (MeasurementSet, MeasurementSet, MeasurementSet) {
-    let set = series(robot, SERIES_B);
-    let (pool, val) = split(&set, 1000.0 / 1495.0, 11);
-    let (id, _) = split(&pool, 0.5, 12);
-    (id, pool, val)
 }
 
 fn identified(robot: &Robot, id: &MeasurementSet) -> Robot {

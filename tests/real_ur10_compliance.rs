@@ -4,34 +4,27 @@
 //! published ones; and the published centres of mass, converted to robocal's joint frames,
 //! sit where Universal Robots puts them.
 
+mod common;
+
+use common::ur10::{SERIES_A, series, series_b_split};
 use nalgebra::Vector3;
+use robocal::data::MeasurementSet;
 use robocal::data::measurement::split;
-use robocal::data::{MeasurementSet, Profile, read_measurements};
 use robocal::evaluate::{RowError, row_errors, summarize};
 use robocal::identify::{Identified, Measure, Options, identify};
 use robocal::kinematics::{Frames, frames, tool_pose};
 use robocal::model::{Robot, read_robot};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn series(robot: &Robot, file: &str) -> MeasurementSet {
-    let profile = Profile::read(root().join("datasets/profiles/ipa_ur10.toml")).unwrap();
-    let path = root().join("datasets/ipa-ur10").join(file);
-    read_measurements(Path::new(&path), robot, &profile, &Default::default())
-        .unwrap()
-        .0
-}
-
 /// The two splits: Series B as in the README (500 poses identify, 495 validate), Series A's
 /// grid (500 identify, 2000 others validate).
 fn splits(robot: &Robot) -> Vec<(&'static str, MeasurementSet, MeasurementSet)> {
-    let b = series(robot, "Series_B/measurements_joint_configurations.csv");
-    let (pool, val_b) = split(&b, 1000.0 / 1495.0, 11);
-    let (id_b, _) = split(&pool, 0.5, 12);
-    let a = series(robot, "Series_A/measurements_grid.csv");
+    let (id_b, _, val_b) = series_b_split(robot);
+    let a = series(robot, SERIES_A);
     let (id_a, rest) = split(&a, 500.0 / a.rows.len() as f64, 21);
     let (val_a, _) = split(&rest, 2000.0 / rest.rows.len() as f64, 22);
     vec![("Series B", id_b, val_b), ("Series A", id_a, val_a)]

@@ -1,5 +1,8 @@
-//! Helpers shared by the command-line tests.
+//! Helpers shared by the integration tests: running the binary, temporary files, the UR10
+//! series.
 #![allow(dead_code)]
+
+pub mod ur10;
 
 use std::path::PathBuf;
 use std::process::{Command, Output};
