@@ -20,7 +20,8 @@ use nalgebra::{Matrix6xX, Point3, Vector3};
 ///
 /// For a compliant robot (q' = q + c tau(q)), a geometric parameter's column is its rigid
 /// column at the reached joints plus J' C d tau / d p (it moves the masses and axes the
-/// torques come from); a compliance c_j's column is J'_j tau_j.
+/// torques come from); a compliance c_j's column is J'_j tau_j, a mass-free coefficient's
+/// J'_j times its deflection per unit ([`moment_sensitivity`]).
 pub fn parameter_jacobian(
     robot: &Robot,
     frames: &Frames,
@@ -62,12 +63,19 @@ pub fn parameter_jacobian(
     if !load.compliant && cols.iter().all(|&c| c < rows) {
         return;
     }
+    // Which compliance parameters the robot has, and gravity in the world: once per call.
+    let joint_form = robot.masses().is_some_and(|m| m.has_mass());
+    let g = chain.base.rotation * gravity_of(robot);
     for (k, &col) in cols.iter().enumerate() {
         let mut c = out.column_mut(k);
         let Some(axis) = chain.axes.get(col) else {
             // The compliance parameters follow the row parameters: c1..cN (a robot with
             // masses) or k_jbi (joint j, bodies b = j..=N, parts i = 0..4).
-            let (j, per_unit) = compliance_column(robot, frames, col - rows, n);
+            let (j, per_unit) = if joint_form {
+                (col - rows, load.torque[col - rows])
+            } else {
+                mass_free_column(robot, frames, &g, col - rows)
+            };
             c.copy_from(&(axis_column(robot, frames, j) * per_unit));
             continue;
         };
@@ -76,7 +84,7 @@ pub fn parameter_jacobian(
         {
             let dm = load.moved_moment(&t);
             for j in 0..n {
-                let d = load.deflection_change_moved(j, &t, &dm);
+                let d = load.deflection_change(j, &t, &dm);
                 if d != 0.0 {
                     c += load.columns[j] * d;
                 }
@@ -85,28 +93,25 @@ pub fn parameter_jacobian(
     }
 }
 
-/// The joint a compliance parameter deflects and its deflection per unit of it: c_j's is
-/// tau_j; k_jbi's is [`Load::moment_sensitivity`]. `k` counts the compliance parameters in
-/// the order of [`Robot::parameters`].
-fn compliance_column(robot: &Robot, frames: &Frames, k: usize, n: usize) -> (usize, f64) {
+/// The joint the `k`-th mass-free coefficient k_jbi deflects (in the order of
+/// [`Robot::parameters`]: joint j, bodies b = j..=N, parts i = 0..4) and its deflection per
+/// unit of it ([`moment_sensitivity`]); `g` gravity in the world (m/s^2).
+fn mass_free_column(robot: &Robot, frames: &Frames, g: &Vector3<f64>, k: usize) -> (usize, f64) {
     let load = &frames.load;
-    if robot.masses().is_some_and(|m| m.has_mass()) {
-        return (k, load.torque[k]);
-    }
+    let n = robot.dof();
     // A robot whose joints do not yet deflect: its frames are the commanded ones.
     let (joint, tool) = if load.compliant {
         (&load.joint[..], &load.tool)
     } else {
         (&frames.joint[..], &frames.tool)
     };
-    let g = robot.chain().base.rotation * gravity_of(robot);
     let mut rest = k;
     for j in 0..n {
         let here = 4 * (n - j + 1);
         if rest < here {
             let (b, i) = (j + rest / 4, rest % 4);
             let revolute = robot.joints()[j].joint_type == crate::model::JointType::Revolute;
-            return (j, moment_sensitivity(joint, tool, &g, revolute, j, b, i));
+            return (j, moment_sensitivity(joint, tool, g, revolute, j, b, i));
         }
         rest -= here;
     }

@@ -41,7 +41,7 @@ pub fn joint_jacobian(robot: &Robot, frames: &Frames, jac: &mut Matrix6xX<f64>) 
             let t = load.joint_twist(i);
             let dm = load.moved_moment(&t);
             for j in 0..n {
-                let dji = load.deflection_change_moved(j, &t, &dm);
+                let dji = load.deflection_change(j, &t, &dm);
                 if dji != 0.0 {
                     // J'_j as frames() left it: column j may already hold its correction.
                     let mut col = jac.column_mut(i);

@@ -208,25 +208,18 @@ impl Load {
         }
     }
 
-    /// d delta_j for the motion `t` (rad or mm per unit of what moves): the change of joint
-    /// j's deflection, c_j d tau_j plus that of its mass-free terms.
-    pub fn deflection_change(&self, j: usize, t: &Twist) -> f64 {
-        self.deflection_change_moved(j, t, &self.moved_moment(t))
-    }
-
     /// The change of the first moment (kg mm, world) of the masses the motion `t` moves
-    /// without their joint's axis: M_f v + w x S_f, f = `t.first`. Shared by every joint
-    /// before f in [`Load::deflection_change_moved`].
+    /// without their joint's axis: M_f v + w x S_f, f = `t.first` (zero without masses).
+    /// Shared by every joint before f in [`Load::deflection_change`].
     pub fn moved_moment(&self, t: &Twist) -> Vector3<f64> {
-        if !self.active || t.first >= self.suffix_mass.len() {
-            return Vector3::zeros();
-        }
         t.v * self.suffix_mass[t.first] + t.w.cross(&self.suffix_moment[t.first])
     }
 
-    /// [`Load::deflection_change`] with the motion's [`Load::moved_moment`] `dm` computed
-    /// once for all joints: a dot product per joint for the joint compliances.
-    pub fn deflection_change_moved(&self, j: usize, t: &Twist, dm: &Vector3<f64>) -> f64 {
+    /// d delta_j for the motion `t` (rad or mm per unit of what moves): the change of joint
+    /// j's deflection, c_j d tau_j (one dot product, with the motion's
+    /// [`Load::moved_moment`] `dm` computed once for all joints) plus that of its mass-free
+    /// terms.
+    pub fn deflection_change(&self, j: usize, t: &Twist, dm: &Vector3<f64>) -> f64 {
         let mut d = if j >= t.first {
             t.w.dot(&self.carried[j])
         } else {
@@ -270,25 +263,6 @@ impl Load {
                 v: z,
                 w: Vector3::zeros(),
             }
-        }
-    }
-
-    /// d tau_j for the motion `t` (N m or N per unit of what moves), at the commanded joints.
-    pub fn torque_change(&self, j: usize, t: &Twist) -> f64 {
-        let (z, o) = self.axes[j];
-        let g = &self.gravity;
-        match (self.revolute[j], j >= t.first) {
-            (true, true) => {
-                let r = self.suffix_moment[j] - o * self.suffix_mass[j];
-                g.dot(&t.w.cross(&z.cross(&r))) * 1e-3
-            }
-            (true, false) => {
-                let f = t.first;
-                let dm = t.v * self.suffix_mass[f] + t.w.cross(&self.suffix_moment[f]);
-                g.dot(&z.cross(&dm)) * 1e-3
-            }
-            (false, true) => self.suffix_mass[j] * g.dot(&t.w.cross(&z)),
-            (false, false) => 0.0,
         }
     }
 }
