@@ -166,29 +166,30 @@ pub fn analyse_with(
     }
     let kept_matrix = DMatrix::from_fn(scaled.nrows(), kept.len(), |i, c| scaled[(i, kept[c])]);
     let (_, selected_condition_number) = condition(&kept_matrix);
-    // One factorisation for every regrouping.
-    let svd = kept_matrix.clone().svd(true, true);
-    for (c, &j) in nonzero.iter().enumerate() {
-        if kept.contains(&c) {
-            continue;
-        }
-        let target = scaled.column(c).into_owned();
+    // Column c = sum x_i column_i in scaled units; in parameter units a change dp_c acts as
+    // x_i norm_c / norm_i of parameter i.
+    let regrouping = |svd: &nalgebra::SVD<f64, nalgebra::Dyn, nalgebra::Dyn>, c: usize| {
+        let j = nonzero[c];
         let coeffs = svd
-            .solve(&target, 1e-12)
+            .solve(&scaled.column(c), 1e-12)
             .unwrap_or_else(|_| DVector::zeros(kept.len()));
         let max_c = coeffs.iter().map(|x| x.abs()).fold(0.0, f64::max);
-        let regroups = kept
-            .iter()
+        kept.iter()
             .zip(coeffs.iter())
             .filter(|&(_, x)| x.abs() > 1e-3 * max_c && x.abs() > 1e-9)
-            // Column j = sum c_i * column_i in scaled units; in parameter units a change dp_j
-            // acts as c_i * norm_j / norm_i of parameter i.
             .map(|(&ci, x)| (candidates[nonzero[ci]], x * norms[j] / norms[nonzero[ci]]))
-            .collect();
-        dropped.push(Dropped {
-            param: candidates[j],
-            reason: DropReason::Regroups(regroups),
-        });
+            .collect::<Vec<_>>()
+    };
+    // One factorisation for every regrouping, and none when nothing regroups.
+    let regrouped: Vec<usize> = (0..nonzero.len()).filter(|c| !kept.contains(c)).collect();
+    if !regrouped.is_empty() {
+        let svd = kept_matrix.svd(true, true);
+        for c in regrouped {
+            dropped.push(Dropped {
+                param: candidates[nonzero[c]],
+                reason: DropReason::Regroups(regrouping(&svd, c)),
+            });
+        }
     }
     let selected = kept.iter().map(|&c| candidates[nonzero[c]]).collect();
     Identifiability {

@@ -82,13 +82,7 @@ pub fn parameter_jacobian(
         if load.compliant
             && let Some(t) = twist(robot, load, axis, n)
         {
-            let dm = load.moved_moment(&t);
-            for j in 0..n {
-                let d = load.deflection_change(j, &t, &dm);
-                if d != 0.0 {
-                    c += load.columns[j] * d;
-                }
-            }
+            c += load.tool_change(&t);
         }
     }
 }

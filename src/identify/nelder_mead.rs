@@ -148,5 +148,6 @@ pub fn solve_nelder_mead(
         stop,
         cost: final_cost,
         evaluations,
+        normal: None,
     })
 }

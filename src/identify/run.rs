@@ -5,13 +5,12 @@
 use super::identifiability::{CONDITION_WARNING, DropReason, Dropped, Identifiability, analyse};
 use super::nelder_mead::solve_nelder_mead;
 use super::problem::{
-    IdentifyWorkspace, Measure, Observations, Sigmas, normal_equations, residual,
+    IdentifyWorkspace, Measure, Normal, Observations, Sigmas, normal_equations, residual,
 };
 use super::register::{Registration, register};
 use super::select::{is_compliance, select};
 use super::solve::{
-    Method, Solution, SolveOptions, StopReason, covariance, free_values, solve_gradient,
-    with_values,
+    Method, Solution, SolveOptions, StopReason, covariance, covariance_from, solve_gradient_from,
 };
 use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
@@ -244,19 +243,22 @@ fn enough_equations(set: &MeasurementSet, obs: &Observations, k: usize) -> Resul
 /// The solve from `start` (Nelder-Mead or a gradient method), and with a robust loss its
 /// iteratively reweighted rounds (weights from the residuals in robust sigmas, 1.4826 x the
 /// median; at most 30 rounds, until no weight moves by 1e-6); the rounds taken.
+/// `normal`: the normal equations at `start` over `cols` when the caller has them (the
+/// first solve then saves a pass over the data).
 fn solve_robust(
     start: &Robot,
     obs: &mut Observations,
     cols: &[usize],
     opts: &Options,
+    normal: Option<Normal>,
 ) -> Result<(Solution, usize)> {
-    let run = |start: &Robot, obs: &Observations| -> Result<Solution> {
+    let run = |start: &Robot, obs: &Observations, normal| -> Result<Solution> {
         match opts.solve.method {
             Method::Nm => solve_nelder_mead(start, obs, cols, &opts.solve),
-            _ => solve_gradient(start, obs, cols, &opts.solve),
+            _ => solve_gradient_from(start, obs, cols, &opts.solve, normal),
         }
     };
-    let mut solution = run(start, obs)?;
+    let mut solution = run(start, obs, normal)?;
     let mut robust_rounds = 0;
     if let Some(loss) = opts.robust {
         for _ in 0..30 {
@@ -269,7 +271,7 @@ fn solve_robust(
                 change = change.max((w - o.weight).abs());
                 o.weight = w;
             }
-            solution = run(&solution.robot, obs)?;
+            solution = run(&solution.robot, obs, None)?;
             if change < 1e-6 {
                 break;
             }
@@ -337,9 +339,6 @@ fn outliers(set: &MeasurementSet, obs: &Observations, robot: &Robot, k: f64) -> 
 /// 0.114; 2 gave 0.095 and 0.137; 1 gave 0.097 and 0.142: the worst case decides.
 pub const SIGNIFICANCE: f64 = 3.0;
 
-/// Iterations of the geometry-only solve that precedes a solve with compliances.
-const STAGE_ONE_ITERATIONS: usize = 2;
-
 /// Backward elimination of compliances: while one has |estimate - its value in `start`| <
 /// [`SIGNIFICANCE`] std, the least significant goes back to its value in `start` (the
 /// nominal's: zero unless the file gave one) and out of the set, and the rest is solved again
@@ -354,7 +353,11 @@ fn drop_insignificant(
 ) -> Result<(Solution, Vec<usize>, nalgebra::DMatrix<f64>, f64)> {
     let params = start.parameters();
     loop {
-        let (cov, s2) = covariance(&solution.robot, obs, &cols)?;
+        // The solve's own normal equations at its solution, when it has them.
+        let (cov, s2) = match &solution.normal {
+            Some(ne) => covariance_from(&solution.robot, ne, obs.len(), &cols)?,
+            None => covariance(&solution.robot, obs, &cols)?,
+        };
         let weakest = cols
             .iter()
             .enumerate()
@@ -383,44 +386,53 @@ fn drop_insignificant(
             solution.robot = reset;
             return Ok((solution, cols, cov, s2));
         }
-        solution = solve_robust(&reset, obs, &cols, opts)?.0;
+        solution = solve_robust(&reset, obs, &cols, opts, None)?.0;
     }
 }
 
-/// The compliances' screening before their nonlinear solve: at the fitted geometry `start`,
-/// one Gauss-Newton step of the linearised problem over `cols` gives every estimate and its
-/// standard deviation at once; the least significant compliance (|estimate| <
-/// [`SIGNIFICANCE`] std) leaves, the step is solved again without it, and so on. Only the
+/// The compliances' screening before their nonlinear solve: at `start`, one Gauss-Newton
+/// step of the linearised problem over `cols` (geometry and compliances together) gives every
+/// estimate and its standard deviation at once; the least significant compliance (|estimate|
+/// < [`SIGNIFICANCE`] std) leaves, the step is solved again without it, and so on. Only the
 /// small normal matrix is solved again, not the problem: a weak compliance never enters the
-/// nonlinear solve, where it would crawl towards its bound. Returns the columns kept and the
-/// model after the last step (the joint solve's start: the compliances are nearly linear).
+/// nonlinear solve, where it would crawl towards its bound (a single joint solve from the
+/// UR10's nominal ran its wrist's c5 to the bound). Returns the columns kept and the normal
+/// equations at `start` over them, the joint solve's first iteration.
 fn screen_compliances(
     start: &Robot,
     obs: &Observations,
     mut cols: Vec<usize>,
     ident: &mut Identifiability,
-) -> (Vec<usize>, Robot) {
+) -> (Vec<usize>, Normal) {
     let params = start.parameters();
     let mut ws = IdentifyWorkspace::new(start);
     let ne = normal_equations(start, obs, &cols, &mut ws);
     // Positions in `ne` of the columns still in.
     let mut live: Vec<usize> = (0..cols.len()).collect();
     let m = obs.len();
-    let unchanged = |cols: Vec<usize>| (cols, start.clone());
+    let kept = |cols: Vec<usize>, live: &[usize]| {
+        let k = live.len();
+        let normal = Normal {
+            a: DMatrix::from_fn(k, k, |i, j| ne.a[(live[i], live[j])]),
+            g: DVector::from_fn(k, |i, _| ne.g[live[i]]),
+            cost: ne.cost,
+        };
+        (cols, normal)
+    };
     loop {
         let n = live.len();
         if n == 0 || m <= n {
-            return unchanged(cols);
+            return kept(cols, &live);
         }
         // Unit diagonal before factorising: mm, rad and rad per N m columns differ by orders.
         let d: Vec<f64> = live.iter().map(|&i| ne.a[(i, i)].sqrt()).collect();
         if d.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
-            return unchanged(cols);
+            return kept(cols, &live);
         }
         let a = DMatrix::from_fn(n, n, |i, j| ne.a[(live[i], live[j])] / (d[i] * d[j]));
         let g = DVector::from_fn(n, |i, _| ne.g[live[i]] / d[i]);
         let Some(chol) = a.cholesky() else {
-            return unchanged(cols);
+            return kept(cols, &live);
         };
         let y = chol.solve(&g);
         let inv = chol.inverse();
@@ -436,10 +448,7 @@ fn screen_compliances(
             .filter(|(_, t)| t.is_nan() || t.abs() < SIGNIFICANCE)
             .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()));
         let Some((i, t)) = weakest else {
-            let (ids, x0) = free_values(start, &cols);
-            let x = DVector::from_fn(n, |k, _| x0[k] + y[k] / d[k]);
-            let stepped = with_values(start, &ids, &x).unwrap_or_else(|_| start.clone());
-            return (cols, stepped);
+            return kept(cols, &live);
         };
         let c = cols.remove(i);
         live.remove(i);
@@ -480,39 +489,15 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
 
     // Compliances are analysed with the rest at the (registered) nominal; they come last in
     // priority, so the geometric subset is what it would be without them.
-    let mut notes = notes;
     let mut ident = analyse(&start, &obs, &candidates, opts.rank_tolerance);
     let mut cols = ident.selected.clone();
-    // Compliances scale what the geometry leaves: solve the geometry first, so that they
-    // start (at zero) from a fitted model rather than from the nominal's millimetres, where a
-    // weak deflection (a wrist's) can stand in for a geometric error and run to its bound;
-    // then keep those the data find significant, before the joint solve.
-    let geometric: Vec<usize> = cols
-        .iter()
-        .copied()
-        .filter(|&c| !is_compliance(&params[c]))
-        .collect();
-    if geometric.len() < cols.len() {
-        if !geometric.is_empty() {
-            // A few Levenberg-Marquardt steps bring the geometry close enough; the joint solve
-            // converges it with the compliances.
-            let rough = Options {
-                solve: SolveOptions {
-                    max_iterations: STAGE_ONE_ITERATIONS,
-                    ..opts.solve
-                },
-                ..opts.clone()
-            };
-            let (solution, _) = solve_robust(&start, &mut obs, &geometric, &rough)?;
-            start = solution.robot;
-            notes
-                .push("the geometry was solved first, then with the compliances from there".into());
-        }
-        let (kept, stepped) = screen_compliances(&start, &obs, cols, &mut ident);
+    // A compliance the data cannot tell from zero (a light wrist's) would stand in for a
+    // geometric error and run to its bound in the nonlinear solve: screen them first.
+    let mut first_normal = None;
+    if cols.iter().any(|&c| is_compliance(&params[c])) {
+        let (kept, normal) = screen_compliances(&start, &obs, cols, &mut ident);
         cols = kept;
-        // The joint solve starts from the screening's Gauss-Newton step: the compliances
-        // are nearly linear there (Levenberg-Marquardt damps the step if not).
-        start = stepped;
+        first_normal = Some(normal);
     }
     if cols.is_empty() {
         return Err(Error::Invalid(
@@ -529,7 +514,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         ));
     }
 
-    let (solution, robust_rounds) = solve_robust(&start, &mut obs, &cols, opts)?;
+    let (solution, robust_rounds) = solve_robust(&start, &mut obs, &cols, opts, first_normal)?;
     if solution.stop == StopReason::MaxIterations {
         warnings.push(format!(
             "stopped at the iteration limit ({}) before any tolerance: the result may be unconverged",

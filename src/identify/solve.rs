@@ -98,6 +98,9 @@ pub struct Solution {
     pub cost: f64,
     /// Cost evaluations (for Nelder-Mead: function evaluations).
     pub evaluations: usize,
+    /// The normal equations at `robot` over the solved parameters (gradient methods; None
+    /// for Nelder-Mead): the covariance needs them, and they cost a pass over the data.
+    pub normal: Option<Normal>,
 }
 
 /// The robot with the free parameters `ids` set to `x` (mm, rad).
@@ -118,15 +121,16 @@ fn finished(
     robot: Robot,
     iterations: usize,
     stop: StopReason,
-    cost: f64,
+    normal: Normal,
     evaluations: usize,
 ) -> Solution {
     Solution {
         robot,
         iterations,
         stop,
-        cost,
+        cost: normal.cost,
         evaluations,
+        normal: Some(normal),
     }
 }
 
@@ -141,10 +145,25 @@ pub fn solve_gradient(
     cols: &[usize],
     opts: &SolveOptions,
 ) -> Result<Solution> {
+    solve_gradient_from(robot, obs, cols, opts, None)
+}
+
+/// [`solve_gradient`] given the normal equations at `robot` over `cols` when the caller has
+/// them already (they cost a pass over the data).
+pub fn solve_gradient_from(
+    robot: &Robot,
+    obs: &Observations,
+    cols: &[usize],
+    opts: &SolveOptions,
+    normal: Option<Normal>,
+) -> Result<Solution> {
     let (ids, mut x) = free_values(robot, cols);
     let mut ws = IdentifyWorkspace::new(robot);
     let mut current = robot.clone();
-    let mut ne = normal_equations(&current, obs, cols, &mut ws);
+    let mut ne = match normal {
+        Some(ne) if ne.a.nrows() == cols.len() && ne.g.len() == cols.len() => ne,
+        _ => normal_equations(&current, obs, cols, &mut ws),
+    };
     let mut evaluations = 1;
     if !ne.cost.is_finite() {
         return Err(Error::NotConverged(format!(
@@ -166,7 +185,7 @@ pub fn solve_gradient(
                 current,
                 iter,
                 StopReason::Gradient,
-                0.0,
+                ne,
                 evaluations,
             ));
         }
@@ -186,7 +205,7 @@ pub fn solve_gradient(
                 current,
                 iter,
                 StopReason::Gradient,
-                ne.cost,
+                ne,
                 evaluations,
             ));
         }
@@ -217,7 +236,7 @@ pub fn solve_gradient(
                 current,
                 iter,
                 StopReason::Precision,
-                ne.cost,
+                ne,
                 evaluations,
             ));
         };
@@ -244,7 +263,7 @@ pub fn solve_gradient(
                 current,
                 iter + 1,
                 StopReason::Function,
-                ne.cost,
+                ne,
                 evaluations,
             ));
         }
@@ -253,7 +272,7 @@ pub fn solve_gradient(
                 current,
                 iter + 1,
                 StopReason::Parameter,
-                ne.cost,
+                ne,
                 evaluations,
             ));
         }
@@ -262,7 +281,7 @@ pub fn solve_gradient(
         current,
         opts.max_iterations,
         StopReason::MaxIterations,
-        ne.cost,
+        ne,
         evaluations,
     ))
 }
@@ -419,7 +438,17 @@ pub fn covariance(
 ) -> Result<(DMatrix<f64>, f64)> {
     let mut ws = IdentifyWorkspace::new(robot);
     let ne = normal_equations(robot, obs, cols, &mut ws);
-    let m = obs.len();
+    covariance_from(robot, &ne, obs.len(), cols)
+}
+
+/// [`covariance`] from the normal equations `ne` at `robot` over `cols`, for `m` residual
+/// components.
+pub fn covariance_from(
+    robot: &Robot,
+    ne: &Normal,
+    m: usize,
+    cols: &[usize],
+) -> Result<(DMatrix<f64>, f64)> {
     let n = cols.len();
     let s2 = if m > n {
         ne.cost / (m - n) as f64

@@ -180,6 +180,7 @@ pub fn frames(robot: &Robot, q: &[f64], out: &mut Frames) {
             let revolute = joint.joint_type == crate::model::JointType::Revolute;
             out.load.columns[j] = axis_column(&out.joint, &out.tool, revolute, j);
         }
+        out.load.fill_maps();
     } else {
         out.joint.copy_from_slice(&load.joint);
         out.link.copy_from_slice(&load.link);

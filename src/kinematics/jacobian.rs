@@ -12,7 +12,8 @@ use nalgebra::{Matrix6xX, Vector3, Vector6};
 /// Revolute joint i with axis z_i through o_i: J'_i = [z_i x (p - o_i); z_i]; prismatic:
 /// [z_i; 0]. A compliant robot reaches q' = q + delta(q), so its Jacobian is J' (I + D),
 /// J' at the reached joints and D = d delta / d q, D_ji the change of joint j's deflection
-/// under joint i's motion ([`super::load::Load::deflection_change`]).
+/// under joint i's motion (J' D's column i is [`super::load::Load::tool_change`] of that
+/// motion).
 pub fn joint_jacobian(robot: &Robot, frames: &Frames, jac: &mut Matrix6xX<f64>) {
     let n = robot.dof();
     if jac.ncols() != n {
@@ -38,16 +39,8 @@ pub fn joint_jacobian(robot: &Robot, frames: &Frames, jac: &mut Matrix6xX<f64>) 
     if frames.load.compliant {
         let load = &frames.load;
         for i in 0..n {
-            let t = load.joint_twist(i);
-            let dm = load.moved_moment(&t);
-            for j in 0..n {
-                let dji = load.deflection_change(j, &t, &dm);
-                if dji != 0.0 {
-                    // J'_j as frames() left it: column j may already hold its correction.
-                    let mut col = jac.column_mut(i);
-                    col += load.columns[j] * dji;
-                }
-            }
+            let mut col = jac.column_mut(i);
+            col += load.tool_change(&load.joint_twist(i));
         }
     }
 }

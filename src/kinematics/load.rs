@@ -21,7 +21,7 @@
 use super::Pose;
 use super::gravity::{PointMass, mass_points};
 use crate::model::{Compliance, JointType, Robot};
-use nalgebra::Vector3;
+use nalgebra::{Matrix6x3, Vector3, Vector6};
 
 /// A small rigid motion of the chain from frame `first` on: the velocity of every point x
 /// of those frames is v + w x x (world), per unit of whatever moves them.
@@ -89,6 +89,12 @@ pub struct Load {
     /// S_j (kg mm, world) for j = 0..=N.
     suffix_moment: Vec<Vector3<f64>>,
     revolute: Vec<bool>,
+    /// Per first moved frame f = 0..=N, the tool's motion through the changed deflections
+    /// per unit of a motion's w (sum over j >= f of J'_j carried_j^T) and of its moved first
+    /// moment (sum over j < f of J'_j beyond_j^T): a motion's whole effect in two 6 x 3
+    /// products ([`Load::tool_change`]). Filled by [`Load::fill_maps`] for a compliant robot.
+    carried_map: Vec<Matrix6x3<f64>>,
+    beyond_map: Vec<Matrix6x3<f64>>,
 }
 
 impl Load {
@@ -122,7 +128,44 @@ impl Load {
                 .iter()
                 .map(|j| j.joint_type == JointType::Revolute)
                 .collect(),
+            carried_map: vec![Matrix6x3::zeros(); n + 1],
+            beyond_map: vec![Matrix6x3::zeros(); n + 1],
         }
+    }
+
+    /// Fills the maps of [`Load::tool_change`] from `columns` (J'_j at the reached joints).
+    pub(crate) fn fill_maps(&mut self) {
+        let n = self.columns.len();
+        self.carried_map[n] = Matrix6x3::zeros();
+        for j in (0..n).rev() {
+            self.carried_map[j] =
+                self.carried_map[j + 1] + self.columns[j] * self.carried[j].transpose();
+        }
+        self.beyond_map[0] = Matrix6x3::zeros();
+        for j in 0..n {
+            self.beyond_map[j + 1] =
+                self.beyond_map[j] + self.columns[j] * self.beyond[j].transpose();
+        }
+    }
+
+    /// The tool's motion (world; rows 0-2 mm, 3-5 rad, per unit of what moves) through the
+    /// deflections the motion `t` changes: sum over j of J'_j d delta_j, d delta_j = c_j d
+    /// tau_j (the module's formulas: carried_j . w for j >= first, beyond_j . dm for j <
+    /// first, dm the moved first moment) plus the change through the mass-free
+    /// coefficients.
+    pub fn tool_change(&self, t: &Twist) -> Vector6<f64> {
+        let dm = self.moved_moment(t);
+        let mut out = self.carried_map[t.first] * t.w + self.beyond_map[t.first] * dm;
+        if self.moments {
+            // The mass-free terms, joint by joint.
+            for j in 0..self.columns.len() {
+                let d = self.moment_change(j, t);
+                if d != 0.0 {
+                    out += self.columns[j] * d;
+                }
+            }
+        }
+        out
     }
 
     /// From the commanded frames already in `joint`, `link` and `tool`: points, torques,
@@ -210,42 +253,32 @@ impl Load {
 
     /// The change of the first moment (kg mm, world) of the masses the motion `t` moves
     /// without their joint's axis: M_f v + w x S_f, f = `t.first` (zero without masses).
-    /// Shared by every joint before f in [`Load::deflection_change`].
-    pub fn moved_moment(&self, t: &Twist) -> Vector3<f64> {
+    /// Shared by every joint before f.
+    fn moved_moment(&self, t: &Twist) -> Vector3<f64> {
         t.v * self.suffix_mass[t.first] + t.w.cross(&self.suffix_moment[t.first])
     }
 
-    /// d delta_j for the motion `t` (rad or mm per unit of what moves): the change of joint
-    /// j's deflection, c_j d tau_j (one dot product, with the motion's
-    /// [`Load::moved_moment`] `dm` computed once for all joints) plus that of its mass-free
-    /// terms.
-    pub fn deflection_change(&self, j: usize, t: &Twist, dm: &Vector3<f64>) -> f64 {
-        let mut d = if j >= t.first {
-            t.w.dot(&self.carried[j])
-        } else {
-            dm.dot(&self.beyond[j])
-        };
-        if self.moments {
-            let n = self.joint.len();
-            let (z, o) = self.axes[j];
-            let g = &self.gravity;
-            d += match (self.revolute[j], j >= t.first) {
-                (true, true) => {
-                    let at = j * (n + 1) + j;
-                    let r = (self.ks[at] - o * self.km[at]) * 1e-3 + self.kh[at];
-                    g.dot(&t.w.cross(&z.cross(&r)))
-                }
-                (true, false) => {
-                    let at = j * (n + 1) + t.first;
-                    let dm = (t.v * self.km[at] + t.w.cross(&self.ks[at])) * 1e-3
-                        + t.w.cross(&self.kh[at]);
-                    g.dot(&z.cross(&dm))
-                }
-                (false, true) => self.km[j * (n + 1) + j] * g.dot(&t.w.cross(&z)),
-                (false, false) => 0.0,
-            };
+    /// The change of joint j's deflection through its mass-free coefficients under the
+    /// motion `t` (rad or mm per unit of what moves).
+    fn moment_change(&self, j: usize, t: &Twist) -> f64 {
+        let n = self.joint.len();
+        let (z, o) = self.axes[j];
+        let g = &self.gravity;
+        match (self.revolute[j], j >= t.first) {
+            (true, true) => {
+                let at = j * (n + 1) + j;
+                let r = (self.ks[at] - o * self.km[at]) * 1e-3 + self.kh[at];
+                g.dot(&t.w.cross(&z.cross(&r)))
+            }
+            (true, false) => {
+                let at = j * (n + 1) + t.first;
+                let dm =
+                    (t.v * self.km[at] + t.w.cross(&self.ks[at])) * 1e-3 + t.w.cross(&self.kh[at]);
+                g.dot(&z.cross(&dm))
+            }
+            (false, true) => self.km[j * (n + 1) + j] * g.dot(&t.w.cross(&z)),
+            (false, false) => 0.0,
         }
-        d
     }
 
     /// The motion of joint i's variable (per rad or per mm), at the commanded joints.
