@@ -52,6 +52,7 @@ pub mod io;
 pub mod kinematics;
 pub mod model;
 pub mod neural;
+pub mod plan;
 #[cfg(feature = "plot")]
 pub mod plot;
 pub mod reports;

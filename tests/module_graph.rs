@@ -323,6 +323,7 @@ const LAYERS: &[&[&str]] = &[
     &["kinematics"],
     &["data"],
     &["identify", "sim", "evaluate"],
+    &["plan"],
     &["neural"],
     &["compensation"],
     &["plot"],

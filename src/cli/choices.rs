@@ -95,3 +95,19 @@ choice! {
         Mix,
     }
 }
+
+choice! {
+    /// What a measurement plan maximises.
+    Criterion => robocal::plan::Criterion {
+        /// D-optimal: the determinant of the information matrix.
+        D,
+        /// Borm and Menq's O1 (plans as D).
+        O1,
+        /// Nahvi and Hollerbach's O3: the smallest singular value.
+        O3,
+        /// A-optimal: the sum of the parameters' variances (scaled).
+        A,
+        /// I-optimal: the predicted mean squared position error over the validation cloud.
+        I,
+    }
+}

@@ -13,6 +13,8 @@ mod ik;
 mod import;
 mod output;
 mod paths;
+mod plan;
+mod plan_study;
 mod predict;
 mod report;
 mod reproduce;
@@ -64,6 +66,12 @@ enum Command {
     Report(report::ReportArgs),
     /// Thesis Case D end to end (Table 6.6) and the non-geometric robot, beside the thesis.
     CaseD(case_d::CaseDArgs),
+    /// Plans the measurements: the configurations that identify the robot best, and the
+    /// accuracy they will give, before measuring.
+    Plan(plan::PlanArgs),
+    /// Planned against random configurations on simulated robots over seeds: the error each
+    /// leaves after identification, and the prediction made before measuring.
+    PlanStudy(plan_study::PlanStudyArgs),
 }
 
 /// Exit code of `compensate` when some targets have no command (the others are written).
@@ -78,6 +86,8 @@ pub fn main() -> ExitCode {
     let mut code = ExitCode::SUCCESS;
     let result = robocal::io::all_or_nothing(|| match cli.command {
         Command::Fk(a) => fk::run(a),
+        Command::Plan(a) => plan::run(a),
+        Command::PlanStudy(a) => plan_study::run_study(a),
         Command::Ik(a) => ik::run(a),
         Command::Import(a) => import::run(a),
         Command::Simulate(a) => simulate::run(a),

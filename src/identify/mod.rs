@@ -12,5 +12,5 @@ pub mod solve;
 
 pub use jacobian::parameter_jacobian;
 pub use problem::{Measure, Sigmas};
-pub use run::{Identified, Options, RobustLoss, identify};
+pub use run::{Identified, Options, RobustLoss, candidates, identify};
 pub use solve::{Method, SolveOptions, StopReason};

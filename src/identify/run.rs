@@ -206,6 +206,17 @@ fn selection_in(nominal: &Robot, completed: &Robot, chosen: Vec<usize>) -> Resul
     select(completed, &spec.join(","))
 }
 
+/// The model an identification of `params` (a selection, see `select`) solves and its
+/// candidate parameters (indices into that model's parameters, in priority order): a fully
+/// selected DH-type base or tool row becomes the equivalent 6-DOF transform. With notes
+/// saying so.
+pub fn candidates(nominal: &Robot, params: &str) -> Result<(Robot, Vec<usize>, Vec<String>)> {
+    let chosen = select(nominal, params)?;
+    let (completed, notes) = complete_frames(nominal, &chosen)?;
+    let candidates = selection_in(nominal, &completed, chosen)?;
+    Ok((completed, candidates, notes))
+}
+
 /// Refuses data with no more independent residual components than `k` identifiable
 /// parameters. Rows that repeat one configuration add no independent equation: 20
 /// measurements of one pose give 6 equations, whatever their number.
@@ -464,10 +475,8 @@ fn screen_compliances(
 pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result<Identified> {
     let measure = opts.measure.unwrap_or_else(|| Measure::default_for(set));
     let mut obs = Observations::new(set, measure, opts.sigmas)?;
-    let chosen = select(nominal, &opts.params)?;
-    let (completed, notes) = complete_frames(nominal, &chosen)?;
+    let (completed, candidates, notes) = candidates(nominal, &opts.params)?;
     let mut warnings = Vec::new();
-    let candidates = selection_in(nominal, &completed, chosen)?;
     let nominal = &completed;
     let params = nominal.parameters();
 

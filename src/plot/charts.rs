@@ -408,3 +408,80 @@ impl Chart for Scatter {
         Ok(())
     }
 }
+
+/// One line of [`Curves`]: a value (and its range) at each x.
+#[derive(Debug, Clone)]
+pub struct Curve {
+    /// Legend name.
+    pub label: String,
+    /// (x, value, low, high): the line through the values, a whisker from low to high.
+    pub points: Vec<(f64, f64, f64, f64)>,
+    /// Dashed (for a prediction beside what was realised).
+    pub dashed: bool,
+}
+
+/// Values against a count, one line with markers and whiskers per curve (planned and
+/// random measurements: error against their number).
+pub struct Curves {
+    /// Title drawn above the chart.
+    pub title: String,
+    /// Axis title of x, e.g. "configurations measured".
+    pub x_label: String,
+    /// Axis title of y with unit.
+    pub y_label: String,
+    /// The curves; colours in order, a dashed curve takes the colour of the one before it.
+    pub curves: Vec<Curve>,
+}
+
+impl Chart for Curves {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let pts = self.curves.iter().flat_map(|c| c.points.iter());
+        let x_hi = pts.clone().map(|p| p.0).fold(1.0f64, f64::max);
+        let x_lo = pts.clone().map(|p| p.0).fold(x_hi, f64::min);
+        let y_hi = pts.map(|p| p.3.max(p.1)).fold(0.0f64, f64::max).max(1e-12);
+        let pad = 0.05 * (x_hi - x_lo).max(1.0);
+        let mut c = ChartBuilder::on(root)
+            .caption(&self.title, font(22))
+            .margin(12)
+            .x_label_area_size(50)
+            .y_label_area_size(80)
+            .build_cartesian_2d(x_lo - pad..x_hi + pad, 0.0..y_hi * 1.3)?;
+        c.configure_mesh()
+            .x_desc(self.x_label.as_str())
+            .y_desc(self.y_label.as_str())
+            .x_label_formatter(&|x| format!("{x:.0}"))
+            .y_label_formatter(&|v| short(*v))
+            .axis_desc_style(font(17))
+            .label_style(font(14))
+            .draw()?;
+        let mut colour = 0;
+        for (k, curve) in self.curves.iter().enumerate() {
+            if k > 0 && !curve.dashed {
+                colour += 1;
+            }
+            let col = COLOURS[colour % COLOURS.len()];
+            let line: Vec<(f64, f64)> = curve.points.iter().map(|p| (p.0, p.1)).collect();
+            let style = col.stroke_width(2);
+            if curve.dashed {
+                c.draw_series(DashedLineSeries::new(line, 8, 6, style))?
+                    .label(curve.label.as_str())
+                    .legend(move |(x, y)| {
+                        PathElement::new([(x, y), (x + 20, y)], col.stroke_width(2))
+                    });
+            } else {
+                c.draw_series(LineSeries::new(line.clone(), style))?
+                    .label(curve.label.as_str())
+                    .legend(move |(x, y)| {
+                        PathElement::new([(x, y), (x + 20, y)], col.stroke_width(2))
+                    });
+                c.draw_series(line.iter().map(|&p| Circle::new(p, 4, col.filled())))?;
+                // Side by side: the whiskers of curves at the same x do not hide each other.
+                let dx = 0.004 * (x_hi - x_lo).max(1.0) * (2.0 * colour as f64 - 1.0);
+                c.draw_series(curve.points.iter().map(|p| {
+                    PathElement::new([(p.0 + dx, p.2), (p.0 + dx, p.3)], col.stroke_width(2))
+                }))?;
+            }
+        }
+        legend(&mut c)
+    }
+}

@@ -3,5 +3,6 @@
 //! files, the noise and the thesis's published figures they share are in [`thesis`].
 
 pub mod case_d;
+pub mod planning;
 pub mod reproduce;
 pub mod thesis;

@@ -1,0 +1,372 @@
+//! `robocal plan`: which configurations to measure, and the accuracy they will give.
+
+use super::choices::{Criterion, Measure};
+use super::data_args::SigmaArgs;
+use super::output::{num, parse_list, writing};
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use robocal::data::JointTable;
+use robocal::identify::identifiability::RANK_TOL;
+use robocal::model::{Robot, read_robot};
+use robocal::plan::design::per_unit;
+use robocal::plan::predict::Prediction;
+use robocal::plan::{Constraints, Design, Pool, choose, pool, predict, smallest_meeting};
+use robocal::sim::Region;
+use std::path::PathBuf;
+
+/// Largest candidate pool drawn: each unit holds its Jacobian block (6 x p numbers).
+const MAX_POOL: usize = 200_000;
+
+#[derive(Args)]
+pub struct PlanArgs {
+    /// Nominal robot file.
+    #[arg(long)]
+    robot: PathBuf,
+    /// Units to measure: configurations, or pairs for --measure relative|distance.
+    #[arg(long, value_parser = super::bounds::count, required_unless_present_any = ["target_mm", "evaluate"], conflicts_with_all = ["target_mm", "evaluate"])]
+    count: Option<usize>,
+    /// Plan the fewest units whose predicted mean position error is at most this (mm).
+    #[arg(long, value_parser = super::bounds::sigma, conflicts_with = "evaluate")]
+    target_mm: Option<f64>,
+    /// Predict the accuracy of an existing list instead of planning (CSV with q1..qN, deg;
+    /// consecutive rows pair up for relative and distance).
+    #[arg(long, conflicts_with = "candidates")]
+    evaluate: Option<PathBuf>,
+    /// Parameters to identify (as `identify --params`).
+    #[arg(long, default_value = "full")]
+    params: String,
+    /// How the planned units will be measured.
+    #[arg(long, value_enum, default_value_t = Measure::Pose)]
+    measure: Measure,
+    /// Candidate configurations (CSV with q1..qN, deg); default: drawn within the limits.
+    #[arg(long, conflicts_with = "region")]
+    candidates: Option<PathBuf>,
+    /// Joint ranges to draw candidates and the validation cloud from (TOML `ranges = [[min,
+    /// max], ...]`, deg).
+    #[arg(long)]
+    region: Option<PathBuf>,
+    /// Candidate units drawn (1 to 200000).
+    #[arg(long, default_value_t = 5000)]
+    pool: usize,
+    /// What the plan maximises.
+    #[arg(long, value_enum, default_value_t = Criterion::D)]
+    criterion: Criterion,
+    #[command(flatten)]
+    sigma: SigmaArgs,
+    /// Random seed (candidate pool, validation cloud, prediction draws).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Angle kept from every revolute joint's limits (deg, 0 to 90).
+    #[arg(long, default_value_t = 0.0)]
+    margin_deg: f64,
+    /// Lowest height of the tool origin (mm, z in the robot's world frame).
+    #[arg(long, allow_hyphen_values = true)]
+    floor_mm: Option<f64>,
+    /// A box the tool origin must stay out of: "xmin,ymin,zmin,xmax,ymax,zmax" (mm).
+    #[arg(long, allow_hyphen_values = true)]
+    forbid: Option<String>,
+    /// Validation configurations the prediction averages over (1 to 100000).
+    #[arg(long, default_value_t = 300)]
+    validation: usize,
+    /// The planned configurations (CSV: id, pair, q1..qN in deg).
+    #[arg(long, required_unless_present = "evaluate")]
+    out: Option<PathBuf>,
+    /// Everything the plan found, as JSON.
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+#[derive(serde::Serialize)]
+struct Report<'a> {
+    robot: String,
+    params: &'a str,
+    measure: &'a str,
+    criterion: &'a str,
+    sigma_position_mm: f64,
+    sigma_rotation_mrad: f64,
+    candidate_units: usize,
+    refused: pool::Refused,
+    identifiable: Vec<String>,
+    not_identifiable: Vec<String>,
+    units: usize,
+    rows: Vec<Vec<f64>>,
+    value: Option<f64>,
+    greedy_value: Option<f64>,
+    exchanges: Option<usize>,
+    prediction: &'a Prediction,
+    random_prediction: Option<Prediction>,
+}
+
+fn constraints(a: &PlanArgs) -> Result<Constraints> {
+    if !(0.0..=90.0).contains(&a.margin_deg) {
+        bail!("--margin-deg {}: give 0 to 90", a.margin_deg);
+    }
+    if a.floor_mm.is_some_and(|f| !f.is_finite()) {
+        bail!("--floor-mm must be a number");
+    }
+    let forbidden = match &a.forbid {
+        Some(s) => {
+            let v = parse_list(s, "--forbid", 6)?;
+            let (lo, hi) = (
+                nalgebra::Vector3::new(v[0], v[1], v[2]),
+                nalgebra::Vector3::new(v[3], v[4], v[5]),
+            );
+            if (0..3).any(|i| lo[i] > hi[i]) {
+                bail!("--forbid {s}: give the box's minimum corner first, then its maximum");
+            }
+            Some((lo, hi))
+        }
+        None => None,
+    };
+    Ok(Constraints {
+        margin: a.margin_deg.to_radians(),
+        floor_mm: a.floor_mm,
+        forbidden,
+    })
+}
+
+/// The configurations of a joints CSV (rad, mm).
+fn configurations(path: &PathBuf, robot: &Robot) -> Result<Vec<Vec<f64>>> {
+    let t = JointTable::read(path, robot)?;
+    if t.joints.is_empty() {
+        bail!("{}: no rows", path.display());
+    }
+    Ok((0..t.joints.len()).map(|r| t.internal(r, robot)).collect())
+}
+
+fn print_prediction(label: &str, p: &Prediction) {
+    println!(
+        "{label}: position mean {:.4} mm, p95 {:.4} mm; orientation mean {:.4} deg, p95 {:.4} deg",
+        p.position_mm.mean, p.position_mm.p95, p.orientation_deg.mean, p.orientation_deg.p95
+    );
+}
+
+pub fn run(a: PlanArgs) -> Result<()> {
+    use super::paths::{guard, opt, req};
+    guard(
+        &[
+            req("--robot", &a.robot),
+            opt("--evaluate", a.evaluate.as_ref()),
+            opt("--candidates", a.candidates.as_ref()),
+            opt("--region", a.region.as_ref()),
+        ],
+        &[
+            opt("--out", a.out.as_ref()),
+            opt("--report", a.report.as_ref()),
+        ],
+    )?;
+    if !(1..=MAX_POOL).contains(&a.pool) {
+        bail!("--pool {}: give 1 to {MAX_POOL}", a.pool);
+    }
+    if !(1..=100_000).contains(&a.validation) {
+        bail!("--validation {}: give 1 to 100000", a.validation);
+    }
+    let robot = read_robot(&a.robot)?;
+    let measure: robocal::identify::Measure = a.measure.into();
+    let criterion: robocal::plan::Criterion = a.criterion.into();
+    let per = per_unit(measure);
+    let limits = constraints(&a)?;
+    let region = match &a.region {
+        Some(p) => Region::read(p, &robot)?,
+        None => Region::limits(&robot),
+    };
+    let candidates: Pool = match (&a.evaluate, &a.candidates) {
+        (Some(p), _) => {
+            let what = p.display().to_string();
+            pool::from_configurations(
+                &robot,
+                &configurations(p, &robot)?,
+                &Constraints::default(),
+                per,
+                &what,
+            )?
+        }
+        (None, Some(p)) => {
+            let what = p.display().to_string();
+            let pool = pool::from_configurations(
+                &robot,
+                &configurations(p, &robot)?,
+                &limits,
+                per,
+                &what,
+            )?;
+            if pool.refused.total() > 0 {
+                eprintln!(
+                    "note: {}: {} candidate row(s) refused by the constraints (limits and margin {}, floor {}, forbidden box {})",
+                    what,
+                    pool.refused.total(),
+                    pool.refused.limits,
+                    pool.refused.floor,
+                    pool.refused.forbidden
+                );
+            }
+            pool
+        }
+        (None, None) => pool::draw(&robot, &region, &limits, a.pool, per, a.seed)?,
+    };
+    // The cloud comes from its own stream of the seed: the pool does not move it.
+    let cloud: Vec<Vec<f64>> = pool::draw(
+        &robot,
+        &region,
+        &limits,
+        a.validation,
+        1,
+        a.seed ^ 0x9e37_79b9_7f4a_7c15,
+    )?
+    .units
+    .into_iter()
+    .map(|mut u| u.remove(0))
+    .collect();
+    let sigmas = a.sigma.sigmas();
+    let design = Design::new(
+        &robot,
+        &a.params,
+        measure,
+        sigmas,
+        &candidates,
+        cloud,
+        RANK_TOL,
+    )
+    .with_context(|| {
+        format!(
+            "planning `{}` on {} candidate units",
+            a.params,
+            candidates.units.len()
+        )
+    })?;
+    let names = design.robot.parameters();
+    for n in &design.notes {
+        println!("note: {n}");
+    }
+    let dropped: Vec<String> = design
+        .identifiability
+        .dropped
+        .iter()
+        .map(|d| names[d.param].name())
+        .collect();
+    println!(
+        "plan: {} candidate units ({} row{} each{}), measure {}, {} identifiable parameters{}",
+        candidates.units.len(),
+        per,
+        if per == 1 { "" } else { "s" },
+        match candidates.refused.total() {
+            0 => String::new(),
+            k => format!(
+                "; {k} refused: {} limits and margin, {} floor, {} forbidden box",
+                candidates.refused.limits, candidates.refused.floor, candidates.refused.forbidden
+            ),
+        },
+        measure.name(),
+        design.p(),
+        if dropped.is_empty() {
+            String::new()
+        } else {
+            format!(" ({} left out: {})", dropped.len(), dropped.join(", "))
+        }
+    );
+    let (units, chosen) = match (&a.evaluate, a.target_mm, a.count) {
+        (Some(_), _, _) => ((0..design.units()).collect::<Vec<_>>(), None),
+        (None, Some(t), _) => {
+            let (c, _) = smallest_meeting(&design, criterion, t, a.seed)?;
+            println!("target {t} mm: {} units", c.units.len());
+            (c.units.clone(), Some(c))
+        }
+        (None, None, Some(n)) => {
+            let c = choose(&design, n, criterion, &[])?;
+            (c.units.clone(), Some(c))
+        }
+        (None, None, None) => bail!("give --count, --target-mm or --evaluate"),
+    };
+    let prediction = predict(&design, &units, a.seed).with_context(|| {
+        format!(
+            "{} units do not identify every parameter: measure more, or more varied, configurations",
+            units.len()
+        )
+    })?;
+    if let Some(c) = &chosen {
+        println!(
+            "criterion {}: {:.6} after the greedy start, {:.6} after {} exchange(s)",
+            criterion.name(),
+            c.greedy_value,
+            c.value,
+            c.exchanges
+        );
+    }
+    println!("parameter    unit     predicted std");
+    for p in &prediction.parameters {
+        println!("{:<12} {:<8} {:>14.6}", p.name, p.unit, p.std);
+    }
+    print_prediction(
+        &format!(
+            "predicted error of {} units over {} validation configurations",
+            units.len(),
+            a.validation
+        ),
+        &prediction,
+    );
+    // What as many units taken as they come from the pool would give, for comparison.
+    let random_prediction = if chosen.is_some() && a.candidates.is_none() {
+        let first: Vec<usize> = (0..units.len()).collect();
+        let r = predict(&design, &first, a.seed);
+        if let Some(r) = &r {
+            print_prediction("the same number of random units from the pool", r);
+        }
+        r
+    } else {
+        None
+    };
+    let rows: Vec<Vec<f64>> = units
+        .iter()
+        .flat_map(|&u| candidates.units[u].iter())
+        .map(|q| {
+            q.iter()
+                .zip(robot.joints())
+                .map(|(v, j)| j.joint_type.to_file(*v))
+                .collect()
+        })
+        .collect();
+    if let Some(out) = &a.out {
+        let n = robot.dof();
+        let mut headers = vec!["id".to_string()];
+        if per == 2 {
+            headers.push("pair".into());
+        }
+        headers.extend(robocal::data::joint_columns(n));
+        let mut w = robocal::data::table::CsvOut::new(&headers)?;
+        for (k, q) in rows.iter().enumerate() {
+            let mut cells = vec![format!("{}", k + 1)];
+            if per == 2 {
+                cells.push(format!("{}", k / 2 + 1));
+            }
+            cells.extend(q.iter().map(|v| num(*v, None)));
+            w.row(&cells)?;
+        }
+        writing(robocal::io::write_atomic(out, &w.into_bytes()?), out)?;
+        println!("wrote {} ({} rows)", out.display(), rows.len());
+    }
+    if let Some(path) = &a.report {
+        let report = Report {
+            robot: a.robot.display().to_string(),
+            params: &a.params,
+            measure: measure.name(),
+            criterion: criterion.name(),
+            sigma_position_mm: sigmas.position_mm,
+            sigma_rotation_mrad: sigmas.rotation_rad * 1e3,
+            candidate_units: candidates.units.len(),
+            refused: candidates.refused,
+            identifiable: design.params.iter().map(|&c| names[c].name()).collect(),
+            not_identifiable: dropped,
+            units: units.len(),
+            rows,
+            value: chosen.as_ref().map(|c| c.value),
+            greedy_value: chosen.as_ref().map(|c| c.greedy_value),
+            exchanges: chosen.as_ref().map(|c| c.exchanges),
+            prediction: &prediction,
+            random_prediction,
+        };
+        let mut bytes = serde_json::to_vec_pretty(&report)?;
+        bytes.push(b'\n');
+        writing(robocal::io::write_atomic(path, &bytes), path)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,146 @@
+//! The accuracy a plan predicts before anything is measured.
+//!
+//! With C = M^-1 the parameters' covariance (parameter units; right when the sigmas are the
+//! instrument's and the model is complete), the tool's error at a configuration is
+//! e = J_pose dtheta, of covariance J C J^T (the pose Jacobian over the planned parameters,
+//! thesis eq. 4.19-4.21). Its length |e| is not Gaussian: its distribution over a validation
+//! cloud is sampled, each configuration with the same `SAMPLES` seeded standard normal
+//! draws, e = V sqrt(Lambda) z (V Lambda V^T = J C J^T): the mean and 95th percentile pool
+//! every configuration's draws. The cloud's mean |e| is what an identification from the
+//! planned measurements will leave against the truth, on average over the noise.
+
+use super::design::Design;
+use crate::identify::parameter_jacobian;
+use crate::kinematics::{Frames, frames};
+use nalgebra::{DMatrix, Matrix3, Matrix6xX, Vector3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+/// Normal draws per validation configuration.
+const SAMPLES: usize = 64;
+
+/// One parameter's predicted standard deviation.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ParamStd {
+    /// Its name (`a2`, `theta3`, `base.x`, ...).
+    pub name: String,
+    /// Its file unit (`mm`, `deg`, ...).
+    pub unit: String,
+    /// Predicted standard deviation (file unit).
+    pub std: f64,
+}
+
+/// Predicted error lengths over the validation cloud.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Spread {
+    /// Mean.
+    pub mean: f64,
+    /// 95th percentile.
+    pub p95: f64,
+}
+
+/// What a set of units predicts.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Prediction {
+    /// Units measured.
+    pub units: usize,
+    /// Each planned parameter's standard deviation.
+    pub parameters: Vec<ParamStd>,
+    /// Tool position error (mm).
+    pub position_mm: Spread,
+    /// Tool orientation error (deg).
+    pub orientation_deg: Spread,
+}
+
+/// Mean and 95th percentile of `v` (sorted in place).
+fn spread(v: &mut [f64]) -> Spread {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    Spread {
+        mean: v.iter().sum::<f64>() / n.max(1) as f64,
+        p95: if n == 0 {
+            f64::NAN
+        } else {
+            v[((0.95 * n as f64).ceil() as usize).clamp(1, n) - 1]
+        },
+    }
+}
+
+/// sqrt of the symmetric positive semi-definite `s` (V sqrt(Lambda), negative eigenvalues of
+/// rounding taken as zero).
+fn root(s: &Matrix3<f64>) -> Matrix3<f64> {
+    let e = s.symmetric_eigen();
+    let mut v = e.eigenvectors;
+    for k in 0..3 {
+        let l = e.eigenvalues[k].max(0.0).sqrt();
+        v.column_mut(k).scale_mut(l);
+    }
+    v
+}
+
+/// The prediction for the units `chosen` of `design`, over its validation cloud; None when
+/// the units do not identify every planned parameter. The draws are seeded by `seed`.
+pub fn predict(design: &Design, chosen: &[usize], seed: u64) -> Option<Prediction> {
+    let cov = design.covariance(chosen)?;
+    predict_covariance(design, &cov, chosen.len(), seed)
+}
+
+/// [`predict`] from the covariance `cov` (parameter units) of `design`'s parameters.
+pub fn predict_covariance(
+    design: &Design,
+    cov: &DMatrix<f64>,
+    units: usize,
+    seed: u64,
+) -> Option<Prediction> {
+    let cloud = &design.cloud;
+    let robot = &design.robot;
+    let ids = robot.parameters();
+    let parameters = design
+        .params
+        .iter()
+        .enumerate()
+        .map(|(k, &c)| ParamStd {
+            name: ids[c].name(),
+            unit: ids[c].field.file_unit().to_string(),
+            std: ids[c].field.to_file(cov[(k, k)].max(0.0).sqrt()),
+        })
+        .collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let z: Vec<Vector3<f64>> = (0..SAMPLES)
+        .map(|_| {
+            Vector3::new(
+                StandardNormal.sample(&mut rng),
+                StandardNormal.sample(&mut rng),
+                StandardNormal.sample(&mut rng),
+            )
+        })
+        .collect();
+    let p = design.p();
+    let mut ws = Frames::new(robot);
+    let mut jac = Matrix6xX::zeros(p);
+    let mut pos = Vec::with_capacity(cloud.len() * SAMPLES);
+    let mut rot = Vec::with_capacity(cloud.len() * SAMPLES);
+    for q in cloud {
+        frames(robot, q, &mut ws);
+        parameter_jacobian(robot, &ws, &design.params, &mut jac);
+        let jc = &jac * cov;
+        let s = &jc * jac.transpose();
+        let sp: Matrix3<f64> = s.fixed_view::<3, 3>(0, 0).into_owned();
+        let sr: Matrix3<f64> = s.fixed_view::<3, 3>(3, 3).into_owned();
+        let (rp, rr) = (root(&sp), root(&sr));
+        for zk in &z {
+            pos.push((rp * zk).norm());
+            rot.push((rr * zk).norm().to_degrees());
+        }
+    }
+    if cov.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    Some(Prediction {
+        units,
+        parameters,
+        position_mm: spread(&mut pos),
+        orientation_deg: spread(&mut rot),
+    })
+}

@@ -1,0 +1,213 @@
+//! `robocal plan` from the command line: planned files, their prediction read back through
+//! `--evaluate`, constraints, pairs, and bad input.
+
+mod common;
+use common::{robocal, stderr, stdout, tmp};
+
+const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
+
+fn json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+#[test]
+fn a_plan_is_written_within_its_constraints_and_evaluate_predicts_it_the_same() {
+    let out = tmp("plan.csv");
+    let report = tmp("plan.json");
+    let common = [
+        "--robot",
+        FANUC,
+        "--seed",
+        "4",
+        "--margin-deg",
+        "5",
+        "--floor-mm",
+        "300",
+        "--pool",
+        "800",
+    ];
+    let mut args = vec!["plan", "--count", "12"];
+    args.extend(common);
+    args.extend([
+        "--out",
+        out.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    let o = robocal(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "id,q1,q2,q3,q4,q5,q6");
+    assert_eq!(lines.len(), 13);
+    let r = json(&report);
+    assert_eq!(r["units"], 12);
+    let robot = robocal::model::read_robot(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/datasets/robots/fanuc_r2000ib_210f.toml"
+    ))
+    .unwrap();
+    for row in r["rows"].as_array().unwrap() {
+        let q: Vec<f64> = row
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        for (v, j) in q.iter().zip(robot.joints()) {
+            assert!(
+                *v >= j.limits[0] + 5.0 - 1e-9 && *v <= j.limits[1] - 5.0 + 1e-9,
+                "{q:?}"
+            );
+        }
+        let p = robocal::kinematics::tool_pose(&robot, &robot.joints_to_internal(&q));
+        assert!(p.translation.vector.z >= 300.0);
+    }
+    let planned = r["prediction"]["position_mm"]["mean"].as_f64().unwrap();
+    let random = r["random_prediction"]["position_mm"]["mean"]
+        .as_f64()
+        .unwrap();
+    assert!(planned < random, "{planned} vs {random}");
+    assert!(r["value"].as_f64().unwrap() >= r["greedy_value"].as_f64().unwrap());
+    // The same prediction for the written file: same cloud (seed and constraints), same
+    // units, through the file.
+    let back = tmp("plan_eval.json");
+    let mut args = vec!["plan", "--evaluate", out.to_str().unwrap()];
+    args.extend(common);
+    args.extend(["--report", back.to_str().unwrap()]);
+    let o = robocal(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = json(&back)["prediction"]["position_mm"]["mean"]
+        .as_f64()
+        .unwrap();
+    assert!((e - planned).abs() < 1e-6 * planned, "{e} vs {planned}");
+    assert!(
+        stdout(&o).contains("predicted error of 12 units"),
+        "{}",
+        stdout(&o)
+    );
+    // Seeded: the same command writes the same file.
+    let again = tmp("plan2.csv");
+    let mut args = vec!["plan", "--count", "12"];
+    args.extend(common);
+    args.extend(["--out", again.to_str().unwrap()]);
+    assert!(robocal(&args).status.success());
+    assert_eq!(std::fs::read(&again).unwrap(), text.as_bytes());
+}
+
+#[test]
+fn distance_plans_pairs_and_a_target_finds_the_fewest_units() {
+    let out = tmp("pairs.csv");
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        FANUC,
+        "--measure",
+        "distance",
+        "--count",
+        "40",
+        "--pool",
+        "400",
+        "--params",
+        "offsets",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.starts_with("id,pair,q1,"), "{text}");
+    assert_eq!(text.lines().count(), 81);
+    let t = tmp("target.json");
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        FANUC,
+        "--target-mm",
+        "0.03",
+        "--pool",
+        "600",
+        "--out",
+        tmp("target.csv").to_str().unwrap(),
+        "--report",
+        t.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = json(&t);
+    let n = r["units"].as_u64().unwrap() as usize;
+    assert!(r["prediction"]["position_mm"]["mean"].as_f64().unwrap() <= 0.03);
+    // One unit fewer misses the target.
+    let fewer = tmp("fewer.json");
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        FANUC,
+        "--count",
+        &(n - 1).to_string(),
+        "--pool",
+        "600",
+        "--out",
+        tmp("fewer.csv").to_str().unwrap(),
+        "--report",
+        fewer.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        json(&fewer)["prediction"]["position_mm"]["mean"]
+            .as_f64()
+            .unwrap()
+            > 0.03
+    );
+}
+
+#[test]
+fn bad_plans_are_refused_with_the_reason() {
+    let out = tmp("bad.csv");
+    let o_ = out.to_str().unwrap();
+    for (args, want) in [
+        (vec!["--count", "3"], "equations"),
+        (vec!["--count", "20", "--forbid", "1,2,3,4,5"], "--forbid"),
+        (
+            vec!["--count", "20", "--forbid", "5,0,0,1,1,1"],
+            "minimum corner",
+        ),
+        (
+            vec!["--count", "20", "--floor-mm", "100000"],
+            "refuse nearly every",
+        ),
+        (vec!["--count", "20", "--margin-deg", "120"], "--margin-deg"),
+        (
+            vec!["--count", "20", "--evaluate", "datasets/robots/ur10.toml"],
+            "cannot be used",
+        ),
+        (
+            vec![
+                "--evaluate",
+                "datasets/case_d/calibration.csv",
+                "--params",
+                "nonsense",
+            ],
+            "nonsense",
+        ),
+    ] {
+        let mut a = vec!["plan", "--robot", FANUC, "--pool", "300", "--out", o_];
+        a.extend(args.iter().copied());
+        let o = robocal(&a);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(stderr(&o).contains(want), "{args:?}: {}", stderr(&o));
+        assert!(!out.exists(), "{args:?} left a file");
+    }
+    // A candidates file that is not one: its name and the missing column.
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        FANUC,
+        "--count",
+        "10",
+        "--candidates",
+        "datasets/robots/ur10.toml",
+        "--out",
+        o_,
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("ur10.toml"), "{}", stderr(&o));
+}
