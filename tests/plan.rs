@@ -4,7 +4,7 @@
 
 use robocal::identify::problem::Measure;
 use robocal::stats::median;
-use robocal::studies::planning::{Case, Outcome, Setup, run};
+use robocal::studies::planning::{Case, Setup, TABLE_HEADER, run};
 use std::path::Path;
 
 fn datasets() -> std::path::PathBuf {
@@ -26,43 +26,17 @@ fn setup(measure: Measure) -> Setup {
     }
 }
 
-fn range(v: &[f64]) -> String {
-    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    format!("{lo:.4}-{hi:.4}")
-}
-
-fn report(case: &Case, measure: &str, o: &Outcome) {
-    let (p, r) = (o.planned_at(20).unwrap(), o.random_at(20).unwrap());
-    println!(
-        "| {} | {measure} | {:.4} ({}) | {:.4} | {:.4} ({}) | {:.4} | {:.1}% | {} |",
-        case.name,
-        median(&p.realised),
-        range(&p.realised),
-        median(&p.predicted),
-        median(&r.realised),
-        range(&r.realised),
-        median(&r.predicted),
-        100.0 * (1.0 - median(&p.realised) / median(&r.realised)),
-        o.random_matching(20)
-            .map_or("beyond 60".to_string(), |n| format!("{n:.0}")),
-    );
-}
-
 #[test]
 #[cfg_attr(
     debug_assertions,
     ignore = "20 seeds of planning and identification: release only"
 )]
 fn planned_poses_beat_random_ones_and_the_prediction_holds() {
-    println!(
-        "| robot | measure | planned N=20: median (range) mm | predicted | random N=20: median (range) | predicted | planned lower by | random N matching planned |"
-    );
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("{TABLE_HEADER}");
     let case = Case::table_6_1(&datasets()).unwrap();
     for (name, measure) in [("pose", Measure::Pose), ("position", Measure::Position)] {
         let o = run(&case, &setup(measure), &mut |_| {}).unwrap();
-        report(&case, name, &o);
+        println!("{}", o.table_row(&case.name, name).unwrap());
         let (p, r) = (o.planned_at(20).unwrap(), o.random_at(20).unwrap());
         let (planned, random) = (median(&p.realised), median(&r.realised));
         // Planned is better than random at the same N, and random needs more units to match.
@@ -85,7 +59,7 @@ fn planned_poses_beat_random_ones_and_the_prediction_holds() {
     // choice of poses removes; the prediction (noise only) is then a floor, not a forecast.
     let case = Case::nongeometric(&datasets()).unwrap();
     let o = run(&case, &setup(Measure::Pose), &mut |_| {}).unwrap();
-    report(&case, "pose", &o);
+    println!("{}", o.table_row(&case.name, "pose").unwrap());
     let p = o.planned_at(20).unwrap();
     assert!(median(&p.realised) > median(&p.predicted));
 }

@@ -7,7 +7,7 @@ use clap::Args;
 use robocal::identify::Measure;
 use robocal::plot::charts::{Curve, Curves};
 use robocal::stats::median;
-use robocal::studies::planning::{Case, Outcome, Series, Setup, run};
+use robocal::studies::planning::{Case, Series, Setup, TABLE_HEADER, run};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -38,24 +38,6 @@ fn range(v: &[f64]) -> (f64, f64) {
         v.iter().copied().fold(f64::INFINITY, f64::min),
         v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
     )
-}
-
-fn row(case: &str, measure: &str, o: &Outcome) {
-    let (Some(p), Some(r)) = (o.planned_at(20), o.random_at(20)) else {
-        return;
-    };
-    let (pl, ph) = range(&p.realised);
-    let (rl, rh) = range(&r.realised);
-    println!(
-        "| {case} | {measure} | {:.4} ({pl:.4}-{ph:.4}) | {:.4} | {:.4} ({rl:.4}-{rh:.4}) | {:.4} | {:.1}% | {} |",
-        median(&p.realised),
-        median(&p.predicted),
-        median(&r.realised),
-        median(&r.predicted),
-        100.0 * (1.0 - median(&p.realised) / median(&r.realised)),
-        o.random_matching(20)
-            .map_or("beyond 60".to_string(), |n| format!("{n:.0}")),
-    );
 }
 
 fn curve(label: &str, series: &[Series], predicted: bool) -> Curve {
@@ -105,12 +87,11 @@ pub fn run_study(a: PlanStudyArgs) -> Result<()> {
         "mean position error against the truth over 300 validation configurations, {} seeds, identification of `full` (mm)",
         a.seeds
     );
-    println!(
-        "| robot | measure | planned N=20: median (range) | predicted | random N=20: median (range) | predicted | planned lower by | random N matching planned N=20 |"
-    );
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("{TABLE_HEADER}");
     for ((case, name, _), o) in cases.iter().zip(&outcomes) {
-        row(&case.name, name, o);
+        if let Some(row) = o.table_row(&case.name, name) {
+            println!("{row}");
+        }
     }
     println!("\nmedian error (mm) against the number of configurations measured:");
     for ((case, name, _), o) in cases.iter().zip(&outcomes) {

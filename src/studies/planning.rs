@@ -120,7 +120,37 @@ pub struct Outcome {
     pub random: Vec<Series>,
 }
 
+/// The header of [`Outcome::table_row`]'s table (Markdown).
+pub const TABLE_HEADER: &str = "| robot | measure | planned N=20: median (range) mm | predicted | random N=20: median (range) | predicted | planned lower by | random N matching planned N=20 |\n|---|---|---|---|---|---|---|---|";
+
 impl Outcome {
+    /// The Markdown row of planned against random at 20 units (mean position error against
+    /// the truth, mm: median and range over the seeds, median prediction), how much lower
+    /// planned is, and the number of random units that matches it; None without both series
+    /// at 20.
+    pub fn table_row(&self, robot: &str, measure: &str) -> Option<String> {
+        let (p, r) = (self.planned_at(20)?, self.random_at(20)?);
+        let range = |v: &[f64]| {
+            let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            format!("{lo:.4}-{hi:.4}")
+        };
+        Some(format!(
+            "| {robot} | {measure} | {:.4} ({}) | {:.4} | {:.4} ({}) | {:.4} | {:.1}% | {} |",
+            median(&p.realised),
+            range(&p.realised),
+            median(&p.predicted),
+            median(&r.realised),
+            range(&r.realised),
+            median(&r.predicted),
+            100.0 * (1.0 - median(&p.realised) / median(&r.realised)),
+            self.random_matching(20)
+                .map_or("beyond the largest tried".to_string(), |n| format!(
+                    "{n:.0}"
+                )),
+        ))
+    }
+
     /// The planned series of `units`.
     pub fn planned_at(&self, units: usize) -> Option<&Series> {
         self.planned.iter().find(|s| s.units == units)
