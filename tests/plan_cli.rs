@@ -196,6 +196,26 @@ fn bad_plans_are_refused_with_the_reason() {
         assert!(stderr(&o).contains(want), "{args:?}: {}", stderr(&o));
         assert!(!out.exists(), "{args:?} left a file");
     }
+    // A list to evaluate with a row beyond the limits: named, not dropped.
+    let beyond = tmp("beyond.csv");
+    std::fs::write(
+        &beyond,
+        "q1,q2,q3,q4,q5,q6\n0,0,0,0,-30,0\n400,0,0,0,-30,0\n",
+    )
+    .unwrap();
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        FANUC,
+        "--evaluate",
+        beyond.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("1 row(s) lie beyond the joint limits"),
+        "{}",
+        stderr(&o)
+    );
     // A candidates file that is not one: its name and the missing column.
     let o = robocal(&[
         "plan",

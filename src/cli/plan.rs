@@ -173,13 +173,22 @@ pub fn run(a: PlanArgs) -> Result<()> {
     let candidates: Pool = match (&a.evaluate, &a.candidates) {
         (Some(p), _) => {
             let what = p.display().to_string();
-            pool::from_configurations(
+            let pool = pool::from_configurations(
                 &robot,
                 &configurations(p, &robot)?,
                 &Constraints::default(),
                 per,
                 &what,
-            )?
+            )?;
+            if pool.refused.limits > 0 {
+                bail!(
+                    "{what}: {} row(s) lie beyond the joint limits of {}: the prediction is for \
+                     configurations the robot can reach",
+                    pool.refused.limits,
+                    a.robot.display()
+                );
+            }
+            pool
         }
         (None, Some(p)) => {
             let what = p.display().to_string();
