@@ -176,6 +176,10 @@ fn bad_plans_are_refused_with_the_reason() {
         ),
         (vec!["--count", "20", "--margin-deg", "120"], "--margin-deg"),
         (
+            vec!["--target-mm", "0.000001"],
+            "the whole pool (300 units) predicts",
+        ),
+        (
             vec!["--count", "20", "--evaluate", "datasets/robots/ur10.toml"],
             "cannot be used",
         ),

@@ -14,7 +14,8 @@ use robocal::plan::{Constraints, Design, Pool, choose, pool, predict, smallest_m
 use robocal::sim::Region;
 use std::path::PathBuf;
 
-/// Largest candidate pool drawn: each unit holds its Jacobian block (6 x p numbers).
+/// Largest candidate pool drawn: each unit holds its Jacobian block three or four times over
+/// (6 x p numbers each; some 1 GB at the largest pool with p = 30).
 const MAX_POOL: usize = 200_000;
 
 #[derive(Args)]

@@ -32,7 +32,7 @@ pub enum Criterion {
 }
 
 impl Criterion {
-    /// Parses `d`, `o1`, `o3` or `a`.
+    /// Parses `d`, `o1`, `o3`, `a` or `i`.
     pub fn parse(s: &str) -> Option<Criterion> {
         match s {
             "d" => Some(Criterion::D),

@@ -32,7 +32,8 @@ pub struct Design {
     pub identifiability: Identifiability,
     /// The planned parameters (indices into `robot.parameters()`), `identifiability.selected`.
     pub params: Vec<usize>,
-    /// Column scale s_j: parameter units (mm or rad) per scaled unit.
+    /// Column scale s_j (the scaled parameter is s_j times the parameter, mm or rad): the
+    /// RMS of column j over the pool's units.
     pub scale: Vec<f64>,
     /// The scaled, weighted blocks B_u (dim x p) stacked: unit u's rows are u dim ..
     /// (u + 1) dim.
@@ -97,6 +98,15 @@ impl Design {
         }
         if cloud.is_empty() {
             return Err(Error::Invalid("the validation cloud is empty".into()));
+        }
+        let per = per_unit(measure);
+        if let Some(u) = pool.units.iter().position(|u| u.len() != per) {
+            return Err(Error::Invalid(format!(
+                "candidate unit {} has {} configuration(s); measuring by {} takes {per}",
+                u + 1,
+                pool.units[u].len(),
+                measure.name()
+            )));
         }
         let (robot, candidates, notes) = crate::identify::candidates(nominal, params)?;
         let set = as_measurements(&robot, pool);
@@ -185,10 +195,20 @@ impl Design {
     }
 
     /// The covariance (parameter units: mm, rad) of the parameters identified from the
-    /// units `chosen`, S^-1 M^-1 S^-1; None when M is singular (the units do not identify
+    /// units `chosen`, S^-1 M^-1 S^-1; None when M is singular up to rounding (the units do not identify
     /// every planned parameter).
     pub fn covariance(&self, chosen: &[usize]) -> Option<DMatrix<f64>> {
         let m = self.information(chosen);
+        // Singular up to rounding: the scaled information's eigenvalues (squared singular
+        // values) span more than the rank tolerance squared.
+        let eig = m.clone().symmetric_eigenvalues();
+        let (lo, hi) = eig
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
+        let tol = crate::identify::identifiability::RANK_TOL;
+        if lo.is_nan() || lo <= tol * tol * hi {
+            return None;
+        }
         let inv = m.cholesky()?.inverse();
         let p = self.p();
         Some(DMatrix::from_fn(p, p, |i, j| {

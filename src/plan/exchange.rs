@@ -29,7 +29,8 @@ const EPS: f64 = 1e-9;
 /// A chosen set of units.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Chosen {
-    /// Unit indices into the design's pool, in the order they were chosen.
+    /// Unit indices into the design's pool: the fixed ones first, then in the order the
+    /// greedy start chose them, an exchange replacing a unit in its place.
     pub units: Vec<usize>,
     /// The criterion's value ([`Criterion::value`]).
     pub value: f64,
@@ -104,7 +105,7 @@ impl<'a> Scorer<'a> {
     }
 
     /// The change of the objective when unit u is added (sign +1) or dropped (-1), exact for
-    /// D and A; -infinity when dropping it leaves M singular.
+    /// D, A and I; -infinity when dropping it leaves M singular.
     fn change(&self, u: usize, sign: f64, criterion: Criterion) -> f64 {
         let (h, g) = self.blocks(u, sign);
         let Some(c) = h.cholesky() else {
@@ -251,6 +252,9 @@ pub fn choose(design: &Design, n: usize, criterion: Criterion, fixed: &[usize]) 
             p / design.dim + 1
         )));
     }
+    let mut fixed = fixed.to_vec();
+    fixed.sort_unstable();
+    fixed.dedup();
     if fixed.len() > n || fixed.iter().any(|&u| u >= units) {
         return Err(Error::Invalid(
             "fixed units beyond the plan or the pool".into(),
@@ -259,7 +263,7 @@ pub fn choose(design: &Design, n: usize, criterion: Criterion, fixed: &[usize]) 
     let mut scorer = Scorer::new(design, criterion);
     let mut inside = vec![false; units];
     let mut chosen: Vec<usize> = Vec::with_capacity(n + 1);
-    for &u in fixed {
+    for &u in &fixed {
         if !inside[u] {
             inside[u] = true;
             chosen.push(u);
@@ -284,7 +288,12 @@ pub fn choose(design: &Design, n: usize, criterion: Criterion, fixed: &[usize]) 
     }
     let r = &design.cloud_root;
     let greedy_value = criterion.value(&m, r, n);
-    let mut objective = criterion.objective(&m, r);
+    // The exchange compares M + eps I, as its scores do: a greedy start that left M singular
+    // (-infinity) can still be improved, swap by swap.
+    let regular = |m: &DMatrix<f64>| {
+        criterion.objective(&(m + DMatrix::identity(m.nrows(), m.ncols()) * EPS), r)
+    };
+    let mut objective = regular(&m);
     let mut exchanges = 0;
     let free = fixed.len();
     let better = |v: f64, than: f64| v > than + 1e-10 * than.abs().max(1.0);
@@ -301,11 +310,11 @@ pub fn choose(design: &Design, n: usize, criterion: Criterion, fixed: &[usize]) 
                     let mut next = m.clone();
                     next.gemm_tr(-1.0, &bo, &bo, 1.0);
                     next.gemm_tr(1.0, &bi, &bi, 1.0);
-                    criterion.objective(&next, r) - objective
+                    regular(&next) - objective
                 } else {
                     scorer.swap_change(out, u, criterion)
                 };
-                if best.is_none_or(|b| c > b.2) {
+                if !c.is_nan() && best.is_none_or(|b| c > b.2) {
                     best = Some((k, u, c));
                 }
             }
@@ -318,7 +327,7 @@ pub fn choose(design: &Design, n: usize, criterion: Criterion, fixed: &[usize]) 
         inside[u] = true;
         chosen[k] = u;
         m = design.information(&chosen);
-        objective = criterion.objective(&m, r);
+        objective = regular(&m);
         exchanges += 1;
     }
     // Recomputed from the units: no drift from the updates.
@@ -445,6 +454,9 @@ mod tests {
         let e = choose(&d, few, Criterion::D, &[]).unwrap_err();
         assert!(e.to_string().contains("equations"), "{e}");
         assert!(choose(&d, 31, Criterion::D, &[]).is_err());
+        // Two units leave M singular: no covariance, no prediction, rather than 1e12 mm.
+        assert!(d.covariance(&[0, 1]).is_none());
+        assert!(crate::plan::predict(&d, &[0, 1], 0).is_none());
         let fixed = [4, 5, 6];
         let c = choose(&d, few + 2, Criterion::D, &fixed).unwrap();
         assert!(fixed.iter().all(|u| c.units.contains(u)));

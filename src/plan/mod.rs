@@ -5,7 +5,7 @@
 //!   cell's constraints (joint margins, a floor, a forbidden box).
 //! - [`design`]: each candidate's noise-weighted, column-scaled Jacobian block over the
 //!   parameters the pool identifies (the identification's own Jacobian and analysis).
-//! - [`criterion`]: D, O1, O3 and A optimality of the information matrix.
+//! - [`criterion`]: D, O1, O3, A and I optimality of the information matrix.
 //! - [`exchange`]: greedy start, then exchanges until none improves.
 //! - [`mod@predict`]: each parameter's standard deviation and the tool's error over a
 //!   validation cloud, by propagating the covariance through the pose Jacobian.
@@ -25,9 +25,10 @@ pub use predict::{Prediction, predict};
 use crate::error::{Error, Result};
 
 /// The smallest plan whose predicted mean position error is at most `target_mm`, by
-/// doubling from the fewest units that identify the parameters and then bisecting (the
-/// predicted error of planned units falls with their number). Returns the plan and its
-/// prediction; an error when even the whole pool misses the target.
+/// doubling from the fewest units that give more equations than parameters and then
+/// bisecting (the predicted error of planned units falls with their number); a plan that
+/// does not identify every parameter counts as missing the target. Returns the plan and its
+/// prediction; an error, before any plan, when even the whole pool misses the target.
 pub fn smallest_meeting(
     design: &Design,
     criterion: Criterion,
@@ -42,28 +43,38 @@ pub fn smallest_meeting(
             design.p()
         )));
     }
-    let attempt = |n: usize| -> Result<(Chosen, Prediction)> {
+    let all: Vec<usize> = (0..units).collect();
+    match predict(design, &all, seed) {
+        Some(p) if p.position_mm.mean <= target_mm => {}
+        p => {
+            return Err(Error::Invalid(format!(
+                "the whole pool ({units} units) predicts {} mean position error, above the \
+                 target {target_mm} mm: lower the noise, widen the region or change the measure",
+                p.map_or("no bounded".to_string(), |p| format!(
+                    "{:.4} mm",
+                    p.position_mm.mean
+                ))
+            )));
+        }
+    }
+    // A plan and its prediction, or None when it misses.
+    let attempt = |n: usize| -> Result<Option<(Chosen, Prediction)>> {
         let chosen = choose(design, n, criterion, &[])?;
-        let prediction = predict(design, &chosen.units, seed).ok_or_else(|| {
-            Error::Invalid(format!("{n} planned units do not identify every parameter"))
-        })?;
-        Ok((chosen, prediction))
+        Ok(predict(design, &chosen.units, seed)
+            .filter(|p| p.position_mm.mean <= target_mm)
+            .map(|p| (chosen, p)))
     };
-    let meets = |p: &Prediction| p.position_mm.mean <= target_mm;
     // Doubling: lo misses (or is below the first), hi meets.
     let mut lo = first - 1;
     let mut hi = first;
     let mut best = loop {
-        let r = attempt(hi)?;
-        if meets(&r.1) {
+        if let Some(r) = attempt(hi)? {
             break r;
         }
         if hi == units {
+            // The whole pool met the target above: only rounding brings this here.
             return Err(Error::Invalid(format!(
-                "the whole pool ({units} units) predicts {:.4} mm mean position error, above \
-                 the target {target_mm} mm: lower the noise, widen the region or change the \
-                 measure",
-                r.1.position_mm.mean
+                "no plan from the pool's {units} units meets the target {target_mm} mm"
             )));
         }
         lo = hi;
@@ -71,8 +82,7 @@ pub fn smallest_meeting(
     };
     while hi - lo > 1 {
         let mid = (lo + hi) / 2;
-        let r = attempt(mid)?;
-        if meets(&r.1) {
+        if let Some(r) = attempt(mid)? {
             hi = mid;
             best = r;
         } else {
