@@ -48,9 +48,9 @@ fn jacobian(c: &mut Criterion) {
             s
         })
     });
-    // The identified compliant model of the non-geometric robot (masses known, c2..c5): FK
-    // through the deflected chain and every geometric column with its compliance term, plus
-    // the compliances' own columns.
+    // The non-geometric robot's nominal with its masses and the simulator's compliances
+    // (c2..c5 non-zero): FK through the deflected chain and every geometric column with its
+    // compliance term, plus the columns of c1..c6 (38 in all).
     let masses = read_robot(path("datasets/nongeometric_robot/nominal_masses.toml")).unwrap();
     let compliant = masses
         .with_compliance(Some(robocal::model::Compliance::from_file_units(&[
@@ -58,6 +58,7 @@ fn jacobian(c: &mut Criterion) {
         ])))
         .unwrap();
     let cols = robocal::identify::select::select(&compliant, "full,compliance").unwrap();
+    assert_eq!(cols.len(), 38);
     let mut ws = Frames::new(&compliant);
     let mut jac = Matrix6xX::zeros(cols.len());
     c.bench_function("jacobian_full_compliance_one_configuration", |b| {

@@ -1,11 +1,9 @@
 //! The command line: batch FK and IK, carried-through columns, and errors with exit codes.
 
 mod common;
-use common::{robocal, stderr, stdout, tmp};
+use common::{FANUC, robocal, stderr, stdout, tmp};
 
 use std::path::Path;
-
-const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
 
 #[test]
 fn fk_single_configuration() {

@@ -2,9 +2,7 @@
 //! the solved joints, position-only targets, marked failures and bad input.
 
 mod common;
-use common::{identify_case_d, robocal, stderr, stdout, tmp};
-
-const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
+use common::{FANUC, identify_case_d, robocal, stderr, stdout, tmp};
 
 fn identified() -> std::path::PathBuf {
     let model = tmp("cd_full.toml");

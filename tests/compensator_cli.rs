@@ -1,13 +1,7 @@
 //! `robocal train`, `predict`, `evaluate --compensator` and `case-d` from the command line.
 
 mod common;
-use common::{accuracy, robocal, stderr, stdout, tmp};
-
-const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
-
-fn json(p: &std::path::Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
-}
+use common::{FANUC, accuracy, json, robocal, stderr, stdout, tmp};
 
 #[test]
 fn identify_train_evaluate_and_predict() {

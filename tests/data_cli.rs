@@ -2,9 +2,8 @@
 //! error (file, line, column) and exit code; warnings keep exit code 0.
 
 mod common;
-use common::{robocal, stderr, tmp};
+use common::{FANUC, robocal, stderr, tmp};
 
-const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
 const HEADER: &str = "id,q1,q2,q3,q4,q5,q6,x,y,z\n";
 
 /// Runs `import` of `body` (after the canonical header) and returns (exit code, stderr, out).

@@ -1,13 +1,11 @@
 //! `robocal identify`, `evaluate`, `split` and `reproduce` from the command line.
 
 mod common;
-use common::{accuracy, robocal, stderr, stdout, tmp};
+use common::{FANUC, accuracy, robocal, stderr, stdout, tmp};
 
 fn text(o: &std::process::Output) -> (String, String) {
     (stdout(o), stderr(o))
 }
-
-const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
 
 #[test]
 fn identify_writes_a_robot_and_a_report_that_evaluate_confirms() {

@@ -2,13 +2,14 @@
 //! seeds, and the prediction against what identification then realises (README "Plan your
 //! measurements"). Release builds only: 20 seeds of planning and identification.
 
+mod common;
+
 use robocal::identify::problem::Measure;
 use robocal::stats::median;
 use robocal::studies::planning::{Case, Setup, TABLE_HEADER, run};
-use std::path::Path;
 
 fn datasets() -> std::path::PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets")
+    common::root().join("datasets")
 }
 
 fn setup(measure: Measure) -> Setup {
@@ -44,7 +45,13 @@ fn planned_poses_beat_random_ones_and_the_prediction_holds() {
             planned < 0.95 * random,
             "{name}: planned {planned} vs random {random}"
         );
-        assert!(o.random_matching(20).is_none_or(|n| n > 22.0), "{name}");
+        let matching = o
+            .random_matching(20)
+            .expect("random reaches planned within 60");
+        assert!(
+            matching > 22.0,
+            "{name}: random matches planned at {matching}"
+        );
         // The model is complete here: the prediction made before measuring is within 25% of
         // the realised median, planned and random.
         for s in [p, r] {
@@ -60,6 +67,8 @@ fn planned_poses_beat_random_ones_and_the_prediction_holds() {
     let case = Case::nongeometric(&datasets()).unwrap();
     let o = run(&case, &setup(Measure::Pose), &mut |_| {}).unwrap();
     println!("{}", o.table_row(&case.name, "pose").unwrap());
-    let p = o.planned_at(20).unwrap();
-    assert!(median(&p.realised) > median(&p.predicted));
+    let (p, r) = (o.planned_at(20).unwrap(), o.random_at(20).unwrap());
+    assert!(median(&p.realised) > 5.0 * median(&p.predicted));
+    // Planning goes where the unmodelled errors are largest: worse than random here.
+    assert!(median(&p.realised) > median(&r.realised));
 }

@@ -2,13 +2,7 @@
 //! `--evaluate`, constraints, pairs, and bad input.
 
 mod common;
-use common::{robocal, stderr, stdout, tmp};
-
-const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
-
-fn json(path: &std::path::Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
+use common::{FANUC, json, robocal, stderr, stdout, tmp};
 
 #[test]
 fn a_plan_is_written_within_its_constraints_and_evaluate_predicts_it_the_same() {
@@ -42,12 +36,10 @@ fn a_plan_is_written_within_its_constraints_and_evaluate_predicts_it_the_same() 
     assert_eq!(lines.len(), 13);
     let r = json(&report);
     assert_eq!(r["units"], 12);
-    let robot = robocal::model::read_robot(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/datasets/robots/fanuc_r2000ib_210f.toml"
-    ))
-    .unwrap();
-    for row in r["rows"].as_array().unwrap() {
+    let robot = robocal::model::read_robot(common::root().join(FANUC)).unwrap();
+    let rows = r["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 12);
+    for row in rows {
         let q: Vec<f64> = row
             .as_array()
             .unwrap()

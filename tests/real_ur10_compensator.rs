@@ -10,6 +10,7 @@
 
 mod common;
 
+use common::root;
 use common::ur10::{SERIES_B, series, series_b_split};
 use robocal::data::MeasurementSet;
 use robocal::data::measurement::split;
@@ -24,12 +25,7 @@ use robocal::neural::predict::PredictWorkspace;
 use robocal::neural::samples::objective;
 use robocal::neural::targets::build;
 use robocal::neural::train::initial_weights;
-use std::path::PathBuf;
 use std::time::Instant;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 fn identified(robot: &Robot, id: &MeasurementSet) -> Robot {
     identify(

@@ -2,7 +2,7 @@
 
 use super::choices::{Criterion, Measure};
 use super::data_args::SigmaArgs;
-use super::output::{num, parse_list, writing};
+use super::output::{emit, num, parse_list, writing};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use robocal::data::JointTable;
@@ -342,16 +342,19 @@ pub fn run(a: PlanArgs) -> Result<()> {
             headers.push("pair".into());
         }
         headers.extend(robocal::data::joint_columns(n));
-        let mut w = robocal::data::table::CsvOut::new(&headers)?;
-        for (k, q) in rows.iter().enumerate() {
-            let mut cells = vec![format!("{}", k + 1)];
-            if per == 2 {
-                cells.push(format!("{}", k / 2 + 1));
-            }
-            cells.extend(q.iter().map(|v| num(*v, None)));
-            w.row(&cells)?;
-        }
-        writing(robocal::io::write_atomic(out, &w.into_bytes()?), out)?;
+        let cells: Vec<Vec<String>> = rows
+            .iter()
+            .enumerate()
+            .map(|(k, q)| {
+                let mut cells = vec![format!("{}", k + 1)];
+                if per == 2 {
+                    cells.push(format!("{}", k / 2 + 1));
+                }
+                cells.extend(q.iter().map(|v| num(*v, None)));
+                cells
+            })
+            .collect();
+        emit(&headers, &cells, false, Some(out))?;
         println!("wrote {} ({} rows)", out.display(), rows.len());
     }
     if let Some(path) = &a.report {

@@ -7,7 +7,7 @@ use clap::Args;
 use robocal::identify::Measure;
 use robocal::plot::charts::{Curve, Curves};
 use robocal::stats::median;
-use robocal::studies::planning::{Case, Series, Setup, TABLE_HEADER, run};
+use robocal::studies::planning::{Case, Series, Setup, TABLE_HEADER, range, run};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -32,13 +32,6 @@ pub struct PlanStudyArgs {
 
 const PLANNED: [usize; 5] = [15, 20, 30, 40, 60];
 const RANDOM: [usize; 6] = [15, 20, 25, 30, 40, 60];
-
-fn range(v: &[f64]) -> (f64, f64) {
-    (
-        v.iter().copied().fold(f64::INFINITY, f64::min),
-        v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-    )
-}
 
 fn curve(label: &str, series: &[Series], predicted: bool) -> Curve {
     Curve {

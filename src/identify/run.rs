@@ -10,7 +10,7 @@ use super::problem::{
 use super::register::{Registration, register};
 use super::select::{is_compliance, select};
 use super::solve::{
-    Method, Solution, SolveOptions, StopReason, covariance, covariance_from, solve_gradient_from,
+    Method, Solution, SolveOptions, StopReason, covariance, covariance_from, solve_gradient,
 };
 use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
@@ -266,7 +266,7 @@ fn solve_robust(
     let run = |start: &Robot, obs: &Observations, normal| -> Result<Solution> {
         match opts.solve.method {
             Method::Nm => solve_nelder_mead(start, obs, cols, &opts.solve),
-            _ => solve_gradient_from(start, obs, cols, &opts.solve, normal),
+            _ => solve_gradient(start, obs, cols, &opts.solve, normal),
         }
     };
     let mut solution = run(start, obs, normal)?;
@@ -350,6 +350,32 @@ fn outliers(set: &MeasurementSet, obs: &Observations, robot: &Robot, k: f64) -> 
 /// 0.114; 2 gave 0.095 and 0.137; 1 gave 0.097 and 0.142: the worst case decides.
 pub const SIGNIFICANCE: f64 = 3.0;
 
+/// The least significant compliance among `cols` (`t(position in cols, parameter)` its
+/// estimate over its standard deviation), when |t| < [`SIGNIFICANCE`] (or t is NaN): it
+/// leaves `cols` and the identifiable set, recorded as not significant. Returns its position
+/// in `cols` and its parameter.
+fn drop_weakest(
+    params: &[ParamId],
+    cols: &mut Vec<usize>,
+    ident: &mut Identifiability,
+    t: impl Fn(usize, usize) -> f64,
+) -> Option<(usize, usize)> {
+    let (k, tk) = cols
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| is_compliance(&params[**c]))
+        .map(|(k, &c)| (k, t(k, c)))
+        .filter(|(_, t)| t.is_nan() || t.abs() < SIGNIFICANCE)
+        .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))?;
+    let c = cols.remove(k);
+    ident.selected.retain(|&p| p != c);
+    ident.dropped.push(Dropped {
+        param: c,
+        reason: DropReason::NotSignificant(tk),
+    });
+    Some((k, c))
+}
+
 /// Backward elimination of compliances: while one has |estimate - its value in `start`| <
 /// [`SIGNIFICANCE`] std, the least significant goes back to its value in `start` (the
 /// nominal's: zero unless the file gave one) and out of the set, and the rest is solved again
@@ -369,29 +395,16 @@ fn drop_insignificant(
             Some(ne) => covariance_from(&solution.robot, ne, obs.len(), &cols)?,
             None => covariance(&solution.robot, obs, &cols)?,
         };
-        let weakest = cols
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| is_compliance(&params[**c]))
-            .map(|(k, &c)| {
-                let id = params[c];
-                let std = cov[(k, k)].max(0.0).sqrt();
-                let t = (solution.robot.param(id) - start.param(id)) / std;
-                (k, c, t)
-            })
-            .filter(|(_, _, t)| t.is_nan() || t.abs() < SIGNIFICANCE)
-            .min_by(|a, b| a.2.abs().total_cmp(&b.2.abs()));
-        let Some((k, c, t)) = weakest else {
+        let robot = &solution.robot;
+        let dropped = drop_weakest(&params, &mut cols, ident, |k, c| {
+            let id = params[c];
+            (robot.param(id) - start.param(id)) / cov[(k, k)].max(0.0).sqrt()
+        });
+        let Some((_, c)) = dropped else {
             return Ok((solution, cols, cov, s2));
         };
         let id = params[c];
         let reset = solution.robot.with_param(id, start.param(id))?;
-        cols.remove(k);
-        ident.selected.retain(|&p| p != c);
-        ident.dropped.push(Dropped {
-            param: c,
-            reason: DropReason::NotSignificant(t),
-        });
         if cols.is_empty() {
             let (cov, s2) = covariance(&reset, obs, &cols)?;
             solution.robot = reset;
@@ -449,25 +462,14 @@ fn screen_compliances(
         let inv = chol.inverse();
         // The linearised cost after the step, and the variance factor it gives.
         let s2 = ((ne.cost - g.dot(&y)) / (m - n) as f64).max(0.0);
-        let weakest = (0..n)
-            .filter(|&i| is_compliance(&params[cols[i]]))
-            .map(|i| {
-                let x = y[i] / d[i];
-                let std = (inv[(i, i)] * s2).sqrt() / d[i];
-                (i, x / std)
-            })
-            .filter(|(_, t)| t.is_nan() || t.abs() < SIGNIFICANCE)
-            .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()));
-        let Some((i, t)) = weakest else {
+        let Some((i, _)) = drop_weakest(&params, &mut cols, ident, |i, _| {
+            let x = y[i] / d[i];
+            let std = (inv[(i, i)] * s2).sqrt() / d[i];
+            x / std
+        }) else {
             return kept(cols, &live);
         };
-        let c = cols.remove(i);
         live.remove(i);
-        ident.selected.retain(|&p| p != c);
-        ident.dropped.push(Dropped {
-            param: c,
-            reason: DropReason::NotSignificant(t),
-        });
     }
 }
 

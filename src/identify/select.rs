@@ -106,13 +106,7 @@ pub fn select(robot: &Robot, spec: &str) -> Result<Vec<usize>> {
 mod tests {
     use super::*;
 
-    fn fanuc() -> Robot {
-        crate::model::read_robot(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/datasets/robots/fanuc_r2000ib_210f.toml"
-        ))
-        .unwrap()
-    }
+    use crate::model::test_fanuc as fanuc;
 
     #[test]
     fn groups_names_and_priority() {

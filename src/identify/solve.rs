@@ -138,19 +138,10 @@ fn names(ids: &[ParamId]) -> String {
     ids.iter().map(|i| i.name()).collect::<Vec<_>>().join(", ")
 }
 
-/// Runs LM or GN from `robot` on the parameters `cols` (indices into `Robot::parameters`).
+/// Runs LM or GN from `robot` on the parameters `cols` (indices into `Robot::parameters`);
+/// `normal`: the normal equations at `robot` over `cols` when the caller has them already
+/// (they cost a pass over the data).
 pub fn solve_gradient(
-    robot: &Robot,
-    obs: &Observations,
-    cols: &[usize],
-    opts: &SolveOptions,
-) -> Result<Solution> {
-    solve_gradient_from(robot, obs, cols, opts, None)
-}
-
-/// [`solve_gradient`] given the normal equations at `robot` over `cols` when the caller has
-/// them already (they cost a pass over the data).
-pub fn solve_gradient_from(
     robot: &Robot,
     obs: &Observations,
     cols: &[usize],
@@ -161,8 +152,11 @@ pub fn solve_gradient_from(
     let mut ws = IdentifyWorkspace::new(robot);
     let mut current = robot.clone();
     let mut ne = match normal {
-        Some(ne) if ne.a.nrows() == cols.len() && ne.g.len() == cols.len() => ne,
-        _ => normal_equations(&current, obs, cols, &mut ws),
+        Some(ne) => {
+            debug_assert!(ne.a.nrows() == cols.len() && ne.g.len() == cols.len());
+            ne
+        }
+        None => normal_equations(&current, obs, cols, &mut ws),
     };
     let mut evaluations = 1;
     if !ne.cost.is_finite() {

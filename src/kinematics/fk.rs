@@ -1,8 +1,10 @@
 //! Forward kinematics, thesis eq. 3.12-3.13: T = T_R T_1 ... T_N T_T; for a compliant robot
-//! at the joints it reaches under gravity, q' = q + c tau(q) ([`crate::model::compliance`]).
+//! at the joints it reaches under gravity, q' = q + delta(q) ([`crate::model::compliance`]).
 
 use super::Pose;
-use super::load::{Load, accumulate_moments, axis_column, gravity_of, moment_deflection, torque};
+use super::load::{
+    Load, accumulate_moments, axis_column, moment_deflection, torque, world_gravity,
+};
 use crate::model::Robot;
 
 /// The tool pose (mm, in the base row's reference frame) for commanded joints `q` (rad or
@@ -40,7 +42,7 @@ fn compliant_tool_pose(robot: &Robot, q: &[f64]) -> Pose {
     };
     let n = q.len();
     let masses = robot.masses();
-    let g = chain.base.rotation * gravity_of(robot);
+    let g = world_gravity(robot);
     let (mut mass, mut moment) = (0.0, nalgebra::Vector3::zeros());
     let mut t = chain.head;
     if let Some(m) = masses {
@@ -103,7 +105,8 @@ pub struct Frames {
     pub link: Vec<Pose>,
     /// The tool frame.
     pub tool: Pose,
-    /// The gravity load, for a robot with mass properties (`load.active`).
+    /// The gravity load and the commanded frames, for a robot with mass properties or
+    /// compliances (stale otherwise; `load.compliant` is then false).
     pub load: Load,
 }
 
@@ -151,18 +154,8 @@ pub fn frames(robot: &Robot, q: &[f64], out: &mut Frames) {
     );
     if robot.masses().is_none() && robot.compliance().is_none() {
         // The rigid, massless robot of most calls: one walk, nothing else.
-        let load = &mut out.load;
-        if load.active || load.compliant || load.moments {
-            (load.active, load.compliant, load.moments) = (false, false, false);
-        }
-        let mut t = chain.head;
-        for (i, link) in chain.links.iter().enumerate() {
-            chain.apply_joint(&mut t, i, q[i]);
-            out.joint[i] = t;
-            out.link[i] = t * link.post;
-            t *= link.next;
-        }
-        out.tool = t;
+        out.load.compliant = false;
+        walk(robot, q, &mut out.joint, &mut out.link, &mut out.tool);
         return;
     }
     let load = &mut out.load;

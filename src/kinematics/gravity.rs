@@ -9,14 +9,12 @@
 //!   (N m; lengths in m);
 //! - prismatic: f_j = sum_k m_k g . z_j (N).
 //!
-//! Derivatives (for the Jacobian of a compliant model): joint i moves the masses it carries,
-//! dp_k/dq_i = z_i x (p_k - o_i) (revolute) or z_i (prismatic); when i comes before j it also
-//! moves joint j's axis with them, a rigid motion that leaves a prismatic j's force and the
-//! lever arms p_k - o_j unchanged but turns z_j x (p_k - o_j) about z_i.
+//! The compliant model sums the same torques from suffix sums, with their derivatives, in
+//! [`super::load`]; this direct sum is the simulator's and the tests' reference.
 
 use super::Pose;
 use crate::model::{JointType, Robot};
-use nalgebra::{DMatrix, Vector3};
+use nalgebra::Vector3;
 
 /// A point mass and the frame it rides on.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -84,151 +82,11 @@ pub fn gravity_torques(
     }
 }
 
-/// d tau_j / d q_i of [`gravity_torques`] into `out` (n x n; N m per rad, N m per mm, N per
-/// rad or N per mm as the joints are), at the configuration of the joint frames `joint`.
-pub fn gravity_torque_jacobian(
-    robot: &Robot,
-    joint: &[Pose],
-    g: &Vector3<f64>,
-    points: &[PointMass],
-    out: &mut DMatrix<f64>,
-) {
-    let joints = robot.joints();
-    let n = joints.len();
-    out.fill(0.0);
-    for j in 0..n {
-        let (zj, oj) = axis(joint, j);
-        for i in 0..n {
-            let (zi, oi) = axis(joint, i);
-            let revolute_i = joints[i].joint_type == JointType::Revolute;
-            let mut d = 0.0;
-            for p in points.iter().filter(|p| p.frame >= j && p.frame >= i) {
-                let f = g * p.mass_kg;
-                let r = (p.position_mm - oj) * 1e-3;
-                d += match (joints[j].joint_type, i < j, revolute_i) {
-                    // Joint i turns joint j's axis and the mass together: the lever arm
-                    // turns about z_i.
-                    (JointType::Revolute, true, true) => f.dot(&zi.cross(&zj.cross(&r))),
-                    // A translation before j moves axis and mass alike.
-                    (JointType::Revolute, true, false) => 0.0,
-                    (JointType::Revolute, false, true) => {
-                        let dp = zi.cross(&((p.position_mm - oi) * 1e-3));
-                        f.dot(&zj.cross(&dp))
-                    }
-                    (JointType::Revolute, false, false) => f.dot(&zj.cross(&(zi * 1e-3))),
-                    (JointType::Prismatic, true, true) => f.dot(&zi.cross(&zj)),
-                    (JointType::Prismatic, _, _) => 0.0,
-                };
-            }
-            out[(j, i)] = d;
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::kinematics::{Frames, frames};
     use crate::model::read_robot;
-
-    /// Masses midway along each link of `robot` at `q` and a payload at the tool.
-    fn masses(robot: &Robot, f: &Frames) -> Vec<PointMass> {
-        let n = robot.dof();
-        let origin = |k: usize| {
-            if k < n {
-                f.joint[k].translation.vector
-            } else {
-                f.tool.translation.vector
-            }
-        };
-        let mut v: Vec<PointMass> = (0..n)
-            .map(|k| PointMass {
-                mass_kg: 10.0 + 7.0 * k as f64,
-                position_mm: (origin(k) + origin(k + 1)) * 0.5,
-                frame: k,
-            })
-            .collect();
-        v.push(PointMass {
-            mass_kg: 50.0,
-            position_mm: origin(n),
-            frame: n,
-        });
-        v
-    }
-
-    #[test]
-    fn torque_jacobian_matches_central_differences() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots");
-        let g = Vector3::new(0.3, -0.2, -9.81);
-        // A robot with prismatic joints too (a gantry-like R-P-R-P), beside the shipped 6R.
-        let rprp = Robot::from_toml(
-            "[[joint]]\nconvention = \"mdh\"\nalpha = 0.0\na = 0.0\ntheta = 0.0\nd = 300.0\n\
-             limits = [-180.0, 180.0]\n\
-             [[joint]]\nconvention = \"mdh\"\ntype = \"prismatic\"\nalpha = 90.0\na = 150.0\n\
-             theta = 20.0\nd = 0.0\nlimits = [-500.0, 500.0]\n\
-             [[joint]]\nconvention = \"mdh\"\nalpha = -60.0\na = 400.0\ntheta = 0.0\nd = 80.0\n\
-             limits = [-180.0, 180.0]\n\
-             [[joint]]\nconvention = \"mdh\"\ntype = \"prismatic\"\nalpha = 45.0\na = 120.0\n\
-             theta = -30.0\nd = 0.0\nlimits = [-500.0, 500.0]\n\
-             [tool]\nconvention = \"transform\"\nx = 100.0\ny = 20.0\nz = 50.0\n",
-        )
-        .unwrap();
-        for (file, robot) in [
-            (
-                "fanuc_r2000ib_210f.toml",
-                read_robot(root.join("fanuc_r2000ib_210f.toml")).unwrap(),
-            ),
-            ("ur10.toml", read_robot(root.join("ur10.toml")).unwrap()),
-            ("rprp", rprp),
-        ] {
-            let n = robot.dof();
-            // rad, or mm for the prismatic joints.
-            let q: Vec<f64> = (0..n).map(|j| 0.3 + 0.2 * j as f64).collect();
-            let mut f = Frames::new(&robot);
-            frames(&robot, &q, &mut f);
-            // The masses ride with their frames: (mass, frame, coordinates in it).
-            let frame_of = |f: &Frames, k: usize| if k == n { f.tool } else { f.joint[k] };
-            let local: Vec<(f64, usize, Vector3<f64>)> = masses(&robot, &f)
-                .iter()
-                .map(|p| {
-                    let frame = frame_of(&f, p.frame);
-                    let l = frame.inverse_transform_point(&p.position_mm.into()).coords;
-                    (p.mass_kg, p.frame, l)
-                })
-                .collect();
-            let at = |q: &[f64], f: &mut Frames| -> Vec<PointMass> {
-                frames(&robot, q, f);
-                local
-                    .iter()
-                    .map(|&(mass_kg, frame, l)| PointMass {
-                        mass_kg,
-                        position_mm: frame_of(f, frame).transform_point(&l.into()).coords,
-                        frame,
-                    })
-                    .collect()
-            };
-            let mut jac = DMatrix::zeros(n, n);
-            let pts = at(&q, &mut f);
-            gravity_torque_jacobian(&robot, &f.joint, &g, &pts, &mut jac);
-            let h = 1e-6;
-            let mut worst: f64 = 0.0;
-            for i in 0..n {
-                let (mut qp, mut qm) = (q.clone(), q.clone());
-                qp[i] += h;
-                qm[i] -= h;
-                let (mut tp, mut tm) = (vec![0.0; n], vec![0.0; n]);
-                let pp = at(&qp, &mut f);
-                gravity_torques(&robot, &f.joint, &g, &pp, &mut tp);
-                let pm = at(&qm, &mut f);
-                gravity_torques(&robot, &f.joint, &g, &pm, &mut tm);
-                for j in 0..n {
-                    let fd = (tp[j] - tm[j]) / (2.0 * h);
-                    worst = worst.max((fd - jac[(j, i)]).abs() / (1.0 + fd.abs()));
-                }
-            }
-            assert!(worst < 1e-6, "{file}: worst relative difference {worst}");
-        }
-    }
 
     #[test]
     fn torque_of_a_hand_computed_arm() {

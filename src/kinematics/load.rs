@@ -1,5 +1,5 @@
 //! The gravity load of one configuration, and how it changes: what bends a compliant robot's
-//! joints ([`crate::model::compliance`]: q' = q + c tau(q)).
+//! joints ([`crate::model::compliance`]: q' = q + delta(q), delta_j = c_j tau_j or its mass-free form).
 //!
 //! The torques are computed from suffix sums: with M_j the mass (kg) and S_j the first moment
 //! (kg mm, world) of the point masses that joint j carries (those on frames j..N, frame N the
@@ -36,11 +36,31 @@ pub struct Twist {
     pub w: Vector3<f64>,
 }
 
-/// Gravity load at the commanded joints; a workspace inside [`super::Frames`].
+impl Twist {
+    /// The unit motion of the frames from `first` on: a rotation about the world line along
+    /// `w` through `at` (mm), or with `rotation` false a translation along `w`.
+    pub fn about_line(first: usize, rotation: bool, w: Vector3<f64>, at: Vector3<f64>) -> Twist {
+        if rotation {
+            Twist {
+                first,
+                v: -w.cross(&at),
+                w,
+            }
+        } else {
+            Twist {
+                first,
+                v: w,
+                w: Vector3::zeros(),
+            }
+        }
+    }
+}
+
+/// Gravity load at the commanded joints, the joints it makes the robot reach and, for a
+/// compliant robot, what the Jacobians need at the reached joints (`columns`, the maps of
+/// [`Load::tool_change`]); a workspace inside [`super::Frames`].
 #[derive(Debug, Clone)]
 pub struct Load {
-    /// Whether the robot has mass properties (otherwise the rest is unused).
-    pub active: bool,
     /// Whether the robot's joints deflect (non-zero compliances): then the frames of
     /// [`super::Frames`] are those of the deflected joints and these below the commanded
     /// ones'.
@@ -54,20 +74,19 @@ pub struct Load {
     /// Gravity (m/s^2, world): the robot's, turned by the base row.
     pub gravity: Vector3<f64>,
     /// The point masses at the commanded joints.
-    pub points: Vec<PointMass>,
+    points: Vec<PointMass>,
     /// Each joint's axis direction z_j and a point o_j on it (mm), at the commanded joints.
-    pub axes: Vec<(Vector3<f64>, Vector3<f64>)>,
+    axes: Vec<(Vector3<f64>, Vector3<f64>)>,
     /// J'_j: the tool's motion per unit of each reached joint value (world; rows 0-2 mm,
     /// 3-5 rad), at the reached joints. Filled for a compliant robot.
     pub columns: Vec<nalgebra::Vector6<f64>>,
     /// Gravity torque of each joint (N m; N for a prismatic joint).
     pub torque: Vec<f64>,
-    /// Deflection of each joint, c_j tau_j (rad; mm for a prismatic joint).
-    pub deflection: Vec<f64>,
-    /// The joints the robot reaches, q + deflection (rad or mm).
+    /// The joints the robot reaches, q + delta(q) (rad or mm): delta_j = c_j tau_j plus the
+    /// mass-free coefficients' deflection.
     pub reached: Vec<f64>,
     /// Whether the robot has mass-free compliance coefficients ([`crate::model::compliance`]).
-    pub moments: bool,
+    moments: bool,
     /// c_j (internal units) of each joint, 0 without.
     c: Vec<f64>,
     /// Per joint j and body frame f >= j (at j (N + 1) + f), the sums over bodies b >= f of
@@ -102,7 +121,6 @@ impl Load {
     pub fn new(robot: &Robot) -> Self {
         let n = robot.dof();
         Load {
-            active: false,
             compliant: false,
             joint: vec![Pose::identity(); n],
             link: vec![Pose::identity(); n],
@@ -112,7 +130,6 @@ impl Load {
             axes: vec![(Vector3::zeros(), Vector3::zeros()); n],
             columns: vec![nalgebra::Vector6::zeros(); n],
             torque: vec![0.0; n],
-            deflection: vec![0.0; n],
             reached: vec![0.0; n],
             moments: false,
             c: vec![0.0; n],
@@ -169,19 +186,20 @@ impl Load {
     }
 
     /// From the commanded frames already in `joint`, `link` and `tool`: points, torques,
-    /// deflections and the joints reached `q + deflection`.
+    /// the joints reached q + delta(q), and the per-joint terms of the deflections' changes
+    /// (`carried`, `beyond`, the mass-free suffix sums).
     pub(crate) fn compute(&mut self, robot: &Robot, q: &[f64]) {
         let n = self.joint.len();
-        self.active = robot.masses().is_some();
+        let active = robot.masses().is_some();
         self.compliant = robot.is_compliant();
         let comp = robot.compliance();
         self.moments = comp.is_some_and(|c| c.has_moments());
-        self.gravity = robot.chain().base.rotation * gravity_of(robot);
+        self.gravity = world_gravity(robot);
         for j in 0..n {
             self.c[j] = comp.map_or(0.0, |c| c.joint(j));
             self.axes[j] = super::gravity::axis(&self.joint, j);
         }
-        if self.active {
+        if active {
             mass_points(robot, &self.joint, &self.tool, &mut self.points);
             // Totals, then suffixes by removing the masses frame by frame (the order
             // `fk::tool_pose` uses, so that both give the same bits).
@@ -214,7 +232,7 @@ impl Load {
         }
         for (j, &qj) in q.iter().enumerate().take(n) {
             let (z, o) = self.axes[j];
-            self.torque[j] = if self.active {
+            self.torque[j] = if active {
                 torque(
                     self.revolute[j],
                     &z,
@@ -226,7 +244,7 @@ impl Load {
             } else {
                 0.0
             };
-            self.deflection[j] = self.c[j] * self.torque[j];
+            let mut deflection = self.c[j] * self.torque[j];
             if let (true, Some(c)) = (self.moments, comp) {
                 // Summed forward, body by body, as `fk::tool_pose` does (same bits).
                 let (mut m, mut sm, mut h) = (0.0, Vector3::zeros(), Vector3::zeros());
@@ -234,13 +252,13 @@ impl Load {
                     let f = if b < n { &self.joint[b] } else { &self.tool };
                     accumulate_moments(c, n, j, b, f, &mut m, &mut sm, &mut h);
                 }
-                self.deflection[j] +=
+                deflection +=
                     moment_deflection(self.revolute[j], &z, &o, m, &sm, &h, &self.gravity);
             }
-            self.reached[j] = qj + self.deflection[j];
+            self.reached[j] = qj + deflection;
             let c = self.c[j];
             let g = self.gravity;
-            (self.carried[j], self.beyond[j]) = match (self.active && c != 0.0, self.revolute[j]) {
+            (self.carried[j], self.beyond[j]) = match (active && c != 0.0, self.revolute[j]) {
                 (false, _) => (Vector3::zeros(), Vector3::zeros()),
                 (true, true) => {
                     let r = self.suffix_moment[j] - o * self.suffix_mass[j];
@@ -284,19 +302,7 @@ impl Load {
     /// The motion of joint i's variable (per rad or per mm), at the commanded joints.
     pub fn joint_twist(&self, i: usize) -> Twist {
         let (z, o) = self.axes[i];
-        if self.revolute[i] {
-            Twist {
-                first: i,
-                v: -z.cross(&o),
-                w: z,
-            }
-        } else {
-            Twist {
-                first: i,
-                v: z,
-                w: Vector3::zeros(),
-            }
-        }
+        Twist::about_line(i, self.revolute[i], z, o)
     }
 }
 
@@ -371,11 +377,13 @@ pub(crate) fn accumulate_moments(
     *h += f.rotation * k;
 }
 
-/// The robot's gravity (m/s^2, base frame): its mass properties', or -9.81 along z.
-pub fn gravity_of(robot: &Robot) -> Vector3<f64> {
-    robot
-        .masses()
-        .map_or(Vector3::new(0.0, 0.0, -9.81), |m| m.gravity)
+/// The robot's gravity in the world (m/s^2): its mass properties' (or -9.81 along z), given
+/// in the frame after the base row and turned by it.
+pub fn world_gravity(robot: &Robot) -> Vector3<f64> {
+    robot.chain().base.rotation
+        * robot
+            .masses()
+            .map_or(Vector3::new(0.0, 0.0, -9.81), |m| m.gravity)
 }
 
 /// The mass-free deflection of one joint (rad; mm if prismatic) with axis z through o

@@ -15,3 +15,13 @@ pub use robot::{
     joint_distance,
 };
 pub use row::{Convention, Field, Row};
+
+/// The shipped FANUC R-2000iB/210F's nominal model, for the unit tests.
+#[cfg(test)]
+pub(crate) fn test_fanuc() -> Robot {
+    read_robot(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/datasets/robots/fanuc_r2000ib_210f.toml"
+    ))
+    .unwrap()
+}

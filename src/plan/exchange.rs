@@ -78,17 +78,23 @@ impl<'a> Scorer<'a> {
         }
     }
 
-    /// (I + sign B M^-1 B^T, and B M^-1 W M^-1 B^T with W = I for `a`, R^T R for `i`) of
-    /// unit u, padded with the identity (zeros) to 6 x 6.
-    fn blocks(&self, u: usize, sign: f64) -> (Matrix6<f64>, Matrix6<f64>) {
-        let d = self.design.dim;
-        let mut h = Matrix6::identity();
-        let mut g = Matrix6::zeros();
-        let second = match self.criterion {
+    /// The stacked columns whose products give B M^-1 W M^-1 B^T: M^-1 B^T for `a` (W = I),
+    /// R M^-1 B^T for `i` (W = R^T R); None for the other criteria.
+    fn weighted(&self, criterion: Criterion) -> Option<&DMatrix<f64>> {
+        match criterion {
             Criterion::A => Some(&self.et),
             Criterion::I => Some(&self.rt),
             _ => None,
-        };
+        }
+    }
+
+    /// (I + sign B M^-1 B^T, and for `a` and `i` B M^-1 W M^-1 B^T) of unit u, padded with
+    /// the identity (zeros) to 6 x 6.
+    fn blocks(&self, u: usize, sign: f64, criterion: Criterion) -> (Matrix6<f64>, Matrix6<f64>) {
+        let d = self.design.dim;
+        let mut h = Matrix6::identity();
+        let mut g = Matrix6::zeros();
+        let second = self.weighted(criterion);
         for i in 0..d {
             let ei = self.et.column(u * d + i);
             for j in 0..d {
@@ -107,7 +113,7 @@ impl<'a> Scorer<'a> {
     /// The change of the objective when unit u is added (sign +1) or dropped (-1), exact for
     /// D, A and I; -infinity when dropping it leaves M singular.
     fn change(&self, u: usize, sign: f64, criterion: Criterion) -> f64 {
-        let (h, g) = self.blocks(u, sign);
+        let (h, g) = self.blocks(u, sign, criterion);
         let Some(c) = h.cholesky() else {
             return f64::NEG_INFINITY;
         };
@@ -118,9 +124,7 @@ impl<'a> Scorer<'a> {
             _ => 2.0 * c.l_dirty().diagonal().iter().map(|v| v.ln()).sum::<f64>(),
         }
     }
-}
 
-impl Scorer<'_> {
     /// x_a . y_b summed into the d x d block at (r0, c0) of `k`, times `sign`, for units
     /// a (rows) and b (columns) of the stacked columns `x` and `y`.
     #[allow(clippy::too_many_arguments)]
@@ -159,13 +163,8 @@ impl Scorer<'_> {
         if det.is_nan() || det <= 0.0 {
             return f64::NEG_INFINITY;
         }
-        match criterion {
-            Criterion::A | Criterion::I => {
-                let f = if criterion == Criterion::A {
-                    et
-                } else {
-                    &self.rt
-                };
+        match self.weighted(criterion) {
+            Some(f) => {
                 let mut g = SMatrix::<f64, 12, 12>::zeros();
                 self.cross(&mut g, (0, 0), f, inn, f, inn, 1.0);
                 self.cross(&mut g, (0, 6), f, inn, f, out, 1.0);
@@ -173,7 +172,7 @@ impl Scorer<'_> {
                 self.cross(&mut g, (6, 6), f, out, f, out, -1.0);
                 lu.solve(&g).map_or(f64::NEG_INFINITY, |x| x.trace())
             }
-            _ => det.ln(),
+            None => det.ln(),
         }
     }
 }
@@ -200,7 +199,7 @@ fn shortlist(
     candidates: impl Iterator<Item = usize>,
     criterion: Criterion,
 ) -> Vec<usize> {
-    let (mut ranked, keep): (Vec<(usize, f64)>, usize) = if criterion == Criterion::O3 {
+    let mut ranked: Vec<(usize, f64)> = if criterion == Criterion::O3 {
         let eig = m.clone().symmetric_eigen();
         let mut order: Vec<usize> = (0..eig.eigenvalues.len()).collect();
         order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
@@ -210,7 +209,7 @@ fn shortlist(
             .map(|&k| (eig.eigenvalues[k], eig.eigenvectors.column(k).into_owned()))
             .collect();
         let d = scorer.design.dim;
-        let ranked = candidates
+        candidates
             .map(|u| {
                 let score = weakest
                     .iter()
@@ -222,16 +221,14 @@ fn shortlist(
                     .fold(f64::INFINITY, f64::min);
                 (u, score)
             })
-            .collect();
-        (ranked, SHORTLIST)
+            .collect()
     } else {
-        let ranked = candidates
+        candidates
             .map(|u| (u, scorer.change(u, 1.0, criterion)))
-            .collect();
-        (ranked, SHORTLIST)
+            .collect()
     };
     ranked.sort_by(|a, b| b.1.total_cmp(&a.1));
-    ranked.into_iter().take(keep).map(|(u, _)| u).collect()
+    ranked.into_iter().take(SHORTLIST).map(|(u, _)| u).collect()
 }
 
 /// Chooses `n` distinct units of `design`'s pool maximising `criterion`. `fixed` units (a
@@ -262,13 +259,12 @@ pub fn choose(design: &Design, n: usize, criterion: Criterion, fixed: &[usize]) 
     }
     let mut scorer = Scorer::new(design, criterion);
     let mut inside = vec![false; units];
-    let mut chosen: Vec<usize> = Vec::with_capacity(n + 1);
     for &u in &fixed {
-        if !inside[u] {
-            inside[u] = true;
-            chosen.push(u);
-        }
+        inside[u] = true;
     }
+    let mut chosen = fixed;
+    // The fixed units stay where they are, first.
+    let free = chosen.len();
     let mut m = design.information(&chosen);
     // Greedy start (D).
     while chosen.len() < n {
@@ -295,7 +291,6 @@ pub fn choose(design: &Design, n: usize, criterion: Criterion, fixed: &[usize]) 
     };
     let mut objective = regular(&m);
     let mut exchanges = 0;
-    let free = fixed.len();
     let better = |v: f64, than: f64| v > than + 1e-10 * than.abs().max(1.0);
     for _ in 0..10 * n.max(1) {
         scorer.update(&inverse(&m));
@@ -330,8 +325,8 @@ pub fn choose(design: &Design, n: usize, criterion: Criterion, fixed: &[usize]) 
         objective = regular(&m);
         exchanges += 1;
     }
-    // Recomputed from the units: no drift from the updates.
-    let m = design.information(&chosen);
+    // m is the information of `chosen`: summed unit by unit in their order, as
+    // `Design::information` sums it.
     Ok(Chosen {
         value: criterion.value(&m, r, n),
         units: chosen,
@@ -348,11 +343,7 @@ mod tests {
     use crate::sim::Region;
 
     fn design(units: usize, measure: Measure) -> Design {
-        let robot = crate::model::read_robot(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/datasets/robots/fanuc_r2000ib_210f.toml"
-        ))
-        .unwrap();
+        let robot = crate::model::test_fanuc();
         let region = Region::limits(&robot);
         let per = crate::plan::design::per_unit(measure);
         let pool = draw(&robot, &region, &Constraints::default(), units, per, 7).unwrap();

@@ -220,13 +220,7 @@ pub fn from_configurations(
 mod tests {
     use super::*;
 
-    fn fanuc() -> Robot {
-        crate::model::read_robot(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/datasets/robots/fanuc_r2000ib_210f.toml"
-        ))
-        .unwrap()
-    }
+    use crate::model::test_fanuc as fanuc;
 
     #[test]
     fn drawn_configurations_keep_every_constraint() {

@@ -5,14 +5,15 @@
 //! e = J_pose dtheta, of covariance J C J^T (the pose Jacobian over the planned parameters,
 //! thesis eq. 4.19-4.21). Its length |e| is not Gaussian: its distribution over a validation
 //! cloud is sampled, each configuration with the same `SAMPLES` seeded standard normal
-//! draws, e = V sqrt(Lambda) z (V Lambda V^T = J C J^T): the mean and 95th percentile pool
-//! every configuration's draws. The cloud's mean |e| is what an identification from the
+//! draws, e = V sqrt(Lambda) z (V Lambda V^T = J C J^T): the statistics pool every
+//! configuration's draws. The cloud's mean |e| is what an identification from the
 //! planned measurements will leave against the truth, on average over the noise.
 
 use super::design::Design;
+use crate::evaluate::Summary;
 use crate::identify::parameter_jacobian;
 use crate::kinematics::{Frames, frames};
-use nalgebra::{DMatrix, Matrix3, Matrix6xX, Vector3};
+use nalgebra::{Matrix3, Matrix6xX, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -31,15 +32,6 @@ pub struct ParamStd {
     pub std: f64,
 }
 
-/// Predicted error lengths over the validation cloud.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Spread {
-    /// Mean.
-    pub mean: f64,
-    /// 95th percentile.
-    pub p95: f64,
-}
-
 /// What a set of units predicts.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Prediction {
@@ -47,24 +39,10 @@ pub struct Prediction {
     pub units: usize,
     /// Each planned parameter's standard deviation.
     pub parameters: Vec<ParamStd>,
-    /// Tool position error (mm).
-    pub position_mm: Spread,
-    /// Tool orientation error (deg).
-    pub orientation_deg: Spread,
-}
-
-/// Mean and 95th percentile of `v` (sorted in place).
-fn spread(v: &mut [f64]) -> Spread {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    Spread {
-        mean: v.iter().sum::<f64>() / n.max(1) as f64,
-        p95: if n == 0 {
-            f64::NAN
-        } else {
-            v[((0.95 * n as f64).ceil() as usize).clamp(1, n) - 1]
-        },
-    }
+    /// Tool position error (mm): mean, RMS, p95 and max over the cloud and the draws.
+    pub position_mm: Summary,
+    /// Tool orientation error (deg), the same.
+    pub orientation_deg: Summary,
 }
 
 /// sqrt of the symmetric positive semi-definite `s` (V sqrt(Lambda), negative eigenvalues of
@@ -83,16 +61,9 @@ fn root(s: &Matrix3<f64>) -> Matrix3<f64> {
 /// the units do not identify every planned parameter. The draws are seeded by `seed`.
 pub fn predict(design: &Design, chosen: &[usize], seed: u64) -> Option<Prediction> {
     let cov = design.covariance(chosen)?;
-    predict_covariance(design, &cov, chosen.len(), seed)
-}
-
-/// [`predict`] from the covariance `cov` (parameter units) of `design`'s parameters.
-pub fn predict_covariance(
-    design: &Design,
-    cov: &DMatrix<f64>,
-    units: usize,
-    seed: u64,
-) -> Option<Prediction> {
+    if cov.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
     let cloud = &design.cloud;
     let robot = &design.robot;
     let ids = robot.parameters();
@@ -124,7 +95,7 @@ pub fn predict_covariance(
     for q in cloud {
         frames(robot, q, &mut ws);
         parameter_jacobian(robot, &ws, &design.params, &mut jac);
-        let jc = &jac * cov;
+        let jc = &jac * &cov;
         let s = &jc * jac.transpose();
         let sp: Matrix3<f64> = s.fixed_view::<3, 3>(0, 0).into_owned();
         let sr: Matrix3<f64> = s.fixed_view::<3, 3>(3, 3).into_owned();
@@ -134,13 +105,10 @@ pub fn predict_covariance(
             rot.push((rr * zk).norm().to_degrees());
         }
     }
-    if cov.iter().any(|v| !v.is_finite()) {
-        return None;
-    }
     Some(Prediction {
-        units,
+        units: chosen.len(),
         parameters,
-        position_mm: spread(&mut pos),
-        orientation_deg: spread(&mut rot),
+        position_mm: Summary::of(&pos)?,
+        orientation_deg: Summary::of(&rot)?,
     })
 }

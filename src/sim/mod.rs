@@ -16,7 +16,7 @@ use crate::model::Robot;
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
+use rand_distr::{Distribution, StandardNormal};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -116,6 +116,45 @@ pub fn actual_pose(
     tool_pose(truth, &actual)
 }
 
+/// What the virtual sensor reports of the true tool `pose` at joints `q`: the measured row
+/// (position plus Gaussian noise of `sigma_position_mm` per coordinate, orientation turned by
+/// a rotation vector of `sigma_rotation_rad` per component, with those sigmas) and the
+/// noise-free row, as `observe` says. Six standard normal draws from `rng` every time (three
+/// for position, then three for rotation), whatever is observed, so that the stream stays
+/// aligned with the rows.
+pub fn reading(
+    pose: &Pose,
+    q: &[f64],
+    observe: Observe,
+    sigma_position_mm: f64,
+    sigma_rotation_rad: f64,
+    rng: &mut impl Rng,
+) -> (Measurement, Measurement) {
+    let mut draw3 = |s: f64| {
+        let mut z = || -> f64 { StandardNormal.sample(&mut *rng) };
+        Vector3::new(z(), z(), z()) * s
+    };
+    let np = draw3(sigma_position_mm);
+    let nr = draw3(sigma_rotation_rad);
+    let mut t = Measurement::new(q.to_vec());
+    let mut m = t.clone();
+    if observe != Observe::Orientation {
+        t.position = Some(pose.translation.vector);
+        m.position = Some(pose.translation.vector + np);
+        if sigma_position_mm > 0.0 {
+            m.sigma_position = Some(Vector3::repeat(sigma_position_mm));
+        }
+    }
+    if observe != Observe::Position {
+        t.rotation = Some(pose.rotation);
+        m.rotation = Some(from_rotation_vector(&nr) * pose.rotation);
+        if sigma_rotation_rad > 0.0 {
+            m.sigma_rotation = Some(Vector3::repeat(sigma_rotation_rad));
+        }
+    }
+    (m, t)
+}
+
 /// A simulation run.
 #[derive(Debug, Clone)]
 pub struct Simulation<'a> {
@@ -171,7 +210,6 @@ impl Simulation<'_> {
         let mut rng_q = ChaCha8Rng::seed_from_u64(self.seed);
         let mut rng_noise = ChaCha8Rng::seed_from_u64(self.seed);
         rng_noise.set_stream(1);
-        let unit = Normal::new(0.0, 1.0).map_err(|e| Error::Invalid(e.to_string()))?;
         let mut ws = Frames::new(robot);
         let mut previous = vec![0.0; n];
         for k in 0..self.count {
@@ -190,32 +228,16 @@ impl Simulation<'_> {
                 })
                 .collect();
             let pose = actual_pose(robot, self.nongeometric, &q, &previous, &mut ws);
-            let mut draw3 = |s: f64| {
-                Vector3::new(
-                    unit.sample(&mut rng_noise),
-                    unit.sample(&mut rng_noise),
-                    unit.sample(&mut rng_noise),
-                ) * s
-            };
-            let np = draw3(self.sigma_position_mm);
-            let nr = draw3(self.sigma_rotation_rad);
-            let mut t = Measurement::new(q.clone());
+            let (mut m, mut t) = reading(
+                &pose,
+                &q,
+                self.observe,
+                self.sigma_position_mm,
+                self.sigma_rotation_rad,
+                &mut rng_noise,
+            );
             t.id = Some((k + 1).to_string());
-            let mut m = t.clone();
-            if self.observe != Observe::Orientation {
-                t.position = Some(pose.translation.vector);
-                m.position = Some(pose.translation.vector + np);
-                if self.sigma_position_mm > 0.0 {
-                    m.sigma_position = Some(Vector3::repeat(self.sigma_position_mm));
-                }
-            }
-            if self.observe != Observe::Position {
-                t.rotation = Some(pose.rotation);
-                m.rotation = Some(from_rotation_vector(&nr) * pose.rotation);
-                if self.sigma_rotation_rad > 0.0 {
-                    m.sigma_rotation = Some(Vector3::repeat(self.sigma_rotation_rad));
-                }
-            }
+            m.id = t.id.clone();
             previous = q.clone();
             // The bound a measurement file's positions have: the data must read back.
             let far = crate::model::MAX_LENGTH_MM;

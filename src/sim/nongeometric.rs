@@ -23,7 +23,8 @@
 //! between the origins of joint frames k and k+1 (the tool origin after the last joint), the
 //! payload at the tool origin; the gravity torque about joint j's axis z_j through o_j is
 //! tau_j = z_j . sum_{k >= j} (c_k - o_j) x (m_k g)  [N m, lengths in m] (for a prismatic
-//! joint the force along its axis, N; the model's routine, `kinematics::gravity`)
+//! joint the force along its axis, N; the direct point-mass sum of `kinematics::gravity`, which
+//! the model's suffix sums equal, a test checks)
 //! and the joint deflects by compliance_j * tau_j in the direction of the torque.
 //! Gear error: dq = A1 sin(q + phi1) + A2 sin(2 q + phi2).
 //! Backlash: dq = +-play/2, the sign of the joint's last motion (from q = 0 for the first row).
@@ -295,8 +296,9 @@ impl NonGeometric {
 }
 
 /// Gravity torque about every joint axis (N m; N along a prismatic one) at joints `q` (rad),
-/// from the masses of the module docs, by the model's own torque routine
-/// ([`crate::kinematics::gravity::gravity_torques`]).
+/// from the masses of the module docs, by the direct point-mass sum
+/// ([`crate::kinematics::gravity::gravity_torques`]; the model's suffix sums in
+/// `kinematics::load` give the same torques to 1e-9, `tests/gravity.rs`).
 pub fn gravity_torques(robot: &Robot, c: &Compliance, q: &[f64], ws: &mut Frames) -> Vec<f64> {
     frames(robot, q, ws);
     let n = robot.dof();

@@ -7,20 +7,17 @@
 //! each, and the error is the mean tool position error against the truth over the cloud. The
 //! prediction is [`crate::plan::predict()`]'s mean for the same units, made before measuring.
 
-use crate::data::{Measurement, MeasurementSet};
+use crate::data::MeasurementSet;
 use crate::error::Result;
-use crate::geometry::rotation::from_rotation_vector;
 use crate::identify::problem::{Measure, Sigmas};
 use crate::identify::{Options, identify};
 use crate::kinematics::{Frames, Pose, tool_pose};
 use crate::model::Robot;
 use crate::plan::{Constraints, Criterion, Design, choose, pool, predict};
-use crate::sim::{NonGeometric, Region, actual_pose};
+use crate::sim::{NonGeometric, Observe, Region, actual_pose, reading};
 use crate::stats::median;
-use nalgebra::Vector3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use std::path::Path;
 
 /// The simulated robot: its nominal model, its truth and its non-geometric errors.
@@ -120,6 +117,14 @@ pub struct Outcome {
     pub random: Vec<Series>,
 }
 
+/// The smallest and the largest of `v` (mm): the range over the seeds.
+pub fn range(v: &[f64]) -> (f64, f64) {
+    (
+        v.iter().copied().fold(f64::INFINITY, f64::min),
+        v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    )
+}
+
 /// The header of [`Outcome::table_row`]'s table (Markdown).
 pub const TABLE_HEADER: &str = "| robot | measure | planned N=20: median (range) mm | predicted | random N=20: median (range) | predicted | planned lower by | random N matching planned N=20 |\n|---|---|---|---|---|---|---|---|";
 
@@ -131,8 +136,7 @@ impl Outcome {
     pub fn table_row(&self, robot: &str, measure: &str) -> Option<String> {
         let (p, r) = (self.planned_at(20)?, self.random_at(20)?);
         let range = |v: &[f64]| {
-            let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let (lo, hi) = range(v);
             format!("{lo:.4}-{hi:.4}")
         };
         Some(format!(
@@ -144,10 +148,12 @@ impl Outcome {
             range(&r.realised),
             median(&r.predicted),
             100.0 * (1.0 - median(&p.realised) / median(&r.realised)),
-            self.random_matching(20)
-                .map_or("beyond the largest tried".to_string(), |n| format!(
-                    "{n:.0}"
-                )),
+            match (self.random_matching(20), self.random.first()) {
+                (None, _) => "beyond the largest tried".to_string(),
+                // Already the fewest tried: not an interpolation.
+                (Some(n), Some(first)) if n == first.units as f64 => format!("<= {n:.0}"),
+                (Some(n), _) => format!("{n:.0}"),
+            },
         ))
     }
 
@@ -181,31 +187,22 @@ impl Outcome {
     }
 }
 
-/// The true tool poses at `qs` (rad, mm), approached in order, measured with the thesis's
-/// noise (seeded by `rng`); position only for `Measure::Position`.
+/// The true tool poses at `qs` (rad, mm), approached in order, as the virtual sensor reports
+/// them with the thesis's noise (seeded by `rng`); position only for `Measure::Position`.
 fn measure(case: &Case, qs: &[Vec<f64>], measure: Measure, rng: &mut ChaCha8Rng) -> MeasurementSet {
     let s = Sigmas::default();
+    let observe = match measure {
+        Measure::Position => Observe::Position,
+        _ => Observe::Pose,
+    };
     let mut ws = Frames::new(&case.truth);
     let mut previous = vec![0.0; case.truth.dof()];
-    let draw = |sigma: f64, rng: &mut ChaCha8Rng| {
-        Vector3::new(
-            StandardNormal.sample(rng),
-            StandardNormal.sample(rng),
-            StandardNormal.sample(rng),
-        ) * sigma
-    };
     let rows = qs
         .iter()
         .map(|q| {
             let pose = actual_pose(&case.truth, &case.nongeometric, q, &previous, &mut ws);
             previous = q.clone();
-            let mut m = Measurement::new(q.clone());
-            m.position = Some(pose.translation.vector + draw(s.position_mm, rng));
-            let noise = draw(s.rotation_rad, rng);
-            if measure == Measure::Pose {
-                m.rotation = Some(from_rotation_vector(&noise) * pose.rotation);
-            }
-            m
+            reading(&pose, q, observe, s.position_mm, s.rotation_rad, rng).0
         })
         .collect();
     MeasurementSet::from_rows(rows)

@@ -4,8 +4,21 @@
 
 pub mod ur10;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+
+/// The FANUC R-2000iB/210F's nominal file, relative to the repository root.
+pub const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
+
+/// The repository root (where `datasets/` is).
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A JSON file, parsed.
+pub fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
 
 /// Runs the `robocal` binary from the repository root.
 pub fn robocal(args: &[&str]) -> Output {

@@ -1,14 +1,11 @@
 //! The shipped UR10 series (real laser-tracker data), imported through their profile, and
 //! the README's fixed split of Series B.
 
+use super::root;
 use robocal::data::measurement::split;
 use robocal::data::{MeasurementSet, Profile, read_measurements};
 use robocal::model::Robot;
-use std::path::{Path, PathBuf};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+use std::path::Path;
 
 /// Series B's file, under `datasets/ipa-ur10/`.
 pub const SERIES_B: &str = "Series_B/measurements_joint_configurations.csv";
