@@ -381,6 +381,22 @@ fn compensated_jacobian_matches_central_differences() {
                 }
             }
         }
+        // With two MLPs the shrinkage must act, or its derivative would go unchecked.
+        if members == 2 && network == Network::Mlp {
+            let mut unshrunk = comp.clone();
+            unshrunk.shrink = None;
+            let (mut w1, mut w2) = (PredictWorkspace::default(), PredictWorkspace::default());
+            let acts = s.test_truth.rows.iter().take(5).any(|m| {
+                let (a, b) = (
+                    comp.correction(&m.q, &mut w1).to_vec(),
+                    unshrunk.correction(&m.q, &mut w2).to_vec(),
+                );
+                a.iter()
+                    .zip(&b)
+                    .any(|(x, y)| (x - y).abs() > 1e-3 * y.abs().max(1e-3))
+            });
+            assert!(acts, "{form:?} {encoding:?}: the shrinkage does not act");
+        }
         // The network must matter here, or the check above would only test the rigid model.
         let mut pw = PredictWorkspace::default();
         let q = &s.test_truth.rows[0].q;

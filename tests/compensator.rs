@@ -148,6 +148,10 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
                 );
             }
         }
+        if network == Network::Mlp && members == 2 {
+            shrinkage_is_the_members_posterior_mean(&c, &test);
+        }
+        assert_eq!(c.shrink.is_some(), network != Network::Rbf && members >= 2);
         let path = std::env::temp_dir().join(format!(
             "robocal-comp-{}-{form:?}-{network:?}.rcal",
             std::process::id()
@@ -203,6 +207,21 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
         }
         let e = edit(&|v| v["domain"]["radius"] = serde_json::json!(-1.0));
         assert!(e.contains("domain"), "{e}");
+        if c.shrink.is_some() {
+            assert_eq!(back.shrink, c.shrink);
+            let e = edit(&|v| v["shrink"]["signal"] = serde_json::json!(-1.0));
+            assert!(e.contains("shrinkage"), "{e}");
+            let e = edit(&|v| {
+                v["shrink"]["centre"].as_array_mut().unwrap().pop();
+            });
+            assert!(e.contains("shrinkage"), "{e}");
+            // A version 3 file (before the shrinkage) is read as it was made: no shrinkage.
+            let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            v["version"] = serde_json::json!(3);
+            v.as_object_mut().unwrap().remove("shrink");
+            std::fs::write(&path, resign(v)).unwrap();
+            assert!(Compensator::load(&path).unwrap().shrink.is_none());
+        }
         if let Some(w) = c.members.first() {
             let mut bad = w.clone();
             bad.w1[(0, 0)] = f64::NAN;
@@ -373,6 +392,62 @@ fn configurations_outside_the_training_domain_are_flagged() {
 
 /// The file's checksum again after an edit: FNV-1a 64 of the compact JSON without it
 /// (written here independently of the library).
+/// The ensemble's correction against one computed here from each member alone (no fade, no
+/// shrinkage): y = c + f (ybar - c), f = T / (T + S), S the members' sample variance summed
+/// over the normalised outputs; and the shrinkage must act somewhere on `set`.
+fn shrinkage_is_the_members_posterior_mean(c: &Compensator, set: &robocal::data::MeasurementSet) {
+    let shrink = c.shrink.clone().expect("two members are shrunk");
+    let mut plain = c.clone();
+    plain.domain = robocal::neural::domain::Domain::fit(&c.robot, c.encoding, &c.input_norm, &[]);
+    let singles: Vec<Compensator> = c
+        .members
+        .iter()
+        .map(|w| {
+            let mut one = plain.clone();
+            one.members = vec![w.clone()];
+            one.shrink = None;
+            one
+        })
+        .collect();
+    let (norm, m) = (&c.output_norm, c.members.len() as f64);
+    let mut smallest: f64 = 1.0;
+    let mut ws = PredictWorkspace::default();
+    for row in &set.rows {
+        let ys: Vec<Vec<f64>> = singles
+            .iter()
+            .map(|one| {
+                let raw = one.correction(&row.q, &mut ws).to_vec();
+                (0..raw.len())
+                    .map(|k| (raw[k] - norm.offset[k]) / norm.scale[k])
+                    .collect()
+            })
+            .collect();
+        let o = ys[0].len();
+        let mean: Vec<f64> = (0..o)
+            .map(|k| ys.iter().map(|y| y[k]).sum::<f64>() / m)
+            .collect();
+        let spread: f64 = (0..o)
+            .map(|k| ys.iter().map(|y| (y[k] - mean[k]).powi(2)).sum::<f64>() / (m - 1.0))
+            .sum();
+        let f = shrink.signal / (shrink.signal + spread);
+        smallest = smallest.min(f);
+        let got = plain.correction(&row.q, &mut ws);
+        for k in 0..o {
+            let want = norm.offset[k]
+                + norm.scale[k] * (shrink.centre[k] + f * (mean[k] - shrink.centre[k]));
+            assert!(
+                (got[k] - want).abs() <= 1e-9 * (1.0 + want.abs()),
+                "output {k}: {} against {want}",
+                got[k]
+            );
+        }
+    }
+    assert!(
+        smallest < 0.99,
+        "the shrinkage never acts (f >= {smallest})"
+    );
+}
+
 fn resign(mut v: serde_json::Value) -> String {
     v.as_object_mut().unwrap().remove("checksum");
     let body = serde_json::to_string(&v).unwrap();

@@ -50,7 +50,10 @@ fn head(rel: &str, lines: usize) -> Vec<u8> {
 /// A written output holds a non-finite number (a CSV cell, a JSON or TOML value; JSON null
 /// is how serde writes NaN, except for a compensator without an RBF network).
 fn non_finite(text: &str) -> bool {
-    let text = text.replace("\"rbf\": null", "");
+    // The compensator file's optional parts are null when absent.
+    let text = text
+        .replace("\"rbf\": null", "")
+        .replace("\"shrink\": null", "");
     text.split([',', '\n', ' ', ':', '='])
         .map(|t| t.trim().trim_matches('"'))
         .any(|t| {

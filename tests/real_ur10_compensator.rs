@@ -80,6 +80,7 @@ fn baseline_fit(model: &Robot, set: &MeasurementSet, hidden: usize, alpha: f64) 
         robot: model.clone(),
         members: vec![shape.from_vector(&v)],
         rbf: None,
+        shrink: None,
         input_norm: p.input_norm,
         output_norm: out_norm,
         domain,

@@ -17,6 +17,7 @@ use super::domain::Domain;
 use super::encoding::Encoding;
 use super::rbf::Rbf;
 pub use super::settings::{CompensatorOptions, Form, Network, Refine, Settings};
+use super::shrink::Shrink;
 use super::weights::{Affine, Weights};
 use crate::model::Robot;
 
@@ -34,6 +35,9 @@ pub struct Compensator {
     pub members: Vec<Weights>,
     /// An RBF network, alone or with the MLPs.
     pub rbf: Option<Rbf>,
+    /// The MLPs' mean shrinks toward its training mean where they disagree (two members or
+    /// more; see [`super::shrink`]).
+    pub shrink: Option<Shrink>,
     /// Standardisation of the input features (encoded joints) fitted on the training rows.
     pub input_norm: Affine,
     /// Map from the networks' unit-scale outputs to raw outputs: pose form dp (mm) and dr

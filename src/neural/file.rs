@@ -1,8 +1,10 @@
-//! The compensator file (JSON, version 3): format and version, form, encoding, shapes,
+//! The compensator file (JSON, version 4): format and version, form, encoding, shapes,
 //! normalisations, training domain, the robot file it runs in series with (embedded, with its
 //! hash), one burn record (burnpack bytes, hex) per MLP of the ensemble, the RBF network
-//! (`rbf`: centres, widths, weights and variances, or null), and a checksum of it all.
+//! (`rbf`: centres, widths, weights and variances, or null), the shrinkage of the MLPs' mean
+//! (`shrink`: centre and signal variance, or null), and a checksum of it all.
 //!
+//! Version 4 added the shrinkage; version 3 files are read without it (as they were made).
 //! Version 3 added the RBF network; version 2 files (MLPs only) are read as before. Version 2
 //! changed the inputs (encodings, standardisation), the pose form's frame (the robot's base
 //! frame) and added ensembles and the domain: version 1 files are refused with a message that
@@ -13,6 +15,7 @@ use super::domain::Domain;
 use super::encoding::Encoding;
 use super::net::{record_bytes, weights_from_record};
 use super::rbf::Rbf;
+use super::shrink::Shrink;
 use super::weights::{Affine, VALUE_BOUND};
 use crate::error::{Error, IN_MEMORY, Location, Result};
 use crate::model::{Robot, robot_to_toml};
@@ -20,7 +23,7 @@ use serde_json::Value;
 use std::path::Path;
 
 const FORMAT: &str = "robocal-compensator";
-const VERSION: u64 = 3;
+const VERSION: u64 = 4;
 /// The oldest version this robocal reads.
 const OLDEST: u64 = 2;
 
@@ -38,7 +41,11 @@ impl Compensator {
             && self
                 .rbf
                 .as_ref()
-                .is_none_or(|r| r.is_valid(self.inputs(), self.outputs()));
+                .is_none_or(|r| r.is_valid(self.inputs(), self.outputs()))
+            && self
+                .shrink
+                .as_ref()
+                .is_none_or(|s| s.is_valid(self.outputs()) && self.members.len() >= 2);
         if !finite {
             return Err(Error::Invalid(
                 "the compensator holds a non-finite or out-of-bounds weight, normalisation or \
@@ -67,6 +74,7 @@ impl Compensator {
             "robot_hash": format!("{:016x}", fnv1a(robot_toml.as_bytes())),
             "network_records_burnpack_hex": records,
             "rbf": self.rbf,
+            "shrink": self.shrink,
         });
         let sum = fnv1a(
             serde_json::to_string(&body)
@@ -214,6 +222,21 @@ impl Compensator {
                     .into(),
             ));
         }
+        let shrink: Option<Shrink> = if version >= 4 {
+            de(&v, "shrink", path)?
+        } else {
+            None
+        };
+        if shrink
+            .as_ref()
+            .is_some_and(|s| !s.is_valid(no) || members.len() < 2)
+        {
+            return Err(bad(
+                "the shrinkage does not fit the outputs or the members, or holds a non-finite \
+                 or non-positive number"
+                    .into(),
+            ));
+        }
         if members.is_empty() != (nh == 0) {
             return Err(bad(format!(
                 "{} network records for {nh} hidden units",
@@ -230,6 +253,7 @@ impl Compensator {
             robot,
             members,
             rbf,
+            shrink,
             input_norm: de::<Affine>(&v, "input_norm", path)?,
             output_norm: de::<Affine>(&v, "output_norm", path)?,
             domain: de::<Domain>(&v, "domain", path)?,

@@ -4,10 +4,12 @@
 use super::compensator::Compensator;
 use super::domain::Domain;
 use super::parallel::parallel_map;
+use super::predict::PredictWorkspace;
 use super::rbf::Rbf;
 use super::refine::{RefinedParam, refine};
 use super::selection::Selection;
 use super::settings::{Network, Settings};
+use super::shrink::Shrink;
 use super::targets::build;
 use super::train::{TrainOptions, TrainReport, train};
 use crate::data::MeasurementSet;
@@ -64,6 +66,21 @@ impl Compensator {
                 fit_seconds: started.elapsed().as_secs_f64(),
             },
         ))
+    }
+
+    /// Sets [`Compensator::shrink`] from the members' outputs at the training rows `set`
+    /// (after the members change).
+    pub fn fit_shrink(&mut self, set: &MeasurementSet) {
+        let mut ws = PredictWorkspace::default();
+        let xs: Vec<Vec<f64>> = if self.members.len() >= 2 {
+            set.rows
+                .iter()
+                .map(|m| ws.normalised_inputs(self, &m.q).to_vec())
+                .collect()
+        } else {
+            Vec::new()
+        };
+        self.shrink = Shrink::fit(&self.members, &xs);
     }
 }
 
@@ -126,6 +143,7 @@ pub(crate) fn fit_with(
         Vec::new()
     };
     let domain = Domain::fit(robot, settings.encoding, &problem.input_norm, &qs);
+    let shrink = Shrink::fit(&members, &problem.samples.x);
     Ok((
         Compensator {
             form: settings.form,
@@ -133,6 +151,7 @@ pub(crate) fn fit_with(
             robot: robot.clone(),
             members,
             rbf,
+            shrink,
             input_norm: problem.input_norm,
             output_norm: problem.output_norm,
             domain,

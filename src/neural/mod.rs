@@ -14,6 +14,7 @@ pub mod refine;
 pub mod samples;
 pub mod selection;
 pub mod settings;
+pub mod shrink;
 pub mod targets;
 pub mod train;
 pub mod training;

@@ -28,6 +28,8 @@ pub struct PredictWorkspace {
     dout: DMatrix<f64>,
     /// d weight / dq (the domain's fade).
     dw: Vec<f64>,
+    /// sum_m dy_m^T y_m over the MLPs (the shrinkage's derivative).
+    g: Vec<f64>,
     /// The training configuration nearest the last query (where the domain search starts).
     near_hint: usize,
     frames: Option<Frames>,
@@ -48,6 +50,7 @@ impl Default for PredictWorkspace {
             dy_sum: DMatrix::zeros(0, 0),
             dout: DMatrix::zeros(0, 0),
             dw: Vec::new(),
+            g: Vec::new(),
             near_hint: 0,
             frames: None,
         }
@@ -91,28 +94,44 @@ impl Compensator {
 
     /// The networks' combined raw output at the prepared inputs `ws.x` into `ws.out` and, with
     /// `derivatives`, its derivative by the normalised inputs into `ws.dy_sum` (normalised
-    /// outputs x inputs). The MLPs' mean and the RBF network have equal say when both are
+    /// outputs x inputs). The MLPs' mean, shrunk toward its training mean where they disagree
+    /// ([`super::shrink`]), and the RBF network have equal say when both are
     /// present: y = (mean_m y_m + y_rbf) / 2. False (and `ws.out` zero) without networks.
     fn mean_output(&self, ws: &mut PredictWorkspace, derivatives: bool) -> bool {
         ws.y_sum.fill(0.0);
         if derivatives {
             ws.dy_sum.fill(0.0);
         }
+        // For the shrinkage: sum_m |y_m|^2 and sum_m dy_m^T y_m.
+        let mut squares = 0.0;
+        ws.g.clear();
+        ws.g.resize(ws.x.len(), 0.0);
         for w in &self.members {
             if derivatives {
                 w.input_jacobian_into(&ws.x, &mut ws.h, &mut ws.y, &mut ws.dy);
                 ws.dy_sum += &ws.dy;
+                if self.shrink.is_some() {
+                    for (i, g) in ws.g.iter_mut().enumerate() {
+                        *g += (0..ws.y.len())
+                            .map(|k| ws.dy[(k, i)] * ws.y[k])
+                            .sum::<f64>();
+                    }
+                }
             } else {
                 w.forward_into(&ws.x, &mut ws.h, &mut ws.y);
             }
+            squares += ws.y.iter().map(|v| v * v).sum::<f64>();
             ws.y_sum.iter_mut().zip(&ws.y).for_each(|(s, v)| *s += v);
         }
         let m = self.members.len();
         if m > 1 {
-            let m = m as f64;
-            ws.y_sum.iter_mut().for_each(|s| *s /= m);
+            let mf = m as f64;
+            ws.y_sum.iter_mut().for_each(|s| *s /= mf);
             if derivatives {
-                ws.dy_sum /= m;
+                ws.dy_sum /= mf;
+            }
+            if let Some(shrink) = &self.shrink {
+                self.shrink_mean(shrink, squares, derivatives, ws);
             }
         }
         if let Some(r) = &self.rbf {
@@ -137,6 +156,44 @@ impl Compensator {
         }
         self.output_norm.invert(&ws.y_sum, &mut ws.out);
         true
+    }
+
+    /// Shrinks the MLPs' mean `ws.y_sum` (and its derivative `ws.dy_sum`) toward the training
+    /// mean: y = c + f (ybar - c), f = T / (T + S) (see [`super::shrink`]); `squares` is
+    /// sum_m |y_m|^2 and `ws.g` sum_m dy_m^T y_m.
+    fn shrink_mean(
+        &self,
+        shrink: &super::shrink::Shrink,
+        squares: f64,
+        derivatives: bool,
+        ws: &mut PredictWorkspace,
+    ) {
+        let mf = self.members.len() as f64;
+        let mean_sq: f64 = ws.y_sum.iter().map(|v| v * v).sum();
+        let spread = (squares - mf * mean_sq) / (mf - 1.0);
+        let f = shrink.factor(spread);
+        if derivatives {
+            // dS/dx_i = 2 (g_i - M sum_k dybar_ki ybar_k) / (M - 1); df = -(f^2 / T) dS;
+            // dy = f dybar + (ybar - c) df^T.
+            let (o, n) = ws.dy_sum.shape();
+            let active = spread > 0.0;
+            for i in 0..n {
+                let along: f64 = (0..o).map(|k| ws.dy_sum[(k, i)] * ws.y_sum[k]).sum();
+                let ds = 2.0 * (ws.g[i] - mf * along) / (mf - 1.0);
+                let df = if active {
+                    -f * f / shrink.signal * ds
+                } else {
+                    0.0
+                };
+                for k in 0..o {
+                    ws.dy_sum[(k, i)] =
+                        f * ws.dy_sum[(k, i)] + (ws.y_sum[k] - shrink.centre[k]) * df;
+                }
+            }
+        }
+        for (v, c) in ws.y_sum.iter_mut().zip(&shrink.centre) {
+            *v = c + f * (*v - c);
+        }
     }
 
     /// The mean raw outputs into `ws.out` and their derivatives by the joints (outputs x

@@ -231,6 +231,9 @@ impl Cv<'_> {
         let mut members: Vec<Weights> = done.into_iter().take(reuse).map(|(w, _)| w).collect();
         members.append(&mut c.members);
         c.members = members;
+        if reuse > 0 {
+            c.fit_shrink(&self.train[fold]);
+        }
         if plain.members == 1
             && let Ok(mut n) = self.nets.lock()
         {
