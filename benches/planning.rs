@@ -20,12 +20,9 @@ fn planning(c: &mut Bench) {
     .unwrap();
     let region = Region::limits(&robot);
     let free = Constraints::default();
-    let cloud: Vec<Vec<f64>> = pool::draw(&robot, &region, &free, 300, 1, 2)
+    let cloud = pool::draw(&robot, &region, &free, 300, 1, 2)
         .unwrap()
-        .units
-        .into_iter()
-        .map(|mut u| u.remove(0))
-        .collect();
+        .into_configurations();
     for (name, measure, criterion) in [
         ("pose_d", Measure::Pose, Criterion::D),
         ("position_d", Measure::Position, Criterion::D),
@@ -53,12 +50,9 @@ fn planning(c: &mut Bench) {
     c.bench_function("plan_30_of_5000_pose_d_whole", |b| {
         b.iter(|| {
             let candidates = pool::draw(&robot, &region, &free, 5000, 1, 1).unwrap();
-            let cloud: Vec<Vec<f64>> = pool::draw(&robot, &region, &free, 300, 1, 2)
+            let cloud = pool::draw(&robot, &region, &free, 300, 1, 2)
                 .unwrap()
-                .units
-                .into_iter()
-                .map(|mut u| u.remove(0))
-                .collect();
+                .into_configurations();
             let design = Design::new(
                 &robot,
                 "full",

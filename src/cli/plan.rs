@@ -215,7 +215,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
         (None, None) => pool::draw(&robot, &region, &limits, a.pool, per, a.seed)?,
     };
     // The cloud comes from its own stream of the seed: the pool does not move it.
-    let cloud: Vec<Vec<f64>> = pool::draw(
+    let cloud = pool::draw(
         &robot,
         &region,
         &limits,
@@ -223,10 +223,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
         1,
         a.seed ^ 0x9e37_79b9_7f4a_7c15,
     )?
-    .units
-    .into_iter()
-    .map(|mut u| u.remove(0))
-    .collect();
+    .into_configurations();
     let sigmas = a.sigma.sigmas();
     let design = Design::new(
         &robot,

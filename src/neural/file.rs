@@ -45,7 +45,7 @@ impl Compensator {
             && self
                 .shrink
                 .as_ref()
-                .is_none_or(|s| s.is_valid(self.outputs()) && self.members.len() >= 2);
+                .is_none_or(|s| s.is_valid(self.outputs(), self.members.len()));
         if !finite {
             return Err(Error::Invalid(
                 "the compensator holds a non-finite or out-of-bounds weight, normalisation or \
@@ -229,7 +229,7 @@ impl Compensator {
         };
         if shrink
             .as_ref()
-            .is_some_and(|s| !s.is_valid(no) || members.len() < 2)
+            .is_some_and(|s| !s.is_valid(no, members.len()))
         {
             return Err(bad(
                 "the shrinkage does not fit the outputs or the members, or holds a non-finite \

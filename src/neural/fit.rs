@@ -4,7 +4,6 @@
 use super::compensator::Compensator;
 use super::domain::Domain;
 use super::parallel::parallel_map;
-use super::predict::PredictWorkspace;
 use super::rbf::Rbf;
 use super::refine::{RefinedParam, refine};
 use super::selection::Selection;
@@ -12,6 +11,7 @@ use super::settings::{Network, Settings};
 use super::shrink::Shrink;
 use super::targets::build;
 use super::train::{TrainOptions, TrainReport, train};
+use super::weights::Weights;
 use crate::data::MeasurementSet;
 use crate::error::Result;
 use crate::identify::Sigmas;
@@ -53,7 +53,7 @@ impl Compensator {
             None => (model.clone(), Vec::new(), Vec::new()),
         };
         let started = std::time::Instant::now();
-        let (c, networks) = fit_with(&robot, set, settings, train_opts, true, true, 0)?;
+        let (c, networks) = fit_with(&robot, set, settings, train_opts, true, true, Vec::new())?;
         Ok((
             c,
             CompensatorReport {
@@ -67,28 +67,13 @@ impl Compensator {
             },
         ))
     }
-
-    /// Sets [`Compensator::shrink`] from the members' outputs at the training rows `set`
-    /// (after the members change).
-    pub fn fit_shrink(&mut self, set: &MeasurementSet) {
-        let mut ws = PredictWorkspace::default();
-        let xs: Vec<Vec<f64>> = if self.members.len() >= 2 {
-            set.rows
-                .iter()
-                .map(|m| ws.normalised_inputs(self, &m.q).to_vec())
-                .collect()
-        } else {
-            Vec::new()
-        };
-        self.shrink = Shrink::fit(&self.members, &xs);
-    }
 }
 
 /// [`Compensator::fit`] on a model already refined (`settings.refine` is not applied);
 /// `parallel` trains the members on several threads; without `with_domain` the domain is
-/// left empty (cross-validation fits never check it). Member m (counting from
-/// `first_member`) trains from seed `train_opts.seed + 7919 m`, so members already trained
-/// for the same settings can be reused and completed.
+/// left empty (cross-validation fits never check it). The members `reused` (already
+/// trained for the same settings and rows) come first; member m after them trains from seed
+/// `train_opts.seed + 7919 m`, m counting them, so an ensemble can be completed.
 pub(crate) fn fit_with(
     robot: &Robot,
     set: &MeasurementSet,
@@ -96,11 +81,12 @@ pub(crate) fn fit_with(
     train_opts: &TrainOptions,
     parallel: bool,
     with_domain: bool,
-    first_member: usize,
+    reused: Vec<Weights>,
 ) -> Result<(Compensator, Vec<TrainReport>)> {
     let problem = build(robot, set, settings.form, settings.encoding)?;
     let outputs = problem.output_norm.len();
-    let mut members = Vec::new();
+    let first_member = reused.len();
+    let mut members = reused;
     let mut reports = Vec::new();
     let rbf = if settings.has_rbf() {
         Some(match &train_opts.rbf_hyper {

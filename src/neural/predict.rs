@@ -102,15 +102,18 @@ impl Compensator {
         if derivatives {
             ws.dy_sum.fill(0.0);
         }
-        // For the shrinkage: sum_m |y_m|^2 and sum_m dy_m^T y_m.
+        // For the shrinkage: sum_m |y_m|^2 and, with derivatives, sum_m dy_m^T y_m.
+        let shrinking = self.shrink.is_some();
         let mut squares = 0.0;
-        ws.g.clear();
-        ws.g.resize(ws.x.len(), 0.0);
+        if derivatives && shrinking {
+            ws.g.clear();
+            ws.g.resize(ws.x.len(), 0.0);
+        }
         for w in &self.members {
             if derivatives {
                 w.input_jacobian_into(&ws.x, &mut ws.h, &mut ws.y, &mut ws.dy);
                 ws.dy_sum += &ws.dy;
-                if self.shrink.is_some() {
+                if shrinking {
                     for (i, g) in ws.g.iter_mut().enumerate() {
                         *g += (0..ws.y.len())
                             .map(|k| ws.dy[(k, i)] * ws.y[k])
@@ -120,7 +123,9 @@ impl Compensator {
             } else {
                 w.forward_into(&ws.x, &mut ws.h, &mut ws.y);
             }
-            squares += ws.y.iter().map(|v| v * v).sum::<f64>();
+            if shrinking {
+                squares += ws.y.iter().map(|v| v * v).sum::<f64>();
+            }
             ws.y_sum.iter_mut().zip(&ws.y).for_each(|(s, v)| *s += v);
         }
         let m = self.members.len();

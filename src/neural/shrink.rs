@@ -76,9 +76,11 @@ impl Shrink {
         self.signal / (self.signal + spread.max(0.0))
     }
 
-    /// Whether it fits `outputs` network outputs with finite numbers and a positive signal.
-    pub fn is_valid(&self, outputs: usize) -> bool {
-        self.centre.len() == outputs
+    /// Whether it fits `outputs` network outputs of `members` MLPs (two or more: one has no
+    /// spread) with finite numbers and a positive signal.
+    pub fn is_valid(&self, outputs: usize, members: usize) -> bool {
+        members >= 2
+            && self.centre.len() == outputs
             && self.centre.iter().all(|v| v.is_finite())
             && self.signal.is_finite()
             && self.signal > 0.0

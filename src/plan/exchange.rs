@@ -347,8 +347,9 @@ mod tests {
         let region = Region::limits(&robot);
         let per = crate::plan::design::per_unit(measure);
         let pool = draw(&robot, &region, &Constraints::default(), units, per, 7).unwrap();
-        let cloud = draw(&robot, &region, &Constraints::default(), 50, 1, 8).unwrap();
-        let cloud = cloud.units.into_iter().map(|mut u| u.remove(0)).collect();
+        let cloud = draw(&robot, &region, &Constraints::default(), 50, 1, 8)
+            .unwrap()
+            .into_configurations();
         Design::new(
             &robot,
             "full",

@@ -123,6 +123,14 @@ pub struct Pool {
     pub refused: Refused,
 }
 
+impl Pool {
+    /// Every unit's configurations in order, one list (rad, mm): a pool of single
+    /// configurations as a validation cloud.
+    pub fn into_configurations(self) -> Vec<Vec<f64>> {
+        self.units.into_iter().flatten().collect()
+    }
+}
+
 /// Draws `count` units of `per_unit` configurations, uniform in `region` narrowed by the
 /// margin, keeping those the constraints admit. Seeded: the same seed gives the same pool.
 /// An error when fewer than one draw in 100 is admitted.

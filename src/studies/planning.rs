@@ -237,12 +237,8 @@ pub fn run(case: &Case, setup: &Setup, progress: &mut dyn FnMut(usize)) -> Resul
             1,
             1000 + seed,
         )?;
-        let cloud: Vec<Vec<f64>> =
-            pool::draw(nominal, &region, &free, setup.cloud, 1, 5000 + seed)?
-                .units
-                .into_iter()
-                .map(|mut u| u.remove(0))
-                .collect();
+        let cloud =
+            pool::draw(nominal, &region, &free, setup.cloud, 1, 5000 + seed)?.into_configurations();
         let mut ws = Frames::new(&case.truth);
         let truth: Vec<Pose> = cloud
             .iter()

@@ -131,7 +131,7 @@ impl Cv<'_> {
                         &train,
                         false,
                         false,
-                        0,
+                        Vec::new(),
                     )?
                     .0;
                     if let Ok(mut f) = self.rbf_fits.lock() {
@@ -219,21 +219,16 @@ impl Cv<'_> {
             start: start.map(|(w, _)| w),
             ..self.opts.train.clone()
         };
-        let (mut c, ..) = crate::neural::fit::fit_with(
+        let reused: Vec<Weights> = done.into_iter().take(reuse).map(|(w, _)| w).collect();
+        let (c, ..) = crate::neural::fit::fit_with(
             model,
             &self.train[fold],
             &plain,
             &train,
             false,
             false,
-            reuse,
+            reused,
         )?;
-        let mut members: Vec<Weights> = done.into_iter().take(reuse).map(|(w, _)| w).collect();
-        members.append(&mut c.members);
-        c.members = members;
-        if reuse > 0 {
-            c.fit_shrink(&self.train[fold]);
-        }
         if plain.members == 1
             && let Ok(mut n) = self.nets.lock()
         {
