@@ -74,11 +74,16 @@ fn condition(m: &DMatrix<f64>) -> (Vec<f64>, f64) {
     if m.ncols() == 0 {
         return (Vec::new(), 1.0);
     }
-    let sv = m.clone().singular_values();
+    condition_of(m.ncols(), &m.clone().singular_values())
+}
+
+/// The sorted singular values `sv` of a matrix with `ncols` columns, padded with zeros, and
+/// its condition number.
+fn condition_of(ncols: usize, sv: &DVector<f64>) -> (Vec<f64>, f64) {
     let mut s: Vec<f64> = sv.iter().copied().collect();
     s.sort_by(|a, b| b.total_cmp(a));
     // Fewer rows than columns: the missing singular values are zero.
-    s.resize(m.ncols(), 0.0);
+    s.resize(ncols, 0.0);
     let cond = if s[s.len() - 1] > 0.0 {
         s[0] / s[s.len() - 1]
     } else {
@@ -165,7 +170,6 @@ pub fn analyse_with(
         }
     }
     let kept_matrix = DMatrix::from_fn(scaled.nrows(), kept.len(), |i, c| scaled[(i, kept[c])]);
-    let (_, selected_condition_number) = condition(&kept_matrix);
     // Column c = sum x_i column_i in scaled units; in parameter units a change dp_c acts as
     // x_i norm_c / norm_i of parameter i.
     let regrouping = |svd: &nalgebra::SVD<f64, nalgebra::Dyn, nalgebra::Dyn>, c: usize| {
@@ -180,9 +184,12 @@ pub fn analyse_with(
             .map(|(&ci, x)| (candidates[nonzero[ci]], x * norms[j] / norms[nonzero[ci]]))
             .collect::<Vec<_>>()
     };
-    // One factorisation for every regrouping, and none when nothing regroups.
+    // One factorisation for every regrouping and the selection's condition number; its
+    // singular values alone when nothing regroups.
     let regrouped: Vec<usize> = (0..nonzero.len()).filter(|c| !kept.contains(c)).collect();
-    if !regrouped.is_empty() {
+    let selected_condition_number = if regrouped.is_empty() || kept.is_empty() {
+        condition(&kept_matrix).1
+    } else {
         let svd = kept_matrix.svd(true, true);
         for c in regrouped {
             dropped.push(Dropped {
@@ -190,7 +197,8 @@ pub fn analyse_with(
                 reason: DropReason::Regroups(regrouping(&svd, c)),
             });
         }
-    }
+        condition_of(kept.len(), &svd.singular_values).1
+    };
     let selected = kept.iter().map(|&c| candidates[nonzero[c]]).collect();
     Identifiability {
         candidates: candidates.to_vec(),

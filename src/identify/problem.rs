@@ -16,7 +16,7 @@ use crate::data::MeasurementSet;
 use crate::data::pairs::{Pair, pairs};
 use crate::error::{Error, Result};
 use crate::geometry::rotation::rotation_vector;
-use crate::kinematics::{Frames, frames};
+use crate::kinematics::{Frames, Pose, frames, tool_pose};
 use crate::model::Robot;
 use nalgebra::{DMatrix, DVector, Matrix6xX, Vector3};
 
@@ -243,6 +243,26 @@ impl IdentifyWorkspace {
     }
 }
 
+/// The tool pose at commanded joints `q`; with `cols`, also its parameter Jacobian into `jac`
+/// (through the frames in `ws`). Without, [`tool_pose`] alone: the same bits without the
+/// frames, the gravity load's derivatives or a compliant robot's second walk's stores.
+fn tool_of(
+    robot: &Robot,
+    q: &[f64],
+    cols: Option<&[usize]>,
+    ws: &mut Frames,
+    jac: &mut Matrix6xX<f64>,
+) -> Pose {
+    match cols {
+        Some(c) => {
+            frames(robot, q, ws);
+            parameter_jacobian(robot, ws, c, jac);
+            ws.tool
+        }
+        None => tool_pose(robot, q),
+    }
+}
+
 /// Unweighted residual (y - f) of observation `o` into `r[..dim]`; with `cols`, also the
 /// model Jacobian of the same components (dim x cols.len()) into `jac`'s first rows.
 pub fn residual(
@@ -256,17 +276,14 @@ pub fn residual(
 ) {
     let set = obs.set;
     let ma = &set.rows[o.a];
-    frames(robot, &ma.q, &mut ws.fa);
-    if let Some(c) = cols {
-        parameter_jacobian(robot, &ws.fa, c, &mut ws.ja);
-    }
-    let pa = ws.fa.tool.translation.vector;
+    let ta = tool_of(robot, &ma.q, cols, &mut ws.fa, &mut ws.ja);
+    let pa = ta.translation.vector;
     match obs.measure {
         Measure::Pose | Measure::Position | Measure::Orientation => {
             let dp = ma.position.map(|p| p - pa).unwrap_or_default();
             let dr = ma
                 .rotation
-                .map(|m| rotation_vector(&(m * ws.fa.tool.rotation.inverse())))
+                .map(|m| rotation_vector(&(m * ta.rotation.inverse())))
                 .unwrap_or_default();
             let (first, second) = match obs.measure {
                 Measure::Pose => (dp, Some(dr)),
@@ -290,11 +307,8 @@ pub fn residual(
         Measure::Relative | Measure::Distance => {
             let b = o.b.unwrap_or(o.a);
             let mb = &set.rows[b];
-            frames(robot, &mb.q, &mut ws.fb);
-            if let Some(c) = cols {
-                parameter_jacobian(robot, &ws.fb, c, &mut ws.jb);
-            }
-            let d_model = pa - ws.fb.tool.translation.vector;
+            let tb = tool_of(robot, &mb.q, cols, &mut ws.fb, &mut ws.jb);
+            let d_model = pa - tb.translation.vector;
             if obs.measure == Measure::Relative {
                 let d_meas = ma.position.unwrap_or_default() - mb.position.unwrap_or_default();
                 r[..3].copy_from_slice((d_meas - d_model).as_slice());

@@ -6,6 +6,7 @@ use super::load::{
     Load, accumulate_moments, axis_column, moment_deflection, torque, world_gravity,
 };
 use crate::model::Robot;
+use crate::model::robot::{Motion, apply_motion};
 
 /// The tool pose (mm, in the base row's reference frame) for commanded joints `q` (rad or
 /// mm); for a compliant robot, the pose it reaches under gravity.
@@ -31,23 +32,40 @@ pub fn tool_pose(robot: &Robot, q: &[f64]) -> Pose {
     t
 }
 
+/// Joints whose motions [`compliant_tool_pose`] keeps on the stack (later ones are computed
+/// again where needed: the same bits).
+const CACHED: usize = 8;
+
 /// [`tool_pose`] of a compliant robot without a workspace: the same sums, in the same order,
 /// as [`Load`], so both give the same bits. Joint compliances take two passes (the masses'
 /// totals, then the torques beside the deflected chain); mass-free coefficients one more
-/// walk per joint (the bodies it carries).
+/// walk per joint (the bodies it carries). Each joint's sine and cosine are computed once
+/// (for the first [`CACHED`] joints), the deflected joint's from them
+/// (`Chain::deflected`).
 fn compliant_tool_pose(robot: &Robot, q: &[f64]) -> Pose {
     let chain = robot.chain();
     let Some(c) = robot.compliance() else {
         unreachable!("a compliant robot has compliances");
     };
     let n = q.len();
+    let mut cache = [Motion::default(); CACHED];
+    for (i, m) in cache.iter_mut().enumerate().take(n) {
+        *m = chain.joint_motion(i, q[i]);
+    }
+    let motion = |i: usize| {
+        if i < CACHED {
+            cache[i]
+        } else {
+            chain.joint_motion(i, q[i])
+        }
+    };
     let masses = robot.masses();
     let g = world_gravity(robot);
     let (mut mass, mut moment) = (0.0, nalgebra::Vector3::zeros());
     let mut t = chain.head;
     if let Some(m) = masses {
-        for (i, (link, &qi)) in chain.links.iter().zip(q).enumerate() {
-            chain.apply_joint(&mut t, i, qi);
+        for (i, link) in chain.links.iter().enumerate() {
+            apply_motion(&mut t, motion(i));
             let b = &m.links[i];
             mass += b.mass_kg;
             moment += t.transform_point(&b.com_mm.into()).coords * b.mass_kg;
@@ -58,8 +76,9 @@ fn compliant_tool_pose(robot: &Robot, q: &[f64]) -> Pose {
     }
     let moments = c.has_moments();
     let (mut rigid, mut loaded) = (chain.head, chain.head);
-    for (i, (link, &qi)) in chain.links.iter().zip(q).enumerate() {
-        chain.apply_joint(&mut rigid, i, qi);
+    for (i, link) in chain.links.iter().enumerate() {
+        let commanded = motion(i);
+        apply_motion(&mut rigid, commanded);
         let z = rigid.rotation.matrix().column(2).into();
         let o = rigid.translation.vector;
         let mut dq = 0.0;
@@ -76,9 +95,9 @@ fn compliant_tool_pose(robot: &Robot, q: &[f64]) -> Pose {
                 (0.0, nalgebra::Vector3::zeros(), nalgebra::Vector3::zeros());
             let mut f = rigid;
             accumulate_moments(c, n, i, i, &f, &mut km, &mut ks, &mut kh);
-            for (b, &qb) in q.iter().enumerate().skip(i + 1) {
+            for b in i + 1..n {
                 f *= chain.links[b - 1].next;
-                chain.apply_joint(&mut f, b, qb);
+                apply_motion(&mut f, motion(b));
                 accumulate_moments(c, n, i, b, &f, &mut km, &mut ks, &mut kh);
             }
             // The payload, on the tool frame.
@@ -86,7 +105,7 @@ fn compliant_tool_pose(robot: &Robot, q: &[f64]) -> Pose {
             accumulate_moments(c, n, i, n, &f, &mut km, &mut ks, &mut kh);
             dq += moment_deflection(!link.prismatic, &z, &o, km, &ks, &kh, &g);
         }
-        chain.apply_joint(&mut loaded, i, qi + dq);
+        apply_motion(&mut loaded, chain.deflected(i, commanded, dq));
         rigid *= link.next;
         loaded *= link.next;
     }
@@ -137,6 +156,49 @@ fn walk(robot: &Robot, q: &[f64], joint: &mut [Pose], link: &mut [Pose], tool: &
     *tool = t;
 }
 
+/// [`walk`] keeping each joint's motion in `motion` (a compliant robot's commanded walk).
+#[inline]
+fn walk_keeping(
+    robot: &Robot,
+    q: &[f64],
+    motion: &mut [Motion],
+    joint: &mut [Pose],
+    link: &mut [Pose],
+    tool: &mut Pose,
+) {
+    let chain = robot.chain();
+    let mut t = chain.head;
+    for (i, l) in chain.links.iter().enumerate() {
+        motion[i] = chain.joint_motion(i, q[i]);
+        apply_motion(&mut t, motion[i]);
+        joint[i] = t;
+        link[i] = t * l.post;
+        t *= l.next;
+    }
+    *tool = t;
+}
+
+/// [`walk`] at the commanded motions `motion` deflected by `dq` (rad or mm).
+#[inline]
+fn walk_deflected(
+    robot: &Robot,
+    motion: &[Motion],
+    dq: &[f64],
+    joint: &mut [Pose],
+    link: &mut [Pose],
+    tool: &mut Pose,
+) {
+    let chain = robot.chain();
+    let mut t = chain.head;
+    for (i, l) in chain.links.iter().enumerate() {
+        apply_motion(&mut t, chain.deflected(i, motion[i], dq[i]));
+        joint[i] = t;
+        link[i] = t * l.post;
+        t *= l.next;
+    }
+    *tool = t;
+}
+
 /// Fills `out` with every frame of commanded configuration `q` (rad or mm): for a robot with
 /// masses also its gravity load, and for a compliant robot the frames of the joints it
 /// reaches. Does not allocate. Panics if `q.len()` or `out` does not fit the robot.
@@ -159,12 +221,20 @@ pub fn frames(robot: &Robot, q: &[f64], out: &mut Frames) {
         return;
     }
     let load = &mut out.load;
-    walk(robot, q, &mut load.joint, &mut load.link, &mut load.tool);
+    walk_keeping(
+        robot,
+        q,
+        &mut load.motion,
+        &mut load.joint,
+        &mut load.link,
+        &mut load.tool,
+    );
     load.compute(robot, q);
     if load.compliant {
-        walk(
+        walk_deflected(
             robot,
-            &load.reached,
+            &load.motion,
+            &load.deflection,
             &mut out.joint,
             &mut out.link,
             &mut out.tool,

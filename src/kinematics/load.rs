@@ -20,6 +20,7 @@
 
 use super::Pose;
 use super::gravity::{PointMass, mass_points};
+use crate::model::robot::Motion;
 use crate::model::{Compliance, JointType, Robot};
 use nalgebra::{Matrix6x3, Vector3, Vector6};
 
@@ -85,6 +86,11 @@ pub struct Load {
     /// The joints the robot reaches, q + delta(q) (rad or mm): delta_j = c_j tau_j plus the
     /// mass-free coefficients' deflection.
     pub reached: Vec<f64>,
+    /// delta(q) (rad or mm), per joint.
+    pub deflection: Vec<f64>,
+    /// Each joint's motion at the commanded joints (sine, cosine, offset), from which the
+    /// deflected walk turns on.
+    pub(crate) motion: Vec<Motion>,
     /// Whether the robot has mass-free compliance coefficients ([`crate::model::compliance`]).
     moments: bool,
     /// c_j (internal units) of each joint, 0 without.
@@ -131,6 +137,8 @@ impl Load {
             columns: vec![nalgebra::Vector6::zeros(); n],
             torque: vec![0.0; n],
             reached: vec![0.0; n],
+            deflection: vec![0.0; n],
+            motion: vec![Motion::default(); n],
             moments: false,
             c: vec![0.0; n],
             km: vec![0.0; n * (n + 1)],
@@ -256,6 +264,7 @@ impl Load {
                     moment_deflection(self.revolute[j], &z, &o, m, &sm, &h, &self.gravity);
             }
             self.reached[j] = qj + deflection;
+            self.deflection[j] = deflection;
             let c = self.c[j];
             let g = self.gravity;
             (self.carried[j], self.beyond[j]) = match (active && c != 0.0, self.revolute[j]) {

@@ -7,7 +7,7 @@
 use super::axes::{Anchor, ParamAxis};
 use super::compliance::Compliance;
 use super::mass::MassProperties;
-use super::row::{Convention, Field, PAYLOAD, Row, apply_z};
+use super::row::{Convention, Field, PAYLOAD, Row, apply_z, apply_z_sc};
 use crate::error::{Error, Result};
 use crate::geometry::Pose;
 
@@ -652,6 +652,54 @@ impl Chain {
             apply_z(t, l.theta + q, l.d);
         }
     }
+
+    /// Joint i's RotZ TransZ at its value q (rad or mm) as the sine and cosine of its angle
+    /// and its offset (mm): what [`Chain::apply_joint`] applies, for [`apply_motion`].
+    #[inline]
+    pub(crate) fn joint_motion(&self, i: usize, q: f64) -> Motion {
+        let l = &self.links[i];
+        let (theta, d) = if l.prismatic {
+            (l.theta, l.d + q)
+        } else {
+            (l.theta + q, l.d)
+        };
+        let (sin, cos) = libm::sincos(theta);
+        Motion { sin, cos, d }
+    }
+
+    /// Joint i's motion `m` moved on by `dq` (rad or mm; a deflection): the angle by the
+    /// angle-addition formulas from the sine and cosine of dq alone, which, small, needs no
+    /// range reduction, so a deflected joint costs no second full sincos. `m` itself when dq
+    /// is zero.
+    #[inline]
+    pub(crate) fn deflected(&self, i: usize, m: Motion, dq: f64) -> Motion {
+        if dq == 0.0 {
+            return m;
+        }
+        if self.links[i].prismatic {
+            return Motion { d: m.d + dq, ..m };
+        }
+        let (sd, cd) = libm::sincos(dq);
+        Motion {
+            sin: m.sin * cd + m.cos * sd,
+            cos: m.cos * cd - m.sin * sd,
+            d: m.d,
+        }
+    }
+}
+
+/// One joint's RotZ(theta) TransZ(d): sin and cos of theta, and d (mm).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Motion {
+    pub sin: f64,
+    pub cos: f64,
+    pub d: f64,
+}
+
+/// `t <- t * RotZ(theta) TransZ(d)` for the motion `m`.
+#[inline]
+pub(crate) fn apply_motion(t: &mut Pose, m: Motion) {
+    apply_z_sc(t, m.sin, m.cos, m.d);
 }
 
 /// [`Field::K`]'s body code of body `b` (0-based link, or `n` for the payload).
