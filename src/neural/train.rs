@@ -402,10 +402,12 @@ fn phase2_lbfgs(
     };
     let full = std::cell::RefCell::new(w.to_vector());
     let mut grad_full = DVector::zeros(w.len());
-    let weights_of = |v: &DVector<f64>| -> Weights {
+    // The weights at the point L-BFGS asks for, rewritten in place at every evaluation.
+    let scratch = std::cell::RefCell::new(shape);
+    let load = |v: &DVector<f64>| {
         let mut f = full.borrow_mut();
         f.rows_mut(0, v.len()).copy_from(v);
-        shape.from_vector(&f)
+        scratch.borrow_mut().read_vector(&f);
     };
     let mut stop = None;
     let (_, _, why) = lbfgs::minimize(
@@ -415,10 +417,11 @@ fn phase2_lbfgs(
         // The objective is a mean: its gradient is 2 / M times LM's J^T e.
         opts.min_grad * 2.0 / components,
         |v, g| {
-            let mut w = weights_of(v);
+            load(v);
+            let mut w = scratch.borrow_mut();
             if project {
                 let f = batch.objective_projected(&mut w, lambda, &mut grad_full);
-                full.borrow_mut().copy_from(&w.to_vector());
+                w.write_vector(&mut full.borrow_mut());
                 g.copy_from(&grad_full.rows(0, hidden_len));
                 f
             } else {
@@ -427,7 +430,8 @@ fn phase2_lbfgs(
         },
         |it, f, v| {
             *epochs = it;
-            let w = weights_of(v);
+            load(v);
+            let w = scratch.borrow();
             stop = record(it, &w, f, opts.max_fail * 10, LBFGS_MIN_GAIN);
             if stop.is_some() {
                 Next::Stop

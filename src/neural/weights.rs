@@ -58,6 +58,49 @@ impl Weights {
         DVector::from_vec(v)
     }
 
+    /// [`Weights::to_vector`] into `v` (of [`Weights::len`] entries), without allocating.
+    pub fn write_vector(&self, v: &mut DVector<f64>) {
+        let (h, i, o) = (self.hidden(), self.inputs(), self.outputs());
+        let mut k = 0;
+        for j in 0..h {
+            for c in 0..i {
+                v[k] = self.w1[(j, c)];
+                k += 1;
+            }
+        }
+        v.rows_mut(k, h).copy_from(&self.b1);
+        k += h;
+        for r in 0..o {
+            for j in 0..h {
+                v[k] = self.w2[(r, j)];
+                k += 1;
+            }
+        }
+        v.rows_mut(k, o).copy_from(&self.b2);
+    }
+
+    /// [`Weights::from_vector`] in place: these weights take the values of `v` (same
+    /// shape), without allocating.
+    pub fn read_vector(&mut self, v: &DVector<f64>) {
+        let (h, i, o) = (self.hidden(), self.inputs(), self.outputs());
+        let mut k = 0;
+        for j in 0..h {
+            for c in 0..i {
+                self.w1[(j, c)] = v[k];
+                k += 1;
+            }
+        }
+        self.b1.copy_from(&v.rows(k, h));
+        k += h;
+        for r in 0..o {
+            for j in 0..h {
+                self.w2[(r, j)] = v[k];
+                k += 1;
+            }
+        }
+        self.b2.copy_from(&v.rows(k, o));
+    }
+
     /// The inverse of [`Weights::to_vector`] for the same shape.
     pub fn from_vector(&self, v: &DVector<f64>) -> Weights {
         let (h, i, o) = (self.hidden(), self.inputs(), self.outputs());
@@ -246,6 +289,21 @@ mod tests {
             w2: f(2, 4, 0.53),
             b2: DVector::from_fn(2, |i, _| i as f64 * 0.1 - 0.2),
         }
+    }
+
+    #[test]
+    fn in_place_vector_copies_match_the_allocating_ones() {
+        let w = sample();
+        let v = w.to_vector();
+        let mut written = DVector::from_element(w.len(), f64::NAN);
+        w.write_vector(&mut written);
+        assert_eq!(written, v);
+        // Another network of the same shape takes w's values.
+        let mut other = w.from_vector(&v.map(|x| -2.0 * x + 1.0));
+        assert_ne!(other, w);
+        other.read_vector(&v);
+        assert_eq!(other, w);
+        assert_eq!(other, w.from_vector(&v));
     }
 
     #[test]
