@@ -11,6 +11,7 @@ pub mod parallel;
 pub mod predict;
 pub mod rbf;
 pub mod refine;
+pub mod repeats;
 pub mod samples;
 pub mod selection;
 pub mod settings;

@@ -25,7 +25,6 @@ use crate::geometry::rotation::rotation_vector;
 use crate::kinematics::{Frames, frames, joint_jacobian};
 use crate::model::Robot;
 use nalgebra::{DMatrix, Matrix3, Matrix6xX, Vector3};
-use std::collections::HashMap;
 
 /// A network's training problem.
 #[derive(Debug, Clone)]
@@ -58,19 +57,6 @@ pub fn model_error(
         .rotation
         .map(|r| rotation_vector(&(r * t.rotation.inverse())));
     Some((dp, dr))
-}
-
-/// Group ids of the rows: rows with the same joint values (to 1e-9) share one.
-pub fn configuration_groups(set: &MeasurementSet) -> Vec<usize> {
-    let mut ids: HashMap<Vec<i64>, usize> = HashMap::new();
-    set.rows
-        .iter()
-        .map(|m| {
-            let key = m.q.iter().map(|v| (v * 1e9).round() as i64).collect();
-            let next = ids.len();
-            *ids.entry(key).or_insert(next)
-        })
-        .collect()
 }
 
 /// The standardised network inputs of every row, and the standardisation fitted on them.
@@ -146,7 +132,7 @@ pub fn build(
         })
         .collect();
     let (x, input_norm) = inputs(robot, set, encoding);
-    let groups = configuration_groups(set);
+    let groups = super::repeats::configuration_groups(set);
     let (samples, output_norm) = match form {
         Form::Pose => {
             let rb = base_rotation(robot).transpose();

@@ -3,7 +3,7 @@
 //! size).
 //!
 //! Folds are drawn by a seeded shuffle of whole configurations (rows that repeat a joint
-//! configuration stay in one fold). Every candidate is fitted on k - 1 folds (refinement
+//! configuration, to the encoders' noise, stay in one fold: [`super::repeats`]). Every candidate is fitted on k - 1 folds (refinement
 //! included, so a refined model is judged on rows it never saw) and scored on the held-out
 //! fold through the exact compensated prediction ([`Compensator::predict`], the code path
 //! of `predict` and `evaluate`, except the training-domain fade: candidates carry no domain,
@@ -124,12 +124,7 @@ pub fn select_settings(
     // still falls steeply with more rows (real tracker data), 3 folds chose penalties ten
     // times too large. From MANY configurations on, candidate fits sit at their iteration
     // floor and the cost grows with the folds: 4 there.
-    let distinct = {
-        let mut g = super::targets::configuration_groups(set);
-        g.sort_unstable();
-        g.dedup();
-        g.len()
-    };
+    let distinct = super::repeats::distinct_configurations(set);
     let want = opts.folds.unwrap_or(if distinct >= MANY { 4 } else { 5 });
     let fold_of = folds(set, want.max(2), opts.train.seed);
     let k = fold_of.iter().max().map_or(0, |m| m + 1);

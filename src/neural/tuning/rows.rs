@@ -13,7 +13,7 @@ use rand_chacha::ChaCha8Rng;
 
 /// Fold of each row: whole configurations, shuffled by `seed`, dealt round-robin.
 pub fn folds(set: &MeasurementSet, k: usize, seed: u64) -> Vec<usize> {
-    let groups = crate::neural::targets::configuration_groups(set);
+    let groups = crate::neural::repeats::configuration_groups(set);
     let mut ids: Vec<usize> = groups.clone();
     ids.sort_unstable();
     ids.dedup();
@@ -104,12 +104,19 @@ mod tests {
 
     #[test]
     fn folds_keep_repeated_configurations_together_and_balance() {
-        // 30 configurations, the first 10 measured three times.
+        // 30 configurations, the first 10 measured three times with the encoders' noise.
         let mut rows = Vec::new();
+        let mut config = Vec::new();
         for k in 0..30 {
             let times = if k < 10 { 3 } else { 1 };
-            for _ in 0..times {
-                rows.push(Measurement::new(vec![k as f64 * 0.01, 0.2, 0.3]));
+            for t in 0..times {
+                let noise = t as f64 * 2e-4;
+                rows.push(Measurement::new(vec![
+                    k as f64 * 0.01 + noise,
+                    0.2,
+                    0.3 - noise,
+                ]));
+                config.push(k);
             }
         }
         let set = MeasurementSet {
@@ -119,21 +126,18 @@ mod tests {
         };
         let f = folds(&set, 5, 7);
         assert_eq!(f.len(), 50);
-        for (i, a) in set.rows.iter().enumerate() {
-            for (j, b) in set.rows.iter().enumerate() {
-                if a.q == b.q {
+        for i in 0..50 {
+            for j in 0..50 {
+                if config[i] == config[j] {
                     assert_eq!(f[i], f[j], "rows {i} and {j} repeat one configuration");
                 }
             }
         }
         // Configurations are dealt round-robin: 6 per fold.
         let groups = |k: usize| {
-            let mut q: Vec<String> = (0..50)
-                .filter(|&i| f[i] == k)
-                .map(|i| format!("{:?}", set.rows[i].q))
-                .collect();
-            q.dedup();
-            q.len()
+            let mut c: Vec<usize> = (0..50).filter(|&i| f[i] == k).map(|i| config[i]).collect();
+            c.dedup();
+            c.len()
         };
         assert!((0..5).all(|k| groups(k) == 6));
         assert_ne!(f, folds(&set, 5, 8), "the seed shuffles");
