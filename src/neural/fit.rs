@@ -6,6 +6,7 @@ use super::domain::Domain;
 use super::parallel::parallel_map;
 use super::rbf::Rbf;
 use super::refine::{RefinedParam, refine};
+use super::repeats::Repeats;
 use super::selection::Selection;
 use super::settings::{Network, Settings};
 use super::shrink::Shrink;
@@ -35,6 +36,10 @@ pub struct CompensatorReport {
     pub selection_seconds: f64,
     /// Wall-clock seconds of the final fit (s).
     pub fit_seconds: f64,
+    /// How far the model's residuals of repeated configurations disagree (the data's floor);
+    /// None without repeats.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub repeats: Option<Repeats>,
 }
 
 impl Compensator {
@@ -64,6 +69,7 @@ impl Compensator {
                 notes,
                 selection_seconds: 0.0,
                 fit_seconds: started.elapsed().as_secs_f64(),
+                repeats: Repeats::of(model, set),
             },
         ))
     }

@@ -12,6 +12,9 @@
 //! tracker's noise, so two such rows are one sample whether or not they were commanded alike.
 
 use crate::data::MeasurementSet;
+use crate::kinematics::Frames;
+use crate::model::Robot;
+use nalgebra::Vector3;
 
 /// Largest difference in every joint (rad; 1e-3 rad = 0.057 deg) at which two rows are the
 /// same configuration.
@@ -78,6 +81,96 @@ pub fn distinct_configurations(set: &MeasurementSet) -> usize {
         .map_or(0, |m| m + 1)
 }
 
+/// How far the model's position residuals of repeated configurations disagree. The network's
+/// input (the joints) is the same for every row of a configuration, so no compensator can
+/// follow these differences: they are the data's own floor.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Repeats {
+    /// Configurations measured more than once (rows with a measured position).
+    pub configurations: usize,
+    /// Rows in them.
+    pub rows: usize,
+    /// Pure error (mm): sqrt(sum_g sum_i |e_i - ebar_g|^2 / sum_g (n_g - 1)), e_i the
+    /// position residual of row i (measured minus model), ebar_g its configuration's mean and
+    /// n_g its rows; the RMS position error a perfect compensator would leave on one row.
+    pub pure_error_rms_mm: f64,
+    /// Median over the configurations of the largest distance between two of their rows'
+    /// residuals (mm).
+    pub median_spread_mm: f64,
+    /// The largest such distance (mm).
+    pub max_spread_mm: f64,
+    /// The source-file lines of the two rows that differ by `max_spread_mm` (0 for rows built
+    /// in code).
+    pub max_spread_lines: [usize; 2],
+}
+
+impl Repeats {
+    /// The repeats of `set` under `model`; None when no configuration has two rows with
+    /// positions.
+    pub fn of(model: &Robot, set: &MeasurementSet) -> Option<Repeats> {
+        let groups = configuration_groups(set);
+        let count = groups.iter().max().map_or(0, |m| m + 1);
+        let mut members: Vec<Vec<(usize, Vector3<f64>)>> = vec![Vec::new(); count];
+        let mut ws = Frames::new(model);
+        let mut sizes = vec![0usize; count];
+        for g in &groups {
+            sizes[*g] += 1;
+        }
+        for (i, m) in set.rows.iter().enumerate() {
+            if sizes[groups[i]] < 2 {
+                continue;
+            }
+            if let Some((dp, _)) = super::targets::model_error(model, m, &mut ws) {
+                members[groups[i]].push((m.line, dp));
+            }
+        }
+        members.retain(|g| g.len() >= 2);
+        if members.is_empty() {
+            return None;
+        }
+        let (mut squares, mut dof, mut rows) = (0.0, 0usize, 0usize);
+        let mut spreads = Vec::with_capacity(members.len());
+        let mut worst = (0.0, [0usize; 2]);
+        for g in &members {
+            let mean = g.iter().map(|(_, e)| e).sum::<Vector3<f64>>() / g.len() as f64;
+            squares += g
+                .iter()
+                .map(|(_, e)| (e - mean).norm_squared())
+                .sum::<f64>();
+            dof += g.len() - 1;
+            rows += g.len();
+            let mut spread = 0.0;
+            for (a, (la, ea)) in g.iter().enumerate() {
+                for (lb, eb) in &g[a + 1..] {
+                    let d = (ea - eb).norm();
+                    if d > spread {
+                        spread = d;
+                    }
+                    if d > worst.0 {
+                        worst = (d, [*la, *lb]);
+                    }
+                }
+            }
+            spreads.push(spread);
+        }
+        spreads.sort_by(f64::total_cmp);
+        let n = spreads.len();
+        let median = if n % 2 == 1 {
+            spreads[n / 2]
+        } else {
+            0.5 * (spreads[n / 2 - 1] + spreads[n / 2])
+        };
+        Some(Repeats {
+            configurations: n,
+            rows,
+            pure_error_rms_mm: (squares / dof as f64).sqrt(),
+            median_spread_mm: median,
+            max_spread_mm: worst.0,
+            max_spread_lines: worst.1,
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -116,5 +209,53 @@ mod tests {
         let g = configuration_groups(&set(&qs));
         assert_eq!(g[20], g[10]);
         assert_eq!(distinct_configurations(&set(&qs)), 20);
+    }
+
+    #[test]
+    fn repeats_measure_how_far_the_residuals_of_one_configuration_disagree() {
+        use crate::data::Measurement;
+        use crate::kinematics::tool_pose;
+        let robot = crate::model::read_robot(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/ur10.toml"),
+        )
+        .unwrap();
+        let row = |q: [f64; 6], off: [f64; 3], line: usize| {
+            let mut m = Measurement::new(q.to_vec());
+            // The position the model gives at the commanded joints, moved by `off` (mm).
+            let p = tool_pose(&robot, &q).translation.vector;
+            m.position = Some(p + Vector3::from(off));
+            m.line = line;
+            m
+        };
+        let a = [0.1, -1.2, 0.8, 0.3, 1.0, -0.5];
+        let b = [1.1, -0.7, 1.5, -0.3, 0.4, 0.5];
+        let c = [-1.0, -2.0, 1.0, 0.0, -1.0, 2.0];
+        let set = MeasurementSet::from_rows(vec![
+            row(a, [0.0, 0.0, 0.0], 2),
+            row(b, [1.0, 0.0, 0.0], 3),
+            row(a, [0.0, 0.3, 0.4], 4),
+            row(b, [1.0, 0.0, 0.1], 5),
+            row(c, [5.0, 5.0, 5.0], 6),
+            row(b, [1.0, 0.0, -0.1], 7),
+        ]);
+        let r = Repeats::of(&robot, &set).unwrap();
+        assert_eq!((r.configurations, r.rows), (2, 5));
+        // a: one pair 0.5 apart (squares 0.125 about the mean, 1 dof); b: three rows at
+        // z = 0, 0.1, -0.1 (squares 0.02, 2 dof).
+        assert!(
+            (r.pure_error_rms_mm - (0.145f64 / 3.0).sqrt()).abs() < 1e-9,
+            "{r:?}"
+        );
+        assert!((r.median_spread_mm - 0.35).abs() < 1e-9);
+        assert!((r.max_spread_mm - 0.5).abs() < 1e-9);
+        assert_eq!(r.max_spread_lines, [2, 4]);
+        // Without a repeat there is nothing to report.
+        assert!(
+            Repeats::of(
+                &robot,
+                &MeasurementSet::from_rows(vec![row(c, [0.0; 3], 2)])
+            )
+            .is_none()
+        );
     }
 }
