@@ -12,7 +12,7 @@
 //! tracker's noise, so two such rows are one sample whether or not they were commanded alike.
 
 use crate::data::MeasurementSet;
-use crate::kinematics::Frames;
+use crate::kinematics::tool_pose;
 use crate::model::Robot;
 use nalgebra::Vector3;
 
@@ -111,7 +111,6 @@ impl Repeats {
         let groups = configuration_groups(set);
         let count = groups.iter().max().map_or(0, |m| m + 1);
         let mut members: Vec<Vec<(usize, Vector3<f64>)>> = vec![Vec::new(); count];
-        let mut ws = Frames::new(model);
         let mut sizes = vec![0usize; count];
         for g in &groups {
             sizes[*g] += 1;
@@ -120,7 +119,8 @@ impl Repeats {
             if sizes[groups[i]] < 2 {
                 continue;
             }
-            if let Some((dp, _)) = super::targets::model_error(model, m, &mut ws) {
+            if let Some(p) = m.position {
+                let dp = p - tool_pose(model, &m.q).translation.vector;
                 members[groups[i]].push((m.line, dp));
             }
         }
@@ -214,7 +214,6 @@ mod tests {
     #[test]
     fn repeats_measure_how_far_the_residuals_of_one_configuration_disagree() {
         use crate::data::Measurement;
-        use crate::kinematics::tool_pose;
         let robot = crate::model::read_robot(
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/ur10.toml"),
         )
