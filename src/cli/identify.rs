@@ -220,13 +220,19 @@ fn print_identified(r: &IdentifyReport) {
         "solution: {} iterations, {}; variance factor s^2 = {:.4}",
         r.iterations, r.stop, r.variance_factor
     );
+    // Compliance units (mrad/kNm) are wider than mm and deg: the column takes the widest.
+    let w = r
+        .parameters
+        .iter()
+        .map(|p| p.unit.len())
+        .fold(4, usize::max);
     println!(
-        "{:<12} {:<4} {:>14} {:>14} {:>12}",
+        "{:<12} {:<w$} {:>14} {:>14} {:>12}",
         "parameter", "unit", "nominal", "estimate", "std"
     );
     for p in &r.parameters {
         println!(
-            "{:<12} {:<4} {:>14.6} {:>14.6} {:>12.6}",
+            "{:<12} {:<w$} {:>14.6} {:>14.6} {:>12.6}",
             p.name, p.unit, p.nominal, p.estimate, p.std
         );
     }

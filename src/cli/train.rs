@@ -117,9 +117,14 @@ fn print_fit(c: &Compensator, report: &robocal::neural::fit::CompensatorReport, 
             "refined on the training rows (exact identification, {} parameters):",
             report.refined.len()
         );
+        let w = report
+            .refined
+            .iter()
+            .map(|p| p.unit.len())
+            .fold(4, usize::max);
         for p in &report.refined {
             println!(
-                "  {:<12} {:<4} {:>14.6} -> {:>14.6}  (std {:.6})",
+                "  {:<12} {:<w$} {:>14.6} -> {:>14.6}  (std {:.6})",
                 p.name, p.unit, p.before, p.after, p.std
             );
         }
