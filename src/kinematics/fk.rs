@@ -142,18 +142,31 @@ impl Frames {
     }
 }
 
-/// Walks the chain at joints `q`, storing every frame.
+/// Walks the chain applying joint i's motion `motion_of(i)`, storing every frame.
 #[inline]
-fn walk(robot: &Robot, q: &[f64], joint: &mut [Pose], link: &mut [Pose], tool: &mut Pose) {
+fn walk_with(
+    robot: &Robot,
+    joint: &mut [Pose],
+    link: &mut [Pose],
+    tool: &mut Pose,
+    mut motion_of: impl FnMut(usize) -> Motion,
+) {
     let chain = robot.chain();
     let mut t = chain.head;
     for (i, l) in chain.links.iter().enumerate() {
-        chain.apply_joint(&mut t, i, q[i]);
+        apply_motion(&mut t, motion_of(i));
         joint[i] = t;
         link[i] = t * l.post;
         t *= l.next;
     }
     *tool = t;
+}
+
+/// Walks the chain at joints `q`, storing every frame.
+#[inline]
+fn walk(robot: &Robot, q: &[f64], joint: &mut [Pose], link: &mut [Pose], tool: &mut Pose) {
+    let chain = robot.chain();
+    walk_with(robot, joint, link, tool, |i| chain.joint_motion(i, q[i]));
 }
 
 /// [`walk`] keeping each joint's motion in `motion` (a compliant robot's commanded walk).
@@ -167,15 +180,10 @@ fn walk_keeping(
     tool: &mut Pose,
 ) {
     let chain = robot.chain();
-    let mut t = chain.head;
-    for (i, l) in chain.links.iter().enumerate() {
+    walk_with(robot, joint, link, tool, |i| {
         motion[i] = chain.joint_motion(i, q[i]);
-        apply_motion(&mut t, motion[i]);
-        joint[i] = t;
-        link[i] = t * l.post;
-        t *= l.next;
-    }
-    *tool = t;
+        motion[i]
+    });
 }
 
 /// [`walk`] at the commanded motions `motion` deflected by `dq` (rad or mm).
@@ -189,14 +197,9 @@ fn walk_deflected(
     tool: &mut Pose,
 ) {
     let chain = robot.chain();
-    let mut t = chain.head;
-    for (i, l) in chain.links.iter().enumerate() {
-        apply_motion(&mut t, chain.deflected(i, motion[i], dq[i]));
-        joint[i] = t;
-        link[i] = t * l.post;
-        t *= l.next;
-    }
-    *tool = t;
+    walk_with(robot, joint, link, tool, |i| {
+        chain.deflected(i, motion[i], dq[i])
+    });
 }
 
 /// Fills `out` with every frame of commanded configuration `q` (rad or mm): for a robot with
