@@ -86,7 +86,8 @@ impl Default for Options {
 pub struct ParamReport {
     /// Parameter name: `a3`, `theta1`, `base.x`, ...
     pub name: String,
-    /// Its file unit: `mm` or `deg`.
+    /// Its file unit: `mm`, `deg`, or a compliance's (`mrad/kNm`, and `mrad/kNm*kg`,
+    /// `mrad/kNm*kg*m` for mass-free coefficients; [`crate::model::Field::file_unit`]).
     pub unit: String,
     /// Value in the nominal (start) model (mm or deg).
     pub nominal: f64,

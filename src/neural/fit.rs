@@ -36,8 +36,8 @@ pub struct CompensatorReport {
     pub selection_seconds: f64,
     /// Wall-clock seconds of the final fit (s).
     pub fit_seconds: f64,
-    /// How far the model's residuals of repeated configurations disagree (the data's floor);
-    /// None without repeats.
+    /// How far the residuals of repeated configurations under the compensator's model (refined,
+    /// when refinement ran) disagree: the data's floor; None without repeats.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub repeats: Option<Repeats>,
 }
@@ -69,7 +69,7 @@ impl Compensator {
                 notes,
                 selection_seconds: 0.0,
                 fit_seconds: started.elapsed().as_secs_f64(),
-                repeats: Repeats::of(model, set),
+                repeats: Repeats::of(&robot, set),
             },
         ))
     }

@@ -26,7 +26,8 @@ pub const RANK_TOLERANCE: f64 = 1e-2;
 pub struct RefinedParam {
     /// Parameter name: `a3`, `theta1`, `base.x`, ...
     pub name: String,
-    /// Its file unit: `mm` or `deg`.
+    /// Its file unit: `mm`, `deg`, or a compliance's (`mrad/kNm`, and `mrad/kNm*kg`,
+    /// `mrad/kNm*kg*m` for mass-free coefficients; [`crate::model::Field::file_unit`]).
     pub unit: String,
     /// Value in the given model (mm or deg).
     pub before: f64,

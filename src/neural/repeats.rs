@@ -2,39 +2,55 @@
 //! validation-failure hold-out keep together, so that a held-out row is never predicted from
 //! its own repeat.
 //!
-//! A tracker campaign that measures a configuration twice commands the same joint targets, yet
-//! the joint values it logs differ by the encoders' noise: on the shipped UR10 Series B the
-//! 293 repeated pairs differ by up to 3e-4 rad in some joint (no two other rows come closer
-//! than 1e-2 rad). Grouping only bit-equal joint values would split those pairs across folds and
-//! leak each held-out row's own measurement into its training part. Rows closer than
-//! [`SAME_CONFIGURATION`] in every joint are therefore one configuration, transitively: at that
-//! distance the model's residual field, which the network learns, cannot differ beyond the
-//! tracker's noise, so two such rows are one sample whether or not they were commanded alike.
+//! Two measurements of one commanded pose do not log the same joint values. On the shipped
+//! UR10 Series B the 293 repeated pairs differ by the encoders' noise, up to 3e-4 rad in some
+//! joint; on Series A 461 goal poses were commanded twice (the same rotation written as two
+//! roll-pitch-yaw triples at pitch 90 deg) and reached with joints up to 6.7e-3 rad apart. No
+//! two rows of different commanded poses come within 3e-2 rad on either series. Grouping only
+//! bit-equal joint values split every such pair across folds and leaked each held-out row's
+//! own measurement into its training part. Rows closer than [`SAME_CONFIGURATION`] in every
+//! joint are therefore one configuration, transitively: at that distance the model's residual
+//! field, which the network learns, barely moves, so two such rows are one sample whether or
+//! not they were commanded alike.
 
 use crate::data::MeasurementSet;
 use crate::kinematics::tool_pose;
 use crate::model::Robot;
 use nalgebra::Vector3;
 
-/// Largest difference in every joint (rad; 1e-3 rad = 0.057 deg) at which two rows are the
-/// same configuration.
-pub const SAME_CONFIGURATION: f64 = 1e-3;
+/// Largest difference in every joint (rad, 1e-2 rad = 0.57 deg; mm for a prismatic joint,
+/// 10 um) at which two rows are the same configuration: above the 6.7e-3 rad of the shipped
+/// repeats, below the 3e-2 rad between their distinct configurations.
+pub const SAME_CONFIGURATION: f64 = 1e-2;
 
 /// Group id of every row: rows whose joint values all differ by less than
-/// [`SAME_CONFIGURATION`] (rad) share one, and so do chains of such rows. Ids count from 0 in
-/// the order of each group's first row.
+/// [`SAME_CONFIGURATION`] (rad or mm) share one, and so do chains of such rows. Ids count
+/// from 0 in the order of each group's first row.
 pub fn configuration_groups(set: &MeasurementSet) -> Vec<usize> {
     let rows = &set.rows;
     let n = rows.len();
-    // Sweep the rows in the order of their first joint: only rows within the tolerance in that
-    // joint can be the same configuration.
-    let first = |i: usize| rows[i].q.first().copied().unwrap_or(0.0);
+    // Sweep the rows in the order of the joint whose values spread widest (a joint held
+    // still would make every pair a candidate): only rows within the tolerance in that joint
+    // can be the same configuration.
+    let dof = rows.iter().map(|m| m.q.len()).min().unwrap_or(0);
+    let spread = |k: usize| {
+        let (lo, hi) = rows
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), m| {
+                (lo.min(m.q[k]), hi.max(m.q[k]))
+            });
+        hi - lo
+    };
+    let key = (0..dof)
+        .max_by(|&a, &b| spread(a).total_cmp(&spread(b)))
+        .unwrap_or(0);
+    let at = |i: usize| rows[i].q.get(key).copied().unwrap_or(0.0);
     let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&a, &b| first(a).total_cmp(&first(b)));
+    order.sort_by(|&a, &b| at(a).total_cmp(&at(b)));
     let mut root: Vec<usize> = (0..n).collect();
     for (a, &i) in order.iter().enumerate() {
         for &j in &order[a + 1..] {
-            if first(j) - first(i) >= SAME_CONFIGURATION {
+            if at(j) - at(i) >= SAME_CONFIGURATION {
                 break;
             }
             let close = rows[i].q.len() == rows[j].q.len()
@@ -45,11 +61,11 @@ pub fn configuration_groups(set: &MeasurementSet) -> Vec<usize> {
                     .all(|(x, y)| (x - y).abs() < SAME_CONFIGURATION);
             if close {
                 let (ri, rj) = (find(&mut root, i), find(&mut root, j));
-                // The smaller row index becomes the root, so ids follow first appearance.
                 root[ri.max(rj)] = ri.min(rj);
             }
         }
     }
+    // Ids in the order of each group's first row.
     let mut id = vec![usize::MAX; n];
     let mut next = 0;
     (0..n)
@@ -130,7 +146,7 @@ impl Repeats {
         }
         let (mut squares, mut dof, mut rows) = (0.0, 0usize, 0usize);
         let mut spreads = Vec::with_capacity(members.len());
-        let mut worst = (0.0, [0usize; 2]);
+        let mut worst: Option<(f64, [usize; 2])> = None;
         for g in &members {
             let mean = g.iter().map(|(_, e)| e).sum::<Vector3<f64>>() / g.len() as f64;
             squares += g
@@ -146,8 +162,8 @@ impl Repeats {
                     if d > spread {
                         spread = d;
                     }
-                    if d > worst.0 {
-                        worst = (d, [*la, *lb]);
+                    if worst.is_none_or(|(w, _)| d > w) {
+                        worst = Some((d, [*la, *lb]));
                     }
                 }
             }
@@ -160,13 +176,14 @@ impl Repeats {
         } else {
             0.5 * (spreads[n / 2 - 1] + spreads[n / 2])
         };
+        let (max_spread_mm, max_spread_lines) = worst?;
         Some(Repeats {
             configurations: n,
             rows,
             pure_error_rms_mm: (squares / dof as f64).sqrt(),
             median_spread_mm: median,
-            max_spread_mm: worst.0,
-            max_spread_lines: worst.1,
+            max_spread_mm,
+            max_spread_lines,
         })
     }
 }
@@ -181,39 +198,41 @@ mod tests {
     }
 
     #[test]
-    fn repeats_within_the_encoders_noise_are_one_configuration() {
+    fn repeats_within_the_tolerance_are_one_configuration_transitively() {
         let a = [0.1, -1.2, 0.8, 0.3, 1.0, -0.5];
         let mut a_again = a;
-        a_again[2] += 3e-4;
-        a_again[5] -= 2e-4;
+        a_again[2] += 3e-3;
+        a_again[5] -= 6e-3;
         let mut b = a;
-        b[4] += 2e-3; // one joint 0.11 deg away: another configuration
+        b[4] += 2e-2; // one joint 1.15 deg away: another configuration
         let mut c = b;
-        c[0] -= 0.9e-3; // within the tolerance of b only
+        c[0] -= 0.9e-2; // within the tolerance of b only
         let mut d = c;
-        d[1] += 0.9e-3; // chains to b through c
+        d[0] -= 0.9e-2; // 1.8e-2 from b, within the tolerance of c: joins b through c
         let other = [-2.0, 0.4, -0.3, 1.1, -1.0, 2.0];
-        let s = set(&[a, b, other, a_again, c, d, other]);
+        // d comes before c, so c must merge two groups that already exist.
+        let s = set(&[a, b, other, a_again, d, c, other]);
         assert_eq!(configuration_groups(&s), vec![0, 1, 2, 0, 1, 1, 2]);
         assert_eq!(distinct_configurations(&s), 3);
     }
 
     #[test]
-    fn rows_sorted_apart_by_other_joints_are_still_compared() {
-        // Many rows share the first joint; the sweep must not stop at the first mismatch.
+    fn a_joint_held_still_does_not_hide_close_rows() {
+        // Joint 1 never moves; rows are told apart by joint 2.
         let mut qs = Vec::new();
         for k in 0..20 {
             qs.push([0.5, k as f64 * 0.1, 0.0, 0.0, 0.0, 0.0]);
         }
-        qs.push([0.5 + 5e-4, 1.0 + 1e-4, 0.0, 0.0, 0.0, 0.0]);
+        qs.push([0.5 + 5e-3, 1.0 + 5e-3, 0.0, 0.0, 0.0, 0.0]); // row 10 again
+        qs.push([0.6, 1.0, 0.0, 0.0, 0.0, 0.0]); // close to row 10 in joint 2 only
         let g = configuration_groups(&set(&qs));
         assert_eq!(g[20], g[10]);
-        assert_eq!(distinct_configurations(&set(&qs)), 20);
+        assert_ne!(g[21], g[10]);
+        assert_eq!(distinct_configurations(&set(&qs)), 21);
     }
 
     #[test]
     fn repeats_measure_how_far_the_residuals_of_one_configuration_disagree() {
-        use crate::data::Measurement;
         let robot = crate::model::read_robot(
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/ur10.toml"),
         )
@@ -248,6 +267,10 @@ mod tests {
         assert!((r.median_spread_mm - 0.35).abs() < 1e-9);
         assert!((r.max_spread_mm - 0.5).abs() < 1e-9);
         assert_eq!(r.max_spread_lines, [2, 4]);
+        // A row pasted twice: no spread, and the lines are still its two.
+        let twice = MeasurementSet::from_rows(vec![row(c, [0.0; 3], 3), row(c, [0.0; 3], 9)]);
+        let r = Repeats::of(&robot, &twice).unwrap();
+        assert_eq!((r.max_spread_mm, r.max_spread_lines), (0.0, [3, 9]));
         // Without a repeat there is nothing to report.
         assert!(
             Repeats::of(

@@ -60,6 +60,7 @@ impl Weights {
 
     /// [`Weights::to_vector`] into `v` (of [`Weights::len`] entries), without allocating.
     pub fn write_vector(&self, v: &mut DVector<f64>) {
+        debug_assert_eq!(v.len(), self.len(), "weight vector of another shape");
         let (h, i, o) = (self.hidden(), self.inputs(), self.outputs());
         let mut k = 0;
         for j in 0..h {
@@ -82,6 +83,7 @@ impl Weights {
     /// [`Weights::from_vector`] in place: these weights take the values of `v` (same
     /// shape), without allocating.
     pub fn read_vector(&mut self, v: &DVector<f64>) {
+        debug_assert_eq!(v.len(), self.len(), "weight vector of another shape");
         let (h, i, o) = (self.hidden(), self.inputs(), self.outputs());
         let mut k = 0;
         for j in 0..h {

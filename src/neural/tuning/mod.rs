@@ -3,7 +3,7 @@
 //! size).
 //!
 //! Folds are drawn by a seeded shuffle of whole configurations (rows that repeat a joint
-//! configuration, to the encoders' noise, stay in one fold: [`super::repeats`]). Every candidate is fitted on k - 1 folds (refinement
+//! configuration, within [`super::repeats::SAME_CONFIGURATION`], stay in one fold). Every candidate is fitted on k - 1 folds (refinement
 //! included, so a refined model is judged on rows it never saw) and scored on the held-out
 //! fold through the exact compensated prediction ([`Compensator::predict`], the code path
 //! of `predict` and `evaluate`, except the training-domain fade: candidates carry no domain,

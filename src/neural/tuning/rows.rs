@@ -110,9 +110,9 @@ mod tests {
         for k in 0..30 {
             let times = if k < 10 { 3 } else { 1 };
             for t in 0..times {
-                let noise = t as f64 * 2e-4;
+                let noise = t as f64 * 2e-3;
                 rows.push(Measurement::new(vec![
-                    k as f64 * 0.01 + noise,
+                    k as f64 * 0.05 + noise,
                     0.2,
                     0.3 - noise,
                 ]));
