@@ -312,3 +312,69 @@ fn case_d_prints_table_6_6_beside_ours_and_reports_every_row() {
                 && r["measured"]["position_mm"]["mean"].is_f64())
     );
 }
+
+/// Rows measured twice: `train` reports how far their residuals differ, with the lines of the
+/// widest pair, on stdout and in its report (the same figures).
+#[test]
+fn train_reports_the_repeats_of_its_data() {
+    let text =
+        std::fs::read_to_string(common::root().join("datasets/case_d/training.csv")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let mut csv: Vec<String> = lines[..61].iter().map(|l| l.to_string()).collect();
+    // Rows 1-5 (file lines 2-6) again, joint 1 moved by 0.002 deg (encoder noise); the copy
+    // of row 3 (line 4) measured 1 mm further along x.
+    for (k, line) in lines[1..6].iter().enumerate() {
+        let mut cells: Vec<String> = line.split(',').map(str::to_string).collect();
+        cells[0] = format!("again{k}");
+        cells[1] = format!("{}", cells[1].parse::<f64>().unwrap() + 0.002);
+        if k == 2 {
+            cells[7] = format!("{}", cells[7].parse::<f64>().unwrap() + 1.0);
+        }
+        csv.push(cells.join(","));
+    }
+    let data = tmp("repeats.csv");
+    std::fs::write(&data, csv.join("\n") + "\n").unwrap();
+    let (comp, report) = (tmp("repeats.rcal"), tmp("repeats.json"));
+    let o = robocal(&[
+        "train",
+        "--robot",
+        FANUC,
+        "--data",
+        data.to_str().unwrap(),
+        "--network",
+        "mlp",
+        "--form",
+        "pose",
+        "--encoding",
+        "gravity",
+        "--hidden",
+        "8",
+        "--penalty",
+        "1",
+        "--members",
+        "1",
+        "--refine",
+        "none",
+        "--out",
+        comp.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    let out = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        out.contains("repeats: 5 configurations measured more than once (10 rows)"),
+        "{out}"
+    );
+    let r = &json(&report)["training"]["repeats"];
+    assert_eq!(r["max_spread_lines"], serde_json::json!([4, 64]), "{r}");
+    let max = r["max_spread_mm"].as_f64().unwrap();
+    // 1 mm, give or take the 0.002 deg of joint 1 (under 0.1 mm at this reach).
+    assert!((max - 1.0).abs() < 0.1, "{max}");
+    assert!(
+        out.contains(&format!("at most {max:.4} mm (lines 4 and 64)")),
+        "{out}"
+    );
+    let median = r["median_spread_mm"].as_f64().unwrap();
+    assert!(median > 0.0 && median < 0.1, "{median}");
+}
