@@ -1,7 +1,7 @@
 //! `robocal train`, `predict`, `evaluate --compensator` and `case-d` from the command line.
 
 mod common;
-use common::{FANUC, accuracy, json, robocal, stderr, stdout, tmp};
+use common::{CHEAP_TRAIN, FANUC, accuracy, json, robocal, stderr, stdout, tmp};
 
 #[test]
 fn identify_train_evaluate_and_predict() {
@@ -335,31 +335,19 @@ fn train_reports_the_repeats_of_its_data() {
     let data = tmp("repeats.csv");
     std::fs::write(&data, csv.join("\n") + "\n").unwrap();
     let (comp, report) = (tmp("repeats.rcal"), tmp("repeats.json"));
-    let o = robocal(&[
+    let mut args = vec![
         "train",
         "--robot",
         FANUC,
         "--data",
         data.to_str().unwrap(),
-        "--network",
-        "mlp",
-        "--form",
-        "pose",
-        "--encoding",
-        "gravity",
-        "--hidden",
-        "8",
-        "--penalty",
-        "1",
-        "--members",
-        "1",
-        "--refine",
-        "none",
         "--out",
         comp.to_str().unwrap(),
         "--report",
         report.to_str().unwrap(),
-    ]);
+    ];
+    args.extend_from_slice(CHEAP_TRAIN);
+    let o = robocal(&args);
     let out = stdout(&o);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(

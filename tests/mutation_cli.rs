@@ -5,32 +5,10 @@
 //! holds no non-finite number.
 
 mod common;
-use common::{mutate, robocal, stderr};
+use common::{CHEAP_TRAIN, mutate, robocal, stderr};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::{Path, PathBuf};
-
-/// `train` with every choice fixed and two epochs: a compensator in milliseconds.
-const CHEAP_TRAIN: &[&str] = &[
-    "--network",
-    "mlp",
-    "--form",
-    "pose",
-    "--encoding",
-    "angles",
-    "--hidden",
-    "2",
-    "--penalty",
-    "1",
-    "--members",
-    "1",
-    "--refine",
-    "none",
-    "--max-epochs",
-    "2",
-    "--momentum-epochs",
-    "2",
-];
 
 /// Cases in the test suite (each one run of the binary; CASES in the environment for more).
 const CASES: usize = 300;

@@ -220,12 +220,7 @@ fn print_identified(r: &IdentifyReport) {
         "solution: {} iterations, {}; variance factor s^2 = {:.4}",
         r.iterations, r.stop, r.variance_factor
     );
-    // Compliance units (mrad/kNm) are wider than mm and deg: the column takes the widest.
-    let w = r
-        .parameters
-        .iter()
-        .map(|p| p.unit.len())
-        .fold(4, usize::max);
+    let w = super::summary::unit_width(r.parameters.iter().map(|p| p.unit.as_str()));
     println!(
         "{:<12} {:<w$} {:>14} {:>14} {:>12}",
         "parameter", "unit", "nominal", "estimate", "std"

@@ -34,3 +34,9 @@ pub fn print_stats(rows: &[Accuracy]) {
 pub fn write_report(path: &Path, r: &Report) -> Result<()> {
     super::output::writing(r.save(path), path)
 }
+
+/// Width of a printed unit column: the widest unit, at least 4 (`unit`); compliance units
+/// (`mrad/kNm`) are wider than mm and deg.
+pub fn unit_width<'a>(units: impl IntoIterator<Item = &'a str>) -> usize {
+    units.into_iter().map(str::len).fold(4, usize::max)
+}

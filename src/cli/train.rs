@@ -117,11 +117,7 @@ fn print_fit(c: &Compensator, report: &robocal::neural::fit::CompensatorReport, 
             "refined on the training rows (exact identification, {} parameters):",
             report.refined.len()
         );
-        let w = report
-            .refined
-            .iter()
-            .map(|p| p.unit.len())
-            .fold(4, usize::max);
+        let w = super::summary::unit_width(report.refined.iter().map(|p| p.unit.as_str()));
         for p in &report.refined {
             println!(
                 "  {:<12} {:<w$} {:>14.6} -> {:>14.6}  (std {:.6})",

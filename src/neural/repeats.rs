@@ -89,12 +89,9 @@ fn find(root: &mut [usize], mut i: usize) -> usize {
     i
 }
 
-/// The number of distinct configurations of `set` (see [`configuration_groups`]).
-pub fn distinct_configurations(set: &MeasurementSet) -> usize {
-    configuration_groups(set)
-        .into_iter()
-        .max()
-        .map_or(0, |m| m + 1)
+/// The number of groups (distinct configurations) in ids from [`configuration_groups`].
+pub fn group_count(groups: &[usize]) -> usize {
+    groups.iter().max().map_or(0, |m| m + 1)
 }
 
 /// How far the model's position residuals of repeated configurations disagree. The network's
@@ -125,7 +122,7 @@ impl Repeats {
     /// positions.
     pub fn of(model: &Robot, set: &MeasurementSet) -> Option<Repeats> {
         let groups = configuration_groups(set);
-        let count = groups.iter().max().map_or(0, |m| m + 1);
+        let count = group_count(&groups);
         let mut members: Vec<Vec<(usize, Vector3<f64>)>> = vec![Vec::new(); count];
         let mut sizes = vec![0usize; count];
         for g in &groups {
@@ -212,8 +209,9 @@ mod tests {
         let other = [-2.0, 0.4, -0.3, 1.1, -1.0, 2.0];
         // d comes before c, so c must merge two groups that already exist.
         let s = set(&[a, b, other, a_again, d, c, other]);
-        assert_eq!(configuration_groups(&s), vec![0, 1, 2, 0, 1, 1, 2]);
-        assert_eq!(distinct_configurations(&s), 3);
+        let g = configuration_groups(&s);
+        assert_eq!(g, vec![0, 1, 2, 0, 1, 1, 2]);
+        assert_eq!(group_count(&g), 3);
     }
 
     #[test]
@@ -228,7 +226,7 @@ mod tests {
         let g = configuration_groups(&set(&qs));
         assert_eq!(g[20], g[10]);
         assert_ne!(g[21], g[10]);
-        assert_eq!(distinct_configurations(&set(&qs)), 21);
+        assert_eq!(group_count(&g), 21);
     }
 
     #[test]

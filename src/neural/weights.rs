@@ -50,15 +50,13 @@ impl Weights {
 
     /// All weights in one vector: W1 (row-major), b1, W2 (row-major), b2.
     pub fn to_vector(&self) -> DVector<f64> {
-        let mut v = Vec::with_capacity(self.len());
-        v.extend(self.w1.transpose().iter());
-        v.extend(self.b1.iter());
-        v.extend(self.w2.transpose().iter());
-        v.extend(self.b2.iter());
-        DVector::from_vec(v)
+        let mut v = DVector::zeros(self.len());
+        self.write_vector(&mut v);
+        v
     }
 
-    /// [`Weights::to_vector`] into `v` (of [`Weights::len`] entries), without allocating.
+    /// [`Weights::to_vector`] into `v` (of [`Weights::len`] entries), without allocating: the
+    /// one place that lays the weights out.
     pub fn write_vector(&self, v: &mut DVector<f64>) {
         debug_assert_eq!(v.len(), self.len(), "weight vector of another shape");
         let (h, i, o) = (self.hidden(), self.inputs(), self.outputs());
@@ -105,18 +103,9 @@ impl Weights {
 
     /// The inverse of [`Weights::to_vector`] for the same shape.
     pub fn from_vector(&self, v: &DVector<f64>) -> Weights {
-        let (h, i, o) = (self.hidden(), self.inputs(), self.outputs());
-        let mut k = 0;
-        let mut take = |n: usize| {
-            let s = v.rows(k, n).into_owned();
-            k += n;
-            s
-        };
-        let w1 = DMatrix::from_row_slice(h, i, take(h * i).as_slice());
-        let b1 = take(h);
-        let w2 = DMatrix::from_row_slice(o, h, take(o * h).as_slice());
-        let b2 = take(o);
-        Weights { w1, b1, w2, b2 }
+        let mut w = self.clone();
+        w.read_vector(v);
+        w
     }
 
     /// Output for input `x`; `hidden` receives the hidden activations.
@@ -297,6 +286,17 @@ mod tests {
     fn in_place_vector_copies_match_the_allocating_ones() {
         let w = sample();
         let v = w.to_vector();
+        // The layout, written out: W1 row by row, b1, W2 row by row, b2.
+        let mut expected: Vec<f64> = Vec::new();
+        for j in 0..w.hidden() {
+            expected.extend(w.w1.row(j).iter());
+        }
+        expected.extend(w.b1.iter());
+        for o in 0..w.outputs() {
+            expected.extend(w.w2.row(o).iter());
+        }
+        expected.extend(w.b2.iter());
+        assert_eq!(v.as_slice(), expected.as_slice());
         let mut written = DVector::from_element(w.len(), f64::NAN);
         w.write_vector(&mut written);
         assert_eq!(written, v);

@@ -10,6 +10,28 @@ use std::process::{Command, Output};
 /// The FANUC R-2000iB/210F's nominal file, relative to the repository root.
 pub const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
 
+/// `train` with every choice fixed and two epochs: a compensator in milliseconds.
+pub const CHEAP_TRAIN: &[&str] = &[
+    "--network",
+    "mlp",
+    "--form",
+    "pose",
+    "--encoding",
+    "angles",
+    "--hidden",
+    "2",
+    "--penalty",
+    "1",
+    "--members",
+    "1",
+    "--refine",
+    "none",
+    "--max-epochs",
+    "2",
+    "--momentum-epochs",
+    "2",
+];
+
 /// The repository root (where `datasets/` is).
 pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

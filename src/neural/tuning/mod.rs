@@ -3,9 +3,9 @@
 //! size).
 //!
 //! Folds are drawn by a seeded shuffle of whole configurations (rows that repeat a joint
-//! configuration, within [`super::repeats::SAME_CONFIGURATION`], stay in one fold). Every candidate is fitted on k - 1 folds (refinement
-//! included, so a refined model is judged on rows it never saw) and scored on the held-out
-//! fold through the exact compensated prediction ([`Compensator::predict`], the code path
+//! configuration, within [`super::repeats::SAME_CONFIGURATION`], stay in one fold). Every
+//! candidate is fitted on k - 1 folds (refinement included, so a refined model is judged on
+//! rows it never saw) and scored on the held-out fold through the exact compensated prediction ([`Compensator::predict`], the code path
 //! of `predict` and `evaluate`, except the training-domain fade: candidates carry no domain,
 //! whose nearest-neighbour search would cost more than the fit, so their correction is never
 //! faded); the score is the RMS position error over all held-out rows (mm), orientation RMS
@@ -124,9 +124,10 @@ pub fn select_settings(
     // still falls steeply with more rows (real tracker data), 3 folds chose penalties ten
     // times too large. From MANY configurations on, candidate fits sit at their iteration
     // floor and the cost grows with the folds: 4 there.
-    let distinct = super::repeats::distinct_configurations(set);
+    let groups = super::repeats::configuration_groups(set);
+    let distinct = super::repeats::group_count(&groups);
     let want = opts.folds.unwrap_or(if distinct >= MANY { 4 } else { 5 });
-    let fold_of = folds(set, want.max(2), opts.train.seed);
+    let fold_of = folds(&groups, want.max(2), opts.train.seed);
     let k = fold_of.iter().max().map_or(0, |m| m + 1);
     if k < 2 || want < 2 {
         return Err(Error::Invalid(format!(

@@ -5,18 +5,18 @@ use crate::data::MeasurementSet;
 use crate::error::Result;
 use crate::evaluate::row_errors;
 use crate::identify::Measure;
+use crate::neural::repeats::group_count;
 use crate::neural::selection::Outlier;
 use crate::neural::selection::Sums;
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 
-/// Fold of each row: whole configurations, shuffled by `seed`, dealt round-robin.
-pub fn folds(set: &MeasurementSet, k: usize, seed: u64) -> Vec<usize> {
-    let groups = crate::neural::repeats::configuration_groups(set);
-    let mut ids: Vec<usize> = groups.clone();
-    ids.sort_unstable();
-    ids.dedup();
+/// Fold of each row from its configuration group (ids 0..G,
+/// [`crate::neural::repeats::configuration_groups`]): whole configurations, shuffled by
+/// `seed`, dealt round-robin.
+pub fn folds(groups: &[usize], k: usize, seed: u64) -> Vec<usize> {
+    let mut ids: Vec<usize> = (0..group_count(groups)).collect();
     ids.shuffle(&mut ChaCha8Rng::seed_from_u64(seed ^ 0xf01d));
     let mut fold_of_group = vec![0; ids.len()];
     for (i, g) in ids.iter().enumerate() {
@@ -124,7 +124,8 @@ mod tests {
             rows,
             extra_columns: Vec::new(),
         };
-        let f = folds(&set, 5, 7);
+        let groups = crate::neural::repeats::configuration_groups(&set);
+        let f = folds(&groups, 5, 7);
         assert_eq!(f.len(), 50);
         for i in 0..50 {
             for j in 0..50 {
@@ -134,12 +135,12 @@ mod tests {
             }
         }
         // Configurations are dealt round-robin: 6 per fold.
-        let groups = |k: usize| {
+        let configurations = |k: usize| {
             let mut c: Vec<usize> = (0..50).filter(|&i| f[i] == k).map(|i| config[i]).collect();
             c.dedup();
             c.len()
         };
-        assert!((0..5).all(|k| groups(k) == 6));
-        assert_ne!(f, folds(&set, 5, 8), "the seed shuffles");
+        assert!((0..5).all(|k| configurations(k) == 6));
+        assert_ne!(f, folds(&groups, 5, 8), "the seed shuffles");
     }
 }
