@@ -201,9 +201,37 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
         assert!(e.contains("out of bounds"), "{e}");
         let e = edit(&|v| v["domain"]["radius"] = serde_json::json!(1e308));
         assert!(e.contains("training domain"), "{e}");
-        if c.rbf.is_some() {
+        if let Some(rbf) = &c.rbf {
             let e = edit(&|v| v["rbf"]["weights"][0][0] = serde_json::json!(1e300));
             assert!(e.contains("rbf") || e.contains("RBF"), "{e}");
+            // One kernel per output; a missing one is refused.
+            assert_eq!(rbf.kernels.len(), c.outputs());
+            assert!(rbf.kernels.iter().all(|k| k.outputs == 1));
+            let e = edit(&|v| {
+                v["rbf"]["kernels"].as_array_mut().unwrap().pop();
+            });
+            assert!(e.contains("RBF"), "{e}");
+            // A version 4 file (one kernel shared by every output) is read as one kernel
+            // serving them all, and predicts as that kernel does.
+            let shared = &rbf.kernels[0];
+            let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            v["version"] = serde_json::json!(4);
+            shared_kernel(&mut v);
+            std::fs::write(&path, resign(v)).unwrap();
+            let old = Compensator::load(&path).unwrap();
+            let old_rbf = old.rbf.as_ref().unwrap();
+            assert_eq!(old_rbf.kernels.len(), 1);
+            assert_eq!(old_rbf.kernels[0].outputs, c.outputs());
+            let mut expected = c.clone();
+            let e_rbf = expected.rbf.as_mut().unwrap();
+            e_rbf.kernels = vec![robocal::neural::rbf::Kernel {
+                outputs: c.outputs(),
+                ..shared.clone()
+            }];
+            let (mut w1, mut w2) = (PredictWorkspace::default(), PredictWorkspace::default());
+            for m in test.rows.iter().take(5) {
+                assert_eq!(old.predict(&m.q, &mut w1), expected.predict(&m.q, &mut w2));
+            }
         }
         let e = edit(&|v| v["domain"]["radius"] = serde_json::json!(-1.0));
         assert!(e.contains("domain"), "{e}");
@@ -219,6 +247,7 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
             let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
             v["version"] = serde_json::json!(3);
             v.as_object_mut().unwrap().remove("shrink");
+            shared_kernel(&mut v);
             std::fs::write(&path, resign(v)).unwrap();
             assert!(Compensator::load(&path).unwrap().shrink.is_none());
         }
@@ -448,6 +477,18 @@ fn shrinkage_is_the_members_posterior_mean(c: &Compensator, set: &robocal::data:
     );
 }
 
+/// Rewrites a compensator file's RBF network (if any) as files of version 3 and 4 held it: the
+/// first output's kernel shared by every output.
+fn shared_kernel(v: &mut serde_json::Value) {
+    let Some(r) = v["rbf"].as_object_mut() else {
+        return;
+    };
+    let first = r.remove("kernels").unwrap()[0].clone();
+    for key in ["widths", "signal_variance", "noise_variance"] {
+        r.insert(key.into(), first[key].clone());
+    }
+}
+
 fn resign(mut v: serde_json::Value) -> String {
     v.as_object_mut().unwrap().remove("checksum");
     let body = serde_json::to_string(&v).unwrap();
@@ -510,11 +551,11 @@ fn default_selection_races_candidates() {
 }
 
 /// A mis-measured training row (3 mm off in x) is listed as an outlier of the
-/// cross-validated error, by its line, and the clean set lists none; kept by default, left
-/// out of the final fit with `drop_outliers`, where the compensated pose of that
-/// configuration then lies nearer its true measurement.
+/// cross-validated error, by its line, and the clean set lists none; left out of the final
+/// fit by default, kept when asked, where the compensated pose of that configuration then
+/// lies farther from its true measurement.
 #[test]
-fn a_mis_measured_training_row_is_listed_and_can_be_left_out() {
+fn a_mis_measured_training_row_is_listed_and_left_out() {
     let (model, clean) = case_d_offsets();
     let bad = 40;
     let mut train = clean.clone();
@@ -522,19 +563,19 @@ fn a_mis_measured_training_row_is_listed_and_can_be_left_out() {
         p.x += 3.0;
     }
     let opts = CompensatorOptions::default();
-    let (kept, report) = Compensator::train(&model, &train, &opts, &|_, _| {}).unwrap();
+    let (dropped, report) = Compensator::train(&model, &train, &opts, &|_, _| {}).unwrap();
     let sel = report.selection.unwrap();
     let listed: Vec<usize> = sel.outliers.iter().map(|o| o.row).collect();
     assert_eq!(listed, vec![bad], "{:?}", sel.outliers);
     assert_eq!(sel.outliers[0].line, train.rows[bad].line);
     assert!(sel.outliers[0].robust_sigmas > sel.outlier_k);
-    assert!(report.notes.iter().any(|n| n.contains("kept")));
-    let drop = CompensatorOptions {
-        drop_outliers: true,
+    assert!(report.notes.iter().any(|n| n.contains("left out")));
+    let keep = CompensatorOptions {
+        drop_outliers: false,
         ..Default::default()
     };
-    let (dropped, report) = Compensator::train(&model, &train, &drop, &|_, _| {}).unwrap();
-    assert!(report.notes.iter().any(|n| n.contains("left out")));
+    let (kept, report) = Compensator::train(&model, &train, &keep, &|_, _| {}).unwrap();
+    assert!(report.notes.iter().any(|n| n.contains("kept")));
     let mut ws = PredictWorkspace::default();
     let truth = clean.rows[bad].position.unwrap();
     let miss = |c: &Compensator, ws: &mut PredictWorkspace| {

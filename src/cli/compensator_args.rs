@@ -96,8 +96,12 @@ pub struct CompensatorArgs {
     /// cross-validation: with every choice fixed, no row is listed.
     #[arg(long, default_value_t = robocal::neural::tuning::OUTLIER_K)]
     pub outlier_k: f64,
-    /// Leave the listed outliers out of the final fit (default: keep them; one sample
-    /// cannot tell a mis-measured row from a sharp feature of the robot).
+    /// Keep the listed outliers in the final fit (default: leave them out; a mis-measured
+    /// row would bend the RBF network's fit around it and spoil its neighbours).
+    #[arg(long, conflicts_with = "drop_outliers")]
+    pub keep_outliers: bool,
+    /// Leave the listed outliers out of the final fit (the default; accepted for scripts
+    /// written when keeping them was).
     #[arg(long)]
     pub drop_outliers: bool,
 }
@@ -205,7 +209,7 @@ impl CompensatorArgs {
                 ..Default::default()
             },
             outlier_k: self.outlier_k,
-            drop_outliers: self.drop_outliers,
+            drop_outliers: !self.keep_outliers,
             budget: self.max_epochs.is_none(),
         })
     }

@@ -131,21 +131,33 @@ fn print_fit(c: &Compensator, report: &robocal::neural::fit::CompensatorReport, 
         report.selection_seconds, report.fit_seconds
     );
     if let Some(r) = &c.rbf {
-        let widths: Vec<String> = r.widths.iter().map(|w| format!("{w:.3}")).collect();
         println!(
-            "rbf network: {} units ({} inputs), widths {} (standardised inputs), noise variance \
-             {:.4} of signal {:.4}{}",
+            "rbf network: {} units ({} inputs), one Gaussian process per output{}",
             r.units(),
             c.encoding.name(),
-            widths.join(" "),
-            r.noise_variance,
-            r.signal_variance,
             if n.is_empty() {
                 format!("; {timing}")
             } else {
                 "; averaged with the MLPs' mean".into()
             }
         );
+        // Pose-form outputs: position (mm) then rotation (mrad), robot base frame.
+        const NAMES: [&str; 6] = ["dx", "dy", "dz", "rx", "ry", "rz"];
+        let mut first = 0;
+        for k in &r.kernels {
+            let name = match k.outputs {
+                1 => NAMES.get(first).copied().unwrap_or("?").to_string(),
+                m => format!("outputs {}-{}", first + 1, first + m),
+            };
+            first += k.outputs;
+            let widths: Vec<String> = k.widths.iter().map(|w| format!("{w:.3}")).collect();
+            println!(
+                "  {name}: noise variance {:.4} of signal {:.4}, widths {} (standardised inputs)",
+                k.noise_variance,
+                k.signal_variance,
+                widths.join(" ")
+            );
+        }
     }
     if n.is_empty() {
         if c.rbf.is_none() {

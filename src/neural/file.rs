@@ -1,10 +1,13 @@
-//! The compensator file (JSON, version 4): format and version, form, encoding, shapes,
+//! The compensator file (JSON, version 5): format and version, form, encoding, shapes,
 //! normalisations, training domain, the robot file it runs in series with (embedded, with its
 //! hash), one burn record (burnpack bytes, hex) per MLP of the ensemble, the RBF network
-//! (`rbf`: centres, widths, weights and variances, or null), the shrinkage of the MLPs' mean
-//! (`shrink`: centre and signal variance, or null), and a checksum of it all.
+//! (`rbf`: centres, one kernel per output with its widths and variances, weights; or null),
+//! the shrinkage of the MLPs' mean (`shrink`: centre and signal variance, or null), and a
+//! checksum of it all.
 //!
-//! Version 4 added the shrinkage; version 3 files are read without it (as they were made).
+//! Version 5 gave the RBF network one kernel per output; version 3 and 4 files, whose outputs
+//! shared one kernel (`widths`, `signal_variance`, `noise_variance` beside the weights), are
+//! read as one kernel serving every output. Version 4 added the shrinkage; version 3 files are read without it (as they were made).
 //! Version 3 added the RBF network; version 2 files (MLPs only) are read as before. Version 2
 //! changed the inputs (encodings, standardisation), the pose form's frame (the robot's base
 //! frame) and added ensembles and the domain: version 1 files are refused with a message that
@@ -14,7 +17,7 @@ use super::compensator::{Compensator, Form};
 use super::domain::Domain;
 use super::encoding::Encoding;
 use super::net::{record_bytes, weights_from_record};
-use super::rbf::Rbf;
+use super::rbf::{Rbf, SharedKernelRbf};
 use super::shrink::Shrink;
 use super::weights::{Affine, VALUE_BOUND};
 use crate::error::{Error, IN_MEMORY, Location, Result};
@@ -23,7 +26,7 @@ use serde_json::Value;
 use std::path::Path;
 
 const FORMAT: &str = "robocal-compensator";
-const VERSION: u64 = 4;
+const VERSION: u64 = 5;
 /// The oldest version this robocal reads.
 const OLDEST: u64 = 2;
 
@@ -210,8 +213,10 @@ impl Compensator {
             }
             members.push(w);
         }
-        let rbf: Option<Rbf> = if version >= 3 {
+        let rbf: Option<Rbf> = if version >= 5 {
             de(&v, "rbf", path)?
+        } else if version >= 3 {
+            de::<Option<SharedKernelRbf>>(&v, "rbf", path)?.map(Rbf::from)
         } else {
             None
         };

@@ -3,6 +3,7 @@
 use super::Accuracy;
 use crate::neural::compensator::Compensator;
 use crate::neural::fit::CompensatorReport;
+use crate::neural::rbf::Kernel;
 use serde::{Deserialize, Serialize};
 
 /// The RBF network of a compensator, as `train` shows it.
@@ -10,12 +11,10 @@ use serde::{Deserialize, Serialize};
 pub struct RbfSummary {
     /// Gaussian units (one per training row).
     pub units: usize,
-    /// Width per input (standardised inputs).
-    pub widths: Vec<f64>,
-    /// The Gaussian process's noise variance (standardised outputs).
-    pub noise_variance: f64,
-    /// Its signal variance (standardised outputs).
-    pub signal_variance: f64,
+    /// The Gaussian processes, in output order (one per output: dx, dy, dz in mm and rx, ry,
+    /// rz in mrad, in the robot's base frame, standardised), each with its width per input
+    /// (standardised inputs) and its noise and signal variances (standardised outputs).
+    pub kernels: Vec<Kernel>,
 }
 
 /// What `train` did and found.
@@ -73,9 +72,7 @@ impl TrainReport {
             shape: [c.inputs(), c.hidden(), c.outputs()],
             rbf: c.rbf.as_ref().map(|r| RbfSummary {
                 units: r.units(),
-                widths: r.widths.clone(),
-                noise_variance: r.noise_variance,
-                signal_variance: r.signal_variance,
+                kernels: r.kernels.clone(),
             }),
             seconds,
             accuracy,
