@@ -211,6 +211,9 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
                 v["rbf"]["kernels"].as_array_mut().unwrap().pop();
             });
             assert!(e.contains("RBF"), "{e}");
+            // A count that would wrap the kernels' sum (and slice out of range) is refused.
+            let e = edit(&|v| v["rbf"]["kernels"][0]["outputs"] = serde_json::json!(u64::MAX));
+            assert!(e.contains("RBF"), "{e}");
             // A version 4 file (one kernel shared by every output) is read as one kernel
             // serving them all, and predicts as that kernel does.
             let shared = &rbf.kernels[0];

@@ -229,6 +229,8 @@ fn train_refuses_bad_input_and_predict_refuses_a_corrupt_compensator() {
         ("--validation-fraction", "1"),
         ("--outlier-k", "nan"),
         ("--outlier-k", "1"),
+        ("--rbf-start", "0"),
+        ("--rbf-start", "4"),
     ] {
         let o = robocal(&[
             "train",
@@ -243,6 +245,27 @@ fn train_refuses_bad_input_and_predict_refuses_a_corrupt_compensator() {
         ]);
         assert!(!o.status.success(), "{flag} {value}");
         assert!(stderr(&o).contains(flag), "{flag}: {}", stderr(&o));
+        assert!(!out.exists());
+    }
+    // Keeping and leaving out the listed outliers contradict each other; an RBF start
+    // with MLPs only makes no sense.
+    for extra in [
+        &["--keep-outliers", "--drop-outliers"][..],
+        &["--rbf-start", "2", "--network", "mlp"][..],
+    ] {
+        let mut args = vec![
+            "train",
+            "--robot",
+            FANUC,
+            "--data",
+            "datasets/case_d/training.csv",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = robocal(&args);
+        assert!(!o.status.success(), "{extra:?}");
+        assert!(stderr(&o).contains(extra[0]), "{extra:?}: {}", stderr(&o));
         assert!(!out.exists());
     }
     // A version-1 file (before ensembles and the training domain) is refused by name.

@@ -125,7 +125,10 @@ fn line(name: &str, s: &ErrorStats, seconds: f64) -> String {
 }
 
 /// Release builds only: the default compensator beats the baseline by at least 10 % RMS on
-/// the Series B split, and its max error stays within 10 % of the model's.
+/// the Series B split, and its max error stays within 10 % of the model's on the validation
+/// rows whose measurement agrees with a repeat of theirs in the pool (or has none); on a row
+/// whose every repeat lies more than 1 mm away (a tracker glitch of one of them), it stays
+/// within that distance of the measurement.
 #[test]
 #[cfg_attr(
     debug_assertions,
@@ -166,7 +169,8 @@ fn default_beats_the_plain_baseline_on_series_b() {
                         .all(|(a, b)| (a - b).abs() <= SAME_CONFIGURATION)
                 })
                 .map(|p| (p.position.unwrap() - m.position.unwrap()).norm())
-                .find(|&gap| gap > 1.0)
+                .reduce(f64::min)
+                .filter(|&gap| gap > 1.0)
         })
         .collect();
     let mut ws = PredictWorkspace::default();
@@ -191,6 +195,7 @@ fn default_beats_the_plain_baseline_on_series_b() {
             ),
         }
     }
+    // A sanity bound: Series B has three glitched pairs in all.
     assert!(
         glitch.iter().filter(|g| g.is_some()).count() <= 3,
         "{glitch:?}"

@@ -33,8 +33,9 @@ pub enum Phase2Arg {
 #[derive(Args, Debug, Clone)]
 pub struct CompensatorArgs {
     /// The network: `mlp` (the thesis's multilayer perceptron, in ensembles where that
-    /// helps), `rbf` (one Gaussian unit per training row, widths and weights of a Gaussian
-    /// process's posterior mean; pose form only; its cost grows with the cube of the rows) or
+    /// helps), `rbf` (one Gaussian unit per training row, widths and weights of one Gaussian
+    /// process's posterior mean per output; pose form only; its cost grows with the cube of
+    /// the rows) or
     /// `mix` (the MLPs' mean and an RBF network averaged; pose form only). Default: chosen by
     /// cross-validation (rbf and mix tried on up to 3000 rows).
     #[arg(long, value_enum)]
@@ -100,6 +101,11 @@ pub struct CompensatorArgs {
     /// row would bend the RBF network's fit around it and spoil its neighbours).
     #[arg(long, conflicts_with = "drop_outliers")]
     pub keep_outliers: bool,
+    /// The RBF network's likelihood search start, 1-3: widths of 1, 0.2 or 0.05 standard
+    /// deviations (1, the smooth one, by default under cross-validation; a fixed network with
+    /// nothing else open takes, output by output, the start of highest likelihood).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=3))]
+    pub rbf_start: Option<u8>,
     /// Leave the listed outliers out of the final fit (the default; accepted for scripts
     /// written when keeping them was).
     #[arg(long)]
@@ -167,6 +173,9 @@ impl CompensatorArgs {
                 robocal::neural::settings::Network::from(n).name()
             );
         }
+        if self.rbf_start.is_some() && self.network == Some(Network::Mlp) {
+            bail!("--rbf-start sets up the RBF network: not with --network mlp");
+        }
         if self.network == Some(Network::Rbf) {
             if self.hidden.is_some() || self.penalty.is_some() {
                 bail!(
@@ -180,7 +189,7 @@ impl CompensatorArgs {
         }
         Ok(CompensatorOptions {
             network: self.network.map(Into::into),
-            rbf_start: None,
+            rbf_start: self.rbf_start.map(|k| usize::from(k) - 1),
             form: self.form.map(Into::into),
             encoding: self.encoding.map(|e| match e {
                 EncodingArg::Sincos => Encoding::SinCos,

@@ -7,7 +7,8 @@
 //!
 //! Version 5 gave the RBF network one kernel per output; version 3 and 4 files, whose outputs
 //! shared one kernel (`widths`, `signal_variance`, `noise_variance` beside the weights), are
-//! read as one kernel serving every output. Version 4 added the shrinkage; version 3 files are read without it (as they were made).
+//! read as one kernel serving every output. Version 4 added the shrinkage; version 3 files are
+//! read without it (as they were made).
 //! Version 3 added the RBF network; version 2 files (MLPs only) are read as before. Version 2
 //! changed the inputs (encodings, standardisation), the pose form's frame (the robot's base
 //! frame) and added ensembles and the domain: version 1 files are refused with a message that

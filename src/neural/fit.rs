@@ -96,7 +96,7 @@ pub(crate) fn fit_with(
     let mut reports = Vec::new();
     let rbf = if settings.has_rbf() {
         Some(match &train_opts.rbf_hyper {
-            Some(h) => Rbf::with_hyper(&problem.samples, h)?,
+            Some(h) => Rbf::with_hyper_on(&problem.samples, h, parallel)?,
             None => Rbf::fit(&problem.samples, settings.rbf_start, train_opts.seed)?.0,
         })
     } else {

@@ -175,14 +175,15 @@ impl Rbf {
         let bound = super::weights::VALUE_BOUND;
         let small = |v: &f64| v.abs() <= bound;
         !self.kernels.is_empty()
-            && self.kernels.iter().map(|k| k.outputs).sum::<usize>() == outputs
             && self.kernels.iter().all(|k| {
-                k.outputs > 0
+                // Bounded first: a huge count would wrap the sum below.
+                (1..=outputs).contains(&k.outputs)
                     && k.widths.len() == inputs
                     && k.widths.iter().all(|l| (1.0 / bound..=bound).contains(l))
                     && k.signal_variance.is_finite()
                     && k.noise_variance.is_finite()
             })
+            && self.kernels.iter().map(|k| k.outputs).sum::<usize>() == outputs
             && self.centres.iter().flatten().all(small)
             && self.weights.iter().flatten().all(small)
             && self.centres.len() == self.weights.len()
@@ -198,8 +199,9 @@ impl Rbf {
     }
 
     /// Fits the network on `s` (targets without maps: the pose form): the hyperparameter
-    /// search from [`STARTS`]`[start]`, or from every start keeping the highest likelihood
-    /// when None ([`search`]), then the weights on every row ([`Rbf::with_hyper`]).
+    /// search from [`STARTS`]`[start]` ([`search`]), or when None from every start keeping,
+    /// output by output, the highest likelihood ([`search_best`]), then the weights on every
+    /// row ([`Rbf::with_hyper`]).
     pub fn fit(s: &Samples, start: Option<usize>, seed: u64) -> Result<(Rbf, Search)> {
         let found = match start {
             Some(k) => search(s, k, seed)?,
@@ -211,6 +213,12 @@ impl Rbf {
     /// The network at fixed hyperparameters `h` (every output's, see [`Hyper`]): one unit
     /// per row of `s`, output o's weights w_o = s_o^2 K_o^-1 b_o (the posterior mean's).
     pub fn with_hyper(s: &Samples, h: &Hyper) -> Result<Rbf> {
+        Rbf::with_hyper_on(s, h, true)
+    }
+
+    /// [`Rbf::with_hyper`], the outputs on several threads when `parallel` (callers that
+    /// already run fits side by side pass false: each thread holds an n x n kernel).
+    pub fn with_hyper_on(s: &Samples, h: &Hyper, parallel: bool) -> Result<Rbf> {
         let (n, d, o) = shape(s)?;
         if h.len() != o * (d + 2) || h.iter().any(|v| !v.is_finite()) {
             return Err(Error::Invalid(format!(
@@ -218,10 +226,13 @@ impl Rbf {
                 o * (d + 2)
             )));
         }
-        let fits = super::parallel::parallel_map(o, |j| {
+        let fit = |j: usize| -> Result<(Kernel, Vec<f64>)> {
             let hj = h.rows(j * (d + 2), d + 2).into_owned();
             let chol = kernel(&s.x, &hj).llt(Side::Lower).map_err(|_| {
-                Error::Invalid("the RBF network's kernel matrix is not positive definite".into())
+                Error::Invalid(format!(
+                    "the RBF network's kernel matrix of output {} is not positive definite",
+                    j + 1
+                ))
             })?;
             let alpha = chol.solve(Mat::<f64>::from_fn(n, 1, |i, _| s.b[i][j]));
             let s2 = hj[d].exp();
@@ -235,7 +246,12 @@ impl Rbf {
                 kernel,
                 (0..n).map(|i| alpha[(i, 0)] * s2).collect::<Vec<f64>>(),
             ))
-        });
+        };
+        let fits: Vec<Result<(Kernel, Vec<f64>)>> = if parallel {
+            super::parallel::parallel_map(o, fit)
+        } else {
+            (0..o).map(fit).collect()
+        };
         let mut kernels = Vec::with_capacity(o);
         let mut columns = Vec::with_capacity(o);
         for f in fits {
@@ -263,16 +279,17 @@ impl Rbf {
 /// variance as a fraction of the targets' mean square). The likelihood has several modes on
 /// real tracker data: a smooth one, and rough ones that interpolate between repeated arm
 /// configurations with narrow widths on a few joints and almost no noise. Each start leads to
-/// one of them; cross-validation or the likelihood chooses.
+/// one of them. Cross-validation tries the first (smooth) one unless told another; a fit
+/// without a start takes, output by output, the start of highest likelihood.
 pub const STARTS: [(f64, f64); 3] = [(1.0, 0.5), (0.2, 0.05), (0.05, 0.01)];
 
 /// The result of one hyperparameter search.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Search {
-    /// [ln l_1 .. ln l_d, ln s^2, ln sigma^2].
+    /// Every output's [ln l_1 .. ln l_d, ln s^2, ln sigma^2], output after output ([`Hyper`]).
     pub hyper: Hyper,
-    /// The minimised objective: negative log marginal likelihood plus the prior's term
-    /// (constants dropped).
+    /// The minimised objective summed over the outputs: negative log marginal likelihood
+    /// plus the prior's term (constants dropped).
     pub objective: f64,
 }
 
@@ -707,15 +724,24 @@ mod tests {
             .map(|f| f.objective)
             .fold(f64::INFINITY, f64::min);
         assert!(best.objective <= lowest, "{} {lowest}", best.objective);
-        // Each output's block is one start's block for that output.
+        // Output by output, the start of lowest objective on that output's own column.
         let block = s.x[0].len() + 2;
+        let mut total = 0.0;
         for j in 0..s.rows() {
-            let mine = best.hyper.rows(j * block, block);
-            assert!(
-                all.iter().any(|f| f.hyper.rows(j * block, block) == mine),
+            let mut one = s.clone();
+            one.b = s.b.iter().map(|b| vec![b[j]]).collect();
+            let own = (0..STARTS.len())
+                .map(|k| search(&one, k, 1).unwrap())
+                .min_by(|a, b| a.objective.total_cmp(&b.objective))
+                .unwrap();
+            assert_eq!(
+                best.hyper.rows(j * block, block),
+                own.hyper.rows(0, block),
                 "{j}"
             );
+            total += own.objective;
         }
+        assert_eq!(best.objective, total);
         // The fit from a start is the network at that start's hyperparameters.
         let (rbf, found) = Rbf::fit(&s, Some(1), 1).unwrap();
         assert_eq!(found, all[1]);

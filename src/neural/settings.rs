@@ -50,7 +50,7 @@ pub enum Network {
     #[default]
     Mlp,
     /// A radial-basis-function network with one unit per training row, widths and weights of
-    /// a Gaussian process's posterior mean ([`super::rbf`]); pose form only.
+    /// a Gaussian process's posterior mean per output ([`super::rbf`]); pose form only.
     Rbf,
     /// The MLPs' mean and an RBF network with equal say (pose form only): the MLPs follow the
     /// smooth trend, the RBF network the sharp local structure (repeated configurations), and
@@ -87,7 +87,7 @@ pub struct Settings {
     /// held-out error.
     pub members: usize,
     /// The RBF network's hyperparameter search start ([`super::rbf::STARTS`]); None: every
-    /// start, the highest likelihood kept.
+    /// start, the highest likelihood kept output by output.
     pub rbf_start: Option<usize>,
     /// Model parameters re-estimated on the training rows first (a selection as for
     /// `identify`), or None.
@@ -173,8 +173,8 @@ pub struct CompensatorOptions {
     /// The network kind; None: cross-validation decides (an RBF network is tried on sets of
     /// at most [`super::tuning::RBF_MAX_ROWS`] rows).
     pub network: Option<Network>,
-    /// The RBF network's search start ([`super::rbf::STARTS`]); None: cross-validation
-    /// decides where it runs, else the highest likelihood.
+    /// The RBF network's search start ([`super::rbf::STARTS`]); None: the first (smooth)
+    /// start where cross-validation runs, else the highest likelihood, output by output.
     pub rbf_start: Option<usize>,
     /// Where the network's output acts; None: cross-validation decides.
     pub form: Option<Form>,

@@ -29,7 +29,10 @@ impl Compensator {
             } else {
                 opts.train.max_epochs
             },
-            // The search cross-validation made on these rows for this model (the same result).
+            // The search cross-validation made on these rows for this model (the same result;
+            // where listed outliers are left out below, the weights are fitted without them
+            // but the hyperparameters are kept: a few rows move the likelihood of hundreds
+            // little, and a new search would cost as much again).
             rbf_hyper: selection
                 .as_ref()
                 .and_then(|s| s.rbf_hyper.clone())
