@@ -143,13 +143,11 @@ fn print_fit(c: &Compensator, report: &robocal::neural::fit::CompensatorReport, 
         );
         // Pose-form outputs: position (mm) then rotation (mrad), robot base frame.
         const NAMES: [&str; 6] = ["dx", "dy", "dz", "rx", "ry", "rz"];
-        let mut first = 0;
-        for k in &r.kernels {
-            let name = match k.outputs {
-                1 => NAMES.get(first).copied().unwrap_or("?").to_string(),
-                m => format!("outputs {}-{}", first + 1, first + m),
+        for (k, outs) in r.kernel_outputs() {
+            let name = match outs.len() {
+                1 => NAMES.get(outs.start).copied().unwrap_or("?").to_string(),
+                _ => format!("outputs {}-{}", outs.start + 1, outs.end),
             };
-            first += k.outputs;
             let widths: Vec<String> = k.widths.iter().map(|w| format!("{w:.3}")).collect();
             println!(
                 "  {name}: noise variance {:.4} of signal {:.4}, widths {} (standardised inputs)",
