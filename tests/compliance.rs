@@ -207,7 +207,17 @@ fn robot_files_keep_compliances_and_refuse_bad_ones() {
     assert!(truth.find_param("c2").is_none());
     assert!(truth.find_param("k2.mx3").is_some());
     assert!(model.find_param("k2.mx3").is_none());
+    // Every parameter is found by its name, and names that only look like one are not.
     let params = truth.parameters();
+    for p in &params {
+        assert_eq!(truth.find_param(&p.name()), Some(*p), "{}", p.name());
+    }
+    for bad in [
+        "k2.mx03", "k0.m1", "k2.mq3", "k7.m1", "k2.m7", "k2.m0", "k3.m2", "k2.mx", "k2.x3",
+        "k2.mp", "k+2.m3", "k2.m+3",
+    ] {
+        assert!(truth.find_param(bad).is_none(), "{bad}");
+    }
     let chosen = robocal::identify::select::select(&truth, "compliance").unwrap();
     assert_eq!(params[chosen[0]].name(), "k1.m1");
     assert_eq!(params[*chosen.last().unwrap()].name(), "k6.mzP");

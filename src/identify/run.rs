@@ -460,18 +460,41 @@ fn screen_compliances(
             return kept(cols, &live);
         };
         let y = chol.solve(&g);
-        let inv = chol.inverse();
+        let inv = inverse_diagonal(chol.l_dirty());
         // The linearised cost after the step, and the variance factor it gives.
         let s2 = ((ne.cost - g.dot(&y)) / (m - n) as f64).max(0.0);
         let Some((i, _)) = drop_weakest(&params, &mut cols, ident, |i, _| {
             let x = y[i] / d[i];
-            let std = (inv[(i, i)] * s2).sqrt() / d[i];
+            let std = (inv[i] * s2).sqrt() / d[i];
             x / std
         }) else {
             return kept(cols, &live);
         };
         live.remove(i);
     }
+}
+
+/// The diagonal of A^-1 from the Cholesky factor L of A = L L^T (its lower triangle; the
+/// upper is ignored): (A^-1)_ii = |L^-1 e_i|^2, one forward substitution from row i each,
+/// a sixth of the work of the whole inverse.
+fn inverse_diagonal(l: &DMatrix<f64>) -> Vec<f64> {
+    let n = l.nrows();
+    let mut y = vec![0.0; n];
+    (0..n)
+        .map(|i| {
+            y[i..].fill(0.0);
+            y[i] = 1.0;
+            // Column by column (L is stored by columns).
+            for c in i..n {
+                y[c] /= l[(c, c)];
+                let yc = y[c];
+                for (yr, lr) in y[c + 1..].iter_mut().zip(l.column(c).iter().skip(c + 1)) {
+                    *yr -= lr * yc;
+                }
+            }
+            y[i..].iter().map(|v| v * v).sum()
+        })
+        .collect()
 }
 
 /// Identifies `nominal`'s selected parameters from `set`.
@@ -553,4 +576,25 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         notes,
         warnings,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inverse_diagonal_is_the_inverses() {
+        let b = DMatrix::from_fn(7, 7, |i, j| ((i * 7 + j) as f64 * 0.37).sin());
+        let a = &b * b.transpose() + DMatrix::identity(7, 7) * 0.1;
+        let chol = a.clone().cholesky().unwrap();
+        let diag = inverse_diagonal(chol.l_dirty());
+        let inv = a.try_inverse().unwrap();
+        for (i, d) in diag.iter().enumerate() {
+            assert!(
+                (d - inv[(i, i)]).abs() < 1e-9 * inv[(i, i)].abs(),
+                "{i}: {d} {}",
+                inv[(i, i)]
+            );
+        }
+    }
 }

@@ -400,10 +400,30 @@ impl Robot {
         if let Some(rest) = name.strip_prefix('k')
             && let Some((joint, body)) = rest.split_once('.')
         {
-            return self
-                .parameters()
-                .into_iter()
-                .find(|p| p.name() == format!("k{joint}.{body}"));
+            // Parsed, not matched against every parameter's formatted name: identification
+            // maps a hundred such names at a time.
+            let j: usize = joint.parse().ok().filter(|&j| j >= 1)?;
+            let (part, link) = ["mx", "my", "mz", "m"]
+                .iter()
+                .find_map(|p| body.strip_prefix(p).map(|l| (p, l)))?;
+            let part = match *part {
+                "m" => 0,
+                "mx" => 1,
+                "my" => 2,
+                _ => 3,
+            };
+            let code = if link == "P" {
+                PAYLOAD
+            } else {
+                let b: usize = link.parse().ok().filter(|&b| b >= 1 && b <= self.dof())?;
+                body_code(b - 1, self.dof())
+            };
+            let id = ParamId {
+                slot: Slot::Joint(j - 1),
+                field: Field::K { body: code, part },
+            };
+            // Its name must read back as given ("k2.mx03" is no parameter).
+            return (self.parameters().contains(&id) && id.name() == name).then_some(id);
         }
         let (slot, field) = if let Some(f) = name.strip_prefix("base.") {
             (Slot::Base, f)

@@ -28,6 +28,8 @@ pub struct PredictWorkspace {
     dout: DMatrix<f64>,
     /// d weight / dq (the domain's fade).
     dw: Vec<f64>,
+    /// The RBF kernels' 1 / l^2 (scratch of [`super::rbf::Rbf::forward_into`]).
+    inverse_squares: Vec<f64>,
     /// sum_m dy_m^T y_m over the MLPs (the shrinkage's derivative).
     g: Vec<f64>,
     /// The training configuration nearest the last query (where the domain search starts).
@@ -50,6 +52,7 @@ impl Default for PredictWorkspace {
             dy_sum: DMatrix::zeros(0, 0),
             dout: DMatrix::zeros(0, 0),
             dw: Vec::new(),
+            inverse_squares: Vec::new(),
             g: Vec::new(),
             near_hint: 0,
             frames: None,
@@ -143,13 +146,13 @@ impl Compensator {
             let share = if m > 0 { 0.5 } else { 1.0 };
             let keep = 1.0 - share;
             if derivatives {
-                r.input_jacobian_into(&ws.x, &mut ws.y, &mut ws.dy);
+                r.input_jacobian_into(&ws.x, &mut ws.y, &mut ws.dy, &mut ws.inverse_squares);
                 ws.dy_sum
                     .iter_mut()
                     .zip(ws.dy.iter())
                     .for_each(|(s, d)| *s = keep * *s + share * d);
             } else {
-                r.forward_into(&ws.x, &mut ws.y);
+                r.forward_into(&ws.x, &mut ws.y, &mut ws.inverse_squares);
             }
             ws.y_sum
                 .iter_mut()

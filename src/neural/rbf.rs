@@ -66,15 +66,22 @@ pub struct Kernel {
 }
 
 impl Kernel {
-    /// The unit response exp(-1/2 sum_d ((x_d - c_d) / l_d)^2) at `x` of the unit at `c`.
-    fn response(&self, x: &[f64], c: &[f64]) -> f64 {
-        let mut s = 0.0;
-        for ((xd, cd), l) in x.iter().zip(c).zip(&self.widths) {
-            let t = (xd - cd) / l;
-            s += t * t;
-        }
-        (-0.5 * s).exp()
+    /// 1 / l_d^2 of each input, appended to `inv`.
+    fn inverse_squares_into(&self, inv: &mut Vec<f64>) {
+        inv.extend(self.widths.iter().map(|l| 1.0 / (l * l)));
     }
+}
+
+/// The unit response exp(-1/2 sum_d (x_d - c_d)^2 / l_d^2) at `x` of the unit at `c`, with
+/// `inv` the kernel's 1 / l_d^2 (multiplications: per input and unit a division cost four
+/// times as much, most of a prediction).
+fn response(x: &[f64], c: &[f64], inv: &[f64]) -> f64 {
+    let mut s = 0.0;
+    for ((xd, cd), i) in x.iter().zip(c).zip(inv) {
+        let t = xd - cd;
+        s += t * t * i;
+    }
+    (-0.5 * s).exp()
 }
 
 /// A fitted RBF network (normalised inputs, unit-scale outputs).
@@ -137,36 +144,59 @@ impl Rbf {
         })
     }
 
-    /// y(x) into `y` (no allocation).
-    pub fn forward_into(&self, x: &[f64], y: &mut [f64]) {
+    /// 1 / l_d^2 of every kernel, kernel after kernel, into `inv` (no allocation once it
+    /// has held them).
+    fn inverse_squares(&self, inv: &mut Vec<f64>) {
+        inv.clear();
+        for k in &self.kernels {
+            k.inverse_squares_into(inv);
+        }
+    }
+
+    /// y(x) into `y`; `inv` is scratch (no allocation once it has been used).
+    pub fn forward_into(&self, x: &[f64], y: &mut [f64], inv: &mut Vec<f64>) {
         y.fill(0.0);
-        for (c, w) in self.centres.iter().zip(&self.weights) {
-            for (kernel, outs) in self.kernel_outputs() {
-                let k = kernel.response(x, c);
+        self.inverse_squares(inv);
+        let mut at = 0;
+        for (kernel, outs) in self.kernel_outputs() {
+            let own = &inv[at..at + kernel.widths.len()];
+            at += kernel.widths.len();
+            for (c, w) in self.centres.iter().zip(&self.weights) {
+                let k = response(x, c, own);
                 y[outs.clone()]
                     .iter_mut()
-                    .zip(&w[outs])
+                    .zip(&w[outs.clone()])
                     .for_each(|(yo, wo)| *yo += wo * k);
             }
         }
     }
 
     /// y(x) into `y` and dy/dx (outputs x inputs) into `dy`: dy_o/dx_d = -sum_i w_io k_io
-    /// (x_d - c_id) / l_od^2.
-    pub fn input_jacobian_into(&self, x: &[f64], y: &mut [f64], dy: &mut DMatrix<f64>) {
+    /// (x_d - c_id) / l_od^2; `inv` is scratch as in [`Rbf::forward_into`].
+    pub fn input_jacobian_into(
+        &self,
+        x: &[f64],
+        y: &mut [f64],
+        dy: &mut DMatrix<f64>,
+        inv: &mut Vec<f64>,
+    ) {
         y.fill(0.0);
         dy.fill(0.0);
-        for (c, w) in self.centres.iter().zip(&self.weights) {
-            for (kernel, outs) in self.kernel_outputs() {
-                let k = kernel.response(x, c);
+        self.inverse_squares(inv);
+        let mut at = 0;
+        for (kernel, outs) in self.kernel_outputs() {
+            let own = &inv[at..at + kernel.widths.len()];
+            at += kernel.widths.len();
+            for (c, w) in self.centres.iter().zip(&self.weights) {
+                let k = response(x, c, own);
                 if k == 0.0 {
                     continue;
                 }
-                for o in outs {
+                for o in outs.clone() {
                     let wk = w[o] * k;
                     y[o] += wk;
-                    for (d, l) in kernel.widths.iter().enumerate() {
-                        dy[(o, d)] -= wk * (x[d] - c[d]) / (l * l);
+                    for (d, i) in own.iter().enumerate() {
+                        dy[(o, d)] -= wk * (x[d] - c[d]) * i;
                     }
                 }
             }
@@ -632,17 +662,18 @@ mod tests {
         }
         let mut worst: f64 = 0.0;
         let mut y = [0.0; 2];
+        let mut inv = Vec::new();
         for a in [-1.0, -0.3, 0.4, 1.1] {
             for b in [-0.8, 0.2, 0.9] {
                 let x = [a, b, 0.5];
-                rbf.forward_into(&x, &mut y);
+                rbf.forward_into(&x, &mut y, &mut inv);
                 let t = truth(&x);
                 worst = worst.max((y[0] - t[0]).abs()).max((y[1] - t[1]).abs());
             }
         }
         assert!(worst < 0.05, "largest error {worst}");
         // Far from every centre the output falls to zero.
-        rbf.forward_into(&[40.0, -40.0, 0.0], &mut y);
+        rbf.forward_into(&[40.0, -40.0, 0.0], &mut y, &mut inv);
         assert!(y.iter().all(|v| v.abs() < 1e-9), "{y:?}");
     }
 
@@ -690,9 +721,10 @@ mod tests {
         let x = [0.3, -0.2, 0.8];
         let mut y = [0.0; 2];
         let mut dy = DMatrix::zeros(2, 3);
-        rbf.input_jacobian_into(&x, &mut y, &mut dy);
+        let mut inv = Vec::new();
+        rbf.input_jacobian_into(&x, &mut y, &mut dy, &mut inv);
         let mut y0 = [0.0; 2];
-        rbf.forward_into(&x, &mut y0);
+        rbf.forward_into(&x, &mut y0, &mut inv);
         assert_eq!(y, y0);
         // The weights of a nearly noise-free fit reach hundreds and cancel: a step of 1e-4
         // keeps the differences' rounding (1e-13 / 1e-4) below the tolerance, and their
@@ -703,8 +735,8 @@ mod tests {
             a[d] += step;
             b[d] -= step;
             let (mut ya, mut yb) = ([0.0; 2], [0.0; 2]);
-            rbf.forward_into(&a, &mut ya);
-            rbf.forward_into(&b, &mut yb);
+            rbf.forward_into(&a, &mut ya, &mut inv);
+            rbf.forward_into(&b, &mut yb, &mut inv);
             for o in 0..2 {
                 let fd = (ya[o] - yb[o]) / (2.0 * step);
                 assert!(
