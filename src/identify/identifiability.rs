@@ -160,7 +160,7 @@ pub fn analyse_with(
         for _ in 0..2 {
             for b in &basis {
                 let proj = b.dot(&v);
-                v -= b * proj;
+                v.axpy(-proj, b, 1.0);
             }
         }
         let rest = v.norm();
