@@ -484,11 +484,14 @@ fn inverse_diagonal(l: &DMatrix<f64>) -> Vec<f64> {
         .map(|i| {
             y[i..].fill(0.0);
             y[i] = 1.0;
-            // Column by column (L is stored by columns).
+            // Column by column (L is stored by columns: column c below the diagonal is the
+            // contiguous slice after l[(c, c)]).
+            let data = l.as_slice();
             for c in i..n {
                 y[c] /= l[(c, c)];
                 let yc = y[c];
-                for (yr, lr) in y[c + 1..].iter_mut().zip(l.column(c).iter().skip(c + 1)) {
+                let below = &data[c * n + c + 1..(c + 1) * n];
+                for (yr, lr) in y[c + 1..].iter_mut().zip(below) {
                     *yr -= lr * yc;
                 }
             }
