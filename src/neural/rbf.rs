@@ -144,31 +144,39 @@ impl Rbf {
         })
     }
 
-    /// 1 / l_d^2 of every kernel, kernel after kernel, into `inv` (no allocation once it
-    /// has held them).
-    fn inverse_squares(&self, inv: &mut Vec<f64>) {
+    /// Calls `f(outputs, inv, centre, weights, k)` for every kernel (the outputs it serves,
+    /// its 1 / l_d^2) and unit, k the unit's response at `x`: kernel by kernel, the units in
+    /// order. `inv` is scratch for the kernels' 1 / l_d^2 (no allocation once it has held
+    /// them).
+    fn responses(
+        &self,
+        x: &[f64],
+        inv: &mut Vec<f64>,
+        mut f: impl FnMut(std::ops::Range<usize>, &[f64], &[f64], &[f64], f64),
+    ) {
         inv.clear();
         for k in &self.kernels {
             k.inverse_squares_into(inv);
+        }
+        let mut at = 0;
+        for (kernel, outs) in self.kernel_outputs() {
+            let own = &inv[at..at + kernel.widths.len()];
+            at += kernel.widths.len();
+            for (c, w) in self.centres.iter().zip(&self.weights) {
+                f(outs.clone(), own, c, w, response(x, c, own));
+            }
         }
     }
 
     /// y(x) into `y`; `inv` is scratch (no allocation once it has been used).
     pub fn forward_into(&self, x: &[f64], y: &mut [f64], inv: &mut Vec<f64>) {
         y.fill(0.0);
-        self.inverse_squares(inv);
-        let mut at = 0;
-        for (kernel, outs) in self.kernel_outputs() {
-            let own = &inv[at..at + kernel.widths.len()];
-            at += kernel.widths.len();
-            for (c, w) in self.centres.iter().zip(&self.weights) {
-                let k = response(x, c, own);
-                y[outs.clone()]
-                    .iter_mut()
-                    .zip(&w[outs.clone()])
-                    .for_each(|(yo, wo)| *yo += wo * k);
-            }
-        }
+        self.responses(x, inv, |outs, _, _, w, k| {
+            y[outs.clone()]
+                .iter_mut()
+                .zip(&w[outs])
+                .for_each(|(yo, wo)| *yo += wo * k);
+        });
     }
 
     /// y(x) into `y` and dy/dx (outputs x inputs) into `dy`: dy_o/dx_d = -sum_i w_io k_io
@@ -182,25 +190,18 @@ impl Rbf {
     ) {
         y.fill(0.0);
         dy.fill(0.0);
-        self.inverse_squares(inv);
-        let mut at = 0;
-        for (kernel, outs) in self.kernel_outputs() {
-            let own = &inv[at..at + kernel.widths.len()];
-            at += kernel.widths.len();
-            for (c, w) in self.centres.iter().zip(&self.weights) {
-                let k = response(x, c, own);
-                if k == 0.0 {
-                    continue;
-                }
-                for o in outs.clone() {
-                    let wk = w[o] * k;
-                    y[o] += wk;
-                    for (d, i) in own.iter().enumerate() {
-                        dy[(o, d)] -= wk * (x[d] - c[d]) * i;
-                    }
+        self.responses(x, inv, |outs, own, c, w, k| {
+            if k == 0.0 {
+                return;
+            }
+            for o in outs {
+                let wk = w[o] * k;
+                y[o] += wk;
+                for (d, i) in own.iter().enumerate() {
+                    dy[(o, d)] -= wk * (x[d] - c[d]) * i;
                 }
             }
-        }
+        });
     }
 
     /// Whether every number is finite and bounded (a finite 1e308 overflows in prediction)
