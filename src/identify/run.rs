@@ -480,13 +480,13 @@ fn screen_compliances(
 fn inverse_diagonal(l: &DMatrix<f64>) -> Vec<f64> {
     let n = l.nrows();
     let mut y = vec![0.0; n];
+    // Column by column (L is stored by columns: column c below the diagonal is the
+    // contiguous slice after l[(c, c)]).
+    let data = l.as_slice();
     (0..n)
         .map(|i| {
             y[i..].fill(0.0);
             y[i] = 1.0;
-            // Column by column (L is stored by columns: column c below the diagonal is the
-            // contiguous slice after l[(c, c)]).
-            let data = l.as_slice();
             for c in i..n {
                 y[c] /= l[(c, c)];
                 let yc = y[c];

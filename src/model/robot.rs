@@ -100,6 +100,10 @@ pub struct ParamId {
     pub field: Field,
 }
 
+/// The parts of a mass-free coefficient's name (`k2.mx3`), by [`Field::K`]'s `part`: the
+/// mass, then its moment along x, y, z.
+const K_PARTS: [&str; 4] = ["m", "mx", "my", "mz"];
+
 impl ParamId {
     /// The parameter's name: `a3`, `alpha2`, `theta1`, `beta3`, `base.x`, `tool.rz`, `c2`
     /// (a compliance), `k2.mx3` (a mass-free compliance coefficient: joint 2, link 3's moment
@@ -111,7 +115,7 @@ impl ParamId {
             } else {
                 (body + 1).to_string()
             };
-            let part = ["m", "mx", "my", "mz"][usize::from(part.min(3))];
+            let part = K_PARTS[usize::from(part.min(3))];
             return format!("k{}.{part}{body}", j + 1);
         }
         match self.slot {
@@ -403,15 +407,10 @@ impl Robot {
             // Parsed, not matched against every parameter's formatted name: identification
             // maps a hundred such names at a time.
             let j: usize = joint.parse().ok().filter(|&j| j >= 1)?;
-            let (part, link) = ["mx", "my", "mz", "m"]
-                .iter()
-                .find_map(|p| body.strip_prefix(p).map(|l| (p, l)))?;
-            let part = match *part {
-                "m" => 0,
-                "mx" => 1,
-                "my" => 2,
-                _ => 3,
-            };
+            // The longest part first ("m" begins them all).
+            let (part, link) = (0..K_PARTS.len())
+                .rev()
+                .find_map(|p| body.strip_prefix(K_PARTS[p]).map(|l| (p as u8, l)))?;
             let code = if link == "P" {
                 PAYLOAD
             } else {

@@ -349,18 +349,16 @@ fn shape(s: &Samples) -> Result<(usize, usize, usize)> {
 /// hyperparameters, [`HYPER_ITERATIONS`] at most) on at most [`HYPER_ROWS`] rows of `s` (a
 /// choice seeded by `seed` when there are more). The objective is the sum of the outputs'.
 pub fn search(s: &Samples, start: usize, seed: u64) -> Result<Search> {
-    let (_, _, o) = shape(s)?;
     let one = Searches::new(s, seed)?;
-    let found = super::parallel::parallel_map(o, |j| one.output(j, start));
+    let found = super::parallel::parallel_map(one.outputs, |j| one.output(j, start));
     Ok(join(found.into_iter().collect::<Result<Vec<_>>>()?))
 }
 
 /// The searches from every start (in parallel), keeping for each output the one of highest
 /// likelihood.
 pub fn search_best(s: &Samples, seed: u64) -> Result<Search> {
-    let (_, _, o) = shape(s)?;
     let one = Searches::new(s, seed)?;
-    let starts = STARTS.len();
+    let (o, starts) = (one.outputs, STARTS.len());
     let all = super::parallel::parallel_map(o * starts, |i| one.output(i / starts, i % starts));
     let mut best = Vec::with_capacity(o);
     let mut all = all.into_iter();
@@ -398,13 +396,15 @@ fn join(per_output: Vec<Search>) -> Search {
 /// What every output's search shares: the rows searched on and their pairs.
 struct Searches<'a> {
     s: &'a Samples,
+    /// Outputs of `s` (one search each).
+    outputs: usize,
     rows: Vec<usize>,
     pairs: Pairs,
 }
 
 impl<'a> Searches<'a> {
     fn new(s: &'a Samples, seed: u64) -> Result<Searches<'a>> {
-        let (n, _, _) = shape(s)?;
+        let (n, _, outputs) = shape(s)?;
         let mut rows: Vec<usize> = (0..n).collect();
         if n > HYPER_ROWS {
             rows.shuffle(&mut ChaCha8Rng::seed_from_u64(seed ^ 0x7bf));
@@ -412,7 +412,12 @@ impl<'a> Searches<'a> {
             rows.sort_unstable();
         }
         let pairs = Pairs::new(&s.x, &rows);
-        Ok(Searches { s, rows, pairs })
+        Ok(Searches {
+            s,
+            outputs,
+            rows,
+            pairs,
+        })
     }
 
     /// Output `j`'s search from [`STARTS`]`[start]`: its d + 2 hyperparameters.
