@@ -434,13 +434,62 @@ pub fn normal_equations_into(
     let mut total = 0.0;
     let (a, g) = (&mut out.a, &mut out.g);
     for_each_block(robot, obs, Some(cols), ws, |jb, rb, rows| {
+        add_gram_upper(a, jb, rows);
         let j = jb.rows(0, rows);
         let r = rb.rows(0, rows);
-        a.gemm_tr(1.0, &j, &j, 1.0);
         g.gemv_tr(1.0, &j, &r, 1.0);
         total += r.norm_squared();
     });
+    mirror_upper(a);
     out.cost = total;
+}
+
+/// a += J^T J over J's first `rows` rows, upper triangle only (J^T J is symmetric: half the
+/// work of a general product). Each entry takes the bits of nalgebra's `gemm_tr`, which the
+/// identification used before: a_ij + J_i . J_j with [`dot`]'s order of additions.
+fn add_gram_upper(a: &mut DMatrix<f64>, j: &DMatrix<f64>, rows: usize) {
+    let (stride, k) = (j.nrows(), j.ncols());
+    let data = j.as_slice();
+    let column = |c: usize| &data[c * stride..c * stride + rows];
+    for c in 0..k {
+        let jc = column(c);
+        let out = &mut a.as_mut_slice()[c * k..c * k + c + 1];
+        for (i, v) in out.iter_mut().enumerate() {
+            *v += dot(column(i), jc);
+        }
+    }
+}
+
+/// Copies the upper triangle of the square `a` onto its lower one.
+fn mirror_upper(a: &mut DMatrix<f64>) {
+    for c in 0..a.ncols() {
+        for i in 0..c {
+            a[(c, i)] = a[(i, c)];
+        }
+    }
+}
+
+/// x . y summed in nalgebra's order (its `dot` on dynamic vectors): eight running sums over
+/// chunks of eight, combined pairwise (0 + 4, 1 + 5, 2 + 6, 3 + 7), then the tail in order.
+/// Keeping that order keeps every identification result to the bit.
+fn dot(x: &[f64], y: &[f64]) -> f64 {
+    let mut acc = [0.0; 8];
+    let (xc, yc) = (x.chunks_exact(8), y.chunks_exact(8));
+    let (xt, yt) = (xc.remainder(), yc.remainder());
+    for (cx, cy) in xc.zip(yc) {
+        for t in 0..8 {
+            acc[t] += cx[t] * cy[t];
+        }
+    }
+    let mut res = 0.0;
+    res += acc[0] + acc[4];
+    res += acc[1] + acc[5];
+    res += acc[2] + acc[6];
+    res += acc[3] + acc[7];
+    for (a, b) in xt.iter().zip(yt) {
+        res += a * b;
+    }
+    res
 }
 
 /// The k x k triangular factor R of the weighted observation matrix (Phi_w = Q R), built
@@ -465,4 +514,36 @@ pub fn observation_r(
         r = full.rows(0, keep).into_owned();
     });
     r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The symmetric accumulation gives nalgebra's `gemm_tr` bits, block after block, for
+    /// every row count around the chunk of eight (and a full block).
+    #[test]
+    fn gram_matches_gemm_tr_to_the_bit() {
+        let k = 13;
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let mut ours = DMatrix::<f64>::zeros(k, k);
+        let mut theirs = DMatrix::<f64>::zeros(k, k);
+        for rows in (0..=25).chain([BLOCK]) {
+            let j = DMatrix::from_fn(BLOCK, k, |_, _| next() * 1e3);
+            add_gram_upper(&mut ours, &j, rows);
+            let jr = j.rows(0, rows);
+            theirs.gemm_tr(1.0, &jr, &jr, 1.0);
+        }
+        mirror_upper(&mut ours);
+        assert!(theirs.norm() > 1e6);
+        for (a, b) in ours.iter().zip(theirs.iter()) {
+            assert_eq!(a.to_bits(), b.to_bits(), "{a} vs {b}");
+        }
+    }
 }
