@@ -493,7 +493,8 @@ fn dot(x: &[f64], y: &[f64]) -> f64 {
 }
 
 /// The k x k triangular factor R of the weighted observation matrix (Phi_w = Q R), built
-/// block by block; its singular values are those of Phi_w, without squaring them.
+/// block by block; its singular values are those of Phi_w, without squaring them. With
+/// fewer rows than k, only the first rows (as many as there are rows) are returned.
 pub fn observation_r(
     robot: &Robot,
     obs: &Observations,
@@ -501,24 +502,123 @@ pub fn observation_r(
     ws: &mut IdentifyWorkspace,
 ) -> DMatrix<f64> {
     let k = cols.len();
-    let mut r = DMatrix::<f64>::zeros(0, k);
+    let mut r = DMatrix::<f64>::zeros(k, k);
+    let mut block: Vec<f64> = Vec::with_capacity(BLOCK * k);
+    let mut total = 0;
     for_each_block(robot, obs, Some(cols), ws, |jb, _, rows| {
-        let mut stacked = DMatrix::<f64>::zeros(r.nrows() + rows, k);
-        stacked.rows_mut(0, r.nrows()).copy_from(&r);
-        stacked
-            .rows_mut(r.nrows(), rows)
-            .copy_from(&jb.rows(0, rows));
-        let qr = stacked.qr();
-        let full = qr.r();
-        let keep = full.nrows().min(k);
-        r = full.rows(0, keep).into_owned();
+        block.clear();
+        for c in 0..k {
+            block.extend_from_slice(&jb.column(c).as_slice()[..rows]);
+        }
+        absorb_rows(&mut r, &mut block, rows);
+        total += rows;
     });
-    r
+    r.rows(0, total.min(k)).into_owned()
+}
+
+/// Folds the rows of `block` (`rows` x k, by columns) into the upper triangular `r` (k x k):
+/// afterwards r^T r gains block^T block. One Householder reflection per column j, acting on
+/// r's row j and the block's rows only (the rows of r below j are zero in columns up to j):
+/// 2 rows k^2 flops, where a QR of r stacked on the block would also work through r's k
+/// rows. The block is left overwritten.
+fn absorb_rows(r: &mut DMatrix<f64>, block: &mut [f64], rows: usize) {
+    let k = r.ncols();
+    let rs = r.as_mut_slice();
+    for j in 0..k {
+        let (head, tail) = block.split_at_mut((j + 1) * rows);
+        let v = &mut head[j * rows..];
+        let below = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if below == 0.0 {
+            continue;
+        }
+        // The reflection maps (x0, v) to (beta, 0): beta of x0's opposite sign, so that
+        // x0 - beta never cancels; v is scaled to the reflector's tail (its head is 1).
+        let x0 = rs[j * k + j];
+        let beta = -x0.signum() * x0.hypot(below);
+        let tau = (beta - x0) / beta;
+        let scale = 1.0 / (x0 - beta);
+        for x in v.iter_mut() {
+            *x *= scale;
+        }
+        rs[j * k + j] = beta;
+        for (c, bc) in tail.chunks_exact_mut(rows).enumerate() {
+            let at = (j + 1 + c) * k + j;
+            let f = tau * (rs[at] + dot(v, bc));
+            rs[at] -= f;
+            for (y, x) in bc.iter_mut().zip(v.iter()) {
+                *y -= f * x;
+            }
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn random(seed: &mut u64) -> f64 {
+        *seed ^= *seed << 13;
+        *seed ^= *seed >> 7;
+        *seed ^= *seed << 17;
+        (*seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+
+    /// Block after block, r stays upper triangular with r^T r = J^T J, and its singular
+    /// values are those of nalgebra's QR of all rows at once (columns of very different
+    /// scales and one repeated column, as in an identification; a zero column too).
+    #[test]
+    fn absorbed_rows_give_the_triangular_factor() {
+        let (k, n) = (9, 3 * 7 + 5);
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let scales = [1e3, 1.0, 1e-3, 5.0, 0.0, 2.0, 1e2, 1.0, 1.0];
+        let mut all = DMatrix::from_fn(n, k, |_, c| random(&mut seed) * scales[c]);
+        let col7 = all.column(7).into_owned();
+        all.column_mut(8).copy_from(&col7);
+        let mut r = DMatrix::<f64>::zeros(k, k);
+        let mut done = 0;
+        for rows in [7, 3, 7, 1, 7, 1] {
+            let mut block: Vec<f64> = (0..k)
+                .flat_map(|c| {
+                    all.column(c)
+                        .rows(done, rows)
+                        .iter()
+                        .copied()
+                        .collect::<Vec<_>>()
+                })
+                .collect();
+            absorb_rows(&mut r, &mut block, rows);
+            done += rows;
+        }
+        assert_eq!(done, n);
+        for c in 0..k {
+            for i in c + 1..k {
+                assert_eq!(r[(i, c)], 0.0);
+            }
+        }
+        let gram = all.transpose() * &all;
+        let ours = r.transpose() * &r;
+        assert!((ours - &gram).norm() <= 1e-12 * gram.norm());
+        let mut a: Vec<f64> = r.singular_values().iter().copied().collect();
+        let mut b: Vec<f64> = all
+            .clone()
+            .qr()
+            .r()
+            .singular_values()
+            .iter()
+            .copied()
+            .collect();
+        a.sort_by(f64::total_cmp);
+        b.sort_by(f64::total_cmp);
+        let top = b[k - 1];
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() <= 1e-12 * top, "{x} vs {y}");
+        }
+        // Two exact zeros: the zero column and the repeated one, to rounding.
+        assert!(
+            a[0] <= 1e-12 * top && a[1] <= 1e-12 * top && a[2] > 1e-9 * top,
+            "{a:?}"
+        );
+    }
 
     /// The symmetric accumulation gives nalgebra's `gemm_tr` bits, block after block, for
     /// every row count around the chunk of eight (and a full block).
