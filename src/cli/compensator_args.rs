@@ -60,9 +60,11 @@ pub struct CompensatorArgs {
     #[arg(long)]
     pub members: Option<usize>,
     /// Model parameters re-estimated on the training rows before the network is trained
-    /// (exact identification): `auto` (cross-validation decides between none and `full`),
-    /// `none`, or a selection as for identify (`offsets`, `full`, names), kept only where
-    /// cross-validation shows it lowers the held-out error.
+    /// (exact identification): `auto` (cross-validation decides among none, `full` and
+    /// `full,compliance`, the joints' gravity compliances kept only where they lower the
+    /// cross-validated error by 2 % or more), `none`, or a selection as for identify
+    /// (`offsets`, `full`, `full,compliance`, names), kept only where cross-validation shows
+    /// it lowers the held-out error.
     #[arg(long, default_value = "auto")]
     pub refine: String,
     /// Cross-validation folds (2 to 20). Default: 5, or 4 from 1500 distinct configurations.

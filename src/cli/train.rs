@@ -53,8 +53,14 @@ fn print_selection(sel: &Selection) {
         "cross-validation ({} folds of whole configurations; RMS over every held-out row):",
         sel.folds
     );
+    // The refine column fits its longest entry (`full,compliance`).
+    let w = sel
+        .candidates
+        .iter()
+        .filter_map(|c| c.settings.refine.as_ref().map(|r| r.len()))
+        .fold(10, usize::max);
     println!(
-        "  {:>5} {:<7} {:<5} {:<6} {:>6} {:>7} {:>7} {:<10} {:>11} {:>15}",
+        "  {:>5} {:<7} {:<5} {:<6} {:>6} {:>7} {:>7} {:<w$} {:>11} {:>15}",
         "stage",
         "network",
         "form",
@@ -71,11 +77,12 @@ fn print_selection(sel: &Selection) {
             .map_or("-".into(), |r| format!("{r:.4}"))
     };
     println!(
-        "  {:>5} {:<52} {:>11.4} {:>15}",
+        "  {:>5} {:<m$} {:>11.4} {:>15}",
         "-",
         "model alone",
         sel.model.position_rms_mm,
-        rot(&sel.model)
+        rot(&sel.model),
+        m = 52 + w - 10
     );
     for (i, c) in sel.candidates.iter().enumerate() {
         let s = &c.settings;
@@ -93,7 +100,7 @@ fn print_selection(sel: &Selection) {
         let mlp = s.network != Network::Rbf;
         let dash = |show: bool, v: String| if show { v } else { "-".into() };
         println!(
-            "{} {:>5} {:<7} {:<5} {:<6} {:>6} {:>7} {:>7} {:<10} {score}",
+            "{} {:>5} {:<7} {:<5} {:<6} {:>6} {:>7} {:>7} {:<w$} {score}",
             if i == sel.chosen { "*" } else { " " },
             c.stage,
             network,

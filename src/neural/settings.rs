@@ -158,7 +158,9 @@ impl Settings {
 /// Whether to re-estimate model parameters with the network.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Refine {
-    /// Cross-validation decides between no refinement and the full identifiable set.
+    /// Cross-validation decides among no refinement, the full identifiable set, and the
+    /// full set with the joints' gravity compliances
+    /// ([`super::tuning::AUTO_REFINE`], [`super::tuning::COMPLIANCE_MARGIN`]).
     Auto,
     /// Never.
     Off,
