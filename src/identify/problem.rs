@@ -494,7 +494,8 @@ fn dot(x: &[f64], y: &[f64]) -> f64 {
 
 /// The k x k triangular factor R of the weighted observation matrix (Phi_w = Q R), built
 /// block by block; its singular values are those of Phi_w, without squaring them. With
-/// fewer rows than k, only the first rows (as many as there are rows) are returned.
+/// fewer rows than k, R keeps all k rows, the extra ones zero: where a column is zero its
+/// reflection is skipped, and what the rows hold lands in a later row of R.
 pub fn observation_r(
     robot: &Robot,
     obs: &Observations,
@@ -504,16 +505,14 @@ pub fn observation_r(
     let k = cols.len();
     let mut r = DMatrix::<f64>::zeros(k, k);
     let mut block: Vec<f64> = Vec::with_capacity(BLOCK * k);
-    let mut total = 0;
     for_each_block(robot, obs, Some(cols), ws, |jb, _, rows| {
         block.clear();
         for c in 0..k {
             block.extend_from_slice(&jb.column(c).as_slice()[..rows]);
         }
         absorb_rows(&mut r, &mut block, rows);
-        total += rows;
     });
-    r.rows(0, total.min(k)).into_owned()
+    r
 }
 
 /// Folds the rows of `block` (`rows` x k, by columns) into the upper triangular `r` (k x k):
@@ -618,6 +617,34 @@ mod tests {
             a[0] <= 1e-12 * top && a[1] <= 1e-12 * top && a[2] > 1e-9 * top,
             "{a:?}"
         );
+    }
+
+    /// Fewer rows than columns, the first column zero: nothing the rows hold is lost (its
+    /// skipped reflection leaves the first row of r zero and fills the next).
+    #[test]
+    fn absorbed_rows_keep_everything_with_fewer_rows_than_columns() {
+        let k = 5;
+        let mut seed = 0x1234_5678_9abc_def1_u64;
+        let all = DMatrix::from_fn(3, k, |_, c| if c == 0 { 0.0 } else { random(&mut seed) });
+        let mut r = DMatrix::<f64>::zeros(k, k);
+        for (start, rows) in [(0, 1), (1, 2)] {
+            let mut block: Vec<f64> = (0..k)
+                .flat_map(|c| {
+                    all.column(c)
+                        .rows(start, rows)
+                        .iter()
+                        .copied()
+                        .collect::<Vec<_>>()
+                })
+                .collect();
+            absorb_rows(&mut r, &mut block, rows);
+        }
+        assert!(r.row(0).iter().all(|&x| x == 0.0) && r.row(1).norm() > 0.0);
+        let gram = all.transpose() * &all;
+        assert!((r.transpose() * &r - &gram).norm() <= 1e-14 * gram.norm());
+        for c in 1..k {
+            assert!((r.column(c).norm() - all.column(c).norm()).abs() <= 1e-14);
+        }
     }
 
     /// The symmetric accumulation gives nalgebra's `gemm_tr` bits, block after block, for

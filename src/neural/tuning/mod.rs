@@ -169,6 +169,7 @@ pub fn select_settings(
     // candidate: left out before anything is fitted with it.
     let mut refined: Vec<Vec<Result<Robot>>> = Vec::new();
     let mut refines = refines;
+    let asked = refines.len();
     refines.retain(|spec| {
         let models = parallel_map(k, |f| cv.model(f, spec));
         let repeated = refined
@@ -371,6 +372,12 @@ pub fn select_settings(
         );
     }
     if let Refine::Params(spec) = &opts.refine
+        && refines.len() < asked
+    {
+        notes.push(format!(
+            "refining `{spec}` changes nothing on these rows: the model is kept as given"
+        ));
+    } else if let Refine::Params(spec) = &opts.refine
         && winner.refine.is_none()
     {
         notes.push(format!(
