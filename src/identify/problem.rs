@@ -18,7 +18,7 @@ use crate::error::{Error, Result};
 use crate::geometry::rotation::rotation_vector;
 use crate::kinematics::{Frames, Pose, frames, tool_pose};
 use crate::model::Robot;
-use nalgebra::{DMatrix, DVector, Matrix6xX, Vector3};
+use nalgebra::{DMatrix, DVector, DVectorView, Matrix6xX, Vector3};
 
 /// How measurements are compared with the model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -440,13 +440,14 @@ pub fn normal_equations_into(
         g.gemv_tr(1.0, &j, &r, 1.0);
         total += r.norm_squared();
     });
-    mirror_upper(a);
+    a.fill_lower_triangle_with_upper_triangle();
     out.cost = total;
 }
 
 /// a += J^T J over J's first `rows` rows, upper triangle only (J^T J is symmetric: half the
-/// work of a general product). Each entry takes the bits of nalgebra's `gemm_tr`, which the
-/// identification used before: a_ij + J_i . J_j with [`dot`]'s order of additions.
+/// work of a general product; the caller mirrors it). Each entry takes the bits of
+/// nalgebra's `gemm_tr`, which the identification used before: a_ij + J_i . J_j with
+/// nalgebra's own `dot`.
 fn add_gram_upper(a: &mut DMatrix<f64>, j: &DMatrix<f64>, rows: usize) {
     let (stride, k) = (j.nrows(), j.ncols());
     let data = j.as_slice();
@@ -460,36 +461,9 @@ fn add_gram_upper(a: &mut DMatrix<f64>, j: &DMatrix<f64>, rows: usize) {
     }
 }
 
-/// Copies the upper triangle of the square `a` onto its lower one.
-fn mirror_upper(a: &mut DMatrix<f64>) {
-    for c in 0..a.ncols() {
-        for i in 0..c {
-            a[(c, i)] = a[(i, c)];
-        }
-    }
-}
-
-/// x . y summed in nalgebra's order (its `dot` on dynamic vectors): eight running sums over
-/// chunks of eight, combined pairwise (0 + 4, 1 + 5, 2 + 6, 3 + 7), then the tail in order.
-/// Keeping that order keeps every identification result to the bit.
+/// x . y by nalgebra's `dot` (the order of additions `gemm_tr` and `gemv_tr` use), on slices.
 fn dot(x: &[f64], y: &[f64]) -> f64 {
-    let mut acc = [0.0; 8];
-    let (xc, yc) = (x.chunks_exact(8), y.chunks_exact(8));
-    let (xt, yt) = (xc.remainder(), yc.remainder());
-    for (cx, cy) in xc.zip(yc) {
-        for t in 0..8 {
-            acc[t] += cx[t] * cy[t];
-        }
-    }
-    let mut res = 0.0;
-    res += acc[0] + acc[4];
-    res += acc[1] + acc[5];
-    res += acc[2] + acc[6];
-    res += acc[3] + acc[7];
-    for (a, b) in xt.iter().zip(yt) {
-        res += a * b;
-    }
-    res
+    DVectorView::from_slice(x, x.len()).dot(&DVectorView::from_slice(y, y.len()))
 }
 
 /// The k x k triangular factor R of the weighted observation matrix (Phi_w = Q R), built
@@ -555,11 +529,21 @@ fn absorb_rows(r: &mut DMatrix<f64>, block: &mut [f64], rows: usize) {
 mod tests {
     use super::*;
 
+    /// Uniform in [-1, 1) (xorshift).
     fn random(seed: &mut u64) -> f64 {
         *seed ^= *seed << 13;
         *seed ^= *seed >> 7;
         *seed ^= *seed << 17;
         (*seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+
+    /// Rows `start..start + rows` of `all`, by columns (the layout `absorb_rows` takes).
+    fn block_of(all: &DMatrix<f64>, start: usize, rows: usize) -> Vec<f64> {
+        let mut block = Vec::with_capacity(rows * all.ncols());
+        for c in all.column_iter() {
+            block.extend(c.rows(start, rows).iter());
+        }
+        block
     }
 
     /// Block after block, r stays upper triangular with r^T r = J^T J, and its singular
@@ -576,16 +560,7 @@ mod tests {
         let mut r = DMatrix::<f64>::zeros(k, k);
         let mut done = 0;
         for rows in [7, 3, 7, 1, 7, 1] {
-            let mut block: Vec<f64> = (0..k)
-                .flat_map(|c| {
-                    all.column(c)
-                        .rows(done, rows)
-                        .iter()
-                        .copied()
-                        .collect::<Vec<_>>()
-                })
-                .collect();
-            absorb_rows(&mut r, &mut block, rows);
+            absorb_rows(&mut r, &mut block_of(&all, done, rows), rows);
             done += rows;
         }
         assert_eq!(done, n);
@@ -628,16 +603,7 @@ mod tests {
         let all = DMatrix::from_fn(3, k, |_, c| if c == 0 { 0.0 } else { random(&mut seed) });
         let mut r = DMatrix::<f64>::zeros(k, k);
         for (start, rows) in [(0, 1), (1, 2)] {
-            let mut block: Vec<f64> = (0..k)
-                .flat_map(|c| {
-                    all.column(c)
-                        .rows(start, rows)
-                        .iter()
-                        .copied()
-                        .collect::<Vec<_>>()
-                })
-                .collect();
-            absorb_rows(&mut r, &mut block, rows);
+            absorb_rows(&mut r, &mut block_of(&all, start, rows), rows);
         }
         assert!(r.row(0).iter().all(|&x| x == 0.0) && r.row(1).norm() > 0.0);
         let gram = all.transpose() * &all;
@@ -653,21 +619,15 @@ mod tests {
     fn gram_matches_gemm_tr_to_the_bit() {
         let k = 13;
         let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
         let mut ours = DMatrix::<f64>::zeros(k, k);
         let mut theirs = DMatrix::<f64>::zeros(k, k);
         for rows in (0..=25).chain([BLOCK]) {
-            let j = DMatrix::from_fn(BLOCK, k, |_, _| next() * 1e3);
+            let j = DMatrix::from_fn(BLOCK, k, |_, _| random(&mut seed) * 1e3);
             add_gram_upper(&mut ours, &j, rows);
             let jr = j.rows(0, rows);
             theirs.gemm_tr(1.0, &jr, &jr, 1.0);
         }
-        mirror_upper(&mut ours);
+        ours.fill_lower_triangle_with_upper_triangle();
         assert!(theirs.norm() > 1e6);
         for (a, b) in ours.iter().zip(theirs.iter()) {
             assert_eq!(a.to_bits(), b.to_bits(), "{a} vs {b}");

@@ -93,7 +93,10 @@ pub const ENSEMBLE: usize = 4;
 /// The parameter sets refined when refinement is left to cross-validation (each tried
 /// against none): the full identifiable geometry, and the same with the joints' gravity
 /// compliances (mass-free coefficients where the file has no masses).
-pub const AUTO_REFINE: [&str; 2] = ["full", "full,compliance"];
+pub const AUTO_REFINE: [&str; 2] = ["full", AUTO_COMPLIANCE];
+
+/// The refinement of [`AUTO_REFINE`] with the joints' gravity compliances.
+pub const AUTO_COMPLIANCE: &str = "full,compliance";
 
 /// Relative cross-validated error by which the compliance refinement of [`AUTO_REFINE`]
 /// must beat the best candidate without it to be chosen: it adds up to a hundred mass-free
@@ -316,21 +319,16 @@ pub fn select_settings(
             better(&candidates, chosen, first..candidates.len())
         };
     }
+    // The compliance refinement that cross-validation adds on its own must win by a margin.
+    let auto = matches!(opts.refine, Refine::Auto);
+    let judged = |candidates: &[Candidate], i: usize| {
+        let margin = auto && candidates[i].settings.refine.as_deref() == Some(AUTO_COMPLIANCE);
+        cv_rms(candidates, i) * if margin { 1.0 + COMPLIANCE_MARGIN } else { 1.0 }
+    };
     // Stage 4: refinement, judged for the network it will carry (early in the search, with
     // an unregularised single network, it looked worse where it finally helped 1.3x; judged
     // with one network instead of the ensemble, it lost by 0.6 % where the ensemble kept it
     // 1.1 % better on held-out real data).
-    // The compliance refinement that cross-validation adds on its own must win by a margin.
-    let judged = |candidates: &[Candidate], i: usize| {
-        let auto = matches!(opts.refine, Refine::Auto);
-        let compliance = candidates[i].settings.refine.as_deref() == Some(AUTO_REFINE[1]);
-        let rms = cv_rms(candidates, i);
-        if auto && compliance {
-            rms * (1.0 + COMPLIANCE_MARGIN)
-        } else {
-            rms
-        }
-    };
     if refines.len() > 1 {
         let w = candidates[chosen].settings.clone();
         let first = candidates.len();
