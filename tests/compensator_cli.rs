@@ -377,7 +377,9 @@ fn train_reports_the_repeats_of_its_data() {
 /// on a simulated FANUC unlike the shipped one (gravity compliance on joints 2 and 3 only,
 /// other masses and payload, other gear errors and seeds), the default `train` on the full
 /// geometric model keeps them and lands far below the network on the geometry alone
-/// (measured: full 0.2025 mm -> 0.0462; with `--refine full` 0.0872). On Case D, a rigid
+/// (measured: full 0.2025 mm -> 0.0462), and so does `--refine full` (the same candidates);
+/// `--refine full --compliance off` leaves them out (0.0872: refining the geometry alone
+/// raised the cross-validated error, and the model is kept as given). On Case D, a rigid
 /// robot, the compliances are all screened out and the refinement is not tried twice.
 #[test]
 fn default_refinement_finds_the_compliance_of_a_compliant_robot() {
@@ -516,6 +518,74 @@ phase2_deg = 80.0
         mean("model"),
         mean("+net")
     );
+
+    // `--refine full` leaves the compliances to cross-validation as the default does (the
+    // same candidates, the same compensator); `--compliance off` refines the geometry alone.
+    let (ng_train, ng_test_truth, ng_rcal) = (
+        file("ng_train.csv"),
+        file("ng_test_truth.csv"),
+        file("ng_other_refine.rcal"),
+    );
+    let train = |extra: &[&str], name: &str| {
+        let report = tmp(&format!("ng_other_{name}.json"));
+        let mut args = vec![
+            "train",
+            "--robot",
+            &full,
+            "--data",
+            &ng_train,
+            "--validate",
+            &ng_test_truth,
+            "--out",
+            &ng_rcal,
+        ];
+        args.extend_from_slice(extra);
+        let report_arg = report.to_str().unwrap().to_string();
+        args.extend_from_slice(&["--report", &report_arg]);
+        let o = robocal(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (json(&report), stdout(&o))
+    };
+    let (full_report, full_out) = train(&["--refine", "full"], "refine_full");
+    let full_mean = accuracy(&full_report, "validation", "+net")["position_mm"]["mean"]
+        .as_f64()
+        .unwrap();
+    assert_eq!(full_mean, mean("+net"), "{full_out}");
+    assert!(
+        full_out.contains("added the joints' gravity compliances to the refinement of `full`"),
+        "{full_out}"
+    );
+    let (geometry, geometry_out) = train(&["--refine", "full", "--compliance", "off"], "off");
+    assert_ne!(
+        geometry["training"]["settings"]["refine"], "full,compliance",
+        "{geometry_out}"
+    );
+    assert!(!geometry_out.contains("full,compliance"), "{geometry_out}");
+    let geometry_mean = accuracy(&geometry, "validation", "+net")["position_mm"]["mean"]
+        .as_f64()
+        .unwrap();
+    assert!(geometry_mean > 1.5 * full_mean, "{geometry_out}");
+    for (flags, says) in [
+        (
+            ["--refine", "none", "--compliance", "on"],
+            "not with --refine none",
+        ),
+        (
+            ["--refine", "full,compliance", "--compliance", "off"],
+            "give one",
+        ),
+    ] {
+        let mut args = vec![
+            "train", "--robot", &full, "--data", &ng_train, "--out", &ng_rcal,
+        ];
+        args.extend_from_slice(&flags);
+        let o = robocal(&args);
+        assert!(
+            !o.status.success() && stderr(&o).contains(says),
+            "{}",
+            stderr(&o)
+        );
+    }
 
     let offsets = tmp("d_offsets_dedup.toml");
     common::identify_case_d(&offsets, &["--params", "offsets"]);

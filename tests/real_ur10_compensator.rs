@@ -291,6 +291,13 @@ fn readme_table_series_b() {
         (
             "`--refine full`",
             CompensatorOptions {
+                refine: Refine::ParamsAutoCompliance("full".into()),
+                ..d()
+            },
+        ),
+        (
+            "`--refine full --compliance off`",
+            CompensatorOptions {
                 refine: Refine::Params("full".into()),
                 ..d()
             },

@@ -8,6 +8,17 @@ use robocal::neural::compensator::{CompensatorOptions, Refine};
 use robocal::neural::encoding::Encoding;
 use robocal::neural::train::{Epoch, Phase2, Progress, TrainOptions};
 
+/// Whether refinement adds the joints' gravity compliances, on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ComplianceArg {
+    /// Cross-validation decides: kept only where they lower the held-out error by 2 % or more.
+    Auto,
+    /// Always refined with the other parameters.
+    On,
+    /// Never.
+    Off,
+}
+
 /// Input encodings on the command line.
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum EncodingArg {
@@ -60,13 +71,18 @@ pub struct CompensatorArgs {
     #[arg(long)]
     pub members: Option<usize>,
     /// Model parameters re-estimated on the training rows before the network is trained
-    /// (exact identification): `auto` (cross-validation decides among none, `full` and
-    /// `full,compliance`, the joints' gravity compliances kept only where they lower the
-    /// cross-validated error by 2 % or more), `none`, or a selection as for identify
-    /// (`offsets`, `full`, `full,compliance`, names), kept only where cross-validation shows
-    /// it lowers the held-out error.
+    /// (exact identification): `auto` (the same as `full`), `none`, or a selection as for
+    /// identify (`offsets`, `full`, `full,compliance`, names). Cross-validation decides
+    /// among no refinement, the selection, and (see --compliance) the selection with the
+    /// joints' gravity compliances.
     #[arg(long, default_value = "auto")]
     pub refine: String,
+    /// Whether the refinement adds the joints' gravity compliances (c1..cN where the robot
+    /// file has masses, else mass-free coefficients): `auto` (tried, and kept only where they
+    /// lower the cross-validated error by 2 % or more), `on`, or `off`. A selection that
+    /// names the compliances refines them as named.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub compliance: ComplianceArg,
     /// Cross-validation folds (2 to 20). Default: 5, or 4 from 1500 distinct configurations.
     #[arg(long)]
     pub folds: Option<usize>,
@@ -162,10 +178,24 @@ impl CompensatorArgs {
                 self.outlier_k
             );
         }
-        let refine = match self.refine.as_str() {
-            "auto" => Refine::Auto,
-            "none" => Refine::Off,
-            spec => Refine::Params(spec.to_string()),
+        let names_compliance = self.refine.split(',').any(|s| s.trim() == "compliance");
+        let refine = match (self.refine.as_str(), self.compliance) {
+            ("none", ComplianceArg::On) => {
+                bail!("--compliance on refines the compliances: not with --refine none")
+            }
+            ("none", _) => Refine::Off,
+            (_, ComplianceArg::Off) if names_compliance => bail!(
+                "--refine {} names the compliances and --compliance off leaves them out: give one",
+                self.refine
+            ),
+            ("auto", ComplianceArg::Auto) => Refine::Auto,
+            ("auto", ComplianceArg::On) => Refine::Params("full,compliance".into()),
+            ("auto", ComplianceArg::Off) => Refine::Params("full".into()),
+            (spec, ComplianceArg::Auto) => Refine::ParamsAutoCompliance(spec.to_string()),
+            (spec, ComplianceArg::On) if !names_compliance => {
+                Refine::Params(format!("{spec},compliance"))
+            }
+            (spec, _) => Refine::Params(spec.to_string()),
         };
         if let Some(n @ (Network::Rbf | Network::Mix)) = self.network
             && self.form == Some(Form::Joint)

@@ -167,6 +167,11 @@ pub enum Refine {
     /// These parameters (a selection as for `identify`); kept only where cross-validation
     /// shows that refinement lowers the held-out error.
     Params(String),
+    /// These parameters, alone or with the joints' gravity compliances: cross-validation
+    /// decides among none, these, and these with the compliances (the latter kept only by
+    /// [`super::tuning::COMPLIANCE_MARGIN`]). A selection that names compliances already is
+    /// [`Refine::Params`]. [`Refine::Auto`] is this for `full`.
+    ParamsAutoCompliance(String),
 }
 
 /// How to build a compensator: each choice left None is made by cross-validation.

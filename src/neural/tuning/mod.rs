@@ -105,6 +105,17 @@ pub const AUTO_COMPLIANCE: &str = "full,compliance";
 /// tried); on a real UR10 pool of 2000 rows it won by 0.3 %, which is no evidence.
 pub const COMPLIANCE_MARGIN: f64 = 0.02;
 
+/// `spec` with the joints' gravity compliances added, or None where it selects some already
+/// (or does not parse: the refinement reports that).
+fn with_compliance(robot: &Robot, spec: &str) -> Option<String> {
+    let (completed, chosen, _) = crate::identify::candidates(robot, spec).ok()?;
+    let params = completed.parameters();
+    let has = chosen
+        .iter()
+        .any(|&i| crate::identify::select::is_compliance(&params[i]));
+    (!has).then(|| format!("{spec},compliance"))
+}
+
 /// The settings to fit: `opts`'s fixed choices, the rest chosen by cross-validation on `set`
 /// (None when nothing was left to choose).
 pub fn select_settings(
@@ -115,6 +126,7 @@ pub fn select_settings(
 ) -> Result<(Settings, Option<Selection>)> {
     let Space {
         refines,
+        auto_compliance,
         rbf_only,
         mix_only,
         forms,
@@ -125,7 +137,7 @@ pub fn select_settings(
         rbf_start,
         try_rbf,
         open,
-    } = Space::of(opts, set)?;
+    } = Space::of(robot, opts, set)?;
     if !open {
         // Nothing to choose (a fixed mix keeps, output by output, the start of highest
         // likelihood).
@@ -172,7 +184,6 @@ pub fn select_settings(
     // candidate: left out before anything is fitted with it.
     let mut refined: Vec<Vec<Result<Robot>>> = Vec::new();
     let mut refines = refines;
-    let asked = refines.len();
     refines.retain(|spec| {
         let models = parallel_map(k, |f| cv.model(f, spec));
         let repeated = refined
@@ -320,9 +331,8 @@ pub fn select_settings(
         };
     }
     // The compliance refinement that cross-validation adds on its own must win by a margin.
-    let auto = matches!(opts.refine, Refine::Auto);
     let judged = |candidates: &[Candidate], i: usize| {
-        let margin = auto && candidates[i].settings.refine.as_deref() == Some(AUTO_COMPLIANCE);
+        let margin = auto_compliance.is_some() && candidates[i].settings.refine == auto_compliance;
         cv_rms(candidates, i) * if margin { 1.0 + COMPLIANCE_MARGIN } else { 1.0 }
     };
     // Stage 4: refinement, judged for the network it will carry (early in the search, with
@@ -369,18 +379,25 @@ pub fn select_settings(
                 .into(),
         );
     }
-    if let Refine::Params(spec) = &opts.refine
-        && refines.len() < asked
-    {
-        notes.push(format!(
-            "refining `{spec}` changes nothing on these rows: the model is kept as given"
-        ));
-    } else if let Refine::Params(spec) = &opts.refine
-        && winner.refine.is_none()
-    {
-        notes.push(format!(
-            "refining `{spec}` raised the cross-validated error: the model is kept as given"
-        ));
+    if let Refine::Params(spec) | Refine::ParamsAutoCompliance(spec) = &opts.refine {
+        let kept = |r: &Option<String>| r.is_some() && refines.contains(r);
+        if !kept(&Some(spec.clone())) && !kept(&auto_compliance) {
+            notes.push(format!(
+                "refining `{spec}` changes nothing on these rows: the model is kept as given"
+            ));
+        } else if winner.refine.is_none() {
+            notes.push(format!(
+                "refining `{spec}` raised the cross-validated error: the model is kept as given"
+            ));
+        } else if matches!(opts.refine, Refine::ParamsAutoCompliance(_))
+            && winner.refine == auto_compliance
+        {
+            notes.push(format!(
+                "cross-validation added the joints' gravity compliances to the refinement of \
+                 `{spec}`: they lowered its cross-validated error by {:.0} % or more",
+                COMPLIANCE_MARGIN * 100.0
+            ));
+        }
     }
     let rbf_hyper = if winner.has_rbf() {
         cv.hyper(winner.encoding, winner.rbf_start.unwrap_or(0))
@@ -448,6 +465,9 @@ pub fn select_settings(
 /// settings it starts from, and whether anything is open at all.
 struct Space {
     refines: Vec<Option<String>>,
+    /// The refinement with the joints' gravity compliances that cross-validation adds on its
+    /// own (kept only by [`COMPLIANCE_MARGIN`]).
+    auto_compliance: Option<String>,
     rbf_only: bool,
     mix_only: bool,
     forms: Vec<Form>,
@@ -462,13 +482,20 @@ struct Space {
 }
 
 impl Space {
-    fn of(opts: &CompensatorOptions, set: &MeasurementSet) -> Result<Space> {
-        let refines: Vec<Option<String>> = match &opts.refine {
-            Refine::Off => vec![None],
-            Refine::Auto => std::iter::once(None)
-                .chain(AUTO_REFINE.iter().map(|r| Some(r.to_string())))
-                .collect(),
-            Refine::Params(p) => vec![None, Some(p.clone())],
+    fn of(robot: &Robot, opts: &CompensatorOptions, set: &MeasurementSet) -> Result<Space> {
+        let (refines, auto_compliance) = match &opts.refine {
+            Refine::Off => (vec![None], None),
+            Refine::Auto => (
+                std::iter::once(None)
+                    .chain(AUTO_REFINE.iter().map(|r| Some(r.to_string())))
+                    .collect(),
+                Some(AUTO_COMPLIANCE.to_string()),
+            ),
+            Refine::Params(p) => (vec![None, Some(p.clone())], None),
+            Refine::ParamsAutoCompliance(p) => match with_compliance(robot, p) {
+                Some(c) => (vec![None, Some(p.clone()), Some(c.clone())], Some(c)),
+                None => (vec![None, Some(p.clone())], None),
+            },
         };
         let rbf_only = opts.network == Some(Network::Rbf);
         let mix_only = opts.network == Some(Network::Mix);
@@ -535,6 +562,7 @@ impl Space {
             || try_rbf;
         Ok(Space {
             refines,
+            auto_compliance,
             rbf_only,
             mix_only,
             forms,
