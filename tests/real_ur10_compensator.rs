@@ -291,7 +291,7 @@ fn readme_table_series_b() {
         (
             "`--refine full`",
             CompensatorOptions {
-                refine: Refine::ParamsAutoCompliance("full".into()),
+                refine: Refine::Params("full".into()),
                 ..d()
             },
         ),
@@ -299,6 +299,7 @@ fn readme_table_series_b() {
             "`--refine full --compliance off`",
             CompensatorOptions {
                 refine: Refine::Params("full".into()),
+                compliance: Some(false),
                 ..d()
             },
         ),

@@ -11,11 +11,11 @@ use robocal::neural::train::{Epoch, Phase2, Progress, TrainOptions};
 /// Whether refinement adds the joints' gravity compliances, on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ComplianceArg {
-    /// Cross-validation decides: kept only where they lower the held-out error by 2 % or more.
+    /// Tried, and kept only where they lower the cross-validated error by 2 % or more.
     Auto,
-    /// Always refined with the other parameters.
+    /// Added to the selection (cross-validation still decides whether to refine at all).
     On,
-    /// Never.
+    /// Not added.
     Off,
 }
 
@@ -71,16 +71,17 @@ pub struct CompensatorArgs {
     #[arg(long)]
     pub members: Option<usize>,
     /// Model parameters re-estimated on the training rows before the network is trained
-    /// (exact identification): `auto` (the same as `full`), `none`, or a selection as for
-    /// identify (`offsets`, `full`, `full,compliance`, names). Cross-validation decides
-    /// among no refinement, the selection, and (see --compliance) the selection with the
-    /// joints' gravity compliances.
+    /// (exact identification): `auto`, `none`, or a selection as for identify (`offsets`,
+    /// `full`, `full,compliance`, names). Cross-validation decides among no refinement, the
+    /// selection, and (see --compliance) the selection with the joints' gravity
+    /// compliances. `auto`: in `train` the selection `full`; in `case-d` each model's own
+    /// parameters (without compliances unless --compliance on).
     #[arg(long, default_value = "auto")]
     pub refine: String,
     /// Whether the refinement adds the joints' gravity compliances (c1..cN where the robot
-    /// file has masses, else mass-free coefficients): `auto` (tried, and kept only where they
-    /// lower the cross-validated error by 2 % or more), `on`, or `off`. A selection that
-    /// names the compliances refines them as named.
+    /// file has masses, else mass-free coefficients) to a selection that names none: `auto`
+    /// (tried, and kept only where they lower the cross-validated error by 2 % or more), `on`,
+    /// or `off`. A selection that names compliances refines them as named (not with `off`).
     #[arg(long, value_enum, default_value = "auto")]
     pub compliance: ComplianceArg,
     /// Cross-validation folds (2 to 20). Default: 5, or 4 from 1500 distinct configurations.
@@ -178,25 +179,26 @@ impl CompensatorArgs {
                 self.outlier_k
             );
         }
-        let names_compliance = self.refine.split(',').any(|s| s.trim() == "compliance");
-        let refine = match (self.refine.as_str(), self.compliance) {
-            ("none", ComplianceArg::On) => {
-                bail!("--compliance on refines the compliances: not with --refine none")
-            }
-            ("none", _) => Refine::Off,
-            (_, ComplianceArg::Off) if names_compliance => bail!(
+        let refine = match self.refine.as_str() {
+            "auto" => Refine::Auto,
+            "none" => Refine::Off,
+            spec => Refine::Params(spec.to_string()),
+        };
+        let compliance = match self.compliance {
+            ComplianceArg::Auto => None,
+            ComplianceArg::On => Some(true),
+            ComplianceArg::Off => Some(false),
+        };
+        if refine == Refine::Off && compliance == Some(true) {
+            bail!("--compliance on refines the compliances: not with --refine none");
+        }
+        // The group by name here; named compliances (`c2`) against the robot in `train`.
+        if compliance == Some(false) && self.refine.split(',').any(|s| s.trim() == "compliance") {
+            bail!(
                 "--refine {} names the compliances and --compliance off leaves them out: give one",
                 self.refine
-            ),
-            ("auto", ComplianceArg::Auto) => Refine::Auto,
-            ("auto", ComplianceArg::On) => Refine::Params("full,compliance".into()),
-            ("auto", ComplianceArg::Off) => Refine::Params("full".into()),
-            (spec, ComplianceArg::Auto) => Refine::ParamsAutoCompliance(spec.to_string()),
-            (spec, ComplianceArg::On) if !names_compliance => {
-                Refine::Params(format!("{spec},compliance"))
-            }
-            (spec, _) => Refine::Params(spec.to_string()),
-        };
+            );
+        }
         if let Some(n @ (Network::Rbf | Network::Mix)) = self.network
             && self.form == Some(Form::Joint)
         {
@@ -232,6 +234,7 @@ impl CompensatorArgs {
             penalty: self.penalty,
             members: self.members,
             refine,
+            compliance,
             sigmas,
             folds: self.folds,
             train: TrainOptions {

@@ -3,16 +3,16 @@
 use super::compensator_args::{CompensatorArgs, progress_bar};
 use super::data_args::{DataArgs, SigmaArgs};
 use super::summary::{print_stats, write_report};
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use robocal::evaluate::{row_errors, summarize};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
-use robocal::neural::compensator::{Compensator, Network};
+use robocal::neural::compensator::{Compensator, Network, Refine};
 use robocal::neural::predict::PredictWorkspace;
 use robocal::neural::train::Phase2;
 use robocal::neural::tuning::RACE_FOLDS;
-use robocal::neural::tuning::{Score, Selection};
+use robocal::neural::tuning::{Score, Selection, names_compliance};
 use robocal::plot::{ErrorRun, error_figures, training_figure};
 use robocal::reports::{Accuracy, Report, TrainReport};
 use std::io::IsTerminal;
@@ -201,6 +201,11 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     )?;
     let terminal = std::io::stderr().is_terminal();
     let opts = a.build.options(a.sigma.sigmas(), terminal)?;
+    if let (Refine::Params(spec), Some(false)) = (&opts.refine, opts.compliance)
+        && names_compliance(&robot, spec) == Some(true)
+    {
+        bail!("--refine {spec} names compliances and --compliance off leaves them out: give one");
+    }
     let bar = progress_bar(terminal);
     let started = std::time::Instant::now();
     let (c, report) = Compensator::train(&robot, &set, &opts, &|done, total| {

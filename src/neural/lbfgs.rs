@@ -48,6 +48,9 @@ pub fn minimize(
     let mut pairs: VecDeque<(DVector<f64>, DVector<f64>, f64)> = VecDeque::with_capacity(memory);
     let mut alpha = vec![0.0; memory];
     let (mut d, mut x_new, mut g_new) = (DVector::zeros(n), DVector::zeros(n), DVector::zeros(n));
+    // The next pair's storage: the pair dropped from a full memory, or one not kept, is
+    // written again (no allocation once the memory is full).
+    let mut spare: Option<(DVector<f64>, DVector<f64>)> = None;
     for iter in 1..=max_iter {
         if g.amax() < min_grad {
             return (x, fx, LbfgsStop::MinGradient);
@@ -99,14 +102,23 @@ pub fn minimize(
             pairs.clear();
             continue;
         };
-        let s = &x_new - &x;
-        let y = &g_new - &g;
+        let (mut s, mut y) = spare
+            .take()
+            .unwrap_or_else(|| (DVector::zeros(n), DVector::zeros(n)));
+        s.copy_from(&x_new);
+        s -= &x;
+        y.copy_from(&g_new);
+        y -= &g;
         let sy = s.dot(&y);
         if sy > 1e-12 * s.norm() * y.norm() {
-            if pairs.len() == memory {
-                pairs.pop_front();
+            if pairs.len() == memory
+                && let Some((old_s, old_y, _)) = pairs.pop_front()
+            {
+                spare = Some((old_s, old_y));
             }
             pairs.push_back((s, y, 1.0 / sy));
+        } else {
+            spare = Some((s, y));
         }
         std::mem::swap(&mut x, &mut x_new);
         std::mem::swap(&mut g, &mut g_new);

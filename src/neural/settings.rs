@@ -158,20 +158,18 @@ impl Settings {
 /// Whether to re-estimate model parameters with the network.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Refine {
-    /// Cross-validation decides among no refinement, the full identifiable set, and the
-    /// full set with the joints' gravity compliances
-    /// ([`super::tuning::AUTO_REFINE`], [`super::tuning::COMPLIANCE_MARGIN`]).
+    /// [`Refine::Params`] of the full identifiable set ([`super::tuning::AUTO_REFINE`]):
+    /// cross-validation decides among no refinement, the full set, and (unless
+    /// [`CompensatorOptions::compliance`] says otherwise) the full set with the joints'
+    /// gravity compliances ([`super::tuning::COMPLIANCE_MARGIN`]).
     Auto,
     /// Never.
     Off,
-    /// These parameters (a selection as for `identify`); kept only where cross-validation
-    /// shows that refinement lowers the held-out error.
+    /// These parameters (a selection as for `identify`), with the joints' gravity
+    /// compliances as [`CompensatorOptions::compliance`] says; kept only where
+    /// cross-validation shows that refinement lowers the held-out error. [`Refine::Auto`] is
+    /// this for `full`.
     Params(String),
-    /// These parameters, alone or with the joints' gravity compliances: cross-validation
-    /// decides among none, these, and these with the compliances (the latter kept only by
-    /// [`super::tuning::COMPLIANCE_MARGIN`]). A selection that names compliances already is
-    /// [`Refine::Params`]. [`Refine::Auto`] is this for `full`.
-    ParamsAutoCompliance(String),
 }
 
 /// How to build a compensator: each choice left None is made by cross-validation.
@@ -196,6 +194,12 @@ pub struct CompensatorOptions {
     pub members: Option<usize>,
     /// Whether and which model parameters to re-estimate before training.
     pub refine: Refine,
+    /// Whether the refinement adds the joints' gravity compliances (c1..cN where the model
+    /// has masses, else the mass-free coefficients) to a selection that names none: None
+    /// lets cross-validation decide (kept only by [`super::tuning::COMPLIANCE_MARGIN`]),
+    /// `Some(true)` always adds them, `Some(false)` never does (and refuses a selection that
+    /// names some).
+    pub compliance: Option<bool>,
     /// Tracker sigmas for rows that carry none (refinement).
     pub sigmas: Sigmas,
     /// Cross-validation folds; None: 5, or 4 from 1500 distinct configurations.
@@ -225,6 +229,7 @@ impl Default for CompensatorOptions {
             penalty: None,
             members: None,
             refine: Refine::Auto,
+            compliance: None,
             sigmas: Sigmas::default(),
             folds: None,
             train: TrainOptions::default(),
@@ -247,6 +252,8 @@ impl CompensatorOptions {
             penalty: Some(settings.penalty),
             members: Some(settings.members),
             refine: settings.refine.clone().map_or(Refine::Off, Refine::Params),
+            // The chosen refinement names its compliances where it has them.
+            compliance: Some(false),
             train,
             budget: false,
             ..Default::default()

@@ -225,12 +225,14 @@ pub fn run_set(
                 None,
             );
         }
-        let o = CompensatorOptions {
-            refine: match &opts.refine {
-                Refine::Auto => Refine::Params(params.trim_end_matches(",compliance").into()),
-                explicit => explicit.clone(),
+        // Auto: each row refines its own parameters, its compliances only when asked.
+        let o = match &opts.refine {
+            Refine::Auto => CompensatorOptions {
+                refine: Refine::Params(params.trim_end_matches(",compliance").into()),
+                compliance: Some(opts.compliance.unwrap_or(false)),
+                ..opts.clone()
             },
-            ..opts.clone()
+            _ => opts.clone(),
         };
         let (c, report) = Compensator::train(&model, &data.training, &o, &|_, _| {})?;
         let mut ws = PredictWorkspace::default();

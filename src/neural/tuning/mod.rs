@@ -90,30 +90,95 @@ pub const RBF_MAX_ROWS: usize = 3000;
 
 /// Ensemble size tried against a single network when not fixed.
 pub const ENSEMBLE: usize = 4;
-/// The parameter sets refined when refinement is left to cross-validation (each tried
-/// against none): the full identifiable geometry, and the same with the joints' gravity
-/// compliances (mass-free coefficients where the file has no masses).
-pub const AUTO_REFINE: [&str; 2] = ["full", AUTO_COMPLIANCE];
+/// The selection refined when refinement is left to cross-validation ([`Refine::Auto`]):
+/// the full identifiable geometry, tried against none and, unless
+/// [`CompensatorOptions::compliance`] says otherwise, with the joints' gravity compliances
+/// (mass-free coefficients where the file has no masses).
+pub const AUTO_REFINE: &str = "full";
 
-/// The refinement of [`AUTO_REFINE`] with the joints' gravity compliances.
-pub const AUTO_COMPLIANCE: &str = "full,compliance";
-
-/// Relative cross-validated error by which the compliance refinement of [`AUTO_REFINE`]
-/// must beat the best candidate without it to be chosen: it adds up to a hundred mass-free
+/// Relative cross-validated error by which a refinement with the joints' gravity compliances
+/// that cross-validation adds on its own ([`CompensatorOptions::compliance`] None) must beat
+/// the best candidate without it to be chosen: it adds up to a hundred mass-free
 /// coefficients, and a choice among more candidates is more optimistic. Where gravity
 /// bends the joints it wins by far more (by 23 to 62 % on the simulated compliant robots
 /// tried); on a real UR10 pool of 2000 rows it won by 0.3 %, which is no evidence.
 pub const COMPLIANCE_MARGIN: f64 = 0.02;
 
-/// `spec` with the joints' gravity compliances added, or None where it selects some already
-/// (or does not parse: the refinement reports that).
-fn with_compliance(robot: &Robot, spec: &str) -> Option<String> {
+/// Whether selection `spec` names compliance parameters of `robot` (None where it does not
+/// parse: the refinement reports that).
+pub fn names_compliance(robot: &Robot, spec: &str) -> Option<bool> {
     let (completed, chosen, _) = crate::identify::candidates(robot, spec).ok()?;
     let params = completed.parameters();
-    let has = chosen
-        .iter()
-        .any(|&i| crate::identify::select::is_compliance(&params[i]));
-    (!has).then(|| format!("{spec},compliance"))
+    Some(
+        chosen
+            .iter()
+            .any(|&i| crate::identify::select::is_compliance(&params[i])),
+    )
+}
+
+/// The refinements tried for selection `spec` (besides none), and the one cross-validation
+/// added the joints' gravity compliances to on its own (judged by [`COMPLIANCE_MARGIN`]):
+/// `spec` alone where it names compliances (they are refined as named) or `compliance` is
+/// `Some(false)`; `spec` with them where `Some(true)`; both where None.
+fn refinements(
+    robot: &Robot,
+    spec: &str,
+    compliance: Option<bool>,
+) -> (Vec<Option<String>>, Option<String>) {
+    let with = format!("{spec},compliance");
+    match (names_compliance(robot, spec), compliance) {
+        (Some(true) | None, _) | (_, Some(false)) => (vec![None, Some(spec.into())], None),
+        (Some(false), Some(true)) => (vec![None, Some(with)], None),
+        (Some(false), None) => (
+            vec![None, Some(spec.into()), Some(with.clone())],
+            Some(with),
+        ),
+    }
+}
+
+/// What to tell about the refinements asked for, `tried` (besides none; `added`, if any, is
+/// the one with the compliances cross-validation added on its own): which changed the model
+/// on some fold (`kept`: the others were left out) and what was chosen (`winner`).
+fn refinement_notes(
+    tried: &[String],
+    kept: &[Option<String>],
+    added: Option<&str>,
+    winner: Option<&str>,
+) -> Vec<String> {
+    let changes = |r: &str| kept.iter().any(|k| k.as_deref() == Some(r));
+    let Some(first) = tried.first() else {
+        return Vec::new();
+    };
+    let mut notes = Vec::new();
+    if !tried.iter().any(|t| changes(t)) {
+        notes.push(format!(
+            "refining `{first}` changes nothing on these rows: the model is kept as given"
+        ));
+        return notes;
+    }
+    let added_changes = added.is_some_and(changes);
+    if added.is_some() && !changes(first) {
+        notes.push(format!(
+            "refining `{first}` alone changes nothing on these rows"
+        ));
+    }
+    let margin = COMPLIANCE_MARGIN * 100.0;
+    match winner {
+        None if added_changes => notes.push(format!(
+            "refining `{first}` did not lower the cross-validated error (with the joints' \
+             gravity compliances, not by {margin:.0} % or more): the model is kept as given"
+        )),
+        None => notes.push(format!(
+            "refining `{first}` did not lower the cross-validated error: the model is kept as \
+             given"
+        )),
+        Some(w) if Some(w) == added => notes.push(format!(
+            "cross-validation added the joints' gravity compliances to the refinement of \
+             `{first}`: they lowered its cross-validated error by {margin:.0} % or more"
+        )),
+        Some(_) => {}
+    }
+    notes
 }
 
 /// The settings to fit: `opts`'s fixed choices, the rest chosen by cross-validation on `set`
@@ -184,6 +249,7 @@ pub fn select_settings(
     // candidate: left out before anything is fitted with it.
     let mut refined: Vec<Vec<Result<Robot>>> = Vec::new();
     let mut refines = refines;
+    let tried: Vec<String> = refines.iter().flatten().cloned().collect();
     refines.retain(|spec| {
         let models = parallel_map(k, |f| cv.model(f, spec));
         let repeated = refined
@@ -379,25 +445,13 @@ pub fn select_settings(
                 .into(),
         );
     }
-    if let Refine::Params(spec) | Refine::ParamsAutoCompliance(spec) = &opts.refine {
-        let kept = |r: &Option<String>| r.is_some() && refines.contains(r);
-        if !kept(&Some(spec.clone())) && !kept(&auto_compliance) {
-            notes.push(format!(
-                "refining `{spec}` changes nothing on these rows: the model is kept as given"
-            ));
-        } else if winner.refine.is_none() {
-            notes.push(format!(
-                "refining `{spec}` raised the cross-validated error: the model is kept as given"
-            ));
-        } else if matches!(opts.refine, Refine::ParamsAutoCompliance(_))
-            && winner.refine == auto_compliance
-        {
-            notes.push(format!(
-                "cross-validation added the joints' gravity compliances to the refinement of \
-                 `{spec}`: they lowered its cross-validated error by {:.0} % or more",
-                COMPLIANCE_MARGIN * 100.0
-            ));
-        }
+    if matches!(opts.refine, Refine::Params(_)) {
+        notes.extend(refinement_notes(
+            &tried,
+            &refines,
+            auto_compliance.as_deref(),
+            winner.refine.as_deref(),
+        ));
     }
     let rbf_hyper = if winner.has_rbf() {
         cv.hyper(winner.encoding, winner.rbf_start.unwrap_or(0))
@@ -484,18 +538,16 @@ struct Space {
 impl Space {
     fn of(robot: &Robot, opts: &CompensatorOptions, set: &MeasurementSet) -> Result<Space> {
         let (refines, auto_compliance) = match &opts.refine {
+            Refine::Off if opts.compliance == Some(true) => {
+                return Err(Error::Invalid(
+                    "the joints' gravity compliances are refined with a selection: not without \
+                     refinement"
+                        .into(),
+                ));
+            }
             Refine::Off => (vec![None], None),
-            Refine::Auto => (
-                std::iter::once(None)
-                    .chain(AUTO_REFINE.iter().map(|r| Some(r.to_string())))
-                    .collect(),
-                Some(AUTO_COMPLIANCE.to_string()),
-            ),
-            Refine::Params(p) => (vec![None, Some(p.clone())], None),
-            Refine::ParamsAutoCompliance(p) => match with_compliance(robot, p) {
-                Some(c) => (vec![None, Some(p.clone()), Some(c.clone())], Some(c)),
-                None => (vec![None, Some(p.clone())], None),
-            },
+            Refine::Auto => refinements(robot, AUTO_REFINE, opts.compliance),
+            Refine::Params(p) => refinements(robot, p, opts.compliance),
         };
         let rbf_only = opts.network == Some(Network::Rbf);
         let mix_only = opts.network == Some(Network::Mix);
@@ -785,5 +837,88 @@ mod tests {
         assert_eq!(significant3(30.000000000000004), 30.0);
         assert_eq!(budget_epochs(FIT_WORK, 2000, 50, 60), 50);
         assert_eq!(budget_epochs(FIT_WORK, 150, 50, 60), 60);
+    }
+
+    #[test]
+    fn refinements_add_the_compliances_as_asked() {
+        let robot = crate::model::read_robot(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/ur10.toml"),
+        )
+        .unwrap();
+        let s = |v: &[&str]| -> Vec<Option<String>> {
+            std::iter::once(None)
+                .chain(v.iter().map(|x| Some(x.to_string())))
+                .collect()
+        };
+        let with = Some("full,compliance".to_string());
+        assert_eq!(
+            refinements(&robot, "full", None),
+            (s(&["full", "full,compliance"]), with.clone())
+        );
+        assert_eq!(
+            refinements(&robot, "full", Some(false)),
+            (s(&["full"]), None)
+        );
+        assert_eq!(
+            refinements(&robot, "full", Some(true)),
+            (s(&["full,compliance"]), None)
+        );
+        // Named compliances are refined as named, whatever the flag.
+        for c in [None, Some(true), Some(false)] {
+            assert_eq!(
+                refinements(&robot, "full,k2.mx3", c),
+                (s(&["full,k2.mx3"]), None)
+            );
+        }
+        assert_eq!(names_compliance(&robot, "offsets"), Some(false));
+        assert_eq!(names_compliance(&robot, "offsets,compliance"), Some(true));
+        assert_eq!(names_compliance(&robot, "no_such_parameter"), None);
+    }
+
+    #[test]
+    fn refinement_notes_say_what_changed_and_what_was_kept() {
+        let t = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+        let k = |v: &[&str]| -> Vec<Option<String>> {
+            std::iter::once(None)
+                .chain(v.iter().map(|x| Some(x.to_string())))
+                .collect()
+        };
+        let both = t(&["full", "full,compliance"]);
+        let added = Some("full,compliance");
+        let one = |n: Vec<String>| {
+            assert_eq!(n.len(), 1, "{n:?}");
+            n[0].clone()
+        };
+        // Nothing changed the model.
+        let n = one(refinement_notes(&both, &k(&[]), added, None));
+        assert!(n.contains("`full` changes nothing"), "{n}");
+        // The geometry alone changed nothing; the compliances did, and lost by the margin.
+        let n = refinement_notes(&both, &k(&["full,compliance"]), added, None);
+        assert_eq!(n.len(), 2, "{n:?}");
+        assert!(n[0].contains("`full` alone changes nothing"), "{n:?}");
+        assert!(n[1].contains("not by 2 % or more"), "{n:?}");
+        // ... or won.
+        let n = refinement_notes(&both, &k(&["full,compliance"]), added, added);
+        assert_eq!(n.len(), 2, "{n:?}");
+        assert!(
+            n[1].contains("added the joints' gravity compliances"),
+            "{n:?}"
+        );
+        // Both changed it; the geometry was kept: nothing to tell.
+        let n = refinement_notes(&both, &k(&["full", "full,compliance"]), added, Some("full"));
+        assert!(n.is_empty(), "{n:?}");
+        // A fixed selection that did not lower the error.
+        let n = one(refinement_notes(
+            &t(&["offsets"]),
+            &k(&["offsets"]),
+            None,
+            None,
+        ));
+        assert!(
+            n.contains("`offsets` did not lower") && !n.contains("2 %"),
+            "{n}"
+        );
+        let n = one(refinement_notes(&t(&["offsets"]), &k(&[]), None, None));
+        assert!(n.contains("`offsets` changes nothing"), "{n}");
     }
 }
