@@ -41,7 +41,8 @@ const CACHED: usize = 8;
 /// totals, then the torques beside the deflected chain); mass-free coefficients one more
 /// walk per joint (the bodies it carries). Each joint's sine and cosine are computed once
 /// (for the first [`CACHED`] joints), the deflected joint's from them
-/// (`Chain::deflected`).
+/// (`Chain::deflected`); so are the commanded frames and the centres of mass of the first
+/// pass, which the second reads again.
 fn compliant_tool_pose(robot: &Robot, q: &[f64]) -> Pose {
     let chain = robot.chain();
     let Some(c) = robot.compliance() else {
@@ -62,23 +63,37 @@ fn compliant_tool_pose(robot: &Robot, q: &[f64]) -> Pose {
     let masses = robot.masses();
     let g = world_gravity(robot);
     let (mut mass, mut moment) = (0.0, nalgebra::Vector3::zeros());
+    // The first pass's commanded joint frames and centres of mass (world, mm).
+    let mut frames = [Pose::identity(); CACHED];
+    let mut coms = [nalgebra::Vector3::zeros(); CACHED];
     let mut t = chain.head;
     if let Some(m) = masses {
         for (i, link) in chain.links.iter().enumerate() {
             apply_motion(&mut t, motion(i));
             let b = &m.links[i];
             mass += b.mass_kg;
-            moment += t.transform_point(&b.com_mm.into()).coords * b.mass_kg;
+            let com = t.transform_point(&b.com_mm.into()).coords;
+            moment += com * b.mass_kg;
+            if i < CACHED {
+                frames[i] = t;
+                coms[i] = com;
+            }
             t *= link.next;
         }
         mass += m.payload.mass_kg;
         moment += t.transform_point(&m.payload.com_mm.into()).coords * m.payload.mass_kg;
     }
     let moments = c.has_moments();
+    // Frames the first pass kept are read again: the same operations gave them.
+    let kept = |i: usize| masses.is_some() && i < CACHED;
     let (mut rigid, mut loaded) = (chain.head, chain.head);
     for (i, link) in chain.links.iter().enumerate() {
         let commanded = motion(i);
-        apply_motion(&mut rigid, commanded);
+        if kept(i) {
+            rigid = frames[i];
+        } else {
+            apply_motion(&mut rigid, commanded);
+        }
         let z = rigid.rotation.matrix().column(2).into();
         let o = rigid.translation.vector;
         let mut dq = 0.0;
@@ -87,7 +102,12 @@ fn compliant_tool_pose(robot: &Robot, q: &[f64]) -> Pose {
             dq = c.joint(i) * tau;
             let b = &m.links[i];
             mass -= b.mass_kg;
-            moment -= rigid.transform_point(&b.com_mm.into()).coords * b.mass_kg;
+            let com = if kept(i) {
+                coms[i]
+            } else {
+                rigid.transform_point(&b.com_mm.into()).coords
+            };
+            moment -= com * b.mass_kg;
         }
         if moments {
             // The bodies joint i carries: its own frame on, walked again from it.
@@ -106,7 +126,9 @@ fn compliant_tool_pose(robot: &Robot, q: &[f64]) -> Pose {
             dq += moment_deflection(!link.prismatic, &z, &o, km, &ks, &kh, &g);
         }
         apply_motion(&mut loaded, chain.deflected(i, commanded, dq));
-        rigid *= link.next;
+        if !kept(i + 1) {
+            rigid *= link.next;
+        }
         loaded *= link.next;
     }
     loaded
