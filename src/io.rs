@@ -91,6 +91,13 @@ struct Transaction {
 
 thread_local! {
     static OPEN: RefCell<Option<Transaction>> = const { RefCell::new(None) };
+    static DISCARDED: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+/// The number of output files the last failed [`all_or_nothing`] had prepared and discarded
+/// (0 after a success): what a command announced as written before it failed was not kept.
+pub fn discarded_outputs() -> usize {
+    DISCARDED.get()
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same folder and a rename, so that
@@ -239,17 +246,15 @@ pub fn all_or_nothing<T, E: From<Error>>(
     OPEN.set(Some(Transaction::default()));
     let result = f();
     let t = OPEN.take().unwrap_or_default();
-    // A destination that cannot take a file (a folder) fails before any rename, not halfway.
-    let blocked = t.writes.iter().find(|w| w.path.is_dir()).map(|w| {
-        Error::io(
-            &w.path,
-            std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a folder"),
-        )
-    });
-    let result = match (result, blocked) {
-        (Ok(_), Some(e)) => Err(E::from(e)),
-        (r, _) => r,
+    // A destination that cannot take a file fails before any rename, not halfway.
+    let result = match result {
+        Ok(v) => match destinations_ready(&t.writes) {
+            Ok(()) => Ok(v),
+            Err(e) => Err(E::from(e)),
+        },
+        r => r,
     };
+    DISCARDED.set(if result.is_err() { t.writes.len() } else { 0 });
     match result {
         Ok(v) => {
             for w in t.writes {
@@ -269,6 +274,36 @@ pub fn all_or_nothing<T, E: From<Error>>(
             Err(e)
         }
     }
+}
+
+/// Checks that every destination of `writes` can take its file: not a folder, and, where
+/// no file is there yet, a name the file system accepts in a folder it may write (probed by
+/// creating the file empty and removing it): a name too long or a read-only folder fails
+/// here, before any output is renamed into place.
+fn destinations_ready(writes: &[Staged]) -> Result<()> {
+    for w in writes {
+        if w.path.is_dir() {
+            return Err(Error::io(
+                &w.path,
+                std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a folder"),
+            ));
+        }
+        if !w.path.exists() {
+            match std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&w.path)
+            {
+                Ok(_) => {
+                    let _ = std::fs::remove_file(&w.path);
+                }
+                // Another writer made it meanwhile: the name is one the folder takes.
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+                Err(e) => return Err(Error::io(&w.path, e)),
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Reads a regular file of at most `cap` bytes: a device (`/dev/zero`), a folder or a larger

@@ -419,9 +419,10 @@ fn a_failed_run_leaves_no_output_behind() {
         .tempdir()
         .unwrap();
     let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
-    // A regular file where a folder is expected makes every write under it fail.
-    std::fs::write(p("file"), "not a folder").unwrap();
-    let blocked = p("file/sub/r.json");
+    // A name longer than the file system allows makes the write fail after the work (a
+    // folder that does not exist is refused before it: `edge_inputs_of_train_and_evaluate`).
+    let long = format!("{}.json", "r".repeat(300));
+    let blocked = p(&long);
     let fanuc = "datasets/robots/fanuc_r2000ib_210f.toml";
     let cases: Vec<(Vec<String>, Vec<String>)> = vec![
         (
@@ -486,11 +487,17 @@ fn a_failed_run_leaves_no_output_behind() {
     ];
     for (args, outputs) in cases {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        refused_saying(&args, &["file/sub/r.json", "Not a directory (os error 20)"]);
+        refused_saying(&args, &[&long, "File name too long (os error 36)"]);
         let err = stderr(&robocal(&args));
         assert!(!err.contains(".tmp"), "{args:?}: {err}");
         assert_eq!(err.matches("os error").count(), 1, "{args:?}: {err}");
-        assert_eq!(err.matches("file/sub/r.json").count(), 1, "{args:?}: {err}");
+        let error_lines: String = err.lines().filter(|l| l.starts_with("error:")).collect();
+        assert_eq!(error_lines.matches(&long).count(), 1, "{args:?}: {err}");
+        // What the command announced before the commit failed is said not to be kept.
+        assert!(
+            err.contains("note: no output file was written"),
+            "{args:?}: {err}"
+        );
         for o in outputs {
             assert!(!std::path::Path::new(&o).exists(), "{args:?} left {o}");
         }
@@ -848,4 +855,103 @@ fn second_review_round() {
         &["report", &p("run"), "--out", &p("page.html")],
         "not a regular file",
     );
+}
+
+/// Edge inputs a user meets (this session's hunt): an output in a folder that does not exist
+/// is refused before any work; a refinement that does not parse is refused, not reported as
+/// a failed candidate; `--members 0` is the model alone (no RBF network either); a joint
+/// column beyond the robot's is refused; `evaluate` refuses a measure the file cannot give.
+#[test]
+fn edge_inputs_of_train_and_evaluate() {
+    const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
+    const TRAIN: &str = "datasets/case_d/training.csv";
+    let out = common::tmp("edge.rcal");
+    let out = out.to_str().unwrap();
+    let missing = common::tmp("no_such_folder/r.json");
+    refused(
+        &[
+            "train",
+            "--robot",
+            FANUC,
+            "--data",
+            TRAIN,
+            "--out",
+            out,
+            "--report",
+            missing.to_str().unwrap(),
+        ],
+        "does not exist",
+    );
+    assert!(!std::path::Path::new(out).exists());
+    refused(
+        &[
+            "train", "--robot", FANUC, "--data", TRAIN, "--out", out, "--refine", "fulll",
+        ],
+        "the refinement `fulll`: unknown parameter or group",
+    );
+    let report = common::tmp("edge_members0.json");
+    let o = robocal(&[
+        "train",
+        "--robot",
+        FANUC,
+        "--data",
+        TRAIN,
+        "--out",
+        out,
+        "--members",
+        "0",
+        "--refine",
+        "none",
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = &common::json(&report)["training"]["settings"];
+    assert_eq!(s["members"], 0, "{s}");
+    assert_ne!(s["network"], "rbf", "{s}");
+    assert_ne!(s["network"], "mix", "{s}");
+
+    // q7 for a 6-joint robot: another robot's file.
+    let seven = common::tmp("edge_q7.csv");
+    std::fs::write(
+        &seven,
+        "q1,q2,q3,q4,q5,q6,q7,x,y,z\n0,0,0,0,0,0,0,1000,0,1000\n",
+    )
+    .unwrap();
+    let seven = seven.to_str().unwrap();
+    refused(
+        &["evaluate", "--robot", FANUC, "--data", seven],
+        "`q7`: a joint column beyond the robot's 6 joints",
+    );
+    refused(
+        &["fk", "--robot", FANUC, "--joints", seven],
+        "`q7`: a joint column beyond the robot's 6 joints",
+    );
+    // Positions only, measured by orientation or pose.
+    let positions = common::tmp("edge_positions.csv");
+    std::fs::write(
+        &positions,
+        "q1,q2,q3,q4,q5,q6,x,y,z\n0,0,0,0,0,0,1000,0,1000\n10,0,0,0,0,0,1000,100,1000\n",
+    )
+    .unwrap();
+    let positions = positions.to_str().unwrap();
+    for (m, says) in [
+        ("orientation", "needs an orientation in every row"),
+        ("pose", "needs position and orientation in every row"),
+    ] {
+        refused(
+            &[
+                "evaluate",
+                "--robot",
+                FANUC,
+                "--data",
+                positions,
+                "--measure",
+                m,
+            ],
+            says,
+        );
+    }
+    let o = robocal(&["evaluate", "--robot", FANUC, "--data", positions]);
+    assert!(o.status.success(), "{}", stderr(&o));
 }

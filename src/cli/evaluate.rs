@@ -65,6 +65,9 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         .measure
         .map(Measure::from)
         .unwrap_or_else(|| Measure::default_for(&set));
+    // What `identify` asks of the rows for this measure (an orientation in every row, pairs,
+    // ...): a measure the file cannot give is refused, not reported as empty columns.
+    robocal::identify::problem::Observations::new(&set, m, Default::default())?;
     let model_rows = row_errors(&set, m, |q| tool_pose(&robot, q))?;
     let s = summarize(&model_rows);
     println!(

@@ -110,6 +110,12 @@ pub fn main() -> ExitCode {
         Ok(()) => code,
         Err(e) => {
             eprintln!("error: {}", capped(&format!("{e:#}")));
+            let n = robocal::io::discarded_outputs();
+            if n > 0 {
+                eprintln!(
+                    "note: no output file was written ({n} prepared before the error were discarded)"
+                );
+            }
             ExitCode::from(1)
         }
     }

@@ -24,7 +24,8 @@ fn resolved(p: &Path) -> Option<PathBuf> {
 pub type Named<'a> = Option<(&'a str, &'a Path)>;
 
 /// Refuses outputs that resolve to an input of the command or to another output, an output
-/// file that is an existing folder, and a `--plot` folder that is an existing file. Each
+/// file that is an existing folder or lies in a folder that does not exist, and a `--plot`
+/// folder that is an existing file. Each
 /// entry is a flag and its path ([`req`], [`opt`]).
 pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
     let ins: Vec<(&str, &Path, PathBuf)> = inputs
@@ -44,6 +45,18 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
         }
         if !folder && path.is_dir() {
             bail!("{flag} {} is a folder: give a file path", path.display());
+        }
+        // Found now, not after the work: the file is written into an existing folder.
+        if !folder
+            && let Some(parent) = path.parent()
+            && !parent.as_os_str().is_empty()
+            && !parent.is_dir()
+        {
+            bail!(
+                "{flag} {}: the folder {} does not exist",
+                path.display(),
+                parent.display()
+            );
         }
         let Some(r) = resolved(path) else { continue };
         if let Some((f, p, _)) = ins.iter().find(|(_, _, i)| *i == r) {
@@ -120,5 +133,11 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("--out-a") && e.contains("--out-b"), "{e}");
+        // A file in a folder that does not exist: refused before the work; a `--plot`
+        // folder is made by the command.
+        let lost = dir.path().join("no_such_folder/out.csv");
+        let e = guard(&[], &[req("--out", &lost)]).unwrap_err().to_string();
+        assert!(e.contains("does not exist"), "{e}");
+        assert!(guard(&[], &[req("--plot", &dir.path().join("a/b"))]).is_ok());
     }
 }

@@ -49,6 +49,7 @@ impl JointTable {
 
     /// The joint table of an already parsed table (for example from [`Table::parse`]).
     pub fn from_table(table: Table, robot: &Robot) -> Result<JointTable> {
+        super::no_extra_joint(&table, robot.dof())?;
         let idx: Vec<usize> = joint_columns(robot.dof())
             .iter()
             .map(|c| table.require(c))

@@ -51,5 +51,20 @@ pub fn joint_columns(n: usize) -> Vec<String> {
     (1..=n).map(|i| format!("q{i}")).collect()
 }
 
+/// Refuses a table with a joint column beyond the robot's `n` (`q{n+1}`): its rows are
+/// another robot's, and dropping that joint would be silent.
+pub fn no_extra_joint(t: &table::Table, n: usize) -> crate::error::Result<()> {
+    let next = format!("q{}", n + 1);
+    match t.column(&next) {
+        Some(_) => Err(crate::error::Error::input(
+            crate::error::Location::at(&t.path, 1, next),
+            format!(
+                "a joint column beyond the robot's {n} joints: is this file for another robot?"
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Names of the pose columns: position (mm) and Z-Y-X Euler angles (deg, R = Rz Ry Rx).
 pub const POSE_COLUMNS: [&str; 6] = ["x", "y", "z", "rz", "ry", "rx"];

@@ -72,6 +72,7 @@ impl TargetTable {
         } else {
             Vec::new()
         };
+        super::no_extra_joint(&table, n)?;
         let qcols = joint_columns(n);
         let seed_idx: Vec<Option<usize>> = qcols.iter().map(|c| table.column(c)).collect();
         let with_seeds = match seed_idx.iter().flatten().count() {

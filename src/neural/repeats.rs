@@ -23,9 +23,11 @@ use nalgebra::Vector3;
 /// repeats, below the 3e-2 rad between their distinct configurations.
 pub const SAME_CONFIGURATION: f64 = 1e-2;
 
-/// Group id of every row: rows whose joint values all differ by less than
-/// [`SAME_CONFIGURATION`] (rad or mm) share one, and so do chains of such rows. Ids count
-/// from 0 in the order of each group's first row.
+/// Group id of every row: a row joins the group of the first row (in the sweep's order, the
+/// order of the joint whose values spread widest) whose joint values all lie within
+/// [`SAME_CONFIGURATION`] (rad or mm) of its own; otherwise it starts a group. Groups do not
+/// chain: a path sampled every 0.5 deg is many configurations, not one. Ids count from 0 in
+/// the order of each group's first row in the file.
 pub fn configuration_groups(set: &MeasurementSet) -> Vec<usize> {
     let rows = &set.rows;
     let n = rows.len();
@@ -47,46 +49,44 @@ pub fn configuration_groups(set: &MeasurementSet) -> Vec<usize> {
     let at = |i: usize| rows[i].q.get(key).copied().unwrap_or(0.0);
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| at(a).total_cmp(&at(b)));
-    let mut root: Vec<usize> = (0..n).collect();
-    for (a, &i) in order.iter().enumerate() {
-        for &j in &order[a + 1..] {
-            if at(j) - at(i) >= SAME_CONFIGURATION {
-                break;
-            }
-            let close = rows[i].q.len() == rows[j].q.len()
-                && rows[i]
-                    .q
-                    .iter()
-                    .zip(&rows[j].q)
-                    .all(|(x, y)| (x - y).abs() < SAME_CONFIGURATION);
-            if close {
-                let (ri, rj) = (find(&mut root, i), find(&mut root, j));
-                root[ri.max(rj)] = ri.min(rj);
-            }
+    let close = |i: usize, j: usize| {
+        rows[i].q.len() == rows[j].q.len()
+            && rows[i]
+                .q
+                .iter()
+                .zip(&rows[j].q)
+                .all(|(x, y)| (x - y).abs() < SAME_CONFIGURATION)
+    };
+    // Each group's first row in the sweep, in the sweep's order (so their keys ascend and
+    // those too far below the current row leave from the front).
+    let mut leaders: Vec<usize> = Vec::new();
+    let mut open = 0;
+    let mut leader = vec![0; n];
+    for &i in &order {
+        while open < leaders.len() && at(i) - at(leaders[open]) >= SAME_CONFIGURATION {
+            open += 1;
         }
+        leader[i] = match leaders[open..].iter().find(|&&l| close(l, i)) {
+            Some(&l) => l,
+            None => {
+                leaders.push(i);
+                i
+            }
+        };
     }
-    // Ids in the order of each group's first row.
+    // Ids in the order of each group's first row in the file.
     let mut id = vec![usize::MAX; n];
     let mut next = 0;
     (0..n)
         .map(|i| {
-            let r = find(&mut root, i);
-            if id[r] == usize::MAX {
-                id[r] = next;
+            let l = leader[i];
+            if id[l] == usize::MAX {
+                id[l] = next;
                 next += 1;
             }
-            id[r]
+            id[l]
         })
         .collect()
-}
-
-/// The root of `i`'s group, halving the path on the way.
-fn find(root: &mut [usize], mut i: usize) -> usize {
-    while root[i] != i {
-        root[i] = root[root[i]];
-        i = root[i];
-    }
-    i
 }
 
 /// The number of groups (distinct configurations) in ids from [`configuration_groups`].
@@ -195,7 +195,7 @@ mod tests {
     }
 
     #[test]
-    fn repeats_within_the_tolerance_are_one_configuration_transitively() {
+    fn repeats_within_the_tolerance_are_one_configuration_and_groups_do_not_chain() {
         let a = [0.1, -1.2, 0.8, 0.3, 1.0, -0.5];
         let mut a_again = a;
         a_again[2] += 3e-3;
@@ -203,15 +203,28 @@ mod tests {
         let mut b = a;
         b[4] += 2e-2; // one joint 1.15 deg away: another configuration
         let mut c = b;
-        c[0] -= 0.9e-2; // within the tolerance of b only
+        c[0] -= 0.9e-2; // within the tolerance of b: b's group
         let mut d = c;
-        d[0] -= 0.9e-2; // 1.8e-2 from b, within the tolerance of c: joins b through c
+        d[0] -= 0.9e-2; // 1.8e-2 from b, within the tolerance of c only: a group of its own
         let other = [-2.0, 0.4, -0.3, 1.1, -1.0, 2.0];
-        // d comes before c, so c must merge two groups that already exist.
         let s = set(&[a, b, other, a_again, d, c, other]);
         let g = configuration_groups(&s);
-        assert_eq!(g, vec![0, 1, 2, 0, 1, 1, 2]);
-        assert_eq!(group_count(&g), 3);
+        assert_eq!(g, vec![0, 1, 2, 0, 3, 1, 2]);
+        assert_eq!(group_count(&g), 4);
+        // A path sampled every 0.5 deg (8.7e-3 rad) is not one configuration: each group
+        // spans less than the tolerance.
+        let path: Vec<[f64; 6]> = (0..120)
+            .map(|k| [-0.5 + k as f64 * 8.7e-3, -1.0, 0.5, 0.0, 1.0, 0.0])
+            .collect();
+        let g = configuration_groups(&set(&path));
+        assert!(group_count(&g) >= 60, "{}", group_count(&g));
+        for (i, gi) in g.iter().enumerate() {
+            for (j, gj) in g.iter().enumerate() {
+                if gi == gj {
+                    assert!((path[i][0] - path[j][0]).abs() < SAME_CONFIGURATION);
+                }
+            }
+        }
     }
 
     #[test]

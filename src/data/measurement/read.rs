@@ -92,6 +92,9 @@ impl Columns {
     /// or no measurement column at all is an error naming the file.
     fn resolve(t: &Table, n: usize, profile: &Profile) -> Result<Columns> {
         let cols = &profile.columns;
+        if cols.joints.is_none() {
+            crate::data::no_extra_joint(t, n)?;
+        }
         let joint_names = cols.joints.clone().unwrap_or_else(|| joint_columns(n));
         if joint_names.len() != n {
             return Err(Error::input(

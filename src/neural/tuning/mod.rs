@@ -301,6 +301,14 @@ pub fn select_settings(
     // From here on some candidate has a score: the best always exists.
     let best = |candidates: &[Candidate]| better(candidates, 0, 1..candidates.len());
     let mut notes = Vec::new();
+    if let Some(asked) = opts.folds
+        && k < asked
+    {
+        notes.push(format!(
+            "{asked} folds asked for, but the rows hold {distinct} distinct configurations: \
+             {k} folds"
+        ));
+    }
     let mut chosen = best(&candidates);
     let with_rbf = try_rbf || mix_only;
     // The RBF hyperparameter searches run beside stages 2 and 3 (whose fits leave cores
@@ -439,7 +447,7 @@ pub fn select_settings(
              compensator averages {ENSEMBLE}"
         ));
     }
-    if winner.members == 0 {
+    if winner.members == 0 && opts.members != Some(0) {
         notes.push(
             "no network lowered the cross-validated error: the compensator is the model alone"
                 .into(),
@@ -547,7 +555,14 @@ impl Space {
             }
             Refine::Off => (vec![None], None),
             Refine::Auto => refinements(robot, AUTO_REFINE, opts.compliance),
-            Refine::Params(p) => refinements(robot, p, opts.compliance),
+            Refine::Params(p) => {
+                // A selection that does not parse is refused before any fit, not reported
+                // as a failed candidate.
+                if let Err(e) = crate::identify::candidates(robot, p) {
+                    return Err(Error::Invalid(format!("the refinement `{p}`: {e}")));
+                }
+                refinements(robot, p, opts.compliance)
+            }
         };
         let rbf_only = opts.network == Some(Network::Rbf);
         let mix_only = opts.network == Some(Network::Mix);
@@ -601,10 +616,13 @@ impl Space {
         // the lowest or within 0.8 % of it on the Series B pools tried (500 rows, seeds 0-2:
         // 0.286 against 0.296; 0.253 against 0.251; 0.244 against 0.265 mm).
         let rbf_start = opts.rbf_start.unwrap_or(0);
-        // An RBF network (alone or with the MLPs) is tried where the network is left open, on
-        // the pose form, while its kernel matrix stays small.
-        let try_rbf =
-            opts.network.is_none() && forms.contains(&Form::Pose) && set.rows.len() <= RBF_MAX_ROWS;
+        // An RBF network (alone or with the MLPs) is tried where the network is left open
+        // (and not fixed at none, `members` 0: the model alone), on the pose form, while its
+        // kernel matrix stays small.
+        let try_rbf = opts.network.is_none()
+            && opts.members != Some(0)
+            && forms.contains(&Form::Pose)
+            && set.rows.len() <= RBF_MAX_ROWS;
         let open = refines.len() > 1
             || forms.len() > 1
             || encodings.len() > 1
