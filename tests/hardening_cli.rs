@@ -867,37 +867,30 @@ fn edge_inputs_of_train_and_evaluate() {
     const TRAIN: &str = "datasets/case_d/training.csv";
     let out = common::tmp("edge.rcal");
     let out = out.to_str().unwrap();
+    // `train` on Case D's training rows with `extra` flags.
+    let train = |extra: &[&str]| -> std::process::Output {
+        let mut args = vec!["train", "--robot", FANUC, "--data", TRAIN, "--out", out];
+        args.extend_from_slice(extra);
+        robocal(&args)
+    };
+    let failed = |extra: &[&str], says: &str| {
+        let o = train(extra);
+        let err = stderr(&o);
+        assert!(
+            !o.status.success() && !err.contains("panicked"),
+            "{extra:?}: {err}"
+        );
+        assert!(err.contains(says), "{extra:?}: {err}");
+    };
     let missing = common::tmp("no_such_folder/r.json");
-    refused(
-        &[
-            "train",
-            "--robot",
-            FANUC,
-            "--data",
-            TRAIN,
-            "--out",
-            out,
-            "--report",
-            missing.to_str().unwrap(),
-        ],
-        "does not exist",
-    );
+    failed(&["--report", missing.to_str().unwrap()], "does not exist");
     assert!(!std::path::Path::new(out).exists());
-    refused(
-        &[
-            "train", "--robot", FANUC, "--data", TRAIN, "--out", out, "--refine", "fulll",
-        ],
+    failed(
+        &["--refine", "fulll"],
         "the refinement `fulll`: unknown parameter or group",
     );
     let report = common::tmp("edge_members0.json");
-    let o = robocal(&[
-        "train",
-        "--robot",
-        FANUC,
-        "--data",
-        TRAIN,
-        "--out",
-        out,
+    let o = train(&[
         "--members",
         "0",
         "--refine",
@@ -927,6 +920,54 @@ fn edge_inputs_of_train_and_evaluate() {
         &["fk", "--robot", FANUC, "--joints", seven],
         "`q7`: a joint column beyond the robot's 6 joints",
     );
+    // One configuration measured again and again (fixed settings: nothing to
+    // cross-validate) trains, with a note.
+    let mut once = String::from("q1,q2,q3,q4,q5,q6,x,y,z\n");
+    for k in 0..20 {
+        once.push_str(&format!(
+            "10,20,30,40,50,60,{},500,1500\n",
+            1200.0 + 0.01 * k as f64
+        ));
+    }
+    let once_path = common::tmp("edge_once.csv");
+    std::fs::write(&once_path, once).unwrap();
+    let o = robocal(&[
+        "train",
+        "--robot",
+        FANUC,
+        "--data",
+        once_path.to_str().unwrap(),
+        "--out",
+        out,
+        "--network",
+        "mlp",
+        "--form",
+        "joint",
+        "--encoding",
+        "gravity",
+        "--hidden",
+        "8",
+        "--penalty",
+        "1",
+        "--members",
+        "1",
+        "--refine",
+        "none",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        common::stdout(&o).contains("are one configuration: the network can learn only a constant"),
+        "{}",
+        common::stdout(&o)
+    );
+    // Joints beyond the limits: the file and its line are named.
+    let beyond = common::tmp("edge_beyond.csv");
+    std::fs::write(&beyond, "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n400,0,0,0,0,0\n").unwrap();
+    let beyond = beyond.to_str().unwrap();
+    let o = robocal(&["fk", "--robot", FANUC, "--joints", beyond]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let says = format!("{beyond}: 1 row(s) have joints outside the robot's limits (lines 3)");
+    assert!(stderr(&o).contains(&says), "{}", stderr(&o));
     // Positions only, measured by orientation or pose.
     let positions = common::tmp("edge_positions.csv");
     std::fs::write(

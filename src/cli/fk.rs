@@ -6,7 +6,7 @@ use clap::Args;
 use robocal::data::{JointTable, POSE_COLUMNS, joint_columns};
 use robocal::kinematics::{pose_to_file, tool_pose};
 use robocal::model::{Robot, read_robot};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 #[command(group = clap::ArgGroup::new("input").required(true))]
@@ -38,6 +38,19 @@ pub(super) fn warn_if_radians(path: &std::path::Path, robot: &Robot, t: &JointTa
     }
 }
 
+/// Warns that the rows at file `lines` of `path` hold joints beyond the robot's limits, and
+/// what was done with them (`then`).
+pub fn warn_beyond_limits(path: &Path, lines: &[usize], then: &str) {
+    if !lines.is_empty() {
+        eprintln!(
+            "warning: {}: {} row(s) have joints outside the robot's limits (lines {}); {then}",
+            path.display(),
+            lines.len(),
+            robocal::data::measurement::list_lines(lines),
+        );
+    }
+}
+
 pub fn run(a: FkArgs) -> Result<()> {
     use super::paths::{guard, opt, req};
     guard(
@@ -47,27 +60,32 @@ pub fn run(a: FkArgs) -> Result<()> {
     let robot = read_robot(&a.robot)?;
     let n = robot.dof();
     let written: Vec<String> = POSE_COLUMNS.iter().map(|s| s.to_string()).collect();
-    let (headers, rows, joints) = match (&a.q, &a.joints) {
+    let (headers, rows, joints, lines) = match (&a.q, &a.joints) {
         (Some(q), _) => {
             let q = joints_arg(&robot, q, "--q")?;
             let cells = q.iter().map(|v| num(*v, None)).collect();
             let mut headers = joint_columns(n);
             headers.extend(written);
-            (headers, vec![cells], vec![q])
+            (headers, vec![cells], vec![q], vec![1])
         }
         (None, Some(path)) => {
             let t = JointTable::read(path, &robot)?;
             warn_if_radians(path, &robot, &t);
-            (t.output_headers(&written)?, t.table.rows, t.joints)
+            (
+                t.output_headers(&written)?,
+                t.table.rows,
+                t.joints,
+                t.table.lines,
+            )
         }
         (None, None) => unreachable!("clap requires one input"),
     };
     let mut out_rows = Vec::with_capacity(rows.len());
     let mut outside = Vec::new();
-    for (k, (cells, q)) in rows.into_iter().zip(&joints).enumerate() {
+    for ((cells, q), line) in rows.into_iter().zip(&joints).zip(lines) {
         let qi = robot.joints_to_internal(q);
         if !robot.joints_outside_limits(&qi).is_empty() {
-            outside.push(k + 1);
+            outside.push(line);
         }
         let pose = tool_pose(&robot, &qi);
         let mut row = cells;
@@ -78,13 +96,8 @@ pub fn run(a: FkArgs) -> Result<()> {
         );
         out_rows.push(row);
     }
-    if !outside.is_empty() {
-        eprintln!(
-            "warning: {} row(s) have joints outside the robot's limits (data rows {:?}); their poses are written anyway",
-            outside.len(),
-            outside
-        );
-    }
+    let source = a.joints.as_deref().unwrap_or(Path::new("--q"));
+    warn_beyond_limits(source, &outside, "their poses are written anyway");
     a.output
         .emit(&headers, &out_rows)
         .with_context(|| "writing the FK output".to_string())

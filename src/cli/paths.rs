@@ -46,11 +46,19 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
         if !folder && path.is_dir() {
             bail!("{flag} {} is a folder: give a file path", path.display());
         }
-        // Found now, not after the work: the file is written into an existing folder.
+        // Found now, not after the work: the file is written into an existing folder, or
+        // into the `--plot` folder the command makes.
+        let made = |parent: &Path| {
+            outputs
+                .iter()
+                .flatten()
+                .any(|(f, p)| *f == "--plot" && parent.starts_with(p))
+        };
         if !folder
             && let Some(parent) = path.parent()
             && !parent.as_os_str().is_empty()
             && !parent.is_dir()
+            && !made(parent)
         {
             bail!(
                 "{flag} {}: the folder {} does not exist",
@@ -139,5 +147,10 @@ mod tests {
         let e = guard(&[], &[req("--out", &lost)]).unwrap_err().to_string();
         assert!(e.contains("does not exist"), "{e}");
         assert!(guard(&[], &[req("--plot", &dir.path().join("a/b"))]).is_ok());
+        // A report inside the `--plot` folder the command makes is fine.
+        let plots = dir.path().join("run");
+        let report = plots.join("r.json");
+        assert!(guard(&[], &[req("--plot", &plots), req("--report", &report)]).is_ok());
+        assert!(guard(&[], &[req("--report", &report)]).is_err());
     }
 }

@@ -63,8 +63,12 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     let mut ws = PredictWorkspace::default();
     let mut out = Vec::with_capacity(rows.len());
     let mut outside = Vec::new();
+    let mut beyond = Vec::new();
     for ((cells, q), line) in rows.into_iter().zip(&joints).zip(lines) {
         let q = c.robot.joints_to_internal(q);
+        if !c.robot.joints_outside_limits(&q).is_empty() {
+            beyond.push(line);
+        }
         let pose = c.predict(&q, &mut ws);
         let check = c.domain_check(&q, &mut ws);
         if !check.inside() {
@@ -79,6 +83,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
         row.push(check.describe());
         out.push(row);
     }
+    super::fk::warn_beyond_limits(&a.joints, &beyond, "their poses are written anyway");
     warn_outside(&a.joints, &outside, true);
     a.output
         .emit(&headers, &out)

@@ -54,6 +54,16 @@ impl Compensator {
         if let Some(s) = &selection {
             report.notes.extend(s.notes.iter().cloned());
         }
+        // One configuration measured again and again gives the network one input: it can
+        // learn a constant only, whatever it is told.
+        let distinct = super::repeats::group_count(&super::repeats::configuration_groups(fit_set));
+        if distinct < 2 && !fit_set.rows.is_empty() {
+            report.notes.push(format!(
+                "the {} training rows are one configuration: the network can learn only a \
+                 constant correction; measure configurations spread over the workspace",
+                fit_set.rows.len()
+            ));
+        }
         report.selection = selection;
         report.selection_seconds = selection_seconds;
         Ok((c, report))
