@@ -863,7 +863,7 @@ fn second_review_round() {
 /// column beyond the robot's is refused; `evaluate` refuses a measure the file cannot give.
 #[test]
 fn edge_inputs_of_train_and_evaluate() {
-    const FANUC: &str = "datasets/robots/fanuc_r2000ib_210f.toml";
+    use common::FANUC;
     const TRAIN: &str = "datasets/case_d/training.csv";
     let out = common::tmp("edge.rcal");
     let out = out.to_str().unwrap();
@@ -931,7 +931,7 @@ fn edge_inputs_of_train_and_evaluate() {
     }
     let once_path = common::tmp("edge_once.csv");
     std::fs::write(&once_path, once).unwrap();
-    let o = robocal(&[
+    let mut args = vec![
         "train",
         "--robot",
         FANUC,
@@ -939,21 +939,9 @@ fn edge_inputs_of_train_and_evaluate() {
         once_path.to_str().unwrap(),
         "--out",
         out,
-        "--network",
-        "mlp",
-        "--form",
-        "joint",
-        "--encoding",
-        "gravity",
-        "--hidden",
-        "8",
-        "--penalty",
-        "1",
-        "--members",
-        "1",
-        "--refine",
-        "none",
-    ]);
+    ];
+    args.extend_from_slice(common::CHEAP_TRAIN);
+    let o = robocal(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         common::stdout(&o).contains("are one configuration: the network can learn only a constant"),
