@@ -19,6 +19,13 @@ pub enum ComplianceArg {
     Off,
 }
 
+/// The error for a `--refine` selection that names compliances with `--compliance off`.
+pub fn compliance_conflict(spec: &str) -> anyhow::Error {
+    anyhow::anyhow!(
+        "--refine {spec} names compliances and --compliance off leaves them out: give one"
+    )
+}
+
 /// Input encodings on the command line.
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum EncodingArg {
@@ -194,10 +201,7 @@ impl CompensatorArgs {
         }
         // The group by name here; named compliances (`c2`) against the robot in `train`.
         if compliance == Some(false) && self.refine.split(',').any(|s| s.trim() == "compliance") {
-            bail!(
-                "--refine {} names the compliances and --compliance off leaves them out: give one",
-                self.refine
-            );
+            return Err(compliance_conflict(&self.refine));
         }
         if let Some(n @ (Network::Rbf | Network::Mix)) = self.network
             && self.form == Some(Form::Joint)

@@ -38,12 +38,12 @@ pub(super) fn warn_if_radians(path: &std::path::Path, robot: &Robot, t: &JointTa
     }
 }
 
-/// Warns that the rows at file `lines` of `path` hold joints beyond the robot's limits, and
-/// what was done with them (`then`).
-pub fn warn_beyond_limits(path: &Path, lines: &[usize], then: &str) {
+/// Warns that the rows at file `lines` of `path` hold joints beyond the robot's limits.
+pub fn warn_beyond_limits(path: &Path, lines: &[usize]) {
     if !lines.is_empty() {
         eprintln!(
-            "warning: {}: {} row(s) have joints outside the robot's limits (lines {}); {then}",
+            "warning: {}: {} row(s) have joints outside the robot's limits (lines {}); their \
+             poses are written anyway",
             path.display(),
             lines.len(),
             robocal::data::measurement::list_lines(lines),
@@ -97,7 +97,7 @@ pub fn run(a: FkArgs) -> Result<()> {
         out_rows.push(row);
     }
     let source = a.joints.as_deref().unwrap_or(Path::new("--q"));
-    warn_beyond_limits(source, &outside, "their poses are written anyway");
+    warn_beyond_limits(source, &outside);
     a.output
         .emit(&headers, &out_rows)
         .with_context(|| "writing the FK output".to_string())

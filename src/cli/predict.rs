@@ -83,7 +83,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
         row.push(check.describe());
         out.push(row);
     }
-    super::fk::warn_beyond_limits(&a.joints, &beyond, "their poses are written anyway");
+    super::fk::warn_beyond_limits(&a.joints, &beyond);
     warn_outside(&a.joints, &outside, true);
     a.output
         .emit(&headers, &out)

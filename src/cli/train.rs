@@ -1,9 +1,9 @@
 //! `robocal train` and `robocal predict`: the neural compensator.
 
-use super::compensator_args::{CompensatorArgs, progress_bar};
+use super::compensator_args::{CompensatorArgs, compliance_conflict, progress_bar};
 use super::data_args::{DataArgs, SigmaArgs};
 use super::summary::{print_stats, write_report};
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 use robocal::evaluate::{row_errors, summarize};
 use robocal::identify::Measure;
@@ -202,9 +202,9 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     let terminal = std::io::stderr().is_terminal();
     let opts = a.build.options(a.sigma.sigmas(), terminal)?;
     if let (Refine::Params(spec), Some(false)) = (&opts.refine, opts.compliance)
-        && names_compliance(&robot, spec) == Some(true)
+        && names_compliance(&robot, spec).unwrap_or(false)
     {
-        bail!("--refine {spec} names compliances and --compliance off leaves them out: give one");
+        return Err(compliance_conflict(spec));
     }
     let bar = progress_bar(terminal);
     let started = std::time::Instant::now();

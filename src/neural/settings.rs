@@ -197,8 +197,8 @@ pub struct CompensatorOptions {
     /// Whether the refinement adds the joints' gravity compliances (c1..cN where the model
     /// has masses, else the mass-free coefficients) to a selection that names none: None
     /// lets cross-validation decide (kept only by [`super::tuning::COMPLIANCE_MARGIN`]),
-    /// `Some(true)` always adds them, `Some(false)` never does (and refuses a selection that
-    /// names some).
+    /// `Some(true)` always adds them, `Some(false)` never does. A selection that names some
+    /// refines them as named whatever this says.
     pub compliance: Option<bool>,
     /// Tracker sigmas for rows that carry none (refinement).
     pub sigmas: Sigmas,

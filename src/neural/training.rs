@@ -56,8 +56,11 @@ impl Compensator {
         }
         // One configuration measured again and again gives the network one input: it can
         // learn a constant only, whatever it is told.
-        let distinct = super::repeats::group_count(&super::repeats::configuration_groups(fit_set));
-        if distinct < 2 && !fit_set.rows.is_empty() {
+        if report
+            .repeats
+            .as_ref()
+            .is_some_and(|r| r.configurations == 1 && r.rows == fit_set.rows.len())
+        {
             report.notes.push(format!(
                 "the {} training rows are one configuration: the network can learn only a \
                  constant correction; measure configurations spread over the workspace",

@@ -104,32 +104,30 @@ pub const AUTO_REFINE: &str = "full";
 /// tried); on a real UR10 pool of 2000 rows it won by 0.3 %, which is no evidence.
 pub const COMPLIANCE_MARGIN: f64 = 0.02;
 
-/// Whether selection `spec` names compliance parameters of `robot` (None where it does not
-/// parse: the refinement reports that).
-pub fn names_compliance(robot: &Robot, spec: &str) -> Option<bool> {
-    let (completed, chosen, _) = crate::identify::candidates(robot, spec).ok()?;
+/// Whether selection `spec` names compliance parameters of `robot`; an error where it does
+/// not parse.
+pub fn names_compliance(robot: &Robot, spec: &str) -> Result<bool> {
+    let (completed, chosen, _) = crate::identify::candidates(robot, spec)?;
     let params = completed.parameters();
-    Some(
-        chosen
-            .iter()
-            .any(|&i| crate::identify::select::is_compliance(&params[i])),
-    )
+    Ok(chosen
+        .iter()
+        .any(|&i| crate::identify::select::is_compliance(&params[i])))
 }
 
 /// The refinements tried for selection `spec` (besides none), and the one cross-validation
 /// added the joints' gravity compliances to on its own (judged by [`COMPLIANCE_MARGIN`]):
-/// `spec` alone where it names compliances (they are refined as named) or `compliance` is
+/// `spec` alone where it `names` compliances (they are refined as named) or `compliance` is
 /// `Some(false)`; `spec` with them where `Some(true)`; both where None.
 fn refinements(
-    robot: &Robot,
     spec: &str,
+    names: bool,
     compliance: Option<bool>,
 ) -> (Vec<Option<String>>, Option<String>) {
     let with = format!("{spec},compliance");
-    match (names_compliance(robot, spec), compliance) {
-        (Some(true) | None, _) | (_, Some(false)) => (vec![None, Some(spec.into())], None),
-        (Some(false), Some(true)) => (vec![None, Some(with)], None),
-        (Some(false), None) => (
+    match (names, compliance) {
+        (true, _) | (_, Some(false)) => (vec![None, Some(spec.into())], None),
+        (false, Some(true)) => (vec![None, Some(with)], None),
+        (false, None) => (
             vec![None, Some(spec.into()), Some(with.clone())],
             Some(with),
         ),
@@ -554,14 +552,13 @@ impl Space {
                 ));
             }
             Refine::Off => (vec![None], None),
-            Refine::Auto => refinements(robot, AUTO_REFINE, opts.compliance),
+            Refine::Auto => refinements(AUTO_REFINE, false, opts.compliance),
             Refine::Params(p) => {
                 // A selection that does not parse is refused before any fit, not reported
                 // as a failed candidate.
-                if let Err(e) = crate::identify::candidates(robot, p) {
-                    return Err(Error::Invalid(format!("the refinement `{p}`: {e}")));
-                }
-                refinements(robot, p, opts.compliance)
+                let names = names_compliance(robot, p)
+                    .map_err(|e| Error::Invalid(format!("the refinement `{p}`: {e}")))?;
+                refinements(p, names, opts.compliance)
             }
         };
         let rbf_only = opts.network == Some(Network::Rbf);
@@ -863,6 +860,8 @@ mod tests {
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/ur10.toml"),
         )
         .unwrap();
+        let refinements =
+            |spec: &str, c| refinements(spec, names_compliance(&robot, spec).unwrap(), c);
         let s = |v: &[&str]| -> Vec<Option<String>> {
             std::iter::once(None)
                 .chain(v.iter().map(|x| Some(x.to_string())))
@@ -870,27 +869,21 @@ mod tests {
         };
         let with = Some("full,compliance".to_string());
         assert_eq!(
-            refinements(&robot, "full", None),
+            refinements("full", None),
             (s(&["full", "full,compliance"]), with.clone())
         );
+        assert_eq!(refinements("full", Some(false)), (s(&["full"]), None));
         assert_eq!(
-            refinements(&robot, "full", Some(false)),
-            (s(&["full"]), None)
-        );
-        assert_eq!(
-            refinements(&robot, "full", Some(true)),
+            refinements("full", Some(true)),
             (s(&["full,compliance"]), None)
         );
         // Named compliances are refined as named, whatever the flag.
         for c in [None, Some(true), Some(false)] {
-            assert_eq!(
-                refinements(&robot, "full,k2.mx3", c),
-                (s(&["full,k2.mx3"]), None)
-            );
+            assert_eq!(refinements("full,k2.mx3", c), (s(&["full,k2.mx3"]), None));
         }
-        assert_eq!(names_compliance(&robot, "offsets"), Some(false));
-        assert_eq!(names_compliance(&robot, "offsets,compliance"), Some(true));
-        assert_eq!(names_compliance(&robot, "no_such_parameter"), None);
+        assert!(!names_compliance(&robot, "offsets").unwrap());
+        assert!(names_compliance(&robot, "offsets,compliance").unwrap());
+        assert!(names_compliance(&robot, "no_such_parameter").is_err());
     }
 
     #[test]
