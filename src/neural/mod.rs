@@ -6,6 +6,7 @@ pub mod encoding;
 pub mod file;
 pub mod fit;
 pub mod lbfgs;
+pub mod logistic;
 pub mod net;
 pub mod parallel;
 pub mod predict;

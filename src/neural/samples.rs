@@ -244,9 +244,9 @@ impl<'a> Batch<'a> {
     /// Hidden activations of every sample into `z`.
     fn hidden(&mut self, w: &Weights) {
         self.x.mul_to(&w.w1.transpose(), &mut self.z);
-        for (j, mut col) in self.z.column_iter_mut().enumerate() {
-            let b = w.b1[j];
-            col.apply(|v| *v = 1.0 / (1.0 + (-(*v + b)).exp()));
+        let n = self.z.nrows();
+        for (j, col) in self.z.as_mut_slice().chunks_exact_mut(n.max(1)).enumerate() {
+            super::logistic::logistic_in_place(col, w.b1[j]);
         }
     }
 
@@ -269,13 +269,18 @@ impl<'a> Batch<'a> {
                 self.r -= &self.y;
             }
             Some(maps) => {
+                // Column-major slices: sample k's entry of column c is at c n + k.
+                let n = self.y.nrows();
+                let (b, y, r) = (self.b.as_slice(), self.y.as_slice(), self.r.as_mut_slice());
                 for (k, a) in maps.iter().enumerate() {
-                    for row in 0..a.nrows() {
-                        let mut v = self.b[(k, row)];
-                        for c in 0..a.ncols() {
-                            v -= a[(row, c)] * self.y[(k, c)];
+                    let (rows, cols) = a.shape();
+                    let a = a.as_slice();
+                    for row in 0..rows {
+                        let mut v = b[row * n + k];
+                        for c in 0..cols {
+                            v -= a[c * rows + row] * y[c * n + k];
                         }
-                        self.r[(k, row)] = v;
+                        r[row * n + k] = v;
                     }
                 }
             }
@@ -354,13 +359,17 @@ impl<'a> Batch<'a> {
                 self.gy *= -2.0 / m;
             }
             Some(maps) => {
+                // Column-major slices: sample k's entry of column c is at c n + k.
+                let n = self.r.nrows();
+                let (r, gy) = (self.r.as_slice(), self.gy.as_mut_slice());
                 for (k, a) in maps.iter().enumerate() {
+                    let rows = a.nrows();
                     for c in 0..no {
                         let mut t = 0.0;
-                        for row in 0..a.nrows() {
-                            t += a[(row, c)] * self.r[(k, row)];
+                        for (row, ar) in a.as_slice()[c * rows..(c + 1) * rows].iter().enumerate() {
+                            t += ar * r[row * n + k];
                         }
-                        self.gy[(k, c)] = -2.0 / m * t;
+                        gy[c * n + k] = -2.0 / m * t;
                     }
                 }
             }
@@ -368,24 +377,41 @@ impl<'a> Batch<'a> {
         // dF/dW2 = Gy^T H, dF/dH = Gy W2, dF/dZ = dF/dH . H (1 - H), dF/dW1 = Gz^T X.
         self.gy.tr_mul_to(&self.z, &mut self.gw2);
         self.gy.mul_to(&w.w2, &mut self.gh);
-        self.gh.zip_apply(&self.z, |g, h| *g *= h * (1.0 - h));
+        for (g, h) in self.gh.as_mut_slice().iter_mut().zip(self.z.as_slice()) {
+            *g *= h * (1.0 - h);
+        }
         self.gh.transpose_to(&mut self.gt);
         self.gw1.gemm(1.0, &self.gt, &self.x, 0.0);
         let (off_b1, off_w2, off_b2) = (nh * ni, nh * ni + nh, nh * ni + nh + no * nh);
+        // The weights and the gradient's blocks by slices (row-major in the gradient,
+        // column-major in the matrices); sums from 0 in row order, as nalgebra's `sum`.
+        let decay = 2.0 * lambda / m;
+        let g = grad.as_mut_slice();
+        let (gw1, w1) = (self.gw1.as_slice(), w.w1.as_slice());
         for j in 0..nh {
             for i in 0..ni {
-                grad[j * ni + i] = self.gw1[(j, i)] + 2.0 * lambda / m * w.w1[(j, i)];
+                g[j * ni + i] = gw1[i * nh + j] + decay * w1[i * nh + j];
             }
-            grad[off_b1 + j] = self.gh.column(j).sum();
+            g[off_b1 + j] = column_sum(&self.gh, j);
         }
+        let (gw2, w2) = (self.gw2.as_slice(), w.w2.as_slice());
         for o in 0..no {
             for j in 0..nh {
-                grad[off_w2 + o * nh + j] = self.gw2[(o, j)] + 2.0 * lambda / m * w.w2[(o, j)];
+                g[off_w2 + o * nh + j] = gw2[j * no + o] + decay * w2[j * no + o];
             }
-            grad[off_b2 + o] = self.gy.column(o).sum();
+            g[off_b2 + o] = column_sum(&self.gy, o);
         }
         (sum + lambda * weight_norm2(w)) / m
     }
+}
+
+/// The sum of column `c` of `m`, added in row order from 0 (the bits of nalgebra's `sum`).
+#[inline]
+fn column_sum(m: &DMatrix<f64>, c: usize) -> f64 {
+    let n = m.nrows();
+    m.as_slice()[c * n..(c + 1) * n]
+        .iter()
+        .fold(0.0, |acc, v| acc + v)
 }
 
 #[cfg(test)]
