@@ -433,3 +433,43 @@ fn real_ur10_series_b_half_split() {
     assert!(rms[2] <= 0.5, "{rms:?}");
     assert!(rms[2] < rms[0]);
 }
+
+/// LM evaluates a trial either for its cost alone or with its normal equations (which the
+/// next iteration then reuses): both must give the same cost to the bit, or the solve would
+/// depend on which pass ran. Rigid and compliant robots (the compliant tool pose has its own
+/// cost-only path), every measure.
+#[test]
+fn cost_only_and_normal_equation_passes_give_the_same_cost_bits() {
+    use robocal::identify::problem::{IdentifyWorkspace, Observations, cost, normal_equations};
+    let truth = table_6_1(&fanuc());
+    let compliant = read_robot(root().join("datasets/nongeometric_robot/nominal_masses.toml"))
+        .unwrap()
+        .with_compliance(Some(robocal::model::Compliance::from_file_units(&[
+            0.0, 12.0, 9.0, 20.0, 30.0, 40.0,
+        ])))
+        .unwrap();
+    assert!(compliant.is_compliant());
+    let (set, _) = simulate(&truth, 60, 31, true, Observe::Pose);
+    for robot in [&fanuc(), &compliant] {
+        let cols: Vec<usize> = robocal::identify::select::select(robot, "full").unwrap();
+        for measure in [
+            Measure::Pose,
+            Measure::Position,
+            Measure::Orientation,
+            Measure::Relative,
+            Measure::Distance,
+        ] {
+            let obs = Observations::new(&set, measure, Default::default()).unwrap();
+            let mut ws = IdentifyWorkspace::new(robot);
+            let c = cost(robot, &obs, &mut ws);
+            let ne = normal_equations(robot, &obs, &cols, &mut ws);
+            assert!(c > 0.0);
+            assert_eq!(
+                c.to_bits(),
+                ne.cost.to_bits(),
+                "{measure:?}: {c} vs {}",
+                ne.cost
+            );
+        }
+    }
+}

@@ -168,6 +168,14 @@ pub fn solve_gradient(
     let k = ids.len();
     let mut step = StepBuffers::new(k);
     let mut lambda = 1e-3;
+    // The normal equations of an LM trial evaluated with its Jacobian (see `lm_step`).
+    let mut spare = Normal {
+        a: DMatrix::zeros(k, k),
+        g: DVector::zeros(k),
+        cost: 0.0,
+    };
+    // Optimistic from the start: LM's first step is nearly always accepted.
+    let mut accepted_first = true;
     let problem = Problem {
         robot,
         obs,
@@ -203,8 +211,8 @@ pub fn solve_gradient(
                 evaluations,
             ));
         }
-        let outcome = if opts.method == Method::Gn {
-            gn_step(
+        let (outcome, with_normal) = if opts.method == Method::Gn {
+            let o = gn_step(
                 &problem,
                 &ne,
                 &x,
@@ -213,17 +221,26 @@ pub fn solve_gradient(
                 &mut step,
                 &mut ws,
                 &mut evaluations,
-            )?
+            )?;
+            (o, false)
         } else {
-            lm_step(
+            let given = accepted_first;
+            let trial = LmTrial {
+                lambda: &mut lambda,
+                normal: given.then_some(&mut spare),
+                cols,
+            };
+            let (o, first, filled) = lm_step(
                 &problem,
                 &ne,
                 &x,
-                &mut lambda,
+                trial,
                 &mut step,
                 &mut ws,
                 &mut evaluations,
-            )
+            );
+            accepted_first = first;
+            (o, filled)
         };
         let Some((new_robot, new_cost)) = outcome else {
             return Ok(finished(
@@ -243,8 +260,14 @@ pub fn solve_gradient(
         x += &step.step;
         current = new_robot;
         let old_cost = ne.cost;
-        normal_equations_into(&current, obs, cols, &mut ws, &mut ne);
-        evaluations += 1;
+        if with_normal {
+            // The accepted trial's pass gave them already.
+            debug_assert_eq!(spare.cost.to_bits(), new_cost.to_bits());
+            std::mem::swap(&mut ne, &mut spare);
+        } else {
+            normal_equations_into(&current, obs, cols, &mut ws, &mut ne);
+            evaluations += 1;
+        }
         if !ne.cost.is_finite() {
             return Err(Error::NotConverged(format!(
                 "the cost became {} at iteration {}",
@@ -324,18 +347,27 @@ impl StepBuffers {
     }
 
     /// The model at x + t step and its cost, or None when that model leaves the robot's
-    /// bounds (100 m, 2 turns: a failed step).
+    /// bounds (100 m, 2 turns: a failed step). With `normal` (the free parameters' columns
+    /// and a buffer), the cost comes from a pass that fills the normal equations too: the
+    /// same bits as the cost-only pass (the same residuals, summed block by block alike).
     fn trial(
         &mut self,
         p: &Problem,
         x: &DVector<f64>,
         t: f64,
+        normal: Option<(&[usize], &mut Normal)>,
         ws: &mut IdentifyWorkspace,
     ) -> Option<(Robot, f64)> {
         self.trial.copy_from(x);
         self.trial.axpy(t, &self.step, 1.0);
         let cand = with_values(p.robot, p.ids, &self.trial).ok()?;
-        let c = cost(&cand, p.obs, ws);
+        let c = match normal {
+            Some((cols, out)) => {
+                normal_equations_into(&cand, p.obs, cols, ws, out);
+                out.cost
+            }
+            None => cost(&cand, p.obs, ws),
+        };
         Some((cand, c))
     }
 }
@@ -364,7 +396,7 @@ fn gn_step(
     }
     let mut t = 1.0;
     for _ in 0..30 {
-        if let Some((cand, c)) = b.trial(p, x, t, ws) {
+        if let Some((cand, c)) = b.trial(p, x, t, None, ws) {
             *evaluations += 1;
             if c.is_finite() && c <= ne.cost {
                 b.step.scale_mut(t);
@@ -387,18 +419,39 @@ fn gn_step(
     )))
 }
 
+/// Predicted decrease (relative to the cost) below which an LM trial is evaluated for its
+/// cost alone: near convergence, where a trial's change is at the level of the cost's
+/// rounding and may be refused, a pass with the Jacobian would be wasted.
+const DECISIVE: f64 = 1e-10;
+
+/// How an LM step evaluates its trials: the damping, raised and lowered in place, and where
+/// the first trial's normal equations go when it is evaluated with its Jacobian.
+struct LmTrial<'a> {
+    lambda: &'a mut f64,
+    /// Some after a step whose first trial was accepted: the next first trial is then
+    /// evaluated by a pass with the Jacobian over `cols` (into here), which the next
+    /// iteration needs if the trial is accepted; the cost-only pass it replaces would be
+    /// followed by that same pass. A refused trial wastes it, so after a refusal, and where
+    /// the predicted decrease is not [`DECISIVE`], trials are cost-only.
+    normal: Option<&'a mut Normal>,
+    cols: &'a [usize],
+}
+
 /// One Levenberg-Marquardt step (thesis 4.1; damping lambda diag(J^T W J), raised tenfold
 /// until the cost falls, lowered tenfold after a success): the new model and cost (`step`
-/// holds the step), None when no damping lowers the cost.
+/// holds the step), None when no damping lowers the cost; whether the first trial was
+/// accepted; and whether the accepted trial's normal equations are in `trial.normal`.
 fn lm_step(
     p: &Problem,
     ne: &Normal,
     x: &DVector<f64>,
-    lambda: &mut f64,
+    mut trial: LmTrial,
     b: &mut StepBuffers,
     ws: &mut IdentifyWorkspace,
     evaluations: &mut usize,
-) -> Option<(Robot, f64)> {
+) -> (Option<(Robot, f64)>, bool, bool) {
+    let lambda = trial.lambda;
+    let mut first = true;
     while *lambda < 1e16 {
         b.m.copy_from(&ne.a);
         for i in 0..ne.g.len() {
@@ -406,20 +459,32 @@ fn lm_step(
         }
         if !b.solve(&ne.g) {
             *lambda *= 10.0;
+            first = false;
             continue;
         }
-        let Some((cand, c)) = b.trial(p, x, 1.0, ws) else {
+        // Half the step's gradient product is the least decrease the linear model predicts;
+        // where it is near the cost's rounding, acceptance is a coin toss: cost-only then.
+        let decisive = 0.5 * b.step.dot(&ne.g) > DECISIVE * ne.cost;
+        let normal = if first && decisive {
+            trial.normal.take()
+        } else {
+            None
+        };
+        let filled = normal.is_some();
+        let Some((cand, c)) = b.trial(p, x, 1.0, normal.map(|n| (trial.cols, n)), ws) else {
             *lambda *= 10.0;
+            first = false;
             continue;
         };
         *evaluations += 1;
         if c.is_finite() && c < ne.cost {
             *lambda = (*lambda / 10.0).max(1e-15);
-            return Some((cand, c));
+            return (Some((cand, c)), first, filled);
         }
         *lambda *= 10.0;
+        first = false;
     }
-    None
+    (None, false, false)
 }
 
 /// Covariance of the free parameters at `robot`: s^2 (J^T W J)^-1 with the a-posteriori
