@@ -262,7 +262,6 @@ pub fn solve_gradient(
         let old_cost = ne.cost;
         if with_normal {
             // The accepted trial's pass gave them already.
-            debug_assert_eq!(spare.cost.to_bits(), new_cost.to_bits());
             std::mem::swap(&mut ne, &mut spare);
         } else {
             normal_equations_into(&current, obs, cols, &mut ws, &mut ne);
@@ -428,11 +427,11 @@ const DECISIVE: f64 = 1e-10;
 /// the first trial's normal equations go when it is evaluated with its Jacobian.
 struct LmTrial<'a> {
     lambda: &'a mut f64,
-    /// Some after a step whose first trial was accepted: the next first trial is then
-    /// evaluated by a pass with the Jacobian over `cols` (into here), which the next
-    /// iteration needs if the trial is accepted; the cost-only pass it replaces would be
-    /// followed by that same pass. A refused trial wastes it, so after a refusal, and where
-    /// the predicted decrease is not [`DECISIVE`], trials are cost-only.
+    /// Some at the first step and after a step whose first trial was accepted: the first
+    /// trial is then evaluated by a pass with the Jacobian over `cols` (into here), which
+    /// the next iteration needs if the trial is accepted; the cost-only pass it replaces
+    /// would be followed by that same pass. A refused trial wastes it, so after a refusal,
+    /// and where the predicted decrease is not [`DECISIVE`], trials are cost-only.
     normal: Option<&'a mut Normal>,
     cols: &'a [usize],
 }
@@ -462,9 +461,10 @@ fn lm_step(
             first = false;
             continue;
         }
-        // Half the step's gradient product is the least decrease the linear model predicts;
-        // where it is near the cost's rounding, acceptance is a coin toss: cost-only then.
-        let decisive = 0.5 * b.step.dot(&ne.g) > DECISIVE * ne.cost;
+        // The linear model predicts the decrease 2 s.g - s^T A s = s.g + lambda s^T D s
+        // (cost sum r_w^2, (A + lambda D) s = g): at least s.g. Where that is near the
+        // cost's rounding, acceptance is a coin toss: cost-only then.
+        let decisive = b.step.dot(&ne.g) > DECISIVE * ne.cost;
         let normal = if first && decisive {
             trial.normal.take()
         } else {

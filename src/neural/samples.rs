@@ -201,7 +201,8 @@ pub fn objective(s: &Samples, w: &Weights, lambda: f64, grad: &mut DVector<f64>)
 }
 
 /// The samples as matrices (one row per sample) for fast batched passes: the objective and
-/// its gradient by matrix products, the same numbers as [`objective`] and [`Samples::mse`].
+/// its gradient by matrix products, the numbers of [`objective`] and [`Samples::mse`] (to
+/// about 1e-16: the batch's activation runs on [`super::logistic`]'s exponential).
 pub struct Batch<'a> {
     s: &'a Samples,
     x: DMatrix<f64>,
