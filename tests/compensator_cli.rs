@@ -341,19 +341,9 @@ fn train_reports_the_repeats_of_its_data() {
     let data = tmp("repeats.csv");
     std::fs::write(&data, csv.join("\n") + "\n").unwrap();
     let (comp, report) = (tmp("repeats.rcal"), tmp("repeats.json"));
-    let mut args = vec![
-        "train",
-        "--robot",
-        FANUC,
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        comp.to_str().unwrap(),
-        "--report",
-        report.to_str().unwrap(),
-    ];
-    args.extend_from_slice(CHEAP_TRAIN);
-    let o = robocal(&args);
+    let mut extra = vec!["--report", report.to_str().unwrap()];
+    extra.extend_from_slice(CHEAP_TRAIN);
+    let o = common::train_fanuc(data.to_str().unwrap(), comp.to_str().unwrap(), &extra);
     let out = stdout(&o);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(

@@ -868,11 +868,7 @@ fn edge_inputs_of_train_and_evaluate() {
     let out = common::tmp("edge.rcal");
     let out = out.to_str().unwrap();
     // `train` on Case D's training rows with `extra` flags.
-    let train = |extra: &[&str]| -> std::process::Output {
-        let mut args = vec!["train", "--robot", FANUC, "--data", TRAIN, "--out", out];
-        args.extend_from_slice(extra);
-        robocal(&args)
-    };
+    let train = |extra: &[&str]| common::train_fanuc(TRAIN, out, extra);
     let failed = |extra: &[&str], says: &str| {
         let o = train(extra);
         let err = stderr(&o);
@@ -931,17 +927,7 @@ fn edge_inputs_of_train_and_evaluate() {
     }
     let once_path = common::tmp("edge_once.csv");
     std::fs::write(&once_path, once).unwrap();
-    let mut args = vec![
-        "train",
-        "--robot",
-        FANUC,
-        "--data",
-        once_path.to_str().unwrap(),
-        "--out",
-        out,
-    ];
-    args.extend_from_slice(common::CHEAP_TRAIN);
-    let o = robocal(&args);
+    let o = common::train_fanuc(once_path.to_str().unwrap(), out, common::CHEAP_TRAIN);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         common::stdout(&o).contains("are one configuration: the network can learn only a constant"),

@@ -96,7 +96,8 @@ pub struct Solution {
     pub stop: StopReason,
     /// Final weighted sum of squares.
     pub cost: f64,
-    /// Cost evaluations (for Nelder-Mead: function evaluations).
+    /// Passes over the data (a cost, or a cost with the normal equations; for Nelder-Mead:
+    /// function evaluations).
     pub evaluations: usize,
     /// The normal equations at `robot` over the solved parameters (gradient methods; None
     /// for Nelder-Mead): the covariance needs them, and they cost a pass over the data.
@@ -179,6 +180,7 @@ pub fn solve_gradient(
     let problem = Problem {
         robot,
         obs,
+        cols,
         ids: &ids,
     };
     for iter in 0..opts.max_iterations {
@@ -224,11 +226,9 @@ pub fn solve_gradient(
             )?;
             (o, false)
         } else {
-            let given = accepted_first;
             let trial = LmTrial {
                 lambda: &mut lambda,
-                normal: given.then_some(&mut spare),
-                cols,
+                normal: accepted_first.then_some(&mut spare),
             };
             let (o, first, filled) = lm_step(
                 &problem,
@@ -306,6 +306,8 @@ pub fn solve_gradient(
 struct Problem<'a> {
     robot: &'a Robot,
     obs: &'a Observations<'a>,
+    /// The free parameters (indices into `Robot::parameters`) and their ids.
+    cols: &'a [usize],
     ids: &'a [ParamId],
 }
 
@@ -346,23 +348,23 @@ impl StepBuffers {
     }
 
     /// The model at x + t step and its cost, or None when that model leaves the robot's
-    /// bounds (100 m, 2 turns: a failed step). With `normal` (the free parameters' columns
-    /// and a buffer), the cost comes from a pass that fills the normal equations too: the
-    /// same bits as the cost-only pass (the same residuals, summed block by block alike).
+    /// bounds (100 m, 2 turns: a failed step). With `normal`, the cost comes from a pass
+    /// that fills the normal equations too: the same bits as the cost-only pass (the same
+    /// residuals, summed block by block alike).
     fn trial(
         &mut self,
         p: &Problem,
         x: &DVector<f64>,
         t: f64,
-        normal: Option<(&[usize], &mut Normal)>,
+        normal: Option<&mut Normal>,
         ws: &mut IdentifyWorkspace,
     ) -> Option<(Robot, f64)> {
         self.trial.copy_from(x);
         self.trial.axpy(t, &self.step, 1.0);
         let cand = with_values(p.robot, p.ids, &self.trial).ok()?;
         let c = match normal {
-            Some((cols, out)) => {
-                normal_equations_into(&cand, p.obs, cols, ws, out);
+            Some(out) => {
+                normal_equations_into(&cand, p.obs, p.cols, ws, out);
                 out.cost
             }
             None => cost(&cand, p.obs, ws),
@@ -428,12 +430,11 @@ const DECISIVE: f64 = 1e-10;
 struct LmTrial<'a> {
     lambda: &'a mut f64,
     /// Some at the first step and after a step whose first trial was accepted: the first
-    /// trial is then evaluated by a pass with the Jacobian over `cols` (into here), which
+    /// trial is then evaluated by a pass with the Jacobian (into here), which
     /// the next iteration needs if the trial is accepted; the cost-only pass it replaces
     /// would be followed by that same pass. A refused trial wastes it, so after a refusal,
     /// and where the predicted decrease is not [`DECISIVE`], trials are cost-only.
     normal: Option<&'a mut Normal>,
-    cols: &'a [usize],
 }
 
 /// One Levenberg-Marquardt step (thesis 4.1; damping lambda diag(J^T W J), raised tenfold
@@ -471,7 +472,7 @@ fn lm_step(
             None
         };
         let filled = normal.is_some();
-        let Some((cand, c)) = b.trial(p, x, 1.0, normal.map(|n| (trial.cols, n)), ws) else {
+        let Some((cand, c)) = b.trial(p, x, 1.0, normal, ws) else {
             *lambda *= 10.0;
             first = false;
             continue;

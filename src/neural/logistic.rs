@@ -1,5 +1,6 @@
-//! The hidden units' activation over a batch, the logistic sigmoid s(z) = 1 / (1 + e^-z)
-//! (thesis 3.2), with an exponential of our own that the compiler vectorises.
+//! The hidden units' activation, the logistic sigmoid s(z) = 1 / (1 + e^-z) (thesis 3.2):
+//! one value at a time on the C library's `exp`, over a batch on an exponential of our own
+//! that the compiler vectorises.
 //!
 //! Why ours: training evaluates the activation for every sample, hidden unit and objective
 //! evaluation (tens of millions of values for 150 poses), and the C library's `exp` is an
@@ -8,7 +9,8 @@
 //! default target): 3.6 ns per value against 5.1 ns for the library's on this machine. One
 //! value at a time the library's table-driven `exp` is faster (16 against 22 ns on a
 //! dependent chain), so prediction, which takes one configuration at a time, keeps it
-//! ([`super::weights::Weights::forward_into`]); the two agree to about 1e-16.
+//! ([`logistic`], in [`super::weights::Weights::forward_into`]); the two agree to about
+//! 1e-16.
 //!
 //! Method (Cody and Waite, as fdlibm's `exp`): x = k ln2 + r with k = round(x / ln2) and
 //! |r| <= ln2 / 2, ln2 split in a high part with trailing zeros (k ln2_hi is exact) and a low
@@ -70,17 +72,23 @@ fn exp_clamped(x: f64) -> f64 {
     er * scale
 }
 
-/// The logistic sigmoid 1 / (1 + e^-z), in (0, 1).
-#[inline(always)]
+/// The logistic sigmoid 1 / (1 + e^-z), in (0, 1), one value at a time: with the C
+/// library's `exp`, the faster one there (prediction).
 pub fn logistic(z: f64) -> f64 {
+    1.0 / (1.0 + (-z).exp())
+}
+
+/// [`logistic`] on our exponential, for loops the compiler vectorises.
+#[inline(always)]
+fn logistic_vectorised(z: f64) -> f64 {
     1.0 / (1.0 + exp_clamped(-z))
 }
 
 /// `values[i] <- logistic(values[i] + bias)` for every i: one hidden unit over a batch (a loop
-/// the compiler vectorises).
+/// the compiler vectorises, on our exponential).
 pub fn logistic_in_place(values: &mut [f64], bias: f64) {
     for v in values.iter_mut() {
-        *v = logistic(*v + bias);
+        *v = logistic_vectorised(*v + bias);
     }
 }
 
@@ -118,18 +126,18 @@ mod tests {
 
     #[test]
     fn logistic_limits_symmetry_and_nan() {
-        assert_eq!(logistic(0.0), 0.5);
-        assert_eq!(logistic(800.0), 1.0);
-        assert_eq!(logistic(f64::INFINITY), 1.0);
-        assert!(logistic(-800.0) > 0.0 && logistic(-800.0) < 1e-300);
-        assert!(logistic(f64::NEG_INFINITY) < 1e-300);
-        assert!(logistic(f64::NAN).is_nan());
+        assert_eq!(logistic_vectorised(0.0), 0.5);
+        assert_eq!(logistic_vectorised(800.0), 1.0);
+        assert_eq!(logistic_vectorised(f64::INFINITY), 1.0);
+        assert!(logistic_vectorised(-800.0) > 0.0 && logistic_vectorised(-800.0) < 1e-300);
+        assert!(logistic_vectorised(f64::NEG_INFINITY) < 1e-300);
+        assert!(logistic_vectorised(f64::NAN).is_nan());
         // s(z) + s(-z) = 1 and the value of the definition with the C library's exp.
         for i in 0..2000 {
             let z = -30.0 + 0.03 * i as f64;
-            let s = logistic(z);
-            assert!((s + logistic(-z) - 1.0).abs() < 4e-16, "{z}");
-            let reference = 1.0 / (1.0 + (-z).exp());
+            let s = logistic_vectorised(z);
+            assert!((s + logistic_vectorised(-z) - 1.0).abs() < 4e-16, "{z}");
+            let reference = logistic(z);
             assert!(
                 (s - reference).abs() <= 4e-16 * reference,
                 "{z}: {s} {reference}"
@@ -138,7 +146,7 @@ mod tests {
         let mut v = [-3.0, 0.0, 2.5];
         logistic_in_place(&mut v, 0.5);
         for (got, z) in v.iter().zip([-2.5, 0.5, 3.0]) {
-            assert_eq!(*got, logistic(z));
+            assert_eq!(*got, logistic_vectorised(z));
         }
     }
 }

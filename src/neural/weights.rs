@@ -17,12 +17,6 @@ pub struct Weights {
     pub b2: DVector<f64>,
 }
 
-/// The logistic with the C library's `exp`: one value at a time it is faster than the batch
-/// path's vectorised one (`super::logistic`), and within 2 ulps of it.
-fn sigmoid(z: f64) -> f64 {
-    1.0 / (1.0 + (-z).exp())
-}
-
 impl Weights {
     /// Number of inputs (columns of W1).
     pub fn inputs(&self) -> usize {
@@ -117,7 +111,7 @@ impl Weights {
             for (i, xi) in x.iter().enumerate() {
                 z += self.w1[(j, i)] * xi;
             }
-            *hj = sigmoid(z);
+            *hj = super::logistic::logistic(z);
         }
         for (k, yk) in y.iter_mut().enumerate() {
             let mut s = self.b2[k];

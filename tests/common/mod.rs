@@ -66,6 +66,13 @@ pub fn tmp(name: &str) -> PathBuf {
     dir.join(name)
 }
 
+/// `robocal train` of the FANUC on `data` into `out`, with `extra` flags.
+pub fn train_fanuc(data: &str, out: &str, extra: &[&str]) -> Output {
+    let mut args = vec!["train", "--robot", FANUC, "--data", data, "--out", out];
+    args.extend_from_slice(extra);
+    robocal(&args)
+}
+
 /// `robocal identify` of the FANUC on Case D's calibration set into `out`, with `extra` flags;
 /// panics with robocal's stderr on failure. Returns stdout.
 pub fn identify_case_d(out: &std::path::Path, extra: &[&str]) -> String {
