@@ -1,0 +1,223 @@
+//! The default compensator on simulated robots it was not designed on (issue 11, item 7: on a
+//! simulated non-geometric robot the default must be >= 2.5x better than full geometric
+//! alone). Each robot is drawn by a seed: geometric deviations of every parameter (random
+//! sign, 0.2-3 mm or mrad), the joints' gravity compliance (payload, link masses and the
+//! compliances drawn), and periodic gear errors of every joint; FANUC R-2000iB/210F and UR10
+//! structures, pose and position-only measurements. The flow is a user's: `simulate`
+//! (calibration, training and test sets), `identify --params full` on the calibration set,
+//! `train` with no options on the training set, its validation against the test set's truth.
+//!
+//! About 10 s in a release build; the table: `cargo test --release --test simulated_robots --
+//! --nocapture`.
+
+mod common;
+
+use common::{FANUC, accuracy, json, robocal, stderr, stdout, tmp};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use robocal::model::read_robot;
+use std::fmt::Write as _;
+
+const UR10: &str = "datasets/robots/ur10.toml";
+
+/// One drawn robot: its structure, what the sensor measures, and its two files' text.
+struct Drawn {
+    structure: &'static str,
+    measure: &'static str,
+    deviations: String,
+    nongeometric: String,
+}
+
+/// Draws a robot of `structure`'s deviations and non-geometric errors from `seed`.
+fn draw(structure: &'static str, measure: &'static str, seed: u64) -> Drawn {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let robot = read_robot(common::root().join(structure)).unwrap();
+    let mut deviations = String::new();
+    for id in robot.parameters() {
+        let name = id.name();
+        // Geometry only: the compliances are drawn below, in the simulator's own terms.
+        if name.starts_with('c') || name.starts_with('k') {
+            continue;
+        }
+        let size: f64 = rng.random_range(0.2..3.0);
+        let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+        writeln!(deviations, "\"{name}\" = {:.3}", sign * size).unwrap();
+    }
+    // Masses (kg) and compliances (mrad per kN m) of the structure's size: a 210 kg-payload
+    // FANUC's gears are stiff, a UR10's harmonic drives far less so.
+    let (payload, masses, arm, wrist): (f64, [f64; 6], (f64, f64), (f64, f64)) =
+        if structure == FANUC {
+            (
+                rng.random_range(20.0..210.0),
+                [400.0, 220.0, 180.0, 30.0, 20.0, 5.0],
+                (0.02, 0.1),
+                (0.0, 0.5),
+            )
+        } else {
+            (
+                rng.random_range(0.0..10.0),
+                [7.1, 12.7, 4.3, 1.2, 1.2, 0.25],
+                (0.5, 3.0),
+                (0.0, 5.0),
+            )
+        };
+    let scale: f64 = rng.random_range(0.5..1.5);
+    let masses = masses.map(|m| m * scale);
+    let c = [
+        0.0,
+        rng.random_range(arm.0..arm.1),
+        rng.random_range(arm.0..arm.1),
+        rng.random_range(wrist.0..wrist.1),
+        rng.random_range(wrist.0..wrist.1),
+        0.0,
+    ];
+    let mut nongeometric = format!(
+        "[compliance]\npayload_kg = {payload:.1}\nlink_masses_kg = {masses:?}\n\
+         mrad_per_knm = {c:?}\ngravity = [0.0, 0.0, -9.81]\n"
+    );
+    for joint in 1..=6 {
+        writeln!(
+            nongeometric,
+            "\n[[gear]]\njoint = {joint}\namplitude1_mrad = {:.3}\nphase1_deg = {:.1}\n\
+             amplitude2_mrad = {:.3}\nphase2_deg = {:.1}",
+            rng.random_range(0.01..0.1),
+            rng.random_range(-180.0..180.0),
+            rng.random_range(0.0..0.04),
+            rng.random_range(-180.0..180.0),
+        )
+        .unwrap();
+    }
+    Drawn {
+        structure,
+        measure,
+        deviations,
+        nongeometric,
+    }
+}
+
+/// Mean position error against the truth (mm) of the identified model and of the default
+/// compensator on the test set, and the settings `train` chose.
+fn run(index: usize, d: &Drawn, seed: u64) -> (f64, f64, String) {
+    let file = |n: &str| {
+        tmp(&format!("sim{index}_{n}"))
+            .to_str()
+            .unwrap()
+            .to_string()
+    };
+    std::fs::write(file("deviations.toml"), &d.deviations).unwrap();
+    std::fs::write(file("nongeometric.toml"), &d.nongeometric).unwrap();
+    for (count, offset, name) in [("30", 1, "cal"), ("150", 2, "train"), ("300", 3, "test")] {
+        let sample_seed = (seed * 10 + offset).to_string();
+        let (out, truth) = (
+            file(&format!("{name}.csv")),
+            file(&format!("{name}_truth.csv")),
+        );
+        let o = robocal(&[
+            "simulate",
+            "--robot",
+            d.structure,
+            "--deviations",
+            &file("deviations.toml"),
+            "--nongeometric",
+            &file("nongeometric.toml"),
+            "--count",
+            count,
+            "--seed",
+            &sample_seed,
+            "--sigma-pos",
+            "0.033",
+            "--sigma-rot",
+            "0.174",
+            "--measure",
+            d.measure,
+            "--out",
+            &out,
+            "--truth-out",
+            &truth,
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let full = file("full.toml");
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        d.structure,
+        "--data",
+        &file("cal.csv"),
+        "--params",
+        "full",
+        "--out",
+        &full,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report = file("train.json");
+    let o = robocal(&[
+        "train",
+        "--robot",
+        &full,
+        "--data",
+        &file("train.csv"),
+        "--validate",
+        &file("test_truth.csv"),
+        "--out",
+        &file("default.rcal"),
+        "--report",
+        &report,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = json(std::path::Path::new(&report));
+    let mean = |what| {
+        accuracy(&r, "validation", what)["position_mm"]["mean"]
+            .as_f64()
+            .unwrap()
+    };
+    let chosen = stdout(&o)
+        .lines()
+        .find(|l| l.starts_with("settings: "))
+        .map_or(String::new(), |l| l["settings: ".len()..].to_string());
+    (mean("model"), mean("+net"), chosen)
+}
+
+#[test]
+fn default_beats_full_geometry_on_drawn_robots() {
+    let robots = [
+        (FANUC, "pose"),
+        (FANUC, "pose"),
+        (FANUC, "pose"),
+        (FANUC, "position"),
+        (FANUC, "pose"),
+        (FANUC, "pose"),
+        (UR10, "pose"),
+        (UR10, "pose"),
+        (UR10, "pose"),
+        (UR10, "position"),
+    ];
+    let mut table = String::from(
+        "| robot | structure | measured | full mm | default mm | ratio | chosen |\n|---|---|---|---|---|---|---|\n",
+    );
+    let mut ratios = Vec::new();
+    for (i, &(structure, measure)) in robots.iter().enumerate() {
+        let seed = 7100 + i as u64;
+        let d = draw(structure, measure, seed);
+        let (model, net, chosen) = run(i, &d, seed);
+        let name = if structure == FANUC { "FANUC" } else { "UR10" };
+        writeln!(
+            table,
+            "| {i} | {name} | {measure} | {model:.4} | {net:.4} | {:.2} | {chosen} |",
+            model / net
+        )
+        .unwrap();
+        ratios.push(model / net);
+    }
+    println!("{table}");
+    // The issue's target on its robot type, the FANUC; on the UR10 draws full geometry leaves
+    // 0.07-0.17 mm against the noise of 0.033 mm per coordinate, and the default must still
+    // remove a third of it.
+    for (i, (r, &(structure, _))) in ratios.iter().zip(&robots).enumerate() {
+        let floor = if structure == FANUC { 2.5 } else { 1.5 };
+        assert!(
+            *r >= floor,
+            "robot {i}: default only {r:.2}x below full geometry (at least {floor}x)\n{table}"
+        );
+    }
+}
