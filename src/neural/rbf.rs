@@ -502,8 +502,8 @@ fn kernel(x: &[Vec<f64>], h: &Hyper) -> Mat<f64> {
 /// pairs of rows (i > j, column by column): by input (`columns`, the kernel's sweep adds
 /// input after input over many pairs at once) and by row (`rows`, the gradient's sweep adds
 /// one pair to every input's sum). The squared differences are formed on the fly from these
-/// few kilobytes instead of being stored per pair and input (30 MB on 500 rows and 30
-/// inputs, read twice per evaluation).
+/// two copies of the inputs (240 kB on 500 rows and 30 inputs, cache-resident) instead of
+/// being stored per pair and input (30 MB, read twice per evaluation).
 pub struct Pairs {
     n: usize,
     columns: Vec<Vec<f64>>,
@@ -562,7 +562,8 @@ impl Pairs {
     #[inline(always)]
     fn weighted_sums_in(&self, p: &[f64], total: &mut [f64]) {
         let n = self.n;
-        total.fill(0.0);
+        // -0.0: the start of an f64 sum, as an iterator's `sum` starts it.
+        total.fill(-0.0);
         let mut at = 0;
         for j in 0..n {
             let xj = &self.rows[j];
@@ -635,7 +636,8 @@ pub fn neg_log_likelihood(
     let f = 0.5 * fit + 0.5 * o as f64 * log_det + 0.5 * dh.norm_squared() / sd2;
     if let Some(g) = grad {
         let kinv = chol.inverse();
-        // (alpha alpha^T)_ij, formed where it is used (an n x n product otherwise).
+        // (alpha alpha^T)_ij, formed where it is used (an n x n product otherwise; for one
+        // target, the searches' case, the same product bit for bit).
         let aa = |i: usize, j: usize| (0..o).fold(0.0, |a, c| a + alpha[(i, c)] * alpha[(j, c)]);
         let of = o as f64;
         // M's diagonal (E_ii = 1) and P = M o (s^2 E) over the pairs.
@@ -745,26 +747,25 @@ mod tests {
         let p: Vec<f64> = (0..count).map(|k| 1.0 + k as f64 / 7.0).collect();
         let mut total = vec![f64::NAN; 3];
         pairs.weighted_sums(&p, &mut total);
-        let mut expected_total = [0.0; 3];
+        // Written out pair by pair as the old table did it (and as an f64 sum starts, at
+        // -0.0): the same operations in the same order, so the same bits.
+        let mut expected_total = [-0.0; 3];
         let mut at = 0;
         for j in 0..rows.len() {
             for i in j + 1..rows.len() {
                 let (xi, xj) = (&s.x[rows[i]], &s.x[rows[j]]);
                 let d2: Vec<f64> = (0..3).map(|c| (xi[c] - xj[c]).powi(2)).collect();
-                let expected: f64 = (0..3).map(|c| w[c] * d2[c]).sum();
-                assert!(
-                    (q[at] - expected).abs() <= 1e-14 * (1.0 + expected),
-                    "pair {at}"
-                );
+                let mut expected = 0.0;
                 for c in 0..3 {
+                    expected += d2[c] * w[c];
                     expected_total[c] += p[at] * d2[c];
                 }
+                assert_eq!(q[at].to_bits(), expected.to_bits(), "pair {at}");
                 at += 1;
             }
         }
         for c in 0..3 {
-            let e = expected_total[c];
-            assert!((total[c] - e).abs() <= 1e-12 * (1.0 + e.abs()), "input {c}");
+            assert_eq!(total[c].to_bits(), expected_total[c].to_bits(), "input {c}");
         }
     }
 
