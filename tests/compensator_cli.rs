@@ -427,65 +427,26 @@ phase2_deg = 80.0
 "#,
     )
     .unwrap();
-    let file = |n: &str| tmp(n).to_str().unwrap().to_string();
-    for (count, seed, name) in [
-        ("30", "811", "cal"),
-        ("150", "812", "train"),
-        ("300", "813", "test"),
-    ] {
-        let (out, truth) = (
-            file(&format!("ng_{name}.csv")),
-            file(&format!("ng_{name}_truth.csv")),
-        );
-        let o = robocal(&[
-            "simulate",
-            "--robot",
-            FANUC,
-            "--deviations",
-            "datasets/deviations/table_6_1.toml",
-            "--nongeometric",
-            ng.to_str().unwrap(),
-            "--count",
-            count,
-            "--seed",
-            seed,
-            "--sigma-pos",
-            "0.033",
-            "--sigma-rot",
-            "0.174",
-            "--measure",
-            "pose",
-            "--out",
-            &out,
-            "--truth-out",
-            &truth,
-        ]);
-        assert!(o.status.success(), "{}", stderr(&o));
-    }
-    let full = file("ng_other_full.toml");
-    let o = robocal(&[
-        "identify",
-        "--robot",
+    let file = common::simulate_and_identify(
+        "ng",
         FANUC,
-        "--data",
-        &file("ng_cal.csv"),
-        "--params",
-        "full",
-        "--out",
-        &full,
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+        "datasets/deviations/table_6_1.toml",
+        ng.to_str().unwrap(),
+        [811, 812, 813],
+        "pose",
+    );
+    let full = file("full.toml");
     let report = tmp("ng_other_train.json");
     let o = robocal(&[
         "train",
         "--robot",
         &full,
         "--data",
-        &file("ng_train.csv"),
+        &file("train.csv"),
         "--validate",
-        &file("ng_test_truth.csv"),
+        &file("test_truth.csv"),
         "--out",
-        &file("ng_other.rcal"),
+        &file("other.rcal"),
         "--report",
         report.to_str().unwrap(),
     ]);
@@ -512,9 +473,9 @@ phase2_deg = 80.0
     // `--refine full` leaves the compliances to cross-validation as the default does (the
     // same candidates, the same compensator); `--compliance off` refines the geometry alone.
     let (ng_train, ng_test_truth, ng_rcal) = (
-        file("ng_train.csv"),
-        file("ng_test_truth.csv"),
-        file("ng_other_refine.rcal"),
+        file("train.csv"),
+        file("test_truth.csv"),
+        file("other_refine.rcal"),
     );
     let train = |extra: &[&str], name: &str| {
         let report = tmp(&format!("ng_other_{name}.json"));

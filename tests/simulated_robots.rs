@@ -12,7 +12,7 @@
 
 mod common;
 
-use common::{FANUC, accuracy, json, robocal, stderr, stdout, tmp};
+use common::{FANUC, accuracy, json, robocal, simulate_and_identify, stderr, stdout, tmp};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use robocal::model::read_robot;
@@ -106,50 +106,15 @@ fn run(index: usize, d: &Drawn, seed: u64) -> (f64, f64, String) {
     };
     std::fs::write(file("deviations.toml"), &d.deviations).unwrap();
     std::fs::write(file("nongeometric.toml"), &d.nongeometric).unwrap();
-    for (count, offset, name) in [("30", 1, "cal"), ("150", 2, "train"), ("300", 3, "test")] {
-        let sample_seed = (seed * 10 + offset).to_string();
-        let (out, truth) = (
-            file(&format!("{name}.csv")),
-            file(&format!("{name}_truth.csv")),
-        );
-        let o = robocal(&[
-            "simulate",
-            "--robot",
-            d.structure,
-            "--deviations",
-            &file("deviations.toml"),
-            "--nongeometric",
-            &file("nongeometric.toml"),
-            "--count",
-            count,
-            "--seed",
-            &sample_seed,
-            "--sigma-pos",
-            "0.033",
-            "--sigma-rot",
-            "0.174",
-            "--measure",
-            d.measure,
-            "--out",
-            &out,
-            "--truth-out",
-            &truth,
-        ]);
-        assert!(o.status.success(), "{}", stderr(&o));
-    }
-    let full = file("full.toml");
-    let o = robocal(&[
-        "identify",
-        "--robot",
+    let file = simulate_and_identify(
+        &format!("sim{index}"),
         d.structure,
-        "--data",
-        &file("cal.csv"),
-        "--params",
-        "full",
-        "--out",
-        &full,
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+        &file("deviations.toml"),
+        &file("nongeometric.toml"),
+        [1, 2, 3].map(|offset| seed * 10 + offset),
+        d.measure,
+    );
+    let full = file("full.toml");
     let report = file("train.json");
     let o = robocal(&[
         "train",

@@ -73,6 +73,66 @@ pub fn train_fanuc(data: &str, out: &str, extra: &[&str]) -> Output {
     robocal(&args)
 }
 
+/// The shipped non-geometric robot's protocol on a virtual robot: 30 calibration, 150
+/// training and 300 test poses (drawn with `seeds` in that order; noise 0.033 mm and 0.174
+/// mrad; the sensor reports `measure`) written with their truths as `{name}_cal.csv`,
+/// `{name}_cal_truth.csv`, `{name}_train.csv`, ... in the test folder, then `identify --params
+/// full` on the calibration set into `{name}_full.toml`. Panics with robocal's stderr on a
+/// failure. Returns the path of `{name}_{tail}` for a tail such as `test_truth.csv`.
+pub fn simulate_and_identify(
+    name: &str,
+    robot: &str,
+    deviations: &str,
+    nongeometric: &str,
+    seeds: [u64; 3],
+    measure: &str,
+) -> impl Fn(&str) -> String + use<> {
+    let name = name.to_string();
+    let file = move |tail: &str| tmp(&format!("{name}_{tail}")).to_str().unwrap().to_string();
+    for ((count, set), seed) in [("30", "cal"), ("150", "train"), ("300", "test")]
+        .into_iter()
+        .zip(seeds)
+    {
+        let o = robocal(&[
+            "simulate",
+            "--robot",
+            robot,
+            "--deviations",
+            deviations,
+            "--nongeometric",
+            nongeometric,
+            "--count",
+            count,
+            "--seed",
+            &seed.to_string(),
+            "--sigma-pos",
+            "0.033",
+            "--sigma-rot",
+            "0.174",
+            "--measure",
+            measure,
+            "--out",
+            &file(&format!("{set}.csv")),
+            "--truth-out",
+            &file(&format!("{set}_truth.csv")),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        robot,
+        "--data",
+        &file("cal.csv"),
+        "--params",
+        "full",
+        "--out",
+        &file("full.toml"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    file
+}
+
 /// `robocal identify` of the FANUC on Case D's calibration set into `out`, with `extra` flags;
 /// panics with robocal's stderr on failure. Returns stdout.
 pub fn identify_case_d(out: &std::path::Path, extra: &[&str]) -> String {
