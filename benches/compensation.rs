@@ -35,6 +35,7 @@ fn compensation(c: &mut Criterion) {
         penalty: 1.0,
         members: 4,
         refine: Some("full".into()),
+        mlp_share: None,
     };
     let (comp, ..) = Compensator::fit(
         &robot,

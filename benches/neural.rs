@@ -80,6 +80,7 @@ fn neural(c: &mut Criterion) {
         penalty: 1.0,
         members: 4,
         refine: None,
+        mlp_share: None,
     };
     let (comp, _) = Compensator::fit(
         &model,

@@ -340,6 +340,7 @@ fn compensated_jacobian_matches_central_differences() {
             penalty: 0.1,
             members,
             refine: None,
+            mlp_share: None,
         };
         let opts = CompensatorOptions::fixed(
             &settings,

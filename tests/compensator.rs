@@ -115,6 +115,7 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
             penalty: 0.1,
             members,
             refine,
+            mlp_share: (network == Network::Mix).then_some(0.3),
         };
         let opts = CompensatorOptions::fixed(&settings, TrainOptions::default());
         let (c, report) = Compensator::train(&id.robot, &train, &opts, &|_, _| {}).unwrap();
@@ -129,7 +130,8 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
             "{form:?}: {report:?}"
         );
         if network == Network::Mix {
-            // The MLPs' mean and the RBF network have equal say.
+            // The MLPs' mean has the share asked for, the RBF network the rest.
+            assert_eq!(c.mlp_share, 0.3);
             let (mut mlp, mut rbf) = (c.clone(), c.clone());
             mlp.rbf = None;
             rbf.members.clear();
@@ -139,13 +141,27 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
                 let b = rbf.correction(&m.q, &mut w2).to_vec();
                 let both = c.correction(&m.q, &mut w3);
                 for i in 0..both.len() {
-                    let mid = 0.5 * (a[i] + b[i]);
+                    let mid = 0.3 * a[i] + 0.7 * b[i];
                     assert!((both[i] - mid).abs() <= 1e-12 * (1.0 + mid.abs()), "{i}");
                 }
                 assert!(
                     a != b,
                     "the two parts must differ for the check to mean anything"
                 );
+            }
+            // Cross-validation scores every share from one run of the networks: bit for bit
+            // the prediction of the compensator with that share.
+            let shares = [0.05, 0.3, 0.5, 0.95];
+            let (mut w4, mut w5) = (PredictWorkspace::default(), PredictWorkspace::default());
+            for m in test.rows.iter().take(5) {
+                let mut poses = Vec::new();
+                c.predict_shares(&m.q, &shares, &mut w4, |i, p| poses.push((i, p)));
+                assert_eq!(poses.len(), shares.len());
+                for (i, p) in poses {
+                    let mut one = c.clone();
+                    one.mlp_share = shares[i];
+                    assert_eq!(p, one.predict(&m.q, &mut w5), "share {}", shares[i]);
+                }
             }
         }
         if network == Network::Mlp && members == 2 {
@@ -219,6 +235,7 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
             let shared = &rbf.kernels[0];
             let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
             v["version"] = serde_json::json!(4);
+            v.as_object_mut().unwrap().remove("mlp_share");
             shared_kernel(&mut v);
             std::fs::write(&path, resign(v)).unwrap();
             let old = Compensator::load(&path).unwrap();
@@ -226,6 +243,8 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
             assert_eq!(old_rbf.kernels.len(), 1);
             assert_eq!(old_rbf.kernels[0].outputs, c.outputs());
             let mut expected = c.clone();
+            // Equal say before version 6.
+            expected.mlp_share = 0.5;
             let e_rbf = expected.rbf.as_mut().unwrap();
             e_rbf.kernels = vec![robocal::neural::rbf::Kernel {
                 outputs: c.outputs(),
@@ -238,6 +257,19 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
         }
         let e = edit(&|v| v["domain"]["radius"] = serde_json::json!(-1.0));
         assert!(e.contains("domain"), "{e}");
+        assert_eq!(back.mlp_share, c.mlp_share);
+        for share in [0.0, 1.0, -0.5, 2.0] {
+            let e = edit(&|v| v["mlp_share"] = serde_json::json!(share));
+            assert!(e.contains("mlp_share"), "{share}: {e}");
+        }
+        {
+            // A version 5 file (before the share) is read with the equal say it was made with.
+            let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            v["version"] = serde_json::json!(5);
+            v.as_object_mut().unwrap().remove("mlp_share");
+            std::fs::write(&path, resign(v)).unwrap();
+            assert_eq!(Compensator::load(&path).unwrap().mlp_share, 0.5);
+        }
         if c.shrink.is_some() {
             assert_eq!(back.shrink, c.shrink);
             let e = edit(&|v| v["shrink"]["signal"] = serde_json::json!(-1.0));
@@ -250,6 +282,7 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
             let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
             v["version"] = serde_json::json!(3);
             v.as_object_mut().unwrap().remove("shrink");
+            v.as_object_mut().unwrap().remove("mlp_share");
             shared_kernel(&mut v);
             std::fs::write(&path, resign(v)).unwrap();
             assert!(Compensator::load(&path).unwrap().shrink.is_none());
@@ -347,6 +380,7 @@ fn configurations_outside_the_training_domain_are_flagged() {
         penalty: 0.1,
         members: 1,
         refine: None,
+        mlp_share: None,
     };
     let (c, ..) = Compensator::fit(
         &nominal,
@@ -551,6 +585,50 @@ fn default_selection_races_candidates() {
         .map(|c| (c.settings.refine.clone(), c.score.is_some()))
         .collect();
     assert_eq!(alone, vec![(None, true), (Some("full".into()), true)]);
+}
+
+/// A blend's MLP share is chosen by cross-validation: the blend's candidate takes a share of
+/// the grid, its score is the lowest of the grid (no higher than at the share 1/2 fixed), it
+/// is the score of that share fixed, bit for bit (the grid's one run of the networks against
+/// the single prediction), and the compensator carries it.
+#[test]
+fn the_blend_share_is_chosen_by_cross_validation() {
+    use robocal::neural::compensator::Network;
+    let (model, train) = case_d_offsets();
+    let run = |share: Option<f64>| {
+        let opts = CompensatorOptions {
+            network: Some(Network::Mix),
+            refine: robocal::neural::compensator::Refine::Off,
+            mlp_share: share,
+            ..Default::default()
+        };
+        let (c, report) = Compensator::train(&model, &train, &opts, &|_, _| {}).unwrap();
+        let sel = report.selection.expect("cross-validated");
+        let chosen = &sel.candidates[sel.chosen];
+        assert_eq!(chosen.settings.network, Network::Mix);
+        assert_eq!(Some(c.mlp_share), chosen.settings.mlp_share);
+        assert_eq!(report.settings, chosen.settings);
+        let rms = chosen.score.as_ref().unwrap().position_rms_mm;
+        (c.mlp_share, rms, chosen.settings.clone())
+    };
+    let (share, open, settings) = run(None);
+    assert!(robocal::neural::tuning::SHARES.contains(&share), "{share}");
+    let (half_share, half, half_settings) = run(Some(0.5));
+    assert_eq!(half_share, 0.5);
+    assert_eq!(
+        Settings {
+            mlp_share: None,
+            ..half_settings
+        },
+        Settings {
+            mlp_share: None,
+            ..settings.clone()
+        },
+        "the same candidate but for its share"
+    );
+    assert!(open <= half, "{open} vs {half} at 1/2");
+    let (_, fixed, _) = run(Some(share));
+    assert_eq!(fixed.to_bits(), open.to_bits(), "share {share}");
 }
 
 /// A mis-measured training row (3 mm off in x) is listed as an outlier of the

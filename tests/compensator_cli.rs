@@ -235,6 +235,11 @@ fn train_refuses_bad_input_and_predict_refuses_a_corrupt_compensator() {
         &["--rbf-start", "4"],
         &["--keep-outliers", "--drop-outliers"],
         &["--rbf-start", "2", "--network", "mlp"],
+        &["--mlp-share", "0"],
+        &["--mlp-share", "1"],
+        &["--mlp-share", "nan"],
+        &["--mlp-share", "0.3", "--network", "rbf"],
+        &["--mlp-share", "0.3", "--members", "0"],
     ] {
         let mut args = vec![
             "train",

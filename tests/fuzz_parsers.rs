@@ -118,6 +118,7 @@ fn compensator_text() -> &'static str {
             members: 1,
             rbf_start: Some(0),
             refine: None,
+            mlp_share: None,
         };
         let train = TrainOptions {
             momentum_epochs: 2,

@@ -81,6 +81,7 @@ fn baseline_fit(model: &Robot, set: &MeasurementSet, hidden: usize, alpha: f64) 
         robot: model.clone(),
         members: vec![shape.from_vector(&v)],
         rbf: None,
+        mlp_share: 0.5,
         shrink: None,
         input_norm: p.input_norm,
         output_norm: out_norm,
@@ -195,6 +196,7 @@ fn default_beats_the_plain_baseline_on_series_b() {
             ),
         }
     }
+    println!("rows agreeing with their repeat: max {comp_max:.4} mm (model {model_max:.4})");
     // A sanity bound: Series B has three glitched pairs in all.
     assert!(
         glitch.iter().filter(|g| g.is_some()).count() <= 3,
@@ -249,6 +251,7 @@ fn readme_table_series_b() {
         penalty: 0.0,
         members: 1,
         refine: None,
+        mlp_share: None,
     };
     let d = CompensatorOptions::default;
     let runs: Vec<(&str, CompensatorOptions)> = vec![
@@ -488,6 +491,13 @@ fn series_b_pools() {
         if let Some(sel) = &rep.selection {
             println!("  outliers listed: {}", sel.outliers.len());
         }
+        let mut ws = PredictWorkspace::default();
+        let worst = row_errors(&val, Measure::Position, |q| c.predict(q, &mut ws))
+            .unwrap()
+            .into_iter()
+            .max_by(|a, b| a.position_mm.unwrap().total_cmp(&b.position_mm.unwrap()))
+            .unwrap();
+        println!("  worst validation row: line {}", worst.line);
         if std::env::var("TABLE").is_ok() {
             let sel = rep.selection.as_ref().unwrap();
             println!("  model alone cv {:.4}", sel.model.position_rms_mm);

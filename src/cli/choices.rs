@@ -91,7 +91,8 @@ choice! {
         /// A radial-basis-function network with one unit per training row (a Gaussian
         /// process's posterior mean); pose form only.
         Rbf,
-        /// The MLPs' mean and an RBF network with equal say (pose form only).
+        /// The MLPs' mean and an RBF network blended, the MLPs' share chosen by
+        /// cross-validation or fixed by --mlp-share (pose form only).
         Mix,
     }
 }

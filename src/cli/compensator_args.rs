@@ -136,6 +136,10 @@ pub struct CompensatorArgs {
     /// written when keeping them was).
     #[arg(long)]
     pub drop_outliers: bool,
+    /// The MLPs' share of a mixed network's correction, strictly between 0 and 1 (the RBF
+    /// network has the rest). Default: chosen by cross-validation among 0.05, 0.1, ..., 0.95.
+    #[arg(long)]
+    pub mlp_share: Option<f64>,
 }
 
 impl CompensatorArgs {
@@ -214,6 +218,18 @@ impl CompensatorArgs {
         if self.rbf_start.is_some() && self.network == Some(Network::Mlp) {
             bail!("--rbf-start sets up the RBF network: not with --network mlp");
         }
+        if let Some(share) = self.mlp_share {
+            if !(share > 0.0 && share < 1.0) {
+                bail!(
+                    "--mlp-share {share}: give a share strictly between 0 and 1 (0 is --network \
+                     rbf, 1 is --network mlp --form pose)"
+                );
+            }
+            if matches!(self.network, Some(Network::Mlp | Network::Rbf)) || self.members == Some(0)
+            {
+                bail!("--mlp-share blends MLPs with an RBF network: not without both");
+            }
+        }
         if self.network == Some(Network::Rbf) {
             if self.hidden.is_some() || self.penalty.is_some() {
                 bail!(
@@ -237,6 +253,7 @@ impl CompensatorArgs {
             hidden: self.hidden,
             penalty: self.penalty,
             members: self.members,
+            mlp_share: self.mlp_share,
             refine,
             compliance,
             sigmas,

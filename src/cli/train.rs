@@ -60,7 +60,7 @@ fn print_selection(sel: &Selection) {
         .filter_map(|c| c.settings.refine.as_ref().map(|r| r.len()))
         .fold(10, usize::max);
     println!(
-        "  {:>5} {:<7} {:<5} {:<6} {:>6} {:>7} {:>7} {:<w$} {:>11} {:>15}",
+        "  {:>5} {:<7} {:<5} {:<6} {:>6} {:>7} {:>7} {:>5} {:<w$} {:>11} {:>15}",
         "stage",
         "network",
         "form",
@@ -68,6 +68,7 @@ fn print_selection(sel: &Selection) {
         "hidden",
         "penalty",
         "members",
+        "share",
         "refine",
         "position mm",
         "orientation deg"
@@ -82,7 +83,7 @@ fn print_selection(sel: &Selection) {
         "model alone",
         sel.model.position_rms_mm,
         rot(&sel.model),
-        m = 52 + w - 10
+        m = 58 + w - 10
     );
     for (i, c) in sel.candidates.iter().enumerate() {
         let s = &c.settings;
@@ -99,8 +100,13 @@ fn print_selection(sel: &Selection) {
         let network = s.network_label();
         let mlp = s.network != Network::Rbf;
         let dash = |show: bool, v: String| if show { v } else { "-".into() };
+        // The MLPs' share of a blend (chosen by cross-validation unless fixed).
+        let share = match (s.network, s.mlp_share) {
+            (Network::Mix, Some(x)) => x.to_string(),
+            _ => "-".into(),
+        };
         println!(
-            "{} {:>5} {:<7} {:<5} {:<6} {:>6} {:>7} {:>7} {:<w$} {score}",
+            "{} {:>5} {:<7} {:<5} {:<6} {:>6} {:>7} {:>7} {:>5} {:<w$} {score}",
             if i == sel.chosen { "*" } else { " " },
             c.stage,
             network,
@@ -109,6 +115,7 @@ fn print_selection(sel: &Selection) {
             dash(mlp, s.hidden.to_string()),
             dash(mlp, s.penalty.to_string()),
             dash(mlp, s.members.to_string()),
+            share,
             s.refine.as_deref().unwrap_or("-"),
         );
         if let Some(e) = &c.error {
@@ -145,7 +152,10 @@ fn print_fit(c: &Compensator, report: &robocal::neural::fit::CompensatorReport, 
             if n.is_empty() {
                 format!("; {timing}")
             } else {
-                "; averaged with the MLPs' mean".into()
+                format!(
+                    "; blended with the MLPs' mean (their share {})",
+                    c.mlp_share
+                )
             }
         );
         // Pose-form outputs: position (mm) then rotation (mrad), robot base frame.

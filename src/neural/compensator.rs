@@ -30,11 +30,14 @@ pub struct Compensator {
     pub encoding: Encoding,
     /// The model the networks run in series with (refined in training when asked).
     pub robot: Robot,
-    /// The ensemble's MLPs; the prediction uses their mean output, averaged with `rbf`'s
+    /// The ensemble's MLPs; the prediction uses their mean output, blended with `rbf`'s
     /// where both are present (none of either: no correction).
     pub members: Vec<Weights>,
     /// An RBF network, alone or with the MLPs.
     pub rbf: Option<Rbf>,
+    /// The MLPs' share s of the correction where both they and `rbf` are present (0 < s < 1):
+    /// y = s mean_m y_m + (1 - s) y_rbf. Unused otherwise.
+    pub mlp_share: f64,
     /// The MLPs' mean shrinks toward its training mean where they disagree (two members or
     /// more; see [`super::shrink`]).
     pub shrink: Option<Shrink>,

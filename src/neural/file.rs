@@ -1,10 +1,12 @@
-//! The compensator file (JSON, version 5): format and version, form, encoding, shapes,
+//! The compensator file (JSON, version 6): format and version, form, encoding, shapes,
 //! normalisations, training domain, the robot file it runs in series with (embedded, with its
 //! hash), one burn record (burnpack bytes, hex) per MLP of the ensemble, the RBF network
 //! (`rbf`: centres, one kernel per output with its widths and variances, weights; or null),
-//! the shrinkage of the MLPs' mean (`shrink`: centre and signal variance, or null), and a
-//! checksum of it all.
+//! the MLPs' share of the correction where both are present (`mlp_share`), the shrinkage of
+//! the MLPs' mean (`shrink`: centre and signal variance, or null), and a checksum of it all.
 //!
+//! Version 6 added the MLPs' share; earlier files are read with the equal say (1/2) they
+//! were made with.
 //! Version 5 gave the RBF network one kernel per output; version 3 and 4 files, whose outputs
 //! shared one kernel (`widths`, `signal_variance`, `noise_variance` beside the weights), are
 //! read as one kernel serving every output. Version 4 added the shrinkage; version 3 files are
@@ -19,6 +21,7 @@ use super::domain::Domain;
 use super::encoding::Encoding;
 use super::net::{record_bytes, weights_from_record};
 use super::rbf::{Rbf, SharedKernelRbf};
+use super::settings::MIX_SHARE;
 use super::shrink::Shrink;
 use super::weights::{Affine, VALUE_BOUND};
 use crate::error::{Error, IN_MEMORY, Location, Result};
@@ -27,7 +30,7 @@ use serde_json::Value;
 use std::path::Path;
 
 const FORMAT: &str = "robocal-compensator";
-const VERSION: u64 = 5;
+const VERSION: u64 = 6;
 /// The oldest version this robocal reads.
 const OLDEST: u64 = 2;
 
@@ -49,11 +52,13 @@ impl Compensator {
             && self
                 .shrink
                 .as_ref()
-                .is_none_or(|s| s.is_valid(self.outputs(), self.members.len()));
+                .is_none_or(|s| s.is_valid(self.outputs(), self.members.len()))
+            && self.mlp_share > 0.0
+            && self.mlp_share < 1.0;
         if !finite {
             return Err(Error::Invalid(
-                "the compensator holds a non-finite or out-of-bounds weight, normalisation or \
-                 domain value; nothing was written"
+                "the compensator holds a non-finite or out-of-bounds weight, normalisation, \
+                 domain value or MLP share; nothing was written"
                     .into(),
             ));
         }
@@ -78,6 +83,7 @@ impl Compensator {
             "robot_hash": format!("{:016x}", fnv1a(robot_toml.as_bytes())),
             "network_records_burnpack_hex": records,
             "rbf": self.rbf,
+            "mlp_share": self.mlp_share,
             "shrink": self.shrink,
         });
         let sum = fnv1a(
@@ -243,6 +249,15 @@ impl Compensator {
                     .into(),
             ));
         }
+        // Versions before 6 gave the MLPs and the RBF network equal say.
+        let mlp_share = if version >= 6 {
+            de::<f64>(&v, "mlp_share", path)?
+        } else {
+            MIX_SHARE
+        };
+        if !(mlp_share > 0.0 && mlp_share < 1.0) {
+            return Err(bad(format!("`mlp_share` {mlp_share} lies outside (0, 1)")));
+        }
         if members.is_empty() != (nh == 0) {
             return Err(bad(format!(
                 "{} network records for {nh} hidden units",
@@ -259,6 +274,7 @@ impl Compensator {
             robot,
             members,
             rbf,
+            mlp_share,
             shrink,
             input_norm: de::<Affine>(&v, "input_norm", path)?,
             output_norm: de::<Affine>(&v, "output_norm", path)?,

@@ -8,7 +8,7 @@ use super::rbf::Rbf;
 use super::refine::{RefinedParam, refine};
 use super::repeats::Repeats;
 use super::selection::Selection;
-use super::settings::{Network, Settings};
+use super::settings::{MIX_SHARE, Network, Settings};
 use super::shrink::Shrink;
 use super::targets::build;
 use super::train::{TrainOptions, TrainReport, train};
@@ -143,6 +143,7 @@ pub(crate) fn fit_with(
             robot: robot.clone(),
             members,
             rbf,
+            mlp_share: settings.mlp_share.unwrap_or(MIX_SHARE),
             shrink,
             input_norm: problem.input_norm,
             output_norm: problem.output_norm,

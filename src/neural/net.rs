@@ -6,7 +6,7 @@
 use super::samples::Samples;
 use super::weights::Weights;
 use crate::error::{Error, Result};
-use burn::module::Module;
+use burn::module::{Module, Param, ParamId};
 use burn::nn::loss::{MseLoss, Reduction};
 use burn::nn::{Linear, LinearConfig};
 use burn::optim::momentum::MomentumConfig;
@@ -122,10 +122,22 @@ impl Mlp {
     }
 }
 
-/// The burn record (burnpack bytes) of a network with these weights.
+/// The burn record (burnpack bytes) of a network with these weights. The parameters carry
+/// fixed ids (1 to 4): burn draws a new id for every parameter it creates, and the same
+/// weights would otherwise give other bytes on every save.
 pub fn record_bytes(w: &Weights) -> Result<Vec<u8>> {
     let d = device(false)?;
     let m = Mlp::new(&d, w.inputs(), w.hidden(), w.outputs()).with_weights(w, &d);
+    let fixed = |l: Linear, k: u64| Linear {
+        weight: Param::initialized(ParamId::from(k), l.weight.val()),
+        bias: l
+            .bias
+            .map(|b| Param::initialized(ParamId::from(k + 1), b.val())),
+    };
+    let m = Mlp {
+        hidden: fixed(m.hidden, 1),
+        out: fixed(m.out, 3),
+    };
     let bytes = m
         .into_record()
         .into_bytes()
@@ -253,6 +265,8 @@ mod tests {
         assert_eq!(m.weights().unwrap(), w);
         let bytes = record_bytes(&w).unwrap();
         assert_eq!(weights_from_record(&bytes, 3, 5, 2).unwrap(), w);
+        // The same weights give the same bytes (a compensator file is reproducible).
+        assert_eq!(record_bytes(&w).unwrap(), bytes);
         assert!(weights_from_record(&bytes, 3, 6, 2).is_err());
         assert!(weights_from_record(&bytes[..bytes.len() / 2], 3, 5, 2).is_err());
     }

@@ -20,6 +20,8 @@ pub struct PredictWorkspace {
     h: Vec<f64>,
     y: Vec<f64>,
     y_sum: Vec<f64>,
+    /// The MLPs' mean output, kept while it is blended at several shares.
+    mlp: Vec<f64>,
     out: Vec<f64>,
     q: Vec<f64>,
     row: Vec<f64>,
@@ -45,6 +47,7 @@ impl Default for PredictWorkspace {
             h: Vec::new(),
             y: Vec::new(),
             y_sum: Vec::new(),
+            mlp: Vec::new(),
             out: Vec::new(),
             q: Vec::new(),
             row: Vec::new(),
@@ -98,9 +101,30 @@ impl Compensator {
     /// The networks' combined raw output at the prepared inputs `ws.x` into `ws.out` and, with
     /// `derivatives`, its derivative by the normalised inputs into `ws.dy_sum` (normalised
     /// outputs x inputs). The MLPs' mean, shrunk toward its training mean where they disagree
-    /// ([`super::shrink`]), and the RBF network have equal say when both are
-    /// present: y = (mean_m y_m + y_rbf) / 2. False (and `ws.out` zero) without networks.
+    /// ([`super::shrink`]), and the RBF network are blended by the MLPs' share s when both are
+    /// present: y = s mean_m y_m + (1 - s) y_rbf. False (and `ws.out` zero) without networks.
     fn mean_output(&self, ws: &mut PredictWorkspace, derivatives: bool) -> bool {
+        let m = self.mlp_mean(ws, derivatives);
+        if let Some(r) = &self.rbf {
+            let keep = if m > 0 { self.mlp_share } else { 0.0 };
+            if derivatives {
+                r.input_jacobian_into(&ws.x, &mut ws.y, &mut ws.dy, &mut ws.inverse_squares);
+                blend(ws.dy_sum.as_mut_slice(), ws.dy.as_slice(), keep);
+            } else {
+                r.forward_into(&ws.x, &mut ws.y, &mut ws.inverse_squares);
+            }
+            blend(&mut ws.y_sum, &ws.y, keep);
+        } else if m == 0 {
+            ws.out.fill(0.0);
+            return false;
+        }
+        self.output_norm.invert(&ws.y_sum, &mut ws.out);
+        true
+    }
+
+    /// The MLPs' mean output at the prepared inputs `ws.x` into `ws.y_sum` (shrunk where they
+    /// disagree) and, with `derivatives`, its derivative into `ws.dy_sum`; the number of MLPs.
+    fn mlp_mean(&self, ws: &mut PredictWorkspace, derivatives: bool) -> usize {
         ws.y_sum.fill(0.0);
         if derivatives {
             ws.dy_sum.fill(0.0);
@@ -142,28 +166,41 @@ impl Compensator {
                 self.shrink_mean(shrink, squares, derivatives, ws);
             }
         }
-        if let Some(r) = &self.rbf {
-            let share = if m > 0 { 0.5 } else { 1.0 };
-            let keep = 1.0 - share;
-            if derivatives {
-                r.input_jacobian_into(&ws.x, &mut ws.y, &mut ws.dy, &mut ws.inverse_squares);
-                ws.dy_sum
-                    .iter_mut()
-                    .zip(ws.dy.iter())
-                    .for_each(|(s, d)| *s = keep * *s + share * d);
-            } else {
-                r.forward_into(&ws.x, &mut ws.y, &mut ws.inverse_squares);
+        m
+    }
+
+    /// The compensated tool poses for joints `q` (rad, mm) of this compensator with the MLPs'
+    /// share set to each of `shares` in turn, handed to `each` (index in `shares`, pose): the
+    /// networks run once. Bit for bit what [`Compensator::predict`] gives with `mlp_share`
+    /// set to the share; a compensator without both MLPs and an RBF network gives its one
+    /// prediction for every share.
+    pub fn predict_shares(
+        &self,
+        q: &[f64],
+        shares: &[f64],
+        ws: &mut PredictWorkspace,
+        mut each: impl FnMut(usize, Pose),
+    ) {
+        let (Some(r), false) = (&self.rbf, self.members.is_empty()) else {
+            let pose = self.predict(q, ws);
+            (0..shares.len()).for_each(|i| each(i, pose));
+            return;
+        };
+        self.prepare(q, ws);
+        self.mlp_mean(ws, false);
+        r.forward_into(&ws.x, &mut ws.y, &mut ws.inverse_squares);
+        let (_, _, w) = self.domain.weight(&ws.x, &mut ws.near_hint);
+        ws.mlp.clear();
+        ws.mlp.extend_from_slice(&ws.y_sum);
+        for (i, &s) in shares.iter().enumerate() {
+            ws.y_sum.copy_from_slice(&ws.mlp);
+            blend(&mut ws.y_sum, &ws.y, s);
+            self.output_norm.invert(&ws.y_sum, &mut ws.out);
+            if w < 1.0 {
+                ws.out.iter_mut().for_each(|v| *v *= w);
             }
-            ws.y_sum
-                .iter_mut()
-                .zip(&ws.y)
-                .for_each(|(s, v)| *s = keep * *s + share * v);
-        } else if m == 0 {
-            ws.out.fill(0.0);
-            return false;
+            each(i, self.corrected(q, ws));
         }
-        self.output_norm.invert(&ws.y_sum, &mut ws.out);
-        true
     }
 
     /// Shrinks the MLPs' mean `ws.y_sum` (and its derivative `ws.dy_sum`) toward the training
@@ -315,6 +352,11 @@ impl Compensator {
     /// used for this compensator.
     pub fn predict(&self, q: &[f64], ws: &mut PredictWorkspace) -> Pose {
         self.correction(q, ws);
+        self.corrected(q, ws)
+    }
+
+    /// The model's tool pose at `q` with the correction `ws.out` applied.
+    fn corrected(&self, q: &[f64], ws: &mut PredictWorkspace) -> Pose {
         match self.form {
             Form::Pose => {
                 let model = tool_pose(&self.robot, q);
@@ -336,6 +378,15 @@ impl Compensator {
             }
         }
     }
+}
+
+/// `mlp <- keep mlp + (1 - keep) rbf`, element by element: the MLPs' share `keep` of a blend
+/// with the RBF network (normalised units).
+fn blend(mlp: &mut [f64], rbf: &[f64], keep: f64) {
+    let share = 1.0 - keep;
+    mlp.iter_mut()
+        .zip(rbf)
+        .for_each(|(s, v)| *s = keep * *s + share * v);
 }
 
 /// The FK frames of a workspace slot, made on first use for this robot.

@@ -16,6 +16,11 @@ use crate::identify::Sigmas;
 /// network, keeping them had been the safer choice.)
 pub const OUTLIER_K: f64 = 4.0;
 
+/// The MLPs' share of a mixed network's correction where nothing chose another
+/// ([`Settings::mlp_share`] None outside cross-validation; the share of every compensator file
+/// before version 6): equal say.
+pub const MIX_SHARE: f64 = 0.5;
+
 /// Where the network's output acts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -52,9 +57,10 @@ pub enum Network {
     /// A radial-basis-function network with one unit per training row, widths and weights of
     /// a Gaussian process's posterior mean per output ([`super::rbf`]); pose form only.
     Rbf,
-    /// The MLPs' mean and an RBF network with equal say (pose form only): the MLPs follow the
-    /// smooth trend, the RBF network the sharp local structure (repeated configurations), and
-    /// their errors are far from fully correlated.
+    /// The MLPs' mean and an RBF network blended (pose form only; the MLPs' share
+    /// [`Settings::mlp_share`]): the MLPs follow the smooth trend, the RBF network the sharp
+    /// local structure (repeated configurations), and their errors are far from fully
+    /// correlated.
     Mix,
 }
 
@@ -92,6 +98,11 @@ pub struct Settings {
     /// Model parameters re-estimated on the training rows first (a selection as for
     /// `identify`), or None.
     pub refine: Option<String>,
+    /// A mixed network's MLP share s (0 < s < 1, see [`super::compensator::Compensator`]);
+    /// None: chosen by cross-validation among [`super::tuning::SHARES`] ([`MIX_SHARE`] in a
+    /// fit of its own). Unused by the other networks.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mlp_share: Option<f64>,
 }
 
 impl Settings {
@@ -121,10 +132,10 @@ impl Settings {
                 self.hidden,
                 self.penalty,
                 self.members,
-                if self.network == Network::Mix {
-                    format!(" + {rbf}")
-                } else {
-                    String::new()
+                match (self.network, self.mlp_share) {
+                    (Network::Mix, Some(s)) => format!(" + {rbf}, MLP share {s}"),
+                    (Network::Mix, None) => format!(" + {rbf}"),
+                    _ => String::new(),
                 }
             ),
         }
@@ -192,6 +203,9 @@ pub struct CompensatorOptions {
     pub penalty: Option<f64>,
     /// MLPs in the ensemble (0: no MLP); None: cross-validation decides.
     pub members: Option<usize>,
+    /// The MLPs' share of a mixed network's correction (0 < s < 1); None: cross-validation
+    /// decides.
+    pub mlp_share: Option<f64>,
     /// Whether and which model parameters to re-estimate before training.
     pub refine: Refine,
     /// Whether the refinement adds the joints' gravity compliances (c1..cN where the model
@@ -228,6 +242,7 @@ impl Default for CompensatorOptions {
             hidden: None,
             penalty: None,
             members: None,
+            mlp_share: None,
             refine: Refine::Auto,
             compliance: None,
             sigmas: Sigmas::default(),
@@ -251,6 +266,7 @@ impl CompensatorOptions {
             hidden: Some(settings.hidden),
             penalty: Some(settings.penalty),
             members: Some(settings.members),
+            mlp_share: settings.mlp_share,
             refine: settings.refine.clone().map_or(Refine::Off, Refine::Params),
             // The chosen refinement names its compliances where it has them.
             compliance: Some(false),

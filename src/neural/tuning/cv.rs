@@ -1,8 +1,9 @@
 //! The cross-validation workspace: each fold's training and held-out rows, refined models,
 //! and the fits (networks, warm starts, RBF hyperparameters) that candidates share.
 
-use super::rows::sums;
+use super::rows::{share_sums, sums};
 use super::{CV_WORK, budget_epochs};
+use super::{SHARES, open_share};
 use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
 use crate::model::Robot;
@@ -12,7 +13,7 @@ use crate::neural::parallel::parallel_map;
 use crate::neural::rbf::{self, Hyper};
 use crate::neural::refine::refine;
 use crate::neural::selection::Sums;
-use crate::neural::settings::{CompensatorOptions, Form, Network, Settings};
+use crate::neural::settings::{CompensatorOptions, Form, MIX_SHARE, Network, Settings};
 use crate::neural::targets::build;
 use crate::neural::train::TrainOptions;
 use crate::neural::weights::Weights;
@@ -79,17 +80,21 @@ impl Cv<'_> {
         found.map_err(Error::Invalid)
     }
 
-    /// Held-out sums of `settings` on one fold; warm starts come from rounds before `round`.
+    /// Held-out sums of `settings` on one fold, one per MLP share of [`SHARES`] for a mixed
+    /// network whose share is open, else one; warm starts come from rounds before `round`.
     pub(super) fn run(
         &self,
         fold: usize,
         settings: &Settings,
         model: &Robot,
         round: usize,
-    ) -> Result<Sums> {
+    ) -> Result<Vec<Sums>> {
         let c = self.fit(fold, settings, model, round)?;
+        if open_share(settings) {
+            return share_sums(&self.held[fold], &c, &SHARES);
+        }
         let mut ws = Default::default();
-        sums(&self.held[fold], |q| c.predict(q, &mut ws))
+        Ok(vec![sums(&self.held[fold], |q| c.predict(q, &mut ws))?])
     }
 
     /// The compensator of `settings` fitted on one fold's training rows.
@@ -151,6 +156,7 @@ impl Cv<'_> {
             };
             let mut c = self.fit(fold, &mlp, model, round)?;
             c.rbf = alone.rbf;
+            c.mlp_share = settings.mlp_share.unwrap_or(MIX_SHARE);
             return Ok(c);
         }
         let key_all = (settings.describe(), fold);

@@ -17,10 +17,11 @@
 //! with gravity inputs at the middle size and penalty, then the penalty decade and the other
 //! encodings; (2) hidden units, then a finer penalty step; (3) the ensemble, kept where it
 //! lowers the cross-validated error, then the RBF network from its search start, alone and
-//! averaged with the best pose-form MLPs (its hyperparameters searched once on the training
-//! rows, at most [`super::rbf::HYPER_ROWS`] of them, beside stages 2 and 3; the folds fit only its
-//! weights); (4) refinement; (5) no
-//! network at all. Candidates are fitted
+//! blended with the best pose-form MLPs at the MLPs' share of lowest cross-validated error
+//! among [`SHARES`] (its hyperparameters searched once on the training rows, at most
+//! [`super::rbf::HYPER_ROWS`] of them, beside stages 2 and 3; the folds fit only its
+//! weights); (4) refinement (for a blend, judged first with the RBF network alone on the race
+//! folds, and the best refinement then tried with the blend); (5) no network at all. Candidates are fitted
 //! with a phase 2 of fixed work ([`CV_WORK`]) and without phase 1, and raced: each is scored
 //! on [`RACE_FOLDS`] folds first and dropped there when it is more than [`RACE_MARGIN`] worse
 //! than the best so far on the same folds. The chosen settings are then fitted in full.
@@ -81,6 +82,18 @@ pub const ENSEMBLE_TIE: f64 = 0.005;
 /// Networks of the ensemble probe in cross-validation: if two networks beat one, the mean of
 /// [`ENSEMBLE`] beats both.
 pub const ENSEMBLE_PROBE: usize = 2;
+
+/// The MLPs' shares at which a mixed network's candidate is scored when not fixed; it takes
+/// the share of lowest cross-validated error (one number chosen on every held-out residual,
+/// hardly an optimistic choice), and the networks run once per row for all of them
+/// ([`crate::neural::compensator::Compensator::predict_shares`]). The equal say of earlier
+/// versions (1/2) was too much on real tracker data: on five Series B splits the held-out
+/// error of the blend fell from the RBF network alone to a minimum at shares 0.1-0.3 and rose
+/// steeply beyond, and cross-validation chose shares of 0.05-0.4 there (20 fits).
+pub const SHARES: [f64; 19] = [
+    0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.55, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85,
+    0.9, 0.95,
+];
 
 /// Rows up to which cross-validation tries an RBF network when the network is not fixed: its
 /// weights solve with the kernel matrix of every row (n^2 numbers, a factorisation cubic in
@@ -360,8 +373,8 @@ pub fn select_settings(
         }
     });
     // Stage 3b: an RBF network from its search start, with the best pose-form MLPs (their
-    // mean and the RBF network's averaged) and alone, against the best so far. The
-    // hyperparameters come from all training rows once; each fold fits only the
+    // mean and the RBF network's blended at the best share) and alone, against the best so
+    // far. The hyperparameters come from all training rows once; each fold fits only the
     // weights.
     if with_rbf {
         let pose_mlp = best_pose_mlp(&candidates);
@@ -384,6 +397,7 @@ pub fn select_settings(
                 members: 1,
                 rbf_start: Some(rbf_start),
                 refine: refines[0].clone(),
+                mlp_share: None,
             });
         }
         searches(&cv, &list);
@@ -414,8 +428,60 @@ pub fn select_settings(
     if refines.len() > 1 {
         let w = candidates[chosen].settings.clone();
         let first = candidates.len();
-        evaluate(4, vary(&w, &refines, |s, r| s.refine = r), &mut candidates);
-        chosen = better_by(&candidates, chosen, first..candidates.len(), judged);
+        // A mixed network's share is chosen again for each other refinement.
+        let share = opts.mlp_share;
+        let other = |s: &mut Settings, r: Option<String>| {
+            if s.refine != r {
+                s.mlp_share = share;
+            }
+            s.refine = r;
+        };
+        let mut list = vary(&w, &refines, other);
+        if w.network == Network::Mix {
+            // A blend's MLPs cost most of its fits, and a refinement changes the residual they
+            // learn. The refinements are judged first with the RBF network alone (the blend's
+            // larger part: shares of 0.05-0.4 on real data) on the race folds, where every
+            // candidate has been scored, and only the best of them is tried with the blend.
+            let alone = Settings {
+                network: Network::Rbf,
+                hidden: 0,
+                penalty: 0.0,
+                members: 1,
+                mlp_share: None,
+                ..w.clone()
+            };
+            evaluate(
+                4,
+                vary(&alone, &refines, |s, r| s.refine = r),
+                &mut candidates,
+            );
+            let proxy = |r: &Option<String>| {
+                let margin = auto_compliance.is_some() && *r == auto_compliance;
+                candidates
+                    .iter()
+                    .filter(|c| c.settings.refine == *r && c.settings.network == Network::Rbf)
+                    .filter(|c| c.settings.encoding == alone.encoding)
+                    .filter(|c| c.settings.rbf_start == alone.rbf_start)
+                    .find_map(|c| c.race.as_ref())
+                    .map_or(f64::INFINITY, |t| t.score().position_rms_mm)
+                    * if margin { 1.0 + COMPLIANCE_MARGIN } else { 1.0 }
+            };
+            let best = refines
+                .iter()
+                .min_by(|a, b| proxy(a).total_cmp(&proxy(b)))
+                .cloned();
+            list.retain(|s| s.refine == w.refine || Some(&s.refine) == best.as_ref());
+        }
+        evaluate(4, list, &mut candidates);
+        // A fixed mixed network stays one.
+        let eligible = |candidates: &[Candidate], i: usize| {
+            if mix_only && candidates[i].settings.network != Network::Mix {
+                f64::INFINITY
+            } else {
+                judged(candidates, i)
+            }
+        };
+        chosen = better_by(&candidates, chosen, first..candidates.len(), eligible);
     }
     // Stage 5: the model alone, without a network, as given and refined (no fits: a refined
     // model alone can win where the refined model with a network lost the race).
@@ -426,6 +492,7 @@ pub fn select_settings(
             network: Network::Mlp,
             members: 0,
             rbf_start: None,
+            mlp_share: opts.mlp_share,
             ..w
         };
         evaluate(
@@ -436,7 +503,12 @@ pub fn select_settings(
         chosen = better_by(&candidates, chosen, first..candidates.len(), judged);
     }
     let mut winner = candidates[chosen].settings.clone();
-    if opts.members.is_none() && winner.members == ENSEMBLE_PROBE {
+    // In a blend the MLPs' mean enters with the share s, its variance with s^2: at the shares
+    // chosen (0.05-0.4 on real data) averaging 4 networks instead of 2 would lower the blend's
+    // variance by at most s^2/4 of one network's, for twice the final fit. A mixed network
+    // keeps the members cross-validation judged.
+    if opts.members.is_none() && winner.members == ENSEMBLE_PROBE && winner.network != Network::Mix
+    {
         winner.members = ENSEMBLE;
         // Told only when the ensemble is what was finally chosen (a later stage, the RBF
         // network's, can win over it).
@@ -595,6 +667,7 @@ impl Space {
                 members: opts.members.unwrap_or(1).min(1),
                 rbf_start: opts.rbf_start,
                 refine: refines[0].clone(),
+                mlp_share: None,
             }
         } else {
             Settings {
@@ -606,6 +679,7 @@ impl Space {
                 members: opts.members.unwrap_or(1),
                 rbf_start: opts.rbf_start,
                 refine: refines[0].clone(),
+                mlp_share: opts.mlp_share,
             }
         };
         // The smooth start only, unless one is asked for: each start costs a search per
@@ -626,7 +700,8 @@ impl Space {
             || hiddens.len() > 1
             || penalties.len() > 1
             || opts.members.is_none()
-            || try_rbf;
+            || try_rbf
+            || (mix_only && opts.mlp_share.is_none());
         Ok(Space {
             refines,
             auto_compliance,
@@ -697,14 +772,15 @@ impl Race<'_, '_> {
         };
         let all: Vec<usize> = (0..list.len()).collect();
         let first = fold_jobs(&all, 0..self.race);
-        let mut results: HashMap<(usize, usize), Result<Sums>> =
+        let mut results: HashMap<(usize, usize), Result<Vec<Sums>>> =
             first.iter().copied().zip(run(&first)).collect();
-        let race_sums = |c: usize, results: &HashMap<(usize, usize), Result<Sums>>| {
-            let mut t = Sums::default();
+        // Over the race folds, at the candidate's best share.
+        let race_sums = |c: usize, results: &HashMap<(usize, usize), Result<Vec<Sums>>>| {
+            let mut t = Vec::new();
             for f in 0..self.race {
-                t.add(*results[&(c, f)].as_ref().ok()?);
+                add_shares(&mut t, results[&(c, f)].as_ref().ok()?);
             }
-            Some(t)
+            Some(best_share(&t).1)
         };
         let rms = |t: &Sums| t.score().position_rms_mm;
         let reference = candidates
@@ -730,16 +806,20 @@ impl Race<'_, '_> {
         results.extend(rest.iter().copied().zip(run(&rest)));
         (self.progress)(total_now, total_now);
         self.done.store(total_now, Ordering::Relaxed);
-        for (c, s) in list.into_iter().enumerate() {
+        for (c, mut s) in list.into_iter().enumerate() {
             let raced = race_sums(c, &results);
-            let mut total = Sums::default();
+            let mut total = Vec::new();
             let mut error = None;
             for f in 0..self.k {
                 match results.get(&(c, f)) {
-                    Some(Ok(x)) => total.add(*x),
+                    Some(Ok(x)) => add_shares(&mut total, x),
                     Some(Err(e)) => error = Some(e.to_string()),
                     None => {}
                 }
+            }
+            let (share, total) = best_share(&total);
+            if open_share(&s) {
+                s.mlp_share = Some(SHARES[share]);
             }
             let kept = survivors.contains(&c);
             candidates.push(Candidate {
@@ -752,6 +832,32 @@ impl Race<'_, '_> {
             });
         }
     }
+}
+
+/// Whether `s` is a mixed network whose MLP share cross-validation chooses (scored at each
+/// of [`SHARES`]).
+fn open_share(s: &Settings) -> bool {
+    s.network == Network::Mix && s.mlp_share.is_none() && s.members > 0
+}
+
+/// `total += x`, share by share (`total` empty: `x`).
+fn add_shares(total: &mut Vec<Sums>, x: &[Sums]) {
+    if total.is_empty() {
+        total.resize(x.len(), Sums::default());
+    }
+    total.iter_mut().zip(x).for_each(|(t, v)| t.add(*v));
+}
+
+/// The share of lowest summed squared position error (the first of equals) and its sums;
+/// empty sums for none.
+fn best_share(t: &[Sums]) -> (usize, Sums) {
+    let mut best = 0;
+    for (i, x) in t.iter().enumerate() {
+        if x.pos < t[best].pos {
+            best = i;
+        }
+    }
+    (best, t.get(best).copied().unwrap_or_default())
 }
 
 /// The best-scored pose-form MLP candidate, the partner of a mixed candidate.

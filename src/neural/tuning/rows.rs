@@ -5,6 +5,7 @@ use crate::data::MeasurementSet;
 use crate::error::Result;
 use crate::evaluate::row_errors;
 use crate::identify::Measure;
+use crate::neural::compensator::Compensator;
 use crate::neural::repeats::group_count;
 use crate::neural::selection::Outlier;
 use crate::neural::selection::Sums;
@@ -69,6 +70,28 @@ pub(super) fn sums(
         s.rows += 1;
     }
     Ok(s)
+}
+
+/// Held-out sums of compensator `c` on `set` with the MLPs' share set to each of `shares`
+/// (the networks run once per row: [`Compensator::predict_shares`]).
+pub(super) fn share_sums(
+    set: &MeasurementSet,
+    c: &Compensator,
+    shares: &[f64],
+) -> Result<Vec<Sums>> {
+    let mut ws = Default::default();
+    let mut poses: Vec<Vec<crate::Pose>> = vec![Vec::with_capacity(set.rows.len()); shares.len()];
+    for m in &set.rows {
+        c.predict_shares(&m.q, shares, &mut ws, |i, p| poses[i].push(p));
+    }
+    poses
+        .iter()
+        .map(|p| {
+            // One prediction per row, in order (held_errors measures pose or position).
+            let mut next = p.iter();
+            sums(set, |_| *next.next().expect("one pose per row"))
+        })
+        .collect()
 }
 
 /// The rows of `set` whose held-out errors `held` (mm, deg per row) lie beyond `k` robust
