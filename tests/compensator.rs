@@ -629,6 +629,30 @@ fn the_blend_share_is_chosen_by_cross_validation() {
     assert!(open <= half, "{open} vs {half} at 1/2");
     let (_, fixed, _) = run(Some(share));
     assert_eq!(fixed.to_bits(), open.to_bits(), "share {share}");
+    // Settings fixed as a whole fit as given: a blend without a share takes 1/2, with no
+    // cross-validation.
+    let all_fixed = CompensatorOptions::fixed(
+        &Settings {
+            mlp_share: None,
+            refine: None,
+            ..settings
+        },
+        Default::default(),
+    );
+    let (c, report) = Compensator::train(&model, &train, &all_fixed, &|_, _| {}).unwrap();
+    assert!(report.selection.is_none());
+    assert_eq!(c.mlp_share, 0.5);
+    // A share outside (0, 1) is refused before any fit.
+    for bad in [0.0, 1.0, 1.5, f64::NAN] {
+        let opts = CompensatorOptions {
+            mlp_share: Some(bad),
+            ..all_fixed.clone()
+        };
+        let e = Compensator::train(&model, &train, &opts, &|_, _| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("share"), "{bad}: {e}");
+    }
 }
 
 /// A mis-measured training row (3 mm off in x) is listed as an outlier of the

@@ -240,6 +240,7 @@ fn train_refuses_bad_input_and_predict_refuses_a_corrupt_compensator() {
         &["--mlp-share", "nan"],
         &["--mlp-share", "0.3", "--network", "rbf"],
         &["--mlp-share", "0.3", "--members", "0"],
+        &["--mlp-share", "0.3", "--form", "joint"],
     ] {
         let mut args = vec![
             "train",

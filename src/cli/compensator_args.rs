@@ -225,9 +225,14 @@ impl CompensatorArgs {
                      rbf, 1 is --network mlp --form pose)"
                 );
             }
-            if matches!(self.network, Some(Network::Mlp | Network::Rbf)) || self.members == Some(0)
+            if matches!(self.network, Some(Network::Mlp | Network::Rbf))
+                || self.members == Some(0)
+                || self.form == Some(Form::Joint)
             {
-                bail!("--mlp-share blends MLPs with an RBF network: not without both");
+                bail!(
+                    "--mlp-share blends MLPs with an RBF network (pose form): not without both, \
+                     nor with --form joint"
+                );
             }
         }
         if self.network == Some(Network::Rbf) {

@@ -89,6 +89,9 @@ pub(crate) fn fit_with(
     with_domain: bool,
     reused: Vec<Weights>,
 ) -> Result<(Compensator, Vec<TrainReport>)> {
+    if let (Network::Mix, Some(share)) = (settings.network, settings.mlp_share) {
+        super::tuning::check_share(share)?;
+    }
     let problem = build(robot, set, settings.form, settings.encoding)?;
     let outputs = problem.output_norm.len();
     let first_member = reused.len();

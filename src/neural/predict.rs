@@ -190,6 +190,8 @@ impl Compensator {
         self.mlp_mean(ws, false);
         r.forward_into(&ws.x, &mut ws.y, &mut ws.inverse_squares);
         let (_, _, w) = self.domain.weight(&ws.x, &mut ws.near_hint);
+        // An RBF network acts on the pose form only: one model pose serves every share.
+        let model = tool_pose(&self.robot, q);
         ws.mlp.clear();
         ws.mlp.extend_from_slice(&ws.y_sum);
         for (i, &s) in shares.iter().enumerate() {
@@ -199,7 +201,7 @@ impl Compensator {
             if w < 1.0 {
                 ws.out.iter_mut().for_each(|v| *v *= w);
             }
-            each(i, self.corrected(q, ws));
+            each(i, self.pose_corrected(&model, ws));
         }
     }
 
@@ -358,25 +360,29 @@ impl Compensator {
     /// The model's tool pose at `q` with the correction `ws.out` applied.
     fn corrected(&self, q: &[f64], ws: &mut PredictWorkspace) -> Pose {
         match self.form {
-            Form::Pose => {
-                let model = tool_pose(&self.robot, q);
-                let rb = base_rotation(&self.robot);
-                let dp = rb * Vector3::new(ws.out[0], ws.out[1], ws.out[2]);
-                let rot = if ws.out.len() >= 6 {
-                    from_rotation_vector(
-                        &(rb * Vector3::new(ws.out[3], ws.out[4], ws.out[5]) * 1e-3),
-                    ) * model.rotation
-                } else {
-                    model.rotation
-                };
-                Pose::from_parts(Translation3::from(model.translation.vector + dp), rot)
-            }
+            Form::Pose => self.pose_corrected(&tool_pose(&self.robot, q), ws),
             Form::Joint => {
                 ws.q.clear();
                 ws.q.extend(q.iter().zip(&ws.out).map(|(a, d)| a + d * 1e-3));
                 tool_pose(&self.robot, &ws.q)
             }
         }
+    }
+}
+
+impl Compensator {
+    /// The model's tool pose `model` with the pose-form correction `ws.out` applied:
+    /// p = p_model + R_b dp, R = exp(R_b dr) R_model (dp mm, dr mrad).
+    fn pose_corrected(&self, model: &Pose, ws: &PredictWorkspace) -> Pose {
+        let rb = base_rotation(&self.robot);
+        let dp = rb * Vector3::new(ws.out[0], ws.out[1], ws.out[2]);
+        let rot = if ws.out.len() >= 6 {
+            from_rotation_vector(&(rb * Vector3::new(ws.out[3], ws.out[4], ws.out[5]) * 1e-3))
+                * model.rotation
+        } else {
+            model.rotation
+        };
+        Pose::from_parts(Translation3::from(model.translation.vector + dp), rot)
     }
 }
 

@@ -266,7 +266,9 @@ impl CompensatorOptions {
             hidden: Some(settings.hidden),
             penalty: Some(settings.penalty),
             members: Some(settings.members),
-            mlp_share: settings.mlp_share,
+            // A blend's share as its fit takes it: fixed, not left to cross-validation.
+            mlp_share: (settings.network == Network::Mix)
+                .then(|| settings.mlp_share.unwrap_or(MIX_SHARE)),
             refine: settings.refine.clone().map_or(Refine::Off, Refine::Params),
             // The chosen refinement names its compliances where it has them.
             compliance: Some(false),

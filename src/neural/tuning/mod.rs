@@ -215,10 +215,18 @@ pub fn select_settings(
         open,
     } = Space::of(robot, opts, set)?;
     if !open {
-        // Nothing to choose (a fixed mix keeps, output by output, the start of highest
-        // likelihood).
+        // Nothing to choose (a fixed mix, its share given, keeps, output by output, the start
+        // of highest likelihood).
         let network = opts.network.unwrap_or(Network::Mlp);
-        return Ok((Settings { network, ..base }, None));
+        let mlp_share = opts.mlp_share.filter(|_| network == Network::Mix);
+        return Ok((
+            Settings {
+                network,
+                mlp_share,
+                ..base
+            },
+            None,
+        ));
     }
     // Fewer folds train candidates on a smaller part of the set; where the held-out error
     // still falls steeply with more rows (real tracker data), 3 folds chose penalties ten
@@ -322,6 +330,12 @@ pub fn select_settings(
     }
     let mut chosen = best(&candidates);
     let with_rbf = try_rbf || mix_only;
+    if opts.mlp_share.is_some() && !with_rbf {
+        notes.push(format!(
+            "an MLP share was given, but no blend of MLPs and the RBF network was tried (it \
+             needs the pose form, MLPs, and at most {RBF_MAX_ROWS} rows)"
+        ));
+    }
     // The RBF hyperparameter searches run beside stages 2 and 3 (whose fits leave cores
     // idle between rounds) once stage 1 has fixed the pose form's encoding.
     std::thread::scope(|scope| {
@@ -384,6 +398,7 @@ pub fn select_settings(
             list.push(Settings {
                 network: Network::Mix,
                 rbf_start: Some(rbf_start),
+                mlp_share: opts.mlp_share,
                 ..candidates[p].settings.clone()
             });
         }
@@ -431,7 +446,7 @@ pub fn select_settings(
         // A mixed network's share is chosen again for each other refinement.
         let share = opts.mlp_share;
         let other = |s: &mut Settings, r: Option<String>| {
-            if s.refine != r {
+            if s.network == Network::Mix && s.refine != r {
                 s.mlp_share = share;
             }
             s.refine = r;
@@ -492,7 +507,7 @@ pub fn select_settings(
             network: Network::Mlp,
             members: 0,
             rbf_start: None,
-            mlp_share: opts.mlp_share,
+            mlp_share: None,
             ..w
         };
         evaluate(
@@ -615,6 +630,9 @@ struct Space {
 
 impl Space {
     fn of(robot: &Robot, opts: &CompensatorOptions, set: &MeasurementSet) -> Result<Space> {
+        if let Some(s) = opts.mlp_share {
+            check_share(s)?;
+        }
         let (refines, auto_compliance) = match &opts.refine {
             Refine::Off if opts.compliance == Some(true) => {
                 return Err(Error::Invalid(
@@ -679,7 +697,7 @@ impl Space {
                 members: opts.members.unwrap_or(1),
                 rbf_start: opts.rbf_start,
                 refine: refines[0].clone(),
-                mlp_share: opts.mlp_share,
+                mlp_share: None,
             }
         };
         // The smooth start only, unless one is asked for: each start costs a search per
@@ -701,7 +719,7 @@ impl Space {
             || penalties.len() > 1
             || opts.members.is_none()
             || try_rbf
-            || (mix_only && opts.mlp_share.is_none());
+            || (mix_only && opts.mlp_share.is_none() && opts.members != Some(0));
         Ok(Space {
             refines,
             auto_compliance,
@@ -818,7 +836,7 @@ impl Race<'_, '_> {
                 }
             }
             let (share, total) = best_share(&total);
-            if open_share(&s) {
+            if open_share(&s) && error.is_none() && total.rows > 0 {
                 s.mlp_share = Some(SHARES[share]);
             }
             let kept = survivors.contains(&c);
@@ -831,6 +849,19 @@ impl Race<'_, '_> {
                 race: raced,
             });
         }
+    }
+}
+
+/// `share` as a blend's MLP share: strictly between 0 and 1 (0 is the RBF network alone, 1 the
+/// MLPs alone), else an error.
+pub fn check_share(share: f64) -> Result<()> {
+    if share > 0.0 && share < 1.0 {
+        Ok(())
+    } else {
+        Err(Error::Invalid(format!(
+            "the MLPs' share {share} of a blend lies outside (0, 1): 0 is the RBF network \
+             alone, 1 the MLPs alone"
+        )))
     }
 }
 

@@ -80,7 +80,9 @@ pub(super) fn share_sums(
     shares: &[f64],
 ) -> Result<Vec<Sums>> {
     let mut ws = Default::default();
-    let mut poses: Vec<Vec<crate::Pose>> = vec![Vec::with_capacity(set.rows.len()); shares.len()];
+    let mut poses: Vec<Vec<crate::Pose>> = (0..shares.len())
+        .map(|_| Vec::with_capacity(set.rows.len()))
+        .collect();
     for m in &set.rows {
         c.predict_shares(&m.q, shares, &mut ws, |i, p| poses[i].push(p));
     }
