@@ -219,12 +219,8 @@ impl CompensatorArgs {
             bail!("--rbf-start sets up the RBF network: not with --network mlp");
         }
         if let Some(share) = self.mlp_share {
-            if !(share > 0.0 && share < 1.0) {
-                bail!(
-                    "--mlp-share {share}: give a share strictly between 0 and 1 (0 is --network \
-                     rbf, 1 is --network mlp --form pose)"
-                );
-            }
+            robocal::neural::settings::check_share(share)
+                .map_err(|e| anyhow::anyhow!("--mlp-share {share}: {e}"))?;
             if matches!(self.network, Some(Network::Mlp | Network::Rbf))
                 || self.members == Some(0)
                 || self.form == Some(Form::Joint)

@@ -21,7 +21,7 @@ use super::domain::Domain;
 use super::encoding::Encoding;
 use super::net::{record_bytes, weights_from_record};
 use super::rbf::{Rbf, SharedKernelRbf};
-use super::settings::MIX_SHARE;
+use super::settings::{MIX_SHARE, check_share};
 use super::shrink::Shrink;
 use super::weights::{Affine, VALUE_BOUND};
 use crate::error::{Error, IN_MEMORY, Location, Result};
@@ -53,8 +53,7 @@ impl Compensator {
                 .shrink
                 .as_ref()
                 .is_none_or(|s| s.is_valid(self.outputs(), self.members.len()))
-            && self.mlp_share > 0.0
-            && self.mlp_share < 1.0;
+            && check_share(self.mlp_share).is_ok();
         if !finite {
             return Err(Error::Invalid(
                 "the compensator holds a non-finite or out-of-bounds weight, normalisation, \
@@ -255,9 +254,7 @@ impl Compensator {
         } else {
             MIX_SHARE
         };
-        if !(mlp_share > 0.0 && mlp_share < 1.0) {
-            return Err(bad(format!("`mlp_share` {mlp_share} lies outside (0, 1)")));
-        }
+        check_share(mlp_share).map_err(|e| bad(format!("`mlp_share`: {e}")))?;
         if members.is_empty() != (nh == 0) {
             return Err(bad(format!(
                 "{} network records for {nh} hidden units",

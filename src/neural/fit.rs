@@ -8,7 +8,7 @@ use super::rbf::Rbf;
 use super::refine::{RefinedParam, refine};
 use super::repeats::Repeats;
 use super::selection::Selection;
-use super::settings::{MIX_SHARE, Network, Settings};
+use super::settings::{MIX_SHARE, Network, Settings, check_share};
 use super::shrink::Shrink;
 use super::targets::build;
 use super::train::{TrainOptions, TrainReport, train};
@@ -90,7 +90,7 @@ pub(crate) fn fit_with(
     reused: Vec<Weights>,
 ) -> Result<(Compensator, Vec<TrainReport>)> {
     if let (Network::Mix, Some(share)) = (settings.network, settings.mlp_share) {
-        super::tuning::check_share(share)?;
+        check_share(share)?;
     }
     let problem = build(robot, set, settings.form, settings.encoding)?;
     let outputs = problem.output_norm.len();

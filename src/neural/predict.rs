@@ -368,9 +368,7 @@ impl Compensator {
             }
         }
     }
-}
 
-impl Compensator {
     /// The model's tool pose `model` with the pose-form correction `ws.out` applied:
     /// p = p_model + R_b dp, R = exp(R_b dr) R_model (dp mm, dr mrad).
     fn pose_corrected(&self, model: &Pose, ws: &PredictWorkspace) -> Pose {

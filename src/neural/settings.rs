@@ -21,6 +21,19 @@ pub const OUTLIER_K: f64 = 4.0;
 /// before version 6): equal say.
 pub const MIX_SHARE: f64 = 0.5;
 
+/// `share` as a blend's MLP share: strictly between 0 and 1 (0 is the RBF network alone, 1 the
+/// MLPs alone), else an error.
+pub fn check_share(share: f64) -> crate::error::Result<()> {
+    if share > 0.0 && share < 1.0 {
+        Ok(())
+    } else {
+        Err(crate::error::Error::Invalid(format!(
+            "the MLPs' share {share} of a blend lies outside (0, 1): 0 is the RBF network \
+             alone, 1 the MLPs alone"
+        )))
+    }
+}
+
 /// Where the network's output acts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]

@@ -34,7 +34,7 @@ use super::parallel::parallel_map;
 use super::selection::Sums;
 pub use super::selection::{Candidate, Outlier, Score, Selection};
 pub use super::settings::OUTLIER_K;
-use super::settings::{CompensatorOptions, Form, Network, Refine, Settings};
+use super::settings::{CompensatorOptions, Form, Network, Refine, Settings, check_share};
 use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
 use crate::model::Robot;
@@ -90,6 +90,7 @@ pub const ENSEMBLE_PROBE: usize = 2;
 /// versions (1/2) was too much on real tracker data: on five Series B splits the held-out
 /// error of the blend fell from the RBF network alone to a minimum at shares 0.1-0.3 and rose
 /// steeply beyond, and cross-validation chose shares of 0.05-0.4 there (20 fits).
+/// Written out, so that each reads back and prints as typed (0.15, not 0.15000000000000002).
 pub const SHARES: [f64; 19] = [
     0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.55, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85,
     0.9, 0.95,
@@ -432,9 +433,15 @@ pub fn select_settings(
         };
     }
     // The compliance refinement that cross-validation adds on its own must win by a margin.
+    let margin = |r: &Option<String>| {
+        if auto_compliance.is_some() && *r == auto_compliance {
+            1.0 + COMPLIANCE_MARGIN
+        } else {
+            1.0
+        }
+    };
     let judged = |candidates: &[Candidate], i: usize| {
-        let margin = auto_compliance.is_some() && candidates[i].settings.refine == auto_compliance;
-        cv_rms(candidates, i) * if margin { 1.0 + COMPLIANCE_MARGIN } else { 1.0 }
+        cv_rms(candidates, i) * margin(&candidates[i].settings.refine)
     };
     // Stage 4: refinement, judged for the network it will carry (early in the search, with
     // an unregularised single network, it looked worse where it finally helped 1.3x; judged
@@ -471,15 +478,17 @@ pub fn select_settings(
                 &mut candidates,
             );
             let proxy = |r: &Option<String>| {
-                let margin = auto_compliance.is_some() && *r == auto_compliance;
-                candidates
+                let raced = candidates
                     .iter()
-                    .filter(|c| c.settings.refine == *r && c.settings.network == Network::Rbf)
-                    .filter(|c| c.settings.encoding == alone.encoding)
-                    .filter(|c| c.settings.rbf_start == alone.rbf_start)
-                    .find_map(|c| c.race.as_ref())
-                    .map_or(f64::INFINITY, |t| t.score().position_rms_mm)
-                    * if margin { 1.0 + COMPLIANCE_MARGIN } else { 1.0 }
+                    .find(|c| {
+                        c.settings
+                            == Settings {
+                                refine: r.clone(),
+                                ..alone.clone()
+                            }
+                    })
+                    .and_then(|c| c.race.as_ref());
+                raced.map_or(f64::INFINITY, |t| t.score().position_rms_mm) * margin(r)
             };
             let best = refines
                 .iter()
@@ -849,19 +858,6 @@ impl Race<'_, '_> {
                 race: raced,
             });
         }
-    }
-}
-
-/// `share` as a blend's MLP share: strictly between 0 and 1 (0 is the RBF network alone, 1 the
-/// MLPs alone), else an error.
-pub fn check_share(share: f64) -> Result<()> {
-    if share > 0.0 && share < 1.0 {
-        Ok(())
-    } else {
-        Err(Error::Invalid(format!(
-            "the MLPs' share {share} of a blend lies outside (0, 1): 0 is the RBF network \
-             alone, 1 the MLPs alone"
-        )))
     }
 }
 
