@@ -402,7 +402,7 @@ fn frames_for<'w>(slot: &'w mut Option<Frames>, robot: &crate::model::Robot) -> 
 }
 
 /// The left Jacobian of SO(3) at rotation vector `phi` (rad): the angular velocity of
-/// exp(phi) is J_l(phi) dphi/dt. J_l = I + (1 - cos t)/t^2 [phi]x + (t - sin t)/t^3 [phi]x^2.
+/// exp(phi) is J_l(phi) dphi/dt. J_l = I + (1 - cos t)/t^2 \[phi\]x + (t - sin t)/t^3 \[phi\]x^2.
 fn left_jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
     let t = phi.norm();
     let k = phi.cross_matrix();

@@ -1,9 +1,10 @@
 //! The cross-validation workspace: each fold's training and held-out rows, refined models,
 //! and the fits (networks, warm starts, RBF hyperparameters) that candidates share.
 
+use super::SHARES;
 use super::rows::{share_sums, sums};
+use super::shares::open_share;
 use super::{CV_WORK, budget_epochs};
-use super::{SHARES, open_share};
 use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
 use crate::model::Robot;

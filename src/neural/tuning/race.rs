@@ -1,0 +1,132 @@
+//! The race that scores candidates on the cross-validation folds.
+
+use super::cv::Cv;
+use super::shares::{add_shares, best_share, open_share};
+use super::{RACE_MARGIN, SHARES};
+use crate::error::{Error, Result};
+use crate::model::Robot;
+use crate::neural::parallel::parallel_map;
+use crate::neural::selection::{Candidate, Sums};
+use crate::neural::settings::Settings;
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// The race that scores candidates: each is fitted on the race folds first and dropped there
+/// when clearly worse than the best so far on the same folds ([`RACE_MARGIN`]); survivors
+/// are fitted on the other folds.
+pub(super) struct Race<'a, 'c> {
+    pub(super) cv: &'a Cv<'c>,
+    pub(super) refines: &'a [Option<String>],
+    /// Each refinement's model per fold.
+    pub(super) refined: &'a [Vec<Result<Robot>>],
+    /// Folds.
+    pub(super) k: usize,
+    /// Race folds.
+    pub(super) race: usize,
+    /// Fold fits done (for progress).
+    pub(super) done: AtomicUsize,
+    /// Evaluation rounds so far (warm starts come from earlier rounds).
+    pub(super) rounds: &'a AtomicUsize,
+    pub(super) progress: &'a (dyn Fn(usize, usize) + Sync),
+}
+
+impl Race<'_, '_> {
+    /// Scores the settings of `list` not yet in `candidates` and appends them (stage
+    /// `stage`).
+    pub(super) fn evaluate(
+        &self,
+        stage: usize,
+        list: Vec<Settings>,
+        candidates: &mut Vec<Candidate>,
+    ) {
+        let list: Vec<Settings> = list
+            .into_iter()
+            .filter(|s| !candidates.iter().any(|c| &c.settings == s))
+            .collect();
+        let total_now = self.done.load(Ordering::Relaxed) + list.len() * self.k;
+        let round = self.rounds.fetch_add(1, Ordering::Relaxed);
+        let run = |jobs: &[(usize, usize)]| {
+            parallel_map(jobs.len(), |j| {
+                let (c, f) = jobs[j];
+                let s = &list[c];
+                let r_idx = self
+                    .refines
+                    .iter()
+                    .position(|r| r == &s.refine)
+                    .unwrap_or(0);
+                let out = match &self.refined[r_idx][f] {
+                    Ok(m) => self.cv.run(f, s, m, round),
+                    Err(e) => Err(Error::Invalid(e.to_string())),
+                };
+                (self.progress)(self.done.fetch_add(1, Ordering::Relaxed) + 1, total_now);
+                out
+            })
+        };
+        let fold_jobs = |cs: &[usize], fs: std::ops::Range<usize>| -> Vec<(usize, usize)> {
+            cs.iter()
+                .flat_map(|&c| fs.clone().map(move |f| (c, f)))
+                .collect()
+        };
+        let all: Vec<usize> = (0..list.len()).collect();
+        let first = fold_jobs(&all, 0..self.race);
+        let mut results: HashMap<(usize, usize), Result<Vec<Sums>>> =
+            first.iter().copied().zip(run(&first)).collect();
+        // Over the race folds, at the candidate's best share.
+        let race_sums = |c: usize, results: &HashMap<(usize, usize), Result<Vec<Sums>>>| {
+            let mut t = Vec::new();
+            for f in 0..self.race {
+                add_shares(&mut t, results[&(c, f)].as_ref().ok()?);
+            }
+            Some(best_share(&t).1)
+        };
+        let rms = |t: &Sums| t.score().position_rms_mm;
+        let reference = candidates
+            .iter()
+            .filter(|c| c.score.is_some())
+            .filter_map(|c| c.race.as_ref().map(rms))
+            .chain(
+                all.iter()
+                    .filter_map(|&c| race_sums(c, &results).as_ref().map(rms)),
+            )
+            .fold(f64::INFINITY, f64::min);
+        let survivors: Vec<usize> = all
+            .iter()
+            .copied()
+            .filter(|&c| {
+                // The model alone fits nothing: nothing to save by dropping it.
+                race_sums(c, &results).is_some_and(|t| {
+                    list[c].members == 0 || rms(&t) <= reference * (1.0 + RACE_MARGIN)
+                })
+            })
+            .collect();
+        let rest = fold_jobs(&survivors, self.race..self.k);
+        results.extend(rest.iter().copied().zip(run(&rest)));
+        (self.progress)(total_now, total_now);
+        self.done.store(total_now, Ordering::Relaxed);
+        for (c, mut s) in list.into_iter().enumerate() {
+            let raced = race_sums(c, &results);
+            let mut total = Vec::new();
+            let mut error = None;
+            for f in 0..self.k {
+                match results.get(&(c, f)) {
+                    Some(Ok(x)) => add_shares(&mut total, x),
+                    Some(Err(e)) => error = Some(e.to_string()),
+                    None => {}
+                }
+            }
+            let (share, total) = best_share(&total);
+            if open_share(&s) && error.is_none() && total.rows > 0 {
+                s.mlp_share = Some(SHARES[share]);
+            }
+            let kept = survivors.contains(&c);
+            candidates.push(Candidate {
+                stage,
+                settings: s,
+                score: (error.is_none() && kept).then(|| total.score()),
+                pruned: (error.is_none() && !kept).then(|| total.score()),
+                error,
+                race: raced,
+            });
+        }
+    }
+}

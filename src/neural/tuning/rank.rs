@@ -1,0 +1,89 @@
+//! Ranking the scored candidates, and drawing the next ones from the best.
+
+use crate::neural::selection::Candidate;
+use crate::neural::settings::{Form, Network, Settings};
+
+/// The best-scored pose-form MLP candidate, the partner of a mixed candidate.
+pub(super) fn best_pose_mlp(candidates: &[Candidate]) -> Option<usize> {
+    (0..candidates.len())
+        .filter(|&i| {
+            let c = &candidates[i].settings;
+            c.form == Form::Pose && c.network == Network::Mlp && c.members > 0
+        })
+        .fold(None, |b: Option<usize>, i| {
+            Some(b.map_or(i, |b| better(candidates, b, i..i + 1)))
+        })
+}
+
+/// Cross-validated position RMS of candidate `i` (mm); infinite when it has no score.
+pub(super) fn cv_rms(candidates: &[Candidate], i: usize) -> f64 {
+    candidates[i]
+        .score
+        .as_ref()
+        .map_or(f64::INFINITY, |s| s.position_rms_mm)
+}
+
+/// The best of `current` and the candidates in `new` (ties keep the earlier one).
+pub(super) fn better(
+    candidates: &[Candidate],
+    current: usize,
+    new: std::ops::Range<usize>,
+) -> usize {
+    better_by(candidates, current, new, cv_rms)
+}
+
+/// [`better`] by the score `judged(candidates, index)` (lower is better).
+pub(super) fn better_by(
+    candidates: &[Candidate],
+    current: usize,
+    new: std::ops::Range<usize>,
+    judged: impl Fn(&[Candidate], usize) -> f64,
+) -> usize {
+    new.fold(current, |b, i| {
+        if judged(candidates, i) < judged(candidates, b) {
+            i
+        } else {
+            b
+        }
+    })
+}
+
+/// `x` to 3 significant digits (penalties read back as typed: 0.333, not 0.3333333333333333).
+pub(super) fn significant3(x: f64) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let scale = 10f64.powi(2 - x.abs().log10().floor() as i32);
+    (x * scale).round() / scale
+}
+
+/// `base` with one setting changed to each of `values`.
+pub(super) fn vary<T: Clone>(
+    base: &Settings,
+    values: &[T],
+    set: impl Fn(&mut Settings, T),
+) -> Vec<Settings> {
+    values
+        .iter()
+        .map(|v| {
+            let mut s = base.clone();
+            set(&mut s, v.clone());
+            s
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::neural::tuning::{FIT_WORK, budget_epochs};
+
+    #[test]
+    fn penalties_keep_three_significant_digits() {
+        assert_eq!(significant3(1.0 / 3.0), 0.333);
+        assert_eq!(significant3(0.1 * 3.0), 0.3);
+        assert_eq!(significant3(30.000000000000004), 30.0);
+        assert_eq!(budget_epochs(FIT_WORK, 2000, 50, 60), 50);
+        assert_eq!(budget_epochs(FIT_WORK, 150, 50, 60), 60);
+    }
+}

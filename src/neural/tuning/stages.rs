@@ -1,0 +1,260 @@
+//! The stages of the search ([`super`]'s doc): each scores its candidates in the race, starting
+//! from the best so far, and moves the choice.
+
+use super::cv::searches;
+use super::race::Race;
+use super::rank::{best_pose_mlp, better, better_by, cv_rms, significant3, vary};
+use super::space::Space;
+use super::{COMPLIANCE_MARGIN, ENSEMBLE_PROBE, ENSEMBLE_TIE, PENALTY_STEP};
+use crate::error::{Error, Result};
+use crate::neural::selection::Candidate;
+use crate::neural::settings::{CompensatorOptions, Form, Network, Settings};
+
+/// The search's state between stages: what it draws from, the candidates scored so far and
+/// the one chosen so far.
+pub(super) struct Search<'r, 'a, 'c> {
+    pub(super) race: &'r Race<'a, 'c>,
+    pub(super) space: &'r Space,
+    pub(super) opts: &'r CompensatorOptions,
+    pub(super) candidates: Vec<Candidate>,
+    /// Index of the chosen candidate so far.
+    pub(super) chosen: usize,
+}
+
+impl Search<'_, '_, '_> {
+    /// Scores the settings of `list` not yet scored (stage `stage`).
+    fn evaluate(&mut self, stage: usize, list: Vec<Settings>) {
+        self.race.evaluate(stage, list, &mut self.candidates);
+    }
+
+    /// The best-scored candidate so far (the first of equals).
+    pub(super) fn best(&self) -> usize {
+        better(&self.candidates, 0, 1..self.candidates.len())
+    }
+
+    /// The factor a candidate of refinement `r` is judged by: the compliance refinement that
+    /// cross-validation adds on its own must win by [`COMPLIANCE_MARGIN`].
+    fn margin(&self, r: &Option<String>) -> f64 {
+        if self.space.auto_compliance.is_some() && *r == self.space.auto_compliance {
+            1.0 + COMPLIANCE_MARGIN
+        } else {
+            1.0
+        }
+    }
+
+    /// Candidate `i`'s cross-validated RMS times its refinement's margin.
+    fn judged(&self, candidates: &[Candidate], i: usize) -> f64 {
+        cv_rms(candidates, i) * self.margin(&candidates[i].settings.refine)
+    }
+
+    /// Stage 1's first step: the forms (gravity inputs, middle size and penalty), or for a
+    /// fixed RBF network its encodings (its search start is the smooth one unless given).
+    pub(super) fn first(&mut self) {
+        let space = self.space;
+        if space.rbf_only {
+            let mut list = Vec::new();
+            for &e in &space.encodings {
+                list.push(Settings {
+                    encoding: e,
+                    rbf_start: Some(space.rbf_start),
+                    members: 1,
+                    ..space.base.clone()
+                });
+            }
+            searches(self.race.cv, &list);
+            self.evaluate(1, list);
+        } else {
+            self.evaluate(1, vary(&space.base, &space.forms, |s, f| s.form = f));
+        }
+    }
+
+    /// Stages 1 to 3 of the MLPs: the penalty decade and the other encodings for the best
+    /// so far, then hidden units and a finer penalty step, then the ensemble. With `with_rbf`,
+    /// the RBF hyperparameter search runs beside stages 2 and 3 (whose fits leave cores idle
+    /// between rounds) once stage 1 has fixed the pose form's encoding.
+    pub(super) fn mlps(&mut self, with_rbf: bool) {
+        let space = self.space;
+        let cv = self.race.cv;
+        std::thread::scope(|scope| {
+            let w = self.candidates[self.best()].settings.clone();
+            self.evaluate(1, vary(&w, &space.penalties, |s, p| s.penalty = p));
+            let w = self.candidates[self.best()].settings.clone();
+            self.evaluate(1, vary(&w, &space.encodings, |s, e| s.encoding = e));
+            if with_rbf && let Some(p) = best_pose_mlp(&self.candidates) {
+                let e = self.candidates[p].settings.encoding;
+                let start = space.rbf_start;
+                scope.spawn(move || cv.hyper(e, start));
+            }
+            // Stage 2: hidden units, then a finer penalty step around the best.
+            let w = self.candidates[self.best()].settings.clone();
+            self.evaluate(2, vary(&w, &space.hiddens, |s, h| s.hidden = h));
+            let w = self.candidates[self.best()].settings.clone();
+            if self.opts.penalty.is_none() {
+                let step = [w.penalty / PENALTY_STEP, w.penalty * PENALTY_STEP].map(significant3);
+                self.evaluate(2, vary(&w, &step, |s, p| s.penalty = p));
+            }
+            self.chosen = self.best();
+            // Stage 3: the ensemble. The mean of several networks has at most the mean squared
+            // error of its members (convexity), so a tie within ENSEMBLE_TIE goes to the
+            // ensemble.
+            if self.opts.members.is_none() {
+                let single = self.candidates[self.chosen].settings.clone();
+                self.evaluate(
+                    3,
+                    vec![Settings {
+                        members: ENSEMBLE_PROBE,
+                        ..single
+                    }],
+                );
+                let probe = self.candidates.len() - 1;
+                if cv_rms(&self.candidates, probe)
+                    <= cv_rms(&self.candidates, self.chosen) * (1.0 + ENSEMBLE_TIE)
+                {
+                    self.chosen = probe;
+                }
+            }
+        });
+    }
+
+    /// Stage 3b: an RBF network from its search start, with the best pose-form MLPs (their
+    /// mean and the RBF network's blended at the best share) and alone, against the best so
+    /// far. The hyperparameters come from all training rows once; each fold fits only the
+    /// weights. An error where the network is fixed to a blend and no MLP was fitted.
+    pub(super) fn rbf(&mut self) -> Result<()> {
+        let space = self.space;
+        let pose_mlp = best_pose_mlp(&self.candidates);
+        let first = self.candidates.len();
+        let mut list = Vec::new();
+        if let Some(p) = pose_mlp {
+            list.push(Settings {
+                network: Network::Mix,
+                rbf_start: Some(space.rbf_start),
+                mlp_share: self.opts.mlp_share,
+                ..self.candidates[p].settings.clone()
+            });
+        }
+        if !space.mix_only {
+            list.push(Settings {
+                network: Network::Rbf,
+                form: Form::Pose,
+                encoding: pose_mlp.map_or(space.base.encoding, |p| {
+                    self.candidates[p].settings.encoding
+                }),
+                hidden: 0,
+                penalty: 0.0,
+                members: 1,
+                rbf_start: Some(space.rbf_start),
+                refine: space.refines[0].clone(),
+                mlp_share: None,
+            });
+        }
+        searches(self.race.cv, &list);
+        self.evaluate(3, list);
+        let new = first..self.candidates.len();
+        self.chosen = if space.mix_only {
+            // The network is fixed: the best of its own candidates, which need pose-form MLPs.
+            if !new.clone().any(|i| self.candidates[i].score.is_some()) {
+                return Err(Error::Invalid(
+                    "a mixed network: no pose-form MLP was fitted to mix the RBF network with \
+                     (no members asked for, or every MLP candidate failed)"
+                        .into(),
+                ));
+            }
+            better(&self.candidates, first, new)
+        } else {
+            better(&self.candidates, self.chosen, new)
+        };
+        Ok(())
+    }
+
+    /// Stage 4: refinement, judged for the network it will carry (early in the search, with
+    /// an unregularised single network, it looked worse where it finally helped 1.3x; judged
+    /// with one network instead of the ensemble, it lost by 0.6 % where the ensemble kept it
+    /// 1.1 % better on held-out real data).
+    pub(super) fn refinement(&mut self) {
+        let space = self.space;
+        let refines = &space.refines;
+        let w = self.candidates[self.chosen].settings.clone();
+        let first = self.candidates.len();
+        // A mixed network's share is chosen again for each other refinement.
+        let share = self.opts.mlp_share;
+        let other = |s: &mut Settings, r: Option<String>| {
+            if s.network == Network::Mix && s.refine != r {
+                s.mlp_share = share;
+            }
+            s.refine = r;
+        };
+        let mut list = vary(&w, refines, other);
+        if w.network == Network::Mix {
+            // A blend's MLPs cost most of its fits, and a refinement changes the residual they
+            // learn. The refinements are judged first with the RBF network alone (the blend's
+            // larger part: shares of 0.05-0.4 on real data) on the race folds, where every
+            // candidate has been scored, and only the best of them is tried with the blend.
+            let alone = Settings {
+                network: Network::Rbf,
+                hidden: 0,
+                penalty: 0.0,
+                members: 1,
+                mlp_share: None,
+                ..w.clone()
+            };
+            self.evaluate(4, vary(&alone, refines, |s, r| s.refine = r));
+            let proxy = |r: &Option<String>| {
+                let raced = self
+                    .candidates
+                    .iter()
+                    .find(|c| {
+                        c.settings
+                            == Settings {
+                                refine: r.clone(),
+                                ..alone.clone()
+                            }
+                    })
+                    .and_then(|c| c.race.as_ref());
+                raced.map_or(f64::INFINITY, |t| t.score().position_rms_mm) * self.margin(r)
+            };
+            let best = refines
+                .iter()
+                .min_by(|a, b| proxy(a).total_cmp(&proxy(b)))
+                .cloned();
+            list.retain(|s| s.refine == w.refine || Some(&s.refine) == best.as_ref());
+        }
+        self.evaluate(4, list);
+        // A fixed mixed network stays one.
+        let mix_only = space.mix_only;
+        let eligible = |candidates: &[Candidate], i: usize| {
+            if mix_only && candidates[i].settings.network != Network::Mix {
+                f64::INFINITY
+            } else {
+                self.judged(candidates, i)
+            }
+        };
+        self.chosen = better_by(
+            &self.candidates,
+            self.chosen,
+            first..self.candidates.len(),
+            eligible,
+        );
+    }
+
+    /// Stage 5: the model alone, without a network, as given and refined (no fits: a refined
+    /// model alone can win where the refined model with a network lost the race).
+    pub(super) fn model_alone(&mut self) {
+        let w = self.candidates[self.chosen].settings.clone();
+        let first = self.candidates.len();
+        let alone = Settings {
+            network: Network::Mlp,
+            members: 0,
+            rbf_start: None,
+            mlp_share: None,
+            ..w
+        };
+        self.evaluate(5, vary(&alone, &self.space.refines, |s, r| s.refine = r));
+        self.chosen = better_by(
+            &self.candidates,
+            self.chosen,
+            first..self.candidates.len(),
+            |c, i| self.judged(c, i),
+        );
+    }
+}
