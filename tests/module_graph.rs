@@ -21,7 +21,7 @@ fn files(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
-/// The module path of a file: `src/neural/rbf.rs` -> ["neural", "rbf"]; `mod.rs` and `lib.rs`
+/// The module path of a file: `src/neural/shrink.rs` -> ["neural", "shrink"]; `mod.rs` and `lib.rs`
 /// name their folder.
 fn module_of(file: &Path) -> Vec<String> {
     let rel = file.strip_prefix(src()).unwrap();
