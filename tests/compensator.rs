@@ -587,6 +587,56 @@ fn default_selection_races_candidates() {
     assert_eq!(alone, vec![(None, true), (Some("full".into()), true)]);
 }
 
+/// Stage 4 of a blend: its refinements are judged by the RBF network alone on the race folds
+/// only (proxies: errors on those folds, never chosen), and only the best proxy's refinement
+/// is tried with the blend on every fold. The report's JSON marks the proxies.
+#[test]
+fn a_blends_refinements_are_judged_by_proxies_on_the_race_folds() {
+    use robocal::neural::compensator::Network;
+    let (model, train) = case_d_offsets();
+    let opts = CompensatorOptions {
+        network: Some(Network::Mix),
+        ..Default::default()
+    };
+    let (_, report) = Compensator::train(&model, &train, &opts, &|_, _| {}).unwrap();
+    let sel = report.selection.expect("cross-validated");
+    assert!(!sel.candidates[sel.chosen].proxy);
+    let stage4 = |network: Network| {
+        sel.candidates
+            .iter()
+            .filter(move |c| c.stage == 4 && c.settings.network == network)
+    };
+    let proxies: Vec<_> = stage4(Network::Rbf).collect();
+    // None and `full` at least (with the compliances where they change the model).
+    assert!(proxies.len() >= 2, "{proxies:?}");
+    for p in &proxies {
+        assert!(p.proxy, "{p:?}");
+        assert!(p.score.is_none() && p.error.is_none(), "{p:?}");
+        assert!(p.pruned.as_ref().unwrap().position_rms_mm > 0.0, "{p:?}");
+    }
+    assert!(sel.candidates.iter().filter(|c| c.proxy).count() == proxies.len());
+    // At most one blend beside the blend's own refinement, and its refinement is a proxy's.
+    let blends: Vec<_> = stage4(Network::Mix).collect();
+    assert!(blends.len() <= 1, "{blends:?}");
+    for b in blends {
+        assert!(b.score.is_some() || b.pruned.is_some(), "{b:?}");
+        assert!(
+            proxies
+                .iter()
+                .any(|p| p.settings.refine == b.settings.refine)
+        );
+    }
+    // The report says which rows are proxies, and only those.
+    let json = serde_json::to_value(&sel).unwrap();
+    let marked = json["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c.get("proxy") == Some(&serde_json::Value::Bool(true)))
+        .count();
+    assert_eq!(marked, proxies.len());
+}
+
 /// A blend's MLP share is chosen by cross-validation: the blend's candidate takes a share of
 /// the grid, its score is the lowest of the grid (no higher than at the share 1/2 fixed), it
 /// is the score of that share fixed, bit for bit (the grid's one run of the networks against

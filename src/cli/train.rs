@@ -89,6 +89,12 @@ fn print_selection(sel: &Selection) {
         let s = &c.settings;
         let score = match (&c.score, &c.pruned) {
             (Some(x), _) => format!("{:>11.4} {:>15}", x.position_rms_mm, rot(x)),
+            (None, Some(x)) if c.proxy => format!(
+                "{:>11.4} {:>15}  proxy on {} folds (refinement for the blend)",
+                x.position_rms_mm,
+                rot(x),
+                RACE_FOLDS
+            ),
             (None, Some(x)) => format!(
                 "{:>11.4} {:>15}  dropped after {} folds",
                 x.position_rms_mm,

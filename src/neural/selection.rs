@@ -45,9 +45,15 @@ pub struct Candidate {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
     /// Set instead of `score` when the candidate was dropped after the first
-    /// [`RACE_FOLDS`](super::tuning::RACE_FOLDS) folds: its errors on those folds.
+    /// [`RACE_FOLDS`](super::tuning::RACE_FOLDS) folds, or was only a proxy (`proxy`): its
+    /// errors on those folds.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pruned: Option<Score>,
+    /// Scored on the race folds only, as a proxy, and never chosen: a blend's refinements
+    /// are judged first by the RBF network alone there (stage 4), and only the best of them
+    /// is tried with the blend.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub proxy: bool,
     /// Sums over the race folds, the yardstick for later candidates.
     #[serde(skip)]
     pub(crate) race: Option<Sums>,

@@ -20,8 +20,9 @@
 //! blended with the best pose-form MLPs at the MLPs' share of lowest cross-validated error
 //! among [`SHARES`] (its hyperparameters searched once on the training rows, at most
 //! [`super::rbf::HYPER_ROWS`] of them, beside stages 2 and 3; the folds fit only its
-//! weights); (4) refinement (for a blend, judged first with the RBF network alone on the race
-//! folds, and the best refinement then tried with the blend); (5) no network at all. Candidates are fitted
+//! weights); (4) refinement (for a blend, judged first by the RBF network alone fitted on
+//! the race folds only, a proxy never chosen, and the best refinement then tried with the
+//! blend); (5) no network at all. Candidates are fitted
 //! with a phase 2 of fixed work ([`CV_WORK`]) and without phase 1, and raced: each is scored
 //! on [`RACE_FOLDS`] folds first and dropped there when it is more than [`RACE_MARGIN`] worse
 //! than the best so far on the same folds. The chosen settings are then fitted in full.
@@ -290,12 +291,19 @@ pub fn select_settings(
             .unwrap_or(0);
         let round = rounds.load(Ordering::Relaxed);
         let mut held = vec![(f64::NAN, None); set.rows.len()];
-        for (f, model) in refined[r_idx].iter().enumerate() {
-            let model = model.as_ref().map_err(|e| Error::Invalid(e.to_string()))?;
+        // The folds' fits are cached; predicting every held-out row is the work, fold by
+        // fold in parallel.
+        let per_fold = parallel_map(k, |f| {
+            let model = refined[r_idx][f]
+                .as_ref()
+                .map_err(|e| Error::Invalid(e.to_string()))?;
             let c = cv.fit(f, s, model, round)?;
             let mut ws = Default::default();
-            let errors = held_errors(&cv.held[f], |q| c.predict(q, &mut ws))?;
+            held_errors(&cv.held[f], |q| c.predict(q, &mut ws))
+        });
+        for (f, errors) in per_fold.into_iter().enumerate() {
             let rows = (0..set.rows.len()).filter(|&i| fold_of[i] == f);
+            let errors = errors?;
             for (i, e) in rows.zip(errors) {
                 held[i] = (e.position_mm.unwrap_or(0.0), e.orientation_deg);
             }

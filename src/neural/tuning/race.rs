@@ -39,11 +39,34 @@ impl Race<'_, '_> {
         list: Vec<Settings>,
         candidates: &mut Vec<Candidate>,
     ) {
+        self.score(stage, list, candidates, false);
+    }
+
+    /// Scores the settings of `list` not yet in `candidates` on the race folds only and
+    /// appends them as proxies, never chosen ([`Candidate::proxy`]; stage `stage`).
+    pub(super) fn proxies(
+        &self,
+        stage: usize,
+        list: Vec<Settings>,
+        candidates: &mut Vec<Candidate>,
+    ) {
+        self.score(stage, list, candidates, true);
+    }
+
+    /// [`Race::evaluate`], or [`Race::proxies`] with `proxy`.
+    fn score(
+        &self,
+        stage: usize,
+        list: Vec<Settings>,
+        candidates: &mut Vec<Candidate>,
+        proxy: bool,
+    ) {
         let list: Vec<Settings> = list
             .into_iter()
             .filter(|s| !candidates.iter().any(|c| &c.settings == s))
             .collect();
-        let total_now = self.done.load(Ordering::Relaxed) + list.len() * self.k;
+        let folds = if proxy { self.race } else { self.k };
+        let total_now = self.done.load(Ordering::Relaxed) + list.len() * folds;
         let round = self.rounds.fetch_add(1, Ordering::Relaxed);
         let run = |jobs: &[(usize, usize)]| {
             parallel_map(jobs.len(), |j| {
@@ -94,9 +117,10 @@ impl Race<'_, '_> {
             .copied()
             .filter(|&c| {
                 // The model alone fits nothing: nothing to save by dropping it.
-                race_sums(c, &results).is_some_and(|t| {
-                    list[c].members == 0 || rms(&t) <= reference * (1.0 + RACE_MARGIN)
-                })
+                !proxy
+                    && race_sums(c, &results).is_some_and(|t| {
+                        list[c].members == 0 || rms(&t) <= reference * (1.0 + RACE_MARGIN)
+                    })
             })
             .collect();
         let rest = fold_jobs(&survivors, self.race..self.k);
@@ -124,6 +148,7 @@ impl Race<'_, '_> {
                 settings: s,
                 score: (error.is_none() && kept).then(|| total.score()),
                 pruned: (error.is_none() && !kept).then(|| total.score()),
+                proxy,
                 error,
                 race: raced,
             });
