@@ -538,6 +538,11 @@ fn resign(mut v: serde_json::Value) -> String {
 
 /// Case D's FANUC identified (joint offsets) on its calibration poses, and its training set.
 fn case_d_offsets() -> (robocal::model::Robot, robocal::data::MeasurementSet) {
+    case_d_identified("offsets")
+}
+
+/// Case D's FANUC identified (`params`) on its calibration poses, and its training set.
+fn case_d_identified(params: &str) -> (robocal::model::Robot, robocal::data::MeasurementSet) {
     let nominal = read_robot(root().join("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
     let rd = |p: &str| read_canonical(&root().join(p), &nominal).unwrap();
     let (cal, train) = (
@@ -545,7 +550,7 @@ fn case_d_offsets() -> (robocal::model::Robot, robocal::data::MeasurementSet) {
         rd("datasets/case_d/training.csv"),
     );
     let params = Options {
-        params: "offsets".into(),
+        params: params.into(),
         ..Default::default()
     };
     (identify(&nominal, &cal, &params).unwrap().robot, train)
@@ -568,7 +573,11 @@ fn default_selection_races_candidates() {
     };
     assert!(sel.candidates.iter().all(|c| outcomes(c) == 1));
     assert!(sel.candidates[sel.chosen].score.is_some());
-    let dropped = sel.candidates.iter().filter(|c| c.pruned.is_some()).count();
+    let dropped = sel
+        .candidates
+        .iter()
+        .filter(|c| c.pruned.is_some() && !c.proxy)
+        .count();
     assert!(dropped > 0, "nothing raced out: {:?}", sel.candidates);
     let best = sel
         .candidates
@@ -588,44 +597,73 @@ fn default_selection_races_candidates() {
 }
 
 /// Stage 4 of a blend: its refinements are judged by the RBF network alone on the race folds
-/// only (proxies: errors on those folds, never chosen), and only the best proxy's refinement
-/// is tried with the blend on every fold. The report's JSON marks the proxies.
+/// only (proxies: errors on those folds, never chosen), and the best proxy's refinement (the
+/// compliances cross-validation adds on its own held to their margin) is tried with the blend
+/// on every fold. The report's JSON marks the proxies. On Case D, `full` identified, the
+/// default chooses the blend, refined (the case-d main job's choice).
 #[test]
 fn a_blends_refinements_are_judged_by_proxies_on_the_race_folds() {
     use robocal::neural::compensator::Network;
-    let (model, train) = case_d_offsets();
-    let opts = CompensatorOptions {
-        network: Some(Network::Mix),
-        ..Default::default()
-    };
-    let (_, report) = Compensator::train(&model, &train, &opts, &|_, _| {}).unwrap();
+    use robocal::neural::tuning::COMPLIANCE_MARGIN;
+    let (model, train) = case_d_identified("full");
+    let (_, report) =
+        Compensator::train(&model, &train, &CompensatorOptions::default(), &|_, _| {}).unwrap();
     let sel = report.selection.expect("cross-validated");
-    assert!(!sel.candidates[sel.chosen].proxy);
-    let stage4 = |network: Network| {
-        sel.candidates
-            .iter()
-            .filter(move |c| c.stage == 4 && c.settings.network == network)
-    };
-    let proxies: Vec<_> = stage4(Network::Rbf).collect();
-    // None and `full` at least (with the compliances where they change the model).
-    assert!(proxies.len() >= 2, "{proxies:?}");
+    let chosen = &sel.candidates[sel.chosen];
+    assert_eq!(chosen.settings.network, Network::Mix, "{chosen:?}");
+    assert!(!chosen.proxy && chosen.score.is_some());
+    let proxies: Vec<_> = sel.candidates.iter().filter(|c| c.proxy).collect();
+    // `full` at least (the blend's own refinement, none, was raced as a candidate in stage 3).
+    assert!(!proxies.is_empty(), "{sel:?}");
     for p in &proxies {
-        assert!(p.proxy, "{p:?}");
+        assert_eq!((p.stage, p.settings.network), (4, Network::Rbf), "{p:?}");
         assert!(p.score.is_none() && p.error.is_none(), "{p:?}");
         assert!(p.pruned.as_ref().unwrap().position_rms_mm > 0.0, "{p:?}");
     }
-    assert!(sel.candidates.iter().filter(|c| c.proxy).count() == proxies.len());
-    // At most one blend beside the blend's own refinement, and its refinement is a proxy's.
-    let blends: Vec<_> = stage4(Network::Mix).collect();
-    assert!(blends.len() <= 1, "{blends:?}");
-    for b in blends {
-        assert!(b.score.is_some() || b.pruned.is_some(), "{b:?}");
-        assert!(
-            proxies
-                .iter()
-                .any(|p| p.settings.refine == b.settings.refine)
-        );
+    let blend = sel
+        .candidates
+        .iter()
+        .find(|c| c.stage == 3 && c.settings.network == Network::Mix)
+        .expect("the blend of stage 3");
+    let own = blend.settings.refine.clone();
+    // The RBF network alone with the blend's other settings, on the race folds, for each
+    // refinement: a proxy, or a candidate scored earlier; the compliances' with their margin.
+    let alone = |c: &&robocal::neural::tuning::Candidate| {
+        c.settings.network == Network::Rbf
+            && c.settings.form == blend.settings.form
+            && c.settings.encoding == blend.settings.encoding
+            && c.settings.rbf_start == blend.settings.rbf_start
+            && c.race_score().is_some()
+    };
+    let judged = |c: &&robocal::neural::tuning::Candidate| {
+        let margin = match c.settings.refine.as_deref() {
+            Some(r) if r.contains("compliance") => 1.0 + COMPLIANCE_MARGIN,
+            _ => 1.0,
+        };
+        c.race_score().unwrap().position_rms_mm * margin
+    };
+    let ranked: Vec<_> = sel.candidates.iter().filter(alone).collect();
+    assert!(ranked.len() > proxies.len(), "{ranked:?}");
+    let best = ranked
+        .iter()
+        .min_by(|a, b| judged(a).total_cmp(&judged(b)))
+        .unwrap();
+    let tried: Vec<_> = sel
+        .candidates
+        .iter()
+        .filter(|c| c.stage == 4 && c.settings.network == Network::Mix)
+        .map(|c| c.settings.refine.clone())
+        .collect();
+    if best.settings.refine == own {
+        assert!(tried.is_empty(), "{tried:?}");
+    } else {
+        assert_eq!(tried, vec![best.settings.refine.clone()]);
     }
+    assert_eq!(
+        chosen.settings.refine.as_deref(),
+        Some("full"),
+        "{chosen:?}"
+    );
     // The report says which rows are proxies, and only those.
     let json = serde_json::to_value(&sel).unwrap();
     let marked = json["candidates"]

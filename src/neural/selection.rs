@@ -37,8 +37,8 @@ pub struct Candidate {
     pub stage: usize,
     /// The settings tried.
     pub settings: Settings,
-    /// None when the candidate failed on some fold (see `error`) or was dropped early
-    /// (see `pruned`).
+    /// None when the candidate failed on some fold (see `error`), was dropped early (see
+    /// `pruned`) or is a proxy (see `proxy`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub score: Option<Score>,
     /// Why the candidate failed on some fold (the last failure's message), if it did.
@@ -54,9 +54,18 @@ pub struct Candidate {
     /// is tried with the blend.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub proxy: bool,
-    /// Sums over the race folds, the yardstick for later candidates.
+    /// Sums over the race folds: a scored candidate's are the yardstick for later ones; a
+    /// proxy's rank the refinements of a blend.
     #[serde(skip)]
     pub(crate) race: Option<Sums>,
+}
+
+impl Candidate {
+    /// Its errors on the race folds, the figure that ranks a blend's refinements: None when
+    /// it failed there, or when it was read from a file (the sums are not saved).
+    pub fn race_score(&self) -> Option<Score> {
+        self.race.as_ref().map(Sums::score)
+    }
 }
 
 /// What cross-validation did.

@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// The race that scores candidates: each is fitted on the race folds first and dropped there
 /// when clearly worse than the best so far on the same folds ([`RACE_MARGIN`]); survivors
-/// are fitted on the other folds.
+/// are fitted on the other folds (proxies, [`Race::proxies`], never are).
 pub(super) struct Race<'a, 'c> {
     pub(super) cv: &'a Cv<'c>,
     pub(super) refines: &'a [Option<String>],

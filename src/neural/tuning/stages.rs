@@ -22,7 +22,8 @@ pub(super) struct Search<'r, 'a, 'c> {
 }
 
 impl Search<'_, '_, '_> {
-    /// Scores the settings of `list` not yet scored (stage `stage`).
+    /// Scores the settings of `list` not yet among the candidates, whatever their outcome
+    /// there (stage `stage`).
     fn evaluate(&mut self, stage: usize, list: Vec<Settings>) {
         self.race.evaluate(stage, list, &mut self.candidates);
     }
