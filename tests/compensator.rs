@@ -776,6 +776,50 @@ fn a_mis_measured_training_row_is_listed_and_left_out() {
     };
     let (k, d) = (miss(&kept, &mut ws), miss(&dropped, &mut ws));
     assert!(d < k, "left out {d} mm, kept {k} mm");
+    // An RBF network's hyperparameters are searched again without the row, beginning at
+    // those cross-validation judged (searched on every row, and kept with the row).
+    let rbf = |drop_outliers: bool| {
+        let opts = CompensatorOptions {
+            network: Some(robocal::neural::compensator::Network::Rbf),
+            refine: robocal::neural::compensator::Refine::Off,
+            drop_outliers,
+            ..Default::default()
+        };
+        let (c, report) = Compensator::train(&model, &train, &opts, &|_, _| {}).unwrap();
+        let listed: Vec<usize> = report
+            .selection
+            .unwrap()
+            .outliers
+            .iter()
+            .map(|o| o.row)
+            .collect();
+        assert_eq!(listed, vec![bad]);
+        assert!(report.settings.has_rbf(), "{:?}", report.settings);
+        (c.rbf.unwrap().kernels, report.settings)
+    };
+    use robocal::neural::rbf::{Rbf, search, search_from};
+    let seed = CompensatorOptions::default().train.seed;
+    let samples = |set: &robocal::data::MeasurementSet, s: &Settings| {
+        robocal::neural::targets::build(&model, set, Form::Pose, s.encoding)
+            .unwrap()
+            .samples
+    };
+    let (kept_kernels, s) = rbf(false);
+    let start = s.rbf_start.unwrap();
+    let all = samples(&train, &s);
+    let judged = search(&all, start, seed).unwrap().hyper;
+    assert_eq!(
+        kept_kernels,
+        Rbf::with_hyper(&all, &judged).unwrap().kernels
+    );
+    let (dropped_kernels, s) = rbf(true);
+    let without = samples(&robocal::neural::tuning::subset(&train, |i| i != bad), &s);
+    let again = search_from(&without, &judged, seed, &[bad]).unwrap().hyper;
+    assert_eq!(
+        dropped_kernels,
+        Rbf::with_hyper(&without, &again).unwrap().kernels
+    );
+    assert_ne!(dropped_kernels, kept_kernels);
     // Without the cut, nothing is listed.
     let none = CompensatorOptions {
         outlier_k: f64::INFINITY,

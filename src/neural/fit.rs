@@ -4,7 +4,7 @@
 use super::compensator::Compensator;
 use super::domain::Domain;
 use super::parallel::parallel_map;
-use super::rbf::Rbf;
+use super::rbf::{Rbf, search_from};
 use super::refine::{RefinedParam, refine};
 use super::repeats::Repeats;
 use super::selection::Selection;
@@ -100,7 +100,26 @@ pub(crate) fn fit_with(
     let rbf = if settings.has_rbf() {
         Some(match &train_opts.rbf_hyper {
             Some(h) => Rbf::with_hyper_on(&problem.samples, h, parallel)?,
-            None => Rbf::fit(&problem.samples, settings.rbf_start, train_opts.seed)?.0,
+            None => match &train_opts.rbf_from {
+                Some(from) => {
+                    let found = search_from(
+                        &problem.samples,
+                        from,
+                        train_opts.seed,
+                        &train_opts.rbf_left_out,
+                    )?;
+                    Rbf::with_hyper_on(&problem.samples, &found.hyper, parallel)?
+                }
+                None => {
+                    Rbf::fit_without(
+                        &problem.samples,
+                        settings.rbf_start,
+                        train_opts.seed,
+                        &train_opts.rbf_left_out,
+                    )?
+                    .0
+                }
+            },
         })
     } else {
         None

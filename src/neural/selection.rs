@@ -89,7 +89,8 @@ pub struct Selection {
     #[serde(with = "crate::io::json_number")]
     pub outlier_k: f64,
     /// The chosen RBF network's hyperparameters, searched on every row for the model as
-    /// given (the final fit reuses them when nothing is refined).
+    /// given (the final fit reuses them when nothing is refined and no row is left out, and
+    /// begins its search at them when rows are left out).
     #[serde(skip)]
     pub rbf_hyper: Option<Hyper>,
 }

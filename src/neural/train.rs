@@ -110,6 +110,13 @@ pub struct TrainOptions {
     /// An RBF network's hyperparameters ([`super::rbf::Hyper`]), found before on the same
     /// rows; None: searched.
     pub rbf_hyper: Option<nalgebra::DVector<f64>>,
+    /// Rows of a larger set this one was taken from without (indices in that set): an RBF
+    /// search runs on the rows the larger set's search draws, but these
+    /// ([`super::rbf::search_without`]); empty: the set is whole.
+    pub rbf_left_out: Vec<usize>,
+    /// Where an RBF search (when `rbf_hyper` is None) begins: the hyperparameters of a search
+    /// on nearly the same rows ([`super::rbf::search_from`]); None: at the settings' start.
+    pub rbf_from: Option<nalgebra::DVector<f64>>,
 }
 
 impl Default for TrainOptions {
@@ -128,6 +135,8 @@ impl Default for TrainOptions {
             progress: None,
             start: None,
             rbf_hyper: None,
+            rbf_left_out: Vec::new(),
+            rbf_from: None,
         }
     }
 }

@@ -9,6 +9,13 @@ use nalgebra::DVector;
 /// Standard deviation (ln units) of the prior on each log hyperparameter.
 pub const PRIOR_SD: f64 = 3.0;
 
+/// Weighted squared distance beyond which a pair's unit response counts as 0 in the
+/// likelihood: e^-345, about 1e-150, below anything a sum of order-one terms can notice.
+/// Smaller responses and their products in the factorisation are subnormal numbers, which the
+/// processor handles about 15 times slower: a search whose widths had grown narrow took 5.4 s
+/// instead of 0.33 s for one output, with the same result to 10 digits.
+const FAR: f64 = 690.0;
+
 /// The prior's centre: widths 1 (the inputs are standardised), signal variance the targets'
 /// mean square `var`, noise a tenth of it.
 pub(super) fn prior_mean(d: usize, var: f64) -> Hyper {
@@ -146,7 +153,8 @@ pub fn neg_log_likelihood(
     let count = n * n.saturating_sub(1) / 2;
     let mut e = vec![0.0; count];
     pairs.weighted_squares(&w, &mut e);
-    e.iter_mut().for_each(|q| *q = (-0.5 * *q).exp());
+    e.iter_mut()
+        .for_each(|q| *q = if *q > FAR { 0.0 } else { (-0.5 * *q).exp() });
     // The factorisation reads the lower triangle only: the upper one stays zero.
     let mut k = Mat::<f64>::zeros(n, n);
     let mut at = 0;

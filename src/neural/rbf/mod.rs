@@ -41,7 +41,10 @@ use faer::{Mat, Side};
 use likelihood::kernel;
 pub use likelihood::{PRIOR_SD, Pairs, neg_log_likelihood};
 use nalgebra::{DMatrix, DVector};
-pub use search::{HYPER_ITERATIONS, HYPER_ROWS, STALL_NATS, STARTS, Search, search, search_best};
+pub use search::{
+    HYPER_ITERATIONS, HYPER_ROWS, STALL_NATS, STARTS, Search, search, search_best,
+    search_best_without, search_from, search_without,
+};
 
 /// One output's Gaussian process (or, in files of version 3 and 4, every output's).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -230,9 +233,21 @@ impl Rbf {
     /// output by output, the highest likelihood ([`search_best`]), then the weights on every
     /// row ([`Rbf::with_hyper`]).
     pub fn fit(s: &Samples, start: Option<usize>, seed: u64) -> Result<(Rbf, Search)> {
+        Rbf::fit_without(s, start, seed, &[])
+    }
+
+    /// [`Rbf::fit`] on a set from which the rows `left_out` (indices in the whole set) were
+    /// taken out: the search runs on the rows the whole set's search draws, but those
+    /// ([`search_without`]).
+    pub fn fit_without(
+        s: &Samples,
+        start: Option<usize>,
+        seed: u64,
+        left_out: &[usize],
+    ) -> Result<(Rbf, Search)> {
         let found = match start {
-            Some(k) => search(s, k, seed)?,
-            None => search_best(s, seed)?,
+            Some(k) => search_without(s, k, seed, left_out)?,
+            None => search_best_without(s, seed, left_out)?,
         };
         Ok((Rbf::with_hyper(s, &found.hyper)?, found))
     }

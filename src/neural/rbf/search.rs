@@ -41,17 +41,60 @@ pub struct Search {
 /// hyperparameters, [`HYPER_ITERATIONS`] at most) on at most [`HYPER_ROWS`] rows of `s` (a
 /// choice seeded by `seed` when there are more). The objective is the sum of the outputs'.
 pub fn search(s: &Samples, start: usize, seed: u64) -> Result<Search> {
-    let one = Searches::new(s, seed)?;
-    let found = parallel_map(one.outputs, |j| one.output(j, start));
+    search_without(s, start, seed, &[])
+}
+
+/// [`search()`] on `s`, a set from which the rows `left_out` (indices in the whole set) were
+/// taken out: the rows searched are those the search of the whole set draws, but those left
+/// out (the hyperparameters of the set without a few mis-measured rows, not those of another
+/// draw of rows).
+pub fn search_without(s: &Samples, start: usize, seed: u64, left_out: &[usize]) -> Result<Search> {
+    let one = Searches::new(s, seed, left_out)?;
+    let found = parallel_map(one.outputs, |j| one.output(j, Begin::Start(start)));
     Ok(join(found.into_iter().collect::<Result<Vec<_>>>()?))
+}
+
+/// [`search_without`] started at the hyperparameters `from` (every output's, see
+/// [`Hyper`]) instead of at a start: those of a search on nearly the same rows, whose mode
+/// it follows (a few steps where the rows differ little).
+pub fn search_from(s: &Samples, from: &Hyper, seed: u64, left_out: &[usize]) -> Result<Search> {
+    let one = Searches::new(s, seed, left_out)?;
+    let block = one.pairs.inputs() + 2;
+    if from.len() != one.outputs * block || from.iter().any(|v| !v.is_finite()) {
+        return Err(Error::Invalid(format!(
+            "RBF search: {} finite hyperparameters to start from expected, got {}",
+            one.outputs * block,
+            from.len()
+        )));
+    }
+    let found = parallel_map(one.outputs, |j| {
+        one.output(j, Begin::At(from.rows(j * block, block).into_owned()))
+    });
+    Ok(join(found.into_iter().collect::<Result<Vec<_>>>()?))
+}
+
+/// Where one output's search begins.
+enum Begin {
+    /// At [`STARTS`]`[k]`.
+    Start(usize),
+    /// At these hyperparameters (the output's d + 2).
+    At(Hyper),
 }
 
 /// The searches from every start (in parallel), keeping for each output the one of highest
 /// likelihood.
 pub fn search_best(s: &Samples, seed: u64) -> Result<Search> {
-    let one = Searches::new(s, seed)?;
+    search_best_without(s, seed, &[])
+}
+
+/// [`search_best`] on a set from which the rows `left_out` were taken out, as
+/// [`search_without`].
+pub fn search_best_without(s: &Samples, seed: u64, left_out: &[usize]) -> Result<Search> {
+    let one = Searches::new(s, seed, left_out)?;
     let (o, starts) = (one.outputs, STARTS.len());
-    let all = parallel_map(o * starts, |i| one.output(i / starts, i % starts));
+    let all = parallel_map(o * starts, |i| {
+        one.output(i / starts, Begin::Start(i % starts))
+    });
     let mut best = Vec::with_capacity(o);
     let mut all = all.into_iter();
     for _ in 0..o {
@@ -95,13 +138,32 @@ struct Searches<'a> {
 }
 
 impl<'a> Searches<'a> {
-    fn new(s: &'a Samples, seed: u64) -> Result<Searches<'a>> {
+    fn new(s: &'a Samples, seed: u64, left_out: &[usize]) -> Result<Searches<'a>> {
         let (n, _, outputs) = shape(s)?;
-        let mut rows: Vec<usize> = (0..n).collect();
-        if n > HYPER_ROWS {
+        let mut left_out = left_out.to_vec();
+        left_out.sort_unstable();
+        left_out.dedup();
+        // The whole set's rows, drawn as its own search draws them.
+        let whole = n + left_out.len();
+        let mut rows: Vec<usize> = (0..whole).collect();
+        if whole > HYPER_ROWS {
             rows.shuffle(&mut ChaCha8Rng::seed_from_u64(seed ^ 0x7bf));
             rows.truncate(HYPER_ROWS);
             rows.sort_unstable();
+        }
+        // Those left out dropped, the others numbered as in `s`.
+        let rows: Vec<usize> = rows
+            .into_iter()
+            .filter(|r| left_out.binary_search(r).is_err())
+            .map(|r| r - left_out.partition_point(|&o| o < r))
+            .collect();
+        if rows.len() < 2 || rows.iter().any(|&r| r >= n) {
+            return Err(Error::Invalid(format!(
+                "the RBF network's hyperparameter search: {} rows left out of {whole} leave {} \
+                 to search on",
+                left_out.len(),
+                rows.len()
+            )));
         }
         let pairs = Pairs::new(&s.x, &rows);
         Ok(Searches {
@@ -112,22 +174,28 @@ impl<'a> Searches<'a> {
         })
     }
 
-    /// Output `j`'s search from [`STARTS`]`[start]`: its d + 2 hyperparameters.
-    fn output(&self, j: usize, start: usize) -> Result<Search> {
-        let Some(&(width, noise)) = STARTS.get(start) else {
-            return Err(Error::Invalid(format!(
-                "RBF search start {start}: there are {} starts",
-                STARTS.len()
-            )));
-        };
+    /// Output `j`'s search from `begin`: its d + 2 hyperparameters.
+    fn output(&self, j: usize, begin: Begin) -> Result<Search> {
         let d = self.pairs.inputs();
         let y = Mat::<f64>::from_fn(self.rows.len(), 1, |i, _| self.s.b[self.rows[i]][j]);
         let square: f64 = (0..self.rows.len()).map(|i| y[(i, 0)] * y[(i, 0)]).sum();
         let var = (square / self.rows.len() as f64).max(1e-12);
         let prior = prior_mean(d, var);
-        let mut h0 = Hyper::from_element(d + 2, width.ln());
-        h0[d] = var.ln();
-        h0[d + 1] = (noise * var).ln();
+        let h0 = match begin {
+            Begin::Start(start) => {
+                let Some(&(width, noise)) = STARTS.get(start) else {
+                    return Err(Error::Invalid(format!(
+                        "RBF search start {start}: there are {} starts",
+                        STARTS.len()
+                    )));
+                };
+                let mut h0 = Hyper::from_element(d + 2, width.ln());
+                h0[d] = var.ln();
+                h0[d + 1] = (noise * var).ln();
+                h0
+            }
+            Begin::At(h) => h,
+        };
         let (mut last, mut idle) = (f64::INFINITY, 0);
         let (hyper, objective, _) = minimize(
             h0,
@@ -165,6 +233,79 @@ mod tests {
     use super::*;
     use crate::neural::rbf::Rbf;
     use crate::neural::rbf::tests::data;
+
+    /// A set without a few rows searches on the whole set's draw of rows but those: the same
+    /// rows, numbered in the smaller set, and the same search as on the whole set when none
+    /// is left out.
+    #[test]
+    fn a_search_without_rows_draws_the_whole_sets_rows_but_those() {
+        let (whole, _) = data(HYPER_ROWS + 100);
+        let drawn = Searches::new(&whole, 7, &[]).unwrap().rows;
+        assert_eq!(drawn.len(), HYPER_ROWS);
+        // Two rows of the draw and one outside it left out, given unsorted and twice.
+        let outside = (0..whole.len()).find(|r| !drawn.contains(r)).unwrap();
+        let left_out = vec![drawn[300], outside, drawn[3], drawn[300]];
+        let mut less = whole.clone();
+        let mut gone = left_out.clone();
+        gone.sort_unstable();
+        gone.dedup();
+        for &r in gone.iter().rev() {
+            less.x.remove(r);
+            less.b.remove(r);
+        }
+        let rows = Searches::new(&less, 7, &left_out).unwrap().rows;
+        assert_eq!(rows.len(), HYPER_ROWS - 2);
+        // Each row searched is the same measurement as the whole set's drawn row.
+        let expected: Vec<&Vec<f64>> = drawn
+            .iter()
+            .filter(|r| !gone.contains(r))
+            .map(|&r| &whole.x[r])
+            .collect();
+        let got: Vec<&Vec<f64>> = rows.iter().map(|&r| &less.x[r]).collect();
+        assert_eq!(got, expected);
+        // A small set: every row but those left out.
+        let (small, _) = data(30);
+        let mut fewer = small.clone();
+        fewer.x.remove(4);
+        fewer.b.remove(4);
+        let rows = Searches::new(&fewer, 7, &[4]).unwrap().rows;
+        assert_eq!(rows, (0..29).collect::<Vec<_>>());
+        assert_eq!(
+            search_without(&fewer, 0, 7, &[4]).unwrap(),
+            search(&fewer, 0, 7).unwrap()
+        );
+        // An index beyond the whole set is refused.
+        assert!(Searches::new(&fewer, 7, &[29, 31]).is_err());
+    }
+
+    /// A search begun at another's result stays in its mode and ends no worse; a start of
+    /// the wrong length or not finite is refused.
+    #[test]
+    fn a_search_from_hyperparameters_continues_there() {
+        let (s, _) = data(80);
+        let cold = search(&s, 1, 1).unwrap();
+        let warm = search_from(&s, &cold.hyper, 1, &[]).unwrap();
+        assert!(
+            warm.objective <= cold.objective,
+            "{} {}",
+            warm.objective,
+            cold.objective
+        );
+        assert!(
+            (&warm.hyper - &cold.hyper).amax() < 0.5,
+            "{} {}",
+            warm.hyper,
+            cold.hyper
+        );
+        // From elsewhere it moves to a mode of its own.
+        let flat = Hyper::from_element(cold.hyper.len(), 0.0);
+        let moved = search_from(&s, &flat, 1, &[]).unwrap();
+        assert!((&moved.hyper - &flat).amax() > 0.1);
+        assert!(search_from(&s, &cold.hyper.rows(0, 3).into_owned(), 1, &[]).is_err());
+        let mut bad = cold.hyper.clone();
+        bad[0] = f64::NAN;
+        assert!(search_from(&s, &bad, 1, &[]).is_err());
+    }
 
     #[test]
     fn the_best_search_takes_each_outputs_lowest_objective_of_the_starts() {
