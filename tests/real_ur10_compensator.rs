@@ -140,8 +140,31 @@ fn default_beats_the_plain_baseline_on_series_b() {
     let (id, pool, val) = series_b_split(&ur);
     let model = identified(&ur, &id);
     let base = baseline(&model, &pool);
-    let (c, _) =
+    let (c, report) =
         Compensator::train(&model, &pool, &CompensatorOptions::default(), &|_, _| {}).unwrap();
+    // The RBF network of the final fit: searched again without the rows cross-validation
+    // listed, from the hyperparameters it judged, on the rows its search drew but those (the
+    // pool has more rows than one search sees, so another draw would be other rows).
+    {
+        use robocal::neural::compensator::Form;
+        use robocal::neural::rbf::{Rbf, search_from};
+        let sel = report.selection.as_ref().unwrap();
+        assert!(report.settings.has_rbf() && report.settings.refine.is_none());
+        assert!(pool.rows.len() > robocal::neural::rbf::HYPER_ROWS);
+        let left: Vec<usize> = sel.outliers.iter().map(|o| o.row).collect();
+        assert!(!left.is_empty());
+        let kept = robocal::neural::tuning::subset(&pool, |i| !left.contains(&i));
+        let samples = robocal::neural::targets::build(&c.robot, &kept, Form::Pose, c.encoding)
+            .unwrap()
+            .samples;
+        let judged = sel.rbf_hyper.as_ref().unwrap();
+        let seed = CompensatorOptions::default().train.seed;
+        let again = search_from(&samples, judged, seed, &left).unwrap().hyper;
+        let kernels = |h| Rbf::with_hyper(&samples, h).unwrap().kernels;
+        assert_eq!(c.rbf.as_ref().unwrap().kernels, kernels(&again));
+        let other_draw = search_from(&samples, judged, seed, &[]).unwrap().hyper;
+        assert_ne!(again, other_draw);
+    }
     let plain = summarize(
         &row_errors(&val, Measure::Pose, |q| {
             robocal::kinematics::tool_pose(&model, q)

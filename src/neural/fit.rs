@@ -102,13 +102,16 @@ pub(crate) fn fit_with(
             Some(h) => Rbf::with_hyper_on(&problem.samples, h, parallel)?,
             None => match &train_opts.rbf_from {
                 Some(from) => {
-                    let found = search_from(
+                    // A search that cannot go on from there keeps where it began (the
+                    // hyperparameters found on nearly the same rows, as before it searched).
+                    let h = search_from(
                         &problem.samples,
                         from,
                         train_opts.seed,
                         &train_opts.rbf_left_out,
-                    )?;
-                    Rbf::with_hyper_on(&problem.samples, &found.hyper, parallel)?
+                    )
+                    .map_or_else(|_| from.clone(), |f| f.hyper);
+                    Rbf::with_hyper_on(&problem.samples, &h, parallel)?
                 }
                 None => {
                     Rbf::fit_without(

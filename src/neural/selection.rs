@@ -88,9 +88,10 @@ pub struct Selection {
     /// The cut, robust sigmas (infinite: no row is left out).
     #[serde(with = "crate::io::json_number")]
     pub outlier_k: f64,
-    /// The chosen RBF network's hyperparameters, searched on every row for the model as
-    /// given (the final fit reuses them when nothing is refined and no row is left out, and
-    /// begins its search at them when rows are left out).
+    /// The chosen RBF network's hyperparameters, searched on the training rows (at most
+    /// [`HYPER_ROWS`](crate::neural::rbf::HYPER_ROWS) of them) for the model as given. When
+    /// nothing is refined, the final fit reuses them, or begins its search at them when it
+    /// leaves rows out; a refined model's final fit searches from the settings' start.
     #[serde(skip)]
     pub rbf_hyper: Option<Hyper>,
 }

@@ -113,9 +113,12 @@ pub struct TrainOptions {
     /// Rows of a larger set this one was taken from without (indices in that set): an RBF
     /// search runs on the rows the larger set's search draws, but these
     /// ([`super::rbf::search_without`]); empty: the set is whole.
+    /// [`Compensator::train`](super::compensator::Compensator::train) sets it (and
+    /// `rbf_hyper`, `rbf_from`) for its final fit, whatever the caller gave.
     pub rbf_left_out: Vec<usize>,
     /// Where an RBF search (when `rbf_hyper` is None) begins: the hyperparameters of a search
-    /// on nearly the same rows ([`super::rbf::search_from`]); None: at the settings' start.
+    /// on nearly the same rows ([`super::rbf::search_from`]); None: at the settings' start,
+    /// or from every start when the settings name none.
     pub rbf_from: Option<nalgebra::DVector<f64>>,
 }
 

@@ -11,9 +11,10 @@ pub const PRIOR_SD: f64 = 3.0;
 
 /// Weighted squared distance beyond which a pair's unit response counts as 0 in the
 /// likelihood: e^-345, about 1e-150, below anything a sum of order-one terms can notice.
-/// Smaller responses and their products in the factorisation are subnormal numbers, which the
-/// processor handles about 15 times slower: a search whose widths had grown narrow took 5.4 s
-/// instead of 0.33 s for one output, with the same result to 10 digits.
+/// Products of such responses in the factorisation (and the responses themselves beyond a
+/// distance of about 1416) are subnormal numbers, which the processor handles about 15 times
+/// slower: a search whose widths had grown narrow took 5.4 s instead of 0.33 s for one output,
+/// with the same result to 10 digits. The weights' kernel ([`kernel`]) keeps every response.
 const FAR: f64 = 690.0;
 
 /// The prior's centre: widths 1 (the inputs are standardised), signal variance the targets'
@@ -132,7 +133,8 @@ impl Pairs {
 /// gradient by h into `grad`: with alpha = K^-1 Y and M = alpha alpha^T - o K^-1,
 /// d/dh_j = -1/2 sum_ij M_ij dK_ij/dh_j (Rasmussen and Williams eq. 5.9), where
 /// dK/d ln l_d = s^2 E o D_d / l_d^2 (D_d the squared differences of input d),
-/// dK/d ln s^2 = s^2 E and dK/d ln sigma^2 = sigma^2 I. Infinite where K is not positive
+/// dK/d ln s^2 = s^2 E and dK/d ln sigma^2 = sigma^2 I, with E_ij = 0 beyond the weighted
+/// squared distance `FAR` = 690 (K is the module's `kernel` but there). Infinite where K is not positive
 /// definite.
 pub fn neg_log_likelihood(
     pairs: &Pairs,
@@ -243,13 +245,22 @@ mod tests {
         let (s, _) = data(40);
         let rows: Vec<usize> = (0..40).collect();
         let pairs = Pairs::new(&s.x, &rows);
-        // One target (as every search has: its own path) and two.
-        for targets in [1, 2] {
+        // One target (as every search has: its own path) and two; widths near 1, and
+        // narrow ones (0.02 on inputs spread over 3) where most pairs lie beyond FAR.
+        let near = vec![0.1, -0.4, 0.7, 0.2, -2.0];
+        let narrow = vec![0.02f64.ln(), 0.03f64.ln(), 0.7, 0.2, -2.0];
+        let w: Vec<f64> = narrow[..3].iter().map(|h| (-2.0 * h).exp()).collect();
+        let mut q = vec![0.0; 40 * 39 / 2];
+        pairs.weighted_squares(&w, &mut q);
+        let far = q.iter().filter(|&&q| q > FAR).count();
+        assert!(far > q.len() / 2, "{far} of {} pairs beyond FAR", q.len());
+        for (targets, h) in [(1, &near), (2, &near), (1, &narrow), (2, &narrow)] {
             let y = Mat::<f64>::from_fn(40, targets, |i, j| s.b[i][j]);
-            let h = DVector::from_vec(vec![0.1, -0.4, 0.7, 0.2, -2.0]);
+            let h = DVector::from_vec(h.clone());
             let prior = prior_mean(3, 0.5);
             let mut g = DVector::zeros(5);
-            neg_log_likelihood(&pairs, &y, &h, &prior, Some(&mut g));
+            let f = neg_log_likelihood(&pairs, &y, &h, &prior, Some(&mut g));
+            assert!(f.is_finite());
             for j in 0..5 {
                 let step = 1e-5;
                 let (mut a, mut b) = (h.clone(), h.clone());
@@ -260,7 +271,7 @@ mod tests {
                     / (2.0 * step);
                 assert!(
                     (fd - g[j]).abs() <= 1e-6 * (1.0 + fd.abs()),
-                    "{targets} target(s), component {j}: analytic {} numeric {fd}",
+                    "{targets} target(s), {h}, component {j}: analytic {} numeric {fd}",
                     g[j]
                 );
             }
