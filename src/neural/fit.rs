@@ -4,14 +4,14 @@
 use super::compensator::Compensator;
 use super::domain::Domain;
 use super::parallel::parallel_map;
-use super::rbf::{Rbf, search_from};
+use super::rbf::{Rbf, search_best_without, search_from, search_without};
 use super::refine::{RefinedParam, refine};
 use super::repeats::Repeats;
 use super::selection::Selection;
 use super::settings::{MIX_SHARE, Network, Settings, check_share};
 use super::shrink::Shrink;
 use super::targets::build;
-use super::train::{TrainOptions, TrainReport, train};
+use super::train::{RbfHyper, TrainOptions, TrainReport, train};
 use super::weights::Weights;
 use crate::data::MeasurementSet;
 use crate::error::Result;
@@ -98,32 +98,19 @@ pub(crate) fn fit_with(
     let mut members = reused;
     let mut reports = Vec::new();
     let rbf = if settings.has_rbf() {
-        Some(match &train_opts.rbf_hyper {
-            Some(h) => Rbf::with_hyper_on(&problem.samples, h, parallel)?,
-            None => match &train_opts.rbf_from {
-                Some(from) => {
-                    // A search that cannot go on from there keeps where it began (the
-                    // hyperparameters found on nearly the same rows, as before it searched).
-                    let h = search_from(
-                        &problem.samples,
-                        from,
-                        train_opts.seed,
-                        &train_opts.rbf_left_out,
-                    )
-                    .map_or_else(|_| from.clone(), |f| f.hyper);
-                    Rbf::with_hyper_on(&problem.samples, &h, parallel)?
-                }
-                None => {
-                    Rbf::fit_without(
-                        &problem.samples,
-                        settings.rbf_start,
-                        train_opts.seed,
-                        &train_opts.rbf_left_out,
-                    )?
-                    .0
-                }
+        let (x, seed, left) = (&problem.samples, train_opts.seed, &train_opts.rbf_left_out);
+        let hyper = match &train_opts.rbf_hyper {
+            RbfHyper::Given(h) => h.clone(),
+            // Begun at hyperparameters found on a superset of the rows searched, it cannot
+            // fail on the data: its start's kernel matrices are principal submatrices of
+            // positive definite ones, and it only takes steps that lower a finite objective.
+            RbfHyper::From(from) => search_from(x, from, seed, left)?.hyper,
+            RbfHyper::Search => match settings.rbf_start {
+                Some(k) => search_without(x, k, seed, left)?.hyper,
+                None => search_best_without(x, seed, left)?.hyper,
             },
-        })
+        };
+        Some(Rbf::with_hyper_on(x, &hyper, parallel)?)
     } else {
         None
     };

@@ -76,6 +76,21 @@ impl std::fmt::Debug for Progress {
     }
 }
 
+/// Where an RBF network's hyperparameters ([`super::rbf::Hyper`]: log widths, signal and
+/// noise variances, output after output) come from.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub enum RbfHyper {
+    /// Searched: from the settings' start, or from every start when the settings name none
+    /// ([`super::rbf::search_without`], [`super::rbf::search_best_without`]).
+    #[default]
+    Search,
+    /// Given: found before on the same rows, not searched.
+    Given(nalgebra::DVector<f64>),
+    /// Searched beginning at these: those of a search on nearly the same rows
+    /// ([`super::rbf::search_from`]).
+    From(nalgebra::DVector<f64>),
+}
+
 /// Training settings.
 #[derive(Debug, Clone)]
 pub struct TrainOptions {
@@ -107,19 +122,14 @@ pub struct TrainOptions {
     /// Weights to start from instead of the seeded initial ones (a warm start: the same
     /// network trained with another penalty); ignored when their shape does not fit.
     pub start: Option<Weights>,
-    /// An RBF network's hyperparameters ([`super::rbf::Hyper`]), found before on the same
-    /// rows; None: searched.
-    pub rbf_hyper: Option<nalgebra::DVector<f64>>,
+    /// Where an RBF network's hyperparameters come from.
+    pub rbf_hyper: RbfHyper,
     /// Rows of a larger set this one was taken from without (indices in that set): an RBF
     /// search runs on the rows the larger set's search draws, but these
     /// ([`super::rbf::search_without`]); empty: the set is whole.
     /// [`Compensator::train`](super::compensator::Compensator::train) sets it (and
-    /// `rbf_hyper`, `rbf_from`) for its final fit, whatever the caller gave.
+    /// `rbf_hyper`) for its final fit, whatever the caller gave.
     pub rbf_left_out: Vec<usize>,
-    /// Where an RBF search (when `rbf_hyper` is None) begins: the hyperparameters of a search
-    /// on nearly the same rows ([`super::rbf::search_from`]); None: at the settings' start,
-    /// or from every start when the settings name none.
-    pub rbf_from: Option<nalgebra::DVector<f64>>,
 }
 
 impl Default for TrainOptions {
@@ -137,9 +147,8 @@ impl Default for TrainOptions {
             phase2: Phase2::Auto,
             progress: None,
             start: None,
-            rbf_hyper: None,
+            rbf_hyper: RbfHyper::Search,
             rbf_left_out: Vec::new(),
-            rbf_from: None,
         }
     }
 }

@@ -4,7 +4,7 @@
 use super::compensator::Compensator;
 use super::fit::CompensatorReport;
 use super::settings::CompensatorOptions;
-use super::train::TrainOptions;
+use super::train::{RbfHyper, TrainOptions};
 use super::tuning::{FIT_WORK, budget_epochs, select_settings};
 use crate::data::MeasurementSet;
 use crate::error::Result;
@@ -36,29 +36,33 @@ impl Compensator {
             kept = super::tuning::subset(set, |i| !out.contains(&i));
             &kept
         };
+        // The RBF hyperparameters cross-validation judged, searched on these rows for the
+        // model as given. Where rows are left out, the final fit searches again from them on
+        // the rows their search drew but those: a mis-measured row pulls the likelihood
+        // toward more noise or narrower widths. Over 28 Series B runs (seven splits, training
+        // seeds 1-4) that lowered the held-out RMS in 21 of the 22 runs without refinement
+        // (by up to 9.4 %; +0.4 % in the other) and the mean of all 28 by 1.6 %, for 0.2 s
+        // of the 7 s on Series A's pool of 2000 (a warm search on at most 500 rows). A refined
+        // model's residual is searched again from the start, on the same rows: the model as
+        // given's hyperparameters on it were worse in 6 runs of 6, by 4-25 %
+        // (cross-validation judges a refinement with them, see `Cv::hyper`).
         let judged = selection
             .as_ref()
             .and_then(|s| s.rbf_hyper.clone())
             .filter(|_| settings.refine.is_none());
+        let rbf_hyper = match judged {
+            None => RbfHyper::Search,
+            Some(h) if left_out.is_empty() => RbfHyper::Given(h),
+            Some(h) => RbfHyper::From(h),
+        };
         let train = TrainOptions {
             max_epochs: if opts.budget {
                 budget_epochs(FIT_WORK, set.rows.len(), 50, 60)
             } else {
                 opts.train.max_epochs
             },
-            // The RBF hyperparameters cross-validation judged, searched on these rows for
-            // the model as given. Where rows are left out, the final fit searches again from
-            // them on the rows their search drew but those: a mis-measured row pulls the
-            // likelihood toward more noise or narrower widths. Over 28 Series B runs (seven
-            // splits, training seeds 1-4) that lowered the held-out RMS in 21 of the 22 runs
-            // without refinement (by up to 9.4 %; +0.4 % in the other) and the mean of all 28
-            // by 1.6 %, for no measurable time. A refined model's residual is searched again
-            // from the start, on the same rows: the model as given's hyperparameters on it
-            // were worse in 6 runs of 6, by 4-25 % (cross-validation judges a refinement with
-            // them, see `Cv::hyper`).
-            rbf_hyper: judged.clone().filter(|_| left_out.is_empty()),
-            rbf_from: judged.filter(|_| !left_out.is_empty()),
-            rbf_left_out: left_out.clone(),
+            rbf_hyper,
+            rbf_left_out: left_out,
             ..opts.train.clone()
         };
         let (c, mut report) = Compensator::fit(robot, fit_set, &settings, opts.sigmas, &train)?;

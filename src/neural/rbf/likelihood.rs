@@ -134,8 +134,8 @@ impl Pairs {
 /// d/dh_j = -1/2 sum_ij M_ij dK_ij/dh_j (Rasmussen and Williams eq. 5.9), where
 /// dK/d ln l_d = s^2 E o D_d / l_d^2 (D_d the squared differences of input d),
 /// dK/d ln s^2 = s^2 E and dK/d ln sigma^2 = sigma^2 I, with E_ij = 0 beyond the weighted
-/// squared distance `FAR` = 690 (K is the module's `kernel` but there). Infinite where K is not positive
-/// definite.
+/// squared distance `FAR` = 690 (K is the module's `kernel` but there). Infinite where K is
+/// not positive definite.
 pub fn neg_log_likelihood(
     pairs: &Pairs,
     y: &Mat<f64>,

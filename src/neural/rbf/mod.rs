@@ -233,21 +233,9 @@ impl Rbf {
     /// output by output, the highest likelihood ([`search_best`]), then the weights on every
     /// row ([`Rbf::with_hyper`]).
     pub fn fit(s: &Samples, start: Option<usize>, seed: u64) -> Result<(Rbf, Search)> {
-        Rbf::fit_without(s, start, seed, &[])
-    }
-
-    /// [`Rbf::fit`] on a set from which the rows `left_out` (indices in the whole set) were
-    /// taken out: the search runs on the rows the whole set's search draws, but those
-    /// ([`search_without`]).
-    pub fn fit_without(
-        s: &Samples,
-        start: Option<usize>,
-        seed: u64,
-        left_out: &[usize],
-    ) -> Result<(Rbf, Search)> {
         let found = match start {
-            Some(k) => search_without(s, k, seed, left_out)?,
-            None => search_best_without(s, seed, left_out)?,
+            Some(k) => search(s, k, seed)?,
+            None => search_best(s, seed)?,
         };
         Ok((Rbf::with_hyper(s, &found.hyper)?, found))
     }
@@ -262,12 +250,7 @@ impl Rbf {
     /// already run fits side by side pass false: each thread holds an n x n kernel).
     pub fn with_hyper_on(s: &Samples, h: &Hyper, parallel: bool) -> Result<Rbf> {
         let (n, d, o) = shape(s)?;
-        if h.len() != o * (d + 2) || h.iter().any(|v| !v.is_finite()) {
-            return Err(Error::Invalid(format!(
-                "RBF hyperparameters: {} finite numbers expected for {d} inputs and {o} outputs",
-                o * (d + 2)
-            )));
-        }
+        check_hyper(h, d, o)?;
         let fit = |j: usize| -> Result<(Kernel, Vec<f64>)> {
             let hj = h.rows(j * (d + 2), d + 2).into_owned();
             let chol = kernel(&s.x, &hj).llt(Side::Lower).map_err(|_| {
@@ -332,6 +315,19 @@ fn shape(s: &Samples) -> Result<(usize, usize, usize)> {
         )));
     }
     Ok((n, d, o))
+}
+
+/// Refuses hyperparameters that are not o (d + 2) finite numbers (see [`Hyper`]).
+fn check_hyper(h: &Hyper, d: usize, o: usize) -> Result<()> {
+    if h.len() != o * (d + 2) || h.iter().any(|v| !v.is_finite()) {
+        return Err(Error::Invalid(format!(
+            "RBF hyperparameters: {} finite numbers expected for {d} inputs and {o} outputs, \
+             got {}",
+            o * (d + 2),
+            h.len()
+        )));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

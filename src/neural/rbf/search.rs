@@ -4,7 +4,7 @@
 //! [`HYPER_ROWS`] rows.
 
 use super::likelihood::{Pairs, neg_log_likelihood, prior_mean};
-use super::{Hyper, shape};
+use super::{Hyper, check_hyper, shape};
 use crate::error::{Error, Result};
 use crate::neural::lbfgs::{Next, minimize};
 use crate::neural::parallel::parallel_map;
@@ -63,14 +63,8 @@ pub fn search_without(s: &Samples, start: usize, seed: u64, left_out: &[usize]) 
 /// it follows (a few steps where the rows differ little).
 pub fn search_from(s: &Samples, from: &Hyper, seed: u64, left_out: &[usize]) -> Result<Search> {
     let one = Searches::new(s, seed, left_out)?;
+    check_hyper(from, one.pairs.inputs(), one.outputs)?;
     let block = one.pairs.inputs() + 2;
-    if from.len() != one.outputs * block || from.iter().any(|v| !v.is_finite()) {
-        return Err(Error::Invalid(format!(
-            "RBF search: {} finite hyperparameters to start from expected, got {}",
-            one.outputs * block,
-            from.len()
-        )));
-    }
     let found = parallel_map(one.outputs, |j| {
         one.output(j, Begin::At(from.rows(j * block, block).into_owned()))
     });

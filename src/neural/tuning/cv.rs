@@ -16,7 +16,7 @@ use crate::neural::refine::refine;
 use crate::neural::selection::Sums;
 use crate::neural::settings::{CompensatorOptions, Form, MIX_SHARE, Network, Settings};
 use crate::neural::targets::build;
-use crate::neural::train::TrainOptions;
+use crate::neural::train::{RbfHyper, TrainOptions};
 use crate::neural::weights::Weights;
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -131,7 +131,7 @@ impl Cv<'_> {
                     };
                     let train = TrainOptions {
                         progress: None,
-                        rbf_hyper: Some(self.hyper(settings.encoding, start)?),
+                        rbf_hyper: RbfHyper::Given(self.hyper(settings.encoding, start)?),
                         ..self.opts.train.clone()
                     };
                     let c = crate::neural::fit::fit_with(
