@@ -67,16 +67,26 @@ impl Kernel {
     }
 }
 
-/// The unit response exp(-1/2 sum_d (x_d - c_d)^2 / l_d^2) at `x` of the unit at `c`, with
-/// `inv` the kernel's 1 / l_d^2 (multiplications: per input and unit a division cost four
-/// times as much, most of a prediction).
+/// Weighted squared distance sum_d (x_d - c_d)^2 / l_d^2 beyond which a unit's response
+/// counts as 0, in the fit, the likelihood and prediction alike: e^-345, about 1e-150, below
+/// anything a sum of order-one terms can notice. Beyond a distance of about 1416 the
+/// responses, and before that their products in the factorisation, are subnormal numbers,
+/// which the processor handles about 15 times slower: a search whose widths had grown narrow
+/// took 5.4 s instead of 0.33 s for one output, with the same result to 10 digits; with the
+/// weights' kernel matrices and prediction cut as well, the default `train` on Series A's
+/// pool of 2000 took 5.60 s instead of 7.32 s, the same compensator bit for bit.
+pub(super) const FAR: f64 = 690.0;
+
+/// The unit response exp(-1/2 sum_d (x_d - c_d)^2 / l_d^2) at `x` of the unit at `c` (0
+/// beyond [`FAR`]), with `inv` the kernel's 1 / l_d^2 (multiplications: per input and unit a
+/// division cost four times as much, most of a prediction).
 fn response(x: &[f64], c: &[f64], inv: &[f64]) -> f64 {
     let mut s = 0.0;
     for ((xd, cd), i) in x.iter().zip(c).zip(inv) {
         let t = xd - cd;
         s += t * t * i;
     }
-    (-0.5 * s).exp()
+    if s > FAR { 0.0 } else { (-0.5 * s).exp() }
 }
 
 /// A fitted RBF network (normalised inputs, unit-scale outputs).
@@ -383,6 +393,56 @@ mod tests {
         // Far from every centre the output falls to zero.
         rbf.forward_into(&[40.0, -40.0, 0.0], &mut y, &mut inv);
         assert!(y.iter().all(|v| v.abs() < 1e-9), "{y:?}");
+    }
+
+    /// Beyond FAR a unit's response is exactly 0 in the weights' kernel matrix (as in the
+    /// likelihood's) and in prediction, short of where exp() itself underflows (a weighted
+    /// squared distance of about 1490): no subnormal numbers reach the factorisation.
+    #[test]
+    fn responses_beyond_far_are_zero_in_the_fit_and_in_prediction() {
+        let (s, _) = data(40);
+        // Narrow widths (0.02, 0.03 and 2 on inputs spread over 3): most pairs lie beyond FAR.
+        let h = Hyper::from_vec(vec![0.02f64.ln(), 0.03f64.ln(), 0.7, 0.2, -2.0]);
+        let k = likelihood::kernel(&s.x, &h);
+        let w: Vec<f64> = (0..3).map(|c| (-2.0 * h[c]).exp()).collect();
+        let s2 = h[3].exp();
+        let (mut cut, mut kept) = (0, 0);
+        for j in 0..s.x.len() {
+            for i in j + 1..s.x.len() {
+                let q: f64 = (0..3).map(|c| (s.x[i][c] - s.x[j][c]).powi(2) * w[c]).sum();
+                // The upper triangle is never written (the factorisation reads the lower).
+                assert_eq!(k[(j, i)], 0.0);
+                if q > FAR {
+                    assert_eq!(k[(i, j)], 0.0, "pair {i} {j}: {q}");
+                    cut += usize::from(q < 1400.0);
+                } else {
+                    assert_eq!(k[(i, j)], s2 * (-0.5 * q).exp());
+                    kept += 1;
+                }
+            }
+        }
+        // Pairs where exp() alone would still give a non-zero number, and pairs kept.
+        assert!(
+            cut > 0 && kept > 0,
+            "{cut} cut short of underflow, {kept} kept"
+        );
+        // Prediction: one unit of width 1 at 0, seen at distances 1 and 30 (q = 900).
+        let rbf = Rbf {
+            centres: vec![vec![0.0]],
+            kernels: vec![Kernel {
+                outputs: 1,
+                widths: vec![1.0],
+                signal_variance: 1.0,
+                noise_variance: 0.1,
+            }],
+            weights: vec![vec![2.0]],
+        };
+        let (mut y, mut inv) = ([0.0], Vec::new());
+        rbf.forward_into(&[1.0], &mut y, &mut inv);
+        assert_eq!(y[0], 2.0 * (-0.5f64).exp());
+        assert!((-450.0f64).exp() > 0.0);
+        rbf.forward_into(&[30.0], &mut y, &mut inv);
+        assert_eq!(y[0], 0.0);
     }
 
     #[test]
