@@ -2,8 +2,9 @@
 //! gradient by the log hyperparameters (Rasmussen and Williams 2006, eqs. 2.30 and 5.9).
 
 use super::{FAR, Hyper};
-use faer::linalg::solvers::{DenseSolveCore, Solve};
-use faer::{Mat, Side};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::cholesky::llt::{factor, inverse, solve};
+use faer::{Conj, Mat};
 use nalgebra::DVector;
 
 /// Standard deviation (ln units) of the prior on each log hyperparameter.
@@ -25,24 +26,96 @@ pub(super) fn kernel(x: &[Vec<f64>], h: &Hyper) -> Mat<f64> {
     let d = h.len() - 2;
     let w: Vec<f64> = (0..d).map(|j| (-2.0 * h[j]).exp()).collect();
     let (s2, noise) = (h[d].exp(), h[d + 1].exp());
-    // The lower triangle only, column by column (contiguous): the factorisation reads no
-    // other, and writing the upper one too went across the columns, a cache miss a pair.
+    let all: Vec<usize> = (0..n).collect();
+    let pairs = Pairs::new(x, &all);
+    // The lower triangle only, column by column (contiguous, input after input as the
+    // likelihood's sweep adds them): the factorisation reads no other.
     let mut k = Mat::<f64>::zeros(n, n);
-    for j in 0..n {
-        let xj = &x[j];
-        let column = k.col_as_slice_mut(j);
-        column[j] = s2 + noise + 1e-8 * s2;
-        for (kij, xi) in column[j + 1..].iter_mut().zip(&x[j + 1..]) {
-            let q: f64 = xi
-                .iter()
-                .zip(xj)
-                .zip(&w)
-                .map(|((a, b), w)| (a - b).powi(2) * w)
-                .sum();
-            *kij = if q > FAR { 0.0 } else { s2 * (-0.5 * q).exp() };
+    pulp::Arch::new().dispatch(|| {
+        for j in 0..n {
+            let column = k.col_as_slice_mut(j);
+            column[j] = s2 + noise + 1e-8 * s2;
+            let below = &mut column[j + 1..];
+            pairs.column_squares(j, &w, below);
+            below.iter_mut().for_each(|q| {
+                *q = if *q > FAR {
+                    0.0
+                } else {
+                    s2 * (-0.5 * *q).exp()
+                }
+            });
+        }
+    });
+    k
+}
+
+/// The scratch of [`factor_lower`], of a solve for `rhs` columns and of [`inverse_lower`] on
+/// `n` rows.
+pub(super) fn scratch(n: usize, rhs: usize) -> MemBuffer {
+    let par = faer::get_global_parallelism();
+    MemBuffer::new(StackReq::any_of(&[
+        factor::cholesky_in_place_scratch::<f64>(n, par, Default::default()),
+        solve::solve_in_place_scratch::<f64>(n, rhs, par),
+        inverse::inverse_scratch::<f64>(n, par),
+    ]))
+}
+
+/// Factors in place the positive definite K whose lower triangle `k` holds: L with L L^T =
+/// K, by faer's LLT as `Mat::llt` runs it (the same numbers, without its copy of the
+/// matrix), the strict upper triangle then 0. False where K is not positive definite.
+pub(super) fn factor_lower(k: &mut Mat<f64>, stack: &mut MemStack) -> bool {
+    let par = faer::get_global_parallelism();
+    let ok = factor::cholesky_in_place(
+        k.as_mut(),
+        Default::default(),
+        par,
+        stack,
+        Default::default(),
+    )
+    .is_ok();
+    for j in 1..k.ncols() {
+        k.col_as_slice_mut(j)[..j].fill(0.0);
+    }
+    ok
+}
+
+/// K^-1 B in place of `rhs` = B, with `l` the factor of [`factor_lower`].
+pub(super) fn solve_lower(l: &Mat<f64>, rhs: &mut Mat<f64>, stack: &mut MemStack) {
+    let par = faer::get_global_parallelism();
+    solve::solve_in_place_with_conj(l.as_ref(), Conj::No, rhs.as_mut(), par, stack);
+}
+
+/// The lower triangle of K^-1 into `out` (its upper triangle left as it was), with `l` the
+/// factor of [`factor_lower`].
+fn inverse_lower(l: &Mat<f64>, out: &mut Mat<f64>, stack: &mut MemStack) {
+    let par = faer::get_global_parallelism();
+    inverse::inverse(out.as_mut(), l.as_ref(), par, stack);
+}
+
+/// What [`neg_log_likelihood_in`] writes on each evaluation, kept between the evaluations
+/// of one search (the n x n matrices and the pairs' arrays, allocated and zeroed on every
+/// evaluation otherwise).
+pub struct Scratch {
+    k: Mat<f64>,
+    kinv: Mat<f64>,
+    alpha: Mat<f64>,
+    e: Vec<f64>,
+    p: Vec<f64>,
+    mem: MemBuffer,
+}
+
+impl Scratch {
+    /// Scratch for `n` rows and `o` targets.
+    pub fn new(n: usize, o: usize) -> Scratch {
+        Scratch {
+            k: Mat::zeros(n, n),
+            kinv: Mat::zeros(n, n),
+            alpha: Mat::zeros(n, o),
+            e: Vec::new(),
+            p: Vec::new(),
+            mem: scratch(n, o),
         }
     }
-    k
 }
 
 /// The inputs of the rows a search sees, laid out for the likelihood's two sweeps over the
@@ -88,15 +161,21 @@ impl Pairs {
         let n = self.len();
         let mut at = 0;
         for j in 0..n {
-            let part = &mut q[at..at + (n - j - 1)];
-            part.fill(0.0);
-            for (column, &wc) in self.columns.iter().zip(w) {
-                let xj = column[j];
-                part.iter_mut()
-                    .zip(&column[j + 1..])
-                    .for_each(|(q, &xi)| *q += (xi - xj) * (xi - xj) * wc);
-            }
+            self.column_squares(j, w, &mut q[at..at + (n - j - 1)]);
             at += n - j - 1;
+        }
+    }
+
+    /// The pairs (i, j), i > j, of one row j into `part` (n - j - 1 of them), as
+    /// [`Pairs::weighted_squares`] adds them.
+    #[inline(always)]
+    fn column_squares(&self, j: usize, w: &[f64], part: &mut [f64]) {
+        part.fill(0.0);
+        for (column, &wc) in self.columns.iter().zip(w) {
+            let xj = column[j];
+            part.iter_mut()
+                .zip(&column[j + 1..])
+                .for_each(|(q, &xi)| *q += (xi - xj) * (xi - xj) * wc);
         }
     }
 
@@ -141,6 +220,20 @@ pub fn neg_log_likelihood(
     prior: &Hyper,
     grad: Option<&mut DVector<f64>>,
 ) -> f64 {
+    let mut scratch = Scratch::new(pairs.len(), y.ncols());
+    neg_log_likelihood_in(pairs, y, h, prior, grad, &mut scratch)
+}
+
+/// [`neg_log_likelihood`] writing into `scratch` (made for the rows of `pairs` and the
+/// columns of `y`: a search's evaluations allocate nothing).
+pub fn neg_log_likelihood_in(
+    pairs: &Pairs,
+    y: &Mat<f64>,
+    h: &Hyper,
+    prior: &Hyper,
+    grad: Option<&mut DVector<f64>>,
+    scratch: &mut Scratch,
+) -> f64 {
     let n = pairs.len();
     let d = h.len() - 2;
     let o = y.ncols();
@@ -151,12 +244,24 @@ pub fn neg_log_likelihood(
     let (s2, noise) = (h[d].exp(), h[d + 1].exp());
     // E over the pairs, then K.
     let count = n * n.saturating_sub(1) / 2;
-    let mut e = vec![0.0; count];
-    pairs.weighted_squares(&w, &mut e);
+    if scratch.k.nrows() != n || scratch.alpha.ncols() != o {
+        *scratch = Scratch::new(n, o);
+    }
+    let Scratch {
+        k,
+        kinv,
+        alpha,
+        e,
+        p,
+        mem,
+    } = scratch;
+    let stack = MemStack::new(mem);
+    e.resize(count, 0.0);
+    pairs.weighted_squares(&w, e);
     e.iter_mut()
         .for_each(|q| *q = if *q > FAR { 0.0 } else { (-0.5 * *q).exp() });
-    // The factorisation reads the lower triangle only: the upper one stays zero.
-    let mut k = Mat::<f64>::zeros(n, n);
+    // The factorisation reads the lower triangle only: the upper one is zero (a new
+    // scratch's, or the last factorisation's).
     let mut at = 0;
     for j in 0..n {
         let column = k.col_as_slice_mut(j);
@@ -168,11 +273,12 @@ pub fn neg_log_likelihood(
             .for_each(|(kij, &eij)| *kij = s2 * eij);
         at += below;
     }
-    let Ok(chol) = k.llt(Side::Lower) else {
+    if !factor_lower(k, stack) {
         return f64::INFINITY;
-    };
-    let alpha = chol.solve(y);
-    let l = chol.L();
+    }
+    alpha.copy_from(y);
+    solve_lower(k, alpha, stack);
+    let l = &*k;
     let log_det: f64 = 2.0 * (0..n).map(|i| l[(i, i)].ln()).sum::<f64>();
     let mut fit = 0.0;
     for j in 0..o {
@@ -184,13 +290,14 @@ pub fn neg_log_likelihood(
     let sd2 = PRIOR_SD * PRIOR_SD;
     let f = 0.5 * fit + 0.5 * o as f64 * log_det + 0.5 * dh.norm_squared() / sd2;
     if let Some(g) = grad {
-        let kinv = chol.inverse();
+        inverse_lower(k, kinv, stack);
         // (alpha alpha^T)_ij, formed where it is used instead of as an n x n product.
         let aa = |i: usize, j: usize| (0..o).fold(0.0, |s, c| s + alpha[(i, c)] * alpha[(j, c)]);
         let of = o as f64;
         // M's diagonal (E_ii = 1) and P = M o (s^2 E) over the pairs.
         let trace_m: f64 = (0..n).map(|i| aa(i, i) - of * kinv[(i, i)]).sum();
-        let mut p = vec![0.0; count];
+        // Every pair's entry is written below.
+        p.resize(count, 0.0);
         let mut at = 0;
         for j in 0..n {
             let below = n - j - 1;
@@ -224,7 +331,7 @@ pub fn neg_log_likelihood(
         g[d + 1] = -0.5 * noise * trace_m;
         // sum_ij P_ij D_ij = 2 sum_{i>j} P_ij D_ij (D_ii = 0).
         let mut total = vec![0.0; d];
-        pairs.weighted_sums(&p, &mut total);
+        pairs.weighted_sums(p, &mut total);
         for c in 0..d {
             g[c] = -total[c] * w[c];
         }
@@ -237,6 +344,82 @@ pub fn neg_log_likelihood(
 mod tests {
     use super::*;
     use crate::neural::rbf::tests::data;
+    use faer::Side;
+    use faer::linalg::solvers::{DenseSolveCore, Solve};
+
+    /// The in-place factorisation, solve and inverse are faer's `Mat::llt`, `solve` and
+    /// `inverse` bit for bit (on the lower triangle, which is all the likelihood reads).
+    #[test]
+    fn in_place_factors_are_those_of_faers_llt() {
+        let (s, _) = data(120);
+        let h = Hyper::from_vec(vec![0.3, -0.2, 0.9, 0.1, -3.0]);
+        let mut k = kernel(&s.x, &h);
+        let chol = k.llt(Side::Lower).unwrap();
+        let mut mem = scratch(120, 2);
+        let stack = MemStack::new(&mut mem);
+        assert!(factor_lower(&mut k, stack));
+        assert_eq!(k, chol.L().to_owned());
+        let b = Mat::<f64>::from_fn(120, 2, |i, j| s.b[i][j]);
+        let mut x = b.clone();
+        solve_lower(&k, &mut x, stack);
+        assert_eq!(x, chol.solve(&b));
+        let mut inv = Mat::<f64>::zeros(120, 120);
+        inverse_lower(&k, &mut inv, stack);
+        let expected = chol.inverse();
+        for j in 0..120 {
+            for i in j..120 {
+                assert_eq!(inv[(i, j)], expected[(i, j)], "{i} {j}");
+            }
+        }
+        // Not positive definite: refused.
+        let mut bad = Mat::<f64>::identity(3, 3);
+        bad[(1, 0)] = 2.0;
+        assert!(!factor_lower(&mut bad, stack));
+    }
+
+    /// A search's scratch, reused across evaluations (after one refused, and after a
+    /// factorisation that failed; one of another size remade), gives the numbers of a fresh
+    /// one.
+    #[test]
+    fn a_reused_scratch_gives_the_numbers_of_a_fresh_one() {
+        let (s, _) = data(60);
+        let rows: Vec<usize> = (0..60).collect();
+        let pairs = Pairs::new(&s.x, &rows);
+        let y = Mat::<f64>::from_fn(60, 1, |i, _| s.b[i][0]);
+        let prior = prior_mean(3, 0.5);
+        let mut reused = Scratch::new(60, 1);
+        let hs = [
+            vec![0.1, -0.4, 0.7, 0.2, -2.0],
+            // A noise variance of e^-60: beyond the bounds, refused before any factorisation.
+            vec![0.1, -0.4, 0.7, 0.2, -60.0],
+            vec![-1.0, 0.5, 0.3, -0.5, -4.0],
+            vec![0.1, -0.4, 0.7, 0.2, -2.0],
+        ];
+        for (t, h) in hs.iter().enumerate() {
+            if t == 2 {
+                // A factorisation that fails midway leaves its scratch as the next needs it.
+                let mut mem = scratch(60, 1);
+                let k = &mut reused.k;
+                for j in 0..60 {
+                    k.col_as_slice_mut(j)[j..].fill(if j == 30 { -1.0 } else { 0.5 });
+                }
+                assert!(!factor_lower(k, MemStack::new(&mut mem)));
+            }
+            let h = DVector::from_vec(h.clone());
+            let (mut g1, mut g2) = (DVector::zeros(5), DVector::zeros(5));
+            let fresh = neg_log_likelihood(&pairs, &y, &h, &prior, Some(&mut g1));
+            let again = neg_log_likelihood_in(&pairs, &y, &h, &prior, Some(&mut g2), &mut reused);
+            assert_eq!(fresh.to_bits(), again.to_bits(), "{h}");
+            assert_eq!(g1, g2);
+        }
+        // A scratch of another size is remade.
+        let mut small = Scratch::new(5, 1);
+        let h = DVector::from_vec(hs[0].clone());
+        assert_eq!(
+            neg_log_likelihood_in(&pairs, &y, &h, &prior, None, &mut small).to_bits(),
+            neg_log_likelihood(&pairs, &y, &h, &prior, None).to_bits()
+        );
+    }
 
     #[test]
     fn likelihood_gradient_matches_central_differences() {

@@ -36,10 +36,10 @@ mod search;
 
 use super::samples::Samples;
 use crate::error::{Error, Result};
-use faer::linalg::solvers::Solve;
-use faer::{Mat, Side};
+use faer::Mat;
+use faer::dyn_stack::MemStack;
 use likelihood::kernel;
-pub use likelihood::{PRIOR_SD, Pairs, neg_log_likelihood};
+pub use likelihood::{PRIOR_SD, Pairs, Scratch, neg_log_likelihood, neg_log_likelihood_in};
 use nalgebra::{DMatrix, DVector};
 pub use search::{
     HYPER_ITERATIONS, HYPER_ROWS, STALL_NATS, STARTS, Search, search, search_best,
@@ -263,13 +263,17 @@ impl Rbf {
         check_hyper(h, d, o)?;
         let fit = |j: usize| -> Result<(Kernel, Vec<f64>)> {
             let hj = h.rows(j * (d + 2), d + 2).into_owned();
-            let chol = kernel(&s.x, &hj).llt(Side::Lower).map_err(|_| {
-                Error::Invalid(format!(
+            let mut k = kernel(&s.x, &hj);
+            let mut mem = likelihood::scratch(n, 1);
+            let stack = MemStack::new(&mut mem);
+            if !likelihood::factor_lower(&mut k, stack) {
+                return Err(Error::Invalid(format!(
                     "the RBF network's kernel matrix of output {} is not positive definite",
                     j + 1
-                ))
-            })?;
-            let alpha = chol.solve(Mat::<f64>::from_fn(n, 1, |i, _| s.b[i][j]));
+                )));
+            }
+            let mut alpha = Mat::<f64>::from_fn(n, 1, |i, _| s.b[i][j]);
+            likelihood::solve_lower(&k, &mut alpha, stack);
             let s2 = hj[d].exp();
             let kernel = Kernel {
                 outputs: 1,

@@ -3,7 +3,7 @@
 //! ([`search_from`]: the final fit's search without the rows it leaves out), on at most
 //! [`HYPER_ROWS`] rows.
 
-use super::likelihood::{Pairs, neg_log_likelihood, prior_mean};
+use super::likelihood::{Pairs, Scratch, neg_log_likelihood_in, prior_mean};
 use super::{Hyper, check_hyper, shape};
 use crate::error::{Error, Result};
 use crate::neural::lbfgs::{Next, minimize};
@@ -203,12 +203,13 @@ impl<'a> Searches<'a> {
             Begin::At(h) => h,
         };
         let (mut last, mut idle) = (f64::INFINITY, 0);
+        let mut scratch = Scratch::new(self.rows.len(), 1);
         let (hyper, objective, _) = minimize(
             h0,
             8,
             HYPER_ITERATIONS,
             1e-6,
-            |h, g| neg_log_likelihood(&self.pairs, &y, h, &prior, Some(g)),
+            |h, g| neg_log_likelihood_in(&self.pairs, &y, h, &prior, Some(g), &mut scratch),
             |_, value, _| {
                 // Likelihood differences of a thousandth of a nat choose nothing: stop when
                 // three steps in a row gain less.
