@@ -4,7 +4,7 @@
 use super::compensator::Compensator;
 use super::domain::Domain;
 use super::parallel::parallel_map;
-use super::rbf::{Rbf, search_best_without, search_from, search_without};
+use super::rbf::{Rbf, search_from, search_start_without};
 use super::refine::{RefinedParam, refine};
 use super::repeats::Repeats;
 use super::selection::Selection;
@@ -105,10 +105,7 @@ pub(crate) fn fit_with(
             // fail on the data: its start's kernel matrices are principal submatrices of
             // positive definite ones, and it only takes steps that lower a finite objective.
             RbfHyper::From(from) => search_from(x, from, seed, left)?.hyper,
-            RbfHyper::Search => match settings.rbf_start {
-                Some(k) => search_without(x, k, seed, left)?.hyper,
-                None => search_best_without(x, seed, left)?.hyper,
-            },
+            RbfHyper::Search => search_start_without(x, settings.rbf_start, seed, left)?.hyper,
         };
         Some(Rbf::with_hyper_on(x, &hyper, parallel)?)
     } else {

@@ -2,7 +2,7 @@
 //! gradient by the log hyperparameters (Rasmussen and Williams 2006, eqs. 2.30 and 5.9).
 
 use super::{FAR, Hyper};
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::{factor, inverse, solve};
 use faer::{Conj, Mat};
 use nalgebra::DVector;
@@ -49,15 +49,17 @@ pub(super) fn kernel(x: &[Vec<f64>], h: &Hyper) -> Mat<f64> {
     k
 }
 
-/// The scratch of [`factor_lower`], of a solve for `rhs` columns and of [`inverse_lower`] on
-/// `n` rows.
-pub(super) fn scratch(n: usize, rhs: usize) -> MemBuffer {
+/// The scratch of [`factor_lower`] and of a solve for `rhs` columns on `n` rows, and with
+/// `inverse` of [`inverse_lower`] (an n x n matrix of its own, which a fit does not need).
+pub(super) fn scratch(n: usize, rhs: usize, inverse: bool) -> MemBuffer {
     let par = faer::get_global_parallelism();
-    MemBuffer::new(StackReq::any_of(&[
-        factor::cholesky_in_place_scratch::<f64>(n, par, Default::default()),
-        solve::solve_in_place_scratch::<f64>(n, rhs, par),
-        inverse::inverse_scratch::<f64>(n, par),
-    ]))
+    let solve = factor::cholesky_in_place_scratch::<f64>(n, par, Default::default())
+        .or(solve::solve_in_place_scratch::<f64>(n, rhs, par));
+    MemBuffer::new(if inverse {
+        solve.or(inverse::inverse_scratch::<f64>(n, par))
+    } else {
+        solve
+    })
 }
 
 /// Factors in place the positive definite K whose lower triangle `k` holds: L with L L^T =
@@ -95,7 +97,7 @@ fn inverse_lower(l: &Mat<f64>, out: &mut Mat<f64>, stack: &mut MemStack) {
 /// What [`neg_log_likelihood_in`] writes on each evaluation, kept between the evaluations
 /// of one search (the n x n matrices and the pairs' arrays, allocated and zeroed on every
 /// evaluation otherwise).
-pub struct Scratch {
+pub(super) struct Scratch {
     k: Mat<f64>,
     kinv: Mat<f64>,
     alpha: Mat<f64>,
@@ -106,19 +108,19 @@ pub struct Scratch {
 
 impl Scratch {
     /// Scratch for `n` rows and `o` targets.
-    pub fn new(n: usize, o: usize) -> Scratch {
+    pub(super) fn new(n: usize, o: usize) -> Scratch {
         Scratch {
             k: Mat::zeros(n, n),
             kinv: Mat::zeros(n, n),
             alpha: Mat::zeros(n, o),
             e: Vec::new(),
             p: Vec::new(),
-            mem: scratch(n, o),
+            mem: scratch(n, o, true),
         }
     }
 }
 
-/// The inputs of the rows a search sees, laid out for the likelihood's two sweeps over the
+/// The inputs of the rows a search sees (or a fit's kernel matrix), laid out for the likelihood's two sweeps over the
 /// pairs of rows (i > j, column by column): by input (`columns`, the kernel's sweep adds
 /// input after input over many pairs at once) and by row (`rows`, the gradient's sweep adds
 /// one pair to every input's sum). The squared differences are formed on the fly from these
@@ -226,7 +228,7 @@ pub fn neg_log_likelihood(
 
 /// [`neg_log_likelihood`] writing into `scratch` (made for the rows of `pairs` and the
 /// columns of `y`: a search's evaluations allocate nothing).
-pub fn neg_log_likelihood_in(
+pub(super) fn neg_log_likelihood_in(
     pairs: &Pairs,
     y: &Mat<f64>,
     h: &Hyper,
@@ -355,7 +357,7 @@ mod tests {
         let h = Hyper::from_vec(vec![0.3, -0.2, 0.9, 0.1, -3.0]);
         let mut k = kernel(&s.x, &h);
         let chol = k.llt(Side::Lower).unwrap();
-        let mut mem = scratch(120, 2);
+        let mut mem = scratch(120, 2, true);
         let stack = MemStack::new(&mut mem);
         assert!(factor_lower(&mut k, stack));
         assert_eq!(k, chol.L().to_owned());
@@ -398,7 +400,7 @@ mod tests {
         for (t, h) in hs.iter().enumerate() {
             if t == 2 {
                 // A factorisation that fails midway leaves its scratch as the next needs it.
-                let mut mem = scratch(60, 1);
+                let mut mem = scratch(60, 1, false);
                 let k = &mut reused.k;
                 for j in 0..60 {
                     k.col_as_slice_mut(j)[j..].fill(if j == 30 { -1.0 } else { 0.5 });

@@ -39,11 +39,11 @@ use crate::error::{Error, Result};
 use faer::Mat;
 use faer::dyn_stack::MemStack;
 use likelihood::kernel;
-pub use likelihood::{PRIOR_SD, Pairs, Scratch, neg_log_likelihood, neg_log_likelihood_in};
+pub use likelihood::{PRIOR_SD, Pairs, neg_log_likelihood};
 use nalgebra::{DMatrix, DVector};
 pub use search::{
     HYPER_ITERATIONS, HYPER_ROWS, STALL_NATS, STARTS, Search, search, search_best,
-    search_best_without, search_from, search_without,
+    search_best_without, search_from, search_start_without, search_without,
 };
 
 /// One output's Gaussian process (or, in files of version 3 and 4, every output's).
@@ -73,8 +73,9 @@ impl Kernel {
 /// responses, and before that their products in the factorisation, are subnormal numbers,
 /// which the processor handles about 15 times slower: a search whose widths had grown narrow
 /// took 5.4 s instead of 0.33 s for one output, with the same result to 10 digits; with the
-/// weights' kernel matrices and prediction cut as well, the default `train` on Series A's
-/// pool of 2000 took 5.60 s instead of 7.32 s, the same compensator bit for bit.
+/// weights' kernel matrices (then filled in their lower triangle only) and prediction cut
+/// as well, the default `train` on Series A's pool of 2000 took 5.60 s instead of 7.32 s,
+/// the same compensator bit for bit.
 pub(super) const FAR: f64 = 690.0;
 
 /// The unit response exp(-1/2 sum_d (x_d - c_d)^2 / l_d^2) at `x` of the unit at `c` (0
@@ -243,10 +244,7 @@ impl Rbf {
     /// output by output, the highest likelihood ([`search_best`]), then the weights on every
     /// row ([`Rbf::with_hyper`]).
     pub fn fit(s: &Samples, start: Option<usize>, seed: u64) -> Result<(Rbf, Search)> {
-        let found = match start {
-            Some(k) => search(s, k, seed)?,
-            None => search_best(s, seed)?,
-        };
+        let found = search_start_without(s, start, seed, &[])?;
         Ok((Rbf::with_hyper(s, &found.hyper)?, found))
     }
 
@@ -264,7 +262,7 @@ impl Rbf {
         let fit = |j: usize| -> Result<(Kernel, Vec<f64>)> {
             let hj = h.rows(j * (d + 2), d + 2).into_owned();
             let mut k = kernel(&s.x, &hj);
-            let mut mem = likelihood::scratch(n, 1);
+            let mut mem = likelihood::scratch(n, 1, false);
             let stack = MemStack::new(&mut mem);
             if !likelihood::factor_lower(&mut k, stack) {
                 return Err(Error::Invalid(format!(

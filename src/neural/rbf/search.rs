@@ -114,6 +114,19 @@ pub fn search_best_without(s: &Samples, seed: u64, left_out: &[usize]) -> Result
     Ok(join(best))
 }
 
+/// [`search_without`] from [`STARTS`]`[k]` for `start` Some(k), else [`search_best_without`].
+pub fn search_start_without(
+    s: &Samples,
+    start: Option<usize>,
+    seed: u64,
+    left_out: &[usize],
+) -> Result<Search> {
+    match start {
+        Some(k) => search_without(s, k, seed, left_out),
+        None => search_best_without(s, seed, left_out),
+    }
+}
+
 /// The outputs' searches as one: their hyperparameters in output order, objectives summed.
 fn join(per_output: Vec<Search>) -> Search {
     let hyper = Hyper::from_iterator(
