@@ -12,7 +12,7 @@
 //! residual, so its effect fades as the data grow, as a prior's should.
 
 use super::weights::Weights;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DMatrixViewMut, DVector};
 
 /// Training samples: normalised inputs `x[k]`, targets `b[k]`, optional maps `maps[k]`
 /// (rows of b x network outputs) and a group per sample (rows of one repeated configuration
@@ -206,9 +206,6 @@ pub fn objective(s: &Samples, w: &Weights, lambda: f64, grad: &mut DVector<f64>)
 pub struct Batch<'a> {
     s: &'a Samples,
     x: DMatrix<f64>,
-    /// Transposed copies: products of the form A^T B go through the blocked `gemm`.
-    zt: DMatrix<f64>,
-    gt: DMatrix<f64>,
     b: DMatrix<f64>,
     z: DMatrix<f64>,
     y: DMatrix<f64>,
@@ -217,6 +214,8 @@ pub struct Batch<'a> {
     gh: DMatrix<f64>,
     gw1: DMatrix<f64>,
     gw2: DMatrix<f64>,
+    /// Column sums (of the activations, the targets, the output and hidden gradients).
+    sums: Vec<f64>,
 }
 
 impl<'a> Batch<'a> {
@@ -228,8 +227,6 @@ impl<'a> Batch<'a> {
         let b = DMatrix::from_fn(n, rows, |k, r| s.b[k][r]);
         Batch {
             s,
-            zt: DMatrix::zeros(nh, n),
-            gt: DMatrix::zeros(nh, n),
             x,
             b,
             z: DMatrix::zeros(n, nh),
@@ -239,6 +236,7 @@ impl<'a> Batch<'a> {
             gh: DMatrix::zeros(n, nh),
             gw1: DMatrix::zeros(nh, ni),
             gw2: DMatrix::zeros(no, nh),
+            sums: vec![0.0; nh.max(no).max(rows)],
         }
     }
 
@@ -317,21 +315,20 @@ impl<'a> Batch<'a> {
         self.hidden(w);
         let (n, nh) = (self.z.nrows(), self.z.ncols());
         let mut a = DMatrix::<f64>::zeros(nh + 1, nh + 1);
-        self.z.transpose_to(&mut self.zt);
-        a.view_mut((0, 0), (nh, nh))
-            .gemm(1.0, &self.zt, &self.z, 0.0);
-        for j in 0..nh {
-            let s = self.z.column(j).sum();
+        gemm_tn(&self.z, &self.z, a.view_mut((0, 0), (nh, nh)));
+        let sums = &mut self.sums;
+        column_sums(&self.z, &mut sums[..nh]);
+        for (j, &s) in sums[..nh].iter().enumerate() {
             a[(j, nh)] = s;
             a[(nh, j)] = s;
             a[(j, j)] += lambda;
         }
         a[(nh, nh)] = n as f64;
         let mut rhs = DMatrix::<f64>::zeros(nh + 1, self.b.ncols());
-        rhs.view_mut((0, 0), (nh, self.b.ncols()))
-            .gemm(1.0, &self.zt, &self.b, 0.0);
-        for c in 0..self.b.ncols() {
-            rhs[(nh, c)] = self.b.column(c).sum();
+        gemm_tn(&self.z, &self.b, rhs.view_mut((0, 0), (nh, self.b.ncols())));
+        column_sums(&self.b, &mut sums[..self.b.ncols()]);
+        for (c, &s) in sums[..self.b.ncols()].iter().enumerate() {
+            rhs[(nh, c)] = s;
         }
         // A tiny ridge keeps a saturated (constant) unit from making A singular.
         for j in 0..=nh {
@@ -378,46 +375,134 @@ impl<'a> Batch<'a> {
         // dF/dW2 = Gy^T H, dF/dH = Gy W2, dF/dZ = dF/dH . H (1 - H), dF/dW1 = Gz^T X.
         self.gy.tr_mul_to(&self.z, &mut self.gw2);
         self.gy.mul_to(&w.w2, &mut self.gh);
-        for (g, h) in self.gh.as_mut_slice().iter_mut().zip(self.z.as_slice()) {
-            *g *= h * (1.0 - h);
-        }
-        self.gh.transpose_to(&mut self.gt);
-        self.gw1.gemm(1.0, &self.gt, &self.x, 0.0);
+        let (gh, z) = (self.gh.as_mut_slice(), self.z.as_slice());
+        pulp::Arch::new().dispatch(
+            #[inline(always)]
+            || {
+                for (g, h) in gh.iter_mut().zip(z) {
+                    *g *= h * (1.0 - h);
+                }
+            },
+        );
+        gemm_tn(&self.gh, &self.x, self.gw1.view_mut((0, 0), (nh, ni)));
         let (off_b1, off_w2, off_b2) = (nh * ni, nh * ni + nh, nh * ni + nh + no * nh);
         // The weights and the gradient's blocks by slices (row-major in the gradient,
         // column-major in the matrices); sums from 0 in row order, as nalgebra's `sum`.
         let decay = 2.0 * lambda / m;
         let g = grad.as_mut_slice();
         let (gw1, w1) = (self.gw1.as_slice(), w.w1.as_slice());
+        column_sums(&self.gh, &mut g[off_b1..off_b1 + nh]);
         for j in 0..nh {
             for i in 0..ni {
                 g[j * ni + i] = gw1[i * nh + j] + decay * w1[i * nh + j];
             }
-            g[off_b1 + j] = column_sum(&self.gh, j);
         }
         let (gw2, w2) = (self.gw2.as_slice(), w.w2.as_slice());
+        column_sums(&self.gy, &mut g[off_b2..off_b2 + no]);
         for o in 0..no {
             for j in 0..nh {
                 g[off_w2 + o * nh + j] = gw2[j * no + o] + decay * w2[j * no + o];
             }
-            g[off_b2 + o] = column_sum(&self.gy, o);
         }
         (sum + lambda * weight_norm2(w)) / m
     }
 }
 
-/// The sum of column `c` of `m`, added in row order from 0 (the bits of nalgebra's `sum`).
-#[inline]
-fn column_sum(m: &DMatrix<f64>, c: usize) -> f64 {
+/// The sum of every column of `m` into `out` (one per column), each added in row order from
+/// 0 (the bits of nalgebra's `sum`), the columns side by side: one chain of additions per
+/// column running at once instead of each addition waiting on the one before.
+fn column_sums(m: &DMatrix<f64>, out: &mut [f64]) {
     let n = m.nrows();
-    m.as_slice()[c * n..(c + 1) * n]
-        .iter()
-        .fold(0.0, |acc, v| acc + v)
+    out.fill(0.0);
+    for k in 0..n {
+        for (t, column) in out.iter_mut().zip(m.as_slice().chunks_exact(n)) {
+            *t += column[k];
+        }
+    }
+}
+
+/// `out` = A^T B (A: rows x m, B: rows x n, out: m x n), by `matrixmultiply`'s blocked
+/// `dgemm` reading A with its strides swapped: the routine nalgebra's `gemm` calls on a
+/// transposed copy of A (above its small-matrix threshold), without the copy, whose strided
+/// writes, and the strided packing of the copy's rows, cost more than the product on the
+/// batch's long, thin matrices. Not nalgebra's `gemm` on a transposed view: its small-matrix
+/// path writes out of bounds with strided views (nalgebra 0.34).
+fn gemm_tn(a: &DMatrix<f64>, b: &DMatrix<f64>, mut out: DMatrixViewMut<'_, f64>) {
+    let (rows, m) = a.shape();
+    let n = b.ncols();
+    assert!(
+        b.nrows() == rows && out.shape() == (m, n),
+        "gemm_tn: shapes {:?}^T {:?} into {:?}",
+        a.shape(),
+        b.shape(),
+        out.shape()
+    );
+    let (rsc, csc) = out.strides();
+    // Strides in elements: A^T's (i, p) is a's (p, i), at i rows + p; B's (p, j) at
+    // j rows + p; out's (i, j) at i rsc + j csc, distinct for distinct (i, j) (a view of a
+    // matrix, rsc >= 1 and csc >= the view's rows).
+    let (rows_stride, rsc, csc) = (rows as isize, rsc as isize, csc as isize);
+    // SAFETY: every index dgemm forms (i < m, p < rows, j < n) lies within the storage of
+    // `a`, `b` and `out` by the strides above and the shapes checked; `out` is borrowed
+    // mutably, so it aliases neither input; with beta 0, dgemm does not read `out`.
+    unsafe {
+        matrixmultiply::dgemm(
+            m,
+            rows,
+            n,
+            1.0,
+            a.as_ptr(),
+            rows_stride,
+            1,
+            b.as_ptr(),
+            1,
+            rows_stride,
+            0.0,
+            out.as_mut_ptr(),
+            rsc,
+            csc,
+        );
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The batch's shortcuts give the bits of what they replace: A^T B without the copy those
+    /// of nalgebra's `gemm` on a transposed copy (sizes above its small-matrix threshold, into
+    /// a view of a larger matrix, as the projection writes it), and the side-by-side column
+    /// sums those of nalgebra's `sum` of each column (numbers of spread magnitudes, whose sum
+    /// depends on the order of the additions).
+    #[test]
+    fn products_without_copies_and_column_sums_give_nalgebras_bits() {
+        let m = DMatrix::from_fn(203, 33, |i, j| {
+            ((i * 31 + j * 17) as f64 * 0.713).sin() * 10f64.powi(((i * 7 + j) % 13) as i32 - 6)
+        });
+        let b = DMatrix::from_fn(203, 7, |i, j| ((i * 3 + j * 11) as f64 * 0.291).cos());
+        let (mut ours, mut copied) = (DMatrix::from_element(35, 9, 5.0), DMatrix::zeros(33, 7));
+        gemm_tn(&m, &b, ours.view_mut((0, 0), (33, 7)));
+        copied.gemm(1.0, &m.transpose(), &b, 0.0);
+        assert_eq!(ours.view((0, 0), (33, 7)), copied);
+        // Nothing outside the view written.
+        assert_eq!(ours.iter().filter(|&&v| v == 5.0).count(), 35 * 9 - 33 * 7);
+        // Small matrices as well (nalgebra's own loops there; the same to rounding).
+        let (a, c) = (
+            m.view((0, 0), (4, 3)).into_owned(),
+            b.view((0, 0), (4, 2)).into_owned(),
+        );
+        let mut small = DMatrix::zeros(3, 2);
+        gemm_tn(&a, &c, small.view_mut((0, 0), (3, 2)));
+        assert!((small - a.transpose() * c).amax() < 1e-12);
+        let mut sums = vec![f64::NAN; 33];
+        column_sums(&m, &mut sums);
+        for (j, s) in sums.iter().enumerate() {
+            assert_eq!(s.to_bits(), m.column(j).sum().to_bits(), "column {j}");
+        }
+        // In another order the sums differ: the comparison above can tell.
+        let reversed: f64 = m.column(0).iter().rev().sum();
+        assert_ne!(reversed.to_bits(), sums[0].to_bits());
+    }
 
     #[test]
     fn gradient_matches_central_differences_with_maps_and_penalty() {
