@@ -1,5 +1,6 @@
 //! The neural compensator (thesis 3.2, 5.5, 6.4): small MLPs in series with a kinematic model.
 
+pub mod batch;
 pub mod compensator;
 pub mod domain;
 pub mod encoding;

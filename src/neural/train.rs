@@ -9,9 +9,10 @@
 //! `min_grad`; the validation error (on a held-out part of the training data) has not improved
 //! for `max_fail` epochs in a row (the weights of its best epoch are kept); `max_epochs`.
 
+use super::batch::Batch;
 use super::lbfgs::{self, LbfgsStop, Next};
 use super::net::train_momentum;
-use super::samples::{Batch, Samples, penalty_mask, weight_norm2};
+use super::samples::{Samples, penalty_mask, weight_norm2};
 use super::weights::Weights;
 use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};

@@ -1,0 +1,387 @@
+//! The training samples as matrices (one row per sample) for fast batched passes of an MLP:
+//! the penalised objective of [`super::samples`] and its gradient by matrix products, and the
+//! variable projection of phase 2 (the output layer solved for the hidden layer given).
+
+use super::samples::{Samples, weight_norm2};
+use super::weights::Weights;
+use nalgebra::{DMatrix, DMatrixViewMut, DVector};
+
+/// The samples as matrices (one row per sample) for fast batched passes: the objective and
+/// its gradient by matrix products, the numbers of [`super::samples::objective`] and
+/// [`Samples::mse`] (to about 1e-16: the batch's activation runs on [`super::logistic`]'s
+/// exponential).
+pub struct Batch<'a> {
+    s: &'a Samples,
+    x: DMatrix<f64>,
+    b: DMatrix<f64>,
+    z: DMatrix<f64>,
+    y: DMatrix<f64>,
+    r: DMatrix<f64>,
+    gy: DMatrix<f64>,
+    gh: DMatrix<f64>,
+    gw1: DMatrix<f64>,
+    gw2: DMatrix<f64>,
+    /// Column sums (of the activations, the targets, the output and hidden gradients).
+    sums: Vec<f64>,
+}
+
+impl<'a> Batch<'a> {
+    /// The matrices of `s` and workspaces sized for networks shaped as `w`.
+    pub fn new(s: &'a Samples, w: &Weights) -> Self {
+        let (n, rows) = (s.len(), s.rows());
+        let (nh, ni, no) = (w.hidden(), w.inputs(), w.outputs());
+        let x = DMatrix::from_fn(n, ni, |k, i| s.x[k][i]);
+        let b = DMatrix::from_fn(n, rows, |k, r| s.b[k][r]);
+        Batch {
+            s,
+            x,
+            b,
+            z: DMatrix::zeros(n, nh),
+            y: DMatrix::zeros(n, no),
+            r: DMatrix::zeros(n, rows),
+            gy: DMatrix::zeros(n, no),
+            gh: DMatrix::zeros(n, nh),
+            gw1: DMatrix::zeros(nh, ni),
+            gw2: DMatrix::zeros(no, nh),
+            sums: vec![0.0; nh.max(no).max(rows)],
+        }
+    }
+
+    /// Hidden activations of every sample into `z`.
+    fn hidden(&mut self, w: &Weights) {
+        self.x.mul_to(&w.w1.transpose(), &mut self.z);
+        let n = self.z.nrows();
+        for (j, col) in self.z.as_mut_slice().chunks_exact_mut(n.max(1)).enumerate() {
+            super::logistic::logistic_in_place(col, w.b1[j]);
+        }
+    }
+
+    /// Forward pass: hidden activations into `z`, outputs into `y`, residuals into `r`;
+    /// returns the sum of squared residuals.
+    fn forward(&mut self, w: &Weights) -> f64 {
+        self.hidden(w);
+        self.outputs(w)
+    }
+
+    /// Outputs and residuals from the activations in `z`; the sum of squared residuals.
+    fn outputs(&mut self, w: &Weights) -> f64 {
+        self.z.mul_to(&w.w2.transpose(), &mut self.y);
+        for (o, mut col) in self.y.column_iter_mut().enumerate() {
+            col.add_scalar_mut(w.b2[o]);
+        }
+        match &self.s.maps {
+            None => {
+                self.r.copy_from(&self.b);
+                self.r -= &self.y;
+            }
+            Some(maps) => {
+                // Column-major slices: sample k's entry of column c is at c n + k.
+                let n = self.y.nrows();
+                let (b, y, r) = (self.b.as_slice(), self.y.as_slice(), self.r.as_mut_slice());
+                for (k, a) in maps.iter().enumerate() {
+                    let (rows, cols) = a.shape();
+                    let a = a.as_slice();
+                    for row in 0..rows {
+                        let mut v = b[row * n + k];
+                        for c in 0..cols {
+                            v -= a[c * rows + row] * y[c * n + k];
+                        }
+                        r[row * n + k] = v;
+                    }
+                }
+            }
+        }
+        self.r.norm_squared()
+    }
+
+    /// Mean squared residual (no penalty).
+    pub fn mse(&mut self, w: &Weights) -> f64 {
+        if self.s.is_empty() {
+            return 0.0;
+        }
+        self.forward(w) / self.s.components() as f64
+    }
+
+    /// The penalised objective F and its gradient, as [`super::samples::objective`].
+    pub fn objective(&mut self, w: &Weights, lambda: f64, grad: &mut DVector<f64>) -> f64 {
+        let sum = self.forward(w);
+        self.backward(w, sum, lambda, grad)
+    }
+
+    /// Variable projection (samples without maps: the outputs are linear in the output layer):
+    /// for the hidden layer of `w`, sets the output layer to its exact minimiser
+    /// (W2 b2)^T = (H~^T H~ + lambda D)^-1 H~^T B, H~ = [H 1], D = diag(1, .., 1, 0), and
+    /// returns F there with its gradient (by the envelope theorem, the full gradient at that
+    /// point; its output-layer part is zero).
+    pub fn objective_projected(
+        &mut self,
+        w: &mut Weights,
+        lambda: f64,
+        grad: &mut DVector<f64>,
+    ) -> f64 {
+        self.hidden(w);
+        let (n, nh) = (self.z.nrows(), self.z.ncols());
+        let mut a = DMatrix::<f64>::zeros(nh + 1, nh + 1);
+        gemm_tn(&self.z, &self.z, a.view_mut((0, 0), (nh, nh)));
+        let sums = &mut self.sums;
+        column_sums(&self.z, &mut sums[..nh]);
+        for (j, &s) in sums[..nh].iter().enumerate() {
+            a[(j, nh)] = s;
+            a[(nh, j)] = s;
+            a[(j, j)] += lambda;
+        }
+        a[(nh, nh)] = n as f64;
+        let mut rhs = DMatrix::<f64>::zeros(nh + 1, self.b.ncols());
+        gemm_tn(&self.z, &self.b, rhs.view_mut((0, 0), (nh, self.b.ncols())));
+        column_sums(&self.b, &mut sums[..self.b.ncols()]);
+        for (c, &s) in sums[..self.b.ncols()].iter().enumerate() {
+            rhs[(nh, c)] = s;
+        }
+        // A tiny ridge keeps a saturated (constant) unit from making A singular.
+        for j in 0..=nh {
+            a[(j, j)] += 1e-12 * (1.0 + a[(j, j)]);
+        }
+        if let Some(ch) = a.cholesky() {
+            let v = ch.solve(&rhs);
+            for o in 0..w.outputs() {
+                for j in 0..nh {
+                    w.w2[(o, j)] = v[(j, o)];
+                }
+                w.b2[o] = v[(nh, o)];
+            }
+        }
+        let sum = self.outputs(w);
+        self.backward(w, sum, lambda, grad)
+    }
+
+    /// The gradient from the residuals of the last forward pass into `grad`; returns F.
+    fn backward(&mut self, w: &Weights, sum: f64, lambda: f64, grad: &mut DVector<f64>) -> f64 {
+        let (nh, ni, no) = (w.hidden(), w.inputs(), w.outputs());
+        let m = self.s.components().max(1) as f64;
+        match &self.s.maps {
+            None => {
+                self.gy.copy_from(&self.r);
+                self.gy *= -2.0 / m;
+            }
+            Some(maps) => {
+                // Column-major slices: sample k's entry of column c is at c n + k.
+                let n = self.r.nrows();
+                let (r, gy) = (self.r.as_slice(), self.gy.as_mut_slice());
+                for (k, a) in maps.iter().enumerate() {
+                    let rows = a.nrows();
+                    for c in 0..no {
+                        let mut t = 0.0;
+                        for (row, ar) in a.as_slice()[c * rows..(c + 1) * rows].iter().enumerate() {
+                            t += ar * r[row * n + k];
+                        }
+                        gy[c * n + k] = -2.0 / m * t;
+                    }
+                }
+            }
+        }
+        // dF/dW2 = Gy^T H, dF/dH = Gy W2, dF/dZ = dF/dH . H (1 - H), dF/dW1 = Gz^T X.
+        self.gy.tr_mul_to(&self.z, &mut self.gw2);
+        self.gy.mul_to(&w.w2, &mut self.gh);
+        let (gh, z) = (self.gh.as_mut_slice(), self.z.as_slice());
+        pulp::Arch::new().dispatch(
+            #[inline(always)]
+            || {
+                for (g, h) in gh.iter_mut().zip(z) {
+                    *g *= h * (1.0 - h);
+                }
+            },
+        );
+        gemm_tn(&self.gh, &self.x, self.gw1.view_mut((0, 0), (nh, ni)));
+        let (off_b1, off_w2, off_b2) = (nh * ni, nh * ni + nh, nh * ni + nh + no * nh);
+        // The weights and the gradient's blocks by slices (row-major in the gradient,
+        // column-major in the matrices); sums from 0 in row order, as nalgebra's `sum`.
+        let decay = 2.0 * lambda / m;
+        let g = grad.as_mut_slice();
+        let (gw1, w1) = (self.gw1.as_slice(), w.w1.as_slice());
+        column_sums(&self.gh, &mut g[off_b1..off_b1 + nh]);
+        for j in 0..nh {
+            for i in 0..ni {
+                g[j * ni + i] = gw1[i * nh + j] + decay * w1[i * nh + j];
+            }
+        }
+        let (gw2, w2) = (self.gw2.as_slice(), w.w2.as_slice());
+        column_sums(&self.gy, &mut g[off_b2..off_b2 + no]);
+        for o in 0..no {
+            for j in 0..nh {
+                g[off_w2 + o * nh + j] = gw2[j * no + o] + decay * w2[j * no + o];
+            }
+        }
+        (sum + lambda * weight_norm2(w)) / m
+    }
+}
+
+/// The sum of every column of `m` into `out` (one per column), each added in row order from
+/// 0 (the bits of nalgebra's `sum`), the columns side by side: one chain of additions per
+/// column running at once instead of each addition waiting on the one before.
+fn column_sums(m: &DMatrix<f64>, out: &mut [f64]) {
+    let n = m.nrows();
+    out.fill(0.0);
+    for k in 0..n {
+        for (t, column) in out.iter_mut().zip(m.as_slice().chunks_exact(n)) {
+            *t += column[k];
+        }
+    }
+}
+
+/// `out` = A^T B (A: rows x m, B: rows x n, out: m x n), by `matrixmultiply`'s blocked
+/// `dgemm` reading A with its strides swapped: the routine nalgebra's `gemm` calls on a
+/// transposed copy of A (above its small-matrix threshold), without the copy, whose strided
+/// writes, and the strided packing of the copy's rows, cost more than the product on the
+/// batch's long, thin matrices. Not nalgebra's `gemm` on a transposed view: its small-matrix
+/// path writes out of bounds with strided views (nalgebra 0.34).
+fn gemm_tn(a: &DMatrix<f64>, b: &DMatrix<f64>, mut out: DMatrixViewMut<'_, f64>) {
+    let (rows, m) = a.shape();
+    let n = b.ncols();
+    assert!(
+        b.nrows() == rows && out.shape() == (m, n),
+        "gemm_tn: shapes {:?}^T {:?} into {:?}",
+        a.shape(),
+        b.shape(),
+        out.shape()
+    );
+    let (rsc, csc) = out.strides();
+    // Strides in elements: A^T's (i, p) is a's (p, i), at i rows + p; B's (p, j) at
+    // j rows + p; out's (i, j) at i rsc + j csc, distinct for distinct (i, j) (a view of a
+    // matrix, rsc >= 1 and csc >= the view's rows).
+    let (rows_stride, rsc, csc) = (rows as isize, rsc as isize, csc as isize);
+    // SAFETY: every index dgemm forms (i < m, p < rows, j < n) lies within the storage of
+    // `a`, `b` and `out` by the strides above and the shapes checked; `out` is borrowed
+    // mutably, so it aliases neither input; with beta 0, dgemm does not read `out`.
+    unsafe {
+        matrixmultiply::dgemm(
+            m,
+            rows,
+            n,
+            1.0,
+            a.as_ptr(),
+            rows_stride,
+            1,
+            b.as_ptr(),
+            1,
+            rows_stride,
+            0.0,
+            out.as_mut_ptr(),
+            rsc,
+            csc,
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::neural::samples::objective;
+
+    /// The batch's shortcuts give the bits of what they replace: A^T B without the copy those
+    /// of nalgebra's `gemm` on a transposed copy (sizes above its small-matrix threshold, into
+    /// a view of a larger matrix, as the projection writes it), and the side-by-side column
+    /// sums those of nalgebra's `sum` of each column (numbers of spread magnitudes, whose sum
+    /// depends on the order of the additions).
+    #[test]
+    fn products_without_copies_and_column_sums_give_nalgebras_bits() {
+        let m = DMatrix::from_fn(203, 33, |i, j| {
+            ((i * 31 + j * 17) as f64 * 0.713).sin() * 10f64.powi(((i * 7 + j) % 13) as i32 - 6)
+        });
+        let b = DMatrix::from_fn(203, 7, |i, j| ((i * 3 + j * 11) as f64 * 0.291).cos());
+        let (mut ours, mut copied) = (DMatrix::from_element(35, 9, 5.0), DMatrix::zeros(33, 7));
+        gemm_tn(&m, &b, ours.view_mut((0, 0), (33, 7)));
+        copied.gemm(1.0, &m.transpose(), &b, 0.0);
+        assert_eq!(ours.view((0, 0), (33, 7)), copied);
+        // Nothing outside the view written.
+        assert_eq!(ours.iter().filter(|&&v| v == 5.0).count(), 35 * 9 - 33 * 7);
+        // Small matrices as well (nalgebra's own loops there; the same to rounding).
+        let (a, c) = (
+            m.view((0, 0), (4, 3)).into_owned(),
+            b.view((0, 0), (4, 2)).into_owned(),
+        );
+        let mut small = DMatrix::zeros(3, 2);
+        gemm_tn(&a, &c, small.view_mut((0, 0), (3, 2)));
+        assert!((small - a.transpose() * c).amax() < 1e-12);
+        let mut sums = vec![f64::NAN; 33];
+        column_sums(&m, &mut sums);
+        for (j, s) in sums.iter().enumerate() {
+            assert_eq!(s.to_bits(), m.column(j).sum().to_bits(), "column {j}");
+        }
+        // In another order the sums differ: the comparison above can tell.
+        let reversed: f64 = m.column(0).iter().rev().sum();
+        assert_ne!(reversed.to_bits(), sums[0].to_bits());
+    }
+
+    /// The per-sample objective's gradient against central differences, and the batched
+    /// passes (plain and projected) against the per-sample objective.
+    #[test]
+    fn gradient_matches_central_differences_with_maps_and_penalty() {
+        let w = Weights {
+            w1: DMatrix::from_fn(4, 3, |i, j| ((i * 7 + j * 3) as f64 * 0.37).sin()),
+            b1: DVector::from_fn(4, |i, _| (i as f64 * 0.9).cos()),
+            w2: DMatrix::from_fn(2, 4, |i, j| ((i * 5 + j) as f64 * 0.53).sin()),
+            b2: DVector::from_fn(2, |i, _| i as f64 * 0.1 - 0.2),
+        };
+        for with_maps in [false, true] {
+            let mut s = Samples::default();
+            let mut maps = Vec::new();
+            for k in 0..5 {
+                let t = k as f64;
+                s.x.push(vec![(t * 0.7).sin(), (t * 1.3).cos(), t * 0.1 - 0.2]);
+                if with_maps {
+                    s.b.push(vec![t * 0.2, -0.3, 0.5 - t * 0.1]);
+                    maps.push(DMatrix::from_fn(3, 2, |i, j| {
+                        ((k + i * 2 + j) as f64).cos()
+                    }));
+                } else {
+                    s.b.push(vec![t * 0.2, -0.3]);
+                }
+            }
+            s.maps = with_maps.then_some(maps);
+            let lambda = 0.7;
+            let mut g = DVector::zeros(w.len());
+            let f = objective(&s, &w, lambda, &mut g);
+            // The batched pass gives the same numbers.
+            let mut batch = Batch::new(&s, &w);
+            let mut gb = DVector::zeros(w.len());
+            let fb = batch.objective(&w, lambda, &mut gb);
+            assert!(
+                (f - fb).abs() < 1e-12 && (&g - &gb).amax() < 1e-12,
+                "{f} vs {fb}"
+            );
+            assert!((batch.mse(&w) - s.mse(&w)).abs() < 1e-12);
+            if !with_maps {
+                // Projection: the output layer it sets is optimal (zero output-layer gradient,
+                // checked by the per-sample objective) and its value is the objective there.
+                let mut wp = w.clone();
+                let mut gp = DVector::zeros(w.len());
+                let fp = batch.objective_projected(&mut wp, lambda, &mut gp);
+                let mut gd = DVector::zeros(w.len());
+                let fd = objective(&s, &wp, lambda, &mut gd);
+                assert!((fp - fd).abs() < 1e-12 && (&gp - &gd).amax() < 1e-10);
+                let off = w.hidden() * w.inputs() + w.hidden();
+                assert!(gd.rows(off, gd.len() - off).amax() < 1e-10, "{gd}");
+                assert!(fp < f);
+            }
+            let direct = (s.mse(&w) * s.components() as f64 + lambda * weight_norm2(&w))
+                / s.components() as f64;
+            assert!((f - direct).abs() < 1e-12, "{f} vs {direct}");
+            let v = w.to_vector();
+            let mut scratch = DVector::zeros(w.len());
+            for c in 0..v.len() {
+                let e = 1e-6;
+                let (mut vp, mut vm) = (v.clone(), v.clone());
+                vp[c] += e;
+                vm[c] -= e;
+                let fp = objective(&s, &w.from_vector(&vp), lambda, &mut scratch);
+                let fm = objective(&s, &w.from_vector(&vm), lambda, &mut scratch);
+                let fd = (fp - fm) / (2.0 * e);
+                assert!(
+                    (fd - g[c]).abs() < 1e-8 * (1.0 + fd.abs()),
+                    "maps {with_maps}, entry {c}: {fd} vs {}",
+                    g[c]
+                );
+            }
+        }
+    }
+}
