@@ -21,7 +21,8 @@ pub struct Batch<'a> {
     gh: DMatrix<f64>,
     gw1: DMatrix<f64>,
     gw2: DMatrix<f64>,
-    /// Column sums (of the activations, the targets, the output and hidden gradients).
+    /// The projection's column sums of the activations and of the targets (the gradients'
+    /// go straight into the gradient).
     sums: Vec<f64>,
 }
 
@@ -43,7 +44,7 @@ impl<'a> Batch<'a> {
             gh: DMatrix::zeros(n, nh),
             gw1: DMatrix::zeros(nh, ni),
             gw2: DMatrix::zeros(no, nh),
-            sums: vec![0.0; nh.max(no).max(rows)],
+            sums: vec![0.0; nh.max(rows)],
         }
     }
 
@@ -183,6 +184,8 @@ impl<'a> Batch<'a> {
         self.gy.tr_mul_to(&self.z, &mut self.gw2);
         self.gy.mul_to(&w.w2, &mut self.gh);
         let (gh, z) = (self.gh.as_mut_slice(), self.z.as_slice());
+        // As wide as the processor allows (AVX2 as well as the baseline's two values), the
+        // same operations: a pass over every sample and hidden unit per evaluation.
         pulp::Arch::new().dispatch(
             #[inline(always)]
             || {
@@ -220,6 +223,7 @@ impl<'a> Batch<'a> {
 /// column running at once instead of each addition waiting on the one before.
 fn column_sums(m: &DMatrix<f64>, out: &mut [f64]) {
     let n = m.nrows();
+    debug_assert_eq!(out.len(), m.ncols(), "column_sums: one sum per column");
     out.fill(0.0);
     for k in 0..n {
         for (t, column) in out.iter_mut().zip(m.as_slice().chunks_exact(n)) {
@@ -228,12 +232,18 @@ fn column_sums(m: &DMatrix<f64>, out: &mut [f64]) {
     }
 }
 
-/// `out` = A^T B (A: rows x m, B: rows x n, out: m x n), by `matrixmultiply`'s blocked
-/// `dgemm` reading A with its strides swapped: the routine nalgebra's `gemm` calls on a
-/// transposed copy of A (above its small-matrix threshold), without the copy, whose strided
-/// writes, and the strided packing of the copy's rows, cost more than the product on the
-/// batch's long, thin matrices. Not nalgebra's `gemm` on a transposed view: its small-matrix
-/// path writes out of bounds with strided views (nalgebra 0.34).
+/// Dimensions up to which nalgebra's `gemm` runs its own loops instead of `matrixmultiply`'s
+/// `dgemm` (nalgebra 0.34's `SMALL_DIM`).
+const NALGEBRA_SMALL: usize = 5;
+
+/// `out` = A^T B (A: rows x m, B: rows x n, out: m x n), the numbers of nalgebra's `gemm` on a
+/// transposed copy of A, without the copy (written one cache line per number, it cost more
+/// than the product on the batch's long, thin matrices). Where every dimension exceeds
+/// [`NALGEBRA_SMALL`], `matrixmultiply`'s blocked `dgemm`, which nalgebra calls there, reading A
+/// with its row and column strides swapped; below, nalgebra's loop (each entry
+/// a_0i b_0j + a_1i b_1j + ..., added in row order). Not nalgebra's `gemm` on a view with
+/// A's strides swapped: its small-matrix path (`axcpy_uninit`) loops over a strided view's
+/// whole span and writes out of bounds (dimforge/nalgebra#1616, open).
 fn gemm_tn(a: &DMatrix<f64>, b: &DMatrix<f64>, mut out: DMatrixViewMut<'_, f64>) {
     let (rows, m) = a.shape();
     let n = b.ncols();
@@ -244,6 +254,20 @@ fn gemm_tn(a: &DMatrix<f64>, b: &DMatrix<f64>, mut out: DMatrixViewMut<'_, f64>)
         b.shape(),
         out.shape()
     );
+    if m <= NALGEBRA_SMALL || n <= NALGEBRA_SMALL || rows <= NALGEBRA_SMALL {
+        for j in 0..n {
+            let bj = b.column(j);
+            for i in 0..m {
+                let ai = a.column(i);
+                out[(i, j)] = if rows == 0 {
+                    0.0
+                } else {
+                    (1..rows).fold(ai[0] * bj[0], |t, p| ai[p] * bj[p] + t)
+                };
+            }
+        }
+        return;
+    }
     let (rsc, csc) = out.strides();
     // Strides in elements: A^T's (i, p) is a's (p, i), at i rows + p; B's (p, j) at
     // j rows + p; out's (i, j) at i rsc + j csc, distinct for distinct (i, j) (a view of a
@@ -251,7 +275,8 @@ fn gemm_tn(a: &DMatrix<f64>, b: &DMatrix<f64>, mut out: DMatrixViewMut<'_, f64>)
     let (rows_stride, rsc, csc) = (rows as isize, rsc as isize, csc as isize);
     // SAFETY: every index dgemm forms (i < m, p < rows, j < n) lies within the storage of
     // `a`, `b` and `out` by the strides above and the shapes checked; `out` is borrowed
-    // mutably, so it aliases neither input; with beta 0, dgemm does not read `out`.
+    // mutably, so it aliases neither input, and it is initialised (a view of a matrix),
+    // which beta 0 overwrites.
     unsafe {
         matrixmultiply::dgemm(
             m,
@@ -278,30 +303,40 @@ mod tests {
     use crate::neural::samples::objective;
 
     /// The batch's shortcuts give the bits of what they replace: A^T B without the copy those
-    /// of nalgebra's `gemm` on a transposed copy (sizes above its small-matrix threshold, into
-    /// a view of a larger matrix, as the projection writes it), and the side-by-side column
-    /// sums those of nalgebra's `sum` of each column (numbers of spread magnitudes, whose sum
-    /// depends on the order of the additions).
+    /// of nalgebra's `gemm` on a transposed copy, into a view of a larger matrix as the
+    /// projection writes it (300 rows: more than `dgemm`'s blocks of 256 along them), and in
+    /// every shape where one dimension is at most nalgebra's small-matrix threshold (its own
+    /// loops there; position-only samples have 3 outputs); the side-by-side column sums those
+    /// of nalgebra's `sum` of each column (numbers of spread magnitudes, whose sum depends on
+    /// the order of the additions).
     #[test]
     fn products_without_copies_and_column_sums_give_nalgebras_bits() {
-        let m = DMatrix::from_fn(203, 33, |i, j| {
+        let m = DMatrix::from_fn(300, 33, |i, j| {
             ((i * 31 + j * 17) as f64 * 0.713).sin() * 10f64.powi(((i * 7 + j) % 13) as i32 - 6)
         });
-        let b = DMatrix::from_fn(203, 7, |i, j| ((i * 3 + j * 11) as f64 * 0.291).cos());
-        let (mut ours, mut copied) = (DMatrix::from_element(35, 9, 5.0), DMatrix::zeros(33, 7));
-        gemm_tn(&m, &b, ours.view_mut((0, 0), (33, 7)));
-        copied.gemm(1.0, &m.transpose(), &b, 0.0);
-        assert_eq!(ours.view((0, 0), (33, 7)), copied);
-        // Nothing outside the view written.
-        assert_eq!(ours.iter().filter(|&&v| v == 5.0).count(), 35 * 9 - 33 * 7);
-        // Small matrices as well (nalgebra's own loops there; the same to rounding).
-        let (a, c) = (
-            m.view((0, 0), (4, 3)).into_owned(),
-            b.view((0, 0), (4, 2)).into_owned(),
-        );
-        let mut small = DMatrix::zeros(3, 2);
-        gemm_tn(&a, &c, small.view_mut((0, 0), (3, 2)));
-        assert!((small - a.transpose() * c).amax() < 1e-12);
+        let b = DMatrix::from_fn(300, 7, |i, j| ((i * 3 + j * 11) as f64 * 0.291).cos());
+        let bits = |x: &DMatrix<f64>| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        for (rows, cols, outs) in [
+            (300, 33, 7),
+            (300, 33, 3),
+            (300, 4, 7),
+            (5, 33, 7),
+            (0, 8, 7),
+        ] {
+            let (a, c) = (
+                m.view((0, 0), (rows, cols)).into_owned(),
+                b.view((0, 0), (rows, outs)).into_owned(),
+            );
+            let mut ours = DMatrix::from_element(cols + 2, outs + 2, 5.0);
+            gemm_tn(&a, &c, ours.view_mut((0, 0), (cols, outs)));
+            let mut copied = DMatrix::from_element(cols, outs, f64::NAN);
+            copied.gemm(1.0, &a.transpose(), &c, 0.0);
+            let got = ours.view((0, 0), (cols, outs)).into_owned();
+            assert_eq!(bits(&got), bits(&copied), "{rows} x {cols}, {outs}");
+            // Nothing outside the view written.
+            let untouched = ours.iter().filter(|&&v| v == 5.0).count();
+            assert_eq!(untouched, (cols + 2) * (outs + 2) - cols * outs);
+        }
         let mut sums = vec![f64::NAN; 33];
         column_sums(&m, &mut sums);
         for (j, s) in sums.iter().enumerate() {
