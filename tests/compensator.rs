@@ -776,14 +776,21 @@ fn a_mis_measured_training_row_is_listed_and_left_out() {
     };
     let (k, d) = (miss(&kept, &mut ws), miss(&dropped, &mut ws));
     assert!(d < k, "left out {d} mm, kept {k} mm");
-    // An RBF network's hyperparameters are searched again without the row, beginning at
-    // those cross-validation judged (searched on every row, and kept with the row).
-    let rbf = |drop_outliers: bool| {
+    // An RBF network's hyperparameters are searched again without the listed rows, beginning
+    // at those cross-validation judged (searched with them). Both searches see the rows
+    // `rows` draws: all 150 by default (only the bad row listed), 60 of them when told (a
+    // search on fewer rows lists a few more, the bad row among them).
+    let rbf = |drop_outliers: bool, rows: usize| {
+        let defaults = CompensatorOptions::default();
         let opts = CompensatorOptions {
             network: Some(robocal::neural::compensator::Network::Rbf),
             refine: robocal::neural::compensator::Refine::Off,
             drop_outliers,
-            ..Default::default()
+            train: TrainOptions {
+                rbf_search_rows: rows,
+                ..defaults.train.clone()
+            },
+            ..defaults
         };
         let (c, report) = Compensator::train(&model, &train, &opts, &|_, _| {}).unwrap();
         let listed: Vec<usize> = report
@@ -793,33 +800,44 @@ fn a_mis_measured_training_row_is_listed_and_left_out() {
             .iter()
             .map(|o| o.row)
             .collect();
-        assert_eq!(listed, vec![bad]);
+        assert!(listed.contains(&bad), "{listed:?}");
         assert!(report.settings.has_rbf(), "{:?}", report.settings);
-        (c.rbf.unwrap().kernels, report.settings)
+        (c.rbf.unwrap().kernels, report.settings, listed)
     };
-    use robocal::neural::rbf::{Rbf, search, search_from};
+    use robocal::neural::rbf::{Draw, HYPER_ROWS, Rbf, search, search_from};
     let seed = CompensatorOptions::default().train.seed;
     let samples = |set: &robocal::data::MeasurementSet, s: &Settings| {
         robocal::neural::targets::build(&model, set, Form::Pose, s.encoding)
             .unwrap()
             .samples
     };
-    let (kept_kernels, s) = rbf(false);
-    let start = s.rbf_start.unwrap();
-    let all = samples(&train, &s);
-    let judged = search(&all, start, seed).unwrap().hyper;
-    assert_eq!(
-        kept_kernels,
-        Rbf::with_hyper(&all, &judged).unwrap().kernels
-    );
-    let (dropped_kernels, s) = rbf(true);
-    let without = samples(&robocal::neural::tuning::subset(&train, |i| i != bad), &s);
-    let again = search_from(&without, &judged, seed, &[bad]).unwrap().hyper;
-    assert_eq!(
-        dropped_kernels,
-        Rbf::with_hyper(&without, &again).unwrap().kernels
-    );
-    assert_ne!(dropped_kernels, kept_kernels);
+    let mut by_rows = Vec::new();
+    for rows in [HYPER_ROWS, 60] {
+        let draw = Draw { seed, rows };
+        let (kept_kernels, s, listed) = rbf(false, rows);
+        if rows == HYPER_ROWS {
+            assert_eq!(listed, vec![bad]);
+        }
+        let start = s.rbf_start.unwrap();
+        let all = samples(&train, &s);
+        let judged = search(&all, start, draw).unwrap().hyper;
+        assert_eq!(
+            kept_kernels,
+            Rbf::with_hyper(&all, &judged).unwrap().kernels
+        );
+        let (dropped_kernels, s, _) = rbf(true, rows);
+        let kept = robocal::neural::tuning::subset(&train, |i| !listed.contains(&i));
+        let without = samples(&kept, &s);
+        let again = search_from(&without, &judged, draw, &listed).unwrap().hyper;
+        assert_eq!(
+            dropped_kernels,
+            Rbf::with_hyper(&without, &again).unwrap().kernels
+        );
+        assert_ne!(dropped_kernels, kept_kernels);
+        by_rows.push(kept_kernels);
+    }
+    // 60 rows of 150 are another search than all of them.
+    assert_ne!(by_rows[0], by_rows[1]);
     // Without the cut, nothing is listed.
     let none = CompensatorOptions {
         outlier_k: f64::INFINITY,

@@ -235,6 +235,9 @@ fn train_refuses_bad_input_and_predict_refuses_a_corrupt_compensator() {
         &["--rbf-start", "4"],
         &["--keep-outliers", "--drop-outliers"],
         &["--rbf-start", "2", "--network", "mlp"],
+        &["--rbf-search-rows", "1"],
+        &["--rbf-search-rows", "3001"],
+        &["--rbf-search-rows", "100", "--network", "mlp"],
         &["--mlp-share", "0"],
         &["--mlp-share", "1"],
         &["--mlp-share", "nan"],
@@ -367,6 +370,37 @@ fn train_reports_the_repeats_of_its_data() {
     );
     let median = r["median_spread_mm"].as_f64().unwrap();
     assert!(median > 0.0 && median < 0.1, "{median}");
+}
+
+/// `--rbf-search-rows` bounds the rows the RBF network's likelihood search sees, and `train`
+/// says how many it saw: 60 of Case D's 150 training rows when told, all of them by default.
+#[test]
+fn train_says_how_many_rows_the_rbf_search_saw() {
+    for (extra, said) in [
+        (
+            &["--rbf-search-rows", "60"][..],
+            "searched on 60 of the rows",
+        ),
+        (&[][..], "searched on all rows"),
+    ] {
+        let comp = tmp(&format!("rows{}.rcal", extra.len()));
+        let mut args = vec!["--network", "rbf", "--refine", "none"];
+        args.extend_from_slice(extra);
+        let o = common::train_fanuc(
+            "datasets/case_d/training.csv",
+            comp.to_str().unwrap(),
+            &args,
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        let out = stdout(&o);
+        assert!(out.contains("rbf network: 150 units ("), "{out}");
+        assert!(
+            out.contains(&format!(
+                "one Gaussian process per output, its hyperparameters {said}"
+            )),
+            "{out}"
+        );
+    }
 }
 
 /// The default refinement tries the joints' gravity compliances (issue 11 item 7, issue 14):

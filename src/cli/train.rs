@@ -130,8 +130,14 @@ fn print_selection(sel: &Selection) {
     }
 }
 
-/// Prints the refined parameters, the RBF network and the MLPs of a finished training.
-fn print_fit(c: &Compensator, report: &robocal::neural::fit::CompensatorReport, seconds: f64) {
+/// Prints the refined parameters, the RBF network (its hyperparameters searched on at most
+/// `search_rows` rows) and the MLPs of a finished training.
+fn print_fit(
+    c: &Compensator,
+    report: &robocal::neural::fit::CompensatorReport,
+    seconds: f64,
+    search_rows: usize,
+) {
     if !report.refined.is_empty() {
         println!(
             "refined on the training rows (exact identification, {} parameters):",
@@ -152,9 +158,15 @@ fn print_fit(c: &Compensator, report: &robocal::neural::fit::CompensatorReport, 
     );
     if let Some(r) = &c.rbf {
         println!(
-            "rbf network: {} units ({} inputs), one Gaussian process per output{}",
+            "rbf network: {} units ({} inputs), one Gaussian process per output, its \
+             hyperparameters searched on {} rows{}",
             r.units(),
             c.encoding.name(),
+            if r.units() > search_rows {
+                format!("{search_rows} of the")
+            } else {
+                "all".to_string()
+            },
             if n.is_empty() {
                 format!("; {timing}")
             } else {
@@ -258,7 +270,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     for n in &report.notes {
         println!("note: {n}");
     }
-    print_fit(&c, &report, seconds);
+    print_fit(&c, &report, seconds, opts.train.rbf_search_rows);
     let mut figs = 0;
     if let Some(dir) = &a.plot
         && let Some(first) = report.networks.first()

@@ -4,7 +4,7 @@
 use super::compensator::Compensator;
 use super::domain::Domain;
 use super::parallel::parallel_map;
-use super::rbf::{Rbf, search_from, search_start_without};
+use super::rbf::{Draw, Rbf, search_from, search_start_without};
 use super::refine::{RefinedParam, refine};
 use super::repeats::Repeats;
 use super::selection::Selection;
@@ -98,14 +98,18 @@ pub(crate) fn fit_with(
     let mut members = reused;
     let mut reports = Vec::new();
     let rbf = if settings.has_rbf() {
-        let (x, seed, left) = (&problem.samples, train_opts.seed, &train_opts.rbf_left_out);
+        let (x, left) = (&problem.samples, &train_opts.rbf_left_out);
+        let draw = Draw {
+            seed: train_opts.seed,
+            rows: train_opts.rbf_search_rows,
+        };
         let hyper = match &train_opts.rbf_hyper {
             RbfHyper::Given(h) => h.clone(),
             // Begun at hyperparameters found on a superset of the rows searched, it cannot
             // fail on the data: its start's kernel matrices are principal submatrices of
             // positive definite ones, and it only takes steps that lower a finite objective.
-            RbfHyper::From(from) => search_from(x, from, seed, left)?.hyper,
-            RbfHyper::Search => search_start_without(x, settings.rbf_start, seed, left)?.hyper,
+            RbfHyper::From(from) => search_from(x, from, draw, left)?.hyper,
+            RbfHyper::Search => search_start_without(x, settings.rbf_start, draw, left)?.hyper,
         };
         Some(Rbf::with_hyper_on(x, &hyper, parallel)?)
     } else {

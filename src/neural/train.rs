@@ -131,6 +131,10 @@ pub struct TrainOptions {
     /// [`Compensator::train`](super::compensator::Compensator::train) sets it (and
     /// `rbf_hyper`) for its final fit, whatever the caller gave.
     pub rbf_left_out: Vec<usize>,
+    /// Rows an RBF network's hyperparameter search sees at most (a seeded choice of them on
+    /// larger sets, the same in cross-validation and in the final fit; at least 2): default
+    /// [`super::rbf::HYPER_ROWS`]. The search's cost is cubic in them.
+    pub rbf_search_rows: usize,
 }
 
 impl Default for TrainOptions {
@@ -150,6 +154,7 @@ impl Default for TrainOptions {
             start: None,
             rbf_hyper: RbfHyper::Search,
             rbf_left_out: Vec::new(),
+            rbf_search_rows: super::rbf::HYPER_ROWS,
         }
     }
 }

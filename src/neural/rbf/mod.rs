@@ -42,7 +42,7 @@ use likelihood::kernel;
 pub use likelihood::{PRIOR_SD, Pairs, neg_log_likelihood};
 use nalgebra::{DMatrix, DVector};
 pub use search::{
-    HYPER_ITERATIONS, HYPER_ROWS, STALL_NATS, STARTS, Search, search, search_best,
+    Draw, HYPER_ITERATIONS, HYPER_ROWS, STALL_NATS, STARTS, Search, search, search_best,
     search_best_without, search_from, search_start_without, search_without,
 };
 
@@ -241,10 +241,10 @@ impl Rbf {
 
     /// Fits the network on `s` (targets without maps: the pose form): the hyperparameter
     /// search from [`STARTS`]`[start]` ([`search()`]), or when None from every start keeping,
-    /// output by output, the highest likelihood ([`search_best`]), then the weights on every
-    /// row ([`Rbf::with_hyper`]).
+    /// output by output, the highest likelihood ([`search_best`]), on the default draw of
+    /// `seed` ([`Draw::seeded`]), then the weights on every row ([`Rbf::with_hyper`]).
     pub fn fit(s: &Samples, start: Option<usize>, seed: u64) -> Result<(Rbf, Search)> {
-        let found = search_start_without(s, start, seed, &[])?;
+        let found = search_start_without(s, start, Draw::seeded(seed), &[])?;
         Ok((Rbf::with_hyper(s, &found.hyper)?, found))
     }
 
@@ -477,7 +477,7 @@ mod tests {
         for j in 0..2 {
             let mut one = s.clone();
             one.b = s.b.iter().map(|b| vec![b[j]]).collect();
-            let own = search(&one, 0, 1).unwrap();
+            let own = search(&one, 0, Draw::seeded(1)).unwrap();
             assert_eq!(own.hyper, found.hyper.rows(4 * j, 4).into_owned());
             let alone = Rbf::with_hyper(&one, &own.hyper).unwrap();
             assert_eq!(alone.kernels[0], rbf.kernels[j]);

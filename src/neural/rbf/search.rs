@@ -14,7 +14,8 @@ use rand::SeedableRng;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 
-/// Rows on which the hyperparameters are fitted at most (the rest only enter the weights).
+/// Rows on which the hyperparameters are fitted at most by default ([`Draw::seeded`]; the
+/// rest only enter the weights).
 pub const HYPER_ROWS: usize = 500;
 /// Gain in log likelihood (nats) below which a search step counts as idle.
 pub const STALL_NATS: f64 = 1e-3;
@@ -31,6 +32,27 @@ pub const HYPER_ITERATIONS: usize = 60;
 /// ([`search_from`]).
 pub const STARTS: [(f64, f64); 3] = [(1.0, 0.5), (0.2, 0.05), (0.05, 0.01)];
 
+/// Which rows of a set a hyperparameter search sees: every row of a set of at most `rows`,
+/// else `rows` of them drawn by a shuffle seeded by `seed`. A search's cost is cubic in its
+/// rows (a Cholesky factor and an inverse of the n x n kernel matrix per evaluation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Draw {
+    /// Seed of the shuffle.
+    pub seed: u64,
+    /// Rows searched at most (at least 2).
+    pub rows: usize,
+}
+
+impl Draw {
+    /// The default draw of `seed`: at most [`HYPER_ROWS`] rows.
+    pub fn seeded(seed: u64) -> Draw {
+        Draw {
+            seed,
+            rows: HYPER_ROWS,
+        }
+    }
+}
+
 /// The result of one hyperparameter search.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Search {
@@ -42,18 +64,18 @@ pub struct Search {
 }
 
 /// Type-II maximum likelihood from [`STARTS`]`[start]`, output by output (L-BFGS on the log
-/// hyperparameters, [`HYPER_ITERATIONS`] at most) on at most [`HYPER_ROWS`] rows of `s` (a
-/// choice seeded by `seed` when there are more). The objective is the sum of the outputs'.
-pub fn search(s: &Samples, start: usize, seed: u64) -> Result<Search> {
-    search_without(s, start, seed, &[])
+/// hyperparameters, [`HYPER_ITERATIONS`] at most) on the rows of `s` that `draw` picks. The
+/// objective is the sum of the outputs'.
+pub fn search(s: &Samples, start: usize, draw: Draw) -> Result<Search> {
+    search_without(s, start, draw, &[])
 }
 
 /// [`search()`] on `s`, a set from which the rows `left_out` (indices in the whole set) were
 /// taken out: the rows searched are those the search of the whole set draws, but those left
 /// out (the hyperparameters of the set without a few mis-measured rows, not those of another
 /// draw of rows).
-pub fn search_without(s: &Samples, start: usize, seed: u64, left_out: &[usize]) -> Result<Search> {
-    let one = Searches::new(s, seed, left_out)?;
+pub fn search_without(s: &Samples, start: usize, draw: Draw, left_out: &[usize]) -> Result<Search> {
+    let one = Searches::new(s, draw, left_out)?;
     let found = parallel_map(one.outputs, |j| one.output(j, Begin::Start(start)));
     Ok(join(found.into_iter().collect::<Result<Vec<_>>>()?))
 }
@@ -61,8 +83,8 @@ pub fn search_without(s: &Samples, start: usize, seed: u64, left_out: &[usize]) 
 /// [`search_without`] started at the hyperparameters `from` (every output's, see
 /// [`Hyper`]) instead of at a start: those of a search on nearly the same rows, whose mode
 /// it follows (a few steps where the rows differ little).
-pub fn search_from(s: &Samples, from: &Hyper, seed: u64, left_out: &[usize]) -> Result<Search> {
-    let one = Searches::new(s, seed, left_out)?;
+pub fn search_from(s: &Samples, from: &Hyper, draw: Draw, left_out: &[usize]) -> Result<Search> {
+    let one = Searches::new(s, draw, left_out)?;
     check_hyper(from, one.pairs.inputs(), one.outputs)?;
     let block = one.pairs.inputs() + 2;
     let found = parallel_map(one.outputs, |j| {
@@ -81,14 +103,14 @@ enum Begin {
 
 /// The searches from every start (in parallel), keeping for each output the one of highest
 /// likelihood.
-pub fn search_best(s: &Samples, seed: u64) -> Result<Search> {
-    search_best_without(s, seed, &[])
+pub fn search_best(s: &Samples, draw: Draw) -> Result<Search> {
+    search_best_without(s, draw, &[])
 }
 
 /// [`search_best`] on a set from which the rows `left_out` were taken out, as
 /// [`search_without`].
-pub fn search_best_without(s: &Samples, seed: u64, left_out: &[usize]) -> Result<Search> {
-    let one = Searches::new(s, seed, left_out)?;
+pub fn search_best_without(s: &Samples, draw: Draw, left_out: &[usize]) -> Result<Search> {
+    let one = Searches::new(s, draw, left_out)?;
     let (o, starts) = (one.outputs, STARTS.len());
     let all = parallel_map(o * starts, |i| {
         one.output(i / starts, Begin::Start(i % starts))
@@ -118,12 +140,12 @@ pub fn search_best_without(s: &Samples, seed: u64, left_out: &[usize]) -> Result
 pub fn search_start_without(
     s: &Samples,
     start: Option<usize>,
-    seed: u64,
+    draw: Draw,
     left_out: &[usize],
 ) -> Result<Search> {
     match start {
-        Some(k) => search_without(s, k, seed, left_out),
-        None => search_best_without(s, seed, left_out),
+        Some(k) => search_without(s, k, draw, left_out),
+        None => search_best_without(s, draw, left_out),
     }
 }
 
@@ -149,8 +171,14 @@ struct Searches<'a> {
 }
 
 impl<'a> Searches<'a> {
-    fn new(s: &'a Samples, seed: u64, left_out: &[usize]) -> Result<Searches<'a>> {
+    fn new(s: &'a Samples, draw: Draw, left_out: &[usize]) -> Result<Searches<'a>> {
         let (n, _, outputs) = shape(s)?;
+        if draw.rows < 2 {
+            return Err(Error::Invalid(format!(
+                "the RBF network's hyperparameter search on {} rows: it needs at least 2",
+                draw.rows
+            )));
+        }
         let mut left_out = left_out.to_vec();
         left_out.sort_unstable();
         left_out.dedup();
@@ -165,9 +193,9 @@ impl<'a> Searches<'a> {
             )));
         }
         let mut rows: Vec<usize> = (0..whole).collect();
-        if whole > HYPER_ROWS {
-            rows.shuffle(&mut ChaCha8Rng::seed_from_u64(seed ^ 0x7bf));
-            rows.truncate(HYPER_ROWS);
+        if whole > draw.rows {
+            rows.shuffle(&mut ChaCha8Rng::seed_from_u64(draw.seed ^ 0x7bf));
+            rows.truncate(draw.rows);
             rows.sort_unstable();
         }
         // Those left out dropped, the others numbered as in `s`.
@@ -260,7 +288,7 @@ mod tests {
     #[test]
     fn a_search_without_rows_draws_the_whole_sets_rows_but_those() {
         let (whole, _) = data(HYPER_ROWS + 100);
-        let drawn = Searches::new(&whole, 7, &[]).unwrap().rows;
+        let drawn = Searches::new(&whole, Draw::seeded(7), &[]).unwrap().rows;
         assert_eq!(drawn.len(), HYPER_ROWS);
         // Two rows of the draw and one outside it left out, given unsorted and twice.
         let outside = (0..whole.len()).find(|r| !drawn.contains(r)).unwrap();
@@ -273,7 +301,9 @@ mod tests {
             less.x.remove(r);
             less.b.remove(r);
         }
-        let rows = Searches::new(&less, 7, &left_out).unwrap().rows;
+        let rows = Searches::new(&less, Draw::seeded(7), &left_out)
+            .unwrap()
+            .rows;
         assert_eq!(rows.len(), HYPER_ROWS - 2);
         // Each row searched is the same measurement as the whole set's drawn row.
         let expected: Vec<&Vec<f64>> = drawn
@@ -288,15 +318,15 @@ mod tests {
         let mut fewer = small.clone();
         fewer.x.remove(4);
         fewer.b.remove(4);
-        let rows = Searches::new(&fewer, 7, &[4]).unwrap().rows;
+        let rows = Searches::new(&fewer, Draw::seeded(7), &[4]).unwrap().rows;
         assert_eq!(rows, (0..29).collect::<Vec<_>>());
         assert_eq!(
-            search_without(&fewer, 0, 7, &[4]).unwrap(),
-            search(&fewer, 0, 7).unwrap()
+            search_without(&fewer, 0, Draw::seeded(7), &[4]).unwrap(),
+            search(&fewer, 0, Draw::seeded(7)).unwrap()
         );
         // An index beyond the whole set is refused, on a small set and on a large one.
-        assert!(Searches::new(&fewer, 7, &[29, 31]).is_err());
-        assert!(Searches::new(&less, 7, &[drawn[3], whole.len() + 50]).is_err());
+        assert!(Searches::new(&fewer, Draw::seeded(7), &[29, 31]).is_err());
+        assert!(Searches::new(&less, Draw::seeded(7), &[drawn[3], whole.len() + 50]).is_err());
     }
 
     /// A search begun at given hyperparameters is, output by output, the search from them:
@@ -318,31 +348,39 @@ mod tests {
                 h0[at + d + 1] = (noise * var).ln();
             }
             assert_eq!(
-                search_from(&s, &h0, 1, &[]).unwrap(),
-                search(&s, k, 1).unwrap()
+                search_from(&s, &h0, Draw::seeded(1), &[]).unwrap(),
+                search(&s, k, Draw::seeded(1)).unwrap()
             );
         }
-        let cold = search(&s, 1, 1).unwrap();
-        let warm = search_from(&s, &cold.hyper, 1, &[]).unwrap();
+        let cold = search(&s, 1, Draw::seeded(1)).unwrap();
+        let warm = search_from(&s, &cold.hyper, Draw::seeded(1), &[]).unwrap();
         assert!(
             warm.objective <= cold.objective,
             "{} {}",
             warm.objective,
             cold.objective
         );
-        assert!(search_from(&s, &cold.hyper.rows(0, 3).into_owned(), 1, &[]).is_err());
+        assert!(
+            search_from(
+                &s,
+                &cold.hyper.rows(0, 3).into_owned(),
+                Draw::seeded(1),
+                &[]
+            )
+            .is_err()
+        );
         let mut bad = cold.hyper.clone();
         bad[0] = f64::NAN;
-        assert!(search_from(&s, &bad, 1, &[]).is_err());
+        assert!(search_from(&s, &bad, Draw::seeded(1), &[]).is_err());
     }
 
     #[test]
     fn the_best_search_takes_each_outputs_lowest_objective_of_the_starts() {
         let (s, _) = data(80);
         let all: Vec<Search> = (0..STARTS.len())
-            .map(|k| search(&s, k, 1).unwrap())
+            .map(|k| search(&s, k, Draw::seeded(1)).unwrap())
             .collect();
-        let best = search_best(&s, 1).unwrap();
+        let best = search_best(&s, Draw::seeded(1)).unwrap();
         let lowest = all
             .iter()
             .map(|f| f.objective)
@@ -355,7 +393,7 @@ mod tests {
             let mut one = s.clone();
             one.b = s.b.iter().map(|b| vec![b[j]]).collect();
             let own = (0..STARTS.len())
-                .map(|k| search(&one, k, 1).unwrap())
+                .map(|k| search(&one, k, Draw::seeded(1)).unwrap())
                 .min_by(|a, b| a.objective.total_cmp(&b.objective))
                 .unwrap();
             assert_eq!(
@@ -370,7 +408,7 @@ mod tests {
         let (rbf, found) = Rbf::fit(&s, Some(1), 1).unwrap();
         assert_eq!(found, all[1]);
         assert_eq!(rbf, Rbf::with_hyper(&s, &all[1].hyper).unwrap());
-        assert!(search(&s, STARTS.len(), 1).is_err());
+        assert!(search(&s, STARTS.len(), Draw::seeded(1)).is_err());
         assert!(Rbf::with_hyper(&s, &all[1].hyper.rows(0, block).into_owned()).is_err());
     }
 }
