@@ -130,13 +130,13 @@ fn print_selection(sel: &Selection) {
     }
 }
 
-/// Prints the refined parameters, the RBF network (its hyperparameters searched on at most
-/// `search_rows` rows) and the MLPs of a finished training.
+/// Prints the refined parameters, the RBF network and the MLPs of a finished training on
+/// `rows` training rows, the RBF search's drawn from them when more than `search_rows`.
 fn print_fit(
     c: &Compensator,
     report: &robocal::neural::fit::CompensatorReport,
     seconds: f64,
-    search_rows: usize,
+    (rows, search_rows): (usize, usize),
 ) {
     if !report.refined.is_empty() {
         println!(
@@ -162,7 +162,8 @@ fn print_fit(
              hyperparameters searched on {} rows{}",
             r.units(),
             c.encoding.name(),
-            if r.units() > search_rows {
+            // The draw is of the training rows, before any outlier is left out.
+            if rows > search_rows {
                 format!("{search_rows} of the")
             } else {
                 "all".to_string()
@@ -270,7 +271,12 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     for n in &report.notes {
         println!("note: {n}");
     }
-    print_fit(&c, &report, seconds, opts.train.rbf_search_rows);
+    print_fit(
+        &c,
+        &report,
+        seconds,
+        (set.rows.len(), opts.train.rbf_search_rows),
+    );
     let mut figs = 0;
     if let Some(dir) = &a.plot
         && let Some(first) = report.networks.first()

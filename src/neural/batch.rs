@@ -21,9 +21,11 @@ pub struct Batch<'a> {
     gh: DMatrix<f64>,
     gw1: DMatrix<f64>,
     gw2: DMatrix<f64>,
-    /// The projection's column sums of the activations and of the targets (the gradients'
-    /// go straight into the gradient).
+    /// The projection's column sums of the activations (the gradients' go straight into
+    /// the gradient).
     sums: Vec<f64>,
+    /// The column sums of the targets `b` (constant: formed once).
+    b_sums: Vec<f64>,
 }
 
 impl<'a> Batch<'a> {
@@ -33,6 +35,8 @@ impl<'a> Batch<'a> {
         let (nh, ni, no) = (w.hidden(), w.inputs(), w.outputs());
         let x = DMatrix::from_fn(n, ni, |k, i| s.x[k][i]);
         let b = DMatrix::from_fn(n, rows, |k, r| s.b[k][r]);
+        let mut b_sums = vec![0.0; rows];
+        column_sums(&b, &mut b_sums);
         Batch {
             s,
             x,
@@ -44,7 +48,8 @@ impl<'a> Batch<'a> {
             gh: DMatrix::zeros(n, nh),
             gw1: DMatrix::zeros(nh, ni),
             gw2: DMatrix::zeros(no, nh),
-            sums: vec![0.0; nh.max(rows)],
+            sums: vec![0.0; nh],
+            b_sums,
         }
     }
 
@@ -124,9 +129,8 @@ impl<'a> Batch<'a> {
         let (n, nh) = (self.z.nrows(), self.z.ncols());
         let mut a = DMatrix::<f64>::zeros(nh + 1, nh + 1);
         gemm_tn(&self.z, &self.z, a.view_mut((0, 0), (nh, nh)));
-        let sums = &mut self.sums;
-        column_sums(&self.z, &mut sums[..nh]);
-        for (j, &s) in sums[..nh].iter().enumerate() {
+        column_sums(&self.z, &mut self.sums);
+        for (j, &s) in self.sums.iter().enumerate() {
             a[(j, nh)] = s;
             a[(nh, j)] = s;
             a[(j, j)] += lambda;
@@ -134,8 +138,7 @@ impl<'a> Batch<'a> {
         a[(nh, nh)] = n as f64;
         let mut rhs = DMatrix::<f64>::zeros(nh + 1, self.b.ncols());
         gemm_tn(&self.z, &self.b, rhs.view_mut((0, 0), (nh, self.b.ncols())));
-        column_sums(&self.b, &mut sums[..self.b.ncols()]);
-        for (c, &s) in sums[..self.b.ncols()].iter().enumerate() {
+        for (c, &s) in self.b_sums.iter().enumerate() {
             rhs[(nh, c)] = s;
         }
         // A tiny ridge keeps a saturated (constant) unit from making A singular.

@@ -4,7 +4,7 @@
 use super::compensator::Compensator;
 use super::domain::Domain;
 use super::parallel::parallel_map;
-use super::rbf::{Draw, Rbf, search_from, search_start_without};
+use super::rbf::{Rbf, search_from, search_start_without};
 use super::refine::{RefinedParam, refine};
 use super::repeats::Repeats;
 use super::selection::Selection;
@@ -98,11 +98,11 @@ pub(crate) fn fit_with(
     let mut members = reused;
     let mut reports = Vec::new();
     let rbf = if settings.has_rbf() {
-        let (x, left) = (&problem.samples, &train_opts.rbf_left_out);
-        let draw = Draw {
-            seed: train_opts.seed,
-            rows: train_opts.rbf_search_rows,
-        };
+        let (x, draw, left) = (
+            &problem.samples,
+            train_opts.rbf_draw(),
+            &train_opts.rbf_left_out,
+        );
         let hyper = match &train_opts.rbf_hyper {
             RbfHyper::Given(h) => h.clone(),
             // Begun at hyperparameters found on a superset of the rows searched, it cannot

@@ -137,6 +137,17 @@ pub struct TrainOptions {
     pub rbf_search_rows: usize,
 }
 
+impl TrainOptions {
+    /// The rows an RBF network's hyperparameter search sees: `rbf_search_rows` of the set,
+    /// drawn by `seed`.
+    pub fn rbf_draw(&self) -> super::rbf::Draw {
+        super::rbf::Draw {
+            seed: self.seed,
+            rows: self.rbf_search_rows,
+        }
+    }
+}
+
 impl Default for TrainOptions {
     fn default() -> Self {
         TrainOptions {

@@ -1,7 +1,7 @@
 //! The Gaussian process's kernel matrix and its negative log marginal likelihood with the
 //! gradient by the log hyperparameters (Rasmussen and Williams 2006, eqs. 2.30 and 5.9).
 
-use super::{FAR, Hyper};
+use super::{Hyper, unit_response};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::{factor, inverse, solve};
 use faer::{Conj, Mat};
@@ -19,12 +19,19 @@ pub(super) fn prior_mean(d: usize, var: f64) -> Hyper {
     m
 }
 
+/// 1 / l_d^2 = e^(-2 ln l_d) of every input under `h` into `w` (cleared first).
+fn inverse_squares(h: &Hyper, w: &mut Vec<f64>) {
+    w.clear();
+    w.extend(h.rows(0, h.len() - 2).iter().map(|v| (-2.0 * v).exp()));
+}
+
 /// The lower triangle of K = s^2 E + (sigma^2 + jitter) I at the inputs `x` under `h` (E
-/// the unit responses, 0 beyond [`FAR`]); the upper triangle is left 0.
+/// the unit responses, [`unit_response`]); the upper triangle is left 0.
 pub(super) fn kernel(x: &[Vec<f64>], h: &Hyper) -> Mat<f64> {
     let n = x.len();
     let d = h.len() - 2;
-    let w: Vec<f64> = (0..d).map(|j| (-2.0 * h[j]).exp()).collect();
+    let mut w = Vec::with_capacity(d);
+    inverse_squares(h, &mut w);
     let (s2, noise) = (h[d].exp(), h[d + 1].exp());
     let all: Vec<usize> = (0..n).collect();
     let pairs = Pairs::new(x, &all);
@@ -37,13 +44,7 @@ pub(super) fn kernel(x: &[Vec<f64>], h: &Hyper) -> Mat<f64> {
             column[j] = s2 + noise + 1e-8 * s2;
             let below = &mut column[j + 1..];
             pairs.column_squares(j, &w, below);
-            below.iter_mut().for_each(|q| {
-                *q = if *q > FAR {
-                    0.0
-                } else {
-                    s2 * (-0.5 * *q).exp()
-                }
-            });
+            below.iter_mut().for_each(|q| *q = s2 * unit_response(*q));
         }
     });
     k
@@ -103,6 +104,9 @@ pub(super) struct Scratch {
     alpha: Mat<f64>,
     e: Vec<f64>,
     p: Vec<f64>,
+    /// 1 / l_d^2 of each input, and the gradient's sums over the pairs of each input.
+    w: Vec<f64>,
+    total: Vec<f64>,
     mem: MemBuffer,
 }
 
@@ -115,13 +119,15 @@ impl Scratch {
             alpha: Mat::zeros(n, o),
             e: Vec::new(),
             p: Vec::new(),
+            w: Vec::new(),
+            total: Vec::new(),
             mem: scratch(n, o, true),
         }
     }
 }
 
-/// The inputs of the rows a search sees (or a fit's kernel matrix), laid out for the likelihood's two sweeps over the
-/// pairs of rows (i > j, column by column): by input (`columns`, the kernel's sweep adds
+/// The inputs of the rows a search sees (or a fit's kernel matrix), laid out for the
+/// likelihood's two sweeps over the pairs of rows (i > j, column by column): by input (`columns`, the kernel's sweep adds
 /// input after input over many pairs at once) and by row (`rows`, the gradient's sweep adds
 /// one pair to every input's sum). The squared differences are formed on the fly from these
 /// two copies of the inputs (240 kB on 500 rows and 30 inputs, cache-resident) instead of
@@ -227,7 +233,8 @@ pub fn neg_log_likelihood(
 }
 
 /// [`neg_log_likelihood`] writing into `scratch` (made for the rows of `pairs` and the
-/// columns of `y`: a search's evaluations allocate nothing).
+/// columns of `y`: a search's evaluations allocate nothing of the rows' size, only the prior's
+/// d + 2 differences).
 pub(super) fn neg_log_likelihood_in(
     pairs: &Pairs,
     y: &Mat<f64>,
@@ -242,7 +249,6 @@ pub(super) fn neg_log_likelihood_in(
     if h.iter().any(|v| !v.is_finite() || v.abs() > 50.0) || pairs.inputs() != d {
         return f64::INFINITY;
     }
-    let w: Vec<f64> = (0..d).map(|j| (-2.0 * h[j]).exp()).collect();
     let (s2, noise) = (h[d].exp(), h[d + 1].exp());
     // E over the pairs, then K.
     let count = n * n.saturating_sub(1) / 2;
@@ -255,13 +261,15 @@ pub(super) fn neg_log_likelihood_in(
         alpha,
         e,
         p,
+        w,
+        total,
         mem,
     } = scratch;
+    inverse_squares(h, w);
     let stack = MemStack::new(mem);
     e.resize(count, 0.0);
-    pairs.weighted_squares(&w, e);
-    e.iter_mut()
-        .for_each(|q| *q = if *q > FAR { 0.0 } else { (-0.5 * *q).exp() });
+    pairs.weighted_squares(w, e);
+    e.iter_mut().for_each(|q| *q = unit_response(*q));
     // The factorisation reads the lower triangle only: the upper one is zero (a new
     // scratch's, or the last factorisation's).
     let mut at = 0;
@@ -332,8 +340,8 @@ pub(super) fn neg_log_likelihood_in(
         g[d] = -0.5 * (s2 * trace_m + 2.0 * p.iter().sum::<f64>());
         g[d + 1] = -0.5 * noise * trace_m;
         // sum_ij P_ij D_ij = 2 sum_{i>j} P_ij D_ij (D_ii = 0).
-        let mut total = vec![0.0; d];
-        pairs.weighted_sums(p, &mut total);
+        total.resize(d, 0.0);
+        pairs.weighted_sums(p, total);
         for c in 0..d {
             g[c] = -total[c] * w[c];
         }
@@ -345,6 +353,7 @@ pub(super) fn neg_log_likelihood_in(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::neural::rbf::FAR;
     use crate::neural::rbf::tests::data;
     use faer::Side;
     use faer::linalg::solvers::{DenseSolveCore, Solve};

@@ -78,6 +78,13 @@ impl Kernel {
 /// the same compensator bit for bit.
 pub(super) const FAR: f64 = 690.0;
 
+/// A unit's response exp(-q / 2) at the weighted squared distance `q`, 0 beyond [`FAR`]:
+/// the one cut the fit, the likelihood and prediction share.
+#[inline(always)]
+fn unit_response(q: f64) -> f64 {
+    if q > FAR { 0.0 } else { (-0.5 * q).exp() }
+}
+
 /// The unit response exp(-1/2 sum_d (x_d - c_d)^2 / l_d^2) at `x` of the unit at `c` (0
 /// beyond [`FAR`]), with `inv` the kernel's 1 / l_d^2 (multiplications: per input and unit a
 /// division cost four times as much, most of a prediction).
@@ -87,7 +94,7 @@ fn response(x: &[f64], c: &[f64], inv: &[f64]) -> f64 {
         let t = xd - cd;
         s += t * t * i;
     }
-    if s > FAR { 0.0 } else { (-0.5 * s).exp() }
+    unit_response(s)
 }
 
 /// A fitted RBF network (normalised inputs, unit-scale outputs).

@@ -76,13 +76,7 @@ impl Cv<'_> {
             return r.clone().map_err(Error::Invalid);
         }
         let found = build(self.robot, self.set, Form::Pose, encoding)
-            .and_then(|p| {
-                let draw = rbf::Draw {
-                    seed: self.opts.train.seed,
-                    rows: self.opts.train.rbf_search_rows,
-                };
-                rbf::search(&p.samples, start, draw)
-            })
+            .and_then(|p| rbf::search(&p.samples, start, self.opts.train.rbf_draw()))
             .map(|f| f.hyper)
             .map_err(|e| e.to_string());
         if let Ok(mut h) = self.hypers.lock() {
