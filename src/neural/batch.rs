@@ -26,6 +26,11 @@ pub struct Batch<'a> {
     sums: Vec<f64>,
     /// The column sums of the targets `b` (constant: formed once).
     b_sums: Vec<f64>,
+    /// The projection's normal matrix H~^T H~ + lambda D, (nh + 1) x (nh + 1), factored in
+    /// place and kept for the next evaluation.
+    normal: DMatrix<f64>,
+    /// The projection's right-hand side H~^T B, (nh + 1) x the target columns, solved in place.
+    rhs: DMatrix<f64>,
 }
 
 impl<'a> Batch<'a> {
@@ -50,6 +55,8 @@ impl<'a> Batch<'a> {
             gw2: DMatrix::zeros(no, nh),
             sums: vec![0.0; nh],
             b_sums,
+            normal: DMatrix::zeros(nh + 1, nh + 1),
+            rhs: DMatrix::zeros(nh + 1, rows),
         }
     }
 
@@ -127,7 +134,15 @@ impl<'a> Batch<'a> {
     ) -> f64 {
         self.hidden(w);
         let (n, nh) = (self.z.nrows(), self.z.ncols());
-        let mut a = DMatrix::<f64>::zeros(nh + 1, nh + 1);
+        let targets = self.b.ncols();
+        // The normal matrix is taken out of the batch for the factorisation, which consumes
+        // it, and put back after: no allocation per evaluation (a failed factorisation drops
+        // it; the next evaluation makes a new one).
+        let mut a = std::mem::replace(&mut self.normal, DMatrix::zeros(0, 0));
+        if a.shape() != (nh + 1, nh + 1) {
+            a = DMatrix::zeros(nh + 1, nh + 1);
+        }
+        a.fill(0.0);
         gemm_tn(&self.z, &self.z, a.view_mut((0, 0), (nh, nh)));
         column_sums(&self.z, &mut self.sums);
         for (j, &s) in self.sums.iter().enumerate() {
@@ -136,8 +151,13 @@ impl<'a> Batch<'a> {
             a[(j, j)] += lambda;
         }
         a[(nh, nh)] = n as f64;
-        let mut rhs = DMatrix::<f64>::zeros(nh + 1, self.b.ncols());
-        gemm_tn(&self.z, &self.b, rhs.view_mut((0, 0), (nh, self.b.ncols())));
+        let rhs = &mut self.rhs;
+        debug_assert_eq!(
+            rhs.shape(),
+            (nh + 1, targets),
+            "projection: rhs sized in new"
+        );
+        gemm_tn(&self.z, &self.b, rhs.view_mut((0, 0), (nh, targets)));
         for (c, &s) in self.b_sums.iter().enumerate() {
             rhs[(nh, c)] = s;
         }
@@ -146,13 +166,14 @@ impl<'a> Batch<'a> {
             a[(j, j)] += 1e-12 * (1.0 + a[(j, j)]);
         }
         if let Some(ch) = a.cholesky() {
-            let v = ch.solve(&rhs);
+            ch.solve_mut(rhs);
             for o in 0..w.outputs() {
                 for j in 0..nh {
-                    w.w2[(o, j)] = v[(j, o)];
+                    w.w2[(o, j)] = rhs[(j, o)];
                 }
-                w.b2[o] = v[(nh, o)];
+                w.b2[o] = rhs[(nh, o)];
             }
+            self.normal = ch.unpack_dirty();
         }
         let sum = self.outputs(w);
         self.backward(w, sum, lambda, grad)
@@ -400,6 +421,24 @@ mod tests {
                 let off = w.hidden() * w.inputs() + w.hidden();
                 assert!(gd.rows(off, gd.len() - off).amax() < 1e-10, "{gd}");
                 assert!(fp < f);
+                // The batch keeps its normal matrix and right-hand side between evaluations:
+                // another hidden layer, then one whose factorisation fails (a negative
+                // penalty: A is not positive definite, the output layer is left as it was),
+                // then the first again give the bits of a fresh batch each time.
+                let mut other = w.clone();
+                other.w1 *= 1.7;
+                for (weights, lam) in [(&other, lambda), (&w, -1e3), (&w, lambda)] {
+                    let (mut kept, mut fresh) = (weights.clone(), weights.clone());
+                    let (mut gk, mut gf) = (DVector::zeros(w.len()), DVector::zeros(w.len()));
+                    let fk = batch.objective_projected(&mut kept, lam, &mut gk);
+                    let ff = Batch::new(&s, &w).objective_projected(&mut fresh, lam, &mut gf);
+                    assert_eq!(fk.to_bits(), ff.to_bits(), "penalty {lam}");
+                    assert_eq!(gk, gf);
+                    assert_eq!(kept.to_vector(), fresh.to_vector());
+                    if lam < 0.0 {
+                        assert_eq!(kept.to_vector(), weights.to_vector(), "failed: unchanged");
+                    }
+                }
             }
             let direct = (s.mse(&w) * s.components() as f64 + lambda * weight_norm2(&w))
                 / s.components() as f64;
