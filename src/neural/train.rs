@@ -318,7 +318,7 @@ impl Best {
     fn record(&mut self, mse: f64, w: &Weights, min_gain: f64) -> usize {
         if mse < self.mse {
             self.mse = mse;
-            self.weights = w.clone();
+            self.weights.clone_from(w);
         }
         if mse < self.mark * (1.0 - min_gain) {
             self.mark = mse;

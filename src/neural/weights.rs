@@ -5,7 +5,7 @@
 use nalgebra::{DMatrix, DVector};
 
 /// Weights of the network.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, PartialEq)]
 pub struct Weights {
     /// hidden x inputs.
     pub w1: DMatrix<f64>,
@@ -15,6 +15,30 @@ pub struct Weights {
     pub w2: DMatrix<f64>,
     /// outputs.
     pub b2: DVector<f64>,
+}
+
+impl Clone for Weights {
+    fn clone(&self) -> Self {
+        Weights {
+            w1: self.w1.clone(),
+            b1: self.b1.clone(),
+            w2: self.w2.clone(),
+            b2: self.b2.clone(),
+        }
+    }
+
+    /// Copies `source` into the matrices already held where the shapes agree (the best
+    /// weights of a training, rewritten at every improvement, without allocating).
+    fn clone_from(&mut self, source: &Self) {
+        if self.w1.shape() == source.w1.shape() && self.w2.shape() == source.w2.shape() {
+            self.w1.copy_from(&source.w1);
+            self.b1.copy_from(&source.b1);
+            self.w2.copy_from(&source.w2);
+            self.b2.copy_from(&source.b2);
+        } else {
+            *self = source.clone();
+        }
+    }
 }
 
 impl Weights {
@@ -276,6 +300,38 @@ mod tests {
             w2: f(2, 4, 0.53),
             b2: DVector::from_fn(2, |i, _| i as f64 * 0.1 - 0.2),
         }
+    }
+
+    #[test]
+    fn clone_from_copies_in_place_and_takes_another_shape() {
+        let source = sample();
+        let mut kept = sample();
+        kept.w1 *= 2.0;
+        kept.b2[1] = 9.0;
+        let at = (
+            kept.w1.as_ptr(),
+            kept.b1.as_ptr(),
+            kept.w2.as_ptr(),
+            kept.b2.as_ptr(),
+        );
+        kept.clone_from(&source);
+        assert_eq!(kept, source);
+        // The same storage: copied in place, not reallocated.
+        let now = (
+            kept.w1.as_ptr(),
+            kept.b1.as_ptr(),
+            kept.w2.as_ptr(),
+            kept.b2.as_ptr(),
+        );
+        assert_eq!(at, now);
+        let mut other = Weights {
+            w1: DMatrix::zeros(2, 3),
+            b1: DVector::zeros(2),
+            w2: DMatrix::zeros(1, 2),
+            b2: DVector::zeros(1),
+        };
+        other.clone_from(&source);
+        assert_eq!(other, source);
     }
 
     #[test]
