@@ -329,9 +329,10 @@ fn case_d_prints_table_6_6_beside_ours_and_reports_every_row() {
 }
 
 /// Rows measured twice: `train` reports how far their residuals differ, with the lines of the
-/// widest pair, on stdout and in its report (the same figures).
+/// widest pair, on stdout and in its report (the same figures); `evaluate` on the same rows
+/// and model reports the same, and nothing on rows without repeats.
 #[test]
-fn train_reports_the_repeats_of_its_data() {
+fn train_and_evaluate_report_the_repeats_of_their_data() {
     let text =
         std::fs::read_to_string(common::root().join("datasets/case_d/training.csv")).unwrap();
     let lines: Vec<&str> = text.lines().collect();
@@ -370,6 +371,40 @@ fn train_reports_the_repeats_of_its_data() {
     );
     let median = r["median_spread_mm"].as_f64().unwrap();
     assert!(median > 0.0 && median < 0.1, "{median}");
+    let evaluated = tmp("repeats_evaluate.json");
+    let o = common::robocal(&[
+        "evaluate",
+        "--robot",
+        common::FANUC,
+        "--data",
+        data.to_str().unwrap(),
+        "--report",
+        evaluated.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let said = stdout(&o);
+    assert_eq!(&json(&evaluated)["repeats"], r);
+    let line = |t: &str| {
+        t.lines()
+            .find(|l| l.starts_with("repeats:"))
+            .map(str::to_string)
+    };
+    assert_eq!(line(&said), line(&out), "{said}");
+    // The first 60 rows alone repeat nothing: no line, and `null` in the report.
+    let single = tmp("repeats_none.csv");
+    std::fs::write(&single, lines[..61].join("\n") + "\n").unwrap();
+    let o = common::robocal(&[
+        "evaluate",
+        "--robot",
+        common::FANUC,
+        "--data",
+        single.to_str().unwrap(),
+        "--report",
+        evaluated.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(line(&stdout(&o)), None);
+    assert!(json(&evaluated)["repeats"].is_null());
 }
 
 /// `--rbf-search-rows` bounds the rows the RBF network's likelihood search sees, and `train`

@@ -2,7 +2,7 @@
 
 use super::data_args::{DataArgs, read_set};
 use super::predict::{load_compensator, warn_outside};
-use super::summary::{print_stats, write_report};
+use super::summary::{print_repeats, print_stats, write_report};
 use anyhow::Result;
 use clap::Args;
 use robocal::evaluate::{row_errors, summarize};
@@ -10,6 +10,7 @@ use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
 use robocal::model::read_robot;
 use robocal::neural::predict::PredictWorkspace;
+use robocal::neural::repeats::Repeats;
 use robocal::plot::{ErrorRun, error_figures};
 use robocal::reports::{Accuracy, EvaluateReport, Report};
 use std::path::PathBuf;
@@ -108,7 +109,11 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         accuracy,
         lines_outside_domain: outside.clone(),
         note,
+        repeats: Repeats::of(&robot, &set),
     };
+    if let Some(r) = &report.repeats {
+        print_repeats(r);
+    }
     print_stats(&report.accuracy);
     for (what, row) in ["model", "with the compensator"]
         .iter()

@@ -2,6 +2,7 @@
 
 use anyhow::Result;
 use robocal::evaluate::ErrorStats;
+use robocal::neural::repeats::Repeats;
 use robocal::reports::{Accuracy, Report};
 use std::path::Path;
 
@@ -28,6 +29,24 @@ pub fn print_stats(rows: &[Accuracy]) {
         let (p, o) = fmt_stats(&r.stats);
         println!("{:<12} {:<7} {p:>39}   {o:>26}", r.data, r.model);
     }
+}
+
+/// Prints the line on the data's repeated configurations (`train` and `evaluate` alike):
+/// how far the model's residuals of one configuration differ, and the pure error no
+/// compensator can remove.
+pub fn print_repeats(r: &Repeats) {
+    println!(
+        "repeats: {} configurations measured more than once ({} rows); the model's position \
+         residuals of one configuration differ by {:.4} mm (median), at most {:.4} mm (lines \
+         {} and {}); pure error {:.4} mm RMS, which no compensator can remove",
+        r.configurations,
+        r.rows,
+        r.median_spread_mm,
+        r.max_spread_mm,
+        r.max_spread_lines[0],
+        r.max_spread_lines[1],
+        r.pure_error_rms_mm
+    );
 }
 
 /// Writes a typed report (JSON).

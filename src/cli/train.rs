@@ -251,18 +251,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         a.robot.display()
     );
     if let Some(r) = &report.repeats {
-        println!(
-            "repeats: {} configurations measured more than once ({} rows); the model's position \
-             residuals of one configuration differ by {:.4} mm (median), at most {:.4} mm (lines \
-             {} and {}); pure error {:.4} mm RMS, which no compensator can remove",
-            r.configurations,
-            r.rows,
-            r.median_spread_mm,
-            r.max_spread_mm,
-            r.max_spread_lines[0],
-            r.max_spread_lines[1],
-            r.pure_error_rms_mm
-        );
+        super::summary::print_repeats(r);
     }
     if let Some(sel) = &report.selection {
         print_selection(sel);

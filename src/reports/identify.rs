@@ -4,6 +4,7 @@ use super::Accuracy;
 use crate::identify::identifiability::DropReason;
 use crate::identify::run::{Outlier, ParamReport};
 use crate::identify::{Identified, Measure, Method, Options, RobustLoss, StopReason};
+use crate::neural::repeats::Repeats;
 use serde::{Deserialize, Serialize};
 
 /// A candidate parameter left out of the identifiable set.
@@ -233,4 +234,10 @@ pub struct EvaluateReport {
     pub lines_outside_domain: Vec<usize>,
     /// A note on the model the compensator runs with, if it is not the robot file's.
     pub note: Option<String>,
+    /// The data's configurations measured more than once, under the robot file's model: how
+    /// far their position residuals differ (mm), the floor of any compensator, and the two
+    /// lines that differ most (a mis-measured row among them decides the max error). None
+    /// when no configuration has two rows with positions, and in reports written before it.
+    #[serde(default)]
+    pub repeats: Option<Repeats>,
 }
