@@ -422,7 +422,7 @@ mod tests {
                 assert!(gd.rows(off, gd.len() - off).amax() < 1e-10, "{gd}");
                 assert!(fp < f);
                 // The batch keeps its normal matrix and right-hand side between evaluations:
-                // another hidden layer, then one whose factorisation fails (a negative
+                // other hidden weights, then one whose factorisation fails (a negative
                 // penalty: A is not positive definite, the output layer is left as it was),
                 // then the first again give the bits of a fresh batch each time.
                 let mut other = w.clone();

@@ -30,7 +30,11 @@ impl Clone for Weights {
     /// Copies `source` into the matrices already held where the shapes agree (the best
     /// weights of a training, rewritten at every improvement, without allocating).
     fn clone_from(&mut self, source: &Self) {
-        if self.w1.shape() == source.w1.shape() && self.w2.shape() == source.w2.shape() {
+        let same = self.w1.shape() == source.w1.shape()
+            && self.b1.len() == source.b1.len()
+            && self.w2.shape() == source.w2.shape()
+            && self.b2.len() == source.b2.len();
+        if same {
             self.w1.copy_from(&source.w1);
             self.b1.copy_from(&source.b1);
             self.w2.copy_from(&source.w2);

@@ -237,7 +237,8 @@ pub struct EvaluateReport {
     /// The data's configurations measured more than once, under the robot file's model: how
     /// far their position residuals differ (mm), the floor of any compensator, and the two
     /// lines that differ most (a mis-measured row among them decides the max error). None
-    /// when no configuration has two rows with positions, and in reports written before it.
-    #[serde(default)]
+    /// when no configuration has two rows with positions (then left out of the file, as in
+    /// `train`'s report), and in reports written before it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub repeats: Option<Repeats>,
 }
