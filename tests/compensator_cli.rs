@@ -371,40 +371,33 @@ fn train_and_evaluate_report_the_repeats_of_their_data() {
     );
     let median = r["median_spread_mm"].as_f64().unwrap();
     assert!(median > 0.0 && median < 0.1, "{median}");
-    let evaluated = tmp("repeats_evaluate.json");
-    let o = common::robocal(&[
-        "evaluate",
-        "--robot",
-        common::FANUC,
-        "--data",
-        data.to_str().unwrap(),
-        "--report",
-        evaluated.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let said = stdout(&o);
-    assert_eq!(&json(&evaluated)["repeats"], r);
+    // `evaluate` of the FANUC's file on `rows`: its stdout and its report.
+    let evaluate = |rows: &std::path::Path| {
+        let report = tmp("repeats_evaluate.json");
+        let args = [
+            "evaluate",
+            "--robot",
+            FANUC,
+            "--data",
+            rows.to_str().unwrap(),
+        ];
+        let o = robocal(&[&args[..], &["--report", report.to_str().unwrap()]].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        (stdout(&o), json(&report))
+    };
     let line = |t: &str| {
         t.lines()
             .find(|l| l.starts_with("repeats:"))
             .map(str::to_string)
     };
+    let (said, report) = evaluate(&data);
+    assert_eq!(&report["repeats"], r);
     assert_eq!(line(&said), line(&out), "{said}");
     // The first 60 rows alone repeat nothing: no line, and none in the report.
     let single = tmp("repeats_none.csv");
     std::fs::write(&single, lines[..61].join("\n") + "\n").unwrap();
-    let o = common::robocal(&[
-        "evaluate",
-        "--robot",
-        common::FANUC,
-        "--data",
-        single.to_str().unwrap(),
-        "--report",
-        evaluated.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(line(&stdout(&o)), None);
-    let report = json(&evaluated);
+    let (said, report) = evaluate(&single);
+    assert_eq!(line(&said), None);
     assert!(
         report.get("repeats").is_none() && report["rows"] == 60,
         "{report}"
