@@ -632,3 +632,112 @@ phase2_deg = 80.0
         "{out}"
     );
 }
+
+/// A validation row logged with another row's reading (line 31 of Case D's test poses given
+/// line 12's position and orientation): `train` and `evaluate` name it, with the row whose
+/// reading it carries, and add the accuracy rows without it (`validation clean`, `data
+/// clean`): the same figures in both commands (1e-9), and the figures of `evaluate` on a file
+/// without that line.
+#[test]
+fn a_reading_logged_with_other_joints_is_named_and_left_out_of_the_clean_rows() {
+    let text =
+        std::fs::read_to_string(common::root().join("datasets/case_d/test_truth.csv")).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let cells = |l: &str| l.split(',').map(str::to_string).collect::<Vec<_>>();
+    let (source, mut slip) = (cells(&lines[11]), cells(&lines[30]));
+    slip[7..13].clone_from_slice(&source[7..13]);
+    lines[30] = slip.join(",");
+    let data = tmp("slip.csv");
+    std::fs::write(&data, lines.join("\n") + "\n").unwrap();
+    let without = tmp("slip_without.csv");
+    let rest: Vec<&String> = lines
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i != 30)
+        .map(|(_, l)| l)
+        .collect();
+    std::fs::write(
+        &without,
+        rest.iter()
+            .map(|l| l.as_str())
+            .collect::<Vec<_>>()
+            .join("\n")
+            + "\n",
+    )
+    .unwrap();
+    let (comp, report) = (tmp("slip.rcal"), tmp("slip_train.json"));
+    let mut extra = vec![
+        "--validate",
+        data.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ];
+    extra.extend_from_slice(CHEAP_TRAIN);
+    let o = common::train_fanuc(
+        "datasets/case_d/training.csv",
+        comp.to_str().unwrap(),
+        &extra,
+    );
+    let out = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        out.contains(
+            "shared readings: 1 validation row(s) carry the reading of another configuration"
+        ) && out
+            .contains("  line 31 carries the reading of line 12 (0.0000 mm and 0.0000 deg apart)"),
+        "{out}"
+    );
+    let train = json(&report);
+    let evaluate = |rows: &std::path::Path, name: &str| {
+        let report = tmp(name);
+        let o = robocal(&[
+            "evaluate",
+            "--robot",
+            FANUC,
+            "--compensator",
+            comp.to_str().unwrap(),
+            "--data",
+            rows.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (stdout(&o), json(&report))
+    };
+    let (said, e) = evaluate(&data, "slip_evaluate.json");
+    assert!(
+        said.contains("  line 31 carries the reading of line 12"),
+        "{said}"
+    );
+    assert_eq!(e["shared_readings"][0]["line"], 31);
+    assert_eq!(e["shared_readings"][0]["other_line"], 12);
+    assert_eq!(e["shared_readings"].as_array().unwrap().len(), 1);
+    let (_, plain) = evaluate(&without, "slip_without.json");
+    assert!(plain.get("shared_readings").is_none());
+    for model in ["model", "+net"] {
+        let clean = accuracy(&e, "data clean", model);
+        assert_eq!(clean["count"], 249);
+        for (kind, f) in [
+            ("position_mm", "mean"),
+            ("position_mm", "max"),
+            ("orientation_deg", "rms"),
+        ] {
+            let x = clean[kind][f].as_f64().unwrap();
+            let y = accuracy(&train, "validation clean", model)[kind][f]
+                .as_f64()
+                .unwrap();
+            let z = accuracy(&plain, "data", model)[kind][f].as_f64().unwrap();
+            assert!(
+                (x - y).abs() <= 1e-9 && x == z,
+                "{model} {kind} {f}: {x} {y} {z}"
+            );
+        }
+        // The row with the slip is in the plain rows, and decides their max.
+        assert!(
+            accuracy(&e, "data", model)["position_mm"]["max"]
+                .as_f64()
+                .unwrap()
+                > clean["position_mm"]["max"].as_f64().unwrap()
+        );
+    }
+}

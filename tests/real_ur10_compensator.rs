@@ -11,7 +11,7 @@
 mod common;
 
 use common::root;
-use common::ur10::{SERIES_B, series, series_b_split};
+use common::ur10::{SERIES_A, SERIES_B, series, series_b_split};
 use robocal::data::MeasurementSet;
 use robocal::data::measurement::split;
 use robocal::evaluate::{ErrorStats, row_errors, summarize};
@@ -151,9 +151,23 @@ fn default_beats_the_plain_baseline_on_series_b() {
         let sel = report.selection.as_ref().unwrap();
         assert!(report.settings.has_rbf() && report.settings.refine.is_none());
         assert!(pool.rows.len() > robocal::neural::rbf::HYPER_ROWS);
-        let left: Vec<usize> = sel.outliers.iter().map(|o| o.row).collect();
-        assert!(!left.is_empty());
-        let kept = robocal::neural::tuning::subset(&pool, |i| !left.contains(&i));
+        // The pool's rows that carry another configuration's reading (lines 534 and 1065)
+        // trained nothing; the outliers are named in the pool's rows, and were found (and
+        // left out of the search) among the rest.
+        let shared: Vec<usize> = report.shared_readings.iter().map(|s| s.row).collect();
+        let lines: Vec<usize> = report.shared_readings.iter().map(|s| s.line).collect();
+        assert_eq!(lines, vec![534, 1065]);
+        let trained = robocal::neural::tuning::subset(&pool, |i| !shared.contains(&i));
+        let outliers: Vec<usize> = sel.outliers.iter().map(|o| o.row).collect();
+        assert!(!outliers.is_empty());
+        let index: Vec<usize> = (0..pool.rows.len())
+            .filter(|i| !shared.contains(i))
+            .collect();
+        let left: Vec<usize> = outliers
+            .iter()
+            .map(|o| index.iter().position(|i| i == o).unwrap())
+            .collect();
+        let kept = robocal::neural::tuning::subset(&trained, |i| !left.contains(&i));
         let samples = robocal::neural::targets::build(&c.robot, &kept, Form::Pose, c.encoding)
             .unwrap()
             .samples;
@@ -533,4 +547,37 @@ fn series_b_pools() {
             }
         }
     }
+}
+
+/// The readings of Series B that two configurations share: under the model identified on the
+/// whole series, the four rows whose reading is another row's (lines 534 and 1065 repeat
+/// lines 533 and 1064 number for number; 856 reads 855's pose, 857 the pose 864 measured
+/// later). Series A, a grid turned about the probe point in 10 deg steps, has none: many of
+/// its rows of different configurations read one position to 0.1 mm, at other orientations.
+#[test]
+fn series_b_shared_readings_are_its_four_logging_slips() {
+    use robocal::data::shared_readings::{SEPARATION_MM, shared_readings};
+    let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
+    let b = series(&ur, SERIES_B);
+    let model = identified(&ur, &b);
+    let found = shared_readings(&model, &b);
+    let pairs: Vec<(usize, usize)> = found.iter().map(|s| (s.line, s.other_line)).collect();
+    // 856 reads 855's pose and also 847's (855's configuration measured earlier, 0.015 mm
+    // from it: the closer reading); 534 reads 533's and 525's (0.0145 mm), 533's closer.
+    assert_eq!(
+        pairs,
+        vec![(534, 533), (856, 847), (857, 864), (1065, 1064)],
+        "{found:#?}"
+    );
+    for s in &found {
+        assert!(s.reading_mm < 0.03 && s.reading_deg < 0.01, "{s:?}");
+        assert!(
+            s.model_mm >= SEPARATION_MM && s.residual_mm > s.other_residual_mm,
+            "{s:?}"
+        );
+    }
+    let a = series(&ur, SERIES_A);
+    let (id, _) = split(&a, 0.25, 23);
+    let model_a = identified(&ur, &id);
+    assert!(shared_readings(&model_a, &a).is_empty());
 }

@@ -2,9 +2,10 @@
 
 use super::data_args::{DataArgs, read_set};
 use super::predict::{load_compensator, warn_outside};
-use super::summary::{print_repeats, print_stats, write_report};
+use super::summary::{clean_accuracy, print_repeats, print_shared, print_stats, write_report};
 use anyhow::Result;
 use clap::Args;
+use robocal::data::shared_readings::shared_readings;
 use robocal::evaluate::{row_errors, summarize};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
@@ -38,6 +39,10 @@ pub struct EvaluateArgs {
     #[arg(long)]
     plot: Option<PathBuf>,
 }
+
+/// The label of the accuracy rows without the rows that carry another configuration's
+/// reading.
+const CLEAN: &str = "data clean";
 
 pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     use super::paths::{guard, opt, req};
@@ -100,6 +105,20 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             ..Accuracy::new("data", "+net", c)
         });
     }
+    // Readings logged with other joints, judged under the robot file's model (absolute
+    // measures: a pair's displacement is no reading of one row).
+    let shared = match m {
+        Measure::Pose | Measure::Position => shared_readings(&robot, &set),
+        _ => Vec::new(),
+    };
+    accuracy.extend(clean_accuracy(
+        CLEAN,
+        &set,
+        &shared,
+        m,
+        &robot,
+        comp.as_ref(),
+    )?);
     let report = EvaluateReport {
         robot: a.robot.display().to_string(),
         compensator: a.compensator.as_ref().map(|p| p.display().to_string()),
@@ -110,9 +129,17 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         lines_outside_domain: outside.clone(),
         note,
         repeats: Repeats::of(&robot, &set),
+        shared_readings: shared,
     };
     if let Some(r) = &report.repeats {
         print_repeats(r);
+    }
+    if !report.shared_readings.is_empty() {
+        print_shared(
+            "data",
+            &report.shared_readings,
+            &format!("'{CLEAN}' leaves them out"),
+        );
     }
     print_stats(&report.accuracy);
     for (what, row) in ["model", "with the compensator"]

@@ -253,4 +253,11 @@ fn print_identified(r: &IdentifyReport) {
             lines.join(", ")
         );
     }
+    if !r.shared_readings.is_empty() {
+        super::summary::print_shared(
+            "calibration",
+            &r.shared_readings,
+            "kept in the fit, as outliers are",
+        );
+    }
 }

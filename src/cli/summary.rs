@@ -1,7 +1,15 @@
 //! Shared output of the fitting commands: the accuracy table and the typed JSON reports.
 
 use anyhow::Result;
-use robocal::evaluate::ErrorStats;
+use robocal::data::MeasurementSet;
+use robocal::data::measurement::subset;
+use robocal::data::shared_readings::{SEPARATION_MM, SharedReading, suspect_rows};
+use robocal::evaluate::{ErrorStats, row_errors, summarize};
+use robocal::identify::Measure;
+use robocal::kinematics::tool_pose;
+use robocal::model::Robot;
+use robocal::neural::compensator::Compensator;
+use robocal::neural::predict::PredictWorkspace;
 use robocal::neural::repeats::Repeats;
 use robocal::reports::{Accuracy, Report};
 use std::path::Path;
@@ -21,13 +29,14 @@ fn fmt_stats(s: &ErrorStats) -> (String, String) {
 
 /// Prints a report's accuracy table (before/after pairs of error statistics).
 pub fn print_stats(rows: &[Accuracy]) {
+    let w = rows.iter().map(|r| r.data.len()).fold(12, usize::max);
     println!(
-        "{:<12} {:<7} {:>39}   {:>26}",
+        "{:<w$} {:<7} {:>39}   {:>26}",
         "set", "model", "position mm: mean rms p95 max", "orientation deg: mean rms max"
     );
     for r in rows {
         let (p, o) = fmt_stats(&r.stats);
-        println!("{:<12} {:<7} {p:>39}   {o:>26}", r.data, r.model);
+        println!("{:<w$} {:<7} {p:>39}   {o:>26}", r.data, r.model);
     }
 }
 
@@ -47,6 +56,60 @@ pub fn print_repeats(r: &Repeats) {
         r.max_spread_lines[1],
         r.pure_error_rms_mm
     );
+}
+
+/// Prints the rows of a set (`what`: "training", "validation", ...) that carry another
+/// configuration's reading, one line each, after what becomes of them (`fate`).
+pub fn print_shared(what: &str, shared: &[SharedReading], fate: &str) {
+    println!(
+        "shared readings: {} {what} row(s) carry the reading of another configuration that \
+         the model puts {SEPARATION_MM} mm or more away, a reading logged with other joints \
+         ({fate}):",
+        shared.len()
+    );
+    for s in shared {
+        println!("  {}", s.describe());
+    }
+}
+
+/// The accuracy rows labelled `clean` on the rows of `set` but the suspects of `shared`: the
+/// model's (`model`) and, with a compensator, its (`+net`, with the rows outside its training
+/// domain), under `measure`; none when `shared` is empty.
+pub fn clean_accuracy(
+    clean: &str,
+    set: &MeasurementSet,
+    shared: &[SharedReading],
+    measure: Measure,
+    robot: &Robot,
+    comp: Option<&Compensator>,
+) -> robocal::Result<Vec<Accuracy>> {
+    if shared.is_empty() {
+        return Ok(Vec::new());
+    }
+    let suspects = suspect_rows(shared);
+    let rows = subset(set, |i| suspects.binary_search(&i).is_err());
+    let mut out = vec![Accuracy::new(
+        clean,
+        "model",
+        summarize(&row_errors(&rows, measure, |q| tool_pose(robot, q))?),
+    )];
+    if let Some(c) = comp {
+        let mut ws = PredictWorkspace::default();
+        let outside = rows
+            .rows
+            .iter()
+            .filter(|r| !c.domain_check(&r.q, &mut ws).inside())
+            .count();
+        out.push(Accuracy {
+            rows_outside_domain: Some(outside),
+            ..Accuracy::new(
+                clean,
+                "+net",
+                summarize(&row_errors(&rows, measure, |q| c.predict(q, &mut ws))?),
+            )
+        });
+    }
+    Ok(out)
 }
 
 /// Writes a typed report (JSON).

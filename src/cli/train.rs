@@ -2,9 +2,10 @@
 
 use super::compensator_args::{CompensatorArgs, compliance_conflict, progress_bar};
 use super::data_args::{DataArgs, SigmaArgs};
-use super::summary::{print_stats, write_report};
+use super::summary::{clean_accuracy, print_shared, print_stats, write_report};
 use anyhow::{Context, Result};
 use clap::Args;
+use robocal::data::shared_readings::shared_readings;
 use robocal::evaluate::{row_errors, summarize};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
@@ -275,9 +276,30 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     }
     let mut ws = PredictWorkspace::default();
     let mut accuracy = Vec::new();
-    for (name, s) in [("training", Some(&set)), ("validation", val.as_ref())] {
+    let mut clean = Vec::new();
+    // The training rows' readings logged with other joints were judged in training, under the
+    // robot file's model; the validation rows' are judged here as `evaluate` judges them.
+    let val_shared = val
+        .as_ref()
+        .map(|v| shared_readings(&robot, v))
+        .unwrap_or_default();
+    for (name, s, shared) in [
+        ("training", Some(&set), &report.shared_readings),
+        ("validation", val.as_ref(), &val_shared),
+    ] {
         let Some(s) = s else { continue };
         let m = Measure::default_for(s);
+        if !shared.is_empty() {
+            print_shared(name, shared, &format!("'{name} clean' leaves them out"));
+        }
+        clean.extend(clean_accuracy(
+            &format!("{name} clean"),
+            s,
+            shared,
+            m,
+            &robot,
+            Some(&c),
+        )?);
         let before_rows = row_errors(s, m, |q| tool_pose(&robot, q))?;
         let after_rows = row_errors(s, m, |q| c.predict(q, &mut ws))?;
         let outside = s
@@ -312,6 +334,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             ..Accuracy::new(name, "+net", after)
         });
     }
+    accuracy.extend(clean);
     let report = TrainReport::new(
         &c,
         report,
@@ -327,7 +350,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     for r in &report.accuracy {
         if let Some(outside) = r.rows_outside_domain
             && outside > 0
-            && r.data != "training"
+            && r.data == "validation"
         {
             eprintln!(
                 "warning: {outside} {} row(s) lie outside the compensator's training domain",

@@ -1,9 +1,11 @@
 //! Measurement and batch data in CSV files.
 
+pub mod configuration;
 pub mod joints;
 pub mod measurement;
 pub mod pairs;
 pub mod profile;
+pub mod shared_readings;
 pub mod table;
 pub mod targets;
 

@@ -14,6 +14,7 @@ use super::targets::build;
 use super::train::{RbfHyper, TrainOptions, TrainReport, train};
 use super::weights::Weights;
 use crate::data::MeasurementSet;
+use crate::data::shared_readings::SharedReading;
 use crate::error::Result;
 use crate::identify::Sigmas;
 use crate::model::Robot;
@@ -40,6 +41,13 @@ pub struct CompensatorReport {
     /// when refinement ran) disagree: the data's floor; None without repeats.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub repeats: Option<Repeats>,
+    /// Training rows that carry another configuration's reading under the model as given
+    /// ([`crate::data::shared_readings`]), indexed in the rows given to
+    /// [`Compensator::train`]: left out of cross-validation and the fit unless outliers are
+    /// kept. Empty when there are none (then left out of the file, and in reports written
+    /// before it).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shared_readings: Vec<SharedReading>,
 }
 
 impl Compensator {
@@ -70,6 +78,7 @@ impl Compensator {
                 selection_seconds: 0.0,
                 fit_seconds: started.elapsed().as_secs_f64(),
                 repeats: Repeats::of(&robot, set),
+                shared_readings: Vec::new(),
             },
         ))
     }

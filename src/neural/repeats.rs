@@ -2,26 +2,21 @@
 //! validation-failure hold-out keep together, so that a held-out row is never predicted from
 //! its own repeat.
 //!
-//! Two measurements of one commanded pose do not log the same joint values. On the shipped
-//! UR10 Series B the 293 repeated pairs differ by the encoders' noise, up to 3e-4 rad in some
-//! joint; on Series A 461 goal poses were commanded twice (the same rotation written as two
-//! roll-pitch-yaw triples at pitch 90 deg) and reached with joints up to 6.7e-3 rad apart. No
-//! two rows of different commanded poses come within 3e-2 rad on either series. Grouping only
-//! bit-equal joint values split every such pair across folds and leaked each held-out row's
-//! own measurement into its training part. Rows closer than [`SAME_CONFIGURATION`] in every
-//! joint are therefore one configuration, transitively: at that distance the model's residual
-//! field, which the network learns, barely moves, so two such rows are one sample whether or
-//! not they were commanded alike.
+//! Two measurements of one commanded pose do not log the same joint values (see
+//! [`crate::data::configuration`]). Grouping only bit-equal joint values split every repeated
+//! pair of the shipped UR10 series across folds and leaked each held-out row's own
+//! measurement into its training part. Rows closer than [`SAME_CONFIGURATION`] in every joint
+//! are therefore one configuration: at that distance the model's residual field, which the
+//! network learns, barely moves, so two such rows are one sample whether or not they were
+//! commanded alike.
 
 use crate::data::MeasurementSet;
+use crate::data::configuration::same_configuration;
 use crate::kinematics::tool_pose;
 use crate::model::Robot;
 use nalgebra::Vector3;
 
-/// Largest difference in every joint (rad, 1e-2 rad = 0.57 deg; mm for a prismatic joint,
-/// 10 um) at which two rows are the same configuration: above the 6.7e-3 rad of the shipped
-/// repeats, below the 3e-2 rad between their distinct configurations.
-pub const SAME_CONFIGURATION: f64 = 1e-2;
+pub use crate::data::configuration::SAME_CONFIGURATION;
 
 /// Group id of every row: a row joins the group of the first row (in the sweep's order, the
 /// order of the joint whose values spread widest) whose joint values all lie within
@@ -49,14 +44,7 @@ pub fn configuration_groups(set: &MeasurementSet) -> Vec<usize> {
     let at = |i: usize| rows[i].q.get(key).copied().unwrap_or(0.0);
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| at(a).total_cmp(&at(b)));
-    let close = |i: usize, j: usize| {
-        rows[i].q.len() == rows[j].q.len()
-            && rows[i]
-                .q
-                .iter()
-                .zip(&rows[j].q)
-                .all(|(x, y)| (x - y).abs() < SAME_CONFIGURATION)
-    };
+    let close = |i: usize, j: usize| same_configuration(&rows[i].q, &rows[j].q);
     // Each group's first row in the sweep, in the sweep's order (so their keys ascend and
     // those too far below the current row leave from the front).
     let mut leaders: Vec<usize> = Vec::new();

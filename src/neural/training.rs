@@ -7,6 +7,8 @@ use super::settings::CompensatorOptions;
 use super::train::{RbfHyper, TrainOptions};
 use super::tuning::{FIT_WORK, budget_epochs, select_settings};
 use crate::data::MeasurementSet;
+use crate::data::measurement::subset;
+use crate::data::shared_readings::{SEPARATION_MM, SharedReading, shared_readings, suspect_rows};
 use crate::error::Result;
 use crate::model::Robot;
 
@@ -21,7 +23,22 @@ impl Compensator {
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<(Compensator, CompensatorReport)> {
         let started = std::time::Instant::now();
-        let (settings, selection) = select_settings(robot, set, opts, progress)?;
+        // A row that carries another configuration's reading is no measurement of its own
+        // joints: it scores no candidate and trains no network (unless outliers are kept).
+        let shared = shared_readings(robot, set);
+        let suspects = suspect_rows(&shared);
+        let drop_shared = opts.drop_outliers && !suspects.is_empty();
+        let read;
+        let (set, index) = if drop_shared {
+            let index: Vec<usize> = (0..set.rows.len())
+                .filter(|i| suspects.binary_search(i).is_err())
+                .collect();
+            read = subset(set, |i| suspects.binary_search(&i).is_err());
+            (&read, index)
+        } else {
+            (set, (0..set.rows.len()).collect())
+        };
+        let (settings, mut selection) = select_settings(robot, set, opts, progress)?;
         let selection_seconds = started.elapsed().as_secs_f64();
         // Rows cross-validation listed as outliers stay out of the final fit when asked.
         let left_out: Vec<usize> = match &selection {
@@ -66,8 +83,15 @@ impl Compensator {
             ..opts.train.clone()
         };
         let (c, mut report) = Compensator::fit(robot, fit_set, &settings, opts.sigmas, &train)?;
-        if let Some(s) = &selection {
+        if !shared.is_empty() {
+            report.notes.push(shared_note(&shared, drop_shared));
+        }
+        if let Some(s) = &mut selection {
             report.notes.extend(s.notes.iter().cloned());
+            // Outliers were found among the rows that trained; name them in the rows given.
+            for o in &mut s.outliers {
+                o.row = index[o.row];
+            }
         }
         // One configuration measured again and again gives the network one input: it can
         // learn a constant only, whatever it is told.
@@ -84,6 +108,36 @@ impl Compensator {
         }
         report.selection = selection;
         report.selection_seconds = selection_seconds;
+        report.shared_readings = shared;
         Ok((c, report))
     }
+}
+
+/// The note on training rows that carry another configuration's reading.
+fn shared_note(shared: &[SharedReading], dropped: bool) -> String {
+    let name = |line: usize, row: usize| match line {
+        0 => format!("row {}", row + 1),
+        l => format!("line {l}"),
+    };
+    let list: Vec<String> = shared
+        .iter()
+        .map(|s| {
+            format!(
+                "{} that of {}",
+                name(s.line, s.row),
+                name(s.other_line, s.other_row)
+            )
+        })
+        .collect();
+    format!(
+        "{} training row(s) carry the reading of another configuration that the model puts \
+         {SEPARATION_MM} mm or more away ({}): a reading logged with other joints, {}",
+        shared.len(),
+        list.join(", "),
+        if dropped {
+            "left out of cross-validation and the fit"
+        } else {
+            "kept as asked"
+        }
+    )
 }

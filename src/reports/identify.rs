@@ -1,6 +1,7 @@
 //! The reports of `identify` and `evaluate`.
 
 use super::Accuracy;
+use crate::data::shared_readings::SharedReading;
 use crate::identify::identifiability::DropReason;
 use crate::identify::run::{Outlier, ParamReport};
 use crate::identify::{Identified, Measure, Method, Options, RobustLoss, StopReason};
@@ -102,6 +103,11 @@ pub struct IdentifyReport {
     pub outlier_k: f64,
     /// Rows beyond the cut.
     pub outliers: Vec<Outlier>,
+    /// Calibration rows that carry another configuration's reading under the identified
+    /// model ([`crate::data::shared_readings`]). Empty when there are none (then left out of
+    /// the file, and in reports written before it).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shared_readings: Vec<SharedReading>,
     /// The robust loss, if one was used.
     pub robust: Option<RobustLoss>,
     /// Reweighting rounds of the robust loss.
@@ -205,6 +211,7 @@ impl IdentifyReport {
                 .collect(),
             outlier_k: opts.outlier_k,
             outliers: id.outliers.clone(),
+            shared_readings: id.shared_readings.clone(),
             robust: opts.robust,
             robust_rounds: id.robust_rounds,
             singular_values: ident.singular_values.clone(),
@@ -241,4 +248,10 @@ pub struct EvaluateReport {
     /// `train`'s report), and in reports written before it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub repeats: Option<Repeats>,
+    /// Rows that carry another configuration's reading under the robot file's model
+    /// ([`crate::data::shared_readings`]; pose and position measures): the `data clean`
+    /// accuracy rows leave them out. Empty when there are none (then left out of the file,
+    /// and in reports written before it).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shared_readings: Vec<SharedReading>,
 }

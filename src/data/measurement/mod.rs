@@ -174,6 +174,21 @@ pub fn list_lines(lines: &[usize]) -> String {
     s.join(", ")
 }
 
+/// The rows of `set` whose index `keep` accepts, in order (same source and columns).
+pub fn subset(set: &MeasurementSet, keep: impl Fn(usize) -> bool) -> MeasurementSet {
+    MeasurementSet {
+        source: set.source.clone(),
+        rows: set
+            .rows
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| keep(*i))
+            .map(|(_, m)| m.clone())
+            .collect(),
+        extra_columns: set.extra_columns.clone(),
+    }
+}
+
 /// Splits a set into two by a seeded random draw: `fraction` of the rows (rounded) go to the
 /// first part; both keep file order.
 pub fn split(set: &MeasurementSet, fraction: f64, seed: u64) -> (MeasurementSet, MeasurementSet) {

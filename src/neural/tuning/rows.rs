@@ -26,20 +26,7 @@ pub fn folds(groups: &[usize], k: usize, seed: u64) -> Vec<usize> {
     groups.iter().map(|g| fold_of_group[*g]).collect()
 }
 
-/// The rows of `set` whose index `keep` accepts, in order (same source and columns).
-pub fn subset(set: &MeasurementSet, keep: impl Fn(usize) -> bool) -> MeasurementSet {
-    MeasurementSet {
-        source: set.source.clone(),
-        rows: set
-            .rows
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| keep(*i))
-            .map(|(_, m)| m.clone())
-            .collect(),
-        extra_columns: set.extra_columns.clone(),
-    }
-}
+pub use crate::data::measurement::subset;
 
 /// Each held-out row's errors under `predict`: pose where the set has orientations, else
 /// position.

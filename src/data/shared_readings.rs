@@ -1,0 +1,311 @@
+//! Readings two configurations share: a tracker reading logged with another pose's joints.
+//!
+//! A robot reaches one target in several configurations (inverse-kinematics branches), and
+//! its errors differ between them: a calibrated model predicts where each puts the probe.
+//! Two rows of different configurations whose readings agree within [`POSITION_MM`] and
+//! [`ORIENTATION_DEG`] although the model puts the two configurations [`SEPARATION_MM`] or
+//! more apart cannot both be readings of their own configurations: the robot would have had to
+//! cancel a separation the model predicts (at least ten times the agreement) to a tracker's
+//! precision in position and orientation at once, by chance (its orientation errors differ by
+//! about 0.1 deg between configurations).
+//!
+//! Position alone is not enough: a grid turned about the probe point reads one position in
+//! several configurations by design, and a model 0.4 mm RMS off can be 1.3 mm off the relative
+//! position of two of them. On Series A (11,910 poses, about 2,000 pairs of different
+//! configurations within 0.1 mm) two such pairs would have passed for shared readings in
+//! position; their orientations are 10 and 20 deg apart. Rows without a measured orientation
+//! therefore take no part.
+//!
+//! A logger that attaches a reading to the wrong joints produces exactly this: on the shipped
+//! UR10 Series B, lines 534 and 1065 hold the very numbers of lines 533 and 1064 (standard
+//! deviations included), line 856 reads line 855's pose to 0.02 mm, and line 857 reads the
+//! pose line 864 measured later (0.03 mm): each pair is one target reached in two elbow
+//! configurations, which the identified model puts 1.3-2.1 mm apart and other such pairs of
+//! the file measure 1.8-2.2 mm apart. Of each pair, the row the model misses more is the
+//! suspect (on Series B by 1.06-2.11 mm against 0.13-0.56 mm for its partner): its reading
+//! is the other configuration's pose.
+//!
+//! Under the nominal model two branches of one target coincide by construction, so the check
+//! needs a calibrated model; it finds nothing under a model that does not separate them.
+
+use super::configuration::same_configuration;
+use super::measurement::MeasurementSet;
+use crate::geometry::rotation::angle_between;
+use crate::kinematics::tool_pose;
+use crate::model::Robot;
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+
+/// Largest distance (mm) at which two readings are one: a laser tracker's reading agrees with
+/// itself to a few hundredths of a mm (Series B's repeats: 0.04 mm median), and a maximum
+/// permissible error of 15 um + 6 um/m stays below 0.1 mm to 14 m.
+pub const POSITION_MM: f64 = 0.1;
+
+/// Largest angle (deg) between two orientation readings that are one: twice a 6-DOF probe's
+/// stated accuracy of 0.01 deg.
+pub const ORIENTATION_DEG: f64 = 0.02;
+
+/// Smallest distance (mm) between the model's positions of the two configurations for their
+/// one reading to be a logging fault: ten times [`POSITION_MM`].
+pub const SEPARATION_MM: f64 = 10.0 * POSITION_MM;
+
+/// A row whose reading another row of a different configuration shares, while the model puts
+/// the two configurations apart: a reading of the other configuration's pose.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SharedReading {
+    /// Index in the set's rows of the suspect row: the one the model misses more.
+    pub row: usize,
+    /// Its source-file line (0 for rows built in code).
+    pub line: usize,
+    /// Index in the set's rows of the row whose reading it shares (the closest reading where
+    /// several do).
+    pub other_row: usize,
+    /// That row's source-file line.
+    pub other_line: usize,
+    /// Distance between the two readings' positions (mm).
+    #[serde(with = "crate::io::json_number")]
+    pub reading_mm: f64,
+    /// Angle between the two readings' orientations (deg).
+    #[serde(with = "crate::io::json_number")]
+    pub reading_deg: f64,
+    /// Distance between the model's positions of the two configurations (mm).
+    #[serde(with = "crate::io::json_number")]
+    pub model_mm: f64,
+    /// The suspect row's position error under the model (mm).
+    #[serde(with = "crate::io::json_number")]
+    pub residual_mm: f64,
+    /// The other row's position error under the model (mm).
+    #[serde(with = "crate::io::json_number")]
+    pub other_residual_mm: f64,
+}
+
+impl SharedReading {
+    /// One line for people: which row, whose reading, how far apart.
+    pub fn describe(&self) -> String {
+        let name = |line: usize, row: usize| match line {
+            0 => format!("row {}", row + 1),
+            l => format!("line {l}"),
+        };
+        format!(
+            "{} carries the reading of {} ({:.4} mm and {:.4} deg apart) although the model \
+             puts the two configurations {:.4} mm apart; the model misses {} by {:.4} mm and \
+             {} by {:.4} mm",
+            name(self.line, self.row),
+            name(self.other_line, self.other_row),
+            self.reading_mm,
+            self.reading_deg,
+            self.model_mm,
+            name(self.line, self.row),
+            self.residual_mm,
+            name(self.other_line, self.other_row),
+            self.other_residual_mm,
+        )
+    }
+}
+
+/// The rows of `set` whose reading a row of another configuration shares under `model` (see
+/// the module's documentation), one per suspect row, in row order. Rows without a measured
+/// position and orientation take no part. The readings are compared through a grid of [`POSITION_MM`] cells
+/// (each row against the 27 cells around its own), so the cost grows with the rows, not
+/// their pairs.
+pub fn shared_readings(model: &Robot, set: &MeasurementSet) -> Vec<SharedReading> {
+    let rows = &set.rows;
+    let cell =
+        |p: &Vector3<f64>| -> [i64; 3] { [0, 1, 2].map(|k| (p[k] / POSITION_MM).floor() as i64) };
+    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for (i, m) in rows.iter().enumerate() {
+        if let (Some(p), Some(_)) = (&m.position, &m.rotation)
+            && p.iter().all(|v| v.is_finite())
+        {
+            grid.entry(cell(p)).or_default().push(i);
+        }
+    }
+    let mut model_at: Vec<Option<Vector3<f64>>> = vec![None; rows.len()];
+    let mut position = |i: usize| -> Vector3<f64> {
+        *model_at[i].get_or_insert_with(|| tool_pose(model, &rows[i].q).translation.vector)
+    };
+    let mut found: Vec<Option<SharedReading>> = vec![None; rows.len()];
+    let limit = ORIENTATION_DEG.to_radians();
+    for (i, a) in rows.iter().enumerate() {
+        let (Some(pa), Some(ra)) = (&a.position, &a.rotation) else {
+            continue;
+        };
+        if !pa.iter().all(|v| v.is_finite()) {
+            continue;
+        }
+        let c = cell(pa);
+        for d in 0..27 {
+            let at = [c[0] + d / 9 - 1, c[1] + (d / 3) % 3 - 1, c[2] + d % 3 - 1];
+            let Some(near) = grid.get(&at) else { continue };
+            for &j in near.iter().filter(|&&j| j > i) {
+                let b = &rows[j];
+                let (Some(pb), Some(rb)) = (&b.position, &b.rotation) else {
+                    unreachable!("only rows with a position and an orientation are in the grid")
+                };
+                let reading_mm = (pa - pb).norm();
+                if reading_mm > POSITION_MM || same_configuration(&a.q, &b.q) {
+                    continue;
+                }
+                let angle = angle_between(ra, rb);
+                if angle.is_nan() || angle > limit {
+                    continue;
+                }
+                let (ma, mb) = (position(i), position(j));
+                let model_mm = (ma - mb).norm();
+                if model_mm.is_nan() || model_mm < SEPARATION_MM {
+                    continue;
+                }
+                let (ea, eb) = ((pa - ma).norm(), (pb - mb).norm());
+                // The later row on a tie: a stale reading follows the pose it belongs to.
+                let (s, o, es, eo) = if ea > eb {
+                    (i, j, ea, eb)
+                } else {
+                    (j, i, eb, ea)
+                };
+                if found[s]
+                    .as_ref()
+                    .is_some_and(|f| f.reading_mm <= reading_mm)
+                {
+                    continue;
+                }
+                found[s] = Some(SharedReading {
+                    row: s,
+                    line: rows[s].line,
+                    other_row: o,
+                    other_line: rows[o].line,
+                    reading_mm,
+                    reading_deg: angle.to_degrees(),
+                    model_mm,
+                    residual_mm: es,
+                    other_residual_mm: eo,
+                });
+            }
+        }
+    }
+    found.into_iter().flatten().collect()
+}
+
+/// The row indices of `shared` (ascending, as [`shared_readings`] gives them).
+pub fn suspect_rows(shared: &[SharedReading]) -> Vec<usize> {
+    shared.iter().map(|s| s.row).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::Measurement;
+    use nalgebra::Rotation3;
+
+    fn ur10() -> Robot {
+        crate::model::read_robot(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/ur10.toml"),
+        )
+        .unwrap()
+    }
+
+    /// A row at joints `q` (rad) whose reading is the model's pose at `at` (rad), moved by
+    /// `off` (mm) and turned by `turn` (rad about x), on `line`.
+    fn row(
+        robot: &Robot,
+        q: [f64; 6],
+        at: [f64; 6],
+        off: [f64; 3],
+        turn: f64,
+        line: usize,
+    ) -> Measurement {
+        let pose = tool_pose(robot, &at);
+        let mut m = Measurement::new(q.to_vec());
+        m.position = Some(pose.translation.vector + Vector3::from(off));
+        m.rotation = Some(pose.rotation * Rotation3::from_euler_angles(turn, 0.0, 0.0));
+        m.line = line;
+        m
+    }
+
+    #[test]
+    fn a_reading_logged_with_another_configuration_is_found_and_its_row_named() {
+        let robot = ur10();
+        let a = [0.3, -1.2, 1.4, -1.8, -1.5, 0.2];
+        let b = [1.1, -0.7, 1.5, -0.3, 0.4, 0.5];
+        let c = [-1.0, -2.0, 1.0, 0.0, -1.0, 2.0];
+        let a_again = [a[0] + 5e-3, a[1], a[2], a[3], a[4], a[5]];
+        assert!(
+            (tool_pose(&robot, &a_again).translation.vector
+                - tool_pose(&robot, &a).translation.vector)
+                .norm()
+                > 2.0 * SEPARATION_MM
+        );
+        let pa = tool_pose(&robot, &a).translation.vector;
+        let pb = tool_pose(&robot, &b).translation.vector;
+        assert!((pa - pb).norm() > 100.0);
+        let rows = vec![
+            row(&robot, a, a, [0.2, 0.0, -0.1], 0.0, 2),
+            // b's row carries a's reading (0.03 mm and 1e-4 rad = 0.0057 deg from it).
+            row(&robot, b, a, [0.2, 0.03, -0.1], 1e-4, 3),
+            row(&robot, c, c, [0.0, 0.3, 0.0], 0.0, 4),
+            // a measured again, its joints logged 5e-3 rad apart (the model moves the tool
+            // by about 5 mm): one configuration, so not a shared reading with line 2 (0.05
+            // mm); 0.058 mm from line 3's reading.
+            row(&robot, a_again, a, [0.2, 0.0, -0.05], 0.0, 5),
+        ];
+        let set = MeasurementSet::from_rows(rows);
+        let found = shared_readings(&robot, &set);
+        assert_eq!(found.len(), 1, "{found:?}");
+        let s = &found[0];
+        assert_eq!((s.row, s.line), (1, 3));
+        // The closest reading: line 2's (0.03 mm), not line 5's (0.058 mm).
+        assert_eq!((s.other_row, s.other_line), (0, 2));
+        assert!((s.reading_mm - 0.03).abs() < 1e-9, "{s:?}");
+        assert!((s.reading_deg - 1e-4f64.to_degrees()).abs() < 1e-9);
+        assert!((s.model_mm - (pa - pb).norm()).abs() < 1e-9);
+        assert!((s.other_residual_mm - 0.2f64.hypot(0.1)).abs() < 1e-9);
+        assert!((s.residual_mm - (pa - pb).norm()).abs() < 1.0);
+        assert_eq!(suspect_rows(&found), vec![1]);
+        assert!(
+            s.describe()
+                .starts_with("line 3 carries the reading of line 2 (0.0300 mm")
+        );
+    }
+
+    #[test]
+    fn readings_apart_or_configurations_the_model_does_not_separate_are_not_shared() {
+        let robot = ur10();
+        let a = [0.3, -1.2, 1.4, -1.8, -1.5, 0.2];
+        let b = [1.1, -0.7, 1.5, -0.3, 0.4, 0.5];
+        // Beyond the position tolerance.
+        let apart = MeasurementSet::from_rows(vec![
+            row(&robot, a, a, [0.0; 3], 0.0, 2),
+            row(&robot, b, a, [0.0, 0.0, 1.01 * POSITION_MM], 0.0, 3),
+        ]);
+        assert!(shared_readings(&robot, &apart).is_empty());
+        // Beyond the orientation tolerance (turned 0.03 deg).
+        let turned = MeasurementSet::from_rows(vec![
+            row(&robot, a, a, [0.0; 3], 0.0, 2),
+            row(&robot, b, a, [0.0; 3], 0.03f64.to_radians(), 3),
+        ]);
+        assert!(shared_readings(&robot, &turned).is_empty());
+        // The same reading without orientations is not judged: a position alone does not
+        // tell a turn about the probe point from a reading of another pose.
+        let mut positions = turned.clone();
+        for m in &mut positions.rows {
+            m.rotation = None;
+        }
+        assert!(shared_readings(&robot, &positions).is_empty());
+        let mut shared = positions.clone();
+        for m in &mut shared.rows {
+            m.rotation = Some(Rotation3::identity());
+        }
+        assert_eq!(shared_readings(&robot, &shared).len(), 1);
+        shared.rows[0].rotation = None;
+        assert!(shared_readings(&robot, &shared).is_empty());
+        // The model puts two configurations at one pose (within SEPARATION_MM): joint 6 turned
+        // by a whole turn, which the repeat rule does not take for one configuration.
+        let mut whole_turn = a;
+        whole_turn[5] += std::f64::consts::TAU;
+        let one_point = MeasurementSet::from_rows(vec![
+            row(&robot, a, a, [0.0; 3], 0.0, 2),
+            row(&robot, whole_turn, a, [0.0, 0.02, 0.0], 1e-5, 3),
+        ]);
+        assert!(shared_readings(&robot, &one_point).is_empty());
+    }
+}
