@@ -1,10 +1,12 @@
 //! Identification speed: the analytic Jacobian (one and 1,000 configurations, every
 //! parameter), LM identification of Case D's 30 poses (`full` and `offsets`), of the
 //! non-geometric robot's 30 poses and of the real UR10 Series A (11,911 poses), geometry alone
-//! and with the joint compliances (known masses, and mass-free).
+//! and with the joint compliances (known masses, and mass-free); the check for readings
+//! logged with other joints on Series A.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Matrix6xX;
+use robocal::data::shared_readings::shared_readings;
 use robocal::data::{Profile, read_measurements};
 use robocal::identify::{Options, identify, parameter_jacobian};
 use robocal::kinematics::{Frames, frames};
@@ -138,6 +140,21 @@ fn ur10_series_a(c: &mut Criterion) {
     )
     .unwrap();
     let published = read_robot(path("datasets/robots/ur10_published_masses.toml")).unwrap();
+    // The check for readings logged with other joints, which `identify` runs after the fit,
+    // under the model identified on the whole series.
+    let full = identify(
+        &robot,
+        &set,
+        &Options {
+            params: "full".into(),
+            ..Default::default()
+        },
+    )
+    .unwrap()
+    .robot;
+    c.bench_function("shared_readings_ur10_series_a_11910_poses", |b| {
+        b.iter(|| shared_readings(&full, black_box(&set)).len())
+    });
     let mut g = c.benchmark_group("slow");
     g.sample_size(10);
     for (name, robot, params) in [

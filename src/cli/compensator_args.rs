@@ -125,8 +125,9 @@ pub struct CompensatorArgs {
     /// cross-validation: with every choice fixed, no row is listed.
     #[arg(long, default_value_t = robocal::neural::tuning::OUTLIER_K)]
     pub outlier_k: f64,
-    /// Keep the listed outliers in the final fit (default: leave them out; a mis-measured
-    /// row would bend the RBF network's fit around it and spoil its neighbours).
+    /// Keep the listed outliers in the final fit, and the rows that carry another
+    /// configuration's reading in cross-validation and the fit (default: leave them out; a
+    /// mis-measured row would bend the RBF network's fit around it and spoil its neighbours).
     #[arg(long, conflicts_with = "drop_outliers")]
     pub keep_outliers: bool,
     /// The RBF network's likelihood search start, 1-3: widths of 1, 0.2 or 0.05 standard

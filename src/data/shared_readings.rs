@@ -20,10 +20,11 @@
 //! UR10 Series B, lines 534 and 1065 hold the very numbers of lines 533 and 1064 (standard
 //! deviations included), line 856 reads line 855's pose to 0.02 mm, and line 857 reads the
 //! pose line 864 measured later (0.03 mm): each pair is one target reached in two elbow
-//! configurations, which the identified model puts 1.3-2.1 mm apart and other such pairs of
-//! the file measure 1.8-2.2 mm apart. Of each pair, the row the model misses more is the
-//! suspect (on Series B by 1.06-2.11 mm against 0.13-0.56 mm for its partner): its reading
-//! is the other configuration's pose.
+//! configurations, which the model identified on the whole series puts 1.2-2.0 mm apart,
+//! while the file's other 729 consecutive rows of one target in two configurations measure
+//! 0.26-3.15 mm apart (median 2.05). Of each pair, the row the model misses more is the
+//! suspect (by 0.94-1.92 mm, against 0.25-0.52 mm for its partner): its reading is the other
+//! configuration's pose.
 //!
 //! Under the nominal model two branches of one target coincide by construction, so the check
 //! needs a calibrated model; it finds nothing under a model that does not separate them.
@@ -35,7 +36,6 @@ use crate::kinematics::tool_pose;
 use crate::model::Robot;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
-use std::collections::HashMap;
 
 /// Largest distance (mm) at which two readings are one: a laser tracker's reading agrees with
 /// itself to a few hundredths of a mm (Series B's repeats: 0.04 mm median), and a maximum
@@ -106,81 +106,81 @@ impl SharedReading {
 
 /// The rows of `set` whose reading a row of another configuration shares under `model` (see
 /// the module's documentation), one per suspect row, in row order. Rows without a measured
-/// position and orientation take no part. The readings are compared through a grid of [`POSITION_MM`] cells
-/// (each row against the 27 cells around its own), so the cost grows with the rows, not
-/// their pairs.
+/// position and orientation take no part. The readings are swept in the order of the
+/// coordinate that spreads widest, each against those within [`POSITION_MM`] of it there, so
+/// the cost grows with the rows (and the readings that close), not with all their pairs.
 pub fn shared_readings(model: &Robot, set: &MeasurementSet) -> Vec<SharedReading> {
     let rows = &set.rows;
-    let cell =
-        |p: &Vector3<f64>| -> [i64; 3] { [0, 1, 2].map(|k| (p[k] / POSITION_MM).floor() as i64) };
-    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
-    for (i, m) in rows.iter().enumerate() {
-        if let (Some(p), Some(_)) = (&m.position, &m.rotation)
-            && p.iter().all(|v| v.is_finite())
-        {
-            grid.entry(cell(p)).or_default().push(i);
-        }
-    }
+    let reading = |i: usize| match (&rows[i].position, &rows[i].rotation) {
+        (Some(p), Some(r)) if p.iter().all(|v| v.is_finite()) => Some((p, r)),
+        _ => None,
+    };
+    let mut order: Vec<usize> = (0..rows.len()).filter(|&i| reading(i).is_some()).collect();
+    // Sweep the readings in the order of the coordinate that spreads widest: only readings
+    // within POSITION_MM in it can be one.
+    let at = |i: usize, k: usize| rows[i].position.map_or(0.0, |p| p[k]);
+    let spread = |k: usize| {
+        let (lo, hi) = order
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &i| {
+                (lo.min(at(i, k)), hi.max(at(i, k)))
+            });
+        hi - lo
+    };
+    let key = (0..3)
+        .max_by(|&a, &b| spread(a).total_cmp(&spread(b)))
+        .unwrap_or(0);
+    order.sort_by(|&a, &b| at(a, key).total_cmp(&at(b, key)));
     let mut model_at: Vec<Option<Vector3<f64>>> = vec![None; rows.len()];
     let mut position = |i: usize| -> Vector3<f64> {
         *model_at[i].get_or_insert_with(|| tool_pose(model, &rows[i].q).translation.vector)
     };
     let mut found: Vec<Option<SharedReading>> = vec![None; rows.len()];
     let limit = ORIENTATION_DEG.to_radians();
-    for (i, a) in rows.iter().enumerate() {
-        let (Some(pa), Some(ra)) = (&a.position, &a.rotation) else {
-            continue;
-        };
-        if !pa.iter().all(|v| v.is_finite()) {
-            continue;
-        }
-        let c = cell(pa);
-        for d in 0..27 {
-            let at = [c[0] + d / 9 - 1, c[1] + (d / 3) % 3 - 1, c[2] + d % 3 - 1];
-            let Some(near) = grid.get(&at) else { continue };
-            for &j in near.iter().filter(|&&j| j > i) {
-                let b = &rows[j];
-                let (Some(pb), Some(rb)) = (&b.position, &b.rotation) else {
-                    unreachable!("only rows with a position and an orientation are in the grid")
-                };
-                let reading_mm = (pa - pb).norm();
-                if reading_mm > POSITION_MM || same_configuration(&a.q, &b.q) {
-                    continue;
-                }
-                let angle = angle_between(ra, rb);
-                if angle.is_nan() || angle > limit {
-                    continue;
-                }
-                let (ma, mb) = (position(i), position(j));
-                let model_mm = (ma - mb).norm();
-                if model_mm.is_nan() || model_mm < SEPARATION_MM {
-                    continue;
-                }
-                let (ea, eb) = ((pa - ma).norm(), (pb - mb).norm());
-                // The later row on a tie: a stale reading follows the pose it belongs to.
-                let (s, o, es, eo) = if ea > eb {
-                    (i, j, ea, eb)
-                } else {
-                    (j, i, eb, ea)
-                };
-                if found[s]
-                    .as_ref()
-                    .is_some_and(|f| f.reading_mm <= reading_mm)
-                {
-                    continue;
-                }
-                found[s] = Some(SharedReading {
-                    row: s,
-                    line: rows[s].line,
-                    other_row: o,
-                    other_line: rows[o].line,
-                    reading_mm,
-                    reading_deg: angle.to_degrees(),
-                    model_mm,
-                    residual_mm: es,
-                    other_residual_mm: eo,
-                });
+    for (k, &i) in order.iter().enumerate() {
+        let (pa, ra) = reading(i).expect("only rows with a reading are swept");
+        for &j in order[k + 1..]
+            .iter()
+            .take_while(|&&j| at(j, key) - at(i, key) <= POSITION_MM)
+        {
+            let (pb, rb) = reading(j).expect("only rows with a reading are swept");
+            let reading_mm = (pa - pb).norm();
+            if reading_mm > POSITION_MM || same_configuration(&rows[i].q, &rows[j].q) {
+                continue;
             }
+            let angle = angle_between(ra, rb);
+            if angle.is_nan() || angle > limit {
+                continue;
+            }
+            let (ma, mb) = (position(i), position(j));
+            let model_mm = (ma - mb).norm();
+            if model_mm.is_nan() || model_mm < SEPARATION_MM {
+                continue;
+            }
+            let (ea, eb) = ((pa - ma).norm(), (pb - mb).norm());
+            // The later row on a tie: a stale reading follows the pose it belongs to.
+            let (s, o, es, eo) = if ea > eb || (ea == eb && i > j) {
+                (i, j, ea, eb)
+            } else {
+                (j, i, eb, ea)
+            };
+            // The closest reading where several are shared (the first row on a tie).
+            if found[s].as_ref().is_some_and(|f| {
+                f.reading_mm < reading_mm || (f.reading_mm == reading_mm && f.other_row < o)
+            }) {
+                continue;
+            }
+            found[s] = Some(SharedReading {
+                row: s,
+                line: rows[s].line,
+                other_row: o,
+                other_line: rows[o].line,
+                reading_mm,
+                reading_deg: angle.to_degrees(),
+                model_mm,
+                residual_mm: es,
+                other_residual_mm: eo,
+            });
         }
     }
     found.into_iter().flatten().collect()

@@ -238,7 +238,9 @@ pub struct CompensatorOptions {
     /// an outlier ([`OUTLIER_K`]; infinite lists none). Applies where
     /// cross-validation runs.
     pub outlier_k: f64,
-    /// Leave the listed outliers out of the final fit (default true).
+    /// Leave the listed outliers out of the final fit, and the training rows that carry
+    /// another configuration's reading ([`crate::data::shared_readings`]) out of
+    /// cross-validation and the fit (default true).
     pub drop_outliers: bool,
     /// Phase-2 epoch limits from the row count ([`super::tuning::CV_WORK`] for candidates,
     /// [`super::tuning::FIT_WORK`] for the final fit) instead of `train.max_epochs`.
