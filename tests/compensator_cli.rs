@@ -633,38 +633,33 @@ phase2_deg = 80.0
     );
 }
 
-/// A validation row logged with another row's reading (line 31 of Case D's test poses given
-/// line 12's position and orientation): `train` and `evaluate` name it, with the row whose
-/// reading it carries, and add the accuracy rows without it (`validation clean`, `data
-/// clean`): the same figures in both commands (1e-9), and the figures of `evaluate` on a file
-/// without that line.
+/// A row logged with another row's reading (line 31 of Case D's training and test poses
+/// given line 12's position and orientation): `train` leaves the training row out and names
+/// both rows, with the row whose reading each carries; `train` and `evaluate` add the
+/// accuracy rows without them (`training clean`, `validation clean`, `data clean`): the same
+/// figures in both commands for the validation rows (1e-9), and the figures of `evaluate` on a
+/// file without that line.
 #[test]
 fn a_reading_logged_with_other_joints_is_named_and_left_out_of_the_clean_rows() {
-    let text =
-        std::fs::read_to_string(common::root().join("datasets/case_d/test_truth.csv")).unwrap();
-    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
-    let cells = |l: &str| l.split(',').map(str::to_string).collect::<Vec<_>>();
-    let (source, mut slip) = (cells(&lines[11]), cells(&lines[30]));
-    slip[7..13].clone_from_slice(&source[7..13]);
-    lines[30] = slip.join(",");
-    let data = tmp("slip.csv");
-    std::fs::write(&data, lines.join("\n") + "\n").unwrap();
-    let without = tmp("slip_without.csv");
-    let rest: Vec<&String> = lines
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| *i != 30)
-        .map(|(_, l)| l)
-        .collect();
-    std::fs::write(
-        &without,
-        rest.iter()
-            .map(|l| l.as_str())
-            .collect::<Vec<_>>()
-            .join("\n")
-            + "\n",
-    )
-    .unwrap();
+    // `file` with line 31's reading replaced by line 12's, and without line 31.
+    let with_slip = |file: &str, name: &str| {
+        let text = std::fs::read_to_string(common::root().join(file)).unwrap();
+        let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+        let cells = |l: &str| l.split(',').map(str::to_string).collect::<Vec<_>>();
+        let (source, mut slip) = (cells(&lines[11]), cells(&lines[30]));
+        slip[7..13].clone_from_slice(&source[7..13]);
+        lines[30] = slip.join(",");
+        let (data, without) = (
+            tmp(&format!("{name}.csv")),
+            tmp(&format!("{name}_without.csv")),
+        );
+        std::fs::write(&data, lines.join("\n") + "\n").unwrap();
+        lines.remove(30);
+        std::fs::write(&without, lines.join("\n") + "\n").unwrap();
+        (data, without)
+    };
+    let (train_data, _) = with_slip("datasets/case_d/training.csv", "slip_train");
+    let (data, without) = with_slip("datasets/case_d/test_truth.csv", "slip_test");
     let (comp, report) = (tmp("slip.rcal"), tmp("slip_train.json"));
     let mut extra = vec![
         "--validate",
@@ -673,38 +668,41 @@ fn a_reading_logged_with_other_joints_is_named_and_left_out_of_the_clean_rows() 
         report.to_str().unwrap(),
     ];
     extra.extend_from_slice(CHEAP_TRAIN);
-    let o = common::train_fanuc(
-        "datasets/case_d/training.csv",
-        comp.to_str().unwrap(),
-        &extra,
-    );
+    let o = common::train_fanuc(train_data.to_str().unwrap(), comp.to_str().unwrap(), &extra);
     let out = stdout(&o);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(
-        out.contains(
-            "shared readings: 1 validation row(s) carry the reading of another configuration"
-        ) && out
-            .contains("  line 31 carries the reading of line 12 (0.0000 mm and 0.0000 deg apart)"),
-        "{out}"
-    );
+    for said in [
+        "note: 1 training row(s) carry the reading of another configuration (line 31 that of \
+         line 12): left out of cross-validation and the fit",
+        "shared readings: 1 training row(s) carry the reading of another configuration",
+        "shared readings: 1 validation row(s) carry the reading of another configuration",
+        "  line 31 carries the reading of line 12 (0.0000 mm and 0.0000 deg apart)",
+    ] {
+        assert!(out.contains(said), "{said}\n{out}");
+    }
     let train = json(&report);
-    let evaluate = |rows: &std::path::Path, name: &str| {
+    assert_eq!(train["training"]["shared_readings"][0]["line"], 31);
+    assert_eq!(train["validation_shared_readings"][0]["other_line"], 12);
+    assert_eq!(accuracy(&train, "training clean", "+net")["count"], 149);
+    let evaluate = |rows: &std::path::Path, name: &str, comp: Option<&std::path::Path>| {
         let report = tmp(name);
-        let o = robocal(&[
+        let mut args = vec![
             "evaluate",
             "--robot",
             FANUC,
-            "--compensator",
-            comp.to_str().unwrap(),
             "--data",
             rows.to_str().unwrap(),
             "--report",
             report.to_str().unwrap(),
-        ]);
+        ];
+        if let Some(c) = comp {
+            args.extend(["--compensator", c.to_str().unwrap()]);
+        }
+        let o = robocal(&args);
         assert!(o.status.success(), "{}", stderr(&o));
         (stdout(&o), json(&report))
     };
-    let (said, e) = evaluate(&data, "slip_evaluate.json");
+    let (said, e) = evaluate(&data, "slip_evaluate.json", Some(&comp));
     assert!(
         said.contains("  line 31 carries the reading of line 12"),
         "{said}"
@@ -712,7 +710,7 @@ fn a_reading_logged_with_other_joints_is_named_and_left_out_of_the_clean_rows() 
     assert_eq!(e["shared_readings"][0]["line"], 31);
     assert_eq!(e["shared_readings"][0]["other_line"], 12);
     assert_eq!(e["shared_readings"].as_array().unwrap().len(), 1);
-    let (_, plain) = evaluate(&without, "slip_without.json");
+    let (_, plain) = evaluate(&without, "slip_without.json", Some(&comp));
     assert!(plain.get("shared_readings").is_none());
     for model in ["model", "+net"] {
         let clean = accuracy(&e, "data clean", model);
@@ -740,4 +738,9 @@ fn a_reading_logged_with_other_joints_is_named_and_left_out_of_the_clean_rows() 
                 > clean["position_mm"]["max"].as_f64().unwrap()
         );
     }
+    // Without a compensator: the model's rows only, and no line about a compensator.
+    let (said, e) = evaluate(&data, "slip_model.json", None);
+    assert!(!said.contains("with the compensator"), "{said}");
+    assert!(said.contains("data clean"), "{said}");
+    assert_eq!(e["accuracy"].as_array().unwrap().len(), 2);
 }

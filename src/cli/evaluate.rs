@@ -142,10 +142,12 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         );
     }
     print_stats(&report.accuracy);
-    for (what, row) in ["model", "with the compensator"]
-        .iter()
-        .zip(&report.accuracy)
-    {
+    for row in report.accuracy.iter().filter(|r| r.data == "data") {
+        let what = if row.model == "model" {
+            "model"
+        } else {
+            "with the compensator"
+        };
         if let Some(c) = row.stats.position_per_coordinate_mean_mm {
             println!("mean per-coordinate position error |dx|,|dy|,|dz| ({what}): {c:.4} mm");
         }

@@ -6,6 +6,7 @@ use super::summary::{print_stats, write_report};
 use anyhow::Result;
 use clap::Args;
 use robocal::data::MeasurementSet;
+use robocal::data::shared_readings::shared_readings;
 use robocal::evaluate::{RowError, row_errors, summarize};
 use robocal::identify::{Options, SolveOptions, identify};
 use robocal::kinematics::tool_pose;
@@ -116,7 +117,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         accuracy.push(Accuracy::new("validation", "before", b));
         accuracy.push(Accuracy::new("validation", "after", af));
     }
-    let report = IdentifyReport::new(
+    let mut report = IdentifyReport::new(
         &id,
         &opts,
         IdentifyFiles {
@@ -128,6 +129,14 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         cal.rows.len(),
         accuracy,
     );
+    // Readings logged with other joints, judged under the identified model (absolute
+    // measures: a pair's displacement is no reading of one row).
+    report.shared_readings = match m {
+        robocal::identify::Measure::Pose | robocal::identify::Measure::Position => {
+            shared_readings(&id.robot, &cal)
+        }
+        _ => Vec::new(),
+    };
     print_identified(&report);
     print_stats(&report.accuracy);
     for n in &report.notes {

@@ -163,7 +163,8 @@ fn print_fit(
              hyperparameters searched on {} rows{}",
             r.units(),
             c.encoding.name(),
-            // The draw is of the training rows, before any outlier is left out.
+            // The draw is of the rows cross-validation saw: the training rows but those left
+            // out for carrying another configuration's reading, outliers included.
             if rows > search_rows {
                 format!("{search_rows} of the")
             } else {
@@ -265,7 +266,15 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         &c,
         &report,
         seconds,
-        (set.rows.len(), opts.train.rbf_search_rows),
+        (
+            set.rows.len()
+                - if opts.drop_outliers {
+                    report.shared_readings.len()
+                } else {
+                    0
+                },
+            opts.train.rbf_search_rows,
+        ),
     );
     let mut figs = 0;
     if let Some(dir) = &a.plot
@@ -290,7 +299,18 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         let Some(s) = s else { continue };
         let m = Measure::default_for(s);
         if !shared.is_empty() {
-            print_shared(name, shared, &format!("'{name} clean' leaves them out"));
+            let fate = match name {
+                "training" if opts.drop_outliers => {
+                    "left out of cross-validation and the fit; 'training clean' leaves them out \
+                     of the figures"
+                        .to_string()
+                }
+                "training" => "kept in cross-validation and the fit, as asked; 'training clean' \
+                               leaves them out of the figures"
+                    .to_string(),
+                _ => format!("'{name} clean' leaves them out"),
+            };
+            print_shared(name, shared, &fate);
         }
         clean.extend(clean_accuracy(
             &format!("{name} clean"),
@@ -335,7 +355,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         });
     }
     accuracy.extend(clean);
-    let report = TrainReport::new(
+    let mut report = TrainReport::new(
         &c,
         report,
         a.robot.display().to_string(),
@@ -346,6 +366,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         seconds,
         accuracy,
     );
+    report.validation_shared_readings = val_shared;
     print_stats(&report.accuracy);
     for r in &report.accuracy {
         if let Some(outside) = r.rows_outside_domain

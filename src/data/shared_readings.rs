@@ -30,7 +30,7 @@
 //! needs a calibrated model; it finds nothing under a model that does not separate them.
 
 use super::configuration::same_configuration;
-use super::measurement::MeasurementSet;
+use super::measurement::{MeasurementSet, row_name};
 use crate::geometry::rotation::angle_between;
 use crate::kinematics::tool_pose;
 use crate::model::Robot;
@@ -83,10 +83,7 @@ pub struct SharedReading {
 impl SharedReading {
     /// One line for people: which row, whose reading, how far apart.
     pub fn describe(&self) -> String {
-        let name = |line: usize, row: usize| match line {
-            0 => format!("row {}", row + 1),
-            l => format!("line {l}"),
-        };
+        let name = row_name;
         format!(
             "{} carries the reading of {} ({:.4} mm and {:.4} deg apart) although the model \
              puts the two configurations {:.4} mm apart; the model misses {} by {:.4} mm and \
@@ -158,7 +155,7 @@ pub fn shared_readings(model: &Robot, set: &MeasurementSet) -> Vec<SharedReading
                 continue;
             }
             let (ea, eb) = ((pa - ma).norm(), (pb - mb).norm());
-            // The later row on a tie: a stale reading follows the pose it belongs to.
+            // The later row on a tie (a choice: nothing tells the two apart then).
             let (s, o, es, eo) = if ea > eb || (ea == eb && i > j) {
                 (i, j, ea, eb)
             } else {
@@ -265,6 +262,37 @@ mod tests {
             s.describe()
                 .starts_with("line 3 carries the reading of line 2 (0.0300 mm")
         );
+    }
+
+    #[test]
+    fn readings_close_in_one_coordinate_only_are_not_one() {
+        let robot = ur10();
+        let a = [0.3, -1.2, 1.4, -1.8, -1.5, 0.2];
+        let b = [1.1, -0.7, 1.5, -0.3, 0.4, 0.5];
+        let c = [-1.0, -2.0, 1.0, 0.0, -1.0, 2.0];
+        // Within 0.05 mm in two coordinates but 0.15 mm apart in the third: not one reading,
+        // whichever coordinate the sweep runs along.
+        for k in 0..3 {
+            let mut off = [0.05, -0.05, 0.05];
+            off[k] = 0.15;
+            let apart = MeasurementSet::from_rows(vec![
+                row(&robot, a, a, [0.0; 3], 0.0, 2),
+                row(&robot, b, a, off, 0.0, 3),
+                row(&robot, c, c, [0.0; 3], 0.0, 4),
+            ]);
+            assert!(shared_readings(&robot, &apart).is_empty(), "{k}");
+            // 0.09 mm in that coordinate alone: one reading.
+            let mut shifted = [0.0; 3];
+            shifted[k] = 0.09;
+            let close = MeasurementSet::from_rows(vec![
+                row(&robot, a, a, [0.0; 3], 0.0, 2),
+                row(&robot, b, a, shifted, 0.0, 3),
+                row(&robot, c, c, [0.0; 3], 0.0, 4),
+            ]);
+            let found = shared_readings(&robot, &close);
+            assert_eq!(found.len(), 1, "{k}");
+            assert_eq!((found[0].row, found[0].other_row), (1, 0));
+        }
     }
 
     #[test]

@@ -13,7 +13,6 @@ use super::solve::{
     Method, Solution, SolveOptions, StopReason, covariance, covariance_from, solve_gradient,
 };
 use crate::data::MeasurementSet;
-use crate::data::shared_readings::{SharedReading, shared_readings};
 use crate::error::{Error, Result};
 use crate::model::{Convention, ParamId, Robot, Slot};
 use crate::stats::median;
@@ -126,10 +125,6 @@ pub struct Identified {
     pub correlations: Vec<(String, String, f64)>,
     /// Rows (or pairs) beyond `outlier_k` robust sigmas, without robust weights.
     pub outliers: Vec<Outlier>,
-    /// Rows that carry another configuration's reading under the identified model
-    /// ([`crate::data::shared_readings`]; pose and position measures), left in the fit as
-    /// outliers are.
-    pub shared_readings: Vec<SharedReading>,
     /// The registered base (and tool), when registration ran.
     pub registration: Option<Registration>,
     /// Robust reweighting rounds (0 without a robust loss).
@@ -570,10 +565,6 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
     let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
     let (parameters, correlations) = parameter_reports(nominal, &solution.robot, &ids, &cov);
     let outliers = outliers(set, &obs, &solution.robot, opts.outlier_k);
-    let shared_readings = match measure {
-        Measure::Pose | Measure::Position => shared_readings(&solution.robot, set),
-        _ => Vec::new(),
-    };
     Ok(Identified {
         robot: solution.robot.clone(),
         measure,
@@ -583,7 +574,6 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         parameters,
         correlations,
         outliers,
-        shared_readings,
         registration,
         robust_rounds,
         notes,

@@ -5,17 +5,21 @@ use super::compensator::Compensator;
 use super::fit::CompensatorReport;
 use super::settings::CompensatorOptions;
 use super::train::{RbfHyper, TrainOptions};
-use super::tuning::{FIT_WORK, budget_epochs, select_settings};
+use super::tuning::{FIT_WORK, budget_epochs, outlier_note, select_settings};
 use crate::data::MeasurementSet;
-use crate::data::measurement::subset;
-use crate::data::shared_readings::{SEPARATION_MM, SharedReading, shared_readings, suspect_rows};
+use crate::data::measurement::{row_name, subset};
+use crate::data::shared_readings::{SharedReading, shared_readings, suspect_rows};
 use crate::error::Result;
 use crate::model::Robot;
 
 impl Compensator {
     /// Trains a compensator for `robot` on the measured rows of `set`: the choices `opts`
     /// leaves open are made by cross-validation on `set` (`progress` is told (done, total)
-    /// trainings), then the chosen settings are fitted on every row.
+    /// trainings), then the chosen settings are fitted on every row. Unless
+    /// `opts.drop_outliers` is false, rows that carry another configuration's reading
+    /// ([`crate::data::shared_readings`], under `robot`) take part in neither, and the rows
+    /// cross-validation lists as outliers are left out of the final fit; the report names
+    /// both by their index in `set`.
     pub fn train(
         robot: &Robot,
         set: &MeasurementSet,
@@ -28,15 +32,19 @@ impl Compensator {
         let shared = shared_readings(robot, set);
         let suspects = suspect_rows(&shared);
         let drop_shared = opts.drop_outliers && !suspects.is_empty();
+        let index: Vec<usize> = (0..set.rows.len())
+            .filter(|i| !drop_shared || suspects.binary_search(i).is_err())
+            .collect();
         let read;
-        let (set, index) = if drop_shared {
-            let index: Vec<usize> = (0..set.rows.len())
-                .filter(|i| suspects.binary_search(i).is_err())
-                .collect();
-            read = subset(set, |i| suspects.binary_search(&i).is_err());
-            (&read, index)
+        let set = if drop_shared {
+            read = MeasurementSet {
+                source: set.source.clone(),
+                rows: index.iter().map(|&i| set.rows[i].clone()).collect(),
+                extra_columns: set.extra_columns.clone(),
+            };
+            &read
         } else {
-            (set, (0..set.rows.len()).collect())
+            set
         };
         let (settings, mut selection) = select_settings(robot, set, opts, progress)?;
         let selection_seconds = started.elapsed().as_secs_f64();
@@ -50,7 +58,7 @@ impl Compensator {
             set
         } else {
             let out: std::collections::HashSet<usize> = left_out.iter().copied().collect();
-            kept = super::tuning::subset(set, |i| !out.contains(&i));
+            kept = subset(set, |i| !out.contains(&i));
             &kept
         };
         // The RBF hyperparameters cross-validation judged, searched on these rows for the
@@ -87,11 +95,15 @@ impl Compensator {
             report.notes.push(shared_note(&shared, drop_shared));
         }
         if let Some(s) = &mut selection {
-            report.notes.extend(s.notes.iter().cloned());
             // Outliers were found among the rows that trained; name them in the rows given.
             for o in &mut s.outliers {
                 o.row = index[o.row];
             }
+            if !s.outliers.is_empty() {
+                s.notes
+                    .push(outlier_note(&s.outliers, s.outlier_k, opts.drop_outliers));
+            }
+            report.notes.extend(s.notes.iter().cloned());
         }
         // One configuration measured again and again gives the network one input: it can
         // learn a constant only, whatever it is told.
@@ -115,23 +127,18 @@ impl Compensator {
 
 /// The note on training rows that carry another configuration's reading.
 fn shared_note(shared: &[SharedReading], dropped: bool) -> String {
-    let name = |line: usize, row: usize| match line {
-        0 => format!("row {}", row + 1),
-        l => format!("line {l}"),
-    };
     let list: Vec<String> = shared
         .iter()
         .map(|s| {
             format!(
                 "{} that of {}",
-                name(s.line, s.row),
-                name(s.other_line, s.other_row)
+                row_name(s.line, s.row),
+                row_name(s.other_line, s.other_row)
             )
         })
         .collect();
     format!(
-        "{} training row(s) carry the reading of another configuration that the model puts \
-         {SEPARATION_MM} mm or more away ({}): a reading logged with other joints, {}",
+        "{} training row(s) carry the reading of another configuration ({}): {}",
         shared.len(),
         list.join(", "),
         if dropped {

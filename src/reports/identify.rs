@@ -104,8 +104,9 @@ pub struct IdentifyReport {
     /// Rows beyond the cut.
     pub outliers: Vec<Outlier>,
     /// Calibration rows that carry another configuration's reading under the identified
-    /// model ([`crate::data::shared_readings`]). Empty when there are none (then left out of
-    /// the file, and in reports written before it).
+    /// model ([`crate::data::shared_readings`]; pose and position measures), left in the fit
+    /// as outliers are; `identify` fills it, [`IdentifyReport::new`] leaves it empty. Empty
+    /// when there are none (then left out of the file, and in reports written before it).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub shared_readings: Vec<SharedReading>,
     /// The robust loss, if one was used.
@@ -211,7 +212,7 @@ impl IdentifyReport {
                 .collect(),
             outlier_k: opts.outlier_k,
             outliers: id.outliers.clone(),
-            shared_readings: id.shared_readings.clone(),
+            shared_readings: Vec::new(),
             robust: opts.robust,
             robust_rounds: id.robust_rounds,
             singular_values: ident.singular_values.clone(),

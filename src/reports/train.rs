@@ -1,6 +1,7 @@
 //! The report of `train`.
 
 use super::Accuracy;
+use crate::data::shared_readings::SharedReading;
 use crate::neural::compensator::Compensator;
 use crate::neural::fit::CompensatorReport;
 use crate::neural::rbf::Kernel;
@@ -40,10 +41,18 @@ pub struct TrainReport {
     pub rbf: Option<RbfSummary>,
     /// Wall time of the whole training (s).
     pub seconds: f64,
-    /// The model's errors and the compensated ones (`+net`), training and validation rows.
+    /// The model's errors and the compensated ones (`+net`), training and validation rows,
+    /// and on the same rows but those that carry another configuration's reading
+    /// (`training clean`, `validation clean`) where there are any.
     pub accuracy: Vec<Accuracy>,
-    /// Cross-validation, refinement and every network's training.
+    /// Cross-validation, refinement and every network's training (with the training rows
+    /// that carry another configuration's reading, `training.shared_readings`).
     pub training: CompensatorReport,
+    /// Validation rows that carry another configuration's reading (of another validation
+    /// row), under the robot file's model ([`crate::data::shared_readings`]). Empty when there
+    /// are none (then left out of the file, and in reports written before it).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub validation_shared_readings: Vec<SharedReading>,
 }
 
 impl TrainReport {
@@ -77,6 +86,7 @@ impl TrainReport {
             seconds,
             accuracy,
             training: report,
+            validation_shared_readings: Vec::new(),
         }
     }
 }

@@ -174,6 +174,15 @@ pub fn list_lines(lines: &[usize]) -> String {
     s.join(", ")
 }
 
+/// A row's name in messages: `line L` of its file, or `row R` (1-based index `row` + 1) for a
+/// row built in code (`line` 0).
+pub fn row_name(line: usize, row: usize) -> String {
+    match line {
+        0 => format!("row {}", row + 1),
+        l => format!("line {l}"),
+    }
+}
+
 /// The rows of `set` whose index `keep` accepts, in order (same source and columns).
 pub fn subset(set: &MeasurementSet, keep: impl Fn(usize) -> bool) -> MeasurementSet {
     MeasurementSet {

@@ -42,6 +42,7 @@ pub use super::selection::{Candidate, Outlier, Score, Selection};
 pub use super::settings::OUTLIER_K;
 use super::settings::{CompensatorOptions, Network, Refine, Settings};
 use crate::data::MeasurementSet;
+use crate::data::measurement::row_name;
 use crate::error::{Error, Result};
 use crate::model::Robot;
 use cv::Cv;
@@ -310,28 +311,6 @@ pub fn select_settings(
         }
         outliers_of(set, &held, opts.outlier_k)
     };
-    if !outliers.is_empty() {
-        let rows: Vec<String> = outliers
-            .iter()
-            .map(|o| match o.line {
-                0 => format!("row {}", o.row + 1),
-                l => format!("line {l}"),
-            })
-            .collect();
-        notes.push(format!(
-            "{} training row(s) beyond {} robust sigmas of the cross-validated error ({}): {}",
-            outliers.len(),
-            opts.outlier_k,
-            rows.join(", "),
-            if opts.drop_outliers {
-                "left out of the final fit (a mis-measured row, or a sharp feature of the robot \
-                 one sample cannot tell; check them, or ask for them to be kept)"
-            } else {
-                "kept (a mis-measured row, or a sharp feature of the robot; check them, or \
-                 ask for them to be dropped from the final fit)"
-            }
-        ));
-    }
     Ok((
         winner,
         Some(Selection {
@@ -378,4 +357,22 @@ fn same_model(a: &Result<Robot>, b: &Result<Robot>) -> bool {
         (Ok(a), Ok(b)) => a.rigid() == b.rigid(),
         _ => false,
     }
+}
+
+/// The note on training rows beyond `k` robust sigmas of the cross-validated error, named in
+/// the rows given to training; `dropped`: left out of the final fit.
+pub fn outlier_note(outliers: &[Outlier], k: f64, dropped: bool) -> String {
+    let rows: Vec<String> = outliers.iter().map(|o| row_name(o.line, o.row)).collect();
+    format!(
+        "{} training row(s) beyond {k} robust sigmas of the cross-validated error ({}): {}",
+        outliers.len(),
+        rows.join(", "),
+        if dropped {
+            "left out of the final fit (a mis-measured row, or a sharp feature of the robot \
+             one sample cannot tell; check them, or ask for them to be kept)"
+        } else {
+            "kept (a mis-measured row, or a sharp feature of the robot; check them, or \
+             ask for them to be dropped from the final fit)"
+        }
+    )
 }
