@@ -2,10 +2,11 @@
 
 use super::data_args::{DataArgs, read_set};
 use super::predict::{load_compensator, warn_outside};
-use super::summary::{clean_accuracy, print_repeats, print_shared, print_stats, write_report};
+use super::summary::{
+    clean_accuracy, print_repeats, print_shared, print_stats, shared_under, write_report,
+};
 use anyhow::Result;
 use clap::Args;
-use robocal::data::shared_readings::shared_readings;
 use robocal::evaluate::{row_errors, summarize};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
@@ -83,20 +84,26 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         set.rows.len(),
         m.name()
     );
-    let mut outside = Vec::new();
+    let mut inside = Vec::new();
     let net_rows = match &comp {
         Some(c) => {
             let mut ws = PredictWorkspace::default();
-            outside = set
+            inside = set
                 .rows
                 .iter()
-                .filter(|r| !c.domain_check(&r.q, &mut ws).inside())
-                .map(|r| r.line)
+                .map(|r| c.domain_check(&r.q, &mut ws).inside())
                 .collect();
             Some(row_errors(&set, m, |q| c.predict(q, &mut ws))?)
         }
         None => None,
     };
+    let outside: Vec<usize> = set
+        .rows
+        .iter()
+        .zip(&inside)
+        .filter(|(_, inside)| !**inside)
+        .map(|(r, _)| r.line)
+        .collect();
     let compensated = net_rows.as_deref().map(summarize);
     let mut accuracy = vec![Accuracy::new("data", "model", s)];
     if let Some(c) = compensated {
@@ -105,20 +112,14 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             ..Accuracy::new("data", "+net", c)
         });
     }
-    // Readings logged with other joints, judged under the robot file's model (absolute
-    // measures: a pair's displacement is no reading of one row).
-    let shared = match m {
-        Measure::Pose | Measure::Position => shared_readings(&robot, &set),
-        _ => Vec::new(),
-    };
+    // Readings logged with other joints, judged under the robot file's model.
+    let shared = shared_under(&robot, &set, m);
     accuracy.extend(clean_accuracy(
         CLEAN,
-        &set,
         &shared,
-        m,
-        &robot,
-        comp.as_ref(),
-    )?);
+        &model_rows,
+        net_rows.as_deref().map(|n| (n, &inside[..])),
+    ));
     let report = EvaluateReport {
         robot: a.robot.display().to_string(),
         compensator: a.compensator.as_ref().map(|p| p.display().to_string()),

@@ -6,7 +6,6 @@ use super::summary::{print_stats, write_report};
 use anyhow::Result;
 use clap::Args;
 use robocal::data::MeasurementSet;
-use robocal::data::shared_readings::shared_readings;
 use robocal::evaluate::{RowError, row_errors, summarize};
 use robocal::identify::{Options, SolveOptions, identify};
 use robocal::kinematics::tool_pose;
@@ -129,14 +128,8 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         cal.rows.len(),
         accuracy,
     );
-    // Readings logged with other joints, judged under the identified model (absolute
-    // measures: a pair's displacement is no reading of one row).
-    report.shared_readings = match m {
-        robocal::identify::Measure::Pose | robocal::identify::Measure::Position => {
-            shared_readings(&id.robot, &cal)
-        }
-        _ => Vec::new(),
-    };
+    // Readings logged with other joints, judged under the identified model.
+    report.shared_readings = super::summary::shared_under(&id.robot, &cal, m);
     print_identified(&report);
     print_stats(&report.accuracy);
     for n in &report.notes {

@@ -2,14 +2,10 @@
 
 use anyhow::Result;
 use robocal::data::MeasurementSet;
-use robocal::data::measurement::subset;
-use robocal::data::shared_readings::{SEPARATION_MM, SharedReading, suspect_rows};
-use robocal::evaluate::{ErrorStats, row_errors, summarize};
+use robocal::data::shared_readings::{SEPARATION_MM, SharedReading, shared_readings, suspect_rows};
+use robocal::evaluate::{ErrorStats, RowError, summarize};
 use robocal::identify::Measure;
-use robocal::kinematics::tool_pose;
 use robocal::model::Robot;
-use robocal::neural::compensator::Compensator;
-use robocal::neural::predict::PredictWorkspace;
 use robocal::neural::repeats::Repeats;
 use robocal::reports::{Accuracy, Report};
 use std::path::Path;
@@ -72,44 +68,51 @@ pub fn print_shared(what: &str, shared: &[SharedReading], fate: &str) {
     }
 }
 
-/// The accuracy rows labelled `clean` on the rows of `set` but the suspects of `shared`: the
-/// model's (`model`) and, with a compensator, its (`+net`, with the rows outside its training
-/// domain), under `measure`; none when `shared` is empty.
+/// The rows of `set` that carry another configuration's reading under `robot`, for the
+/// absolute measures (pose, position): a pair's displacement is no reading of one row.
+pub fn shared_under(robot: &Robot, set: &MeasurementSet, measure: Measure) -> Vec<SharedReading> {
+    match measure {
+        Measure::Pose | Measure::Position => shared_readings(robot, set),
+        _ => Vec::new(),
+    }
+}
+
+/// The accuracy rows labelled `clean`: the model's (`model`) and, with a compensator, its
+/// (`+net`, with the rows outside its training domain) on every row but the suspects of
+/// `shared`, taken from the errors already found on every row (`model_rows`; `net`: the
+/// compensator's and whether each row lies inside its domain), one per row as the absolute
+/// measures give them. None when `shared` is empty.
 pub fn clean_accuracy(
     clean: &str,
-    set: &MeasurementSet,
     shared: &[SharedReading],
-    measure: Measure,
-    robot: &Robot,
-    comp: Option<&Compensator>,
-) -> robocal::Result<Vec<Accuracy>> {
+    model_rows: &[RowError],
+    net: Option<(&[RowError], &[bool])>,
+) -> Vec<Accuracy> {
     if shared.is_empty() {
-        return Ok(Vec::new());
+        return Vec::new();
     }
     let suspects = suspect_rows(shared);
-    let rows = subset(set, |i| suspects.binary_search(&i).is_err());
+    let kept = |i: &usize| suspects.binary_search(i).is_err();
+    let without = |rows: &[RowError]| -> Vec<RowError> {
+        rows.iter()
+            .enumerate()
+            .filter(|(i, _)| kept(i))
+            .map(|(_, r)| *r)
+            .collect()
+    };
     let mut out = vec![Accuracy::new(
         clean,
         "model",
-        summarize(&row_errors(&rows, measure, |q| tool_pose(robot, q))?),
+        summarize(&without(model_rows)),
     )];
-    if let Some(c) = comp {
-        let mut ws = PredictWorkspace::default();
-        let outside = rows
-            .rows
-            .iter()
-            .filter(|r| !c.domain_check(&r.q, &mut ws).inside())
-            .count();
+    if let Some((rows, inside)) = net {
+        debug_assert_eq!(rows.len(), inside.len());
         out.push(Accuracy {
-            rows_outside_domain: Some(outside),
-            ..Accuracy::new(
-                clean,
-                "+net",
-                summarize(&row_errors(&rows, measure, |q| c.predict(q, &mut ws))?),
-            )
+            rows_outside_domain: Some((0..inside.len()).filter(|i| kept(i) && !inside[*i]).count()),
+            ..Accuracy::new(clean, "+net", summarize(&without(rows)))
         });
     }
-    Ok(out)
+    out
 }
 
 /// Writes a typed report (JSON).

@@ -2,10 +2,9 @@
 
 use super::compensator_args::{CompensatorArgs, compliance_conflict, progress_bar};
 use super::data_args::{DataArgs, SigmaArgs};
-use super::summary::{clean_accuracy, print_shared, print_stats, write_report};
+use super::summary::{clean_accuracy, print_shared, print_stats, shared_under, write_report};
 use anyhow::{Context, Result};
 use clap::Args;
-use robocal::data::shared_readings::shared_readings;
 use robocal::evaluate::{row_errors, summarize};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
@@ -290,43 +289,47 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     // robot file's model; the validation rows' are judged here as `evaluate` judges them.
     let val_shared = val
         .as_ref()
-        .map(|v| shared_readings(&robot, v))
+        .map(|v| shared_under(&robot, v, Measure::default_for(v)))
         .unwrap_or_default();
-    for (name, s, shared) in [
-        ("training", Some(&set), &report.shared_readings),
-        ("validation", val.as_ref(), &val_shared),
+    let training_fate = if opts.drop_outliers {
+        "left out of cross-validation and the fit; 'training clean' leaves them out of the figures"
+    } else {
+        "kept in cross-validation and the fit, as asked; 'training clean' leaves them out of the \
+         figures"
+    };
+    for (name, s, shared, fate) in [
+        (
+            "training",
+            Some(&set),
+            &report.shared_readings,
+            training_fate,
+        ),
+        (
+            "validation",
+            val.as_ref(),
+            &val_shared,
+            "'validation clean' leaves them out",
+        ),
     ] {
         let Some(s) = s else { continue };
         let m = Measure::default_for(s);
         if !shared.is_empty() {
-            let fate = match name {
-                "training" if opts.drop_outliers => {
-                    "left out of cross-validation and the fit; 'training clean' leaves them out \
-                     of the figures"
-                        .to_string()
-                }
-                "training" => "kept in cross-validation and the fit, as asked; 'training clean' \
-                               leaves them out of the figures"
-                    .to_string(),
-                _ => format!("'{name} clean' leaves them out"),
-            };
-            print_shared(name, shared, &fate);
+            print_shared(name, shared, fate);
         }
-        clean.extend(clean_accuracy(
-            &format!("{name} clean"),
-            s,
-            shared,
-            m,
-            &robot,
-            Some(&c),
-        )?);
         let before_rows = row_errors(s, m, |q| tool_pose(&robot, q))?;
         let after_rows = row_errors(s, m, |q| c.predict(q, &mut ws))?;
-        let outside = s
+        let inside: Vec<bool> = s
             .rows
             .iter()
-            .filter(|r| !c.domain_check(&r.q, &mut ws).inside())
-            .count();
+            .map(|r| c.domain_check(&r.q, &mut ws).inside())
+            .collect();
+        let outside = inside.iter().filter(|i| !**i).count();
+        clean.extend(clean_accuracy(
+            &format!("{name} clean"),
+            shared,
+            &before_rows,
+            Some((&after_rows, &inside)),
+        ));
         if let Some(dir) = &a.plot {
             let runs = [
                 ErrorRun {

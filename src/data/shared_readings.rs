@@ -83,19 +83,18 @@ pub struct SharedReading {
 impl SharedReading {
     /// One line for people: which row, whose reading, how far apart.
     pub fn describe(&self) -> String {
-        let name = row_name;
+        let (me, other) = (
+            row_name(self.line, self.row),
+            row_name(self.other_line, self.other_row),
+        );
         format!(
-            "{} carries the reading of {} ({:.4} mm and {:.4} deg apart) although the model \
-             puts the two configurations {:.4} mm apart; the model misses {} by {:.4} mm and \
-             {} by {:.4} mm",
-            name(self.line, self.row),
-            name(self.other_line, self.other_row),
+            "{me} carries the reading of {other} ({:.4} mm and {:.4} deg apart) although the \
+             model puts the two configurations {:.4} mm apart; the model misses {me} by {:.4} \
+             mm and {other} by {:.4} mm",
             self.reading_mm,
             self.reading_deg,
             self.model_mm,
-            name(self.line, self.row),
             self.residual_mm,
-            name(self.other_line, self.other_row),
             self.other_residual_mm,
         )
     }

@@ -32,16 +32,12 @@ impl Compensator {
         let shared = shared_readings(robot, set);
         let suspects = suspect_rows(&shared);
         let drop_shared = opts.drop_outliers && !suspects.is_empty();
-        let index: Vec<usize> = (0..set.rows.len())
-            .filter(|i| !drop_shared || suspects.binary_search(i).is_err())
-            .collect();
+        let trains = |i: &usize| !drop_shared || suspects.binary_search(i).is_err();
+        // The index in `set` of each row that trains.
+        let index: Vec<usize> = (0..set.rows.len()).filter(trains).collect();
         let read;
         let set = if drop_shared {
-            read = MeasurementSet {
-                source: set.source.clone(),
-                rows: index.iter().map(|&i| set.rows[i].clone()).collect(),
-                extra_columns: set.extra_columns.clone(),
-            };
+            read = subset(set, |i| trains(&i));
             &read
         } else {
             set
