@@ -634,32 +634,48 @@ phase2_deg = 80.0
 }
 
 /// A row logged with another row's reading (line 31 of Case D's training and test poses
-/// given line 12's position and orientation): `train` leaves the training row out and names
-/// both rows, with the row whose reading each carries; `train` and `evaluate` add the
-/// accuracy rows without them (`training clean`, `validation clean`, `data clean`): the same
-/// figures in both commands for the validation rows (1e-9), and the figures of `evaluate` on a
-/// file without that line.
+/// given line 12's position and orientation, and line 40 of the test poses given line 20 of
+/// the training poses'): `train` leaves the training row out and names the rows, with the row
+/// whose reading each carries (a validation row's among the validation and the training
+/// rows); `train` and `evaluate` add the accuracy rows without them (`training clean`,
+/// `validation clean`, `data clean`): `evaluate` names the row that carries a training row's
+/// reading when given the training file (`--check-against`), and then gives the same figures
+/// as `train` for the validation rows (1e-9), and the figures of `evaluate` on a file without
+/// those lines.
 #[test]
 fn a_reading_logged_with_other_joints_is_named_and_left_out_of_the_clean_rows() {
-    // `file` with line 31's reading replaced by line 12's, and without line 31.
-    let with_slip = |file: &str, name: &str| {
+    let cells = |l: &str| l.split(',').map(str::to_string).collect::<Vec<_>>();
+    let lines_of = |file: &str| -> Vec<String> {
         let text = std::fs::read_to_string(common::root().join(file)).unwrap();
-        let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
-        let cells = |l: &str| l.split(',').map(str::to_string).collect::<Vec<_>>();
-        let (source, mut slip) = (cells(&lines[11]), cells(&lines[30]));
-        slip[7..13].clone_from_slice(&source[7..13]);
-        lines[30] = slip.join(",");
+        text.lines().map(str::to_string).collect()
+    };
+    let training_lines = lines_of("datasets/case_d/training.csv");
+    // `file` with line 31's reading replaced by line 12's (and, for the validation file, line
+    // 40's by line 20 of the training file), and without those lines.
+    let with_slip = |file: &str, name: &str, from_training: bool| {
+        let mut lines = lines_of(file);
+        let mut slips = vec![(30, cells(&lines[11]))];
+        if from_training {
+            slips.push((39, cells(&training_lines[19])));
+        }
+        for (at, source) in &slips {
+            let mut slip = cells(&lines[*at]);
+            slip[7..13].clone_from_slice(&source[7..13]);
+            lines[*at] = slip.join(",");
+        }
         let (data, without) = (
             tmp(&format!("{name}.csv")),
             tmp(&format!("{name}_without.csv")),
         );
         std::fs::write(&data, lines.join("\n") + "\n").unwrap();
-        lines.remove(30);
+        for (at, _) in slips.iter().rev() {
+            lines.remove(*at);
+        }
         std::fs::write(&without, lines.join("\n") + "\n").unwrap();
         (data, without)
     };
-    let (train_data, _) = with_slip("datasets/case_d/training.csv", "slip_train");
-    let (data, without) = with_slip("datasets/case_d/test_truth.csv", "slip_test");
+    let (train_data, _) = with_slip("datasets/case_d/training.csv", "slip_train", false);
+    let (data, without) = with_slip("datasets/case_d/test_truth.csv", "slip_test", true);
     let (comp, report) = (tmp("slip.rcal"), tmp("slip_train.json"));
     let mut extra = vec![
         "--validate",
@@ -675,16 +691,40 @@ fn a_reading_logged_with_other_joints_is_named_and_left_out_of_the_clean_rows() 
         "note: 1 training row(s) carry the reading of another configuration (line 31 that of \
          line 12): left out of cross-validation and the fit",
         "shared readings: 1 training row(s) carry the reading of another configuration",
-        "shared readings: 1 validation row(s) carry the reading of another configuration",
+        "shared readings: 2 validation row(s) carry the reading of another configuration",
         "  line 31 carries the reading of line 12 (0.0000 mm and 0.0000 deg apart)",
+        &format!(
+            "  line 40 carries the reading of line 20 of {} (0.0000 mm and 0.0000 deg apart)",
+            train_data.display()
+        ),
     ] {
         assert!(out.contains(said), "{said}\n{out}");
     }
     let train = json(&report);
     assert_eq!(train["training"]["shared_readings"][0]["line"], 31);
-    assert_eq!(train["validation_shared_readings"][0]["other_line"], 12);
+    assert_eq!(
+        train["training"]["shared_readings"]
+            .as_array()
+            .unwrap()
+            .len(),
+        1
+    );
+    let val_shared = &train["validation_shared_readings"];
+    assert_eq!(val_shared[0]["other_line"], 12);
+    assert!(val_shared[0].get("other_source").is_none());
+    assert_eq!(
+        (&val_shared[1]["line"], &val_shared[1]["other_line"]),
+        (&40.into(), &20.into())
+    );
+    assert_eq!(
+        val_shared[1]["other_source"],
+        train_data.display().to_string()
+    );
     assert_eq!(accuracy(&train, "training clean", "+net")["count"], 149);
-    let evaluate = |rows: &std::path::Path, name: &str, comp: Option<&std::path::Path>| {
+    let evaluate = |rows: &std::path::Path,
+                    name: &str,
+                    comp: Option<&std::path::Path>,
+                    against: Option<&std::path::Path>| {
         let report = tmp(name);
         let mut args = vec![
             "evaluate",
@@ -698,23 +738,38 @@ fn a_reading_logged_with_other_joints_is_named_and_left_out_of_the_clean_rows() 
         if let Some(c) = comp {
             args.extend(["--compensator", c.to_str().unwrap()]);
         }
+        if let Some(f) = against {
+            args.extend(["--check-against", f.to_str().unwrap()]);
+        }
         let o = robocal(&args);
         assert!(o.status.success(), "{}", stderr(&o));
         (stdout(&o), json(&report))
     };
-    let (said, e) = evaluate(&data, "slip_evaluate.json", Some(&comp));
+    // Alone, the validation file shows only the reading it shares with itself.
+    let (said, alone) = evaluate(&data, "slip_evaluate_alone.json", Some(&comp), None);
     assert!(
-        said.contains("  line 31 carries the reading of line 12"),
+        said.contains("  line 31 carries the reading of line 12 (") && !said.contains("line 40"),
         "{said}"
     );
-    assert_eq!(e["shared_readings"][0]["line"], 31);
-    assert_eq!(e["shared_readings"][0]["other_line"], 12);
-    assert_eq!(e["shared_readings"].as_array().unwrap().len(), 1);
-    let (_, plain) = evaluate(&without, "slip_without.json", Some(&comp));
+    assert_eq!(alone["shared_readings"].as_array().unwrap().len(), 1);
+    assert!(alone.get("check_against").is_none());
+    assert_eq!(accuracy(&alone, "data clean", "+net")["count"], 249);
+    let (said, e) = evaluate(&data, "slip_evaluate.json", Some(&comp), Some(&train_data));
+    assert!(
+        said.contains("  line 31 carries the reading of line 12 (")
+            && said.contains(&format!(
+                "  line 40 carries the reading of line 20 of {}",
+                train_data.display()
+            )),
+        "{said}"
+    );
+    assert_eq!(e["shared_readings"], *val_shared);
+    assert_eq!(e["check_against"], train_data.display().to_string());
+    let (_, plain) = evaluate(&without, "slip_without.json", Some(&comp), None);
     assert!(plain.get("shared_readings").is_none());
     for model in ["model", "+net"] {
         let clean = accuracy(&e, "data clean", model);
-        assert_eq!(clean["count"], 249);
+        assert_eq!(clean["count"], 248);
         for (kind, f) in [
             ("position_mm", "mean"),
             ("position_mm", "max"),
@@ -739,7 +794,7 @@ fn a_reading_logged_with_other_joints_is_named_and_left_out_of_the_clean_rows() 
         );
     }
     // Without a compensator: the model's rows only, and no line about a compensator.
-    let (said, e) = evaluate(&data, "slip_model.json", None);
+    let (said, e) = evaluate(&data, "slip_model.json", None, None);
     assert!(!said.contains("with the compensator"), "{said}");
     assert!(said.contains("data clean"), "{said}");
     assert_eq!(e["accuracy"].as_array().unwrap().len(), 2);

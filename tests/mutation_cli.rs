@@ -164,6 +164,8 @@ fn mutated_inputs_never_crash_a_command() {
             "DATA",
             "--compensator",
             "COMP",
+            "--check-against",
+            "DATA",
             "--report",
             "OUT",
         ],

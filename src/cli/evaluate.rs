@@ -28,6 +28,12 @@ pub struct EvaluateArgs {
     /// A compensator (from `robocal train`) to evaluate beside the robot.
     #[arg(long)]
     compensator: Option<PathBuf>,
+    /// Other measurements of the same robot (the training file of a compensator, say) to
+    /// check this file's readings against: a row here that carries the reading of a row there,
+    /// logged with other joints, is listed and left out of `data clean` as one that carries the
+    /// reading of a row of this file is (read with the same options as `--data`).
+    #[arg(long, value_name = "FILE")]
+    check_against: Option<PathBuf>,
     #[command(flatten)]
     read: DataArgs,
     #[arg(long, value_enum)]
@@ -52,6 +58,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             req("--robot", &a.robot),
             req("--data", &a.data),
             opt("--compensator", a.compensator.as_ref()),
+            opt("--check-against", a.check_against.as_ref()),
             opt("--profile", a.read.profile.as_ref()),
         ],
         &[
@@ -68,6 +75,11 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         None => (None, None),
     };
     let set = read_set(&a.read, &a.data, &robot)?;
+    let reference = a
+        .check_against
+        .as_ref()
+        .map(|p| read_set(&a.read, p, &robot))
+        .transpose()?;
     let m = a
         .measure
         .map(Measure::from)
@@ -113,7 +125,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         });
     }
     // Readings logged with other joints, judged under the robot file's model.
-    let shared = shared_under(&robot, &set, m);
+    let shared = shared_under(&robot, &set, m, reference.as_ref());
     accuracy.extend(clean_accuracy(
         CLEAN,
         &shared,
@@ -131,6 +143,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         note,
         repeats: Repeats::of(&robot, &set),
         shared_readings: shared,
+        check_against: a.check_against.as_ref().map(|p| p.display().to_string()),
     };
     if let Some(r) = &report.repeats {
         print_repeats(r);

@@ -129,7 +129,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         accuracy,
     );
     // Readings logged with other joints, judged under the identified model.
-    report.shared_readings = super::summary::shared_under(&id.robot, &cal, m);
+    report.shared_readings = super::summary::shared_under(&id.robot, &cal, m, None);
     print_identified(&report);
     print_stats(&report.accuracy);
     for n in &report.notes {

@@ -2,7 +2,9 @@
 
 use anyhow::Result;
 use robocal::data::MeasurementSet;
-use robocal::data::shared_readings::{SEPARATION_MM, SharedReading, shared_readings, suspect_rows};
+use robocal::data::shared_readings::{
+    SEPARATION_MM, SharedReading, shared_readings, shared_readings_with, suspect_rows,
+};
 use robocal::evaluate::{ErrorStats, RowError, summarize};
 use robocal::identify::Measure;
 use robocal::model::Robot;
@@ -68,11 +70,19 @@ pub fn print_shared(what: &str, shared: &[SharedReading], fate: &str) {
     }
 }
 
-/// The rows of `set` that carry another configuration's reading under `robot`, for the
-/// absolute measures (pose, position): a pair's displacement is no reading of one row.
-pub fn shared_under(robot: &Robot, set: &MeasurementSet, measure: Measure) -> Vec<SharedReading> {
-    match measure {
-        Measure::Pose | Measure::Position => shared_readings(robot, set),
+/// The rows of `set` that carry another configuration's reading under `robot`, a row of `set`
+/// or, where given, of `reference` (other measurements of the same robot: the training rows
+/// of a validation set), for the absolute measures (pose, position): a pair's displacement is
+/// no reading of one row.
+pub fn shared_under(
+    robot: &Robot,
+    set: &MeasurementSet,
+    measure: Measure,
+    reference: Option<&MeasurementSet>,
+) -> Vec<SharedReading> {
+    match (measure, reference) {
+        (Measure::Pose | Measure::Position, None) => shared_readings(robot, set),
+        (Measure::Pose | Measure::Position, Some(r)) => shared_readings_with(robot, set, r),
         _ => Vec::new(),
     }
 }

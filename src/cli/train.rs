@@ -286,10 +286,12 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     let mut accuracy = Vec::new();
     let mut clean = Vec::new();
     // The training rows' readings logged with other joints were judged in training, under the
-    // robot file's model; the validation rows' are judged here as `evaluate` judges them.
+    // robot file's model, among themselves; the validation rows' are judged here against
+    // their own and the training rows, as `evaluate --check-against` the training file judges
+    // them (a validation row can carry a training row's reading).
     let val_shared = val
         .as_ref()
-        .map(|v| shared_under(&robot, v, Measure::default_for(v)))
+        .map(|v| shared_under(&robot, v, Measure::default_for(v), Some(&set)))
         .unwrap_or_default();
     let training_fate = if opts.drop_outliers {
         "left out of cross-validation and the fit; 'training clean' leaves them out of the figures"

@@ -30,7 +30,7 @@
 //! needs a calibrated model; it finds nothing under a model that does not separate them.
 
 use super::configuration::same_configuration;
-use super::measurement::{MeasurementSet, row_name};
+use super::measurement::{Measurement, MeasurementSet, row_name};
 use crate::geometry::rotation::angle_between;
 use crate::kinematics::tool_pose;
 use crate::model::Robot;
@@ -78,15 +78,20 @@ pub struct SharedReading {
     /// The other row's position error under the model (mm).
     #[serde(with = "crate::io::json_number")]
     pub other_residual_mm: f64,
+    /// The file of the other row when it is not of this row's set (a reference set, see
+    /// [`shared_readings_with`]); `other_row` then indexes that set's rows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub other_source: Option<String>,
 }
 
 impl SharedReading {
     /// One line for people: which row, whose reading, how far apart.
     pub fn describe(&self) -> String {
-        let (me, other) = (
-            row_name(self.line, self.row),
-            row_name(self.other_line, self.other_row),
-        );
+        let me = row_name(self.line, self.row);
+        let other = match &self.other_source {
+            Some(file) => format!("{} of {file}", row_name(self.other_line, self.other_row)),
+            None => row_name(self.other_line, self.other_row),
+        };
         format!(
             "{me} carries the reading of {other} ({:.4} mm and {:.4} deg apart) although the \
              model puts the two configurations {:.4} mm apart; the model misses {me} by {:.4} \
@@ -106,7 +111,37 @@ impl SharedReading {
 /// coordinate that spreads widest, each against those within [`POSITION_MM`] of it there, so
 /// the cost grows with the rows (and the readings that close), not with all their pairs.
 pub fn shared_readings(model: &Robot, set: &MeasurementSet) -> Vec<SharedReading> {
-    let rows = &set.rows;
+    let rows: Vec<&Measurement> = set.rows.iter().collect();
+    sweep(model, &rows, rows.len())
+}
+
+/// The rows of `set` whose reading a row of another configuration shares under `model`, a row
+/// of `set` or of `reference` (other measurements of the same robot, such as the training rows
+/// of a validation set), one per suspect row of `set`, in row order. A suspect of `reference`
+/// is not named (its reading may be a row of `set`'s: `reference` is checked on its own), and a
+/// row of `set` whose reading a suspect of `reference` carries keeps its own. Where the other
+/// row is one of `reference`'s, [`SharedReading::other_source`] names `reference`'s file and
+/// `other_row` indexes its rows. With an empty `reference` this is [`shared_readings`].
+pub fn shared_readings_with(
+    model: &Robot,
+    set: &MeasurementSet,
+    reference: &MeasurementSet,
+) -> Vec<SharedReading> {
+    let n = set.rows.len();
+    let rows: Vec<&Measurement> = set.rows.iter().chain(&reference.rows).collect();
+    let mut found = sweep(model, &rows, n);
+    for s in &mut found {
+        if s.other_row >= n {
+            s.other_row -= n;
+            s.other_source = Some(reference.source.display().to_string());
+        }
+    }
+    found
+}
+
+/// The suspects among the first `named` of `rows` (see [`shared_readings`]); `other_row`
+/// indexes `rows`.
+fn sweep(model: &Robot, rows: &[&Measurement], named: usize) -> Vec<SharedReading> {
     let reading = |i: usize| match (&rows[i].position, &rows[i].rotation) {
         (Some(p), Some(r)) if p.iter().all(|v| v.is_finite()) => Some((p, r)),
         _ => None,
@@ -131,7 +166,7 @@ pub fn shared_readings(model: &Robot, set: &MeasurementSet) -> Vec<SharedReading
     let mut position = |i: usize| -> Vector3<f64> {
         *model_at[i].get_or_insert_with(|| tool_pose(model, &rows[i].q).translation.vector)
     };
-    let mut found: Vec<Option<SharedReading>> = vec![None; rows.len()];
+    let mut found: Vec<Option<SharedReading>> = vec![None; named];
     let limit = ORIENTATION_DEG.to_radians();
     for (k, &i) in order.iter().enumerate() {
         let (pa, ra) = reading(i).expect("only rows with a reading are swept");
@@ -139,6 +174,9 @@ pub fn shared_readings(model: &Robot, set: &MeasurementSet) -> Vec<SharedReading
             .iter()
             .take_while(|&&j| at(j, key) - at(i, key) <= POSITION_MM)
         {
+            if i >= named && j >= named {
+                continue;
+            }
             let (pb, rb) = reading(j).expect("only rows with a reading are swept");
             let reading_mm = (pa - pb).norm();
             if reading_mm > POSITION_MM || same_configuration(&rows[i].q, &rows[j].q) {
@@ -161,9 +199,11 @@ pub fn shared_readings(model: &Robot, set: &MeasurementSet) -> Vec<SharedReading
                 (j, i, eb, ea)
             };
             // The closest reading where several are shared (the first row on a tie).
-            if found[s].as_ref().is_some_and(|f| {
-                f.reading_mm < reading_mm || (f.reading_mm == reading_mm && f.other_row < o)
-            }) {
+            if s >= named
+                || found[s].as_ref().is_some_and(|f| {
+                    f.reading_mm < reading_mm || (f.reading_mm == reading_mm && f.other_row < o)
+                })
+            {
                 continue;
             }
             found[s] = Some(SharedReading {
@@ -176,6 +216,7 @@ pub fn shared_readings(model: &Robot, set: &MeasurementSet) -> Vec<SharedReading
                 model_mm,
                 residual_mm: es,
                 other_residual_mm: eo,
+                other_source: None,
             });
         }
     }
@@ -261,6 +302,68 @@ mod tests {
             s.describe()
                 .starts_with("line 3 carries the reading of line 2 (0.0300 mm")
         );
+    }
+
+    #[test]
+    fn a_reading_shared_with_a_reference_row_is_found_in_the_set_only() {
+        let robot = ur10();
+        let a = [0.3, -1.2, 1.4, -1.8, -1.5, 0.2];
+        let b = [1.1, -0.7, 1.5, -0.3, 0.4, 0.5];
+        let c = [-1.0, -2.0, 1.0, 0.0, -1.0, 2.0];
+        let d = [0.5, -1.5, 2.0, -0.5, 1.0, -1.0];
+        // The validation rows: b carries the reading of a training row (a), 0.03 mm off.
+        let set = MeasurementSet::from_rows(vec![
+            row(&robot, c, c, [0.1, 0.0, 0.0], 0.0, 2),
+            row(&robot, b, a, [0.2, 0.03, -0.1], 1e-4, 3),
+        ]);
+        let mut training = MeasurementSet::from_rows(vec![
+            row(&robot, d, d, [0.0; 3], 0.0, 7),
+            row(&robot, a, a, [0.2, 0.0, -0.1], 0.0, 8),
+        ]);
+        training.source = "training.csv".into();
+        assert!(shared_readings(&robot, &set).is_empty());
+        assert!(shared_readings(&robot, &training).is_empty());
+        let found = shared_readings_with(&robot, &set, &training);
+        assert_eq!(found.len(), 1, "{found:?}");
+        let s = &found[0];
+        assert_eq!((s.row, s.line, s.other_row, s.other_line), (1, 3, 1, 8));
+        assert_eq!(s.other_source.as_deref(), Some("training.csv"));
+        assert!((s.reading_mm - 0.03).abs() < 1e-9, "{s:?}");
+        assert!(
+            s.describe()
+                .starts_with("line 3 carries the reading of line 8 of training.csv (0.0300 mm"),
+            "{}",
+            s.describe()
+        );
+        // The other way round the suspect is a reference row: not named, and the set's row
+        // keeps its reading.
+        let mut swapped = set.clone();
+        swapped.source = "validation.csv".into();
+        assert!(shared_readings_with(&robot, &training, &swapped).is_empty());
+        // Without a reference, or with the set itself as its reference (every row the same
+        // configuration as its copy), the set's own check.
+        let mut own = set.clone();
+        own.rows.push(row(&robot, a, a, [0.2, 0.0, -0.1], 0.0, 4));
+        let alone = shared_readings(&robot, &own);
+        assert_eq!(alone.len(), 1);
+        assert_eq!(alone[0].other_source, None);
+        for reference in [MeasurementSet::from_rows(Vec::new()), own.clone()] {
+            assert_eq!(shared_readings_with(&robot, &own, &reference), alone);
+        }
+        // A reading both files share: the closest is named, here the reference's (exactly the
+        // suspect's reading) before the set's (0.03 mm).
+        let mut exact = training.clone();
+        exact.rows[1] = row(&robot, a, a, [0.2, 0.03, -0.1], 1e-4, 9);
+        let closest = shared_readings_with(&robot, &own, &exact);
+        assert_eq!(closest.len(), 1);
+        assert_eq!((closest[0].other_line, closest[0].reading_mm), (9, 0.0));
+        // The JSON form names the other file only where there is one.
+        let json = serde_json::to_string(&alone[0]).unwrap();
+        assert!(!json.contains("other_source"), "{json}");
+        let back: SharedReading = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, alone[0]);
+        let json = serde_json::to_string(&found[0]).unwrap();
+        assert!(json.contains("\"other_source\":\"training.csv\""), "{json}");
     }
 
     #[test]

@@ -250,9 +250,13 @@ pub struct EvaluateReport {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub repeats: Option<Repeats>,
     /// Rows that carry another configuration's reading under the robot file's model
-    /// ([`crate::data::shared_readings`]; pose and position measures): the `data clean`
-    /// accuracy rows leave them out. Empty when there are none (then left out of the file,
-    /// and in reports written before it).
+    /// ([`crate::data::shared_readings`]; pose and position measures), a row of the data or of
+    /// `check_against`'s: the `data clean` accuracy rows leave them out. Empty when there are
+    /// none (then left out of the file, and in reports written before it).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub shared_readings: Vec<SharedReading>,
+    /// The measurements the data's readings were checked against besides their own
+    /// (`--check-against`), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub check_against: Option<String>,
 }

@@ -48,9 +48,10 @@ pub struct TrainReport {
     /// Cross-validation, refinement and every network's training (with the training rows
     /// that carry another configuration's reading, `training.shared_readings`).
     pub training: CompensatorReport,
-    /// Validation rows that carry another configuration's reading (of another validation
-    /// row), under the robot file's model ([`crate::data::shared_readings`]). Empty when there
-    /// are none (then left out of the file, and in reports written before it).
+    /// Validation rows that carry another configuration's reading, of another validation row
+    /// or of a training row (`other_source` the training file), under the robot file's model
+    /// ([`crate::data::shared_readings::shared_readings_with`]). Empty when there are none
+    /// (then left out of the file, and in reports written before it).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub validation_shared_readings: Vec<SharedReading>,
 }
