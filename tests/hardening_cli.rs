@@ -969,4 +969,20 @@ fn edge_inputs_of_train_and_evaluate() {
     }
     let o = robocal(&["evaluate", "--robot", FANUC, "--data", positions]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // A check of single rows' readings means nothing for an orientation-only measure.
+    refused(
+        &[
+            "evaluate",
+            "--robot",
+            FANUC,
+            "--data",
+            "datasets/case_d/test_truth.csv",
+            "--measure",
+            "orientation",
+            "--check-against",
+            "datasets/case_d/training.csv",
+        ],
+        "--check-against compares the readings of single rows (measure pose or position), not \
+         measure orientation",
+    );
 }

@@ -87,6 +87,13 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     // What `identify` asks of the rows for this measure (an orientation in every row, pairs,
     // ...): a measure the file cannot give is refused, not reported as empty columns.
     robocal::identify::problem::Observations::new(&set, m, Default::default())?;
+    if reference.is_some() && !matches!(m, Measure::Pose | Measure::Position) {
+        anyhow::bail!(
+            "--check-against compares the readings of single rows (measure pose or position), \
+             not measure {}",
+            m.name()
+        );
+    }
     let model_rows = row_errors(&set, m, |q| tool_pose(&robot, q))?;
     let s = summarize(&model_rows);
     println!(
