@@ -152,7 +152,7 @@ fn ur10_series_a(c: &mut Criterion) {
     )
     .unwrap()
     .robot;
-    c.bench_function("shared_readings_ur10_series_a_11910_poses", |b| {
+    c.bench_function("shared_readings_ur10_series_a_11911_poses", |b| {
         b.iter(|| shared_readings(&full, black_box(&set)).len())
     });
     let mut g = c.benchmark_group("slow");

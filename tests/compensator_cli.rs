@@ -763,6 +763,14 @@ fn a_reading_logged_with_other_joints_is_named_and_left_out_of_the_clean_rows() 
             )),
         "{said}"
     );
+    assert!(
+        said.contains(&format!(
+            "checked against {}: 250 row(s) with a position and an orientation, against \
+             themselves and 150 of its rows; 2 carry another configuration's reading",
+            train_data.display()
+        )),
+        "{said}"
+    );
     assert_eq!(e["shared_readings"], *val_shared);
     assert_eq!(e["check_against"], train_data.display().to_string());
     let (_, plain) = evaluate(&without, "slip_without.json", Some(&comp), None);

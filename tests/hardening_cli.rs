@@ -2,7 +2,7 @@
 //! names the bound, never a panic.
 
 mod common;
-use common::{robocal, stderr};
+use common::{robocal, stderr, stdout};
 
 const UR10: &str = "datasets/robots/ur10.toml";
 
@@ -969,6 +969,27 @@ fn edge_inputs_of_train_and_evaluate() {
     }
     let o = robocal(&["evaluate", "--robot", FANUC, "--data", positions]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // Positions alone take no part in the check of readings: said, not passed for clean.
+    let o = robocal(&[
+        "evaluate",
+        "--robot",
+        FANUC,
+        "--data",
+        positions,
+        "--check-against",
+        "datasets/case_d/training.csv",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("0 row(s) with a position and an orientation, against themselves and 150 of its rows; 0 carry")
+            && stderr(&o).contains(
+                "warning: --check-against datasets/case_d/training.csv: the data have no row \
+                 with both a position and an orientation"
+            ),
+        "{}\n{}",
+        stdout(&o),
+        stderr(&o)
+    );
     // A check of single rows' readings means nothing for an orientation-only measure.
     refused(
         &[

@@ -83,6 +83,11 @@ fn mutated_inputs_never_crash_a_command() {
             bytes: head("datasets/case_d/calibration.csv", 31),
         },
         Input {
+            key: "REF",
+            name: "reference.csv",
+            bytes: head("datasets/case_d/training.csv", 31),
+        },
+        Input {
             key: "SERIES",
             name: "series.csv",
             bytes: head(
@@ -165,7 +170,7 @@ fn mutated_inputs_never_crash_a_command() {
             "--compensator",
             "COMP",
             "--check-against",
-            "DATA",
+            "REF",
             "--report",
             "OUT",
         ],

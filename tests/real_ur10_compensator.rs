@@ -504,6 +504,7 @@ fn series_a_pool_2000() {
         "{} validation rows carry another configuration's reading",
         shared.len()
     );
+    assert!(shared.is_empty(), "{shared:?}");
 }
 
 /// Series B (or Series A with SERIES=A) with other pool sizes and seeds (POOL, SEEDS env;

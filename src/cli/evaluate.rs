@@ -7,6 +7,7 @@ use super::summary::{
 };
 use anyhow::Result;
 use clap::Args;
+use robocal::data::shared_readings::rows_checked;
 use robocal::evaluate::{row_errors, summarize};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
@@ -31,7 +32,8 @@ pub struct EvaluateArgs {
     /// Other measurements of the same robot (the training file of a compensator, say) to
     /// check this file's readings against: a row here that carries the reading of a row there,
     /// logged with other joints, is listed and left out of `data clean` as one that carries the
-    /// reading of a row of this file is (read with the same options as `--data`).
+    /// reading of a row of this file is (read with the same options as `--data`; measures pose
+    /// and position; rows with a position and an orientation).
     #[arg(long, value_name = "FILE")]
     check_against: Option<PathBuf>,
     #[command(flatten)]
@@ -75,11 +77,6 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         None => (None, None),
     };
     let set = read_set(&a.read, &a.data, &robot)?;
-    let reference = a
-        .check_against
-        .as_ref()
-        .map(|p| read_set(&a.read, p, &robot))
-        .transpose()?;
     let m = a
         .measure
         .map(Measure::from)
@@ -87,13 +84,18 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     // What `identify` asks of the rows for this measure (an orientation in every row, pairs,
     // ...): a measure the file cannot give is refused, not reported as empty columns.
     robocal::identify::problem::Observations::new(&set, m, Default::default())?;
-    if reference.is_some() && !matches!(m, Measure::Pose | Measure::Position) {
+    if a.check_against.is_some() && !matches!(m, Measure::Pose | Measure::Position) {
         anyhow::bail!(
             "--check-against compares the readings of single rows (measure pose or position), \
              not measure {}",
             m.name()
         );
     }
+    let reference = a
+        .check_against
+        .as_ref()
+        .map(|p| read_set(&a.read, p, &robot))
+        .transpose()?;
     let model_rows = row_errors(&set, m, |q| tool_pose(&robot, q))?;
     let s = summarize(&model_rows);
     println!(
@@ -154,6 +156,24 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     };
     if let Some(r) = &report.repeats {
         print_repeats(r);
+    }
+    if let (Some(path), Some(r)) = (&a.check_against, &reference) {
+        // Said whatever it found: a check that could not run is not a clean result.
+        let (mine, theirs) = (rows_checked(&robot, &set), rows_checked(&robot, r));
+        println!(
+            "checked against {}: {mine} row(s) with a position and an orientation, against \
+             themselves and {theirs} of its rows; {} carry another configuration's reading",
+            path.display(),
+            report.shared_readings.len()
+        );
+        if mine == 0 || theirs == 0 {
+            eprintln!(
+                "warning: --check-against {}: {} no row with both a position and an \
+                 orientation, so no reading was compared with its rows",
+                path.display(),
+                if mine == 0 { "the data have" } else { "it has" }
+            );
+        }
     }
     if !report.shared_readings.is_empty() {
         print_shared(

@@ -26,7 +26,9 @@ pub struct TrainArgs {
     /// Training measurements (full pose or position).
     #[arg(long)]
     data: PathBuf,
-    /// Measurements to report the compensator on (e.g. a simulated set's truth file).
+    /// Measurements to report the compensator on (e.g. a simulated set's truth file); their
+    /// readings are checked against themselves and the training rows' for readings logged with
+    /// other joints (`validation clean` leaves those rows out).
     #[arg(long)]
     validate: Option<PathBuf>,
     #[command(flatten)]

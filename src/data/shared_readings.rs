@@ -11,7 +11,7 @@
 //!
 //! Position alone is not enough: a grid turned about the probe point reads one position in
 //! several configurations by design, and a model 0.4 mm RMS off can be 1.3 mm off the relative
-//! position of two of them. On Series A (11,910 poses, about 2,000 pairs of different
+//! position of two of them. On Series A (11,911 poses, about 2,000 pairs of different
 //! configurations within 0.1 mm) two such pairs would have passed for shared readings in
 //! position; their orientations are 10 and 20 deg apart. Rows without a measured orientation
 //! therefore take no part.
@@ -58,8 +58,9 @@ pub struct SharedReading {
     pub row: usize,
     /// Its source-file line (0 for rows built in code).
     pub line: usize,
-    /// Index in the set's rows of the row whose reading it shares (the closest reading where
-    /// several do).
+    /// Index of the row whose reading it shares (the closest reading where several do): in
+    /// the set's rows, or in the reference set's where [`SharedReading::other_source`] names
+    /// one.
     pub other_row: usize,
     /// That row's source-file line.
     pub other_line: usize,
@@ -107,9 +108,10 @@ impl SharedReading {
 
 /// The rows of `set` whose reading a row of another configuration shares under `model` (see
 /// the module's documentation), one per suspect row, in row order. Rows without a measured
-/// position and orientation take no part. The readings are swept in the order of the
-/// coordinate that spreads widest, each against those within [`POSITION_MM`] of it there, so
-/// the cost grows with the rows (and the readings that close), not with all their pairs.
+/// position and orientation (or with another number of joints than `model`'s) take no part.
+/// The readings are swept in the order of the coordinate that spreads widest, each against
+/// those within [`POSITION_MM`] of it there, so the cost grows with the rows (and the readings
+/// that close), not with all their pairs.
 pub fn shared_readings(model: &Robot, set: &MeasurementSet) -> Vec<SharedReading> {
     let rows: Vec<&Measurement> = set.rows.iter().collect();
     sweep(model, &rows, rows.len())
@@ -139,11 +141,25 @@ pub fn shared_readings_with(
     found
 }
 
+/// How many rows of `set` take part in the check under `model`: those with a measured position
+/// and orientation and `model`'s number of joints.
+pub fn rows_checked(model: &Robot, set: &MeasurementSet) -> usize {
+    set.rows.iter().filter(|m| has_reading(model, m)).count()
+}
+
+/// Whether row `m` takes part: a finite measured position, an orientation, and `model`'s
+/// number of joints (a row of another robot has no pose under `model`).
+fn has_reading(model: &Robot, m: &Measurement) -> bool {
+    m.rotation.is_some()
+        && m.position.is_some_and(|p| p.iter().all(|v| v.is_finite()))
+        && m.q.len() == model.dof()
+}
+
 /// The suspects among the first `named` of `rows` (see [`shared_readings`]); `other_row`
 /// indexes `rows`.
 fn sweep(model: &Robot, rows: &[&Measurement], named: usize) -> Vec<SharedReading> {
     let reading = |i: usize| match (&rows[i].position, &rows[i].rotation) {
-        (Some(p), Some(r)) if p.iter().all(|v| v.is_finite()) => Some((p, r)),
+        (Some(p), Some(r)) if has_reading(model, rows[i]) => Some((p, r)),
         _ => None,
     };
     let mut order: Vec<usize> = (0..rows.len()).filter(|&i| reading(i).is_some()).collect();
@@ -357,6 +373,32 @@ mod tests {
         let closest = shared_readings_with(&robot, &own, &exact);
         assert_eq!(closest.len(), 1);
         assert_eq!((closest[0].other_line, closest[0].reading_mm), (9, 0.0));
+        // A slip within the reference is the reference's own (not named here), and an empty
+        // set has nothing to name.
+        let mut slipped = training.clone();
+        slipped
+            .rows
+            .push(row(&robot, c, d, [0.01, 0.0, 0.0], 0.0, 10));
+        assert_eq!(shared_readings(&robot, &slipped).len(), 1);
+        assert_eq!(shared_readings_with(&robot, &set, &slipped), found);
+        let none = MeasurementSet::from_rows(Vec::new());
+        assert!(shared_readings_with(&robot, &none, &slipped).is_empty());
+        // A row of another robot (five joints) takes no part, and does not stop the check.
+        let mut other_robot = training.clone();
+        let mut five = row(&robot, a, a, [0.2, 0.03, -0.1], 1e-4, 11);
+        five.q.pop();
+        other_robot.rows.push(five);
+        assert_eq!(shared_readings_with(&robot, &set, &other_robot), found);
+        assert_eq!(
+            (
+                rows_checked(&robot, &training),
+                rows_checked(&robot, &other_robot)
+            ),
+            (2, 2)
+        );
+        let mut no_orientation = training.clone();
+        no_orientation.rows[0].rotation = None;
+        assert_eq!(rows_checked(&robot, &no_orientation), 1);
         // The JSON form names the other file only where there is one.
         let json = serde_json::to_string(&alone[0]).unwrap();
         assert!(!json.contains("other_source"), "{json}");
