@@ -7,6 +7,7 @@ use robocal::model::read_robot;
 use robocal::neural::compensator::{Compensator, CompensatorOptions, Form, Settings};
 use robocal::neural::encoding::Encoding;
 use robocal::neural::predict::PredictWorkspace;
+use robocal::neural::rbf::Covariance;
 use robocal::neural::train::TrainOptions;
 use robocal::studies::case_d::{Robotset, Stage, find, run};
 use std::path::{Path, PathBuf};
@@ -246,8 +247,10 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
             // Equal say before version 6.
             expected.mlp_share = 0.5;
             let e_rbf = expected.rbf.as_mut().unwrap();
+            // Squared-exponential kernels before version 7.
             e_rbf.kernels = vec![robocal::neural::rbf::Kernel {
                 outputs: c.outputs(),
+                covariance: Covariance::SquaredExponential,
                 ..shared.clone()
             }];
             let (mut w1, mut w2) = (PredictWorkspace::default(), PredictWorkspace::default());
@@ -269,6 +272,36 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
             v.as_object_mut().unwrap().remove("mlp_share");
             std::fs::write(&path, resign(v)).unwrap();
             assert_eq!(Compensator::load(&path).unwrap().mlp_share, 0.5);
+        }
+        if let Some(rbf) = &c.rbf {
+            // Version 7 gave each kernel its covariance function (Matern 5/2 by default); a
+            // version 6 file, without it, is read with the squared exponential it was made
+            // with, and one of another name is refused.
+            let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            assert_eq!(v["version"], 7);
+            assert_eq!(v["rbf"]["kernels"][0]["covariance"], "matern52");
+            assert!(
+                rbf.kernels
+                    .iter()
+                    .all(|k| k.covariance == Covariance::Matern52)
+            );
+            assert_eq!(back.rbf, c.rbf);
+            let mut v6 = v.clone();
+            v6["version"] = serde_json::json!(6);
+            for k in v6["rbf"]["kernels"].as_array_mut().unwrap() {
+                k.as_object_mut().unwrap().remove("covariance");
+            }
+            std::fs::write(&path, resign(v6)).unwrap();
+            let old = Compensator::load(&path).unwrap();
+            let old_rbf = old.rbf.as_ref().unwrap();
+            assert!(
+                old_rbf
+                    .kernels
+                    .iter()
+                    .all(|k| k.covariance == Covariance::SquaredExponential)
+            );
+            let e = edit(&|v| v["rbf"]["kernels"][0]["covariance"] = serde_json::json!("cubic"));
+            assert!(e.contains("cubic") || e.contains("rbf"), "{e}");
         }
         if c.shrink.is_some() {
             assert_eq!(back.shrink, c.shrink);
@@ -813,7 +846,10 @@ fn a_mis_measured_training_row_is_listed_and_left_out() {
     };
     let mut by_rows = Vec::new();
     for rows in [HYPER_ROWS, 60] {
-        let draw = Draw { seed, rows };
+        let draw = Draw {
+            rows,
+            ..Draw::seeded(seed)
+        };
         let (kept_kernels, s, listed) = rbf(false, rows);
         if rows == HYPER_ROWS {
             assert_eq!(listed, vec![bad]);
@@ -823,7 +859,9 @@ fn a_mis_measured_training_row_is_listed_and_left_out() {
         let judged = search(&all, start, draw).unwrap().hyper;
         assert_eq!(
             kept_kernels,
-            Rbf::with_hyper(&all, &judged).unwrap().kernels
+            Rbf::with_hyper(&all, &judged, draw.covariance)
+                .unwrap()
+                .kernels
         );
         let (dropped_kernels, s, _) = rbf(true, rows);
         let kept = robocal::neural::tuning::subset(&train, |i| !listed.contains(&i));
@@ -831,7 +869,9 @@ fn a_mis_measured_training_row_is_listed_and_left_out() {
         let again = search_from(&without, &judged, draw, &listed).unwrap().hyper;
         assert_eq!(
             dropped_kernels,
-            Rbf::with_hyper(&without, &again).unwrap().kernels
+            Rbf::with_hyper(&without, &again, draw.covariance)
+                .unwrap()
+                .kernels
         );
         assert_ne!(dropped_kernels, kept_kernels);
         by_rows.push(kept_kernels);

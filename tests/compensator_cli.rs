@@ -405,17 +405,25 @@ fn train_and_evaluate_report_the_repeats_of_their_data() {
 }
 
 /// `--rbf-search-rows` bounds the rows the RBF network's likelihood search sees, and `train`
-/// says how many it saw: 60 of Case D's 150 training rows when told, all of them by default.
+/// says how many it saw: 60 of Case D's 150 training rows when told, all of them by default;
+/// and which covariance function it fitted (`--rbf-kernel`; Matern 5/2 by default), which the
+/// file keeps.
 #[test]
 fn train_says_how_many_rows_the_rbf_search_saw() {
-    for (extra, said) in [
+    for (extra, said, kernel) in [
         (
             &["--rbf-search-rows", "60"][..],
             "searched on 60 of the rows",
+            "matern52",
         ),
-        (&[][..], "searched on all rows"),
+        (&[][..], "searched on all rows", "matern52"),
+        (
+            &["--rbf-kernel", "squared-exponential"][..],
+            "searched on all rows",
+            "squared_exponential",
+        ),
     ] {
-        let comp = tmp(&format!("rows{}.rcal", extra.len()));
+        let comp = tmp(&format!("rows{}{}.rcal", extra.len(), kernel.len()));
         let mut args = vec!["--network", "rbf", "--refine", "none"];
         args.extend_from_slice(extra);
         let o = common::train_fanuc(
@@ -428,11 +436,26 @@ fn train_says_how_many_rows_the_rbf_search_saw() {
         assert!(out.contains("rbf network: 150 units ("), "{out}");
         assert!(
             out.contains(&format!(
-                "one Gaussian process per output, its hyperparameters {said}"
+                "one Gaussian process per output ({kernel} covariance), its hyperparameters \
+                 {said}"
             )),
             "{out}"
         );
+        let c = robocal::neural::compensator::Compensator::load(&comp).unwrap();
+        let rbf = c.rbf.unwrap();
+        assert!(rbf.kernels.iter().all(|k| k.covariance.name() == kernel));
     }
+    // The RBF network's kernel means nothing to the MLPs alone.
+    let o = common::train_fanuc(
+        "datasets/case_d/training.csv",
+        tmp("kernel_mlp.rcal").to_str().unwrap(),
+        &["--network", "mlp", "--rbf-kernel", "matern52"],
+    );
+    assert!(
+        !o.status.success() && stderr(&o).contains("--rbf-kernel sets up the RBF network"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 /// The default refinement tries the joints' gravity compliances (issue 11 item 7, issue 14):

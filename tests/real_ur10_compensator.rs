@@ -175,7 +175,11 @@ fn default_beats_the_plain_baseline_on_series_b() {
         let judged = sel.rbf_hyper.as_ref().unwrap();
         let draw = Draw::seeded(CompensatorOptions::default().train.seed);
         let again = search_from(&samples, judged, draw, &left).unwrap().hyper;
-        let kernels = |h| Rbf::with_hyper(&samples, h).unwrap().kernels;
+        let kernels = |h| {
+            Rbf::with_hyper(&samples, h, draw.covariance)
+                .unwrap()
+                .kernels
+        };
         assert_eq!(c.rbf.as_ref().unwrap().kernels, kernels(&again));
         let other_draw = search_from(&samples, judged, draw, &[]).unwrap().hyper;
         assert_ne!(again, other_draw);

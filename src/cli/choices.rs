@@ -112,3 +112,13 @@ choice! {
         I,
     }
 }
+
+choice! {
+    /// The RBF network's covariance function.
+    RbfKernel => robocal::neural::rbf::Covariance {
+        /// Matern nu = 5/2: (1 + t + t^2/3) e^-t, t = sqrt(5 q) (the default).
+        Matern52,
+        /// Squared exponential exp(-q/2) (networks before version 7 of the file).
+        SquaredExponential,
+    }
+}

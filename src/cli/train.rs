@@ -160,10 +160,11 @@ fn print_fit(
     );
     if let Some(r) = &c.rbf {
         println!(
-            "rbf network: {} units ({} inputs), one Gaussian process per output, its \
-             hyperparameters searched on {} rows{}",
+            "rbf network: {} units ({} inputs), one Gaussian process per output ({} \
+             covariance), its hyperparameters searched on {} rows{}",
             r.units(),
             c.encoding.name(),
+            r.kernels.first().map_or("-", |k| k.covariance.name()),
             // The draw is of the rows cross-validation saw: the training rows but those left
             // out for carrying another configuration's reading, outliers included.
             if rows > search_rows {

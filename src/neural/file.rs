@@ -1,10 +1,13 @@
-//! The compensator file (JSON, version 6): format and version, form, encoding, shapes,
+//! The compensator file (JSON, version 7): format and version, form, encoding, shapes,
 //! normalisations, training domain, the robot file it runs in series with (embedded, with its
 //! hash), one burn record (burnpack bytes, hex) per MLP of the ensemble, the RBF network
 //! (`rbf`: centres, one kernel per output with its widths and variances, weights; or null),
 //! the MLPs' share of the correction where both are present (`mlp_share`), the shrinkage of
 //! the MLPs' mean (`shrink`: centre and signal variance, or null), and a checksum of it all.
 //!
+//! Version 7 gave each RBF kernel its covariance function (`covariance`: `matern52`, the
+//! default since, or `squared_exponential`); earlier files are read with the squared
+//! exponential they were made with.
 //! Version 6 added the MLPs' share; earlier files are read with the equal say (1/2) they
 //! were made with.
 //! Version 5 gave the RBF network one kernel per output; version 3 and 4 files, whose outputs
@@ -30,7 +33,7 @@ use serde_json::Value;
 use std::path::Path;
 
 const FORMAT: &str = "robocal-compensator";
-const VERSION: u64 = 6;
+const VERSION: u64 = 7;
 /// The oldest version this robocal reads.
 const OLDEST: u64 = 2;
 

@@ -120,7 +120,7 @@ pub(crate) fn fit_with(
             RbfHyper::From(from) => search_from(x, from, draw, left)?.hyper,
             RbfHyper::Search => search_start_without(x, settings.rbf_start, draw, left)?.hyper,
         };
-        Some(Rbf::with_hyper_on(x, &hyper, parallel)?)
+        Some(Rbf::with_hyper_on(x, &hyper, draw.covariance, parallel)?)
     } else {
         None
     };

@@ -135,15 +135,19 @@ pub struct TrainOptions {
     /// larger sets, the same in cross-validation and in the final fit; at least 2): default
     /// [`super::rbf::HYPER_ROWS`]. The search's cost is cubic in them.
     pub rbf_search_rows: usize,
+    /// The RBF network's covariance function: default [`super::rbf::Covariance::DEFAULT`]
+    /// (Matern 5/2).
+    pub rbf_covariance: super::rbf::Covariance,
 }
 
 impl TrainOptions {
-    /// The rows an RBF network's hyperparameter search sees: `rbf_search_rows` of the set,
-    /// drawn by `seed`.
+    /// The rows an RBF network's hyperparameter search sees (`rbf_search_rows` of the set,
+    /// drawn by `seed`) and its covariance function.
     pub fn rbf_draw(&self) -> super::rbf::Draw {
         super::rbf::Draw {
             seed: self.seed,
             rows: self.rbf_search_rows,
+            covariance: self.rbf_covariance,
         }
     }
 }
@@ -166,6 +170,7 @@ impl Default for TrainOptions {
             rbf_hyper: RbfHyper::Search,
             rbf_left_out: Vec::new(),
             rbf_search_rows: super::rbf::HYPER_ROWS,
+            rbf_covariance: super::rbf::Covariance::DEFAULT,
         }
     }
 }

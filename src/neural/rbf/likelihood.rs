@@ -1,7 +1,7 @@
 //! The Gaussian process's kernel matrix and its negative log marginal likelihood with the
 //! gradient by the log hyperparameters (Rasmussen and Williams 2006, eqs. 2.30 and 5.9).
 
-use super::{Hyper, unit_response};
+use super::{Covariance, Hyper};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::{factor, inverse, solve};
 use faer::{Conj, Mat};
@@ -26,8 +26,8 @@ fn inverse_squares(h: &Hyper, w: &mut Vec<f64>) {
 }
 
 /// The lower triangle of K = s^2 E + (sigma^2 + jitter) I at the inputs `x` under `h` (E
-/// the unit responses, [`unit_response`]); the upper triangle is left 0.
-pub(super) fn kernel(x: &[Vec<f64>], h: &Hyper) -> Mat<f64> {
+/// the unit responses of `cov`, [`Covariance::response`]); the upper triangle is left 0.
+pub(super) fn kernel(x: &[Vec<f64>], h: &Hyper, cov: Covariance) -> Mat<f64> {
     let n = x.len();
     let d = h.len() - 2;
     let mut w = Vec::with_capacity(d);
@@ -44,7 +44,7 @@ pub(super) fn kernel(x: &[Vec<f64>], h: &Hyper) -> Mat<f64> {
             column[j] = s2 + noise + 1e-8 * s2;
             let below = &mut column[j + 1..];
             pairs.column_squares(j, &w, below);
-            below.iter_mut().for_each(|q| *q = s2 * unit_response(*q));
+            below.iter_mut().for_each(|q| *q = s2 * cov.response(*q));
         }
     });
     k
@@ -104,6 +104,10 @@ pub(super) struct Scratch {
     alpha: Mat<f64>,
     e: Vec<f64>,
     p: Vec<f64>,
+    /// Per pair, -2 dk/dq ([`Covariance::width_factor`]) and P with it in place of E (both
+    /// empty for the squared exponential, whose factor is E itself).
+    g: Vec<f64>,
+    pg: Vec<f64>,
     /// 1 / l_d^2 of each input, and the gradient's sums over the pairs of each input.
     w: Vec<f64>,
     total: Vec<f64>,
@@ -119,6 +123,8 @@ impl Scratch {
             alpha: Mat::zeros(n, o),
             e: Vec::new(),
             p: Vec::new(),
+            g: Vec::new(),
+            pg: Vec::new(),
             w: Vec::new(),
             total: Vec::new(),
             mem: scratch(n, o, true),
@@ -217,19 +223,20 @@ impl Pairs {
 /// `h`, plus the prior's negative log density around `prior` (constants dropped), and its
 /// gradient by h into `grad`: with alpha = K^-1 Y and M = alpha alpha^T - o K^-1,
 /// d/dh_j = -1/2 sum_ij M_ij dK_ij/dh_j (Rasmussen and Williams eq. 5.9), where
-/// dK/d ln l_d = s^2 E o D_d / l_d^2 (D_d the squared differences of input d),
-/// dK/d ln s^2 = s^2 E and dK/d ln sigma^2 = sigma^2 I, with E_ij = 0 beyond the weighted
-/// squared distance `FAR` = 690 (K is the module's `kernel`). Infinite where K is
-/// not positive definite.
+/// dK/d ln l_d = s^2 G o D_d / l_d^2 (D_d the squared differences of input d, G = -2 dE/dq,
+/// E itself for the squared exponential), dK/d ln s^2 = s^2 E and dK/d ln sigma^2 = sigma^2
+/// I, with E_ij = G_ij = 0 beyond the weighted squared distance [`Covariance::far`] (K is the
+/// module's `kernel` under `cov`). Infinite where K is not positive definite.
 pub fn neg_log_likelihood(
     pairs: &Pairs,
     y: &Mat<f64>,
     h: &Hyper,
     prior: &Hyper,
+    cov: Covariance,
     grad: Option<&mut DVector<f64>>,
 ) -> f64 {
     let mut scratch = Scratch::new(pairs.len(), y.ncols());
-    neg_log_likelihood_in(pairs, y, h, prior, grad, &mut scratch)
+    neg_log_likelihood_in(pairs, y, h, prior, cov, grad, &mut scratch)
 }
 
 /// [`neg_log_likelihood`] writing into `scratch` (made for the rows of `pairs` and the
@@ -240,6 +247,7 @@ pub(super) fn neg_log_likelihood_in(
     y: &Mat<f64>,
     h: &Hyper,
     prior: &Hyper,
+    cov: Covariance,
     grad: Option<&mut DVector<f64>>,
     scratch: &mut Scratch,
 ) -> f64 {
@@ -261,6 +269,8 @@ pub(super) fn neg_log_likelihood_in(
         alpha,
         e,
         p,
+        g: gf,
+        pg,
         w,
         total,
         mem,
@@ -269,7 +279,14 @@ pub(super) fn neg_log_likelihood_in(
     let stack = MemStack::new(mem);
     e.resize(count, 0.0);
     pairs.weighted_squares(w, e);
-    e.iter_mut().for_each(|q| *q = unit_response(*q));
+    let squared_exponential = cov == Covariance::SquaredExponential;
+    if !squared_exponential && grad.is_some() {
+        gf.resize(count, 0.0);
+        gf.iter_mut()
+            .zip(e.iter())
+            .for_each(|(g, &q)| *g = cov.width_factor(q));
+    }
+    e.iter_mut().for_each(|q| *q = cov.response(*q));
     // The factorisation reads the lower triangle only: the upper one is zero (a new
     // scratch's, or the last factorisation's).
     let mut at = 0;
@@ -339,9 +356,19 @@ pub(super) fn neg_log_likelihood_in(
         // sum_ij P_ij = trace(P) + 2 sum_{i>j} P_ij, trace(P) = s^2 trace(M).
         g[d] = -0.5 * (s2 * trace_m + 2.0 * p.iter().sum::<f64>());
         g[d + 1] = -0.5 * noise * trace_m;
-        // sum_ij P_ij D_ij = 2 sum_{i>j} P_ij D_ij (D_ii = 0).
+        // sum_ij P_ij D_ij = 2 sum_{i>j} P_ij D_ij (D_ii = 0), with G in place of E in P.
         total.resize(d, 0.0);
-        pairs.weighted_sums(p, total);
+        if squared_exponential {
+            pairs.weighted_sums(p, total);
+        } else {
+            pg.resize(count, 0.0);
+            pg.iter_mut()
+                .zip(p.iter().zip(e.iter().zip(gf.iter())))
+                .for_each(|(pgij, (&pij, (&eij, &gij)))| {
+                    *pgij = if eij == 0.0 { 0.0 } else { pij / eij * gij }
+                });
+            pairs.weighted_sums(pg, total);
+        }
         for c in 0..d {
             g[c] = -total[c] * w[c];
         }
@@ -364,7 +391,7 @@ mod tests {
     fn in_place_factors_are_those_of_faers_llt() {
         let (s, _) = data(120);
         let h = Hyper::from_vec(vec![0.3, -0.2, 0.9, 0.1, -3.0]);
-        let mut k = kernel(&s.x, &h);
+        let mut k = kernel(&s.x, &h, Covariance::DEFAULT);
         let chol = k.llt(Side::Lower).unwrap();
         let mut mem = scratch(120, 2, true);
         let stack = MemStack::new(&mut mem);
@@ -417,18 +444,23 @@ mod tests {
                 assert!(!factor_lower(k, MemStack::new(&mut mem)));
             }
             let h = DVector::from_vec(h.clone());
-            let (mut g1, mut g2) = (DVector::zeros(5), DVector::zeros(5));
-            let fresh = neg_log_likelihood(&pairs, &y, &h, &prior, Some(&mut g1));
-            let again = neg_log_likelihood_in(&pairs, &y, &h, &prior, Some(&mut g2), &mut reused);
-            assert_eq!(fresh.to_bits(), again.to_bits(), "{h}");
-            assert_eq!(g1, g2);
+            // Both covariance functions through one scratch, one after the other.
+            for cov in [Covariance::Matern52, Covariance::SquaredExponential] {
+                let (mut g1, mut g2) = (DVector::zeros(5), DVector::zeros(5));
+                let fresh = neg_log_likelihood(&pairs, &y, &h, &prior, cov, Some(&mut g1));
+                let again =
+                    neg_log_likelihood_in(&pairs, &y, &h, &prior, cov, Some(&mut g2), &mut reused);
+                assert_eq!(fresh.to_bits(), again.to_bits(), "{h}");
+                assert_eq!(g1, g2);
+            }
         }
         // A scratch of another size is remade.
         let mut small = Scratch::new(5, 1);
         let h = DVector::from_vec(hs[0].clone());
+        let cov = Covariance::DEFAULT;
         assert_eq!(
-            neg_log_likelihood_in(&pairs, &y, &h, &prior, None, &mut small).to_bits(),
-            neg_log_likelihood(&pairs, &y, &h, &prior, None).to_bits()
+            neg_log_likelihood_in(&pairs, &y, &h, &prior, cov, None, &mut small).to_bits(),
+            neg_log_likelihood(&pairs, &y, &h, &prior, cov, None).to_bits()
         );
     }
 
@@ -446,24 +478,28 @@ mod tests {
         pairs.weighted_squares(&w, &mut q);
         let far = q.iter().filter(|&&q| q > FAR).count();
         assert!(far > q.len() / 2, "{far} of {} pairs beyond FAR", q.len());
-        for (targets, h) in [(1, &near), (2, &near), (1, &narrow), (2, &narrow)] {
+        let cases = [(1, &near), (2, &near), (1, &narrow), (2, &narrow)];
+        for (cov, (targets, h)) in [Covariance::SquaredExponential, Covariance::Matern52]
+            .into_iter()
+            .flat_map(|c| cases.into_iter().map(move |t| (c, t)))
+        {
             let y = Mat::<f64>::from_fn(40, targets, |i, j| s.b[i][j]);
             let h = DVector::from_vec(h.clone());
             let prior = prior_mean(3, 0.5);
             let mut g = DVector::zeros(5);
-            let f = neg_log_likelihood(&pairs, &y, &h, &prior, Some(&mut g));
+            let f = neg_log_likelihood(&pairs, &y, &h, &prior, cov, Some(&mut g));
             assert!(f.is_finite());
             for j in 0..5 {
                 let step = 1e-5;
                 let (mut a, mut b) = (h.clone(), h.clone());
                 a[j] += step;
                 b[j] -= step;
-                let fd = (neg_log_likelihood(&pairs, &y, &a, &prior, None)
-                    - neg_log_likelihood(&pairs, &y, &b, &prior, None))
+                let fd = (neg_log_likelihood(&pairs, &y, &a, &prior, cov, None)
+                    - neg_log_likelihood(&pairs, &y, &b, &prior, cov, None))
                     / (2.0 * step);
                 assert!(
                     (fd - g[j]).abs() <= 1e-6 * (1.0 + fd.abs()),
-                    "{targets} target(s), {h}, component {j}: analytic {} numeric {fd}",
+                    "{cov:?}, {targets} target(s), {h}, component {j}: analytic {} numeric {fd}",
                     g[j]
                 );
             }

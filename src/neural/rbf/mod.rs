@@ -31,11 +31,13 @@
 //! choice) and only the weights use every row. The likelihood has several modes on real data,
 //! so the search can run from each of [`STARTS`]; the factorisations use `faer`.
 
+mod covariance;
 mod likelihood;
 mod search;
 
 use super::samples::Samples;
 use crate::error::{Error, Result};
+pub use covariance::Covariance;
 use faer::Mat;
 use faer::dyn_stack::MemStack;
 use likelihood::kernel;
@@ -58,6 +60,9 @@ pub struct Kernel {
     pub signal_variance: f64,
     /// Noise variance sigma^2 (unit-scale outputs squared).
     pub noise_variance: f64,
+    /// The form of the unit response (files before version 7: the squared exponential).
+    #[serde(default = "Covariance::before_version_7")]
+    pub covariance: Covariance,
 }
 
 impl Kernel {
@@ -78,23 +83,16 @@ impl Kernel {
 /// the same compensator bit for bit.
 pub(super) const FAR: f64 = 690.0;
 
-/// A unit's response exp(-q / 2) at the weighted squared distance `q`, 0 beyond [`FAR`]:
-/// the one cut the fit, the likelihood and prediction share.
-#[inline(always)]
-fn unit_response(q: f64) -> f64 {
-    if q > FAR { 0.0 } else { (-0.5 * q).exp() }
-}
-
-/// The unit response exp(-1/2 sum_d (x_d - c_d)^2 / l_d^2) at `x` of the unit at `c` (0
-/// beyond [`FAR`]), with `inv` the kernel's 1 / l_d^2 (multiplications: per input and unit a
-/// division cost four times as much, most of a prediction).
-fn response(x: &[f64], c: &[f64], inv: &[f64]) -> f64 {
+/// The weighted squared distance sum_d (x_d - c_d)^2 / l_d^2 of `x` from the unit at `c`,
+/// with `inv` the kernel's 1 / l_d^2 (multiplications: per input and unit a division cost
+/// four times as much, most of a prediction).
+fn distance(x: &[f64], c: &[f64], inv: &[f64]) -> f64 {
     let mut s = 0.0;
     for ((xd, cd), i) in x.iter().zip(c).zip(inv) {
         let t = xd - cd;
         s += t * t * i;
     }
-    unit_response(s)
+    s
 }
 
 /// A fitted RBF network (normalised inputs, unit-scale outputs).
@@ -131,6 +129,7 @@ impl From<SharedKernelRbf> for Rbf {
                 widths: r.widths,
                 signal_variance: r.signal_variance,
                 noise_variance: r.noise_variance,
+                covariance: Covariance::before_version_7(),
             }],
             centres: r.centres,
             weights: r.weights,
@@ -157,15 +156,15 @@ impl Rbf {
         })
     }
 
-    /// Calls `f(outputs, inv, centre, weights, k)` for every kernel (the outputs it serves,
-    /// its 1 / l_d^2) and unit, k the unit's response at `x`: kernel by kernel, the units in
-    /// order. `inv` is scratch for the kernels' 1 / l_d^2 (no allocation once it has held
-    /// them).
+    /// Calls `f(outputs, inv, centre, weights, covariance, q)` for every kernel (the outputs
+    /// it serves, its 1 / l_d^2, its covariance function) and unit, q the unit's weighted
+    /// squared distance from `x`: kernel by kernel, the units in order. `inv` is scratch for
+    /// the kernels' 1 / l_d^2 (no allocation once it has held them).
     fn responses(
         &self,
         x: &[f64],
         inv: &mut Vec<f64>,
-        mut f: impl FnMut(std::ops::Range<usize>, &[f64], &[f64], &[f64], f64),
+        mut f: impl FnMut(std::ops::Range<usize>, &[f64], &[f64], &[f64], Covariance, f64),
     ) {
         inv.clear();
         for k in &self.kernels {
@@ -176,7 +175,14 @@ impl Rbf {
             let own = &inv[at..at + kernel.widths.len()];
             at += kernel.widths.len();
             for (c, w) in self.centres.iter().zip(&self.weights) {
-                f(outs.clone(), own, c, w, response(x, c, own));
+                f(
+                    outs.clone(),
+                    own,
+                    c,
+                    w,
+                    kernel.covariance,
+                    distance(x, c, own),
+                );
             }
         }
     }
@@ -184,7 +190,8 @@ impl Rbf {
     /// y(x) into `y`; `inv` is scratch (no allocation once it has been used).
     pub fn forward_into(&self, x: &[f64], y: &mut [f64], inv: &mut Vec<f64>) {
         y.fill(0.0);
-        self.responses(x, inv, |outs, _, _, w, k| {
+        self.responses(x, inv, |outs, _, _, w, cov, q| {
+            let k = cov.response(q);
             y[outs.clone()]
                 .iter_mut()
                 .zip(&w[outs])
@@ -192,8 +199,9 @@ impl Rbf {
         });
     }
 
-    /// y(x) into `y` and dy/dx (outputs x inputs) into `dy`: dy_o/dx_d = -sum_i w_io k_io
-    /// (x_d - c_id) / l_od^2; `inv` is scratch as in [`Rbf::forward_into`].
+    /// y(x) into `y` and dy/dx (outputs x inputs) into `dy`: dy_o/dx_d = -sum_i w_io g_io
+    /// (x_d - c_id) / l_od^2, g = -2 dk/dq ([`Covariance::width_factor`]; the response itself
+    /// for the squared exponential); `inv` is scratch as in [`Rbf::forward_into`].
     pub fn input_jacobian_into(
         &self,
         x: &[f64],
@@ -203,15 +211,20 @@ impl Rbf {
     ) {
         y.fill(0.0);
         dy.fill(0.0);
-        self.responses(x, inv, |outs, own, c, w, k| {
+        self.responses(x, inv, |outs, own, c, w, cov, q| {
+            let k = cov.response(q);
             if k == 0.0 {
                 return;
             }
+            let g = match cov {
+                Covariance::SquaredExponential => k,
+                _ => cov.width_factor(q),
+            };
             for o in outs {
-                let wk = w[o] * k;
-                y[o] += wk;
+                y[o] += w[o] * k;
+                let wg = w[o] * g;
                 for (d, i) in own.iter().enumerate() {
-                    dy[(o, d)] -= wk * (x[d] - c[d]) * i;
+                    dy[(o, d)] -= wg * (x[d] - c[d]) * i;
                 }
             }
         });
@@ -249,26 +262,29 @@ impl Rbf {
     /// Fits the network on `s` (targets without maps: the pose form): the hyperparameter
     /// search from [`STARTS`]`[start]` ([`search()`]), or when None from every start keeping,
     /// output by output, the highest likelihood ([`search_best`]), on the default draw of
-    /// `seed` ([`Draw::seeded`]), then the weights on every row ([`Rbf::with_hyper`]).
+    /// `seed` ([`Draw::seeded`], the default covariance function), then the weights on every
+    /// row ([`Rbf::with_hyper`]).
     pub fn fit(s: &Samples, start: Option<usize>, seed: u64) -> Result<(Rbf, Search)> {
-        let found = search_start_without(s, start, Draw::seeded(seed), &[])?;
-        Ok((Rbf::with_hyper(s, &found.hyper)?, found))
+        let draw = Draw::seeded(seed);
+        let found = search_start_without(s, start, draw, &[])?;
+        Ok((Rbf::with_hyper(s, &found.hyper, draw.covariance)?, found))
     }
 
-    /// The network at fixed hyperparameters `h` (every output's, see [`Hyper`]): one unit
-    /// per row of `s`, output o's weights w_o = s_o^2 K_o^-1 b_o (the posterior mean's).
-    pub fn with_hyper(s: &Samples, h: &Hyper) -> Result<Rbf> {
-        Rbf::with_hyper_on(s, h, true)
+    /// The network at fixed hyperparameters `h` (every output's, see [`Hyper`]) and
+    /// covariance function `cov`: one unit per row of `s`, output o's weights w_o = s_o^2
+    /// K_o^-1 b_o (the posterior mean's).
+    pub fn with_hyper(s: &Samples, h: &Hyper, cov: Covariance) -> Result<Rbf> {
+        Rbf::with_hyper_on(s, h, cov, true)
     }
 
     /// [`Rbf::with_hyper`], the outputs on several threads when `parallel` (callers that
     /// already run fits side by side pass false: each thread holds an n x n kernel).
-    pub fn with_hyper_on(s: &Samples, h: &Hyper, parallel: bool) -> Result<Rbf> {
+    pub fn with_hyper_on(s: &Samples, h: &Hyper, cov: Covariance, parallel: bool) -> Result<Rbf> {
         let (n, d, o) = shape(s)?;
         check_hyper(h, d, o)?;
         let fit = |j: usize| -> Result<(Kernel, Vec<f64>)> {
             let hj = h.rows(j * (d + 2), d + 2).into_owned();
-            let mut k = kernel(&s.x, &hj);
+            let mut k = kernel(&s.x, &hj, cov);
             let mut mem = likelihood::scratch(n, 1, false);
             let stack = MemStack::new(&mut mem);
             if !likelihood::factor_lower(&mut k, stack) {
@@ -285,6 +301,7 @@ impl Rbf {
                 widths: (0..d).map(|c| hj[c].exp()).collect(),
                 signal_variance: s2,
                 noise_variance: hj[d + 1].exp(),
+                covariance: cov,
             };
             Ok((
                 kernel,
@@ -399,58 +416,76 @@ mod tests {
             }
         }
         assert!(worst < 0.05, "largest error {worst}");
-        // Far from every centre the output falls to zero.
-        rbf.forward_into(&[40.0, -40.0, 0.0], &mut y, &mut inv);
+        // Far from every centre the output falls to zero (as e^-t, t = sqrt(5 q), under the
+        // default Matern 5/2: farther than a squared exponential's e^-q/2 needs).
+        rbf.forward_into(&[400.0, -400.0, 0.0], &mut y, &mut inv);
         assert!(y.iter().all(|v| v.abs() < 1e-9), "{y:?}");
     }
 
     /// Beyond FAR a unit's response is exactly 0 in the weights' kernel matrix (as in the
     /// likelihood's) and in prediction, short of where exp() itself underflows (a weighted
-    /// squared distance of about 1490): no subnormal numbers reach the factorisation.
+    /// squared distance of about 1490 for the squared exponential): no subnormal numbers
+    /// reach the factorisation. Within it, the response of the kernel's covariance function.
     #[test]
     fn responses_beyond_far_are_zero_in_the_fit_and_in_prediction() {
         let (s, _) = data(40);
         // Narrow widths (0.02, 0.03 and 2 on inputs spread over 3): most pairs lie beyond FAR.
         let h = Hyper::from_vec(vec![0.02f64.ln(), 0.03f64.ln(), 0.7, 0.2, -2.0]);
-        let k = likelihood::kernel(&s.x, &h);
         let w: Vec<f64> = (0..3).map(|c| (-2.0 * h[c]).exp()).collect();
         let s2 = h[3].exp();
-        let (mut cut, mut kept) = (0, 0);
-        for j in 0..s.x.len() {
-            for i in j + 1..s.x.len() {
-                let q: f64 = (0..3).map(|c| (s.x[i][c] - s.x[j][c]).powi(2) * w[c]).sum();
-                // The upper triangle is never written (the factorisation reads the lower).
-                assert_eq!(k[(j, i)], 0.0);
-                if q > FAR {
-                    assert_eq!(k[(i, j)], 0.0, "pair {i} {j}: {q}");
-                    cut += usize::from(q < 1400.0);
-                } else {
-                    assert_eq!(k[(i, j)], s2 * (-0.5 * q).exp());
-                    kept += 1;
+        for cov in [Covariance::SquaredExponential, Covariance::Matern52] {
+            let k = likelihood::kernel(&s.x, &h, cov);
+            let (mut cut, mut kept) = (0, 0);
+            for j in 0..s.x.len() {
+                for i in j + 1..s.x.len() {
+                    let q: f64 = (0..3).map(|c| (s.x[i][c] - s.x[j][c]).powi(2) * w[c]).sum();
+                    // The upper triangle is never written (the factorisation reads the lower).
+                    assert_eq!(k[(j, i)], 0.0);
+                    if q > cov.far() {
+                        assert_eq!(k[(i, j)], 0.0, "pair {i} {j}: {q}");
+                        cut += usize::from(q < 1400.0);
+                    } else {
+                        assert_eq!(k[(i, j)], s2 * cov.response(q));
+                        kept += 1;
+                    }
                 }
             }
+            if cov == Covariance::SquaredExponential {
+                assert_eq!(cov.far(), FAR);
+                // Pairs where exp() alone would still give a non-zero number, and pairs kept.
+                assert!(
+                    cut > 0 && kept > 0,
+                    "{cut} cut short of underflow, {kept} kept"
+                );
+            }
         }
-        // Pairs where exp() alone would still give a non-zero number, and pairs kept.
-        assert!(
-            cut > 0 && kept > 0,
-            "{cut} cut short of underflow, {kept} kept"
-        );
-        // Prediction: one unit of width 1 at 0, seen at distances 1 and 30 (q = 900).
-        let rbf = Rbf {
+        // Prediction: one unit of width 1 at 0, seen at distances 1 and 30 (q = 900), and
+        // for Matern 5/2 at 160 (q = 25,600).
+        let unit = |covariance| Rbf {
             centres: vec![vec![0.0]],
             kernels: vec![Kernel {
                 outputs: 1,
                 widths: vec![1.0],
                 signal_variance: 1.0,
                 noise_variance: 0.1,
+                covariance,
             }],
             weights: vec![vec![2.0]],
         };
         let (mut y, mut inv) = ([0.0], Vec::new());
+        let rbf = unit(Covariance::SquaredExponential);
         rbf.forward_into(&[1.0], &mut y, &mut inv);
         assert_eq!(y[0], 2.0 * (-0.5f64).exp());
         assert!((-450.0f64).exp() > 0.0);
         rbf.forward_into(&[30.0], &mut y, &mut inv);
+        assert_eq!(y[0], 0.0);
+        let rbf = unit(Covariance::Matern52);
+        rbf.forward_into(&[1.0], &mut y, &mut inv);
+        let t = 5.0f64.sqrt();
+        assert!((y[0] - 2.0 * (1.0 + t + 5.0 / 3.0) * (-t).exp()).abs() < 1e-15);
+        rbf.forward_into(&[30.0], &mut y, &mut inv);
+        assert!(y[0] > 0.0);
+        rbf.forward_into(&[160.0], &mut y, &mut inv);
         assert_eq!(y[0], 0.0);
     }
 
@@ -486,7 +521,7 @@ mod tests {
             one.b = s.b.iter().map(|b| vec![b[j]]).collect();
             let own = search(&one, 0, Draw::seeded(1)).unwrap();
             assert_eq!(own.hyper, found.hyper.rows(4 * j, 4).into_owned());
-            let alone = Rbf::with_hyper(&one, &own.hyper).unwrap();
+            let alone = Rbf::with_hyper(&one, &own.hyper, Covariance::DEFAULT).unwrap();
             assert_eq!(alone.kernels[0], rbf.kernels[j]);
         }
     }
@@ -494,7 +529,19 @@ mod tests {
     #[test]
     fn input_jacobian_matches_central_differences() {
         let (s, _) = data(60);
-        let (rbf, _) = Rbf::fit(&s, None, 1).unwrap();
+        for covariance in [Covariance::SquaredExponential, Covariance::Matern52] {
+            let draw = Draw {
+                covariance,
+                ..Draw::seeded(1)
+            };
+            let found = search_start_without(&s, None, draw, &[]).unwrap();
+            let rbf = Rbf::with_hyper(&s, &found.hyper, covariance).unwrap();
+            assert!(rbf.kernels.iter().all(|k| k.covariance == covariance));
+            jacobian_matches_central_differences(&rbf);
+        }
+    }
+
+    fn jacobian_matches_central_differences(rbf: &Rbf) {
         let x = [0.3, -0.2, 0.8];
         let mut y = [0.0; 2];
         let mut dy = DMatrix::zeros(2, 3);

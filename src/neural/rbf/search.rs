@@ -3,6 +3,7 @@
 //! ([`search_from`]: the final fit's search without the rows it leaves out), on at most
 //! [`HYPER_ROWS`] rows.
 
+use super::Covariance;
 use super::likelihood::{Pairs, Scratch, neg_log_likelihood_in, prior_mean};
 use super::{Hyper, check_hyper, shape};
 use crate::error::{Error, Result};
@@ -32,23 +33,27 @@ pub const HYPER_ITERATIONS: usize = 60;
 /// ([`search_from`]).
 pub const STARTS: [(f64, f64); 3] = [(1.0, 0.5), (0.2, 0.05), (0.05, 0.01)];
 
-/// Which rows of a set a hyperparameter search sees: every row of a set of at most `rows`,
-/// else `rows` of them drawn by a shuffle seeded by `seed`. A search's cost is cubic in its
-/// rows (a Cholesky factor and an inverse of the n x n kernel matrix per evaluation).
+/// Which rows of a set a hyperparameter search sees, and the covariance function whose
+/// hyperparameters it fits: every row of a set of at most `rows`, else `rows` of them drawn
+/// by a shuffle seeded by `seed`. A search's cost is cubic in its rows (a Cholesky factor and
+/// an inverse of the n x n kernel matrix per evaluation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Draw {
     /// Seed of the shuffle.
     pub seed: u64,
     /// Rows searched at most (at least 2).
     pub rows: usize,
+    /// The covariance function.
+    pub covariance: Covariance,
 }
 
 impl Draw {
-    /// The default draw of `seed`: at most [`HYPER_ROWS`] rows.
+    /// The default draw of `seed`: at most [`HYPER_ROWS`] rows, [`Covariance::DEFAULT`].
     pub fn seeded(seed: u64) -> Draw {
         Draw {
             seed,
             rows: HYPER_ROWS,
+            covariance: Covariance::DEFAULT,
         }
     }
 }
@@ -168,6 +173,7 @@ struct Searches<'a> {
     outputs: usize,
     rows: Vec<usize>,
     pairs: Pairs,
+    covariance: Covariance,
 }
 
 impl<'a> Searches<'a> {
@@ -218,6 +224,7 @@ impl<'a> Searches<'a> {
             outputs,
             rows,
             pairs,
+            covariance: draw.covariance,
         })
     }
 
@@ -250,7 +257,17 @@ impl<'a> Searches<'a> {
             8,
             HYPER_ITERATIONS,
             1e-6,
-            |h, g| neg_log_likelihood_in(&self.pairs, &y, h, &prior, Some(g), &mut scratch),
+            |h, g| {
+                neg_log_likelihood_in(
+                    &self.pairs,
+                    &y,
+                    h,
+                    &prior,
+                    self.covariance,
+                    Some(g),
+                    &mut scratch,
+                )
+            },
             |_, value, _| {
                 // Likelihood differences of a thousandth of a nat choose nothing: stop when
                 // three steps in a row gain less.
@@ -407,8 +424,18 @@ mod tests {
         // The fit from a start is the network at that start's hyperparameters.
         let (rbf, found) = Rbf::fit(&s, Some(1), 1).unwrap();
         assert_eq!(found, all[1]);
-        assert_eq!(rbf, Rbf::with_hyper(&s, &all[1].hyper).unwrap());
+        assert_eq!(
+            rbf,
+            Rbf::with_hyper(&s, &all[1].hyper, Covariance::DEFAULT).unwrap()
+        );
         assert!(search(&s, STARTS.len(), Draw::seeded(1)).is_err());
-        assert!(Rbf::with_hyper(&s, &all[1].hyper.rows(0, block).into_owned()).is_err());
+        assert!(
+            Rbf::with_hyper(
+                &s,
+                &all[1].hyper.rows(0, block).into_owned(),
+                Covariance::DEFAULT
+            )
+            .is_err()
+        );
     }
 }
