@@ -1,10 +1,12 @@
 //! A radial-basis-function network (Broomhead and Lowe, 1988) whose widths and output weights
 //! are those of Gaussian processes' posterior means (Rasmussen and Williams 2006, eqs. 2.25,
-//! 5.8 and 5.9): one Gaussian unit per training row, centred on its normalised input, and for
-//! each output o its own kernel,
+//! 5.8 and 5.9): one unit per training row, centred on its normalised input, and for each
+//! output o its own kernel,
 //!
-//!   y_o(x) = sum_i w_io exp(-1/2 sum_d ((x_d - c_id) / l_od)^2),
+//!   y_o(x) = sum_i w_io k(sum_d ((x_d - c_id) / l_od)^2),
 //!
+//! k the unit response of the kernel's covariance function ([`Covariance`]: Matern 5/2 by
+//! default, the squared exponential exp(-q / 2) of networks before file version 7),
 //! w_o = s_o^2 (s_o^2 E_o + sigma_o^2 I)^-1 b_o, E_o the units' responses at the training
 //! inputs under output o's widths, b_o the unit-scale targets of output o. The widths l_od (one
 //! per input and output: automatic relevance determination), the signal variance s_o^2 and
@@ -72,8 +74,9 @@ impl Kernel {
     }
 }
 
-/// Weighted squared distance sum_d (x_d - c_d)^2 / l_d^2 beyond which a unit's response
-/// counts as 0, in the fit, the likelihood and prediction alike: e^-345, about 1e-150, below
+/// Weighted squared distance sum_d (x_d - c_d)^2 / l_d^2 beyond which a squared-exponential
+/// unit's response counts as 0 ([`Covariance::far`]; Matern 5/2 reaches the same response
+/// farther), in the fit, the likelihood and prediction alike: e^-345, about 1e-150, below
 /// anything a sum of order-one terms can notice. Beyond a distance of about 1416 the
 /// responses, and before that their products in the factorisation, are subnormal numbers,
 /// which the processor handles about 15 times slower: a search whose widths had grown narrow
