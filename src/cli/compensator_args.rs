@@ -53,7 +53,7 @@ pub enum Phase2Arg {
 #[derive(Args, Debug, Clone)]
 pub struct CompensatorArgs {
     /// The network: `mlp` (the thesis's multilayer perceptron, in ensembles where that
-    /// helps), `rbf` (one Gaussian unit per training row, widths and weights of one Gaussian
+    /// helps), `rbf` (one unit per training row, widths and weights of one Gaussian
     /// process's posterior mean per output; pose form only; its cost grows with the cube of
     /// the rows) or
     /// `mix` (the MLPs' mean and an RBF network averaged; pose form only). Default: chosen by

@@ -222,6 +222,16 @@ impl Compensator {
             }
             members.push(w);
         }
+        // From version 7 each kernel names its covariance function: a kernel without one is
+        // not read as the older files' squared exponential (it would predict otherwise).
+        if version >= 7
+            && let Some(kernels) = v["rbf"]["kernels"].as_array()
+            && kernels.iter().any(|k| k.get("covariance").is_none())
+        {
+            return Err(bad(format!(
+                "`rbf`: a kernel without its `covariance` in a version {version} file"
+            )));
+        }
         let rbf: Option<Rbf> = if version >= 5 {
             de(&v, "rbf", path)?
         } else if version >= 3 {

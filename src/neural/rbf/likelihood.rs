@@ -104,8 +104,9 @@ pub(super) struct Scratch {
     alpha: Mat<f64>,
     e: Vec<f64>,
     p: Vec<f64>,
-    /// Per pair, -2 dk/dq ([`Covariance::width_factor`]) and P with it in place of E (both
-    /// empty for the squared exponential, whose factor is E itself).
+    /// Per pair, -2 dk/dq ([`Covariance::width_factor`]) and P with it in place of E (unused
+    /// for the squared exponential, whose factor is E itself: left as the last Matern
+    /// evaluation wrote them).
     g: Vec<f64>,
     pg: Vec<f64>,
     /// 1 / l_d^2 of each input, and the gradient's sums over the pairs of each input.
@@ -478,7 +479,27 @@ mod tests {
         pairs.weighted_squares(&w, &mut q);
         let far = q.iter().filter(|&&q| q > FAR).count();
         assert!(far > q.len() / 2, "{far} of {} pairs beyond FAR", q.len());
-        let cases = [(1, &near), (2, &near), (1, &narrow), (2, &narrow)];
+        // Narrower still (0.005 and 0.008): pairs beyond Matern 5/2's cut-off too.
+        let narrower = vec![0.005f64.ln(), 0.008f64.ln(), 0.7, 0.2, -2.0];
+        let w: Vec<f64> = narrower[..3].iter().map(|h| (-2.0 * h).exp()).collect();
+        pairs.weighted_squares(&w, &mut q);
+        let beyond = q
+            .iter()
+            .filter(|&&q| q > Covariance::Matern52.far())
+            .count();
+        assert!(
+            beyond > q.len() / 4 && beyond < q.len(),
+            "{beyond} of {} pairs beyond Matern's cut-off",
+            q.len()
+        );
+        let cases = [
+            (1, &near),
+            (2, &near),
+            (1, &narrow),
+            (2, &narrow),
+            (1, &narrower),
+            (2, &narrower),
+        ];
         for (cov, (targets, h)) in [Covariance::SquaredExponential, Covariance::Matern52]
             .into_iter()
             .flat_map(|c| cases.into_iter().map(move |t| (c, t)))
