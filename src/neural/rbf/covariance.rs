@@ -66,16 +66,7 @@ impl Covariance {
     /// The unit response k(q) (0 beyond [`Covariance::far`]).
     #[inline(always)]
     pub fn response(self, q: f64) -> f64 {
-        if q > self.far() {
-            return 0.0;
-        }
-        match self {
-            Covariance::SquaredExponential => (-0.5 * q).exp(),
-            Covariance::Matern52 => {
-                let t = (5.0 * q).sqrt();
-                (1.0 + t + t * t / 3.0) * (-t).exp()
-            }
-        }
+        self.response_and_width_factor(q).0
     }
 
     /// -2 dk/dq at `q` (0 beyond [`Covariance::far`]): the factor of dk/d ln l_d =
@@ -83,14 +74,25 @@ impl Covariance {
     /// exponential it is the response itself; for Matern 5/2, 5/3 (1 + t) e^-t.
     #[inline(always)]
     pub fn width_factor(self, q: f64) -> f64 {
+        self.response_and_width_factor(q).1
+    }
+
+    /// [`Covariance::response`] and [`Covariance::width_factor`] at `q` from one
+    /// exponential (and for Matern 5/2 one square root).
+    #[inline(always)]
+    pub fn response_and_width_factor(self, q: f64) -> (f64, f64) {
         if q > self.far() {
-            return 0.0;
+            return (0.0, 0.0);
         }
         match self {
-            Covariance::SquaredExponential => (-0.5 * q).exp(),
+            Covariance::SquaredExponential => {
+                let k = (-0.5 * q).exp();
+                (k, k)
+            }
             Covariance::Matern52 => {
                 let t = (5.0 * q).sqrt();
-                5.0 / 3.0 * (1.0 + t) * (-t).exp()
+                let e = (-t).exp();
+                ((1.0 + t + t * t / 3.0) * e, 5.0 / 3.0 * (1.0 + t) * e)
             }
         }
     }

@@ -283,11 +283,12 @@ pub(super) fn neg_log_likelihood_in(
     let squared_exponential = cov == Covariance::SquaredExponential;
     if !squared_exponential && grad.is_some() {
         gf.resize(count, 0.0);
-        gf.iter_mut()
-            .zip(e.iter())
-            .for_each(|(g, &q)| *g = cov.width_factor(q));
+        gf.iter_mut().zip(e.iter_mut()).for_each(|(g, q)| {
+            (*q, *g) = cov.response_and_width_factor(*q);
+        });
+    } else {
+        e.iter_mut().for_each(|q| *q = cov.response(*q));
     }
-    e.iter_mut().for_each(|q| *q = cov.response(*q));
     // The factorisation reads the lower triangle only: the upper one is zero (a new
     // scratch's, or the last factorisation's).
     let mut at = 0;

@@ -215,14 +215,10 @@ impl Rbf {
         y.fill(0.0);
         dy.fill(0.0);
         self.responses(x, inv, |outs, own, c, w, cov, q| {
-            let k = cov.response(q);
+            let (k, g) = cov.response_and_width_factor(q);
             if k == 0.0 {
                 return;
             }
-            let g = match cov {
-                Covariance::SquaredExponential => k,
-                _ => cov.width_factor(q),
-            };
             for o in outs {
                 y[o] += w[o] * k;
                 let wg = w[o] * g;
