@@ -18,12 +18,9 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Weighted squared distance beyond which a squared-exponential response counts as 0:
-/// e^-345, about 1e-150 (see [`super::FAR`], the same number).
-const FAR_SQUARED_EXPONENTIAL: f64 = super::FAR;
-
 /// Weighted squared distance beyond which a Matern 5/2 response counts as 0: where
-/// (1 + t + t^2 / 3) e^-t = e^-345 as at [`FAR_SQUARED_EXPONENTIAL`] (t = 355.66, q = t^2 / 5).
+/// (1 + t + t^2 / 3) e^-t = e^-345 as at the squared exponential's [`super::FAR`] (t = 355.66,
+/// q = t^2 / 5).
 const FAR_MATERN52: f64 = 25_300.0;
 
 /// The form of the unit response (every output of a network fitted now has the same; files
@@ -58,7 +55,7 @@ impl Covariance {
     /// likelihood and prediction alike (no subnormal number reaches a factorisation).
     pub fn far(self) -> f64 {
         match self {
-            Covariance::SquaredExponential => FAR_SQUARED_EXPONENTIAL,
+            Covariance::SquaredExponential => super::FAR,
             Covariance::Matern52 => FAR_MATERN52,
         }
     }
@@ -69,16 +66,10 @@ impl Covariance {
         self.response_and_width_factor(q).0
     }
 
-    /// -2 dk/dq at `q` (0 beyond [`Covariance::far`]): the factor of dk/d ln l_d =
-    /// -2 dk/dq D_d / l_d^2, D_d the squared difference of input d. For the squared
-    /// exponential it is the response itself; for Matern 5/2, 5/3 (1 + t) e^-t.
-    #[inline(always)]
-    pub fn width_factor(self, q: f64) -> f64 {
-        self.response_and_width_factor(q).1
-    }
-
-    /// [`Covariance::response`] and [`Covariance::width_factor`] at `q` from one
-    /// exponential (and for Matern 5/2 one square root).
+    /// [`Covariance::response`] and -2 dk/dq at `q` (both 0 beyond [`Covariance::far`]) from
+    /// one exponential (and for Matern 5/2 one square root). -2 dk/dq is the factor of
+    /// dk/d ln l_d = -2 dk/dq D_d / l_d^2, D_d the squared difference of input d: for the
+    /// squared exponential the response itself, for Matern 5/2 5/3 (1 + t) e^-t.
     #[inline(always)]
     pub fn response_and_width_factor(self, q: f64) -> (f64, f64) {
         if q > self.far() {
@@ -94,22 +85,6 @@ impl Covariance {
                 let e = (-t).exp();
                 ((1.0 + t + t * t / 3.0) * e, 5.0 / 3.0 * (1.0 + t) * e)
             }
-        }
-    }
-}
-
-impl std::str::FromStr for Covariance {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Covariance, String> {
-        match s {
-            "squared_exponential" | "squared-exponential" | "se" => {
-                Ok(Covariance::SquaredExponential)
-            }
-            "matern52" => Ok(Covariance::Matern52),
-            _ => Err(format!(
-                "unknown covariance `{s}` (squared_exponential or matern52)"
-            )),
         }
     }
 }
@@ -130,23 +105,21 @@ mod tests {
                 // -2 dk/dq against central differences (relative step).
                 let h = 1e-5 * q;
                 let fd = -2.0 * (c.response(q + h) - c.response(q - h)) / (2.0 * h);
-                let w = c.width_factor(q);
+                let w = c.response_and_width_factor(q).1;
                 assert!(
                     (fd - w).abs() <= 1e-6 * w.abs() + 1e-300,
                     "{c:?} {q}: {fd} {w}"
                 );
             }
             assert_eq!(c.response(c.far() * 1.001), 0.0);
-            assert_eq!(c.width_factor(c.far() * 1.001), 0.0);
+            assert_eq!(c.response_and_width_factor(c.far() * 1.001), (0.0, 0.0));
             // Just inside: a normal number near e^-345, no subnormal.
             let inside = c.response(c.far() * 0.999);
             assert!(inside > 1e-160 && inside < 1e-140, "{c:?}: {inside}");
-            assert_eq!(c.name().parse::<Covariance>(), Ok(c));
         }
         // Matern 5/2 at t = sqrt(5 q) = 1: (1 + 1 + 1/3) / e.
         let m = Covariance::Matern52.response(0.2);
         assert!((m - 7.0 / 3.0 / std::f64::consts::E).abs() < 1e-15);
         assert!((Covariance::SquaredExponential.response(2.0) - (-1.0f64).exp()).abs() < 1e-16);
-        assert!("gaussian".parse::<Covariance>().is_err());
     }
 }

@@ -104,11 +104,9 @@ pub(super) struct Scratch {
     alpha: Mat<f64>,
     e: Vec<f64>,
     p: Vec<f64>,
-    /// Per pair, -2 dk/dq ([`Covariance::width_factor`]) and P with it in place of E (unused
-    /// for the squared exponential, whose factor is E itself: left as the last Matern
-    /// evaluation wrote them).
+    /// Per pair, -2 dk/dq ([`Covariance::response_and_width_factor`]), then P with it in
+    /// place of E (unused for the squared exponential, whose factor is E itself).
     g: Vec<f64>,
-    pg: Vec<f64>,
     /// 1 / l_d^2 of each input, and the gradient's sums over the pairs of each input.
     w: Vec<f64>,
     total: Vec<f64>,
@@ -125,7 +123,6 @@ impl Scratch {
             e: Vec::new(),
             p: Vec::new(),
             g: Vec::new(),
-            pg: Vec::new(),
             w: Vec::new(),
             total: Vec::new(),
             mem: scratch(n, o, true),
@@ -271,7 +268,6 @@ pub(super) fn neg_log_likelihood_in(
         e,
         p,
         g: gf,
-        pg,
         w,
         total,
         mem,
@@ -363,13 +359,13 @@ pub(super) fn neg_log_likelihood_in(
         if squared_exponential {
             pairs.weighted_sums(p, total);
         } else {
-            pg.resize(count, 0.0);
-            pg.iter_mut()
-                .zip(p.iter().zip(e.iter().zip(gf.iter())))
-                .for_each(|(pgij, (&pij, (&eij, &gij)))| {
-                    *pgij = if eij == 0.0 { 0.0 } else { pij / eij * gij }
+            // P_ij / E_ij G_ij, written over G (E and G are 0 together, beyond the cut-off).
+            gf.iter_mut()
+                .zip(p.iter().zip(e.iter()))
+                .for_each(|(gij, (&pij, &eij))| {
+                    *gij = if eij == 0.0 { 0.0 } else { pij / eij * *gij }
                 });
-            pairs.weighted_sums(pg, total);
+            pairs.weighted_sums(gf, total);
         }
         for c in 0..d {
             g[c] = -total[c] * w[c];

@@ -203,7 +203,7 @@ impl Rbf {
     }
 
     /// y(x) into `y` and dy/dx (outputs x inputs) into `dy`: dy_o/dx_d = -sum_i w_io g_io
-    /// (x_d - c_id) / l_od^2, g = -2 dk/dq ([`Covariance::width_factor`]; the response itself
+    /// (x_d - c_id) / l_od^2, g = -2 dk/dq ([`Covariance::response_and_width_factor`]; the response itself
     /// for the squared exponential); `inv` is scratch as in [`Rbf::forward_into`].
     pub fn input_jacobian_into(
         &self,
