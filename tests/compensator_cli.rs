@@ -404,16 +404,33 @@ fn train_and_evaluate_report_the_repeats_of_their_data() {
     );
 }
 
-/// `--rbf-search-rows` bounds the rows the RBF network's likelihood search sees, and `train`
-/// says how many it saw: 60 of Case D's 150 training rows when told, all of them by default;
-/// and which covariance function it fitted (`--rbf-kernel`; Matern 5/2 by default), which the
-/// file keeps.
+/// `--rbf-search-rows` and `--rbf-search-blocks` bound the rows the RBF network's likelihood
+/// search sees, and `train` says how many it saw of Case D's 150 training rows: all of them
+/// by default; in blocks of 60 rows, one (the default) or two; in blocks of 120, one (the
+/// other 30, less than half a block, are left out); in blocks of 100, the rest, 50, as a
+/// second; and which covariance function it fitted (`--rbf-kernel`; Matern 5/2 by default),
+/// which the file keeps.
 #[test]
 fn train_says_how_many_rows_the_rbf_search_saw() {
     for (extra, said, kernel) in [
         (
+            &["--rbf-search-rows", "60", "--rbf-search-blocks", "2"][..],
+            "searched on 120 of the rows, in 2 blocks of 60 + 60 (their likelihoods added)",
+            "matern52",
+        ),
+        (
             &["--rbf-search-rows", "60"][..],
-            "searched on 60 of the rows",
+            "searched on 60 of the rows;",
+            "matern52",
+        ),
+        (
+            &["--rbf-search-rows", "120", "--rbf-search-blocks", "3"][..],
+            "searched on 120 of the rows;",
+            "matern52",
+        ),
+        (
+            &["--rbf-search-rows", "100", "--rbf-search-blocks", "4"][..],
+            "searched on all rows, in 2 blocks of 100 + 50 (their likelihoods added)",
             "matern52",
         ),
         (&[][..], "searched on all rows", "matern52"),
@@ -445,17 +462,30 @@ fn train_says_how_many_rows_the_rbf_search_saw() {
         let rbf = c.rbf.unwrap();
         assert!(rbf.kernels.iter().all(|k| k.covariance.name() == kernel));
     }
-    // The RBF network's kernel means nothing to the MLPs alone.
-    let o = common::train_fanuc(
-        "datasets/case_d/training.csv",
-        tmp("kernel_mlp.rcal").to_str().unwrap(),
-        &["--network", "mlp", "--rbf-kernel", "matern52"],
-    );
-    assert!(
-        !o.status.success() && stderr(&o).contains("--rbf-kernel sets up the RBF network"),
-        "{}",
-        stderr(&o)
-    );
+    // The RBF network's kernel and search mean nothing to the MLPs alone; no block is none.
+    for (args, error) in [
+        (
+            &["--network", "mlp", "--rbf-kernel", "matern52"][..],
+            "--rbf-kernel sets up the RBF network",
+        ),
+        (
+            &["--network", "mlp", "--rbf-search-blocks", "2"][..],
+            "--rbf-search-blocks sets up the RBF network",
+        ),
+        (&["--rbf-search-blocks", "0"][..], "--rbf-search-blocks"),
+        (&["--rbf-search-blocks", "9"][..], "--rbf-search-blocks"),
+    ] {
+        let o = common::train_fanuc(
+            "datasets/case_d/training.csv",
+            tmp("kernel_mlp.rcal").to_str().unwrap(),
+            args,
+        );
+        assert!(
+            !o.status.success() && stderr(&o).contains(error),
+            "{args:?}: {}",
+            stderr(&o)
+        );
+    }
 }
 
 /// The default refinement tries the joints' gravity compliances (issue 11 item 7, issue 14):

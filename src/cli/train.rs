@@ -132,13 +132,33 @@ fn print_selection(sel: &Selection) {
     }
 }
 
+/// Which of `rows` training rows the RBF search saw, in blocks of `sizes`: "all rows", "N of
+/// the rows", and the blocks when there are more than one.
+fn searched_rows(rows: usize, sizes: &[usize]) -> String {
+    let searched: usize = sizes.iter().sum();
+    let which = if searched >= rows {
+        "all rows".to_string()
+    } else {
+        format!("{searched} of the rows")
+    };
+    if sizes.len() < 2 {
+        return which;
+    }
+    let blocks: Vec<String> = sizes.iter().map(usize::to_string).collect();
+    format!(
+        "{which}, in {} blocks of {} (their likelihoods added)",
+        sizes.len(),
+        blocks.join(" + ")
+    )
+}
+
 /// Prints the refined parameters, the RBF network and the MLPs of a finished training on
-/// `rows` training rows, the RBF search's drawn from them when more than `search_rows`.
+/// `rows` training rows, the RBF search's drawn from them by `draw`.
 fn print_fit(
     c: &Compensator,
     report: &robocal::neural::fit::CompensatorReport,
     seconds: f64,
-    (rows, search_rows): (usize, usize),
+    (rows, draw): (usize, robocal::neural::rbf::Draw),
 ) {
     if !report.refined.is_empty() {
         println!(
@@ -161,17 +181,13 @@ fn print_fit(
     if let Some(r) = &c.rbf {
         println!(
             "rbf network: {} units ({} inputs), one Gaussian process per output ({} \
-             covariance), its hyperparameters searched on {} rows{}",
+             covariance), its hyperparameters searched on {}{}",
             r.units(),
             c.encoding.name(),
             r.kernels.first().map_or("-", |k| k.covariance.name()),
             // The draw is of the rows cross-validation saw: the training rows but those left
             // out for carrying another configuration's reading, outliers included.
-            if rows > search_rows {
-                format!("{search_rows} of the")
-            } else {
-                "all".to_string()
-            },
+            searched_rows(rows, &draw.block_sizes(rows)),
             if n.is_empty() {
                 format!("; {timing}")
             } else {
@@ -275,7 +291,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
                 } else {
                     0
                 },
-            opts.train.rbf_search_rows,
+            opts.train.rbf_draw(),
         ),
     );
     let mut figs = 0;

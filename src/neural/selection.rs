@@ -89,6 +89,7 @@ pub struct Selection {
     #[serde(with = "crate::io::json_number")]
     pub outlier_k: f64,
     /// The chosen RBF network's hyperparameters, searched on the training rows (at most
+    /// [`HYPER_BLOCKS`](crate::neural::rbf::HYPER_BLOCKS) blocks of
     /// [`HYPER_ROWS`](crate::neural::rbf::HYPER_ROWS) of them) for the model as given. When
     /// nothing is refined, the final fit reuses them, or begins its search at them when it
     /// leaves rows out; a refined model's final fit searches from the settings' start.

@@ -135,19 +135,24 @@ pub struct TrainOptions {
     /// larger sets, the same in cross-validation and in the final fit; at least 2): default
     /// [`super::rbf::HYPER_ROWS`]. The search's cost is cubic in them.
     pub rbf_search_rows: usize,
+    /// Disjoint blocks of `rbf_search_rows` an RBF network's hyperparameter search sees at
+    /// most on larger sets, their likelihoods added (at least 1): default
+    /// [`super::rbf::HYPER_BLOCKS`]. The search's cost is linear in them.
+    pub rbf_search_blocks: usize,
     /// The RBF network's covariance function: default [`super::rbf::Covariance::DEFAULT`]
     /// (Matern 5/2).
     pub rbf_covariance: super::rbf::Covariance,
 }
 
 impl TrainOptions {
-    /// The rows an RBF network's hyperparameter search sees (`rbf_search_rows` of the set,
-    /// drawn by `seed`) and its covariance function.
+    /// The rows an RBF network's hyperparameter search sees (up to `rbf_search_blocks`
+    /// blocks of `rbf_search_rows` of the set, drawn by `seed`) and its covariance function.
     pub fn rbf_draw(&self) -> super::rbf::Draw {
         super::rbf::Draw {
             seed: self.seed,
             rows: self.rbf_search_rows,
             covariance: self.rbf_covariance,
+            blocks: self.rbf_search_blocks,
         }
     }
 }
@@ -170,6 +175,7 @@ impl Default for TrainOptions {
             rbf_hyper: RbfHyper::Search,
             rbf_left_out: Vec::new(),
             rbf_search_rows: super::rbf::HYPER_ROWS,
+            rbf_search_blocks: super::rbf::HYPER_BLOCKS,
             rbf_covariance: super::rbf::Covariance::DEFAULT,
         }
     }

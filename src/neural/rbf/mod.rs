@@ -29,8 +29,9 @@
 //! sharply with a few joints (on real tracker data, repeated arm configurations reached with
 //! other wrist angles) where a small MLP can only follow the smooth trend. Far from every
 //! centre its output falls to zero: the compensator becomes the model. Its cost is cubic in
-//! the rows, so the hyperparameters are fitted on at most [`HYPER_ROWS`] of them (a seeded
-//! choice) and only the weights use every row. The likelihood has several modes on real data,
+//! the rows, so the hyperparameters are fitted on at most [`HYPER_BLOCKS`] blocks of
+//! [`HYPER_ROWS`] of them (a seeded choice; the blocks' likelihoods added) and only the
+//! weights use every row. The likelihood has several modes on real data,
 //! so the search can run from each of [`STARTS`]; the factorisations use `faer`.
 
 mod covariance;
@@ -46,8 +47,8 @@ use likelihood::kernel;
 pub use likelihood::{PRIOR_SD, Pairs, neg_log_likelihood};
 use nalgebra::{DMatrix, DVector};
 pub use search::{
-    Draw, HYPER_ITERATIONS, HYPER_ROWS, STALL_NATS, STARTS, Search, search, search_best,
-    search_best_without, search_from, search_start_without, search_without,
+    Draw, HYPER_BLOCKS, HYPER_ITERATIONS, HYPER_ROWS, STALL_NATS, STARTS, Search, search,
+    search_best, search_best_without, search_from, search_start_without, search_without,
 };
 
 /// One output's Gaussian process (or, in files of version 3 and 4, every output's).

@@ -19,7 +19,8 @@
 //! lowers the cross-validated error, then the RBF network from its search start, alone and
 //! blended with the best pose-form MLPs at the MLPs' share of lowest cross-validated error
 //! among [`SHARES`] (its hyperparameters searched once on the training rows, at most
-//! [`super::rbf::HYPER_ROWS`] of them, beside stages 2 and 3; the folds fit only its
+//! [`super::rbf::HYPER_BLOCKS`] blocks of [`super::rbf::HYPER_ROWS`] of them, beside stages 2
+//! and 3; the folds fit only its
 //! weights); (4) refinement (for a blend, judged first by the RBF network alone fitted on
 //! the race folds only, a proxy never chosen, and the best refinement then tried with the
 //! blend); (5) no network at all. Candidates are fitted
@@ -111,7 +112,7 @@ pub const SHARES: [f64; 19] = [
 /// Rows up to which cross-validation tries an RBF network when the network is not fixed: its
 /// weights solve with the kernel matrix of every row (n^2 numbers, a factorisation cubic in
 /// n), which MLPs do not need. The hyperparameter search itself sees at most
-/// [`super::rbf::HYPER_ROWS`] rows.
+/// [`super::rbf::HYPER_BLOCKS`] blocks of [`super::rbf::HYPER_ROWS`] rows.
 pub const RBF_MAX_ROWS: usize = 3000;
 
 /// Ensemble size tried against a single network when not fixed.
