@@ -412,6 +412,7 @@ fn train_and_evaluate_report_the_repeats_of_their_data() {
 /// which the file keeps.
 #[test]
 fn train_says_how_many_rows_the_rbf_search_saw() {
+    let mut widths = Vec::new();
     for (extra, said, kernel) in [
         (
             &["--rbf-search-rows", "60", "--rbf-search-blocks", "2"][..],
@@ -461,7 +462,16 @@ fn train_says_how_many_rows_the_rbf_search_saw() {
         let c = robocal::neural::compensator::Compensator::load(&comp).unwrap();
         let rbf = c.rbf.unwrap();
         assert!(rbf.kernels.iter().all(|k| k.covariance.name() == kernel));
+        widths.push(
+            rbf.kernels
+                .iter()
+                .map(|k| k.widths.clone())
+                .collect::<Vec<_>>(),
+        );
     }
+    // The blocks reach the search: two blocks of 60 rows fit other widths than the first
+    // alone.
+    assert_ne!(widths[0], widths[1]);
     // The RBF network's kernel and search mean nothing to the MLPs alone; no block is none.
     for (args, error) in [
         (

@@ -139,7 +139,7 @@ pub struct CompensatorArgs {
     /// (default 500): on a larger training set a seeded choice of them, the other rows
     /// entering its weights only. Its cost grows with the cube of the rows: on 2000 real UR10
     /// poses, one block of 1000 rows instead of 500 lowered the held-out RMS by 5.5 % and took
-    /// the default `train` from 4.5 s to 11-15 s.
+    /// the default `train` from 4.5 s to 11-15 s (squared-exponential kernel).
     #[arg(long)]
     pub rbf_search_rows: Option<usize>,
     /// Disjoint blocks of those rows the likelihood search sees at most on a larger training

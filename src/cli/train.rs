@@ -133,32 +133,40 @@ fn print_selection(sel: &Selection) {
 }
 
 /// Which of `rows` training rows the RBF search saw, in blocks of `sizes`: "all rows", "N of
-/// the rows", and the blocks when there are more than one.
-fn searched_rows(rows: usize, sizes: &[usize]) -> String {
+/// the rows", and the blocks when there are more than one; with the `outliers` the final fit
+/// left out, said to be left out of those.
+fn searched_rows(rows: usize, sizes: &[usize], outliers: usize) -> String {
     let searched: usize = sizes.iter().sum();
     let which = if searched >= rows {
         "all rows".to_string()
     } else {
         format!("{searched} of the rows")
     };
-    if sizes.len() < 2 {
-        return which;
-    }
-    let blocks: Vec<String> = sizes.iter().map(usize::to_string).collect();
-    format!(
-        "{which}, in {} blocks of {} (their likelihoods added)",
-        sizes.len(),
-        blocks.join(" + ")
-    )
+    let blocks = if sizes.len() < 2 {
+        String::new()
+    } else {
+        let each: Vec<String> = sizes.iter().map(usize::to_string).collect();
+        format!(
+            ", in {} blocks of {} (their likelihoods added)",
+            sizes.len(),
+            each.join(" + ")
+        )
+    };
+    let left = match outliers {
+        0 => String::new(),
+        n => format!(", less the outliers among them ({n} left out of the final fit)"),
+    };
+    format!("{which}{blocks}{left}")
 }
 
 /// Prints the refined parameters, the RBF network and the MLPs of a finished training on
-/// `rows` training rows, the RBF search's drawn from them by `draw`.
+/// `rows` training rows, the RBF search's drawn from them by `draw`, of which the final fit
+/// left `outliers` out.
 fn print_fit(
     c: &Compensator,
     report: &robocal::neural::fit::CompensatorReport,
     seconds: f64,
-    (rows, draw): (usize, robocal::neural::rbf::Draw),
+    (rows, draw, outliers): (usize, robocal::neural::rbf::Draw, usize),
 ) {
     if !report.refined.is_empty() {
         println!(
@@ -187,7 +195,7 @@ fn print_fit(
             r.kernels.first().map_or("-", |k| k.covariance.name()),
             // The draw is of the rows cross-validation saw: the training rows but those left
             // out for carrying another configuration's reading, outliers included.
-            searched_rows(rows, &draw.block_sizes(rows)),
+            searched_rows(rows, &draw.block_sizes(rows), outliers),
             if n.is_empty() {
                 format!("; {timing}")
             } else {
@@ -292,6 +300,11 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
                     0
                 },
             opts.train.rbf_draw(),
+            if opts.drop_outliers {
+                report.selection.as_ref().map_or(0, |s| s.outliers.len())
+            } else {
+                0
+            },
         ),
     );
     let mut figs = 0;

@@ -27,10 +27,12 @@ pub const HYPER_ROWS: usize = 500;
 /// lowered the held-out position RMS over 16 Series B runs with pools of 1000 (4 splits,
 /// training seeds 1-4) from 0.2144 to 0.2108 mm (lower in 9, the worst run 0.2399 -> 0.2284,
 /// each split's spread over the seeds narrower) and on Series A's pool of 2000 (seeds 1-3)
-/// from 0.1400 to 0.1377 (lower in all three), but it costs a second search per block: 5.3
-/// -> 7.1 s on those 2000 poses, 5.9 -> 8.3 s on Series B's README split (1000 poses).
+/// from 0.1400 to 0.1377 (lower in all three), but every step of the search then evaluates
+/// two likelihoods (as many steps as one block's), which doubles its time: 5.3 -> 7.1 s on
+/// those 2000 poses, 5.9 -> 8.3 s on Series B's README split (1000 poses).
 pub const HYPER_BLOCKS: usize = 1;
-/// Gain in log likelihood (nats) below which a search step counts as idle.
+/// Gain in log likelihood (nats) below which a search step counts as idle: of the blocks'
+/// summed objective (with K blocks, a stop about K times stricter for each).
 pub const STALL_NATS: f64 = 1e-3;
 /// L-BFGS iterations of each hyperparameter search.
 pub const HYPER_ITERATIONS: usize = 60;
@@ -76,13 +78,13 @@ impl Draw {
 
     /// The sizes of the blocks a search of a set of `n` rows sees (none left out): blocks
     /// of `rows` while there are rows and blocks, a last smaller one only if it has at least
-    /// `rows / 2` rows (and the first always).
+    /// `rows / 2` rows and 2 (and the first always).
     pub fn block_sizes(&self, n: usize) -> Vec<usize> {
         let (rows, blocks) = (self.rows.max(1), self.blocks.max(1));
         (0..blocks)
             .map(|b| n.saturating_sub(b * rows).min(rows))
             .enumerate()
-            .filter(|&(b, size)| b == 0 || (size > 0 && size >= rows / 2))
+            .filter(|&(b, size)| b == 0 || size >= (rows / 2).max(2))
             .map(|(_, size)| size)
             .collect()
     }
@@ -249,25 +251,31 @@ impl<'a> Searches<'a> {
                 .collect()
         };
         let mut at = 0;
-        let blocks: Vec<(Vec<usize>, Pairs)> = draw
+        let drawn: Vec<Vec<usize>> = draw
             .block_sizes(whole)
             .into_iter()
             .map(|size| {
                 at += size;
                 renumber(&all[at - size..at])
             })
+            .collect();
+        let left: usize = drawn.iter().map(Vec::len).sum();
+        let blocks: Vec<(Vec<usize>, Pairs)> = drawn
+            .into_iter()
+            // A block that rows left out leave with fewer than 2 rows says nothing of a
+            // width.
+            .filter(|rows| rows.len() >= 2)
             .map(|rows| {
                 let pairs = Pairs::new(&s.x, &rows);
                 (rows, pairs)
             })
             .collect();
-        let rows = blocks[0].0.len();
-        if rows < 2 {
+        if blocks.is_empty() {
             return Err(Error::Invalid(format!(
                 "the RBF network's hyperparameter search: {} rows left out of {whole} leave {} \
                  to search on",
                 left_out.len(),
-                rows
+                left
             )));
         }
         Ok(Searches {
@@ -286,17 +294,8 @@ impl<'a> Searches<'a> {
     /// Output `j`'s search from `begin`: its d + 2 hyperparameters.
     fn output(&self, j: usize, begin: Begin) -> Result<Search> {
         let d = self.inputs();
-        let y: Vec<Mat<f64>> = self
-            .blocks
-            .iter()
-            .map(|(rows, _)| Mat::<f64>::from_fn(rows.len(), 1, |i, _| self.s.b[rows[i]][j]))
-            .collect();
-        let (square, count) = y.iter().fold((0.0, 0), |(sum, n), y| {
-            let one: f64 = (0..y.nrows()).map(|i| y[(i, 0)] * y[(i, 0)]).sum();
-            (sum + one, n + y.nrows())
-        });
-        let var = (square / count as f64).max(1e-12);
-        let prior = prior_mean(d, var);
+        let mut objective = Objective::new(self, j);
+        let var = objective.var;
         let h0 = match begin {
             Begin::Start(start) => {
                 let Some(&(width, noise)) = STARTS.get(start) else {
@@ -313,49 +312,15 @@ impl<'a> Searches<'a> {
             Begin::At(h) => h,
         };
         let (mut last, mut idle) = (f64::INFINITY, 0);
-        let mut scratch: Vec<Scratch> = y.iter().map(|y| Scratch::new(y.nrows(), 1)).collect();
-        let mut block_grad = DVector::zeros(d + 2);
         let (hyper, objective, _) = minimize(
             h0,
             8,
             HYPER_ITERATIONS,
             1e-6,
-            |h, g| {
-                let mut f = 0.0;
-                for (b, ((_, pairs), (y, scratch))) in self
-                    .blocks
-                    .iter()
-                    .zip(y.iter().zip(&mut scratch))
-                    .enumerate()
-                {
-                    // The prior counted once: centred on h itself, its term and its gradient
-                    // are zero in the other blocks.
-                    let (centre, grad) = if b == 0 {
-                        (&prior, &mut *g)
-                    } else {
-                        (h, &mut block_grad)
-                    };
-                    f += neg_log_likelihood_in(
-                        pairs,
-                        y,
-                        h,
-                        centre,
-                        self.covariance,
-                        Some(grad),
-                        scratch,
-                    );
-                    if !f.is_finite() {
-                        return f;
-                    }
-                    if b > 0 {
-                        *g += &block_grad;
-                    }
-                }
-                f
-            },
+            |h, g| objective.value(self, h, g),
             |_, value, _| {
                 // Likelihood differences of a thousandth of a nat choose nothing: stop when
-                // three steps in a row gain less.
+                // three steps in a row gain less (on the blocks' sum).
                 idle = if last - value < STALL_NATS {
                     idle + 1
                 } else {
@@ -375,6 +340,90 @@ impl<'a> Searches<'a> {
             ));
         }
         Ok(Search { hyper, objective })
+    }
+}
+
+/// One output's objective over the blocks of a [`Searches`]: the first block's negative log
+/// marginal likelihood and the prior's term, plus every other block's likelihood alone, and
+/// its gradient. The blocks of one size share one scratch (they are evaluated one after
+/// another): the memory of a search grows with the distinct sizes, not with the blocks.
+struct Objective {
+    /// Output j's targets at each block's rows.
+    y: Vec<Mat<f64>>,
+    /// Mean square of the targets over every block's rows.
+    var: f64,
+    prior: Hyper,
+    /// Scratch per distinct block size, and each block's.
+    scratch: Vec<Scratch>,
+    slot: Vec<usize>,
+    block_grad: DVector<f64>,
+}
+
+impl Objective {
+    fn new(one: &Searches, j: usize) -> Objective {
+        let d = one.inputs();
+        let y: Vec<Mat<f64>> = one
+            .blocks
+            .iter()
+            .map(|(rows, _)| Mat::<f64>::from_fn(rows.len(), 1, |i, _| one.s.b[rows[i]][j]))
+            .collect();
+        let (square, count) = y.iter().fold((0.0, 0), |(sum, n), y| {
+            let one: f64 = (0..y.nrows()).map(|i| y[(i, 0)] * y[(i, 0)]).sum();
+            (sum + one, n + y.nrows())
+        });
+        let var = (square / count as f64).max(1e-12);
+        let mut sizes: Vec<usize> = Vec::new();
+        let slot = y
+            .iter()
+            .map(|y| {
+                sizes
+                    .iter()
+                    .position(|&n| n == y.nrows())
+                    .unwrap_or_else(|| {
+                        sizes.push(y.nrows());
+                        sizes.len() - 1
+                    })
+            })
+            .collect();
+        Objective {
+            y,
+            var,
+            prior: prior_mean(d, var),
+            scratch: sizes.iter().map(|&n| Scratch::new(n, 1)).collect(),
+            slot,
+            block_grad: DVector::zeros(d + 2),
+        }
+    }
+
+    /// The objective at `h`, its gradient into `g` (infinite, `g` unspecified, where a
+    /// block's kernel matrix is not positive definite).
+    fn value(&mut self, one: &Searches, h: &Hyper, g: &mut DVector<f64>) -> f64 {
+        let mut f = 0.0;
+        for (b, ((_, pairs), y)) in one.blocks.iter().zip(&self.y).enumerate() {
+            // The prior counted once: centred on h itself, its term and its gradient are
+            // zero in the other blocks.
+            let (centre, grad) = if b == 0 {
+                (&self.prior, &mut *g)
+            } else {
+                (h, &mut self.block_grad)
+            };
+            f += neg_log_likelihood_in(
+                pairs,
+                y,
+                h,
+                centre,
+                one.covariance,
+                Some(grad),
+                &mut self.scratch[self.slot[b]],
+            );
+            if !f.is_finite() {
+                return f;
+            }
+            if b > 0 {
+                *g += &self.block_grad;
+            }
+        }
+        f
     }
 }
 
@@ -403,6 +452,9 @@ mod tests {
         assert_eq!(draw(100, 4).block_sizes(150), vec![100, 50]);
         assert_eq!(draw(60, 2).block_sizes(150), vec![60, 60]);
         assert_eq!(draw(2, 2).block_sizes(1), vec![1]);
+        // A last block of one row is none, whatever half a block is.
+        assert_eq!(draw(3, 2).block_sizes(4), vec![3]);
+        assert_eq!(draw(2, 3).block_sizes(5), vec![2, 2]);
         assert_eq!(Draw::seeded(1).blocks, HYPER_BLOCKS);
     }
 
@@ -454,6 +506,105 @@ mod tests {
             assert_eq!(got, expected);
         }
         assert!(Searches::new(&s, Draw { blocks: 0, ..two }, &[]).is_err());
+        // Blocks of 3 rows on 6: a block left with one row is dropped, the other kept, even
+        // the first; with none of 2 rows or more left, an error.
+        let (six, _) = data(6);
+        let small = Draw {
+            rows: 3,
+            blocks: 2,
+            ..Draw::seeded(5)
+        };
+        let whole = Searches::new(&six, small, &[]).unwrap().blocks;
+        for b in 0..2 {
+            let out = [whole[b].0[0], whole[b].0[2]];
+            let mut less = six.clone();
+            let mut gone = out.to_vec();
+            gone.sort_unstable();
+            for &r in gone.iter().rev() {
+                less.x.remove(r);
+                less.b.remove(r);
+            }
+            let kept = Searches::new(&less, small, &out).unwrap().blocks;
+            assert_eq!(kept.len(), 1, "{b}");
+            let got: Vec<&Vec<f64>> = kept[0].0.iter().map(|&r| &less.x[r]).collect();
+            let expected: Vec<&Vec<f64>> = whole[1 - b].0.iter().map(|&r| &six.x[r]).collect();
+            assert_eq!(got, expected, "{b}");
+        }
+        let out = [whole[0].0[0], whole[0].0[1], whole[1].0[0], whole[1].0[1]];
+        let mut two_left = six.clone();
+        let mut gone = out.to_vec();
+        gone.sort_unstable();
+        for &r in gone.iter().rev() {
+            two_left.x.remove(r);
+            two_left.b.remove(r);
+        }
+        let e = Searches::new(&two_left, small, &out).err().unwrap();
+        assert!(
+            e.to_string().contains("4 rows left out of 6 leave 2"),
+            "{e}"
+        );
+    }
+
+    /// The objective over blocks (rows left out of two of them; blocks of one size sharing a
+    /// scratch) has its central differences as its gradient, and is the sum of the blocks'
+    /// likelihoods each computed on its own rows, the first with the prior, for 2 and 3
+    /// blocks.
+    #[test]
+    fn the_blocks_objective_has_its_central_differences_as_gradient() {
+        let (s, _) = data(200);
+        for blocks in [2, 3] {
+            let draw = Draw {
+                rows: 70,
+                blocks,
+                ..Draw::seeded(4)
+            };
+            let whole = Searches::new(&s, draw, &[]).unwrap();
+            let out = vec![whole.blocks[0].0[5], whole.blocks[1].0[9]];
+            let mut less = s.clone();
+            let mut gone = out.clone();
+            gone.sort_unstable();
+            for &r in gone.iter().rev() {
+                less.x.remove(r);
+                less.b.remove(r);
+            }
+            let one = Searches::new(&less, draw, &out).unwrap();
+            assert_eq!(one.blocks.len(), blocks);
+            let d = one.inputs();
+            for j in 0..less.rows() {
+                let mut objective = Objective::new(&one, j);
+                assert_eq!(objective.scratch.len(), blocks - 1, "69 + 69 (+ 60) rows");
+                let mut h = Hyper::from_element(d + 2, 0.4f64.ln());
+                h[0] = 0.9f64.ln();
+                h[d] = objective.var.ln();
+                h[d + 1] = (0.05 * objective.var).ln();
+                let mut g = DVector::zeros(d + 2);
+                let f = objective.value(&one, &h, &mut g);
+                assert!(f.is_finite());
+                let mut unused = DVector::zeros(d + 2);
+                for c in 0..d + 2 {
+                    let step = 1e-5;
+                    let (mut a, mut b) = (h.clone(), h.clone());
+                    a[c] += step;
+                    b[c] -= step;
+                    let fd = (objective.value(&one, &a, &mut unused)
+                        - objective.value(&one, &b, &mut unused))
+                        / (2.0 * step);
+                    assert!(
+                        (fd - g[c]).abs() <= 1e-6 * (1.0 + fd.abs()),
+                        "{blocks} blocks, output {j}, component {c}: analytic {} numeric {fd}",
+                        g[c]
+                    );
+                }
+                let cov = draw.covariance;
+                let y = &objective.y;
+                let mut sum =
+                    neg_log_likelihood(&one.blocks[0].1, &y[0], &h, &objective.prior, cov, None);
+                for ((_, pairs), y) in one.blocks.iter().zip(y).skip(1) {
+                    sum += neg_log_likelihood(pairs, y, &h, &h, cov, None);
+                }
+                assert!((f - sum).abs() <= 1e-9 * sum.abs(), "{f} {sum}");
+            }
+        }
     }
 
     /// A search on two blocks minimises, output by output, the first block's objective
