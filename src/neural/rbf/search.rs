@@ -433,6 +433,19 @@ mod tests {
     use crate::neural::rbf::tests::data;
     use crate::neural::rbf::{Rbf, neg_log_likelihood};
 
+    /// `s` without the rows `out` (indices in `s`, any order).
+    fn without(s: &Samples, out: &[usize]) -> Samples {
+        let mut less = s.clone();
+        let mut gone = out.to_vec();
+        gone.sort_unstable();
+        gone.dedup();
+        for &r in gone.iter().rev() {
+            less.x.remove(r);
+            less.b.remove(r);
+        }
+        less
+    }
+
     /// Blocks of `rows` while there are rows and blocks; a short last block only from half
     /// a block; the first block always, however short.
     #[test]
@@ -487,13 +500,7 @@ mod tests {
         assert_eq!(three[1].0, blocks[1].0);
         // Rows left out of both blocks: gone from them, the others renumbered.
         let out = [blocks[0].0[7], blocks[1].0[3]];
-        let mut less = s.clone();
-        let mut gone = out.to_vec();
-        gone.sort_unstable();
-        for &r in gone.iter().rev() {
-            less.x.remove(r);
-            less.b.remove(r);
-        }
+        let less = without(&s, &out);
         let left = Searches::new(&less, two, &out).unwrap().blocks;
         for ((rows, _), (whole, _)) in left.iter().zip(&blocks) {
             assert_eq!(rows.len(), whole.len() - 1);
@@ -517,13 +524,7 @@ mod tests {
         let whole = Searches::new(&six, small, &[]).unwrap().blocks;
         for b in 0..2 {
             let out = [whole[b].0[0], whole[b].0[2]];
-            let mut less = six.clone();
-            let mut gone = out.to_vec();
-            gone.sort_unstable();
-            for &r in gone.iter().rev() {
-                less.x.remove(r);
-                less.b.remove(r);
-            }
+            let less = without(&six, &out);
             let kept = Searches::new(&less, small, &out).unwrap().blocks;
             assert_eq!(kept.len(), 1, "{b}");
             let got: Vec<&Vec<f64>> = kept[0].0.iter().map(|&r| &less.x[r]).collect();
@@ -531,13 +532,7 @@ mod tests {
             assert_eq!(got, expected, "{b}");
         }
         let out = [whole[0].0[0], whole[0].0[1], whole[1].0[0], whole[1].0[1]];
-        let mut two_left = six.clone();
-        let mut gone = out.to_vec();
-        gone.sort_unstable();
-        for &r in gone.iter().rev() {
-            two_left.x.remove(r);
-            two_left.b.remove(r);
-        }
+        let two_left = without(&six, &out);
         let e = Searches::new(&two_left, small, &out).err().unwrap();
         assert!(
             e.to_string().contains("4 rows left out of 6 leave 2"),
@@ -560,13 +555,7 @@ mod tests {
             };
             let whole = Searches::new(&s, draw, &[]).unwrap();
             let out = vec![whole.blocks[0].0[5], whole.blocks[1].0[9]];
-            let mut less = s.clone();
-            let mut gone = out.clone();
-            gone.sort_unstable();
-            for &r in gone.iter().rev() {
-                less.x.remove(r);
-                less.b.remove(r);
-            }
+            let less = without(&s, &out);
             let one = Searches::new(&less, draw, &out).unwrap();
             assert_eq!(one.blocks.len(), blocks);
             let d = one.inputs();
