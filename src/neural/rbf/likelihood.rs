@@ -218,7 +218,8 @@ impl Pairs {
 }
 
 /// The negative log marginal likelihood of the targets `y` at the rows of `pairs` under
-/// `h`, plus the prior's negative log density around `prior` (constants dropped), and its
+/// `h`, plus the prior's negative log density around `prior` if given (constants dropped;
+/// a search on several blocks of rows counts it with one block only), and its
 /// gradient by h into `grad`: with alpha = K^-1 Y and M = alpha alpha^T - o K^-1,
 /// d/dh_j = -1/2 sum_ij M_ij dK_ij/dh_j (Rasmussen and Williams eq. 5.9), where
 /// dK/d ln l_d = s^2 G o D_d / l_d^2 (D_d the squared differences of input d, G = -2 dE/dq,
@@ -229,7 +230,7 @@ pub fn neg_log_likelihood(
     pairs: &Pairs,
     y: &Mat<f64>,
     h: &Hyper,
-    prior: &Hyper,
+    prior: Option<&Hyper>,
     cov: Covariance,
     grad: Option<&mut DVector<f64>>,
 ) -> f64 {
@@ -244,7 +245,7 @@ pub(super) fn neg_log_likelihood_in(
     pairs: &Pairs,
     y: &Mat<f64>,
     h: &Hyper,
-    prior: &Hyper,
+    prior: Option<&Hyper>,
     cov: Covariance,
     grad: Option<&mut DVector<f64>>,
     scratch: &mut Scratch,
@@ -311,9 +312,12 @@ pub(super) fn neg_log_likelihood_in(
             fit += y[(i, j)] * alpha[(i, j)];
         }
     }
-    let dh = h - prior;
+    let dh = prior.map(|p| h - p);
     let sd2 = PRIOR_SD * PRIOR_SD;
-    let f = 0.5 * fit + 0.5 * o as f64 * log_det + 0.5 * dh.norm_squared() / sd2;
+    let mut f = 0.5 * fit + 0.5 * o as f64 * log_det;
+    if let Some(dh) = &dh {
+        f += 0.5 * dh.norm_squared() / sd2;
+    }
     if let Some(g) = grad {
         inverse_lower(k, kinv, stack);
         // (alpha alpha^T)_ij, formed where it is used instead of as an n x n product.
@@ -370,7 +374,9 @@ pub(super) fn neg_log_likelihood_in(
         for c in 0..d {
             g[c] = -total[c] * w[c];
         }
-        *g += dh / sd2;
+        if let Some(dh) = &dh {
+            *g += dh / sd2;
+        }
     }
     f
 }
@@ -445,9 +451,16 @@ mod tests {
             // Both covariance functions through one scratch, one after the other.
             for cov in [Covariance::Matern52, Covariance::SquaredExponential] {
                 let (mut g1, mut g2) = (DVector::zeros(5), DVector::zeros(5));
-                let fresh = neg_log_likelihood(&pairs, &y, &h, &prior, cov, Some(&mut g1));
-                let again =
-                    neg_log_likelihood_in(&pairs, &y, &h, &prior, cov, Some(&mut g2), &mut reused);
+                let fresh = neg_log_likelihood(&pairs, &y, &h, Some(&prior), cov, Some(&mut g1));
+                let again = neg_log_likelihood_in(
+                    &pairs,
+                    &y,
+                    &h,
+                    Some(&prior),
+                    cov,
+                    Some(&mut g2),
+                    &mut reused,
+                );
                 assert_eq!(fresh.to_bits(), again.to_bits(), "{h}");
                 assert_eq!(g1, g2);
             }
@@ -457,8 +470,8 @@ mod tests {
         let h = DVector::from_vec(hs[0].clone());
         let cov = Covariance::DEFAULT;
         assert_eq!(
-            neg_log_likelihood_in(&pairs, &y, &h, &prior, cov, None, &mut small).to_bits(),
-            neg_log_likelihood(&pairs, &y, &h, &prior, cov, None).to_bits()
+            neg_log_likelihood_in(&pairs, &y, &h, Some(&prior), cov, None, &mut small).to_bits(),
+            neg_log_likelihood(&pairs, &y, &h, Some(&prior), cov, None).to_bits()
         );
     }
 
@@ -505,15 +518,15 @@ mod tests {
             let h = DVector::from_vec(h.clone());
             let prior = prior_mean(3, 0.5);
             let mut g = DVector::zeros(5);
-            let f = neg_log_likelihood(&pairs, &y, &h, &prior, cov, Some(&mut g));
+            let f = neg_log_likelihood(&pairs, &y, &h, Some(&prior), cov, Some(&mut g));
             assert!(f.is_finite());
             for j in 0..5 {
                 let step = 1e-5;
                 let (mut a, mut b) = (h.clone(), h.clone());
                 a[j] += step;
                 b[j] -= step;
-                let fd = (neg_log_likelihood(&pairs, &y, &a, &prior, cov, None)
-                    - neg_log_likelihood(&pairs, &y, &b, &prior, cov, None))
+                let fd = (neg_log_likelihood(&pairs, &y, &a, Some(&prior), cov, None)
+                    - neg_log_likelihood(&pairs, &y, &b, Some(&prior), cov, None))
                     / (2.0 * step);
                 assert!(
                     (fd - g[j]).abs() <= 1e-6 * (1.0 + fd.abs()),

@@ -50,7 +50,8 @@ pub const STARTS: [(f64, f64); 3] = [(1.0, 0.5), (0.2, 0.05), (0.05, 0.01)];
 /// Which rows of a set a hyperparameter search sees, and the covariance function whose
 /// hyperparameters it fits: every row of a set of at most `rows`, else blocks of `rows` in
 /// the order of a shuffle seeded by `seed`: the first block, then up to `blocks - 1` more,
-/// a last one of fewer rows only if it has `rows / 2` or more. A block's cost is cubic in its
+/// a last one of fewer rows only if it has `rows / 2` or more and 2 ([`Draw::block_sizes`]);
+/// a block that rows left out leave with fewer than 2 is dropped. A block's cost is cubic in its
 /// rows (a Cholesky factor and an inverse of the n x n kernel matrix per evaluation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Draw {
@@ -400,18 +401,17 @@ impl Objective {
     fn value(&mut self, one: &Searches, h: &Hyper, g: &mut DVector<f64>) -> f64 {
         let mut f = 0.0;
         for (b, ((_, pairs), y)) in one.blocks.iter().zip(&self.y).enumerate() {
-            // The prior counted once: centred on h itself, its term and its gradient are
-            // zero in the other blocks.
-            let (centre, grad) = if b == 0 {
-                (&self.prior, &mut *g)
+            // The prior counted once, with the first block.
+            let (prior, grad) = if b == 0 {
+                (Some(&self.prior), &mut *g)
             } else {
-                (h, &mut self.block_grad)
+                (None, &mut self.block_grad)
             };
             f += neg_log_likelihood_in(
                 pairs,
                 y,
                 h,
-                centre,
+                prior,
                 one.covariance,
                 Some(grad),
                 &mut self.scratch[self.slot[b]],
@@ -586,10 +586,16 @@ mod tests {
                 }
                 let cov = draw.covariance;
                 let y = &objective.y;
-                let mut sum =
-                    neg_log_likelihood(&one.blocks[0].1, &y[0], &h, &objective.prior, cov, None);
+                let mut sum = neg_log_likelihood(
+                    &one.blocks[0].1,
+                    &y[0],
+                    &h,
+                    Some(&objective.prior),
+                    cov,
+                    None,
+                );
                 for ((_, pairs), y) in one.blocks.iter().zip(y).skip(1) {
-                    sum += neg_log_likelihood(pairs, y, &h, &h, cov, None);
+                    sum += neg_log_likelihood(pairs, y, &h, None, cov, None);
                 }
                 assert!((f - sum).abs() <= 1e-9 * sum.abs(), "{f} {sum}");
             }
@@ -625,8 +631,8 @@ mod tests {
             let parts = |h: &Hyper| {
                 let h = h.rows(j * (d + 2), d + 2).into_owned();
                 (
-                    neg_log_likelihood(&blocks[0].1, &y[0], &h, &prior, cov, None),
-                    neg_log_likelihood(&blocks[1].1, &y[1], &h, &h, cov, None),
+                    neg_log_likelihood(&blocks[0].1, &y[0], &h, Some(&prior), cov, None),
+                    neg_log_likelihood(&blocks[1].1, &y[1], &h, None, cov, None),
                 )
             };
             let (a, b) = parts(&found.hyper);
@@ -655,14 +661,7 @@ mod tests {
         // Two rows of the draw and one outside it left out, given unsorted and twice.
         let outside = (0..whole.len()).find(|r| !drawn.contains(r)).unwrap();
         let left_out = vec![drawn[300], outside, drawn[3], drawn[300]];
-        let mut less = whole.clone();
-        let mut gone = left_out.clone();
-        gone.sort_unstable();
-        gone.dedup();
-        for &r in gone.iter().rev() {
-            less.x.remove(r);
-            less.b.remove(r);
-        }
+        let less = without(&whole, &left_out);
         let rows = Searches::new(&less, Draw::seeded(7), &left_out)
             .unwrap()
             .blocks[0]
@@ -672,7 +671,7 @@ mod tests {
         // Each row searched is the same measurement as the whole set's drawn row.
         let expected: Vec<&Vec<f64>> = drawn
             .iter()
-            .filter(|r| !gone.contains(r))
+            .filter(|r| !left_out.contains(r))
             .map(|&r| &whole.x[r])
             .collect();
         let got: Vec<&Vec<f64>> = rows.iter().map(|&r| &less.x[r]).collect();
