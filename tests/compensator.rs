@@ -844,7 +844,7 @@ fn a_mis_measured_training_row_is_listed_and_left_out() {
         assert!(report.settings.has_rbf(), "{:?}", report.settings);
         (c.rbf.unwrap().kernels, report.settings, listed)
     };
-    use robocal::neural::rbf::{Draw, HYPER_ROWS, Rbf, search, search_from};
+    use robocal::neural::rbf::{Draw, HYPER_ROWS, LeftOut, Rbf, search, search_from};
     let seed = CompensatorOptions::default().train.seed;
     let samples = |set: &robocal::data::MeasurementSet, s: &Settings| {
         robocal::neural::targets::build(&model, set, Form::Pose, s.encoding)
@@ -873,7 +873,11 @@ fn a_mis_measured_training_row_is_listed_and_left_out() {
         let (dropped_kernels, s, _) = rbf(true, rows);
         let kept = robocal::neural::tuning::subset(&train, |i| !listed.contains(&i));
         let without = samples(&kept, &s);
-        let again = search_from(&without, &judged, draw, &listed).unwrap().hyper;
+        let whole = LeftOut {
+            rows: &listed,
+            groups: &all.groups,
+        };
+        let again = search_from(&without, &judged, draw, whole).unwrap().hyper;
         assert_eq!(
             dropped_kernels,
             Rbf::with_hyper(&without, &again, draw.covariance)

@@ -330,7 +330,8 @@ fn case_d_prints_table_6_6_beside_ours_and_reports_every_row() {
 
 /// Rows measured twice: `train` reports how far their residuals differ, with the lines of the
 /// widest pair, on stdout and in its report (the same figures); `evaluate` on the same rows
-/// and model reports the same, and nothing on rows without repeats.
+/// and model reports the same, and nothing on rows without repeats; the RBF network's search
+/// sees one row per configuration, and `train` says so.
 #[test]
 fn train_and_evaluate_report_the_repeats_of_their_data() {
     let text =
@@ -401,6 +402,23 @@ fn train_and_evaluate_report_the_repeats_of_their_data() {
     assert!(
         report.get("repeats").is_none() && report["rows"] == 60,
         "{report}"
+    );
+    // The RBF network's search sees one row of each of the 60 configurations, all 65 rows its
+    // weights (the moved copy of line 4 kept: cross-validation lists it as an outlier).
+    let rbf = tmp("repeats_rbf.rcal");
+    let o = common::train_fanuc(
+        data.to_str().unwrap(),
+        rbf.to_str().unwrap(),
+        &["--network", "rbf", "--refine", "none", "--keep-outliers"],
+    );
+    let out = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        out.contains("rbf network: 65 units (")
+            && out.contains(
+                "its hyperparameters searched on 60 of the rows, one per arm configuration;"
+            ),
+        "{out}"
     );
 }
 

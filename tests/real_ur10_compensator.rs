@@ -148,7 +148,7 @@ fn default_beats_the_plain_baseline_on_series_b() {
     // pool has more rows than one search sees, so another draw would be other rows).
     {
         use robocal::neural::compensator::Form;
-        use robocal::neural::rbf::{Draw, Rbf, search_from};
+        use robocal::neural::rbf::{Draw, LeftOut, Rbf, search_from};
         let sel = report.selection.as_ref().unwrap();
         assert!(report.settings.has_rbf() && report.settings.refine.is_none());
         assert!(pool.rows.len() > robocal::neural::rbf::HYPER_ROWS);
@@ -174,14 +174,22 @@ fn default_beats_the_plain_baseline_on_series_b() {
             .samples;
         let judged = sel.rbf_hyper.as_ref().unwrap();
         let draw = Draw::seeded(CompensatorOptions::default().train.seed);
-        let again = search_from(&samples, judged, draw, &left).unwrap().hyper;
+        // Cross-validation's search drew one row per configuration of the rows that trained.
+        let groups = robocal::neural::repeats::configuration_groups(&trained);
+        let whole = LeftOut {
+            rows: &left,
+            groups: &groups,
+        };
+        let again = search_from(&samples, judged, draw, whole).unwrap().hyper;
         let kernels = |h| {
             Rbf::with_hyper(&samples, h, draw.covariance)
                 .unwrap()
                 .kernels
         };
         assert_eq!(c.rbf.as_ref().unwrap().kernels, kernels(&again));
-        let other_draw = search_from(&samples, judged, draw, &[]).unwrap().hyper;
+        let other_draw = search_from(&samples, judged, draw, LeftOut::NONE)
+            .unwrap()
+            .hyper;
         assert_ne!(again, other_draw);
     }
     let plain = summarize(

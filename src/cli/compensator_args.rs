@@ -136,8 +136,8 @@ pub struct CompensatorArgs {
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=3))]
     pub rbf_start: Option<u8>,
     /// Rows of each block the RBF network's likelihood search sees at most, 2 to 3000
-    /// (default 500): on a larger training set a seeded choice of them, the other rows
-    /// entering its weights only. Its cost grows with the cube of the rows: on 2000 real UR10
+    /// (default 500), one per arm configuration: on a larger training set a seeded choice of
+    /// them, the other rows (and a configuration's repeats) entering its weights only. Its cost grows with the cube of the rows: on 2000 real UR10
     /// poses, one block of 1000 rows instead of 500 lowered the held-out RMS by 5.5 % and took
     /// the default `train` from 4.5 s to 11-15 s (squared-exponential kernel).
     #[arg(long)]
@@ -145,7 +145,7 @@ pub struct CompensatorArgs {
     /// Disjoint blocks of those rows the likelihood search sees at most on a larger training
     /// set, their log likelihoods added, 1 to 8 (default 1; a last block of fewer rows only
     /// from half a block). Its cost grows with the blocks: on 2000 real UR10 poses, 2 blocks
-    /// instead of 1 lowered the held-out RMS by 1.6 % and took the default `train` from 5.3 s
+    /// instead of 1 lowered the held-out RMS by 1.4 % and took the default `train` from 5.3 s
     /// to 7.1 s.
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
     pub rbf_search_blocks: Option<u8>,

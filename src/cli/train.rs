@@ -5,11 +5,13 @@ use super::data_args::{DataArgs, SigmaArgs};
 use super::summary::{clean_accuracy, print_shared, print_stats, shared_under, write_report};
 use anyhow::{Context, Result};
 use clap::Args;
+use robocal::data::measurement::subset;
 use robocal::evaluate::{row_errors, summarize};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
 use robocal::neural::compensator::{Compensator, Network, Refine};
 use robocal::neural::predict::PredictWorkspace;
+use robocal::neural::repeats::{configuration_groups, group_count};
 use robocal::neural::train::Phase2;
 use robocal::neural::tuning::RACE_FOLDS;
 use robocal::neural::tuning::{Score, Selection, names_compliance};
@@ -132,13 +134,16 @@ fn print_selection(sel: &Selection) {
     }
 }
 
-/// Which of `rows` training rows the RBF search saw, in blocks of `sizes`: "all rows", "N of
-/// the rows", and the blocks when there are more than one; with the `outliers` the final fit
-/// left out, said to be left out of those.
-fn searched_rows(rows: usize, sizes: &[usize], outliers: usize) -> String {
+/// Which of `rows` training rows (of `configurations` arm configurations) the RBF search saw,
+/// in blocks of `sizes`: "all rows", "N of the rows" (with "one per configuration" where some
+/// configuration has several), and the blocks when there are more than one; with the
+/// `outliers` the final fit left out, said to be left out of those.
+fn searched_rows(rows: usize, configurations: usize, sizes: &[usize], outliers: usize) -> String {
     let searched: usize = sizes.iter().sum();
     let which = if searched >= rows {
         "all rows".to_string()
+    } else if configurations < rows {
+        format!("{searched} of the rows, one per arm configuration")
     } else {
         format!("{searched} of the rows")
     };
@@ -160,14 +165,20 @@ fn searched_rows(rows: usize, sizes: &[usize], outliers: usize) -> String {
 }
 
 /// Prints the refined parameters, the RBF network and the MLPs of a finished training on
-/// `rows` training rows, the RBF search's drawn from them by `draw`, of which the final fit
-/// left `outliers` out.
+/// the training rows `searched` (those cross-validation saw), the RBF search's drawn from
+/// them by `draw` (one per configuration), of which the final fit left `outliers` out.
 fn print_fit(
     c: &Compensator,
     report: &robocal::neural::fit::CompensatorReport,
     seconds: f64,
-    (rows, draw, outliers): (usize, robocal::neural::rbf::Draw, usize),
+    (searched, draw, outliers): (
+        &robocal::data::MeasurementSet,
+        robocal::neural::rbf::Draw,
+        usize,
+    ),
 ) {
+    let rows = searched.rows.len();
+    let configurations = group_count(&configuration_groups(searched));
     if !report.refined.is_empty() {
         println!(
             "refined on the training rows (exact identification, {} parameters):",
@@ -195,7 +206,12 @@ fn print_fit(
             r.kernels.first().map_or("-", |k| k.covariance.name()),
             // The draw is of the rows cross-validation saw: the training rows but those left
             // out for carrying another configuration's reading, outliers included.
-            searched_rows(rows, &draw.block_sizes(rows), outliers),
+            searched_rows(
+                rows,
+                configurations,
+                &draw.block_sizes(configurations),
+                outliers
+            ),
             if n.is_empty() {
                 format!("; {timing}")
             } else {
@@ -293,12 +309,11 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         &report,
         seconds,
         (
-            set.rows.len()
-                - if opts.drop_outliers {
-                    report.shared_readings.len()
-                } else {
-                    0
-                },
+            &if opts.drop_outliers {
+                subset(&set, |i| report.shared_readings.iter().all(|r| r.row != i))
+            } else {
+                set.clone()
+            },
             opts.train.rbf_draw(),
             if opts.drop_outliers {
                 report.selection.as_ref().map_or(0, |s| s.outliers.len())

@@ -4,7 +4,7 @@
 use super::compensator::Compensator;
 use super::domain::Domain;
 use super::parallel::parallel_map;
-use super::rbf::{Rbf, search_from, search_start_without};
+use super::rbf::{LeftOut, Rbf, search_from, search_start_without};
 use super::refine::{RefinedParam, refine};
 use super::repeats::Repeats;
 use super::selection::Selection;
@@ -110,7 +110,10 @@ pub(crate) fn fit_with(
         let (x, draw, left) = (
             &problem.samples,
             train_opts.rbf_draw(),
-            &train_opts.rbf_left_out,
+            LeftOut {
+                rows: &train_opts.rbf_left_out,
+                groups: &train_opts.rbf_whole_groups,
+            },
         );
         let hyper = match &train_opts.rbf_hyper {
             RbfHyper::Given(h) => h.clone(),

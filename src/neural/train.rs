@@ -131,8 +131,14 @@ pub struct TrainOptions {
     /// [`Compensator::train`](super::compensator::Compensator::train) sets it (and
     /// `rbf_hyper`) for its final fit, whatever the caller gave.
     pub rbf_left_out: Vec<usize>,
-    /// Rows an RBF network's hyperparameter search sees at most (a seeded choice of them on
-    /// larger sets, the same in cross-validation and in the final fit; at least 2): default
+    /// The larger set's configuration group of each of its rows (its
+    /// [`Samples::groups`](super::samples::Samples::groups)), so that the search draws that
+    /// set's one row per configuration ([`super::rbf::LeftOut`]); empty: this set's groups,
+    /// each row of `rbf_left_out` a configuration of its own.
+    pub rbf_whole_groups: Vec<usize>,
+    /// Rows an RBF network's hyperparameter search sees at most (one per arm configuration, a
+    /// seeded choice of them on larger sets, the same in cross-validation and in the final
+    /// fit; at least 2): default
     /// [`super::rbf::HYPER_ROWS`]. The search's cost is cubic in them.
     pub rbf_search_rows: usize,
     /// Disjoint blocks of `rbf_search_rows` an RBF network's hyperparameter search sees at
@@ -174,6 +180,7 @@ impl Default for TrainOptions {
             start: None,
             rbf_hyper: RbfHyper::Search,
             rbf_left_out: Vec::new(),
+            rbf_whole_groups: Vec::new(),
             rbf_search_rows: super::rbf::HYPER_ROWS,
             rbf_search_blocks: super::rbf::HYPER_BLOCKS,
             rbf_covariance: super::rbf::Covariance::DEFAULT,

@@ -3,6 +3,7 @@
 
 use super::compensator::Compensator;
 use super::fit::CompensatorReport;
+use super::repeats::configuration_groups;
 use super::settings::CompensatorOptions;
 use super::train::{RbfHyper, TrainOptions};
 use super::tuning::{FIT_WORK, budget_epochs, outlier_note, select_settings};
@@ -83,6 +84,13 @@ impl Compensator {
                 opts.train.max_epochs
             },
             rbf_hyper,
+            // Cross-validation's search drew one row per configuration of `set` (its samples'
+            // groups are these): the final fit's search draws the same rows, but those left out.
+            rbf_whole_groups: if left_out.is_empty() {
+                Vec::new()
+            } else {
+                configuration_groups(set)
+            },
             rbf_left_out: left_out,
             ..opts.train.clone()
         };

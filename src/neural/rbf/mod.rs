@@ -30,8 +30,8 @@
 //! other wrist angles) where a small MLP can only follow the smooth trend. Far from every
 //! centre its output falls to zero: the compensator becomes the model. Its cost is cubic in
 //! the rows, so the hyperparameters are fitted on at most [`HYPER_BLOCKS`] blocks of
-//! [`HYPER_ROWS`] of them (a seeded choice; the blocks' likelihoods added) and only the
-//! weights use every row. The likelihood has several modes on real data,
+//! [`HYPER_ROWS`] of them (one per arm configuration, a seeded choice; the blocks'
+//! likelihoods added) and only the weights use every row. The likelihood has several modes on real data,
 //! so the search can run from each of [`STARTS`]; the factorisations use `faer`.
 
 mod covariance;
@@ -47,7 +47,7 @@ use likelihood::kernel;
 pub use likelihood::{PRIOR_SD, Pairs, neg_log_likelihood};
 use nalgebra::{DMatrix, DVector};
 pub use search::{
-    Draw, HYPER_BLOCKS, HYPER_ITERATIONS, HYPER_ROWS, STALL_NATS, STARTS, Search, search,
+    Draw, HYPER_BLOCKS, HYPER_ITERATIONS, HYPER_ROWS, LeftOut, STALL_NATS, STARTS, Search, search,
     search_best, search_best_without, search_from, search_start_without, search_without,
 };
 
@@ -266,7 +266,7 @@ impl Rbf {
     /// row ([`Rbf::with_hyper`]).
     pub fn fit(s: &Samples, start: Option<usize>, seed: u64) -> Result<(Rbf, Search)> {
         let draw = Draw::seeded(seed);
-        let found = search_start_without(s, start, draw, &[])?;
+        let found = search_start_without(s, start, draw, LeftOut::NONE)?;
         Ok((Rbf::with_hyper(s, &found.hyper, draw.covariance)?, found))
     }
 
@@ -540,7 +540,7 @@ mod tests {
                 covariance,
                 ..Draw::seeded(1)
             };
-            let found = search_start_without(&s, None, draw, &[]).unwrap();
+            let found = search_start_without(&s, None, draw, LeftOut::NONE).unwrap();
             let rbf = Rbf::with_hyper(&s, &found.hyper, covariance).unwrap();
             assert!(rbf.kernels.iter().all(|k| k.covariance == covariance));
             jacobian_matches_central_differences(&rbf);

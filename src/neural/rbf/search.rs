@@ -1,7 +1,7 @@
 //! Type-II maximum likelihood of each output's Gaussian process: L-BFGS on the log
 //! hyperparameters from one of [`STARTS`], from all of them, or from given hyperparameters
 //! ([`search_from`]: the final fit's search without the rows it leaves out), on at most
-//! [`HYPER_ROWS`] rows.
+//! [`HYPER_ROWS`] rows, one per arm configuration.
 
 use super::Covariance;
 use super::likelihood::{Pairs, Scratch, neg_log_likelihood_in, prior_mean};
@@ -25,11 +25,12 @@ pub const HYPER_ROWS: usize = 500;
 /// block-diagonal approximation), at a cost linear in the blocks instead of cubic in the rows.
 /// One by default: on real UR10 data, the default `train` with two blocks instead of one
 /// lowered the held-out position RMS over 16 Series B runs with pools of 1000 (4 splits,
-/// training seeds 1-4) from 0.2144 to 0.2108 mm (lower in 9, the worst run 0.2399 -> 0.2284,
-/// each split's spread over the seeds narrower) and on Series A's pool of 2000 (seeds 1-3)
-/// from 0.1400 to 0.1377 (lower in all three), but every step of the search then evaluates
-/// two likelihoods (as many steps as one block's), which doubles its time: 5.3 -> 7.1 s on
-/// those 2000 poses, 5.9 -> 8.3 s on Series B's README split (1000 poses).
+/// training seeds 1-4) from 0.2081 to 0.2072 mm (the worst run 0.2289 -> 0.2244) and on
+/// Series A's pool of 2000 (seeds 1-3) from 0.1400 to 0.1380 (lower in all three), but every
+/// step of the search then evaluates two likelihoods (as many steps as one block's), which
+/// doubles its time: 5.3 -> 7.1 s on those 2000 poses, 5.9 -> 8.3 s on Series B's README
+/// split (1000 poses). (Before the draw of one row per configuration, two blocks had taken
+/// the Series B mean from 0.2144 to 0.2108 mm.)
 pub const HYPER_BLOCKS: usize = 1;
 /// Gain in log likelihood (nats) below which a search step counts as idle: of the blocks'
 /// summed objective (with K blocks, a stop about K times stricter for each).
@@ -48,8 +49,10 @@ pub const HYPER_ITERATIONS: usize = 60;
 pub const STARTS: [(f64, f64); 3] = [(1.0, 0.5), (0.2, 0.05), (0.05, 0.01)];
 
 /// Which rows of a set a hyperparameter search sees, and the covariance function whose
-/// hyperparameters it fits: every row of a set of at most `rows`, else blocks of `rows` in
-/// the order of a shuffle seeded by `seed`: the first block, then up to `blocks - 1` more,
+/// hyperparameters it fits: one row per configuration (a seeded choice among a repeated
+/// configuration's rows, see [`Samples::groups`]); all of them where they are at most `rows`,
+/// else blocks of `rows` in the order of a shuffle seeded by `seed`: the first block, then up
+/// to `blocks - 1` more,
 /// a last one of fewer rows only if it has `rows / 2` or more and 2 ([`Draw::block_sizes`]);
 /// a block that rows left out leave with fewer than 2 is dropped. A block's cost is cubic in its
 /// rows (a Cholesky factor and an inverse of the n x n kernel matrix per evaluation).
@@ -77,7 +80,8 @@ impl Draw {
         }
     }
 
-    /// The sizes of the blocks a search of a set of `n` rows sees (none left out): blocks
+    /// The sizes of the blocks a search of a set of `n` configurations sees (none left out;
+    /// one row per configuration): blocks
     /// of `rows` while there are rows and blocks, a last smaller one only if it has at least
     /// `rows / 2` rows and 2 (and the first always).
     pub fn block_sizes(&self, n: usize) -> Vec<usize> {
@@ -105,14 +109,35 @@ pub struct Search {
 /// hyperparameters, [`HYPER_ITERATIONS`] at most) on the rows of `s` that `draw` picks. The
 /// objective is the sum of the outputs'.
 pub fn search(s: &Samples, start: usize, draw: Draw) -> Result<Search> {
-    search_without(s, start, draw, &[])
+    search_without(s, start, draw, LeftOut::NONE)
 }
 
-/// [`search()`] on `s`, a set from which the rows `left_out` (indices in the whole set) were
-/// taken out: the rows searched are those the search of the whole set draws, but those left
-/// out (the hyperparameters of the set without a few mis-measured rows, not those of another
-/// draw of rows).
-pub fn search_without(s: &Samples, start: usize, draw: Draw, left_out: &[usize]) -> Result<Search> {
+/// Rows a set was taken from a whole set without, for a search that should see the rows the
+/// whole set's search draws, but those.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LeftOut<'a> {
+    /// Indices in the whole set of the rows taken out (any order; repeats allowed).
+    pub rows: &'a [usize],
+    /// The whole set's configuration group of each of its rows (its [`Samples::groups`]),
+    /// which the draw of one row per configuration needs. Empty: the set's own groups for its
+    /// rows and each row taken out a configuration of its own (exact where no configuration
+    /// repeats; otherwise a configuration whose drawn row is taken out keeps another).
+    pub groups: &'a [usize],
+}
+
+impl LeftOut<'_> {
+    /// Nothing left out: the set is whole.
+    pub const NONE: LeftOut<'static> = LeftOut {
+        rows: &[],
+        groups: &[],
+    };
+}
+
+/// [`search()`] on `s`, a set taken from a whole set without the rows `left_out`: the rows
+/// searched are those the search of the whole set draws, but those left out (the
+/// hyperparameters of the set without a few mis-measured rows, not those of another draw of
+/// rows; see [`LeftOut::groups`]).
+pub fn search_without(s: &Samples, start: usize, draw: Draw, left_out: LeftOut) -> Result<Search> {
     let one = Searches::new(s, draw, left_out)?;
     let found = parallel_map(one.outputs, |j| one.output(j, Begin::Start(start)));
     Ok(join(found.into_iter().collect::<Result<Vec<_>>>()?))
@@ -121,7 +146,7 @@ pub fn search_without(s: &Samples, start: usize, draw: Draw, left_out: &[usize])
 /// [`search_without`] started at the hyperparameters `from` (every output's, see
 /// [`Hyper`]) instead of at a start: those of a search on nearly the same rows, whose mode
 /// it follows (a few steps where the rows differ little).
-pub fn search_from(s: &Samples, from: &Hyper, draw: Draw, left_out: &[usize]) -> Result<Search> {
+pub fn search_from(s: &Samples, from: &Hyper, draw: Draw, left_out: LeftOut) -> Result<Search> {
     let one = Searches::new(s, draw, left_out)?;
     check_hyper(from, one.inputs(), one.outputs)?;
     let block = one.inputs() + 2;
@@ -142,12 +167,12 @@ enum Begin {
 /// The searches from every start (in parallel), keeping for each output the one of highest
 /// likelihood.
 pub fn search_best(s: &Samples, draw: Draw) -> Result<Search> {
-    search_best_without(s, draw, &[])
+    search_best_without(s, draw, LeftOut::NONE)
 }
 
 /// [`search_best`] on a set from which the rows `left_out` were taken out, as
 /// [`search_without`].
-pub fn search_best_without(s: &Samples, draw: Draw, left_out: &[usize]) -> Result<Search> {
+pub fn search_best_without(s: &Samples, draw: Draw, left_out: LeftOut) -> Result<Search> {
     let one = Searches::new(s, draw, left_out)?;
     let (o, starts) = (one.outputs, STARTS.len());
     let all = parallel_map(o * starts, |i| {
@@ -179,7 +204,7 @@ pub fn search_start_without(
     s: &Samples,
     start: Option<usize>,
     draw: Draw,
-    left_out: &[usize],
+    left_out: LeftOut,
 ) -> Result<Search> {
     match start {
         Some(k) => search_without(s, k, draw, left_out),
@@ -210,8 +235,46 @@ struct Searches<'a> {
     covariance: Covariance,
 }
 
+/// The rows of a whole set of `whole` rows (indices in it; `s` is that set less the sorted
+/// rows `left_out`) that a search takes its blocks from, in the order it takes them: a shuffle
+/// seeded by `seed`, of which only the first row of each configuration is kept. The
+/// configurations are `whole_groups` (the whole set's groups), or where that is empty the
+/// groups of `s` ([`Samples::groups`]) with each row left out a configuration of its own.
+///
+/// One row per configuration because repeated measurements of one arm configuration agree to
+/// the data's repeatability (0.034 mm on Series B's pool), far closer than rows of different
+/// configurations follow the function of the joints the network learns. Pairs of repeats in
+/// the likelihood pull its noise variance toward that repeatability and its widths narrower,
+/// and the fit then follows its rows too closely between configurations, where it is judged.
+/// On 16 Series B runs with pools of 1000 (4 splits, training seeds 1-4), the default `train`'s
+/// held-out position RMS: 0.2144 mm with rows drawn one by one (as before), 0.2223 with each
+/// configuration's rows drawn together, 0.2081 with one row per configuration.
+fn configurations_in_draw_order(
+    s: &Samples,
+    left_out: &[usize],
+    whole_groups: &[usize],
+    whole: usize,
+    seed: u64,
+) -> Vec<usize> {
+    let mut all: Vec<usize> = (0..whole).collect();
+    all.shuffle(&mut ChaCha8Rng::seed_from_u64(seed ^ 0x7bf));
+    // A configuration: (false, group) for a group, (true, row) for a row left out alone.
+    let configuration = |r: usize| -> (bool, usize) {
+        if !whole_groups.is_empty() {
+            return (false, whole_groups[r]);
+        }
+        match left_out.binary_search(&r) {
+            Ok(_) => (true, r),
+            Err(before) => (false, s.group(r - before)),
+        }
+    };
+    let mut seen = std::collections::HashSet::new();
+    all.retain(|&r| seen.insert(configuration(r)));
+    all
+}
+
 impl<'a> Searches<'a> {
-    fn new(s: &'a Samples, draw: Draw, left_out: &[usize]) -> Result<Searches<'a>> {
+    fn new(s: &'a Samples, draw: Draw, left_out: LeftOut) -> Result<Searches<'a>> {
         let (n, _, outputs) = shape(s)?;
         if draw.rows < 2 {
             return Err(Error::Invalid(format!(
@@ -225,7 +288,8 @@ impl<'a> Searches<'a> {
                     .into(),
             ));
         }
-        let mut left_out = left_out.to_vec();
+        let whole_groups = left_out.groups;
+        let mut left_out = left_out.rows.to_vec();
         left_out.sort_unstable();
         left_out.dedup();
         // The whole set's rows, drawn as its own search draws them.
@@ -238,10 +302,14 @@ impl<'a> Searches<'a> {
                  {whole} rows"
             )));
         }
-        let mut all: Vec<usize> = (0..whole).collect();
-        if whole > draw.rows {
-            all.shuffle(&mut ChaCha8Rng::seed_from_u64(draw.seed ^ 0x7bf));
+        if !whole_groups.is_empty() && whole_groups.len() != whole {
+            return Err(Error::Invalid(format!(
+                "the RBF network's hyperparameter search: configuration groups of {} rows for \
+                 a whole set of {whole}",
+                whole_groups.len()
+            )));
         }
+        let all = configurations_in_draw_order(s, &left_out, whole_groups, whole, draw.seed);
         // Those left out dropped, the others numbered as in `s`.
         let renumber = |block: &[usize]| -> Vec<usize> {
             let mut rows = block.to_vec();
@@ -253,7 +321,7 @@ impl<'a> Searches<'a> {
         };
         let mut at = 0;
         let drawn: Vec<Vec<usize>> = draw
-            .block_sizes(whole)
+            .block_sizes(all.len())
             .into_iter()
             .map(|size| {
                 at += size;
@@ -433,6 +501,11 @@ mod tests {
     use crate::neural::rbf::tests::data;
     use crate::neural::rbf::{Rbf, neg_log_likelihood};
 
+    /// The rows `rows` left out, the whole set's groups not given.
+    fn rows_out(rows: &[usize]) -> LeftOut<'_> {
+        LeftOut { rows, groups: &[] }
+    }
+
     /// `s` without the rows `out` (indices in `s`, any order).
     fn without(s: &Samples, out: &[usize]) -> Samples {
         let mut less = s.clone();
@@ -442,8 +515,103 @@ mod tests {
         for &r in gone.iter().rev() {
             less.x.remove(r);
             less.b.remove(r);
+            if !less.groups.is_empty() {
+                less.groups.remove(r);
+            }
         }
         less
+    }
+
+    /// `data(n)` whose rows come in configurations of three (groups k / 3), each
+    /// configuration's rows the same inputs, their targets apart by the noise of a repeat.
+    fn repeated(n: usize) -> Samples {
+        let (mut s, _) = data(n);
+        for k in 0..n {
+            let first = k - k % 3;
+            s.x[k] = s.x[first].clone();
+            let shift = 1e-3 * (k % 3) as f64;
+            s.b[k] = s.b[first].iter().map(|b| b + shift).collect();
+        }
+        s.groups = (0..n).map(|k| k / 3).collect();
+        s
+    }
+
+    /// A search sees one row of each configuration: on a small set all configurations, on a
+    /// large one blocks of distinct configurations; the search is the one on the set of those
+    /// rows alone, bit for bit (a repeat's row cannot enter it). Rows left out leave the whole
+    /// set's draw but those when its groups are given.
+    #[test]
+    fn a_search_sees_one_row_per_configuration() {
+        let s = repeated(60);
+        let groups_of = |rows: &[usize]| -> Vec<usize> {
+            let mut g: Vec<usize> = rows.iter().map(|&r| s.groups[r]).collect();
+            g.sort_unstable();
+            g
+        };
+        let one = Searches::new(&s, Draw::seeded(7), LeftOut::NONE).unwrap();
+        assert_eq!(one.blocks.len(), 1);
+        let drawn = one.blocks[0].0.clone();
+        assert_eq!(groups_of(&drawn), (0..20).collect::<Vec<_>>());
+        // Not always a configuration's first row: the choice is the shuffle's.
+        assert!(drawn.iter().any(|r| r % 3 != 0), "{drawn:?}");
+        let mut distinct = Samples::default();
+        for &r in &drawn {
+            distinct.x.push(s.x[r].clone());
+            distinct.b.push(s.b[r].clone());
+        }
+        assert_eq!(
+            search(&s, 0, Draw::seeded(7)).unwrap(),
+            search(&distinct, 0, Draw::seeded(7)).unwrap()
+        );
+        // Two blocks of 8 rows from 16 distinct configurations.
+        let small = Draw {
+            rows: 8,
+            blocks: 2,
+            ..Draw::seeded(7)
+        };
+        let two = Searches::new(&s, small, LeftOut::NONE).unwrap().blocks;
+        assert_eq!(two.iter().map(|b| b.0.len()).collect::<Vec<_>>(), [8, 8]);
+        let both: Vec<usize> = two.iter().flat_map(|b| b.0.iter().copied()).collect();
+        let mut g = groups_of(&both);
+        g.dedup();
+        assert_eq!(g.len(), 16);
+        // The drawn row of configuration 5 left out. With the whole set's groups, the rows
+        // searched are the whole set's but that one: configuration 5 is not searched.
+        let gone = *drawn.iter().find(|&&r| s.groups[r] == 5).unwrap();
+        let less = without(&s, &[gone]);
+        let exact = Searches::new(
+            &less,
+            Draw::seeded(7),
+            LeftOut {
+                rows: &[gone],
+                groups: &s.groups,
+            },
+        )
+        .unwrap()
+        .blocks[0]
+            .0
+            .clone();
+        let renumbered: Vec<usize> = drawn
+            .iter()
+            .filter(|&&r| r != gone)
+            .map(|&r| if r > gone { r - 1 } else { r })
+            .collect();
+        assert_eq!(exact, renumbered);
+        // Without them, the row left out is a configuration of its own, and configuration 5
+        // keeps another of its rows (`less` no longer holds the one left out).
+        let rows = Searches::new(&less, Draw::seeded(7), rows_out(&[gone]))
+            .unwrap()
+            .blocks[0]
+            .0
+            .clone();
+        assert_eq!(rows.len(), 20);
+        assert_eq!(rows.iter().filter(|&&r| less.groups[r] == 5).count(), 1);
+        // Groups of another length than the whole set are refused.
+        let short = LeftOut {
+            rows: &[gone],
+            groups: &s.groups[1..],
+        };
+        assert!(Searches::new(&less, Draw::seeded(7), short).is_err());
     }
 
     /// Blocks of `rows` while there are rows and blocks; a short last block only from half
@@ -482,8 +650,8 @@ mod tests {
             ..Draw::seeded(5)
         };
         let one = Draw { blocks: 1, ..two };
-        let blocks = Searches::new(&s, two, &[]).unwrap().blocks;
-        let single = Searches::new(&s, one, &[]).unwrap().blocks;
+        let blocks = Searches::new(&s, two, LeftOut::NONE).unwrap().blocks;
+        let single = Searches::new(&s, one, LeftOut::NONE).unwrap().blocks;
         assert_eq!(blocks.len(), 2);
         assert_eq!(single.len(), 1);
         assert_eq!(blocks[0].0, single[0].0);
@@ -491,7 +659,7 @@ mod tests {
         assert!(blocks[1].0.iter().all(|r| !blocks[0].0.contains(r)));
         assert!(blocks.iter().all(|(b, _)| b.is_sorted()));
         // Three blocks: the third (60 rows, more than half a block) is the rest.
-        let three = Searches::new(&s, Draw { blocks: 3, ..two }, &[])
+        let three = Searches::new(&s, Draw { blocks: 3, ..two }, LeftOut::NONE)
             .unwrap()
             .blocks;
         let mut all: Vec<usize> = three.iter().flat_map(|(b, _)| b.clone()).collect();
@@ -501,7 +669,7 @@ mod tests {
         // Rows left out of both blocks: gone from them, the others renumbered.
         let out = [blocks[0].0[7], blocks[1].0[3]];
         let less = without(&s, &out);
-        let left = Searches::new(&less, two, &out).unwrap().blocks;
+        let left = Searches::new(&less, two, rows_out(&out)).unwrap().blocks;
         for ((rows, _), (whole, _)) in left.iter().zip(&blocks) {
             assert_eq!(rows.len(), whole.len() - 1);
             let got: Vec<&Vec<f64>> = rows.iter().map(|&r| &less.x[r]).collect();
@@ -512,7 +680,7 @@ mod tests {
                 .collect();
             assert_eq!(got, expected);
         }
-        assert!(Searches::new(&s, Draw { blocks: 0, ..two }, &[]).is_err());
+        assert!(Searches::new(&s, Draw { blocks: 0, ..two }, LeftOut::NONE).is_err());
         // Blocks of 3 rows on 6: a block left with one row is dropped, the other kept, even
         // the first; with none of 2 rows or more left, an error.
         let (six, _) = data(6);
@@ -521,11 +689,11 @@ mod tests {
             blocks: 2,
             ..Draw::seeded(5)
         };
-        let whole = Searches::new(&six, small, &[]).unwrap().blocks;
+        let whole = Searches::new(&six, small, LeftOut::NONE).unwrap().blocks;
         for b in 0..2 {
             let out = [whole[b].0[0], whole[b].0[2]];
             let less = without(&six, &out);
-            let kept = Searches::new(&less, small, &out).unwrap().blocks;
+            let kept = Searches::new(&less, small, rows_out(&out)).unwrap().blocks;
             assert_eq!(kept.len(), 1, "{b}");
             let got: Vec<&Vec<f64>> = kept[0].0.iter().map(|&r| &less.x[r]).collect();
             let expected: Vec<&Vec<f64>> = whole[1 - b].0.iter().map(|&r| &six.x[r]).collect();
@@ -533,7 +701,9 @@ mod tests {
         }
         let out = [whole[0].0[0], whole[0].0[1], whole[1].0[0], whole[1].0[1]];
         let two_left = without(&six, &out);
-        let e = Searches::new(&two_left, small, &out).err().unwrap();
+        let e = Searches::new(&two_left, small, rows_out(&out))
+            .err()
+            .unwrap();
         assert!(
             e.to_string().contains("4 rows left out of 6 leave 2"),
             "{e}"
@@ -553,10 +723,10 @@ mod tests {
                 blocks,
                 ..Draw::seeded(4)
             };
-            let whole = Searches::new(&s, draw, &[]).unwrap();
+            let whole = Searches::new(&s, draw, LeftOut::NONE).unwrap();
             let out = vec![whole.blocks[0].0[5], whole.blocks[1].0[9]];
             let less = without(&s, &out);
-            let one = Searches::new(&less, draw, &out).unwrap();
+            let one = Searches::new(&less, draw, rows_out(&out)).unwrap();
             assert_eq!(one.blocks.len(), blocks);
             let d = one.inputs();
             for j in 0..less.rows() {
@@ -616,7 +786,7 @@ mod tests {
         };
         let found = search(&s, 0, two).unwrap();
         let first_only = search(&s, 0, Draw { blocks: 1, ..two }).unwrap();
-        let blocks = Searches::new(&s, two, &[]).unwrap().blocks;
+        let blocks = Searches::new(&s, two, LeftOut::NONE).unwrap().blocks;
         let d = s.x[0].len();
         let cov = two.covariance;
         let mut total = 0.0;
@@ -654,7 +824,9 @@ mod tests {
     #[test]
     fn a_search_without_rows_draws_the_whole_sets_rows_but_those() {
         let (whole, _) = data(HYPER_ROWS + 100);
-        let drawn = Searches::new(&whole, Draw::seeded(7), &[]).unwrap().blocks[0]
+        let drawn = Searches::new(&whole, Draw::seeded(7), LeftOut::NONE)
+            .unwrap()
+            .blocks[0]
             .0
             .clone();
         assert_eq!(drawn.len(), HYPER_ROWS);
@@ -662,7 +834,7 @@ mod tests {
         let outside = (0..whole.len()).find(|r| !drawn.contains(r)).unwrap();
         let left_out = vec![drawn[300], outside, drawn[3], drawn[300]];
         let less = without(&whole, &left_out);
-        let rows = Searches::new(&less, Draw::seeded(7), &left_out)
+        let rows = Searches::new(&less, Draw::seeded(7), rows_out(&left_out))
             .unwrap()
             .blocks[0]
             .0
@@ -681,17 +853,26 @@ mod tests {
         let mut fewer = small.clone();
         fewer.x.remove(4);
         fewer.b.remove(4);
-        let rows = Searches::new(&fewer, Draw::seeded(7), &[4]).unwrap().blocks[0]
+        let rows = Searches::new(&fewer, Draw::seeded(7), rows_out(&[4]))
+            .unwrap()
+            .blocks[0]
             .0
             .clone();
         assert_eq!(rows, (0..29).collect::<Vec<_>>());
         assert_eq!(
-            search_without(&fewer, 0, Draw::seeded(7), &[4]).unwrap(),
+            search_without(&fewer, 0, Draw::seeded(7), rows_out(&[4])).unwrap(),
             search(&fewer, 0, Draw::seeded(7)).unwrap()
         );
         // An index beyond the whole set is refused, on a small set and on a large one.
-        assert!(Searches::new(&fewer, Draw::seeded(7), &[29, 31]).is_err());
-        assert!(Searches::new(&less, Draw::seeded(7), &[drawn[3], whole.len() + 50]).is_err());
+        assert!(Searches::new(&fewer, Draw::seeded(7), rows_out(&[29, 31])).is_err());
+        assert!(
+            Searches::new(
+                &less,
+                Draw::seeded(7),
+                rows_out(&[drawn[3], whole.len() + 50])
+            )
+            .is_err()
+        );
     }
 
     /// A search begun at given hyperparameters is, output by output, the search from them:
@@ -713,12 +894,12 @@ mod tests {
                 h0[at + d + 1] = (noise * var).ln();
             }
             assert_eq!(
-                search_from(&s, &h0, Draw::seeded(1), &[]).unwrap(),
+                search_from(&s, &h0, Draw::seeded(1), LeftOut::NONE).unwrap(),
                 search(&s, k, Draw::seeded(1)).unwrap()
             );
         }
         let cold = search(&s, 1, Draw::seeded(1)).unwrap();
-        let warm = search_from(&s, &cold.hyper, Draw::seeded(1), &[]).unwrap();
+        let warm = search_from(&s, &cold.hyper, Draw::seeded(1), LeftOut::NONE).unwrap();
         assert!(
             warm.objective <= cold.objective,
             "{} {}",
@@ -730,13 +911,13 @@ mod tests {
                 &s,
                 &cold.hyper.rows(0, 3).into_owned(),
                 Draw::seeded(1),
-                &[]
+                LeftOut::NONE
             )
             .is_err()
         );
         let mut bad = cold.hyper.clone();
         bad[0] = f64::NAN;
-        assert!(search_from(&s, &bad, Draw::seeded(1), &[]).is_err());
+        assert!(search_from(&s, &bad, Draw::seeded(1), LeftOut::NONE).is_err());
     }
 
     #[test]
