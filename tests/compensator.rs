@@ -820,7 +820,7 @@ fn a_mis_measured_training_row_is_listed_and_left_out() {
     // at those cross-validation judged (searched with them). Both searches see the rows
     // `rows` draws: all 150 by default (only the bad row listed), 60 of them when told (a
     // search on fewer rows lists a few more, the bad row among them).
-    let rbf = |drop_outliers: bool, rows: usize| {
+    let rbf = |train: &robocal::data::MeasurementSet, drop_outliers: bool, rows: usize| {
         let defaults = CompensatorOptions::default();
         let opts = CompensatorOptions {
             network: Some(robocal::neural::compensator::Network::Rbf),
@@ -832,7 +832,7 @@ fn a_mis_measured_training_row_is_listed_and_left_out() {
             },
             ..defaults
         };
-        let (c, report) = Compensator::train(&model, &train, &opts, &|_, _| {}).unwrap();
+        let (c, report) = Compensator::train(&model, train, &opts, &|_, _| {}).unwrap();
         let listed: Vec<usize> = report
             .selection
             .unwrap()
@@ -851,18 +851,21 @@ fn a_mis_measured_training_row_is_listed_and_left_out() {
             .unwrap()
             .samples
     };
-    let mut by_rows = Vec::new();
-    for rows in [HYPER_ROWS, 60] {
+    // The final fit's RBF network on `train` with the search on `rows`: the kernels kept
+    // without cutting, and those of the searches without the rows listed that begin at the
+    // hyperparameters cross-validation judged, on the whole set's draw (its groups given) and
+    // on a draw that does not know them.
+    let check = |train: &robocal::data::MeasurementSet, rows: usize| {
         let draw = Draw {
             rows,
             ..Draw::seeded(seed)
         };
-        let (kept_kernels, s, listed) = rbf(false, rows);
-        if rows == HYPER_ROWS {
+        let (kept_kernels, s, listed) = rbf(train, false, rows);
+        if rows == HYPER_ROWS && train.rows.len() == 150 {
             assert_eq!(listed, vec![bad]);
         }
         let start = s.rbf_start.unwrap();
-        let all = samples(&train, &s);
+        let all = samples(train, &s);
         let judged = search(&all, start, draw).unwrap().hyper;
         assert_eq!(
             kept_kernels,
@@ -870,8 +873,8 @@ fn a_mis_measured_training_row_is_listed_and_left_out() {
                 .unwrap()
                 .kernels
         );
-        let (dropped_kernels, s, _) = rbf(true, rows);
-        let kept = robocal::neural::tuning::subset(&train, |i| !listed.contains(&i));
+        let (dropped_kernels, s, _) = rbf(train, true, rows);
+        let kept = robocal::neural::tuning::subset(train, |i| !listed.contains(&i));
         let without = samples(&kept, &s);
         let whole = LeftOut {
             rows: &listed,
@@ -885,8 +888,29 @@ fn a_mis_measured_training_row_is_listed_and_left_out() {
                 .kernels
         );
         assert_ne!(dropped_kernels, kept_kernels);
+        let blind = LeftOut {
+            rows: &listed,
+            groups: &[],
+        };
+        let other = search_from(&without, &judged, draw, blind).unwrap().hyper;
+        (kept_kernels, again, other)
+    };
+    let mut by_rows = Vec::new();
+    for rows in [HYPER_ROWS, 60] {
+        let (kept_kernels, again, other) = check(&train, rows);
+        // No configuration repeats: the draw needs no groups.
+        assert_eq!(again, other);
         by_rows.push(kept_kernels);
     }
+    // The bad row's configuration and ten others measured again, correctly: the final fit
+    // searches cross-validation's draw of one row per configuration but the rows listed,
+    // which only the whole set's groups give.
+    let mut repeated = train.clone();
+    for k in std::iter::once(bad).chain(0..10) {
+        repeated.rows.push(clean.rows[k].clone());
+    }
+    let (_, again, other) = check(&repeated, 140);
+    assert_ne!(again, other);
     // 60 rows of 150 are another search than all of them.
     assert_ne!(by_rows[0], by_rows[1]);
     // Without the cut, nothing is listed.

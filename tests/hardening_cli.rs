@@ -934,6 +934,26 @@ fn edge_inputs_of_train_and_evaluate() {
         "{}",
         common::stdout(&o)
     );
+    // The same with an RBF network, whose search takes the configuration's rows.
+    let rbf = [
+        "--network",
+        "rbf",
+        "--form",
+        "pose",
+        "--encoding",
+        "gravity",
+        "--refine",
+        "none",
+        "--members",
+        "1",
+    ];
+    let o = common::train_fanuc(once_path.to_str().unwrap(), out, &rbf);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        common::stdout(&o).contains("are one configuration: the network can learn only a constant"),
+        "{}",
+        common::stdout(&o)
+    );
     // Joints beyond the limits: the file and its line are named.
     let beyond = common::tmp("edge_beyond.csv");
     std::fs::write(&beyond, "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n400,0,0,0,0,0\n").unwrap();

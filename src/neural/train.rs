@@ -129,7 +129,7 @@ pub struct TrainOptions {
     /// search runs on the rows the larger set's search draws, but these
     /// ([`super::rbf::search_without`]); empty: the set is whole.
     /// [`Compensator::train`](super::compensator::Compensator::train) sets it (and
-    /// `rbf_hyper`) for its final fit, whatever the caller gave.
+    /// `rbf_hyper`, `rbf_whole_groups`) for its final fit, whatever the caller gave.
     pub rbf_left_out: Vec<usize>,
     /// The larger set's configuration group of each of its rows (its
     /// [`Samples::groups`](super::samples::Samples::groups)), so that the search draws that

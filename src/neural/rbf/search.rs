@@ -40,8 +40,9 @@ pub const HYPER_ITERATIONS: usize = 60;
 
 /// Where the hyperparameter searches start: (width of every standardised input, noise
 /// variance as a fraction of the targets' mean square). The likelihood has several modes on
-/// real tracker data: a smooth one, and rough ones that interpolate between repeated arm
-/// configurations with narrow widths on a few joints and almost no noise. Each start leads to
+/// real tracker data: a smooth one, and rough ones that interpolate between nearby arm
+/// configurations (one goal reached with several wrist angles) with narrow widths on a few
+/// joints and almost no noise. Each start leads to
 /// one of them. Cross-validation tries the first (smooth) one unless told another; a fit
 /// without a start takes, output by output, the start of highest likelihood. A final fit that
 /// leaves rows out begins at the hyperparameters cross-validation judged instead
@@ -120,8 +121,10 @@ pub struct LeftOut<'a> {
     pub rows: &'a [usize],
     /// The whole set's configuration group of each of its rows (its [`Samples::groups`]),
     /// which the draw of one row per configuration needs. Empty: the set's own groups for its
-    /// rows and each row taken out a configuration of its own (exact where no configuration
-    /// repeats; otherwise a configuration whose drawn row is taken out keeps another).
+    /// rows and each row taken out a configuration of its own, exact where no configuration
+    /// repeats; otherwise a configuration whose drawn row is taken out keeps another, the
+    /// rows taken out still count toward the blocks, and the set's groups may part rows that
+    /// a row taken out had joined.
     pub groups: &'a [usize],
 }
 
@@ -237,7 +240,8 @@ struct Searches<'a> {
 
 /// The rows of a whole set of `whole` rows (indices in it; `s` is that set less the sorted
 /// rows `left_out`) that a search takes its blocks from, in the order it takes them: a shuffle
-/// seeded by `seed`, of which only the first row of each configuration is kept. The
+/// seeded by `seed`, of which only the first row of each configuration is kept (every row
+/// where the whole set is one configuration). The
 /// configurations are `whole_groups` (the whole set's groups), or where that is empty the
 /// groups of `s` ([`Samples::groups`]) with each row left out a configuration of its own.
 ///
@@ -269,8 +273,15 @@ fn configurations_in_draw_order(
         }
     };
     let mut seen = std::collections::HashSet::new();
-    all.retain(|&r| seen.insert(configuration(r)));
-    all
+    let first: Vec<usize> = all
+        .iter()
+        .copied()
+        .filter(|&r| seen.insert(configuration(r)))
+        .collect();
+    // One configuration measured again and again says nothing of how the error varies
+    // between configurations; its rows are all there is to fit the noise and signal levels
+    // on (the network can learn a constant only, which `train` notes).
+    if seen.len() < 2 { all } else { first }
 }
 
 impl<'a> Searches<'a> {
@@ -341,10 +352,9 @@ impl<'a> Searches<'a> {
             .collect();
         if blocks.is_empty() {
             return Err(Error::Invalid(format!(
-                "the RBF network's hyperparameter search: {} rows left out of {whole} leave {} \
-                 to search on",
+                "the RBF network's hyperparameter search: {whole} rows ({} left out, one row \
+                 searched per arm configuration) leave {left} to search on, no block of them 2 or more",
                 left_out.len(),
-                left
             )));
         }
         Ok(Searches {
@@ -606,6 +616,13 @@ mod tests {
             .clone();
         assert_eq!(rows.len(), 20);
         assert_eq!(rows.iter().filter(|&&r| less.groups[r] == 5).count(), 1);
+        // One configuration measured again and again: its rows are all there is to search on.
+        let mut once = repeated(20);
+        once.groups = vec![0; 20];
+        let all = Searches::new(&once, Draw::seeded(7), LeftOut::NONE)
+            .unwrap()
+            .blocks;
+        assert_eq!(all[0].0, (0..20).collect::<Vec<_>>());
         // Groups of another length than the whole set are refused.
         let short = LeftOut {
             rows: &[gone],
@@ -705,7 +722,8 @@ mod tests {
             .err()
             .unwrap();
         assert!(
-            e.to_string().contains("4 rows left out of 6 leave 2"),
+            e.to_string()
+                .contains("6 rows (4 left out, one row searched per arm configuration) leave 2"),
             "{e}"
         );
     }
