@@ -954,6 +954,11 @@ fn edge_inputs_of_train_and_evaluate() {
         "{}",
         common::stdout(&o)
     );
+    assert!(
+        common::stdout(&o).contains("its hyperparameters searched on all rows;"),
+        "{}",
+        common::stdout(&o)
+    );
     // Joints beyond the limits: the file and its line are named.
     let beyond = common::tmp("edge_beyond.csv");
     std::fs::write(&beyond, "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n400,0,0,0,0,0\n").unwrap();

@@ -178,7 +178,8 @@ fn print_fit(
     ),
 ) {
     let rows = searched.rows.len();
-    let configurations = group_count(&configuration_groups(searched));
+    let groups = configuration_groups(searched);
+    let configurations = group_count(&groups);
     if !report.refined.is_empty() {
         println!(
             "refined on the training rows (exact identification, {} parameters):",
@@ -209,7 +210,7 @@ fn print_fit(
             searched_rows(
                 rows,
                 configurations,
-                &draw.block_sizes(configurations),
+                &draw.block_sizes_of(&groups),
                 outliers
             ),
             if n.is_empty() {
@@ -304,15 +305,19 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     for n in &report.notes {
         println!("note: {n}");
     }
+    // The rows cross-validation saw: the training rows but those left out for carrying
+    // another configuration's reading.
+    let trained;
     print_fit(
         &c,
         &report,
         seconds,
         (
-            &if opts.drop_outliers {
-                subset(&set, |i| report.shared_readings.iter().all(|r| r.row != i))
+            if opts.drop_outliers {
+                trained = subset(&set, |i| report.shared_readings.iter().all(|r| r.row != i));
+                &trained
             } else {
-                set.clone()
+                &set
             },
             opts.train.rbf_draw(),
             if opts.drop_outliers {

@@ -31,8 +31,9 @@
 //! centre its output falls to zero: the compensator becomes the model. Its cost is cubic in
 //! the rows, so the hyperparameters are fitted on at most [`HYPER_BLOCKS`] blocks of
 //! [`HYPER_ROWS`] of them (one per arm configuration, a seeded choice; the blocks'
-//! likelihoods added) and only the weights use every row. The likelihood has several modes on real data,
-//! so the search can run from each of [`STARTS`]; the factorisations use `faer`.
+//! likelihoods added) and only the weights use every row. The likelihood has several modes
+//! on real data, so the search can run from each of [`STARTS`]; the factorisations use
+//! `faer`.
 
 mod covariance;
 mod likelihood;

@@ -42,8 +42,7 @@ pub const HYPER_ITERATIONS: usize = 60;
 /// variance as a fraction of the targets' mean square). The likelihood has several modes on
 /// real tracker data: a smooth one, and rough ones that interpolate between nearby arm
 /// configurations (one goal reached with several wrist angles) with narrow widths on a few
-/// joints and almost no noise. Each start leads to
-/// one of them. Cross-validation tries the first (smooth) one unless told another; a fit
+/// joints and almost no noise. Each start leads to one of them. Cross-validation tries the first (smooth) one unless told another; a fit
 /// without a start takes, output by output, the start of highest likelihood. A final fit that
 /// leaves rows out begins at the hyperparameters cross-validation judged instead
 /// ([`search_from`]).
@@ -53,8 +52,8 @@ pub const STARTS: [(f64, f64); 3] = [(1.0, 0.5), (0.2, 0.05), (0.05, 0.01)];
 /// hyperparameters it fits: one row per configuration (a seeded choice among a repeated
 /// configuration's rows, see [`Samples::groups`]); all of them where they are at most `rows`,
 /// else blocks of `rows` in the order of a shuffle seeded by `seed`: the first block, then up
-/// to `blocks - 1` more,
-/// a last one of fewer rows only if it has `rows / 2` or more and 2 ([`Draw::block_sizes`]);
+/// to `blocks - 1` more, a last one of fewer rows only if it has `rows / 2` or more and 2
+/// ([`Draw::block_sizes`]);
 /// a block that rows left out leave with fewer than 2 is dropped. A block's cost is cubic in its
 /// rows (a Cholesky factor and an inverse of the n x n kernel matrix per evaluation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -82,9 +81,8 @@ impl Draw {
     }
 
     /// The sizes of the blocks a search of a set of `n` configurations sees (none left out;
-    /// one row per configuration): blocks
-    /// of `rows` while there are rows and blocks, a last smaller one only if it has at least
-    /// `rows / 2` rows and 2 (and the first always).
+    /// one row per configuration): blocks of `rows` while there are rows and blocks, a last
+    /// smaller one only if it has at least `rows / 2` rows and 2 (and the first always).
     pub fn block_sizes(&self, n: usize) -> Vec<usize> {
         let (rows, blocks) = (self.rows.max(1), self.blocks.max(1));
         (0..blocks)
@@ -93,6 +91,29 @@ impl Draw {
             .filter(|&(b, size)| b == 0 || size >= (rows / 2).max(2))
             .map(|(_, size)| size)
             .collect()
+    }
+
+    /// [`Draw::block_sizes`] of a set whose rows are the configuration `groups` (ids as
+    /// [`Samples::groups`]; none left out): the rows the search of that set sees.
+    pub fn block_sizes_of(&self, groups: &[usize]) -> Vec<usize> {
+        let distinct = groups
+            .iter()
+            .collect::<std::collections::HashSet<_>>()
+            .len();
+        self.block_sizes(searched_rows(groups.len(), distinct))
+    }
+}
+
+/// Rows a search takes its blocks from on `rows` rows of `configurations` configurations: one
+/// per configuration, or every row where they are one configuration (measured again and
+/// again, it says nothing of how the error varies between configurations; its rows are all
+/// there is to fit the noise and signal levels on, and the network can learn a constant only,
+/// which `train` notes).
+fn searched_rows(rows: usize, configurations: usize) -> usize {
+    if configurations < 2 {
+        rows
+    } else {
+        configurations
     }
 }
 
@@ -278,10 +299,11 @@ fn configurations_in_draw_order(
         .copied()
         .filter(|&r| seen.insert(configuration(r)))
         .collect();
-    // One configuration measured again and again says nothing of how the error varies
-    // between configurations; its rows are all there is to fit the noise and signal levels
-    // on (the network can learn a constant only, which `train` notes).
-    if seen.len() < 2 { all } else { first }
+    if searched_rows(all.len(), seen.len()) == all.len() {
+        all
+    } else {
+        first
+    }
 }
 
 impl<'a> Searches<'a> {
@@ -353,7 +375,8 @@ impl<'a> Searches<'a> {
         if blocks.is_empty() {
             return Err(Error::Invalid(format!(
                 "the RBF network's hyperparameter search: {whole} rows ({} left out, one row \
-                 searched per arm configuration) leave {left} to search on, no block of them 2 or more",
+                 searched per arm configuration) leave {left} to search on, no block of them \
+                 2 or more",
                 left_out.len(),
             )));
         }
