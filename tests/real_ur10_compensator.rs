@@ -160,7 +160,13 @@ fn default_beats_the_plain_baseline_on_series_b() {
         assert_eq!(lines, vec![534, 1065]);
         let trained = robocal::neural::tuning::subset(&pool, |i| !shared.contains(&i));
         let outliers: Vec<usize> = sel.outliers.iter().map(|o| o.row).collect();
-        assert!(!outliers.is_empty());
+        // The cut is for gross errors: it lists a few rows of the 998, not the tail of the
+        // network's error (a cut of 4 listed 6 here).
+        assert!(
+            !outliers.is_empty() && outliers.len() <= pool.rows.len() / 200,
+            "{:?}",
+            sel.outliers
+        );
         let index: Vec<usize> = (0..pool.rows.len())
             .filter(|i| !shared.contains(i))
             .collect();
@@ -279,6 +285,58 @@ fn default_beats_the_plain_baseline_on_series_b() {
         "max {comp_max} vs model {model_max} (all rows: {} vs {})",
         d.position_mm.unwrap().max,
         plain.position_mm.unwrap().max
+    );
+}
+
+/// Release builds only: the default outlier cut lists gross errors of real data. Five rows of
+/// a Series B pool of 1000 (`series_pools`' seed 0), drawn by seed, are moved 2 mm in random
+/// directions (readings wrong by 2 mm that carry no other configuration's reading, so only
+/// the cut can find them): `train` lists every one and leaves it out of the final fit. (A
+/// cut of 8 listed one of them here, and the held-out RMS rose by 12 %.)
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "trains dozens of networks: release builds only"
+)]
+fn the_default_cut_lists_rows_two_millimetres_off() {
+    use rand::{Rng, SeedableRng};
+    let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
+    let set = series(&ur, SERIES_B);
+    let (pool, _) = split(&set, 1000.0 / set.rows.len() as f64, 100);
+    let model = identified(&ur, &split(&pool, 500.0 / pool.rows.len() as f64, 200).0);
+    let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+    let mut moved = pool.clone();
+    let mut lines = Vec::new();
+    while lines.len() < 5 {
+        let i = rng.random_range(0..moved.rows.len());
+        if lines.contains(&moved.rows[i].line) {
+            continue;
+        }
+        let d = nalgebra::Vector3::from_fn(|_, _| rng.random::<f64>() - 0.5);
+        *moved.rows[i].position.as_mut().unwrap() += d * (2.0 / d.norm());
+        lines.push(moved.rows[i].line);
+    }
+    let (_, report) =
+        Compensator::train(&model, &moved, &CompensatorOptions::default(), &|_, _| {}).unwrap();
+    let listed: Vec<usize> = report
+        .selection
+        .as_ref()
+        .unwrap()
+        .outliers
+        .iter()
+        .map(|o| o.line)
+        .collect();
+    assert!(
+        lines.iter().all(|l| listed.contains(l)),
+        "moved {lines:?}, listed {listed:?}"
+    );
+    assert!(
+        report
+            .notes
+            .iter()
+            .any(|n| n.contains("left out of the final fit")),
+        "{:?}",
+        report.notes
     );
 }
 
