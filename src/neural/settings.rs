@@ -6,22 +6,23 @@ use super::train::TrainOptions;
 use crate::identify::Sigmas;
 
 /// Default outlier cut: robust sigmas (1.4826 x the median, as `identify` scales its
-/// outliers) of the chosen candidate's cross-validated error beyond which a training row is
-/// listed as an outlier (and, by default, left out of the final fit). Under Gaussian noise a
-/// position error's norm has its median at 1.54 sigmas of a coordinate, so the cut lies near
-/// 11 sigmas of each coordinate and lists no clean row. On real data the cross-validated
-/// error is mostly the network's, and the cut trades two losses. Too low, it leaves out the
-/// tail of what the network cannot follow, rows that are right where the robot is hardest to
-/// predict: a cut of 4 (before the fifteenth session) listed 0.2-1.1 % of the real UR10 rows,
-/// often the same lines on every split. Too high, it keeps a gross error (a reading wrong by
-/// a millimetre or two, not carrying another configuration's reading, which
-/// [`crate::data::shared_readings`] finds apart from it) that the RBF network then bends its
-/// fit around. Measured on Series B (three splits of 1000, five pool rows moved by 0, 1, 1.5
-/// or 2 mm), mean held-out RMS (mm) for cuts of 4 / 5 / 6 / 8: 0.2158 / 0.2122 / 0.2119 /
-/// 0.2119 clean, 0.2161 / 0.2124 / 0.2176 / 0.2258 with 1.5 mm, 0.2173 / 0.2136 / 0.2135 /
-/// 0.2285 with 2 mm: 5 is best or within 0.0003 mm of it in every case. On 35 clean runs of
-/// Series A and B (pools of 500 to 2000) it lowered the mean held-out RMS of every group
-/// against 4.
+/// outliers) of the chosen candidate's cross-validated error, position and orientation each
+/// on its own, beyond which a training row is listed as an outlier (and, by default, left out
+/// of the final fit). Under Gaussian noise a position error's norm has its median at 1.54
+/// sigmas of a coordinate, so the cut lies near 11 sigmas of each coordinate and lists no
+/// clean row. On real data the cross-validated error is mostly the network's, and the cut
+/// trades one risk against the other. Too low, it leaves out good rows: a cut of 4 (before
+/// the fifteenth session) listed 0.2-1.1 % of the real UR10 rows, on Series B every one for
+/// its orientation error (4-6 sigmas) while its position was 0.3-3.7 sigmas off, the same
+/// lines from split to split. Too high, it keeps a gross error (a reading wrong by a
+/// millimetre or two; rows that carry another configuration's reading are found separately,
+/// by [`crate::data::shared_readings`]) that the RBF network then bends its fit around.
+/// Measured on Series B (three splits of 1000, five pool rows moved by 0, 1, 1.5 or 2 mm),
+/// mean held-out RMS (mm) for cuts of 4 / 5 / 6 / 8: 0.2158 / 0.2122 / 0.2119 / 0.2119
+/// clean, 0.2175 / 0.2160 / 0.2157 / 0.2158 with 1 mm, 0.2161 / 0.2124 / 0.2176 / 0.2258
+/// with 1.5 mm, 0.2173 / 0.2136 / 0.2135 / 0.2285 with 2 mm: 5 is best or within 0.0003 mm
+/// of it in every case. On 35 clean runs of Series A and B (pools of 500 to 2000) it lowered
+/// the mean held-out RMS of every group against 4.
 pub const OUTLIER_K: f64 = 5.0;
 
 /// The MLPs' share of a mixed network's correction where nothing chose another

@@ -25,12 +25,12 @@ pub const HYPER_ROWS: usize = 500;
 /// block-diagonal approximation), at a cost linear in the blocks instead of cubic in the rows.
 /// One by default: on real UR10 data, the default `train` with two blocks instead of one
 /// lowered the held-out position RMS over 16 Series B runs with pools of 1000 (4 splits,
-/// training seeds 1-4) from 0.2081 to 0.2072 mm (the worst run 0.2289 -> 0.2244) and on
-/// Series A's pool of 2000 (seeds 1-3) from 0.1400 to 0.1380 (lower in all three), but every
-/// step of the search then evaluates two likelihoods (as many steps as one block's), which
-/// doubles its time: 5.3 -> 7.1 s on those 2000 poses, 5.9 -> 8.3 s on Series B's README
-/// split (1000 poses). (Before the draw of one row per configuration, two blocks had taken
-/// the Series B mean from 0.2144 to 0.2108 mm.)
+/// training seeds 1-4; fourteenth session, outlier cut 4) from 0.2081 to 0.2072 mm (the worst
+/// run 0.2289 -> 0.2244) and on Series A's pool of 2000 (seeds 1-3) from 0.1400 to 0.1380
+/// (lower in all three), but every step of the search then evaluates two likelihoods (as
+/// many steps as one block's), which doubles its time: 5.3 -> 7.1 s on those 2000 poses,
+/// 5.9 -> 8.3 s on Series B's README split (1000 poses). (Before the draw of one row per
+/// configuration, two blocks had taken the Series B mean from 0.2144 to 0.2108 mm.)
 pub const HYPER_BLOCKS: usize = 1;
 /// Gain in log likelihood (nats) below which a search step counts as idle: of the blocks'
 /// summed objective (with K blocks, a stop about K times stricter for each).
@@ -42,10 +42,10 @@ pub const HYPER_ITERATIONS: usize = 60;
 /// variance as a fraction of the targets' mean square). The likelihood has several modes on
 /// real tracker data: a smooth one, and rough ones that interpolate between nearby arm
 /// configurations (one goal reached with several wrist angles) with narrow widths on a few
-/// joints and almost no noise. Each start leads to one of them. Cross-validation tries the first (smooth) one unless told another; a fit
-/// without a start takes, output by output, the start of highest likelihood. A final fit that
-/// leaves rows out begins at the hyperparameters cross-validation judged instead
-/// ([`search_from`]).
+/// joints and almost no noise. Each start leads to one of them. Cross-validation tries the
+/// first (smooth) one unless told another; a fit without a start takes, output by output, the
+/// start of highest likelihood. A final fit that leaves rows out begins at the
+/// hyperparameters cross-validation judged instead ([`search_from`]).
 pub const STARTS: [(f64, f64); 3] = [(1.0, 0.5), (0.2, 0.05), (0.05, 0.01)];
 
 /// Which rows of a set a hyperparameter search sees, and the covariance function whose
