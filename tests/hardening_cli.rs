@@ -949,15 +949,14 @@ fn edge_inputs_of_train_and_evaluate() {
     ];
     let o = common::train_fanuc(once_path.to_str().unwrap(), out, &rbf);
     assert!(o.status.success(), "{}", stderr(&o));
+    let said = common::stdout(&o);
     assert!(
-        common::stdout(&o).contains("are one configuration: the network can learn only a constant"),
-        "{}",
-        common::stdout(&o)
+        said.contains("are one configuration: the network can learn only a constant"),
+        "{said}"
     );
     assert!(
-        common::stdout(&o).contains("its hyperparameters searched on all rows;"),
-        "{}",
-        common::stdout(&o)
+        said.contains("its hyperparameters searched on all rows;"),
+        "{said}"
     );
     // Joints beyond the limits: the file and its line are named.
     let beyond = common::tmp("edge_beyond.csv");

@@ -10,13 +10,12 @@
 
 mod common;
 
-use common::root;
 use common::ur10::{SERIES_A, SERIES_B, series, series_b_split};
 use robocal::data::MeasurementSet;
 use robocal::data::measurement::split;
 use robocal::evaluate::{ErrorStats, row_errors, summarize};
 use robocal::identify::{Measure, Options, identify};
-use robocal::model::{Robot, read_robot};
+use robocal::model::Robot;
 use robocal::neural::compensator::{Compensator, CompensatorOptions, Form};
 use robocal::neural::domain::Domain;
 use robocal::neural::encoding::Encoding;
@@ -39,6 +38,30 @@ fn identified(robot: &Robot, id: &MeasurementSet) -> Robot {
     )
     .unwrap()
     .robot
+}
+
+/// The rows of a training pool that identify its model: the pool itself up to 500 rows, else
+/// 500 of them drawn by `seed`.
+fn identification_rows(pool: &MeasurementSet, seed: u64) -> MeasurementSet {
+    if pool.rows.len() <= 500 {
+        pool.clone()
+    } else {
+        split(pool, 500.0 / pool.rows.len() as f64, seed).0
+    }
+}
+
+/// `series_pools`' Series B split `seed` of the whole series `set`: a pool of `pool_n` rows
+/// (drawn by seed 100 + `seed`), the rest to validate, and the model identified (`full`) on
+/// [`identification_rows`] of the pool (seed 200 + `seed`).
+fn series_b_pool(
+    ur: &Robot,
+    set: &MeasurementSet,
+    pool_n: f64,
+    seed: u64,
+) -> (MeasurementSet, MeasurementSet, Robot) {
+    let (pool, val) = split(set, pool_n / set.rows.len() as f64, 100 + seed);
+    let model = identified(ur, &identification_rows(&pool, 200 + seed));
+    (pool, val, model)
 }
 
 /// The baseline network for fixed size and scikit-learn penalty alpha, fitted on `set`.
@@ -137,7 +160,7 @@ fn line(name: &str, s: &ErrorStats, seconds: f64) -> String {
     ignore = "trains dozens of networks: release builds only"
 )]
 fn default_beats_the_plain_baseline_on_series_b() {
-    let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
+    let ur = common::ur10::robot();
     let (id, pool, val) = series_b_split(&ur);
     let model = identified(&ur, &id);
     let base = baseline(&model, &pool);
@@ -302,10 +325,8 @@ fn default_beats_the_plain_baseline_on_series_b() {
 )]
 fn the_default_cut_lists_rows_two_millimetres_off() {
     use rand::{Rng, SeedableRng};
-    let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
-    let set = series(&ur, SERIES_B);
-    let (pool, _) = split(&set, 1000.0 / set.rows.len() as f64, 100);
-    let model = identified(&ur, &split(&pool, 500.0 / pool.rows.len() as f64, 200).0);
+    let ur = common::ur10::robot();
+    let (pool, _, model) = series_b_pool(&ur, &series(&ur, SERIES_B), 1000.0, 0);
     let shared = robocal::data::shared_readings::shared_readings(&model, &pool);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
     let mut moved = pool.clone();
@@ -362,7 +383,7 @@ fn the_default_cut_lists_rows_two_millimetres_off() {
 fn readme_table_series_b() {
     use robocal::neural::compensator::{Refine, Settings};
     use robocal::neural::train::TrainOptions;
-    let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
+    let ur = common::ur10::robot();
     let (id, pool, val) = series_b_split(&ur);
     let model = identified(&ur, &id);
     let plain = summarize(
@@ -486,7 +507,7 @@ fn readme_table_series_b() {
 #[test]
 #[ignore = "experiment: Series A, pool of 2000"]
 fn series_a_pool_2000() {
-    let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
+    let ur = common::ur10::robot();
     let set = series(&ur, "Series_A/measurements_grid.csv");
     let (pool, rest) = split(&set, 2000.0 / set.rows.len() as f64, 21);
     let (val, _) = split(&rest, 2000.0 / rest.rows.len() as f64, 22);
@@ -589,7 +610,7 @@ fn series_a_pool_2000() {
 #[test]
 #[ignore = "experiment"]
 fn series_pools() {
-    let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
+    let ur = common::ur10::robot();
     let a = std::env::var("SERIES").is_ok_and(|s| s == "A");
     let set = series(&ur, if a { SERIES_A } else { SERIES_B });
     let pool_n: f64 = std::env::var("POOL")
@@ -599,20 +620,14 @@ fn series_pools() {
         .map(|v| v.parse().unwrap())
         .unwrap_or(3);
     for seed in 0..seeds {
-        let (pool, val, id_seed) = if a {
+        let (pool, val, model) = if a {
             let (pool, rest) = split(&set, pool_n / set.rows.len() as f64, 300 + seed);
             let (val, _) = split(&rest, 2000.0 / rest.rows.len() as f64, 400 + seed);
-            (pool, val, 500 + seed)
+            let model = identified(&ur, &identification_rows(&pool, 500 + seed));
+            (pool, val, model)
         } else {
-            let (pool, val) = split(&set, pool_n / set.rows.len() as f64, 100 + seed);
-            (pool, val, 200 + seed)
+            series_b_pool(&ur, &set, pool_n, seed)
         };
-        let id = if pool.rows.len() <= 500 {
-            pool.clone()
-        } else {
-            split(&pool, 500.0 / pool.rows.len() as f64, id_seed).0
-        };
-        let model = identified(&ur, &id);
         let plain = summarize(
             &row_errors(&val, Measure::Pose, |q| {
                 robocal::kinematics::tool_pose(&model, q)
@@ -708,7 +723,7 @@ fn series_pools() {
 #[test]
 fn series_b_shared_readings_are_its_four_logging_slips() {
     use robocal::data::shared_readings::{SEPARATION_MM, shared_readings};
-    let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
+    let ur = common::ur10::robot();
     let b = series(&ur, SERIES_B);
     let model = identified(&ur, &b);
     let found = shared_readings(&model, &b);

@@ -62,7 +62,7 @@ fn paired(a: &[RowError], b: &[RowError]) -> (f64, f64) {
     ignore = "identifies on thousands of real poses: release builds only"
 )]
 fn compliance_never_costs_more_than_two_percent_rms() {
-    let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
+    let ur = common::ur10::robot();
     let published = read_robot(root().join("datasets/robots/ur10_published_masses.toml")).unwrap();
     println!(
         "| series | model | kept | validation mean | RMS | p95 | max | change vs full, paired (mm) |"
@@ -140,6 +140,6 @@ fn published_centres_of_mass_are_in_the_right_frames() {
         assert_eq!(masses.links[k].mass_kg, kg[k]);
     }
     // The same robot as the nominal file otherwise.
-    let ur = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
+    let ur = common::ur10::robot();
     assert_eq!(robot.joints(), ur.joints());
 }

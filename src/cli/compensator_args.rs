@@ -138,8 +138,9 @@ pub struct CompensatorArgs {
     /// Rows of each block the RBF network's likelihood search sees at most, 2 to 3000
     /// (default 500), one per arm configuration: on a larger training set a seeded choice of
     /// them, the other rows (and a configuration's repeats) entering its weights only. Its
-    /// cost grows with the cube of the rows: on 2000 real UR10 poses, one block of 1000 rows instead of 500 lowered the held-out RMS by 5.5 % and took
-    /// the default `train` from 4.5 s to 11-15 s (squared-exponential kernel).
+    /// cost grows with the cube of the rows: on 2000 real UR10 poses, one block of 1000 rows
+    /// instead of 500 lowered the held-out RMS by 5.5 % and took the default `train` from 4.5
+    /// s to 11-15 s (squared-exponential kernel).
     #[arg(long)]
     pub rbf_search_rows: Option<usize>,
     /// Disjoint blocks of those rows the likelihood search sees at most on a larger training

@@ -4,13 +4,18 @@
 use super::root;
 use robocal::data::measurement::split;
 use robocal::data::{MeasurementSet, Profile, read_measurements};
-use robocal::model::Robot;
+use robocal::model::{Robot, read_robot};
 use std::path::Path;
 
 /// Series B's file, under `datasets/ipa-ur10/`.
 pub const SERIES_B: &str = "Series_B/measurements_joint_configurations.csv";
 /// Series A's file, under `datasets/ipa-ur10/`.
 pub const SERIES_A: &str = "Series_A/measurements_grid.csv";
+
+/// The UR10's nominal model (`datasets/robots/ur10.toml`).
+pub fn robot() -> Robot {
+    read_robot(root().join("datasets/robots/ur10.toml")).unwrap()
+}
 
 /// A series of the shipped UR10 data set, imported through its profile.
 pub fn series(robot: &Robot, file: &str) -> MeasurementSet {
