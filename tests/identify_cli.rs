@@ -129,6 +129,23 @@ fn identify_on_real_ur10_through_the_profile_with_a_split() {
             <= 0.5
     );
     assert!(r["registration_rms_mm"].as_f64().unwrap() < 5.0);
+    // The tracker's sigmas are far below what the model leaves: the unmodelled error added
+    // to them is printed, and is the report's, in its units (mm, rad).
+    let tau = &r["unmodelled"];
+    let (p, rot) = (
+        tau["position_mm"].as_f64().unwrap(),
+        tau["rotation_rad"].as_f64().unwrap(),
+    );
+    assert!(
+        (0.15..0.4).contains(&p) && (2e-4..2e-3).contains(&rot),
+        "{tau}"
+    );
+    let out = text(&o).0;
+    let line = format!(
+        "an unmodelled error (position {p:.4} mm, orientation {:.4} mrad)",
+        rot * 1e3
+    );
+    assert!(out.contains(&line), "{out}");
 }
 
 #[test]

@@ -148,6 +148,101 @@ fn line(name: &str, s: &ErrorStats, seconds: f64) -> String {
     )
 }
 
+/// Where the tracker stands is not a property of the robot (issue 11: with a tracker 3.7 m
+/// away, the linearised refinement of then moved a base rotation against a constant joint
+/// correction by degrees, 16 mm held out). Series B's readings moved into a frame 10.4 m away
+/// and turned by (170, 55, -120) deg give the same identified model (base aside: the
+/// registration takes the frame), and the same compensator with its refinement forced
+/// (`full`, refined exactly on the training rows): the joints' refined parameters agree to
+/// 1e-3 (mm, deg), the held-out RMS to 1 %, and the refined compensator stays far below the
+/// model. The tracker's per-axis sigmas are left out of both sets: turned into another frame
+/// they would no longer be per axis.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "trains RBF networks and MLPs: release builds only"
+)]
+fn moving_the_tracker_ten_metres_away_changes_nothing() {
+    use nalgebra::{Rotation3, Vector3};
+    use robocal::model::Slot;
+    use robocal::neural::compensator::Network;
+    use robocal::neural::settings::Settings;
+    let ur = common::ur10::robot();
+    let mut set = series(&ur, SERIES_B);
+    for row in &mut set.rows {
+        row.sigma_position = None;
+        row.sigma_rotation = None;
+    }
+    let d = std::f64::consts::PI / 180.0;
+    let turn = Rotation3::from_euler_angles(170.0 * d, 55.0 * d, -120.0 * d);
+    let shift = Vector3::new(-8000.0, 6000.0, -3000.0);
+    let mut far = set.clone();
+    for row in &mut far.rows {
+        row.position = row.position.map(|p| turn * p + shift);
+        row.rotation = row.rotation.map(|r| turn * r);
+    }
+    let settings = Settings {
+        network: Network::Mix,
+        form: Form::Pose,
+        encoding: Encoding::Gravity,
+        hidden: 16,
+        penalty: 3.0,
+        members: 2,
+        rbf_start: Some(0),
+        refine: Some("full".into()),
+        mlp_share: Some(0.1),
+    };
+    let mut runs = Vec::new();
+    for s in [&set, &far] {
+        let (pool, rest) = split(s, 400.0 / s.rows.len() as f64, 100);
+        let val = split(&rest, 300.0 / rest.rows.len() as f64, 5).0;
+        let model = identified(&ur, &split(&pool, 0.5, 200).0);
+        let (c, _) = Compensator::fit(
+            &model,
+            &pool,
+            &settings,
+            Default::default(),
+            &Default::default(),
+        )
+        .unwrap();
+        let model_rms = position_rms(
+            &Compensator {
+                members: Vec::new(),
+                rbf: None,
+                ..c.clone()
+            },
+            &val,
+        );
+        runs.push((model, c.clone(), model_rms, position_rms(&c, &val)));
+    }
+    let ((m0, c0, model0, rms0), (m1, c1, model1, rms1)) = (&runs[0], &runs[1]);
+    eprintln!("as measured: refined model {model0:.5}, with the networks {rms0:.5} mm");
+    eprintln!("10.4 m away: refined model {model1:.5}, with the networks {rms1:.5} mm");
+    for (a, b) in [(m0, m1), (&c0.robot, &c1.robot)] {
+        for id in a
+            .parameters()
+            .into_iter()
+            .filter(|id| id.slot != Slot::Base)
+        {
+            let (x, y) = (id.field.to_file(a.param(id)), id.field.to_file(b.param(id)));
+            assert!((x - y).abs() < 1e-3, "{}: {x} vs {y}", id.name());
+        }
+    }
+    let base = |r: &Robot| r.base().transform();
+    let moved = nalgebra::IsometryMatrix3::from_parts(shift.into(), turn) * base(&c0.robot);
+    let gap = moved.inverse() * base(&c1.robot);
+    assert!(
+        gap.translation.vector.norm() < 0.01 && gap.rotation.angle() < 1e-5,
+        "{gap:?}"
+    );
+    assert!(
+        (model0 - model1).abs() < 1e-4 * model0,
+        "{model0} vs {model1}"
+    );
+    assert!((rms0 - rms1).abs() < 0.01 * rms0, "{rms0} vs {rms1}");
+    assert!(*rms1 < 0.7 * model1, "{rms1} vs the model's {model1}");
+}
+
 /// Release builds only: the default compensator beats the baseline by at least 10 % RMS on
 /// the Series B split, and its max error stays within 10 % of the model's on the validation
 /// rows whose measurement agrees with a repeat of theirs in the pool (or has none); on a row

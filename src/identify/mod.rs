@@ -9,8 +9,10 @@ pub mod register;
 pub mod run;
 pub mod select;
 pub mod solve;
+pub mod unmodelled;
 
 pub use jacobian::parameter_jacobian;
 pub use problem::{Measure, Sigmas};
 pub use run::{Identified, Options, RobustLoss, candidates, identify};
 pub use solve::{Method, SolveOptions, StopReason};
+pub use unmodelled::Unmodelled;

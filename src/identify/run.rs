@@ -12,6 +12,7 @@ use super::select::{is_compliance, select};
 use super::solve::{
     Method, Solution, SolveOptions, StopReason, covariance, covariance_from, solve_gradient,
 };
+use super::unmodelled::Unmodelled;
 use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
 use crate::model::{Convention, ParamId, Robot, Slot};
@@ -129,6 +130,9 @@ pub struct Identified {
     pub registration: Option<Registration>,
     /// Robust reweighting rounds (0 without a robust loss).
     pub robust_rounds: usize,
+    /// The unmodelled error added to the rows' own sigmas, by kind (see
+    /// [`super::unmodelled`]); none where the sigmas account for the residuals.
+    pub unmodelled: Unmodelled,
     /// What was done that the user should know (frames re-expressed, ...).
     pub notes: Vec<String>,
     /// What may make the result unreliable (ill-conditioning, iteration limit).
@@ -552,7 +556,24 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         ));
     }
 
-    let (solution, robust_rounds) = solve_robust(&start, &mut obs, &cols, opts, first_normal)?;
+    let (mut solution, mut robust_rounds) =
+        solve_robust(&start, &mut obs, &cols, opts, first_normal)?;
+    // Where the model misses by far more than the rows' own sigmas, they no longer decide
+    // which rows and axes it fits: each kind's sigmas take its unmodelled error, and the
+    // problem is solved again until that settles.
+    let sigma_inv: Vec<[f64; 6]> = obs.items.iter().map(|o| o.inv_sigma).collect();
+    let mut unmodelled = Unmodelled::default();
+    for _ in 0..super::unmodelled::MAX_ROUNDS {
+        let tau = super::unmodelled::estimate(&solution.robot, &obs, &sigma_inv, cols.len());
+        if tau.settled(&unmodelled) {
+            break;
+        }
+        unmodelled = tau;
+        super::unmodelled::apply(&mut obs, &sigma_inv, &unmodelled);
+        let (s, rounds) = solve_robust(&solution.robot, &mut obs, &cols, opts, None)?;
+        solution = s;
+        robust_rounds += rounds;
+    }
     if solution.stop == StopReason::MaxIterations {
         warnings.push(format!(
             "stopped at the iteration limit ({}) before any tolerance: the result may be unconverged",
@@ -576,6 +597,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         outliers,
         registration,
         robust_rounds,
+        unmodelled,
         notes,
         warnings,
     })

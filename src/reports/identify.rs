@@ -94,6 +94,11 @@ pub struct IdentifyReport {
     /// A-posteriori variance factor s^2 (1 when the residuals are the stated noise).
     #[serde(with = "crate::io::json_number")]
     pub variance_factor: f64,
+    /// The unmodelled error added to the rows' own sigmas, by kind
+    /// ([`crate::identify::unmodelled`]): tau of positions (mm) and orientations (rad).
+    /// Left out of the file where none was added (and absent in reports written before it).
+    #[serde(default, skip_serializing_if = "unmodelled_is_none")]
+    pub unmodelled: crate::identify::Unmodelled,
     /// Every identified parameter: nominal, estimate, standard deviation (file units).
     pub parameters: Vec<ParamReport>,
     /// Strongly correlated pairs (|r| > 0.9).
@@ -200,6 +205,7 @@ impl IdentifyReport {
             stop_reason: id.solution.stop,
             stop: id.solution.stop.describe().into(),
             variance_factor: id.variance_factor,
+            unmodelled: id.unmodelled,
             parameters: id.parameters.clone(),
             correlations: id
                 .correlations
@@ -259,4 +265,8 @@ pub struct EvaluateReport {
     /// (`--check-against`), if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub check_against: Option<String>,
+}
+
+fn unmodelled_is_none(u: &crate::identify::Unmodelled) -> bool {
+    !u.any()
 }
