@@ -131,7 +131,8 @@ pub struct Identified {
     /// Robust reweighting rounds (0 without a robust loss).
     pub robust_rounds: usize,
     /// The unmodelled error added to the rows' own sigmas, by kind (see
-    /// [`super::unmodelled`]); none where the sigmas account for the residuals.
+    /// [`super::unmodelled`]); none where the sigmas account for the residuals, or where
+    /// every component of a kind has the same sigma (however far the residuals exceed it).
     pub unmodelled: Unmodelled,
     /// What was done that the user should know (frames re-expressed, ...).
     pub notes: Vec<String>,
@@ -563,9 +564,17 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
     // problem is solved again until that settles.
     let sigma_inv: Vec<[f64; 6]> = obs.items.iter().map(|o| o.inv_sigma).collect();
     let mut unmodelled = Unmodelled::default();
-    for _ in 0..super::unmodelled::MAX_ROUNDS {
+    for round in 0..=super::unmodelled::MAX_ROUNDS {
         let tau = super::unmodelled::estimate(&solution.robot, &obs, &sigma_inv, cols.len());
         if tau.settled(&unmodelled) {
+            break;
+        }
+        if round == super::unmodelled::MAX_ROUNDS {
+            warnings.push(format!(
+                "the unmodelled error added to the sigmas did not settle in {round} rounds \
+                 (last {:?}, then {:?}): the weights are those of the last round",
+                unmodelled, tau
+            ));
             break;
         }
         unmodelled = tau;
