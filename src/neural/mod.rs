@@ -4,6 +4,7 @@ pub mod batch;
 pub mod compensator;
 pub mod domain;
 pub mod encoding;
+pub mod exponential;
 pub mod file;
 pub mod fit;
 pub mod lbfgs;

@@ -44,7 +44,7 @@ pub(super) fn kernel(x: &[Vec<f64>], h: &Hyper, cov: Covariance) -> Mat<f64> {
             column[j] = s2 + noise + 1e-8 * s2;
             let below = &mut column[j + 1..];
             pairs.column_squares(j, &w, below);
-            below.iter_mut().for_each(|q| *q = s2 * cov.response(*q));
+            cov.responses_in_place(below, s2);
         }
     });
     k
@@ -280,11 +280,9 @@ pub(super) fn neg_log_likelihood_in(
     let squared_exponential = cov == Covariance::SquaredExponential;
     if !squared_exponential && grad.is_some() {
         gf.resize(count, 0.0);
-        gf.iter_mut().zip(e.iter_mut()).for_each(|(g, q)| {
-            (*q, *g) = cov.response_and_width_factor(*q);
-        });
+        cov.responses_and_width_factors_in_place(e, gf);
     } else {
-        e.iter_mut().for_each(|q| *q = cov.response(*q));
+        cov.responses_in_place(e, 1.0);
     }
     // The factorisation reads the lower triangle only: the upper one is zero (a new
     // scratch's, or the last factorisation's).

@@ -80,13 +80,17 @@ impl Kernel {
 /// unit's response counts as 0 ([`Covariance::far`]; Matern 5/2 reaches the same response
 /// farther), in the fit, the likelihood and prediction alike: e^-345, about 1e-150, below
 /// anything a sum of order-one terms can notice. Beyond a distance of about 1416 the
-/// responses, and before that their products in the factorisation, are subnormal numbers,
-/// which the processor handles about 15 times slower: a search whose widths had grown narrow
+/// responses (with the C library's `exp`; ours stops at e^-700, about 1e-304), and before
+/// that their products in the factorisation, were subnormal numbers, which the processor
+/// handles about 15 times slower: a search whose widths had grown narrow
 /// took 5.4 s instead of 0.33 s for one output, with the same result to 10 digits; with the
 /// weights' kernel matrices (then filled in their lower triangle only) and prediction cut
 /// as well, the default `train` on Series A's pool of 2000 took 5.60 s instead of 7.32 s,
 /// the same compensator bit for bit.
 pub(super) const FAR: f64 = 690.0;
+
+/// Units whose responses prediction takes at once (a buffer on the stack).
+const CHUNK: usize = 64;
 
 /// The weighted squared distance sum_d (x_d - c_d)^2 / l_d^2 of `x` from the unit at `c`,
 /// with `inv` the kernel's 1 / l_d^2 (multiplications: per input and unit a division cost
@@ -161,6 +165,14 @@ impl Rbf {
         })
     }
 
+    /// Every kernel's 1 / l_d^2, kernel after kernel, into `inv` (cleared first).
+    fn inverses_into(&self, inv: &mut Vec<f64>) {
+        inv.clear();
+        for k in &self.kernels {
+            k.inverse_squares_into(inv);
+        }
+    }
+
     /// Calls `f(outputs, inv, centre, weights, covariance, q)` for every kernel (the outputs
     /// it serves, its 1 / l_d^2, its covariance function) and unit, q the unit's weighted
     /// squared distance from `x`: kernel by kernel, the units in order. `inv` is scratch for
@@ -171,10 +183,7 @@ impl Rbf {
         inv: &mut Vec<f64>,
         mut f: impl FnMut(std::ops::Range<usize>, &[f64], &[f64], &[f64], Covariance, f64),
     ) {
-        inv.clear();
-        for k in &self.kernels {
-            k.inverse_squares_into(inv);
-        }
+        self.inverses_into(inv);
         let mut at = 0;
         for (kernel, outs) in self.kernel_outputs() {
             let own = &inv[at..at + kernel.widths.len()];
@@ -193,15 +202,31 @@ impl Rbf {
     }
 
     /// y(x) into `y`; `inv` is scratch (no allocation once it has been used).
+    /// The units' distances go into a buffer of [`CHUNK`] at a time and their responses are
+    /// taken over it ([`Covariance::responses_in_place`], vectorised); the outputs add the
+    /// units in order.
     pub fn forward_into(&self, x: &[f64], y: &mut [f64], inv: &mut Vec<f64>) {
         y.fill(0.0);
-        self.responses(x, inv, |outs, _, _, w, cov, q| {
-            let k = cov.response(q);
-            y[outs.clone()]
-                .iter_mut()
-                .zip(&w[outs])
-                .for_each(|(yo, wo)| *yo += wo * k);
-        });
+        self.inverses_into(inv);
+        let mut buffer = [0.0; CHUNK];
+        let mut at = 0;
+        for (kernel, outs) in self.kernel_outputs() {
+            let own = &inv[at..at + kernel.widths.len()];
+            at += kernel.widths.len();
+            for (centres, weights) in self.centres.chunks(CHUNK).zip(self.weights.chunks(CHUNK)) {
+                let q = &mut buffer[..centres.len()];
+                q.iter_mut()
+                    .zip(centres)
+                    .for_each(|(q, c)| *q = distance(x, c, own));
+                kernel.covariance.responses_in_place(q, 1.0);
+                for (k, w) in q.iter().zip(weights) {
+                    y[outs.clone()]
+                        .iter_mut()
+                        .zip(&w[outs.clone()])
+                        .for_each(|(yo, wo)| *yo += wo * k);
+                }
+            }
+        }
     }
 
     /// y(x) into `y` and dy/dx (outputs x inputs) into `dy`: dy_o/dx_d = -sum_i w_io g_io
@@ -424,8 +449,8 @@ mod tests {
     }
 
     /// Beyond FAR a unit's response is exactly 0 in the weights' kernel matrix (as in the
-    /// likelihood's) and in prediction, short of where exp() itself underflows (a weighted
-    /// squared distance of about 1490 for the squared exponential): no subnormal numbers
+    /// likelihood's) and in prediction, well short of the exponential's floor (e^-700 at a
+    /// weighted squared distance of 1400 for the squared exponential): no subnormal numbers
     /// reach the factorisation. Within it, the response of the kernel's covariance function.
     #[test]
     fn responses_beyond_far_are_zero_in_the_fit_and_in_prediction() {
@@ -448,16 +473,18 @@ mod tests {
                     assert_eq!(k[(j, i)], 0.0);
                     if q > cov.far() {
                         assert_eq!(k[(i, j)], 0.0, "pair {i} {j}: {q}");
-                        cut += usize::from(q < 1400.0 || (cov == Covariance::Matern52 && q < 1e5));
+                        cut += usize::from(
+                            q < 1400.0 || (cov == Covariance::Matern52 && q < 98_000.0),
+                        );
                     } else {
                         assert_eq!(k[(i, j)], s2 * cov.response(q));
                         kept += 1;
                     }
                 }
             }
-            // Pairs cut where the response alone would still be a number (short of where
-            // exp() underflows: q about 1490 for the squared exponential, 103,700 for Matern
-            // 5/2), and pairs kept.
+            // Pairs cut where the response alone would still be above the exponential's
+            // floor e^-700 (q below 1400 for the squared exponential, 98,000 for Matern 5/2),
+            // and pairs kept.
             assert!(
                 cut > 0 && kept > 0,
                 "{cov:?}: {cut} cut short of underflow, {kept} kept"
