@@ -11,7 +11,9 @@
 //! for the library's, and four where the processor has AVX2 (the callers dispatch through
 //! `pulp`; the same operations, so the same bits). One value at a time the library's
 //! table-driven `exp` is faster (16 against 22 ns on a dependent chain), so the MLP's
-//! prediction keeps it.
+//! prediction keeps it; the RBF network's one-value response
+//! ([`super::rbf::Covariance::response`], in its input Jacobian) takes this one, so that the
+//! Jacobian's outputs are prediction's bit for bit.
 //!
 //! Method (Cody and Waite, as fdlibm's `exp`): x = k ln2 + r with k = round(x / ln2) and
 //! |r| <= ln2 / 2, ln2 split in a high part with trailing zeros (k ln2_hi is exact) and a low

@@ -202,7 +202,7 @@ impl Rbf {
     }
 
     /// y(x) into `y`; `inv` is scratch (no allocation once it has been used).
-    /// The units' distances go into a buffer of [`CHUNK`] at a time and their responses are
+    /// The units' distances go into a buffer of 64 at a time and their responses are
     /// taken over it ([`Covariance::responses_in_place`], vectorised); the outputs add the
     /// units in order.
     pub fn forward_into(&self, x: &[f64], y: &mut [f64], inv: &mut Vec<f64>) {
@@ -509,7 +509,8 @@ mod tests {
         let (mut y, mut inv) = ([0.0], Vec::new());
         let rbf = unit(Covariance::SquaredExponential);
         rbf.forward_into(&[1.0], &mut y, &mut inv);
-        assert_eq!(y[0], 2.0 * (-0.5f64).exp());
+        assert_eq!(y[0], 2.0 * Covariance::SquaredExponential.response(1.0));
+        assert!((y[0] - 2.0 * (-0.5f64).exp()).abs() < 1e-15);
         assert!((-450.0f64).exp() > 0.0);
         rbf.forward_into(&[30.0], &mut y, &mut inv);
         assert_eq!(y[0], 0.0);
