@@ -165,40 +165,22 @@ impl Rbf {
         })
     }
 
-    /// Every kernel's 1 / l_d^2, kernel after kernel, into `inv` (cleared first).
-    fn inverses_into(&self, inv: &mut Vec<f64>) {
+    /// Each kernel with the outputs it serves and its 1 / l_d^2, which go into `inv` (scratch:
+    /// no allocation once it has held them) kernel after kernel.
+    fn kernels_with_inverses<'a>(
+        &'a self,
+        inv: &'a mut Vec<f64>,
+    ) -> impl Iterator<Item = (&'a Kernel, std::ops::Range<usize>, &'a [f64])> {
         inv.clear();
         for k in &self.kernels {
             k.inverse_squares_into(inv);
         }
-    }
-
-    /// Calls `f(outputs, inv, centre, weights, covariance, q)` for every kernel (the outputs
-    /// it serves, its 1 / l_d^2, its covariance function) and unit, q the unit's weighted
-    /// squared distance from `x`: kernel by kernel, the units in order. `inv` is scratch for
-    /// the kernels' 1 / l_d^2 (no allocation once it has held them).
-    fn responses(
-        &self,
-        x: &[f64],
-        inv: &mut Vec<f64>,
-        mut f: impl FnMut(std::ops::Range<usize>, &[f64], &[f64], &[f64], Covariance, f64),
-    ) {
-        self.inverses_into(inv);
-        let mut at = 0;
-        for (kernel, outs) in self.kernel_outputs() {
-            let own = &inv[at..at + kernel.widths.len()];
-            at += kernel.widths.len();
-            for (c, w) in self.centres.iter().zip(&self.weights) {
-                f(
-                    outs.clone(),
-                    own,
-                    c,
-                    w,
-                    kernel.covariance,
-                    distance(x, c, own),
-                );
-            }
-        }
+        let inv: &'a [f64] = inv;
+        self.kernel_outputs().scan(0, move |at, (kernel, outs)| {
+            let own = &inv[*at..*at + kernel.widths.len()];
+            *at += kernel.widths.len();
+            Some((kernel, outs, own))
+        })
     }
 
     /// y(x) into `y`; `inv` is scratch (no allocation once it has been used).
@@ -207,12 +189,8 @@ impl Rbf {
     /// units in order.
     pub fn forward_into(&self, x: &[f64], y: &mut [f64], inv: &mut Vec<f64>) {
         y.fill(0.0);
-        self.inverses_into(inv);
         let mut buffer = [0.0; CHUNK];
-        let mut at = 0;
-        for (kernel, outs) in self.kernel_outputs() {
-            let own = &inv[at..at + kernel.widths.len()];
-            at += kernel.widths.len();
+        for (kernel, outs, own) in self.kernels_with_inverses(inv) {
             for (centres, weights) in self.centres.chunks(CHUNK).zip(self.weights.chunks(CHUNK)) {
                 let q = &mut buffer[..centres.len()];
                 q.iter_mut()
@@ -241,19 +219,23 @@ impl Rbf {
     ) {
         y.fill(0.0);
         dy.fill(0.0);
-        self.responses(x, inv, |outs, own, c, w, cov, q| {
-            let (k, g) = cov.response_and_width_factor(q);
-            if k == 0.0 {
-                return;
-            }
-            for o in outs {
-                y[o] += w[o] * k;
-                let wg = w[o] * g;
-                for (d, i) in own.iter().enumerate() {
-                    dy[(o, d)] -= wg * (x[d] - c[d]) * i;
+        for (kernel, outs, own) in self.kernels_with_inverses(inv) {
+            for (c, w) in self.centres.iter().zip(&self.weights) {
+                let (k, g) = kernel
+                    .covariance
+                    .response_and_width_factor(distance(x, c, own));
+                if k == 0.0 {
+                    continue;
+                }
+                for o in outs.clone() {
+                    y[o] += w[o] * k;
+                    let wg = w[o] * g;
+                    for (d, i) in own.iter().enumerate() {
+                        dy[(o, d)] -= wg * (x[d] - c[d]) * i;
+                    }
                 }
             }
-        });
+        }
     }
 
     /// Whether every number is finite and bounded (a finite 1e308 overflows in prediction)
