@@ -9,6 +9,7 @@ use robocal::identify::identifiability::DropReason;
 use robocal::identify::{Measure, Method, Options, RobustLoss, SolveOptions, identify};
 use robocal::kinematics::{Pose, tool_pose};
 use robocal::model::{Robot, read_robot};
+use robocal::neural::refine::refine;
 use robocal::sim::{Deviations, NonGeometric, Observe, Region, Simulation};
 use robocal::studies::reproduce::{Case, median_range, over_seeds};
 use std::path::{Path, PathBuf};
@@ -479,6 +480,23 @@ fn real_ur10_unmodelled_error_takes_the_weight_off_the_tracker_sigmas() {
         };
         let (a, b) = (rms(&own.robot), rms(&one.robot));
         eprintln!("seed {seed}: file sigmas {a:.4} mm, one sigma {b:.4} mm, tau {tau:.4} mm");
+        if seed == 1 {
+            // A compensator's refinement runs the same identification and says so in its notes
+            // (`train` prints them): with the file's sigmas, not with one per kind.
+            let said = |set: &MeasurementSet| {
+                refine(&own.robot, set, "full", Default::default())
+                    .unwrap()
+                    .2
+                    .into_iter()
+                    .find(|n| n.contains("an unmodelled error (position "))
+            };
+            let note = said(&cal).expect("the refinement's note on the unmodelled error");
+            let at = note.find("(position ").unwrap() + "(position ".len();
+            let refined_tau: f64 = note[at..].split(' ').next().unwrap().parse().unwrap();
+            assert!((0.15..0.4).contains(&refined_tau), "{note}");
+            assert!(note.contains(" mrad)"), "{note}");
+            assert_eq!(said(&cal_common), None);
+        }
         assert!(a <= 1.01 * b, "seed {seed}: {a} vs {b}");
     }
 }

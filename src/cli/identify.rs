@@ -222,21 +222,10 @@ fn print_identified(r: &IdentifyReport) {
         "solution: {} iterations, {}; variance factor s^2 = {:.4}",
         r.iterations, r.stop, r.variance_factor
     );
-    let u = &r.unmodelled;
-    if u.any() {
-        let part =
-            |kind: &str, v: Option<f64>, unit: &str| v.map(|t| format!("{kind} {t:.4} {unit}"));
-        let parts: Vec<String> = [
-            part("position", u.position_mm, "mm"),
-            part("orientation", u.rotation_rad.map(|t| t * 1e3), "mrad"),
-        ]
-        .into_iter()
-        .flatten()
-        .collect();
+    if let Some(tau) = r.unmodelled.describe() {
         println!(
             "weights: the model misses the rows by far more than their own sigmas; an unmodelled \
-             error ({}) was added to each sigma of that kind, the kind's total weight kept",
-            parts.join(", ")
+             error ({tau}) was added to each sigma of that kind, the kind's total weight kept"
         );
     }
     let w = super::summary::unit_width(r.parameters.iter().map(|p| p.unit.as_str()));

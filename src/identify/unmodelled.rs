@@ -70,6 +70,20 @@ impl Unmodelled {
         }
     }
 
+    /// The kinds' tau in file units, as `position 0.2545 mm, orientation 0.5223 mrad` (only
+    /// the kinds that have one); None where no kind has one.
+    pub fn describe(&self) -> Option<String> {
+        let parts: Vec<String> = [
+            self.position_mm.map(|t| format!("position {t:.4} mm")),
+            self.rotation_rad
+                .map(|t| format!("orientation {:.4} mrad", t * 1e3)),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        (!parts.is_empty()).then(|| parts.join(", "))
+    }
+
     /// Whether every tau is within [`SETTLED`] of `other`'s (both None counts as settled).
     pub fn settled(&self, other: &Unmodelled) -> bool {
         (0..KINDS).all(|k| match (self.get(k), other.get(k)) {
@@ -200,6 +214,24 @@ mod tests {
     use super::*;
     use rand::SeedableRng;
     use rand_distr::{Distribution, Normal};
+
+    #[test]
+    fn describe_gives_file_units_and_only_the_kinds_that_have_a_tau() {
+        let both = Unmodelled {
+            position_mm: Some(0.25454),
+            rotation_rad: Some(0.00052226),
+        };
+        assert_eq!(
+            both.describe().as_deref(),
+            Some("position 0.2545 mm, orientation 0.5223 mrad")
+        );
+        let turns = Unmodelled {
+            position_mm: None,
+            rotation_rad: Some(1e-4),
+        };
+        assert_eq!(turns.describe().as_deref(), Some("orientation 0.1000 mrad"));
+        assert_eq!(Unmodelled::default().describe(), None);
+    }
 
     /// Components whose sigmas spread over a factor 8, drawn with their sigma alone: no tau
     /// (on 20 seeds); drawn with an added error of 0.26: tau found within 5 %.

@@ -38,7 +38,8 @@ pub struct RefinedParam {
 }
 
 /// Re-estimates the parameters `spec` (a selection as for `identify`) of `model` on `set`:
-/// the refined model, what moved, and the identification's warnings.
+/// the refined model, what moved, and notes: the identification's warnings and the unmodelled
+/// error it added to the rows' sigmas ([`crate::identify::unmodelled`]), if any.
 pub fn refine(
     model: &Robot,
     set: &MeasurementSet,
@@ -68,10 +69,18 @@ pub fn refine(
             std: p.std,
         })
         .collect();
-    let warnings = id
+    let mut notes: Vec<String> = id
         .warnings
         .iter()
         .map(|w| format!("refinement: {w}"))
         .collect();
-    Ok((id.robot, moved, warnings))
+    // The weights the refined values and their sigmas come from, as `identify` reports them.
+    if let Some(tau) = id.unmodelled.describe() {
+        notes.push(format!(
+            "refinement: the model misses the training rows by far more than their own sigmas; \
+             an unmodelled error ({tau}) was added to each sigma of that kind, the kind's total \
+             weight kept"
+        ));
+    }
+    Ok((id.robot, moved, notes))
 }
