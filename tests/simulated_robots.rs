@@ -186,3 +186,151 @@ fn default_beats_full_geometry_on_drawn_robots() {
         );
     }
 }
+
+/// A SCARA (two vertical revolute axes, a prismatic joint, a revolute wrist: four joints)
+/// and a seven-joint arm, each written here in standard DH, through the same user's flow.
+/// The SCARA's errors are geometric only, which `full` identifies completely: the network
+/// has nothing to learn, and the default must not make the compensated pose worse than the
+/// model against the truth (a blend of MLPs and the RBF network that won cross-validation
+/// by 0.4 % had raised the max by 44 % here), and a network's file must be written (the gravity directions in the
+/// links that turn about the identified, barely tilted vertical axes vary by 4e-10: their
+/// standardisation once made a scale no file can hold). The arm's joints 2 and 4 carry gear
+/// errors, which the default must take a third of (it took 55 % in a trial with 400 rows).
+#[test]
+fn a_scara_and_a_seven_joint_arm_go_through_the_default() {
+    let frame = |x: &str| format!("convention = \"transform\"\n{x}rz = 0.0\nry = 0.0\nrx = 0.0\n");
+    let joint = |kind: &str, d: f64, a: f64, alpha: f64, lim: (f64, f64)| {
+        format!(
+            "\n[[joint]]\nconvention = \"dh\"\ntype = \"{kind}\"\nd = {d:?}\na = {a:?}\n\
+             alpha = {alpha:?}\nlimits = [{:?}, {:?}]\n",
+            lim.0, lim.1
+        )
+    };
+    let scara = [
+        joint("revolute", 400.0, 325.0, 0.0, (-140.0, 140.0)),
+        joint("revolute", 0.0, 275.0, 180.0, (-145.0, 145.0)),
+        joint("prismatic", 0.0, 0.0, 0.0, (0.0, 200.0)),
+        joint("revolute", 50.0, 0.0, 0.0, (-360.0, 360.0)),
+    ]
+    .concat();
+    let arm = [
+        joint("revolute", 340.0, 0.0, -90.0, (-170.0, 170.0)),
+        joint("revolute", 0.0, 0.0, 90.0, (-120.0, 120.0)),
+        joint("revolute", 400.0, 0.0, 90.0, (-170.0, 170.0)),
+        joint("revolute", 0.0, 0.0, -90.0, (-120.0, 120.0)),
+        joint("revolute", 400.0, 0.0, -90.0, (-170.0, 170.0)),
+        joint("revolute", 0.0, 0.0, 90.0, (-120.0, 120.0)),
+        joint("revolute", 126.0, 0.0, 0.0, (-175.0, 175.0)),
+    ]
+    .concat();
+    let arm = format!(
+        "name = \"arm7\"\n[base]\n{}{arm}\n[tool]\n{}",
+        frame("x = 0.0\ny = 0.0\nz = 0.0\n"),
+        frame("x = 0.0\ny = 0.0\nz = 100.0\n")
+    );
+    let gear = |j: usize, a: f64, p: f64| {
+        format!(
+            "\n[[gear]]\njoint = {j}\namplitude1_mrad = {a:?}\nphase1_deg = {p:?}\n\
+             amplitude2_mrad = 0.0\nphase2_deg = 0.0\n"
+        )
+    };
+    let cases = [
+        (
+            "scara",
+            format!("name = \"scara\"\n{scara}"),
+            "\"a1\" = 0.8\n\"a2\" = -0.5\n\"theta2\" = 0.1\n\"d3\" = 0.4\n\"alpha1\" = 0.03\n\
+             \"theta4\" = 0.2\n",
+            String::new(),
+        ),
+        (
+            "arm7",
+            arm,
+            "\"a1\" = 0.8\n\"d3\" = -0.6\n\"alpha2\" = 0.05\n\"theta4\" = 0.08\n\"a5\" = 0.5\n\
+             \"alpha6\" = -0.04\n\"theta7\" = 0.1\n\"base.x\" = 1.2\n\"tool.z\" = -0.7\n",
+            gear(2, 0.15, 30.0) + &gear(4, 0.12, 100.0),
+        ),
+    ];
+    for (name, robot, deviations, nongeometric) in cases {
+        let path = |tail: &str| {
+            let p = tmp(&format!("shape_{name}_{tail}"));
+            p.to_str().unwrap().to_string()
+        };
+        std::fs::write(path("robot.toml"), robot).unwrap();
+        std::fs::write(path("deviations.toml"), deviations).unwrap();
+        std::fs::write(path("nongeometric.toml"), nongeometric).unwrap();
+        let file = simulate_and_identify(
+            &format!("shape_{name}"),
+            &path("robot.toml"),
+            &path("deviations.toml"),
+            &path("nongeometric.toml"),
+            [81, 82, 83],
+            "pose",
+        );
+        let report = file("train.json");
+        let o = robocal(&[
+            "train",
+            "--robot",
+            &file("full.toml"),
+            "--data",
+            &file("train.csv"),
+            "--validate",
+            &file("test_truth.csv"),
+            "--out",
+            &file("default.rcal"),
+            "--report",
+            &report,
+        ]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let r = json(std::path::Path::new(&report));
+        let position = |what: &str, stat: &str| {
+            accuracy(&r, "validation", what)["position_mm"][stat]
+                .as_f64()
+                .unwrap()
+        };
+        let (model, net) = (position("model", "rms"), position("+net", "rms"));
+        let (model_max, net_max) = (position("model", "max"), position("+net", "max"));
+        eprintln!(
+            "{name}: full {model:.4} (max {model_max:.4}) -> default {net:.4} (max {net_max:.4}) \
+             mm RMS against the truth"
+        );
+        if name == "scara" {
+            assert!(
+                net <= model && net_max <= 1.1 * model_max,
+                "{name}\n{}",
+                stdout(&o)
+            );
+            // A model whose first two twists are off by 0.002 deg each (3.5e-5 rad): the
+            // gravity direction's z in the links beyond joint 2 varies with q2 by the product
+            // of the two, below 1e-9 as a standard deviation; a network on it (the model kept
+            // as given) is written.
+            let tilted = std::fs::read_to_string(path("robot.toml"))
+                .unwrap()
+                .replacen(
+                    "alpha = 0.0\nlimits = [-140.0",
+                    "alpha = 0.002\nlimits = [-140.0",
+                    1,
+                )
+                .replacen("alpha = 180.0\n", "alpha = 180.002\n", 1);
+            std::fs::write(path("tilted.toml"), tilted).unwrap();
+            let o = robocal(&[
+                "train",
+                "--robot",
+                &path("tilted.toml"),
+                "--data",
+                &file("train.csv"),
+                "--refine",
+                "none",
+                "--network",
+                "rbf",
+                "--encoding",
+                "gravity",
+                "--out",
+                &path("tilted.rcal"),
+            ]);
+            assert!(o.status.success(), "{}", stderr(&o));
+            assert!(std::path::Path::new(&path("tilted.rcal")).exists());
+        } else {
+            assert!(net <= model / 1.5, "{name}\n{}", stdout(&o));
+        }
+    }
+}

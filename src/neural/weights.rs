@@ -232,7 +232,11 @@ pub struct Affine {
 
 impl Affine {
     /// Mean 0 and standard deviation 1 over `rows` (of equal length); a constant feature
-    /// keeps scale 1.
+    /// keeps scale 1. A feature counts as constant where its deviation is at most
+    /// 1 / [`VALUE_BOUND`] of its size (max(1, |mean|)): what is left at a billionth is
+    /// rounding or a second-order trace (the gravity direction's z in a link that turns about
+    /// an axis tilted by a few 1e-5 rad, as in a SCARA's), and a smaller scale could not be
+    /// stored.
     pub fn standardise(rows: &[Vec<f64>]) -> Affine {
         let n = rows.first().map_or(0, |r| r.len());
         let count = rows.len().max(1) as f64;
@@ -242,7 +246,8 @@ impl Affine {
         let scale = (0..n)
             .map(|k| {
                 let var = rows.iter().map(|r| (r[k] - offset[k]).powi(2)).sum::<f64>() / count;
-                if var > 1e-24 { var.sqrt() } else { 1.0 }
+                let floor = offset[k].abs().max(1.0) / VALUE_BOUND;
+                if var.sqrt() > floor { var.sqrt() } else { 1.0 }
             })
             .collect();
         Affine { offset, scale }
@@ -438,5 +443,29 @@ mod tests {
         m.invert(&out, &mut back);
         assert_eq!(back, [10.0, 5.0]);
         assert!(m.is_valid() && !Affine::scaling(vec![0.0]).is_valid());
+    }
+
+    /// A feature whose spread is a billionth of its size or less is constant (scale 1): the
+    /// normalisation of a SCARA's gravity features, where a z varied by 4e-10 about 1, can
+    /// be stored; spreads above it are kept whatever the feature's size.
+    #[test]
+    fn spreads_at_a_billionth_of_the_size_are_constant() {
+        let rows: Vec<Vec<f64>> = (0..8)
+            .map(|i| {
+                let s = if i % 2 == 0 { 1.0 } else { -1.0 };
+                vec![
+                    1.0 + s * 4e-10,
+                    500.0 + s * 4e-7,
+                    s * 4e-10,
+                    1.0 + s * 2e-9,
+                    s * 1e-6,
+                ]
+            })
+            .collect();
+        let m = Affine::standardise(&rows);
+        assert_eq!(&m.scale[..3], &[1.0, 1.0, 1.0]);
+        assert!((m.scale[3] / 2e-9 - 1.0).abs() < 1e-6, "{:?}", m.scale);
+        assert!((m.scale[4] / 1e-6 - 1.0).abs() < 1e-9, "{:?}", m.scale);
+        assert!(m.is_valid());
     }
 }

@@ -5,7 +5,7 @@ use super::cv::searches;
 use super::race::Race;
 use super::rank::{best_pose_mlp, better, better_by, cv_rms, significant3, vary};
 use super::space::Space;
-use super::{COMPLIANCE_MARGIN, ENSEMBLE_PROBE, ENSEMBLE_TIE, PENALTY_STEP};
+use super::{COMPLIANCE_MARGIN, ENSEMBLE_PROBE, ENSEMBLE_TIE, NETWORK_MARGIN, PENALTY_STEP};
 use crate::error::{Error, Result};
 use crate::neural::selection::Candidate;
 use crate::neural::settings::{CompensatorOptions, Form, Network, Settings};
@@ -246,7 +246,8 @@ impl Search<'_, '_, '_> {
     }
 
     /// Stage 5: the model alone, without a network, as given and refined (no fits: a refined
-    /// model alone can win where the refined model with a network lost the race).
+    /// model alone can win where the refined model with a network lost the race). A network
+    /// must beat the best of them by [`NETWORK_MARGIN`] to be kept.
     pub(super) fn model_alone(&mut self) {
         let w = self.candidates[self.chosen].settings.clone();
         let first = self.candidates.len();
@@ -258,11 +259,21 @@ impl Search<'_, '_, '_> {
             ..w
         };
         self.evaluate(5, vary(&alone, &self.space.refines, |s, r| s.refine = r));
-        self.chosen = better_by(
-            &self.candidates,
-            self.chosen,
-            first..self.candidates.len(),
-            |c, i| self.judged(c, i),
-        );
+        let new = first..self.candidates.len();
+        let best_alone = better_by(&self.candidates, first, new, |c, i| self.judged(c, i));
+        let has_network = {
+            let s = &self.candidates[self.chosen].settings;
+            s.members > 0 || s.has_rbf()
+        };
+        let margin = if has_network {
+            1.0 + NETWORK_MARGIN
+        } else {
+            1.0
+        };
+        if self.judged(&self.candidates, best_alone)
+            < self.judged(&self.candidates, self.chosen) * margin
+        {
+            self.chosen = best_alone;
+        }
     }
 }
