@@ -624,9 +624,15 @@ fn default_selection_races_candidates() {
         .iter()
         .filter_map(|c| c.score.as_ref().map(|s| s.position_rms_mm))
         .fold(f64::INFINITY, f64::min);
-    // The best, or an ensemble within the tie of it.
+    // The best, an ensemble within the tie of it, or the model alone within the margin a
+    // network must win by.
     let chosen = sel.candidates[sel.chosen].score.as_ref().unwrap();
-    assert!(chosen.position_rms_mm <= best * (1.0 + robocal::neural::tuning::ENSEMBLE_TIE));
+    let slack = if sel.candidates[sel.chosen].settings.has_network() {
+        robocal::neural::tuning::ENSEMBLE_TIE
+    } else {
+        robocal::neural::tuning::NETWORK_MARGIN
+    };
+    assert!(chosen.position_rms_mm <= best * (1.0 + slack));
     let alone: Vec<_> = sel
         .candidates
         .iter()

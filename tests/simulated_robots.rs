@@ -6,8 +6,9 @@
 //! structures, pose and position-only measurements. The flow is a user's: `simulate`
 //! (calibration, training and test sets), `identify --params full` on the calibration set,
 //! `train` with no options on the training set, its validation against the test set's truth.
+//! A second test takes a SCARA and a seven-joint arm, written here, through the same flow.
 //!
-//! About 10 s in a release build; the table: `cargo test --release --test simulated_robots --
+//! About 12 s in a release build; the table: `cargo test --release --test simulated_robots --
 //! --nocapture`.
 
 mod common;
@@ -311,6 +312,8 @@ fn a_scara_and_a_seven_joint_arm_go_through_the_default() {
                     1,
                 )
                 .replacen("alpha = 180.0\n", "alpha = 180.002\n", 1);
+            assert_eq!(tilted.matches("alpha = 0.002\n").count(), 1, "{tilted}");
+            assert_eq!(tilted.matches("alpha = 180.002\n").count(), 1, "{tilted}");
             std::fs::write(path("tilted.toml"), tilted).unwrap();
             let o = robocal(&[
                 "train",
@@ -324,10 +327,13 @@ fn a_scara_and_a_seven_joint_arm_go_through_the_default() {
                 "rbf",
                 "--encoding",
                 "gravity",
+                "--members",
+                "1",
                 "--out",
                 &path("tilted.rcal"),
             ]);
             assert!(o.status.success(), "{}", stderr(&o));
+            assert!(stdout(&o).contains("rbf network: "), "{}", stdout(&o));
             assert!(std::path::Path::new(&path("tilted.rcal")).exists());
         } else {
             assert!(net <= model / 1.5, "{name}\n{}", stdout(&o));

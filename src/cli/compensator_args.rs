@@ -57,7 +57,8 @@ pub struct CompensatorArgs {
     /// process's posterior mean per output; pose form only; its cost grows with the cube of
     /// the rows) or
     /// `mix` (the MLPs' mean and an RBF network averaged; pose form only). Default: chosen by
-    /// cross-validation (rbf and mix tried on up to 3000 rows).
+    /// cross-validation (rbf and mix tried on up to 3000 rows). Without --members,
+    /// cross-validation may still keep the model alone where no network is 2 % better.
     #[arg(long, value_enum)]
     pub network: Option<Network>,
     /// Where the network acts: joint corrections before FK, or a pose residual after it
@@ -76,7 +77,8 @@ pub struct CompensatorArgs {
     #[arg(long)]
     pub penalty: Option<f64>,
     /// Networks in the ensemble (0 to 50; the prediction is their mean; 0: the model alone).
-    /// Default: 1 or 4, or none where no network lowers the error, by cross-validation.
+    /// Default: 1 or 4, or none where no network lowers the error by 2 % or more, by
+    /// cross-validation.
     #[arg(long)]
     pub members: Option<usize>,
     /// Model parameters re-estimated on the training rows before the network is trained

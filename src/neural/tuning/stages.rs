@@ -260,12 +260,13 @@ impl Search<'_, '_, '_> {
         };
         self.evaluate(5, vary(&alone, &self.space.refines, |s, r| s.refine = r));
         let new = first..self.candidates.len();
+        if new.is_empty() {
+            return;
+        }
         let best_alone = better_by(&self.candidates, first, new, |c, i| self.judged(c, i));
-        let has_network = {
-            let s = &self.candidates[self.chosen].settings;
-            s.members > 0 || s.has_rbf()
-        };
-        let margin = if has_network {
+        // Both judged as every candidate is (a refinement with the compliances that
+        // cross-validation adds on its own carries COMPLIANCE_MARGIN on either side).
+        let margin = if self.candidates[self.chosen].settings.has_network() {
             1.0 + NETWORK_MARGIN
         } else {
             1.0
