@@ -96,6 +96,28 @@ fn draw(structure: &'static str, measure: &'static str, seed: u64) -> Drawn {
     }
 }
 
+/// `train` with no options on the files `file` names (the identified `full.toml`, the
+/// training set), validated against the test set's truth: its output and JSON report.
+fn train_default(file: &impl Fn(&str) -> String) -> (std::process::Output, serde_json::Value) {
+    let report = file("train.json");
+    let o = robocal(&[
+        "train",
+        "--robot",
+        &file("full.toml"),
+        "--data",
+        &file("train.csv"),
+        "--validate",
+        &file("test_truth.csv"),
+        "--out",
+        &file("default.rcal"),
+        "--report",
+        &report,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = json(std::path::Path::new(&report));
+    (o, r)
+}
+
 /// Mean position error against the truth (mm) of the identified model and of the default
 /// compensator on the test set, and the settings `train` chose.
 fn run(index: usize, d: &Drawn, seed: u64) -> (f64, f64, String) {
@@ -115,23 +137,7 @@ fn run(index: usize, d: &Drawn, seed: u64) -> (f64, f64, String) {
         [1, 2, 3].map(|offset| seed * 10 + offset),
         d.measure,
     );
-    let full = file("full.toml");
-    let report = file("train.json");
-    let o = robocal(&[
-        "train",
-        "--robot",
-        &full,
-        "--data",
-        &file("train.csv"),
-        "--validate",
-        &file("test_truth.csv"),
-        "--out",
-        &file("default.rcal"),
-        "--report",
-        &report,
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let r = json(std::path::Path::new(&report));
+    let (o, r) = train_default(&file);
     let mean = |what| {
         accuracy(&r, "validation", what)["position_mm"]["mean"]
             .as_f64()
@@ -267,22 +273,7 @@ fn a_scara_and_a_seven_joint_arm_go_through_the_default() {
             [81, 82, 83],
             "pose",
         );
-        let report = file("train.json");
-        let o = robocal(&[
-            "train",
-            "--robot",
-            &file("full.toml"),
-            "--data",
-            &file("train.csv"),
-            "--validate",
-            &file("test_truth.csv"),
-            "--out",
-            &file("default.rcal"),
-            "--report",
-            &report,
-        ]);
-        assert!(o.status.success(), "{name}: {}", stderr(&o));
-        let r = json(std::path::Path::new(&report));
+        let (o, r) = train_default(&file);
         let position = |what: &str, stat: &str| {
             accuracy(&r, "validation", what)["position_mm"][stat]
                 .as_f64()
