@@ -222,11 +222,8 @@ fn print_identified(r: &IdentifyReport) {
         "solution: {} iterations, {}; variance factor s^2 = {:.4}",
         r.iterations, r.stop, r.variance_factor
     );
-    if let Some(tau) = r.unmodelled.describe() {
-        println!(
-            "weights: the model misses the rows by far more than their own sigmas; an unmodelled \
-             error ({tau}) was added to each sigma of that kind, the kind's total weight kept"
-        );
+    if let Some(note) = r.unmodelled.note("the rows") {
+        println!("weights: {note}");
     }
     let w = super::summary::unit_width(r.parameters.iter().map(|p| p.unit.as_str()));
     println!(

@@ -84,6 +84,18 @@ impl Unmodelled {
         (!parts.is_empty()).then(|| parts.join(", "))
     }
 
+    /// What was done, for `identify` and a compensator's refinement alike: the model misses
+    /// `rows` by far more than their sigmas, and the unmodelled error added; None where none
+    /// was added.
+    pub fn note(&self, rows: &str) -> Option<String> {
+        self.describe().map(|tau| {
+            format!(
+                "the model misses {rows} by far more than their own sigmas; an unmodelled error \
+                 ({tau}) was added to each sigma of that kind, the kind's total weight kept"
+            )
+        })
+    }
+
     /// Whether every tau is within [`SETTLED`] of `other`'s (both None counts as settled).
     pub fn settled(&self, other: &Unmodelled) -> bool {
         (0..KINDS).all(|k| match (self.get(k), other.get(k)) {

@@ -75,12 +75,8 @@ pub fn refine(
         .map(|w| format!("refinement: {w}"))
         .collect();
     // The weights the refined values and their sigmas come from, as `identify` reports them.
-    if let Some(tau) = id.unmodelled.describe() {
-        notes.push(format!(
-            "refinement: the model misses the training rows by far more than their own sigmas; \
-             an unmodelled error ({tau}) was added to each sigma of that kind, the kind's total \
-             weight kept"
-        ));
+    if let Some(note) = id.unmodelled.note("the training rows") {
+        notes.push(format!("refinement: {note}"));
     }
     Ok((id.robot, moved, notes))
 }

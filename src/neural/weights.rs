@@ -246,8 +246,12 @@ impl Affine {
         let scale = (0..n)
             .map(|k| {
                 let var = rows.iter().map(|r| (r[k] - offset[k]).powi(2)).sum::<f64>() / count;
-                let floor = offset[k].abs().max(1.0) / VALUE_BOUND;
-                if var.sqrt() > floor { var.sqrt() } else { 1.0 }
+                let deviation = var.sqrt();
+                if deviation > offset[k].abs().max(1.0) / VALUE_BOUND {
+                    deviation
+                } else {
+                    1.0
+                }
             })
             .collect();
         Affine { offset, scale }
