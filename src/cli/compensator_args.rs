@@ -58,7 +58,8 @@ pub struct CompensatorArgs {
     /// the rows) or
     /// `mix` (the MLPs' mean and an RBF network averaged; pose form only). Default: chosen by
     /// cross-validation (rbf and mix tried on up to 3000 rows). Without --members,
-    /// cross-validation may still keep the model alone where no network is 2 % better.
+    /// cross-validation may still keep the model alone where no network is 2 % better, and
+    /// significantly better row by row.
     #[arg(long, value_enum)]
     pub network: Option<Network>,
     /// Where the network acts: joint corrections before FK, or a pose residual after it
@@ -77,8 +78,8 @@ pub struct CompensatorArgs {
     #[arg(long)]
     pub penalty: Option<f64>,
     /// Networks in the ensemble (0 to 50; the prediction is their mean; 0: the model alone).
-    /// Default: 1 or 4, or none where no network lowers the error by 2 % or more, by
-    /// cross-validation.
+    /// Default: 1 or 4, or none where no network lowers the error by 2 % or more and
+    /// significantly row by row, by cross-validation.
     #[arg(long)]
     pub members: Option<usize>,
     /// Model parameters re-estimated on the training rows before the network is trained

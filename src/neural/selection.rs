@@ -95,6 +95,33 @@ pub struct Selection {
     /// leaves rows out; a refined model's final fit searches from the settings' start.
     #[serde(skip)]
     pub rbf_hyper: Option<Hyper>,
+    /// The best network against the best model alone on the same held-out rows (stage 5 of
+    /// [`super::tuning`]); None where no network was held against the model alone.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub network_test: Option<NetworkTest>,
+}
+
+/// The best network against the best model alone (as given or refined), row by row on the
+/// same held-out rows: the network is kept only if it is lower by
+/// [`NETWORK_MARGIN`](super::tuning::NETWORK_MARGIN) in cross-validated RMS and significantly
+/// lower row by row ([`NETWORK_Z`](super::tuning::NETWORK_Z)).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct NetworkTest {
+    /// Index of the network among the candidates.
+    pub network: usize,
+    /// Index of the best model alone among the candidates.
+    pub alone: usize,
+    /// The network's cross-validated position RMS over the model alone's, each as judged
+    /// (times its refinement's margin).
+    pub ratio: f64,
+    /// Paired z of the rows' differences of squared position errors (network minus model
+    /// alone, mm^2): their mean over its standard error, negative where the network is lower.
+    #[serde(with = "crate::io::json_number")]
+    pub z: f64,
+    /// Held-out rows compared.
+    pub rows: usize,
+    /// Whether the network was kept.
+    pub kept: bool,
 }
 
 /// Sums of squared errors over held-out rows.

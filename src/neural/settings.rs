@@ -112,7 +112,8 @@ pub struct Settings {
     pub penalty: f64,
     /// MLPs in the ensemble (for `Rbf`: 1 with the RBF network); 0 and no RBF network: the
     /// (refined) model alone, chosen where cross-validation finds that no network lowers the
-    /// held-out error by [`super::tuning::NETWORK_MARGIN`] or more.
+    /// held-out error by [`super::tuning::NETWORK_MARGIN`] or more and significantly row by
+    /// row ([`super::tuning::NETWORK_Z`]).
     pub members: usize,
     /// The RBF network's hyperparameter search start ([`super::rbf::STARTS`]); None: every
     /// start, the highest likelihood kept output by output.

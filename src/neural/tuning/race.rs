@@ -1,9 +1,11 @@
 //! The race that scores candidates on the cross-validation folds.
 
 use super::cv::Cv;
+use super::rows::held_errors;
 use super::shares::{add_shares, best_share, open_share};
 use super::{RACE_MARGIN, SHARES};
 use crate::error::{Error, Result};
+use crate::evaluate::RowError;
 use crate::model::Robot;
 use crate::neural::parallel::parallel_map;
 use crate::neural::selection::{Candidate, Sums};
@@ -31,6 +33,27 @@ pub(super) struct Race<'a, 'c> {
 }
 
 impl Race<'_, '_> {
+    /// Held-out errors of `settings` on every fold, fold by fold, in each fold's row order
+    /// (the folds' fits are cached: predicting is the work, folds in parallel).
+    pub(super) fn held_rows(&self, settings: &Settings) -> Result<Vec<Vec<RowError>>> {
+        let r_idx = self
+            .refines
+            .iter()
+            .position(|r| r == &settings.refine)
+            .unwrap_or(0);
+        let round = self.rounds.load(Ordering::Relaxed);
+        parallel_map(self.k, |f| {
+            let model = self.refined[r_idx][f]
+                .as_ref()
+                .map_err(|e| Error::Invalid(e.to_string()))?;
+            let c = self.cv.fit(f, settings, model, round)?;
+            let mut ws = Default::default();
+            held_errors(&self.cv.held[f], |q| c.predict(q, &mut ws))
+        })
+        .into_iter()
+        .collect()
+    }
+
     /// Scores the settings of `list` not yet in `candidates` and appends them (stage
     /// `stage`).
     pub(super) fn evaluate(

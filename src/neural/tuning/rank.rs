@@ -48,6 +48,28 @@ pub(super) fn better_by(
     })
 }
 
+/// Paired z of `a` against `b` (the same rows' errors, in the same order): the mean of the
+/// differences a - b over its standard error, sd / sqrt(n). Negative where `a` is lower;
+/// 0 for fewer than 2 rows or where the differences are all equal to zero, and infinite
+/// (of the mean's sign) where they are all equal to a nonzero value.
+pub(super) fn paired_z(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    if n < 2 {
+        return 0.0;
+    }
+    let d = || a.iter().zip(b).map(|(x, y)| x - y);
+    let mean = d().sum::<f64>() / n as f64;
+    let var = d().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+    let se = (var / n as f64).sqrt();
+    if se > 0.0 {
+        mean / se
+    } else if mean == 0.0 {
+        0.0
+    } else {
+        mean.signum() * f64::INFINITY
+    }
+}
+
 /// `x` to 3 significant digits (penalties read back as typed: 0.333, not 0.3333333333333333).
 pub(super) fn significant3(x: f64) -> f64 {
     if x == 0.0 || !x.is_finite() {
@@ -77,6 +99,18 @@ pub(super) fn vary<T: Clone>(
 mod tests {
     use super::*;
     use crate::neural::tuning::{FIT_WORK, budget_epochs};
+
+    /// Against values computed by hand: differences -1, -2, -3 have mean -2 and standard
+    /// deviation 1, so z = -2 / (1 / sqrt 3) = -2 sqrt 3.
+    #[test]
+    fn paired_z_is_the_mean_difference_over_its_standard_error() {
+        let z = paired_z(&[1.0, 2.0, 3.0], &[2.0, 4.0, 6.0]);
+        assert!((z + 2.0 * 3f64.sqrt()).abs() < 1e-12, "{z}");
+        assert!((paired_z(&[2.0, 4.0, 6.0], &[1.0, 2.0, 3.0]) - 2.0 * 3f64.sqrt()).abs() < 1e-12);
+        assert_eq!(paired_z(&[1.0, 2.0], &[1.0, 2.0]), 0.0);
+        assert_eq!(paired_z(&[1.0, 2.0], &[2.0, 3.0]), f64::NEG_INFINITY);
+        assert_eq!(paired_z(&[1.0], &[5.0]), 0.0);
+    }
 
     #[test]
     fn penalties_keep_three_significant_digits() {

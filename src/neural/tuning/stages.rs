@@ -3,11 +3,13 @@
 
 use super::cv::searches;
 use super::race::Race;
-use super::rank::{best_pose_mlp, better, better_by, cv_rms, significant3, vary};
+use super::rank::{best_pose_mlp, better, better_by, cv_rms, paired_z, significant3, vary};
 use super::space::Space;
-use super::{COMPLIANCE_MARGIN, ENSEMBLE_PROBE, ENSEMBLE_TIE, NETWORK_MARGIN, PENALTY_STEP};
+use super::{
+    COMPLIANCE_MARGIN, ENSEMBLE_PROBE, ENSEMBLE_TIE, NETWORK_MARGIN, NETWORK_Z, PENALTY_STEP,
+};
 use crate::error::{Error, Result};
-use crate::neural::selection::Candidate;
+use crate::neural::selection::{Candidate, NetworkTest};
 use crate::neural::settings::{CompensatorOptions, Form, Network, Settings};
 
 /// The search's state between stages: what it draws from, the candidates scored so far and
@@ -19,6 +21,8 @@ pub(super) struct Search<'r, 'a, 'c> {
     pub(super) candidates: Vec<Candidate>,
     /// Index of the chosen candidate so far.
     pub(super) chosen: usize,
+    /// Stage 5's test of the best network against the best model alone.
+    pub(super) network_test: Option<NetworkTest>,
 }
 
 impl Search<'_, '_, '_> {
@@ -247,7 +251,8 @@ impl Search<'_, '_, '_> {
 
     /// Stage 5: the model alone, without a network, as given and refined (no fits: a refined
     /// model alone can win where the refined model with a network lost the race). A network
-    /// must beat the best of them by [`NETWORK_MARGIN`] to be kept.
+    /// must beat the best of them by [`NETWORK_MARGIN`] in cross-validated RMS, and row by
+    /// row with a paired z of [`NETWORK_Z`] or more, to be kept.
     pub(super) fn model_alone(&mut self) {
         let w = self.candidates[self.chosen].settings.clone();
         let first = self.candidates.len();
@@ -264,16 +269,48 @@ impl Search<'_, '_, '_> {
             return;
         }
         let best_alone = better_by(&self.candidates, first, new, |c, i| self.judged(c, i));
+        if !self.candidates[self.chosen].settings.has_network() {
+            if self.judged(&self.candidates, best_alone)
+                < self.judged(&self.candidates, self.chosen)
+            {
+                self.chosen = best_alone;
+            }
+            return;
+        }
+        // A model alone that failed on some fold cannot replace the network.
+        if !self.judged(&self.candidates, best_alone).is_finite() {
+            return;
+        }
         // Both judged as every candidate is (a refinement with the compliances that
         // cross-validation adds on its own carries COMPLIANCE_MARGIN on either side).
-        let margin = if self.candidates[self.chosen].settings.has_network() {
-            1.0 + NETWORK_MARGIN
-        } else {
-            1.0
+        let ratio =
+            self.judged(&self.candidates, self.chosen) / self.judged(&self.candidates, best_alone);
+        let squares = |i: usize| -> Option<Vec<f64>> {
+            let folds = self.race.held_rows(&self.candidates[i].settings).ok()?;
+            Some(
+                folds
+                    .iter()
+                    .flatten()
+                    .map(|r| r.position_mm.unwrap_or(0.0).powi(2))
+                    .collect(),
+            )
         };
-        if self.judged(&self.candidates, best_alone)
-            < self.judged(&self.candidates, self.chosen) * margin
-        {
+        // Both were scored on every fold: their fits are cached, and a failure here (none
+        // is expected) leaves the test undecided, which keeps the model alone.
+        let (z, rows) = match (squares(self.chosen), squares(best_alone)) {
+            (Some(a), Some(b)) if a.len() == b.len() => (paired_z(&a, &b), a.len()),
+            _ => (0.0, 0),
+        };
+        let kept = ratio * (1.0 + NETWORK_MARGIN) <= 1.0 && z <= -NETWORK_Z;
+        self.network_test = Some(NetworkTest {
+            network: self.chosen,
+            alone: best_alone,
+            ratio,
+            z,
+            rows,
+            kept,
+        });
+        if !kept {
             self.chosen = best_alone;
         }
     }
