@@ -768,6 +768,27 @@ fn series_pools() {
         );
         if let Some(sel) = &rep.selection {
             println!("  outliers listed: {}", sel.outliers.len());
+            if let Some(t) = &sel.network_test {
+                println!("  network test: {t:?}");
+                // The network stage 5 did not keep, fitted as it would have been.
+                if !t.kept {
+                    let mut s = sel.candidates[t.network].settings.clone();
+                    if s.members == robocal::neural::tuning::ENSEMBLE_PROBE
+                        && s.network != robocal::neural::compensator::Network::Mix
+                    {
+                        s.members = robocal::neural::tuning::ENSEMBLE;
+                    }
+                    let fixed = CompensatorOptions::fixed(&s, opts.train.clone());
+                    let (n, _) = Compensator::train(&model, &pool, &fixed, &|_, _| {}).unwrap();
+                    let e = stats(&n, &val).position_mm.unwrap();
+                    println!(
+                        "  the network left out ({}): {:.4}/{:.3}",
+                        s.describe(),
+                        e.rms,
+                        e.max
+                    );
+                }
+            }
         }
         let mut ws = PredictWorkspace::default();
         let worst = row_errors(&val, Measure::Position, |q| c.predict(q, &mut ws))

@@ -291,6 +291,16 @@ fn a_scara_and_a_seven_joint_arm_go_through_the_default() {
                 "{name}\n{}",
                 stdout(&o)
             );
+            // The model alone, by the margin: the network is less than 2 % ahead (0.4 %).
+            let test = &r["training"]["selection"]["network_test"];
+            let ratio = test["ratio"].as_f64().unwrap();
+            let margin = 1.0 + robocal::neural::tuning::NETWORK_MARGIN;
+            assert!(ratio * margin > 1.0 && test["kept"] == false, "{test}");
+            assert!(
+                stdout(&o).contains("not 2 % or more below: the compensator is the model alone"),
+                "{}",
+                stdout(&o)
+            );
             // A model whose first two twists are off by 0.002 deg each (3.5e-5 rad): the
             // gravity direction's z in the links beyond joint 2 varies with q2 by the product
             // of the two, below 1e-9 as a standard deviation; a network on it (the model kept

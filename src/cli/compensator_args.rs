@@ -58,8 +58,8 @@ pub struct CompensatorArgs {
     /// the rows) or
     /// `mix` (the MLPs' mean and an RBF network averaged; pose form only). Default: chosen by
     /// cross-validation (rbf and mix tried on up to 3000 rows). Without --members,
-    /// cross-validation may still keep the model alone where no network is 2 % better, and
-    /// significantly better row by row.
+    /// cross-validation may still keep the model alone where no network is both 2 % better
+    /// and significantly better row by row.
     #[arg(long, value_enum)]
     pub network: Option<Network>,
     /// Where the network acts: joint corrections before FK, or a pose residual after it

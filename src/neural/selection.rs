@@ -95,14 +95,15 @@ pub struct Selection {
     /// leaves rows out; a refined model's final fit searches from the settings' start.
     #[serde(skip)]
     pub rbf_hyper: Option<Hyper>,
-    /// The best network against the best model alone on the same held-out rows (stage 5 of
-    /// [`super::tuning`]); None where no network was held against the model alone.
+    /// The network chosen so far against the best model alone on the same held-out rows
+    /// (stage 5 of [`super::tuning`]); None where no network was held against the model
+    /// alone.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub network_test: Option<NetworkTest>,
 }
 
-/// The best network against the best model alone (as given or refined), row by row on the
-/// same held-out rows: the network is kept only if it is lower by
+/// The network chosen after stages 1-4 of [`super::tuning`] against the best model alone (as
+/// given or refined), row by row on the same held-out rows: the network is kept only if it is lower by
 /// [`NETWORK_MARGIN`](super::tuning::NETWORK_MARGIN) in cross-validated RMS and significantly
 /// lower row by row ([`NETWORK_Z`](super::tuning::NETWORK_Z)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -112,13 +113,16 @@ pub struct NetworkTest {
     /// Index of the best model alone among the candidates.
     pub alone: usize,
     /// The network's cross-validated position RMS over the model alone's, each as judged
-    /// (times its refinement's margin).
+    /// (times its refinement's margin, [`COMPLIANCE_MARGIN`](super::tuning::COMPLIANCE_MARGIN)).
+    #[serde(with = "crate::io::json_number")]
     pub ratio: f64,
     /// Paired z of the rows' differences of squared position errors (network minus model
     /// alone, mm^2): their mean over its standard error, negative where the network is lower.
+    /// Not a number where the held-out rows could not be recomputed as they were scored
+    /// (the margin alone then decided).
     #[serde(with = "crate::io::json_number")]
     pub z: f64,
-    /// Held-out rows compared.
+    /// Held-out rows compared (0: the test could not be run).
     pub rows: usize,
     /// Whether the network was kept.
     pub kept: bool,

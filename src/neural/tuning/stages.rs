@@ -21,7 +21,7 @@ pub(super) struct Search<'r, 'a, 'c> {
     pub(super) candidates: Vec<Candidate>,
     /// Index of the chosen candidate so far.
     pub(super) chosen: usize,
-    /// Stage 5's test of the best network against the best model alone.
+    /// Stage 5's test of the network chosen so far against the best model alone.
     pub(super) network_test: Option<NetworkTest>,
 }
 
@@ -285,23 +285,28 @@ impl Search<'_, '_, '_> {
         // cross-validation adds on its own carries COMPLIANCE_MARGIN on either side).
         let ratio =
             self.judged(&self.candidates, self.chosen) / self.judged(&self.candidates, best_alone);
+        // Each held-out row's squared position error (mm^2), fold by fold: the rows that
+        // gave the candidate's score (its fits are cached), checked against it.
         let squares = |i: usize| -> Option<Vec<f64>> {
             let folds = self.race.held_rows(&self.candidates[i].settings).ok()?;
-            Some(
-                folds
-                    .iter()
-                    .flatten()
-                    .map(|r| r.position_mm.unwrap_or(0.0).powi(2))
-                    .collect(),
-            )
+            let e: Vec<f64> = folds
+                .iter()
+                .flatten()
+                .map(|r| r.position_mm.unwrap_or(0.0).powi(2))
+                .collect();
+            let rms = (e.iter().sum::<f64>() / e.len().max(1) as f64).sqrt();
+            let scored = cv_rms(&self.candidates, i);
+            ((rms - scored).abs() <= 1e-9 * scored.max(1e-12)).then_some(e)
         };
-        // Both were scored on every fold: their fits are cached, and a failure here (none
-        // is expected) leaves the test undecided, which keeps the model alone.
-        let (z, rows) = match (squares(self.chosen), squares(best_alone)) {
-            (Some(a), Some(b)) if a.len() == b.len() => (paired_z(&a, &b), a.len()),
-            _ => (0.0, 0),
+        let paired = match (squares(self.chosen), squares(best_alone)) {
+            (Some(a), Some(b)) if a.len() == b.len() => Some((paired_z(&a, &b), a.len())),
+            _ => None,
         };
-        let kept = ratio * (1.0 + NETWORK_MARGIN) <= 1.0 && z <= -NETWORK_Z;
+        // Where the rows cannot be had again as they were scored (not expected: every fit
+        // is cached), the margin alone decides, as it did before the test.
+        let significant = paired.is_none_or(|(z, _)| z <= -NETWORK_Z);
+        let (z, rows) = paired.unwrap_or((f64::NAN, 0));
+        let kept = ratio * (1.0 + NETWORK_MARGIN) <= 1.0 && significant;
         self.network_test = Some(NetworkTest {
             network: self.chosen,
             alone: best_alone,
