@@ -138,6 +138,25 @@ fn run(index: usize, d: &Drawn, seed: u64) -> (f64, f64, String) {
         d.measure,
     );
     let (o, r) = train_default(&file);
+    // Where a kept network's cross-validated orientation error is above the model alone's
+    // (the choice is made on position), the note says so; only there.
+    let sel = &r["training"]["selection"];
+    let test = &sel["network_test"];
+    if test["kept"] == true {
+        let rot = |i: &serde_json::Value| {
+            sel["candidates"][i.as_u64().unwrap() as usize]["score"]["orientation_rms_deg"].as_f64()
+        };
+        let worse =
+            matches!((rot(&test["network"]), rot(&test["alone"])), (Some(n), Some(a)) if n > a);
+        assert_eq!(
+            stdout(&o).contains(
+                "the network is kept (chosen on position; its cross-validated orientation error is"
+            ),
+            worse,
+            "{}",
+            stdout(&o)
+        );
+    }
     let mean = |what| {
         accuracy(&r, "validation", what)["position_mm"]["mean"]
             .as_f64()

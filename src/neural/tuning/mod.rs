@@ -302,7 +302,7 @@ pub fn select_settings(
         ));
     }
     if let Some(t) = &network_test {
-        notes.push(network_note(t, &candidates[t.alone].settings));
+        notes.push(network_note(t, &candidates));
     } else if winner.members == 0 && opts.members != Some(0) {
         notes.push(format!(
             "no network's cross-validated error was {:.0} % or more below the model's alone: \
@@ -356,8 +356,10 @@ pub fn select_settings(
     ))
 }
 
-/// What stage 5's test of the network against the best model alone (`alone`) found.
-fn network_note(t: &NetworkTest, alone: &Settings) -> String {
+/// What stage 5's test of the network against the best model alone found (`candidates`: the
+/// search's, which `t` indexes).
+fn network_note(t: &NetworkTest, candidates: &[Candidate]) -> String {
+    let alone = &candidates[t.alone].settings;
     let below = (1.0 - t.ratio) * 100.0;
     let by = if below >= 0.0 {
         format!("{below:.1} % below")
@@ -377,7 +379,22 @@ fn network_note(t: &NetworkTest, alone: &Settings) -> String {
         "the network's cross-validated error is {by} the best model alone's ({model}), {rows}"
     );
     if t.kept {
-        return format!("{test}: the network is kept");
+        // The choice is made on position: say where the orientation pays for it.
+        let rot = |i: usize| {
+            candidates[i]
+                .score
+                .as_ref()
+                .and_then(|s| s.orientation_rms_deg)
+        };
+        return match (rot(t.network), rot(t.alone)) {
+            (Some(n), Some(a)) if n > a => format!(
+                "{test}: the network is kept (chosen on position; its cross-validated \
+                 orientation error is {:.1} % above the model alone's, {n:.4} against {a:.4} \
+                 deg RMS)",
+                (n / a - 1.0) * 100.0
+            ),
+            _ => format!("{test}: the network is kept"),
+        };
     }
     let why = if t.ratio * (1.0 + NETWORK_MARGIN) > 1.0 {
         format!("not {:.0} % or more below", NETWORK_MARGIN * 100.0)
