@@ -117,7 +117,9 @@ pub struct NetworkTest {
     #[serde(with = "crate::io::json_number")]
     pub ratio: f64,
     /// Paired z of the rows' differences of squared position errors (network minus model
-    /// alone, mm^2): their mean over its standard error, negative where the network is lower.
+    /// alone, mm^2): their mean over its standard error, negative where the network is lower;
+    /// the error clustered by arm configuration (rows that repeat one configuration count
+    /// as one cluster, as they stay in one fold).
     /// Not a number where the held-out rows could not be recomputed as they were scored
     /// (the margin alone then decided).
     #[serde(with = "crate::io::json_number")]

@@ -48,19 +48,31 @@ pub(super) fn better_by(
     })
 }
 
-/// Paired z of `a` against `b` (the same rows' errors, in the same order): the mean of the
-/// differences a - b over its standard error, sd / sqrt(n). Negative where `a` is lower;
-/// 0 for fewer than 2 rows or where the differences are all equal to zero, and infinite
-/// (of the mean's sign) where they are all equal to a nonzero value.
-pub(super) fn paired_z(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len().min(b.len());
-    if n < 2 {
+/// Paired z of `a` against `b` (the same rows' errors, in the same order) with the rows in
+/// clusters (`cluster[i]`: row i's, ids from 0): the mean of the differences d = a - b over
+/// its cluster-robust standard error, sqrt(G / (G - 1) * sum over clusters of (the cluster's
+/// sum of d - mean)^2) / n for G clusters of n rows. Rows of one cluster (repeats of one arm
+/// configuration) share their error, and counted as independent they would make the
+/// difference look surer than it is; with every row its own cluster this is the usual
+/// sd / sqrt(n). Negative where `a` is lower; 0 for fewer than 2 clusters or where the
+/// differences are all equal to zero, and infinite (of the mean's sign) where the clusters'
+/// deviations all vanish otherwise.
+pub(super) fn paired_z(a: &[f64], b: &[f64], cluster: &[usize]) -> f64 {
+    let n = a.len().min(b.len()).min(cluster.len());
+    let g = cluster[..n].iter().max().map_or(0, |m| m + 1);
+    let mean = (0..n).map(|i| a[i] - b[i]).sum::<f64>() / n.max(1) as f64;
+    let mut sums = vec![0.0; g];
+    let mut rows = vec![0usize; g];
+    for i in 0..n {
+        sums[cluster[i]] += a[i] - b[i] - mean;
+        rows[cluster[i]] += 1;
+    }
+    let clusters = rows.iter().filter(|&&r| r > 0).count();
+    if clusters < 2 {
         return 0.0;
     }
-    let d = || a.iter().zip(b).map(|(x, y)| x - y);
-    let mean = d().sum::<f64>() / n as f64;
-    let var = d().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
-    let se = (var / n as f64).sqrt();
+    let c = clusters as f64;
+    let se = (c / (c - 1.0) * sums.iter().map(|s| s * s).sum::<f64>()).sqrt() / n as f64;
     if se > 0.0 {
         mean / se
     } else if mean == 0.0 {
@@ -100,16 +112,31 @@ mod tests {
     use super::*;
     use crate::neural::tuning::{FIT_WORK, budget_epochs};
 
-    /// Against values computed by hand: differences -1, -2, -3 have mean -2 and standard
-    /// deviation 1, so z = -2 / (1 / sqrt 3) = -2 sqrt 3.
+    /// Against values computed by hand. Rows alone: differences -1, -2, -3 have mean -2 and
+    /// standard deviation 1, so z = -2 / (1 / sqrt 3) = -2 sqrt 3. In clusters: differences
+    /// -1, -1 | -3, -3 have mean -2, the clusters' sums of deviations 2 and -2, so the
+    /// standard error is sqrt(2 / 1 * 8) / 4 = 1 and z = -2, where the rows counted alone
+    /// would give -2 / sqrt(4 / 3 / 4) = -2 sqrt 3.
     #[test]
     fn paired_z_is_the_mean_difference_over_its_standard_error() {
-        let z = paired_z(&[1.0, 2.0, 3.0], &[2.0, 4.0, 6.0]);
+        let alone = [0, 1, 2];
+        let z = paired_z(&[1.0, 2.0, 3.0], &[2.0, 4.0, 6.0], &alone);
         assert!((z + 2.0 * 3f64.sqrt()).abs() < 1e-12, "{z}");
-        assert!((paired_z(&[2.0, 4.0, 6.0], &[1.0, 2.0, 3.0]) - 2.0 * 3f64.sqrt()).abs() < 1e-12);
-        assert_eq!(paired_z(&[1.0, 2.0], &[1.0, 2.0]), 0.0);
-        assert_eq!(paired_z(&[1.0, 2.0], &[2.0, 3.0]), f64::NEG_INFINITY);
-        assert_eq!(paired_z(&[1.0], &[5.0]), 0.0);
+        let z = paired_z(&[2.0, 4.0, 6.0], &[1.0, 2.0, 3.0], &alone);
+        assert!((z - 2.0 * 3f64.sqrt()).abs() < 1e-12, "{z}");
+        let (a, b) = ([0.0, 0.0, 0.0, 0.0], [1.0, 1.0, 3.0, 3.0]);
+        let z = paired_z(&a, &b, &[0, 0, 1, 1]);
+        assert!((z + 2.0).abs() < 1e-12, "{z}");
+        let z = paired_z(&a, &b, &[0, 1, 2, 3]);
+        assert!((z + 2.0 * 3f64.sqrt()).abs() < 1e-12, "{z}");
+        assert_eq!(paired_z(&[1.0, 2.0], &[1.0, 2.0], &[0, 1]), 0.0);
+        assert_eq!(
+            paired_z(&[1.0, 2.0], &[2.0, 3.0], &[0, 1]),
+            f64::NEG_INFINITY
+        );
+        assert_eq!(paired_z(&[1.0], &[5.0], &[0]), 0.0);
+        // One configuration measured twice is one cluster: no test.
+        assert_eq!(paired_z(&[1.0, 2.0], &[5.0, 7.0], &[3, 3]), 0.0);
     }
 
     #[test]

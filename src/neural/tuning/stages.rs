@@ -299,7 +299,10 @@ impl Search<'_, '_, '_> {
             ((rms - scored).abs() <= 1e-9 * scored.max(1e-12)).then_some(e)
         };
         let paired = match (squares(self.chosen), squares(best_alone)) {
-            (Some(a), Some(b)) if a.len() == b.len() => Some((paired_z(&a, &b), a.len())),
+            (Some(a), Some(b)) if a.len() == b.len() => {
+                let cluster: Vec<usize> = self.race.cv.held_groups.concat();
+                Some((paired_z(&a, &b, &cluster), a.len()))
+            }
             _ => None,
         };
         // Where the rows cannot be had again as they were scored (not expected: every fit
