@@ -27,9 +27,11 @@ pub(super) struct Cv<'a> {
     pub(super) robot: &'a Robot,
     pub(super) train: Vec<MeasurementSet>,
     pub(super) held: Vec<MeasurementSet>,
-    /// The configuration group of each held-out row, fold by fold in the rows' order
+    /// Each fold's held-out rows: their indices in the training set, in `held`'s order.
+    pub(super) held_index: Vec<Vec<usize>>,
+    /// The configuration group of every training row
     /// ([`crate::neural::repeats::configuration_groups`]).
-    pub(super) held_groups: Vec<Vec<usize>>,
+    pub(super) groups: Vec<usize>,
     pub(super) opts: &'a CompensatorOptions,
     /// The network of each (single-network settings, fold) fitted so far: an ensemble
     /// candidate of the same settings reuses it as its first member.

@@ -212,14 +212,10 @@ pub fn select_settings(
         robot,
         train: (0..k).map(|f| subset(set, |i| fold_of[i] != f)).collect(),
         held: (0..k).map(|f| subset(set, |i| fold_of[i] == f)).collect(),
-        held_groups: (0..k)
-            .map(|f| {
-                (0..set.rows.len())
-                    .filter(|&i| fold_of[i] == f)
-                    .map(|i| groups[i])
-                    .collect()
-            })
+        held_index: (0..k)
+            .map(|f| (0..set.rows.len()).filter(|&i| fold_of[i] == f).collect())
             .collect(),
+        groups,
         opts,
         nets: Mutex::new(HashMap::new()),
         warm: Mutex::new(HashMap::new()),
@@ -256,6 +252,7 @@ pub fn select_settings(
         candidates: Vec::new(),
         chosen: 0,
         network_test: None,
+        chosen_rows: None,
     };
     search.first();
     if search.candidates.iter().all(|c| c.score.is_none()) {
@@ -295,6 +292,7 @@ pub fn select_settings(
         candidates,
         chosen,
         network_test,
+        chosen_rows,
         ..
     } = search;
     let mut winner = candidates[chosen].settings.clone();
@@ -339,13 +337,13 @@ pub fn select_settings(
     // a mis-measured row pulls the refinement too).
     let outliers = {
         let mut held = vec![(f64::NAN, None); set.rows.len()];
-        for (f, errors) in race
-            .held_rows(&candidates[chosen].settings)?
-            .into_iter()
-            .enumerate()
-        {
-            let rows = (0..set.rows.len()).filter(|&i| fold_of[i] == f);
-            for (i, e) in rows.zip(errors) {
+        // Stage 5 has them where it held a network against the model alone.
+        let per_fold = match chosen_rows {
+            Some(rows) => rows,
+            None => race.held_rows(&candidates[chosen].settings)?,
+        };
+        for (index, errors) in cv.held_index.iter().zip(per_fold) {
+            for (&i, e) in index.iter().zip(errors) {
                 held[i] = (e.position_mm.unwrap_or(0.0), e.orientation_deg);
             }
         }

@@ -9,6 +9,7 @@ use super::{
     COMPLIANCE_MARGIN, ENSEMBLE_PROBE, ENSEMBLE_TIE, NETWORK_MARGIN, NETWORK_Z, PENALTY_STEP,
 };
 use crate::error::{Error, Result};
+use crate::evaluate::RowError;
 use crate::neural::selection::{Candidate, NetworkTest};
 use crate::neural::settings::{CompensatorOptions, Form, Network, Settings};
 
@@ -23,6 +24,9 @@ pub(super) struct Search<'r, 'a, 'c> {
     pub(super) chosen: usize,
     /// Stage 5's test of the network chosen so far against the best model alone.
     pub(super) network_test: Option<NetworkTest>,
+    /// The held-out errors of the candidate stage 5 chose, fold by fold
+    /// ([`Race::held_rows`]), where it computed them.
+    pub(super) chosen_rows: Option<Vec<Vec<RowError>>>,
 }
 
 impl Search<'_, '_, '_> {
@@ -285,22 +289,22 @@ impl Search<'_, '_, '_> {
         // cross-validation adds on its own carries COMPLIANCE_MARGIN on either side).
         let ratio =
             self.judged(&self.candidates, self.chosen) / self.judged(&self.candidates, best_alone);
-        // Each held-out row's squared position error (mm^2), fold by fold: the rows that
-        // gave the candidate's score (its fits are cached), checked against it.
-        let squares = |i: usize| -> Option<Vec<f64>> {
+        // Each fold's held-out errors: the rows that gave the candidate's score (its fits
+        // are cached), checked against it.
+        let held = |i: usize| -> Option<Vec<Vec<RowError>>> {
             let folds = self.race.held_rows(&self.candidates[i].settings).ok()?;
-            let e: Vec<f64> = folds
-                .iter()
-                .flatten()
-                .map(|r| r.position_mm.unwrap_or(0.0).powi(2))
-                .collect();
-            let rms = (e.iter().sum::<f64>() / e.len().max(1) as f64).sqrt();
+            let n = folds.iter().map(Vec::len).sum::<usize>().max(1);
+            let rms = (squares(&folds).iter().sum::<f64>() / n as f64).sqrt();
             let scored = cv_rms(&self.candidates, i);
-            ((rms - scored).abs() <= 1e-9 * scored.max(1e-12)).then_some(e)
+            ((rms - scored).abs() <= 1e-9 * scored.max(1e-12)).then_some(folds)
         };
-        let paired = match (squares(self.chosen), squares(best_alone)) {
-            (Some(a), Some(b)) if a.len() == b.len() => {
-                let cluster: Vec<usize> = self.race.cv.held_groups.concat();
+        let (network, alone) = (held(self.chosen), held(best_alone));
+        let paired = match (&network, &alone) {
+            (Some(a), Some(b)) => {
+                let cluster: Vec<usize> = (self.race.cv.held_index.concat().iter())
+                    .map(|&i| self.race.cv.groups[i])
+                    .collect();
+                let (a, b) = (squares(a), squares(b));
                 Some((paired_z(&a, &b, &cluster), a.len()))
             }
             _ => None,
@@ -321,5 +325,15 @@ impl Search<'_, '_, '_> {
         if !kept {
             self.chosen = best_alone;
         }
+        self.chosen_rows = if kept { network } else { alone };
     }
+}
+
+/// Each held-out row's squared position error (mm^2), fold after fold.
+fn squares(folds: &[Vec<RowError>]) -> Vec<f64> {
+    folds
+        .iter()
+        .flatten()
+        .map(|r| r.position_mm.unwrap_or(0.0).powi(2))
+        .collect()
 }
