@@ -3,6 +3,7 @@
 //! variable projection of phase 2 (the output layer solved for the hidden layer given).
 
 use super::samples::{Samples, weight_norm2};
+use super::vectors::{add_products, sub_products};
 use super::weights::Weights;
 use nalgebra::{DMatrix, DMatrixViewMut, DVector};
 
@@ -31,6 +32,12 @@ pub struct Batch<'a> {
     normal: DMatrix<f64>,
     /// The projection's right-hand side H~^T B, (nh + 1) x the target columns, solved in place.
     rhs: DMatrix<f64>,
+    /// The samples' maps (rows x outputs each) packed for passes over the samples: entry
+    /// (row, c) of sample k at (row outputs + c) n + k, every sample's side by side.
+    maps: Vec<f64>,
+    /// W1^T and W2^T, copied in at every pass (an owned transpose per pass would allocate).
+    w1t: DMatrix<f64>,
+    w2t: DMatrix<f64>,
 }
 
 impl<'a> Batch<'a> {
@@ -42,6 +49,17 @@ impl<'a> Batch<'a> {
         let b = DMatrix::from_fn(n, rows, |k, r| s.b[k][r]);
         let mut b_sums = vec![0.0; rows];
         column_sums(&b, &mut b_sums);
+        let mut maps = Vec::new();
+        if let Some(a) = &s.maps {
+            maps = vec![0.0; rows * no * n];
+            for (k, a) in a.iter().enumerate() {
+                for row in 0..rows {
+                    for c in 0..no {
+                        maps[(row * no + c) * n + k] = a[(row, c)];
+                    }
+                }
+            }
+        }
         Batch {
             s,
             x,
@@ -57,12 +75,16 @@ impl<'a> Batch<'a> {
             b_sums,
             normal: DMatrix::zeros(nh + 1, nh + 1),
             rhs: DMatrix::zeros(nh + 1, rows),
+            maps,
+            w1t: DMatrix::zeros(ni, nh),
+            w2t: DMatrix::zeros(nh, no),
         }
     }
 
     /// Hidden activations of every sample into `z`.
     fn hidden(&mut self, w: &Weights) {
-        self.x.mul_to(&w.w1.transpose(), &mut self.z);
+        self.w1t.tr_copy_from(&w.w1);
+        self.x.mul_to(&self.w1t, &mut self.z);
         let n = self.z.nrows();
         for (j, col) in self.z.as_mut_slice().chunks_exact_mut(n.max(1)).enumerate() {
             super::logistic::logistic_in_place(col, w.b1[j]);
@@ -78,7 +100,8 @@ impl<'a> Batch<'a> {
 
     /// Outputs and residuals from the activations in `z`; the sum of squared residuals.
     fn outputs(&mut self, w: &Weights) -> f64 {
-        self.z.mul_to(&w.w2.transpose(), &mut self.y);
+        self.w2t.tr_copy_from(&w.w2);
+        self.z.mul_to(&self.w2t, &mut self.y);
         for (o, mut col) in self.y.column_iter_mut().enumerate() {
             col.add_scalar_mut(w.b2[o]);
         }
@@ -87,19 +110,20 @@ impl<'a> Batch<'a> {
                 self.r.copy_from(&self.b);
                 self.r -= &self.y;
             }
-            Some(maps) => {
-                // Column-major slices: sample k's entry of column c is at c n + k.
+            Some(_) => {
+                // Column-major slices: sample k's entry of column c is at c n + k. Each
+                // residual is b - a_0 y_0 - a_1 y_1 - ..., in that order, every sample side
+                // by side.
                 let n = self.y.nrows();
+                let cols = self.y.ncols();
                 let (b, y, r) = (self.b.as_slice(), self.y.as_slice(), self.r.as_mut_slice());
-                for (k, a) in maps.iter().enumerate() {
-                    let (rows, cols) = a.shape();
-                    let a = a.as_slice();
-                    for row in 0..rows {
-                        let mut v = b[row * n + k];
-                        for c in 0..cols {
-                            v -= a[c * rows + row] * y[c * n + k];
+                r.copy_from_slice(b);
+                // (chunks of n: none to take without samples)
+                if n > 0 {
+                    for (row, r) in r.chunks_exact_mut(n).enumerate() {
+                        for (c, y) in y.chunks_exact(n).enumerate() {
+                            sub_products(r, &self.maps[(row * cols + c) * n..][..n], y);
                         }
-                        r[row * n + k] = v;
                     }
                 }
             }
@@ -188,24 +212,27 @@ impl<'a> Batch<'a> {
                 self.gy.copy_from(&self.r);
                 self.gy *= -2.0 / m;
             }
-            Some(maps) => {
-                // Column-major slices: sample k's entry of column c is at c n + k.
+            Some(_) => {
+                // Column-major slices: sample k's entry of column c is at c n + k. Each
+                // gradient is -2 / M (0 + a_0 r_0 + a_1 r_1 + ...), in that order, every
+                // sample side by side.
                 let n = self.r.nrows();
                 let (r, gy) = (self.r.as_slice(), self.gy.as_mut_slice());
-                for (k, a) in maps.iter().enumerate() {
-                    let rows = a.nrows();
-                    for c in 0..no {
-                        let mut t = 0.0;
-                        for (row, ar) in a.as_slice()[c * rows..(c + 1) * rows].iter().enumerate() {
-                            t += ar * r[row * n + k];
+                gy.fill(0.0);
+                if n > 0 {
+                    for (c, gy) in gy.chunks_exact_mut(n).enumerate() {
+                        for (row, r) in r.chunks_exact(n).enumerate() {
+                            add_products(gy, &self.maps[(row * no + c) * n..][..n], r);
                         }
-                        gy[c * n + k] = -2.0 / m * t;
+                        for t in gy.iter_mut() {
+                            *t *= -2.0 / m;
+                        }
                     }
                 }
             }
         }
         // dF/dW2 = Gy^T H, dF/dH = Gy W2, dF/dZ = dF/dH . H (1 - H), dF/dW1 = Gz^T X.
-        self.gy.tr_mul_to(&self.z, &mut self.gw2);
+        super::vectors::tr_mul_to(&self.gy, &self.z, &mut self.gw2);
         self.gy.mul_to(&w.w2, &mut self.gh);
         let (gh, z) = (self.gh.as_mut_slice(), self.z.as_slice());
         // As wide as the processor allows (AVX2 as well as the baseline's two values), the

@@ -5,6 +5,7 @@
 //! Small and ours because the training needs a per-iteration callback (validation-failure
 //! stopping, progress) that minimiser crates do not offer.
 
+use super::vectors::{axpy, dot};
 use nalgebra::DVector;
 use std::collections::VecDeque;
 
@@ -58,35 +59,35 @@ pub fn minimize(
         // Two-loop recursion: d = -H g.
         d.copy_from(&g);
         for (k, (s, y, rho)) in pairs.iter().enumerate().rev() {
-            alpha[k] = rho * s.dot(&d);
-            d.axpy(-alpha[k], y, 1.0);
+            alpha[k] = rho * dot(s, &d);
+            axpy(&mut d, -alpha[k], y);
         }
         let gamma = pairs
             .back()
-            .map_or(1.0 / g.norm().max(1e-300), |(s, y, _)| {
-                s.dot(y) / y.norm_squared()
+            .map_or(1.0 / dot(&g, &g).sqrt().max(1e-300), |(s, y, _)| {
+                dot(s, y) / dot(y, y)
             });
         d *= gamma;
         for (k, (s, y, rho)) in pairs.iter().enumerate() {
-            let beta = rho * y.dot(&d);
-            d.axpy(alpha[k] - beta, s, 1.0);
+            let beta = rho * dot(y, &d);
+            axpy(&mut d, alpha[k] - beta, s);
         }
         d.neg_mut();
-        let mut slope = g.dot(&d);
+        let mut slope = dot(&g, &d);
         if slope >= 0.0 {
             // Not a descent direction (curvature information gone stale): restart.
             pairs.clear();
             d.copy_from(&g);
             d.neg_mut();
-            d /= g.norm().max(1e-300);
-            slope = g.dot(&d);
+            d /= dot(&g, &g).sqrt().max(1e-300);
+            slope = dot(&g, &d);
         }
         // Backtracking line search on the Armijo condition.
         let mut step = 1.0;
         let mut accepted = None;
         for _ in 0..40 {
             x_new.copy_from(&x);
-            x_new.axpy(step, &d, 1.0);
+            axpy(&mut x_new, step, &d);
             let f_new = f(&x_new, &mut g_new);
             if f_new.is_finite() && f_new <= fx + 1e-4 * step * slope {
                 accepted = Some(f_new);
@@ -109,8 +110,8 @@ pub fn minimize(
         s -= &x;
         y.copy_from(&g_new);
         y -= &g;
-        let sy = s.dot(&y);
-        if sy > 1e-12 * s.norm() * y.norm() {
+        let sy = dot(&s, &y);
+        if sy > 1e-12 * dot(&s, &s).sqrt() * dot(&y, &y).sqrt() {
             if pairs.len() == memory
                 && let Some((old_s, old_y, _)) = pairs.pop_front()
             {

@@ -23,4 +23,5 @@ pub mod targets;
 pub mod train;
 pub mod training;
 pub mod tuning;
+pub mod vectors;
 pub mod weights;
