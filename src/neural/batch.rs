@@ -49,17 +49,21 @@ impl<'a> Batch<'a> {
         let b = DMatrix::from_fn(n, rows, |k, r| s.b[k][r]);
         let mut b_sums = vec![0.0; rows];
         column_sums(&b, &mut b_sums);
-        let mut maps = Vec::new();
-        if let Some(a) = &s.maps {
-            maps = vec![0.0; rows * no * n];
-            for (k, a) in a.iter().enumerate() {
+        let maps = s.maps.as_ref().map_or_else(Vec::new, |list| {
+            debug_assert!(
+                list.len() == n && list.iter().all(|a| a.shape() == (rows, no)),
+                "Batch::new: one rows x outputs map per sample"
+            );
+            let mut packed = vec![0.0; rows * no * n];
+            for (k, a) in list.iter().enumerate() {
                 for row in 0..rows {
                     for c in 0..no {
-                        maps[(row * no + c) * n + k] = a[(row, c)];
+                        packed[(row * no + c) * n + k] = a[(row, c)];
                     }
                 }
             }
-        }
+            packed
+        });
         Batch {
             s,
             x,
@@ -115,14 +119,14 @@ impl<'a> Batch<'a> {
                 // residual is b - a_0 y_0 - a_1 y_1 - ..., in that order, every sample side
                 // by side.
                 let n = self.y.nrows();
-                let cols = self.y.ncols();
+                let no = self.y.ncols();
                 let (b, y, r) = (self.b.as_slice(), self.y.as_slice(), self.r.as_mut_slice());
                 r.copy_from_slice(b);
                 // (chunks of n: none to take without samples)
                 if n > 0 {
                     for (row, r) in r.chunks_exact_mut(n).enumerate() {
                         for (c, y) in y.chunks_exact(n).enumerate() {
-                            sub_products(r, &self.maps[(row * cols + c) * n..][..n], y);
+                            sub_products(r, &self.maps[(row * no + c) * n..][..n], y);
                         }
                     }
                 }

@@ -5,7 +5,7 @@
 //! Small and ours because the training needs a per-iteration callback (validation-failure
 //! stopping, progress) that minimiser crates do not offer.
 
-use super::vectors::{axpy, dot};
+use super::vectors::{axpy, dot, norm};
 use nalgebra::DVector;
 use std::collections::VecDeque;
 
@@ -64,7 +64,7 @@ pub fn minimize(
         }
         let gamma = pairs
             .back()
-            .map_or(1.0 / dot(&g, &g).sqrt().max(1e-300), |(s, y, _)| {
+            .map_or(1.0 / norm(&g).max(1e-300), |(s, y, _)| {
                 dot(s, y) / dot(y, y)
             });
         d *= gamma;
@@ -79,7 +79,7 @@ pub fn minimize(
             pairs.clear();
             d.copy_from(&g);
             d.neg_mut();
-            d /= dot(&g, &g).sqrt().max(1e-300);
+            d /= norm(&g).max(1e-300);
             slope = dot(&g, &d);
         }
         // Backtracking line search on the Armijo condition.
@@ -111,7 +111,7 @@ pub fn minimize(
         y.copy_from(&g_new);
         y -= &g;
         let sy = dot(&s, &y);
-        if sy > 1e-12 * dot(&s, &s).sqrt() * dot(&y, &y).sqrt() {
+        if sy > 1e-12 * norm(&s) * norm(&y) {
             if pairs.len() == memory
                 && let Some((old_s, old_y, _)) = pairs.pop_front()
             {

@@ -1,9 +1,9 @@
 //! Dense vector kernels with nalgebra's bits: the same operations in the same order as
-//! nalgebra's `dot`, `axpy` and `tr_mul_to` (so the same results to the bit), in loops the
-//! compiler vectorises as wide as the processor allows: `pulp` compiles them for AVX2 too
-//! and picks at run time. nalgebra's `axpy` walks its vectors by run-time strides, one value
-//! at a time, and the release build's baseline vectorises its `dot` two values wide. L-BFGS's
-//! vector operations were a sixth of the instructions of a default `train` on 150 poses.
+//! nalgebra's `dot`, `axpy` and `tr_mul_to` (so the same results to the bit), four values at a
+//! time in AVX2 registers (`pulp`'s V3, chosen at run time) where the processor has them, one
+//! at a time elsewhere. nalgebra's `axpy` walks its vectors by run-time strides, one value at
+//! a time, and the release build's baseline keeps its `dot` two values wide. L-BFGS's vector
+//! operations were a sixth of the instructions of a default `train` on 150 poses.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -18,6 +18,11 @@ fn dot_in(a: &[f64], b: &[f64]) -> f64 {
             || dot_v3(simd, a, b),
         );
     }
+    dot_plain(a, b)
+}
+
+/// [`dot_in`] one value at a time (where AVX2 is not there).
+fn dot_plain(a: &[f64], b: &[f64]) -> f64 {
     let (mut lo, mut hi) = ([0.0f64; 4], [0.0f64; 4]);
     for (ca, cb) in a.chunks_exact(8).zip(b.chunks_exact(8)) {
         for k in 0..4 {
@@ -63,6 +68,11 @@ pub fn dot(a: &DVector<f64>, b: &DVector<f64>) -> f64 {
     dot_in(a, b)
 }
 
+/// |a|: nalgebra's `a.norm()` (the square root of 0 + a . a).
+pub fn norm(a: &DVector<f64>) -> f64 {
+    dot(a, a).sqrt()
+}
+
 /// y <- y + a x: nalgebra's `y.axpy(a, x, 1.0)` (whose a x 1 + 1 y has these bits).
 pub fn axpy(y: &mut DVector<f64>, a: f64, x: &DVector<f64>) {
     let (y, x) = (y.as_mut_slice(), x.as_slice());
@@ -79,26 +89,27 @@ pub fn axpy(y: &mut DVector<f64>, a: f64, x: &DVector<f64>) {
 
 /// y <- y - a x, element by element (each y - (a x), the bits of `*y -= a * x`).
 pub fn sub_products(y: &mut [f64], a: &[f64], x: &[f64]) {
-    elementwise::<true>(y, a, x);
+    elementwise::<true>(y, a, x, true);
 }
 
 /// y <- y + a x, element by element (each y + (a x), the bits of `*y += a * x`).
 pub fn add_products(y: &mut [f64], a: &[f64], x: &[f64]) {
-    elementwise::<false>(y, a, x);
+    elementwise::<false>(y, a, x, true);
 }
 
-/// y <- y - a x (`SUB`) or y + a x element by element: four at a time with AVX2 (the
-/// product and the sum as separate instructions, no fused multiply-add: one value at a
-/// time's bits), one at a time on the rest and where AVX2 is not there.
+/// y <- y - a x (`SUB`) or y + a x element by element: four at a time with AVX2 where the
+/// processor has it and `wide` allows (the product and the sum as separate instructions, no
+/// fused multiply-add: one value at a time's bits), one at a time on the rest.
 #[inline(always)]
-fn elementwise<const SUB: bool>(y: &mut [f64], a: &[f64], x: &[f64]) {
+fn elementwise<const SUB: bool>(y: &mut [f64], a: &[f64], x: &[f64], wide: bool) {
     assert!(
         a.len() == y.len() && x.len() == y.len(),
         "elementwise: slices of unequal lengths"
     );
+    #[cfg_attr(not(target_arch = "x86_64"), allow(unused_mut))]
     let mut done = 0;
     #[cfg(target_arch = "x86_64")]
-    if let Some(simd) = pulp::x86::V3::try_new() {
+    if wide && let Some(simd) = pulp::x86::V3::try_new() {
         use pulp::{Simd, f64x4};
         let load = |c: &[f64]| f64x4(c[0], c[1], c[2], c[3]);
         simd.vectorize(
@@ -154,26 +165,33 @@ pub fn tr_mul_to(a: &DMatrix<f64>, b: &DMatrix<f64>, out: &mut DMatrix<f64>) {
 mod tests {
     use super::*;
 
-    #[test]
-    fn vector_operations_give_nalgebras_bits() {
-        // Lengths around the blocks of eight, values of many magnitudes and signs.
-        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut next = || {
+    /// Values of many magnitudes (1e-6 to 1e6) and both signs, from a xorshift seeded by
+    /// `seed`: sums of them in another order round otherwise.
+    fn values(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
             seed ^= seed << 13;
             seed ^= seed >> 7;
             seed ^= seed << 17;
             let m = (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
             m * 10f64.powi((seed % 13) as i32 - 6)
-        };
+        }
+    }
+
+    #[test]
+    fn vector_operations_give_nalgebras_bits() {
+        // Lengths around the blocks of eight.
+        let mut next = values(0x9e37_79b9_7f4a_7c15_u64);
         for n in [0, 1, 7, 8, 9, 15, 16, 17, 63, 992, 1190, 1999] {
             let a = DVector::from_fn(n, |_, _| next());
             let b = DVector::from_fn(n, |_, _| next());
             assert_eq!(dot(&a, &b).to_bits(), a.dot(&b).to_bits(), "dot, n = {n}");
+            let plain = dot_plain(a.as_slice(), b.as_slice());
             assert_eq!(
-                dot(&a, &a).sqrt().to_bits(),
-                a.norm().to_bits(),
-                "norm, n = {n}"
+                plain.to_bits(),
+                a.dot(&b).to_bits(),
+                "dot one at a time, n = {n}"
             );
+            assert_eq!(norm(&a).to_bits(), a.norm().to_bits(), "norm, n = {n}");
             let alpha = next();
             let (mut y, mut z) = (b.clone(), b.clone());
             axpy(&mut y, alpha, &a);
@@ -189,41 +207,32 @@ mod tests {
 
     #[test]
     fn elementwise_products_give_one_value_at_a_times_bits() {
-        let mut seed = 0x853c_49e6_748f_ea9b_u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            let m = (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
-            m * 10f64.powi((seed % 13) as i32 - 6)
-        };
+        let mut next = values(0x853c_49e6_748f_ea9b_u64);
         for n in [0, 1, 3, 4, 5, 8, 120, 123] {
             let mut v = || (0..n).map(|_| next()).collect::<Vec<f64>>();
             let (y, a, x) = (v(), v(), v());
-            let (mut sub, mut add) = (y.clone(), y.clone());
-            sub_products(&mut sub, &a, &x);
-            add_products(&mut add, &a, &x);
-            for k in 0..n {
-                assert_eq!(sub[k].to_bits(), (y[k] - a[k] * x[k]).to_bits(), "n = {n}");
-                assert_eq!(add[k].to_bits(), (y[k] + a[k] * x[k]).to_bits(), "n = {n}");
+            for wide in [true, false] {
+                let (mut sub, mut add) = (y.clone(), y.clone());
+                elementwise::<true>(&mut sub, &a, &x, wide);
+                elementwise::<false>(&mut add, &a, &x, wide);
+                for k in 0..n {
+                    let (s, t) = (y[k] - a[k] * x[k], y[k] + a[k] * x[k]);
+                    assert_eq!(sub[k].to_bits(), s.to_bits(), "n = {n}, {wide}");
+                    assert_eq!(add[k].to_bits(), t.to_bits(), "n = {n}, {wide}");
+                }
             }
         }
     }
 
     #[test]
     fn transposed_products_give_nalgebras_bits() {
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            let m = (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
-            m * 10f64.powi((seed % 13) as i32 - 6)
-        };
+        let mut next = values(0x2545_f491_4f6c_dd1d_u64);
         for (rows, m, n) in [(0, 3, 2), (1, 1, 1), (7, 6, 32), (120, 6, 64), (121, 5, 3)] {
             let a = DMatrix::from_fn(rows, m, |_, _| next());
             let b = DMatrix::from_fn(rows, n, |_, _| next());
-            let (mut ours, mut theirs) = (DMatrix::zeros(m, n), DMatrix::zeros(m, n));
+            // NaN at the start: every entry must be written (zeros with no rows too).
+            let mut ours = DMatrix::from_element(m, n, f64::NAN);
+            let mut theirs = DMatrix::zeros(m, n);
             tr_mul_to(&a, &b, &mut ours);
             a.tr_mul_to(&b, &mut theirs);
             assert!(
