@@ -54,15 +54,15 @@ impl<'a> Batch<'a> {
                 list.len() == n && list.iter().all(|a| a.shape() == (rows, no)),
                 "Batch::new: one rows x outputs map per sample"
             );
-            let mut packed = vec![0.0; rows * no * n];
+            let mut packing = vec![0.0; rows * no * n];
             for (k, a) in list.iter().enumerate() {
                 for row in 0..rows {
                     for c in 0..no {
-                        packed[(row * no + c) * n + k] = a[(row, c)];
+                        packing[(row * no + c) * n + k] = a[(row, c)];
                     }
                 }
             }
-            packed
+            packing
         });
         Batch {
             s,
@@ -122,12 +122,10 @@ impl<'a> Batch<'a> {
                 let no = self.y.ncols();
                 let (b, y, r) = (self.b.as_slice(), self.y.as_slice(), self.r.as_mut_slice());
                 r.copy_from_slice(b);
-                // (chunks of n: none to take without samples)
-                if n > 0 {
-                    for (row, r) in r.chunks_exact_mut(n).enumerate() {
-                        for (c, y) in y.chunks_exact(n).enumerate() {
-                            sub_products(r, &self.maps[(row * no + c) * n..][..n], y);
-                        }
+                // (chunks of at least 1: none without samples)
+                for (row, r) in r.chunks_exact_mut(n.max(1)).enumerate() {
+                    for (c, y) in y.chunks_exact(n.max(1)).enumerate() {
+                        sub_products(r, packed(&self.maps, row, c, no, n), y);
                     }
                 }
             }
@@ -223,14 +221,12 @@ impl<'a> Batch<'a> {
                 let n = self.r.nrows();
                 let (r, gy) = (self.r.as_slice(), self.gy.as_mut_slice());
                 gy.fill(0.0);
-                if n > 0 {
-                    for (c, gy) in gy.chunks_exact_mut(n).enumerate() {
-                        for (row, r) in r.chunks_exact(n).enumerate() {
-                            add_products(gy, &self.maps[(row * no + c) * n..][..n], r);
-                        }
-                        for t in gy.iter_mut() {
-                            *t *= -2.0 / m;
-                        }
+                for (c, gy) in gy.chunks_exact_mut(n.max(1)).enumerate() {
+                    for (row, r) in r.chunks_exact(n.max(1)).enumerate() {
+                        add_products(gy, packed(&self.maps, row, c, no, n), r);
+                    }
+                    for t in gy.iter_mut() {
+                        *t *= -2.0 / m;
                     }
                 }
             }
@@ -271,6 +267,12 @@ impl<'a> Batch<'a> {
         }
         (sum + lambda * weight_norm2(w)) / m
     }
+}
+
+/// Entry (`row`, `c`) of every sample's map, side by side, from [`Batch`]'s packing of
+/// maps with `no` columns over `n` samples.
+fn packed(maps: &[f64], row: usize, c: usize, no: usize, n: usize) -> &[f64] {
+    &maps[(row * no + c) * n..][..n]
 }
 
 /// The sum of every column of `m` into `out` (one per column), each added in row order from

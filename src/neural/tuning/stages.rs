@@ -291,21 +291,21 @@ impl Search<'_, '_, '_> {
             self.judged(&self.candidates, self.chosen) / self.judged(&self.candidates, best_alone);
         // Each fold's held-out errors: the rows that gave the candidate's score (its fits
         // are cached), checked against it.
-        let held = |i: usize| -> Option<Vec<Vec<RowError>>> {
+        // With them, each row's squared position error (mm^2), fold after fold.
+        let held = |i: usize| -> Option<(Vec<Vec<RowError>>, Vec<f64>)> {
             let folds = self.race.held_rows(&self.candidates[i].settings).ok()?;
-            let n = folds.iter().map(Vec::len).sum::<usize>().max(1);
-            let rms = (squares(&folds).iter().sum::<f64>() / n as f64).sqrt();
+            let squares = squares(&folds);
+            let rms = (squares.iter().sum::<f64>() / squares.len().max(1) as f64).sqrt();
             let scored = cv_rms(&self.candidates, i);
-            ((rms - scored).abs() <= 1e-9 * scored.max(1e-12)).then_some(folds)
+            ((rms - scored).abs() <= 1e-9 * scored.max(1e-12)).then_some((folds, squares))
         };
         let (network, alone) = (held(self.chosen), held(best_alone));
         let paired = match (&network, &alone) {
-            (Some(a), Some(b)) => {
+            (Some((_, a)), Some((_, b))) => {
                 let cluster: Vec<usize> = (self.race.cv.held_index.concat().iter())
                     .map(|&i| self.race.cv.groups[i])
                     .collect();
-                let (a, b) = (squares(a), squares(b));
-                Some((paired_z(&a, &b, &cluster), a.len()))
+                Some((paired_z(a, b, &cluster), a.len()))
             }
             _ => None,
         };
@@ -325,7 +325,7 @@ impl Search<'_, '_, '_> {
         if !kept {
             self.chosen = best_alone;
         }
-        self.chosen_rows = if kept { network } else { alone };
+        self.chosen_rows = if kept { network } else { alone }.map(|(folds, _)| folds);
     }
 }
 
