@@ -37,6 +37,7 @@
 
 mod covariance;
 mod likelihood;
+mod prediction;
 mod search;
 
 use super::samples::Samples;
@@ -46,7 +47,7 @@ use faer::Mat;
 use faer::dyn_stack::MemStack;
 use likelihood::kernel;
 pub use likelihood::{PRIOR_SD, Pairs, neg_log_likelihood};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 pub use search::{
     Draw, HYPER_BLOCKS, HYPER_ITERATIONS, HYPER_ROWS, LeftOut, STALL_NATS, STARTS, Search, search,
     search_best, search_best_without, search_from, search_start_without, search_without,
@@ -88,21 +89,6 @@ impl Kernel {
 /// as well, the default `train` on Series A's pool of 2000 took 5.60 s instead of 7.32 s,
 /// the same compensator bit for bit.
 pub(super) const FAR: f64 = 690.0;
-
-/// Units whose responses prediction takes at once (a buffer on the stack).
-const CHUNK: usize = 64;
-
-/// The weighted squared distance sum_d (x_d - c_d)^2 / l_d^2 of `x` from the unit at `c`,
-/// with `inv` the kernel's 1 / l_d^2 (multiplications: per input and unit a division cost
-/// four times as much, most of a prediction).
-fn distance(x: &[f64], c: &[f64], inv: &[f64]) -> f64 {
-    let mut s = 0.0;
-    for ((xd, cd), i) in x.iter().zip(c).zip(inv) {
-        let t = xd - cd;
-        s += t * t * i;
-    }
-    s
-}
 
 /// A fitted RBF network (normalised inputs, unit-scale outputs).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -163,79 +149,6 @@ impl Rbf {
             *first = outs.end;
             Some((k, outs))
         })
-    }
-
-    /// Each kernel with the outputs it serves and its 1 / l_d^2, which go into `inv` (scratch:
-    /// no allocation once it has held them) kernel after kernel.
-    fn kernels_with_inverses<'a>(
-        &'a self,
-        inv: &'a mut Vec<f64>,
-    ) -> impl Iterator<Item = (&'a Kernel, std::ops::Range<usize>, &'a [f64])> {
-        inv.clear();
-        for k in &self.kernels {
-            k.inverse_squares_into(inv);
-        }
-        let inv: &'a [f64] = inv;
-        self.kernel_outputs().scan(0, move |at, (kernel, outs)| {
-            let own = &inv[*at..*at + kernel.widths.len()];
-            *at += kernel.widths.len();
-            Some((kernel, outs, own))
-        })
-    }
-
-    /// y(x) into `y`; `inv` is scratch (no allocation once it has been used).
-    /// The units' distances go into a buffer of 64 at a time and their responses are
-    /// taken over it ([`Covariance::responses_in_place`], vectorised); the outputs add the
-    /// units in order.
-    pub fn forward_into(&self, x: &[f64], y: &mut [f64], inv: &mut Vec<f64>) {
-        y.fill(0.0);
-        let mut buffer = [0.0; CHUNK];
-        for (kernel, outs, own) in self.kernels_with_inverses(inv) {
-            for (centres, weights) in self.centres.chunks(CHUNK).zip(self.weights.chunks(CHUNK)) {
-                let q = &mut buffer[..centres.len()];
-                q.iter_mut()
-                    .zip(centres)
-                    .for_each(|(q, c)| *q = distance(x, c, own));
-                kernel.covariance.responses_in_place(q, 1.0);
-                for (k, w) in q.iter().zip(weights) {
-                    y[outs.clone()]
-                        .iter_mut()
-                        .zip(&w[outs.clone()])
-                        .for_each(|(yo, wo)| *yo += wo * k);
-                }
-            }
-        }
-    }
-
-    /// y(x) into `y` and dy/dx (outputs x inputs) into `dy`: dy_o/dx_d = -sum_i w_io g_io
-    /// (x_d - c_id) / l_od^2, g = -2 dk/dq ([`Covariance::response_and_width_factor`]; the response itself
-    /// for the squared exponential); `inv` is scratch as in [`Rbf::forward_into`].
-    pub fn input_jacobian_into(
-        &self,
-        x: &[f64],
-        y: &mut [f64],
-        dy: &mut DMatrix<f64>,
-        inv: &mut Vec<f64>,
-    ) {
-        y.fill(0.0);
-        dy.fill(0.0);
-        for (kernel, outs, own) in self.kernels_with_inverses(inv) {
-            for (c, w) in self.centres.iter().zip(&self.weights) {
-                let (k, g) = kernel
-                    .covariance
-                    .response_and_width_factor(distance(x, c, own));
-                if k == 0.0 {
-                    continue;
-                }
-                for o in outs.clone() {
-                    y[o] += w[o] * k;
-                    let wg = w[o] * g;
-                    for (d, i) in own.iter().enumerate() {
-                        dy[(o, d)] -= wg * (x[d] - c[d]) * i;
-                    }
-                }
-            }
-        }
     }
 
     /// Whether every number is finite and bounded (a finite 1e308 overflows in prediction)
@@ -377,6 +290,7 @@ fn check_hyper(h: &Hyper, d: usize, o: usize) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::DMatrix;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
