@@ -30,7 +30,8 @@ fn main() -> robocal::Result<()> {
                     "row {}: branch {}, command x {x:.3} y {y:.3} z {z:.3} mm, rz {rz:.3} \
                      ry {ry:.3} rx {rx:.3} deg ({moved:.3} mm from the desired pose)",
                     r + 1,
-                    c.branch
+                    // None only for a nominal model without a closed form.
+                    c.branch.map_or_else(|| "-".into(), |b| b.to_string())
                 );
             }
             Err(why) => println!("row {}: no command: {why}", r + 1),

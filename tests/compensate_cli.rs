@@ -211,20 +211,82 @@ fn bad_input_names_file_line_and_column() {
         assert!(stderr(&o).contains(want), "{text}: {}", stderr(&o));
         assert!(!out.exists(), "{text}: no output on bad input");
     }
-    // A nominal robot without a closed form cannot seed the solve.
+    // A nominal robot without a closed form needs a seed for every target: the row is
+    // marked, the run exits with the code of failed targets (3).
     let good = tmp("good_targets.csv");
     std::fs::write(&good, "x,y,z,rz,ry,rx\n2000,0,1500,90,0,90\n").unwrap();
+    let out = tmp("unseeded.csv");
     let o = robocal(&[
         "compensate",
         "--nominal",
         "datasets/robots/ur10.toml",
         "--robot",
-        model.to_str().unwrap(),
+        "datasets/robots/ur10.toml",
         "--targets",
         good.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
     ]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(stderr(&o).contains("no closed form"), "{}", stderr(&o));
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("no closed-form inverse kinematics")
+            && err.contains(":2: no-seed: the nominal model has no closed form")
+            && err.contains("(give q1..qN columns or --seed)"),
+        "{err}"
+    );
+    assert!(std::fs::read_to_string(&out).unwrap().contains("no-seed"));
+    // Seeded, the target is solved: the UR10 as both models, so the command is the target
+    // itself and the joints the configuration it was made at (the seed 3 deg away), with an
+    // empty branch.
+    let ur10 = robocal::model::read_robot("datasets/robots/ur10.toml").unwrap();
+    let q = [30.0f64, -70.0, 80.0, -100.0, -60.0, 20.0];
+    let pose = robocal::kinematics::pose_to_file(&robocal::kinematics::tool_pose(
+        &ur10,
+        &q.map(f64::to_radians),
+    ));
+    let cells: Vec<String> = pose
+        .iter()
+        .chain(&q.map(|v| v + 3.0))
+        .map(|v| format!("{v:.12}"))
+        .collect();
+    std::fs::write(
+        &good,
+        format!("x,y,z,rz,ry,rx,q1,q2,q3,q4,q5,q6\n{}\n", cells.join(",")),
+    )
+    .unwrap();
+    let o = robocal(&[
+        "compensate",
+        "--nominal",
+        "datasets/robots/ur10.toml",
+        "--robot",
+        "datasets/robots/ur10.toml",
+        "--targets",
+        good.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--decimals",
+        "9",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let rows = csv(&std::fs::read_to_string(&out).unwrap());
+    let cell = |name: &str| rows[1][col(&rows, name)].clone();
+    assert_eq!(
+        (cell("branch").as_str(), cell("status").as_str()),
+        ("", "ok")
+    );
+    for (j, want) in q.iter().enumerate() {
+        let got: f64 = cell(&format!("q{}", j + 1)).parse().unwrap();
+        assert!(
+            (got - want).abs() < 1e-6,
+            "q{}: {got} against {want}",
+            j + 1
+        );
+    }
+    for (c, want) in ["cmd_x", "cmd_y", "cmd_z"].iter().zip(&pose) {
+        let got: f64 = cell(c).parse().unwrap();
+        assert!((got - want).abs() < 1e-6, "{c}: {got} against {want}");
+    }
     // Output columns in the input (a previous output fed back in) are kept under
     // `input_<name>`, as in every command that carries columns; a name that would still
     // appear twice is refused.

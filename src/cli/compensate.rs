@@ -15,7 +15,8 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct CompensateArgs {
-    /// The controller's nominal robot (TOML; mm, deg); it must have a closed form.
+    /// The controller's nominal robot (TOML; mm, deg). Without a closed form (a UR arm)
+    /// every target needs seed joints and has no branch.
     #[arg(long)]
     nominal: PathBuf,
     /// The calibrated robot (from `robocal identify`).
@@ -81,8 +82,15 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         Some(c) => CalibratedModel::compensated(c),
         None => CalibratedModel::identified(&robot),
     };
-    let mut solver = FakeTargetSolver::new(&nominal, model)
-        .with_context(|| format!("{}: no closed form to seed from", a.nominal.display()))?;
+    let mut solver = FakeTargetSolver::new(&nominal, model)?;
+    if let Some(why) = solver.without_closed_form() {
+        eprintln!(
+            "note: {}: {why}: each target is solved numerically from its seed joints, and its \
+             command checked by solving the nominal model from the same seed, as a controller \
+             solving near the joints it is given does (empty branch column)",
+            a.nominal.display()
+        );
+    }
     let global_seed = match &a.seed {
         Some(s) => Some(nominal.joints_to_internal(&joints_arg(&nominal, s, "--seed")?)),
         None => None,
@@ -170,10 +178,12 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         note,
     };
     if let (Some(mean), Some(max)) = (report.shift_mean_mm, report.shift_max_mm) {
+        let calibrated = comp.as_ref().map_or(&robot, |c| &c.robot);
         eprintln!(
             "compensate: {} of {total} targets solved; the commands move the tool positions by \
-             {mean:.3} mm on average (max {max:.3} mm) from the desired ones",
-            report.solved
+             {mean:.3} mm on average (max {max:.3} mm) from the desired ones{}",
+            report.solved,
+            frame_change(&nominal, calibrated)
         );
     }
     if let Some(p) = &a.report {
@@ -181,6 +191,30 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     }
     Ok((!failed.is_empty()).then(|| failure_message(&a.targets, &failed, total)))
 }
+
+/// Where the calibrated model's base frame lies far from the nominal's (a base registered to
+/// a tracker's frame: more than [`FRAME_CHANGE_MM`] or [`FRAME_CHANGE_DEG`]), the targets are
+/// in the calibrated model's world frame and the commands in the controller's, so the shift
+/// is mostly that change of frame: the words saying so, else nothing.
+fn frame_change(nominal: &Robot, calibrated: &Robot) -> String {
+    let d = nominal.base().transform().inverse() * calibrated.base().transform();
+    let (mm, deg) = (d.translation.vector.norm(), d.rotation.angle().to_degrees());
+    if mm > FRAME_CHANGE_MM || deg > FRAME_CHANGE_DEG {
+        format!(
+            ", most of it a change of frame: the calibrated model's base lies {mm:.1} mm and \
+             {deg:.1} deg from the nominal's (targets in the calibrated model's world frame, \
+             commands in the controller's base frame)"
+        )
+    } else {
+        String::new()
+    }
+}
+
+/// Base offset (mm) beyond which [`frame_change`] speaks: far beyond a base's calibration
+/// correction (millimetres).
+const FRAME_CHANGE_MM: f64 = 100.0;
+/// Base rotation (deg) beyond which [`frame_change`] speaks (a correction: tenths of a deg).
+const FRAME_CHANGE_DEG: f64 = 5.0;
 
 /// The columns compensate writes after the target file's: for position targets the
 /// orientation used, the branch, the joints, the command, the residuals and the status, and
@@ -212,7 +246,7 @@ fn command_cells(
     if !with_orientation {
         row.extend(want[3..].iter().map(|v| num(*v, d)));
     }
-    row.push(c.branch.to_string());
+    row.push(c.branch.map_or_else(String::new, |b| b.to_string()));
     row.extend(nominal.joints_to_file(&c.q).iter().map(|v| num(*v, d)));
     row.extend(pose_to_file(&c.fake).iter().map(|v| num(*v, d)));
     row.push(num(c.position_residual_mm, Some(9)));
@@ -231,7 +265,9 @@ fn failure_message(targets: &std::path::Path, failed: &[(usize, Failure)], total
     for (line, why) in failed.iter().take(20) {
         // Where this command's seed joints come from.
         let hint = match why {
-            Failure::NoSeed => " (give q1..qN columns or --seed)",
+            Failure::NoSeed | Failure::NoSeedWithoutClosedForm => {
+                " (give q1..qN columns or --seed)"
+            }
             _ => "",
         };
         msg.push_str(&format!("\n  {}:{line}: {why}{hint}", targets.display()));

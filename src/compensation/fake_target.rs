@@ -11,6 +11,13 @@
 //! 3. q* must lie within the limits, and the nominal closed form of F = FK_nominal(q*) on the
 //!    seed's branch must return q* itself: that is what the controller will compute from F.
 //!    A target failing any step is a [`Failure`], never a command.
+//!
+//! A controller model without a closed form (a UR arm: no spherical wrist) has no branches:
+//! its controller solves a pose numerically near the joints it is given (URScript's
+//! `get_inverse_kin(pose, qnear)`). Each target then needs seed joints (the configuration
+//! it was taught in): q* is the calibrated model's solution from the seed (step 2), within
+//! the limits, and the nominal model's numerical solve of F from the same seed must return
+//! q* (step 3's check, the controller's view).
 
 use super::model::CalibratedModel;
 use crate::data::Target;
@@ -34,8 +41,9 @@ pub struct Command {
     pub q: Vec<f64>,
     /// The fake target FK_nominal(q) to give the controller (mm).
     pub fake: Pose,
-    /// The nominal closed form's branch of q (the seed's).
-    pub branch: Branch,
+    /// The nominal closed form's branch of q (the seed's); None for a nominal model without
+    /// a closed form, whose controller solves near the seed joints instead.
+    pub branch: Option<Branch>,
     /// LM iterations.
     pub iterations: usize,
     /// Remaining position error of the calibrated model at q (mm).
@@ -49,6 +57,9 @@ pub struct Command {
 pub enum Failure {
     /// A position-only target without seed joints (its orientation is undefined).
     NoSeed,
+    /// A target without seed joints for a nominal model without a closed form: nothing
+    /// starts the solve, and no branch says which configuration the controller keeps.
+    NoSeedWithoutClosedForm,
     /// Seed joints that do not fit the robot.
     BadSeed(String),
     /// Neither the nominal closed form nor a seed gives a start.
@@ -65,7 +76,7 @@ impl Failure {
     /// A short code for the status column.
     pub fn code(&self) -> &'static str {
         match self {
-            Failure::NoSeed => "no-seed",
+            Failure::NoSeed | Failure::NoSeedWithoutClosedForm => "no-seed",
             Failure::BadSeed(_) => "bad-seed",
             Failure::Unreachable(_) => "unreachable",
             Failure::NotConverged(_) => "not-converged",
@@ -81,6 +92,11 @@ impl std::fmt::Display for Failure {
             Failure::NoSeed => write!(
                 f,
                 "no-seed: a position-only target needs seed joints for its orientation"
+            ),
+            Failure::NoSeedWithoutClosedForm => write!(
+                f,
+                "no-seed: the nominal model has no closed form, so each target needs seed \
+                 joints (the configuration the controller solves near)"
             ),
             Failure::OutsideLimits(j) => write!(
                 f,
@@ -101,11 +117,15 @@ impl std::fmt::Display for Failure {
 }
 
 /// The per-target solver: the shared IK strategy ([`IkSolver::from_nearest_start`], started
-/// by the nominal closed form) over the calibrated model, with reused buffers.
+/// by the nominal closed form, or [`IkSolver::nearest`] from the seed without one) over the
+/// calibrated model, with reused buffers.
 pub struct FakeTargetSolver<'a> {
     nominal: &'a Robot,
-    closed: SphericalWristIk,
+    /// The nominal closed form, or why there is none.
+    closed: std::result::Result<SphericalWristIk, String>,
     ik: IkSolver<CalibratedModel<'a>>,
+    /// Without a closed form: the nominal model's numerical solve, as the controller's.
+    controller: Option<IkSolver<CalibratedModel<'a>>>,
     sols: Vec<(Branch, [f64; 6])>,
 }
 
@@ -123,10 +143,10 @@ fn wrapped_distance(a: &[f64], b: &[f64]) -> f64 {
 }
 
 impl<'a> FakeTargetSolver<'a> {
-    /// `nominal` is the controller's model (it needs a closed form); `model` the calibrated
-    /// one. Both must have the same joints.
+    /// `nominal` is the controller's model; `model` the calibrated one. Both must have the
+    /// same joints. Without a nominal closed form every target needs seed joints.
     pub fn new(nominal: &'a Robot, model: CalibratedModel<'a>) -> Result<Self> {
-        let closed = SphericalWristIk::new(nominal)?;
+        let closed = SphericalWristIk::new(nominal).map_err(|e| e.to_string());
         if !model.robot().same_joints(nominal) {
             return Err(Error::Invalid(
                 "the calibrated model's joints differ from the nominal model's".into(),
@@ -137,19 +157,40 @@ impl<'a> FakeTargetSolver<'a> {
             tol_rotation_rad: 1e-9,
             ..IkOptions::default()
         };
+        let (start, controller) = match &closed {
+            Ok(c) => (IkStart::Nominal(c.clone()), None),
+            Err(why) => (
+                IkStart::Seed(why.clone()),
+                Some(IkSolver::new(
+                    CalibratedModel::identified(nominal),
+                    IkStart::Seed(why.clone()),
+                    opts,
+                )),
+            ),
+        };
         Ok(FakeTargetSolver {
             nominal,
-            ik: IkSolver::new(model, IkStart::Nominal(closed.clone()), opts),
+            ik: IkSolver::new(model, start, opts),
+            controller,
             closed,
             sols: Vec::with_capacity(8),
         })
     }
 
+    /// Why the nominal model has no closed form (every target then needs seed joints and
+    /// has no branch); None when it has one.
+    pub fn without_closed_form(&self) -> Option<&str> {
+        self.closed.as_ref().err().map(String::as_str)
+    }
+
     /// The branch of the nominal closed form that returns `q` (mod 2 pi) for FK_nominal(q);
-    /// None at a singularity, where the branches merge.
+    /// None at a singularity, where the branches merge, or without a closed form.
     pub fn branch_of(&mut self, q: &[f64]) -> Option<Branch> {
         let f = tool_pose(self.nominal, q);
-        self.closed.solve_branches(&f, &mut self.sols);
+        let Ok(closed) = &self.closed else {
+            return None;
+        };
+        closed.solve_branches(&f, &mut self.sols);
         let mut found = None;
         for (b, s) in &self.sols {
             if wrapped_distance(s, q) < SAME_JOINTS_RAD {
@@ -185,6 +226,9 @@ impl<'a> FakeTargetSolver<'a> {
                 Pose::from_parts(Translation3::from(*x), r)
             }
         };
+        if self.controller.is_some() {
+            return self.solve_from_seed(target, seed);
+        }
         // A seed fixes the branch (the configuration the robot program was taught in).
         let seed_branch = seed.and_then(|s| self.branch_of(s));
         let solved = self
@@ -238,7 +282,62 @@ impl<'a> FakeTargetSolver<'a> {
         Ok(Command {
             desired: target,
             fake: tool_pose(self.nominal, &sol.q),
-            branch,
+            branch: Some(branch),
+            iterations: sol.iterations,
+            position_residual_mm: sol.position_error_mm,
+            rotation_residual_rad: sol.rotation_error_rad,
+            q: sol.q,
+        })
+    }
+    /// [`FakeTargetSolver::solve`] for a nominal model without a closed form: q* from the
+    /// seed, and the nominal model solved for F = FK_nominal(q*) from the same seed must
+    /// return q* (what a controller solving near the seed computes).
+    fn solve_from_seed(
+        &mut self,
+        target: Pose,
+        seed: Option<&[f64]>,
+    ) -> std::result::Result<Command, Failure> {
+        let seed = seed.ok_or(Failure::NoSeedWithoutClosedForm)?;
+        let failure = |e: IkFailure| match e {
+            IkFailure::BadSeed(m) => Failure::BadSeed(m),
+            IkFailure::OutsideLimits(j) => Failure::OutsideLimits(j),
+            e => Failure::NotConverged(e.to_string()),
+        };
+        let sol = self
+            .ik
+            .nearest(&target, Some(seed))
+            .map_err(failure)?
+            .solution;
+        let outside = self.nominal.joints_outside_limits(&sol.q);
+        if !outside.is_empty() {
+            return Err(Failure::OutsideLimits(outside));
+        }
+        let fake = tool_pose(self.nominal, &sol.q);
+        let controller = self
+            .controller
+            .as_mut()
+            .expect("a solver without a closed form has the nominal model's");
+        match controller.nearest(&fake, Some(seed)) {
+            Ok(back) => {
+                let apart = wrapped_distance(&back.solution.q, &sol.q);
+                if apart >= SAME_JOINTS_RAD {
+                    return Err(Failure::BranchChanged(format!(
+                        "the nominal model solves the command from the seed {:.4} deg away \
+                         from the calibrated solution: the controller would take other joints",
+                        apart.to_degrees()
+                    )));
+                }
+            }
+            Err(e) => {
+                return Err(Failure::BranchChanged(format!(
+                    "the nominal model does not solve the command from the seed: {e}"
+                )));
+            }
+        }
+        Ok(Command {
+            desired: target,
+            fake,
+            branch: None,
             iterations: sol.iterations,
             position_residual_mm: sol.position_error_mm,
             rotation_residual_rad: sol.rotation_error_rad,

@@ -77,19 +77,19 @@ impl Rbf {
 
     /// y(x) into `y`; `inv` is scratch (no allocation once it has been used).
     /// The units' distances go into a buffer of 64 at a time and their responses are
-    /// taken over it ([`super::Covariance::responses_in_place`], vectorised); the outputs add the
-    /// units in order. Where every kernel serves one output (networks fitted now, at most
-    /// eight of them) the kernels take each block of units in turn and their sums
-    /// advance side by side: each output's sum is one chain of additions, which bounded a
-    /// prediction's speed while the outputs ran one after another (the same additions in
-    /// the same order, so the same bits).
+    /// taken over it ([`super::Covariance::responses_in_place`], vectorised); the outputs
+    /// add the units in order. Where every kernel serves one output, as in networks fitted
+    /// now, and there are at most [`INTERLEAVED`] of them, the kernels take each block of
+    /// units in turn and their sums advance side by side: each output's sum is one chain of
+    /// additions, which bounded a prediction's speed while the outputs ran one after another
+    /// (the same additions in the same order, so the same bits).
     pub fn forward_into(&self, x: &[f64], y: &mut [f64], inv: &mut Vec<f64>) {
-        y.fill(0.0);
         let kernels = self.kernels.len();
         if kernels > INTERLEAVED
             || kernels != y.len()
             || self.kernels.iter().any(|k| k.outputs != 1)
         {
+            y.fill(0.0);
             self.forward_kernel_by_kernel(x, y, inv);
             return;
         }
@@ -109,8 +109,10 @@ impl Rbf {
                 distances(x, centres, own, q);
                 kernel.covariance.responses_in_place(q, 1.0);
             }
-            for (u, w) in weights.iter().enumerate() {
-                for ((s, q), wo) in sums.iter_mut().zip(&buffers).zip(w) {
+            // Rows of weights as long as the kernels and no more than the block's units (a
+            // valid network's: `is_valid`), or a panic as before.
+            for (u, w) in weights.iter().take(centres.len()).enumerate() {
+                for ((s, q), wo) in sums.iter_mut().zip(&buffers).zip(&w[..kernels]) {
                     *s += wo * q[u];
                 }
             }
@@ -118,7 +120,8 @@ impl Rbf {
         y.copy_from_slice(sums);
     }
 
-    /// [`Rbf::forward_into`] one kernel after another (any kernel's output count).
+    /// [`Rbf::forward_into`] one kernel after another (any kernel's output count), added
+    /// into `y`.
     fn forward_kernel_by_kernel(&self, x: &[f64], y: &mut [f64], inv: &mut Vec<f64>) {
         let mut buffer = [0.0; CHUNK];
         for (kernel, outs, own) in self.kernels_with_inverses(inv) {
@@ -137,8 +140,10 @@ impl Rbf {
     }
 
     /// y(x) into `y` and dy/dx (outputs x inputs) into `dy`: dy_o/dx_d = -sum_i w_io g_io
-    /// (x_d - c_id) / l_od^2, g = -2 dk/dq ([`super::Covariance::response_and_width_factor`]; the response itself
-    /// for the squared exponential); `inv` is scratch as in [`Rbf::forward_into`].
+    /// (x_d - c_id) / l_od^2, g = -2 dk/dq
+    /// ([`super::Covariance::response_and_width_factor`]; the response itself for the
+    /// squared exponential); `inv` is scratch as in [`Rbf::forward_into`]. One unit and one
+    /// kernel at a time (compensated targets' solves; not the training's hot path).
     pub fn input_jacobian_into(
         &self,
         x: &[f64],
@@ -176,7 +181,8 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     /// The four-at-a-time distances are [`distance`]'s bits for any count of units (groups
-    /// of four and a remainder), any count of inputs, and a unit shorter than the inputs.
+    /// of four and a remainder), any count of inputs, a unit shorter than the inputs, and
+    /// inputs, widths and units of different lengths (the shortest counts, as in a zip).
     #[test]
     fn distances_four_at_a_time_are_one_at_a_time_bits() {
         use rand::Rng;
@@ -198,14 +204,23 @@ mod tests {
                 if units > 5 && inputs > 0 {
                     centres[5].truncate(inputs - 1);
                 }
-                let mut q = vec![f64::NAN; units];
-                distances(&x, &centres, &inv, &mut q);
-                for (u, c) in centres.iter().enumerate() {
-                    assert_eq!(
-                        q[u].to_bits(),
-                        distance(&x, c, &inv).to_bits(),
-                        "{inputs} inputs, {units} units, unit {u}"
-                    );
+                // As given; one width short; one input short (centres one longer).
+                for (x, inv) in [
+                    (&x[..], &inv[..]),
+                    (&x[..], &inv[..inputs.saturating_sub(1)]),
+                    (&x[..inputs.saturating_sub(1)], &inv[..]),
+                ] {
+                    let mut q = vec![f64::NAN; units];
+                    distances(x, &centres, inv, &mut q);
+                    for (u, c) in centres.iter().enumerate() {
+                        assert_eq!(
+                            q[u].to_bits(),
+                            distance(x, c, inv).to_bits(),
+                            "{inputs} inputs ({} x, {} widths), {units} units, unit {u}",
+                            x.len(),
+                            inv.len()
+                        );
+                    }
                 }
             }
         }
@@ -213,8 +228,10 @@ mod tests {
 
     /// Prediction with the kernels side by side gives the bits of one kernel after another,
     /// on a fitted network (two one-output kernels, 150 units: two blocks of 64 and a
-    /// remainder) and on the same network with six outputs; past [`INTERLEAVED`] kernels
-    /// and with a kernel of two outputs the kernel-by-kernel path runs.
+    /// remainder) and on the same network with six outputs. Past [`INTERLEAVED`] kernels and
+    /// with a kernel of two outputs `forward_into` runs the kernel-by-kernel path itself, so
+    /// those two cases check only that it is taken (the side-by-side path would mishandle
+    /// them).
     #[test]
     fn kernels_side_by_side_give_the_bits_of_one_after_another() {
         let (s, _) = data(150);
