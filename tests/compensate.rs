@@ -10,7 +10,9 @@ use robocal::data::Target;
 use robocal::data::{MeasurementSet, read_canonical};
 use robocal::geometry::rotation::rotation_vector;
 use robocal::identify::{Measure, Options, identify};
-use robocal::kinematics::{Frames, Pose, SphericalWristIk, tool_pose};
+use robocal::kinematics::{
+    Frames, IkOptions, IkSolver, IkStart, Pose, SphericalWristIk, tool_pose,
+};
 use robocal::model::{Robot, read_robot};
 use robocal::neural::compensator::{Compensator, CompensatorOptions};
 use robocal::neural::predict::PredictWorkspace;
@@ -436,6 +438,12 @@ fn ur10_targets_are_solved_from_their_seeds_without_a_closed_form() {
             .without_closed_form()
             .is_some_and(|w| w.contains("no spherical wrist"))
     );
+    // The controller's view, solved here on its own: the nominal model from the seed.
+    let mut controller = IkSolver::new(
+        CalibratedModel::identified(&nominal),
+        IkStart::Seed("test".into()),
+        IkOptions::default(),
+    );
     let mut worst: f64 = 0.0;
     for m in val.rows.iter().take(100) {
         let target = truth_pose(m);
@@ -450,6 +458,19 @@ fn ur10_targets_are_solved_from_their_seeds_without_a_closed_form() {
         assert!(dp < 1e-5 && dr < 1e-8, "line {}: {dp} mm, {dr} rad", m.line);
         let fake = tool_pose(&nominal, &cmd.q);
         assert!((fake.translation.vector - cmd.fake.translation.vector).norm() < 1e-9);
+        assert!(rotation_vector(&(fake.rotation * cmd.fake.rotation.inverse())).norm() < 1e-12);
+        let back = controller
+            .nearest(&cmd.fake, Some(&seed))
+            .unwrap()
+            .solution
+            .q;
+        for (a, b) in back.iter().zip(&cmd.q) {
+            assert!(
+                (a - b).abs() < 1e-6,
+                "line {}: the controller's {a} against {b}",
+                m.line
+            );
+        }
         for (a, b) in cmd.q.iter().zip(&m.q) {
             worst = worst.max((a - b).abs());
         }
@@ -479,4 +500,21 @@ fn ur10_targets_are_solved_from_their_seeds_without_a_closed_form() {
     assert!((reached.translation.vector - p).norm() < 1e-5);
     let at_seed = tool_pose(&robot, &m.q).rotation;
     assert!(rotation_vector(&(reached.rotation * at_seed.inverse())).norm() < 1e-8);
+    // A controller whose joint 1 may not reach the solution: outside its limits, no command.
+    let q1 = cmd.q[0].to_degrees();
+    let text = std::fs::read_to_string(common::root().join("datasets/robots/ur10.toml"))
+        .unwrap()
+        .replacen(
+            "limits = [-360.0, 360.0]",
+            &format!("limits = [{}, {}]", q1 + 1.0, q1 + 10.0),
+            1,
+        );
+    let narrow = Robot::from_toml(&text).unwrap();
+    let mut solver = FakeTargetSolver::new(&narrow, CalibratedModel::identified(&robot)).unwrap();
+    assert_eq!(
+        solver
+            .solve(&Target::Pose(truth_pose(m)), Some(&m.q))
+            .unwrap_err(),
+        Failure::OutsideLimits(vec![0])
+    );
 }

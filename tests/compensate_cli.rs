@@ -211,82 +211,6 @@ fn bad_input_names_file_line_and_column() {
         assert!(stderr(&o).contains(want), "{text}: {}", stderr(&o));
         assert!(!out.exists(), "{text}: no output on bad input");
     }
-    // A nominal robot without a closed form needs a seed for every target: the row is
-    // marked, the run exits with the code of failed targets (3).
-    let good = tmp("good_targets.csv");
-    std::fs::write(&good, "x,y,z,rz,ry,rx\n2000,0,1500,90,0,90\n").unwrap();
-    let out = tmp("unseeded.csv");
-    let o = robocal(&[
-        "compensate",
-        "--nominal",
-        "datasets/robots/ur10.toml",
-        "--robot",
-        "datasets/robots/ur10.toml",
-        "--targets",
-        good.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
-    let err = stderr(&o);
-    assert!(
-        err.contains("no closed-form inverse kinematics")
-            && err.contains(":2: no-seed: the nominal model has no closed form")
-            && err.contains("(give q1..qN columns or --seed)"),
-        "{err}"
-    );
-    assert!(std::fs::read_to_string(&out).unwrap().contains("no-seed"));
-    // Seeded, the target is solved: the UR10 as both models, so the command is the target
-    // itself and the joints the configuration it was made at (the seed 3 deg away), with an
-    // empty branch.
-    let ur10 = robocal::model::read_robot("datasets/robots/ur10.toml").unwrap();
-    let q = [30.0f64, -70.0, 80.0, -100.0, -60.0, 20.0];
-    let pose = robocal::kinematics::pose_to_file(&robocal::kinematics::tool_pose(
-        &ur10,
-        &q.map(f64::to_radians),
-    ));
-    let cells: Vec<String> = pose
-        .iter()
-        .chain(&q.map(|v| v + 3.0))
-        .map(|v| format!("{v:.12}"))
-        .collect();
-    std::fs::write(
-        &good,
-        format!("x,y,z,rz,ry,rx,q1,q2,q3,q4,q5,q6\n{}\n", cells.join(",")),
-    )
-    .unwrap();
-    let o = robocal(&[
-        "compensate",
-        "--nominal",
-        "datasets/robots/ur10.toml",
-        "--robot",
-        "datasets/robots/ur10.toml",
-        "--targets",
-        good.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--decimals",
-        "9",
-    ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let rows = csv(&std::fs::read_to_string(&out).unwrap());
-    let cell = |name: &str| rows[1][col(&rows, name)].clone();
-    assert_eq!(
-        (cell("branch").as_str(), cell("status").as_str()),
-        ("", "ok")
-    );
-    for (j, want) in q.iter().enumerate() {
-        let got: f64 = cell(&format!("q{}", j + 1)).parse().unwrap();
-        assert!(
-            (got - want).abs() < 1e-6,
-            "q{}: {got} against {want}",
-            j + 1
-        );
-    }
-    for (c, want) in ["cmd_x", "cmd_y", "cmd_z"].iter().zip(&pose) {
-        let got: f64 = cell(c).parse().unwrap();
-        assert!((got - want).abs() < 1e-6, "{c}: {got} against {want}");
-    }
     // Output columns in the input (a previous output fed back in) are kept under
     // `input_<name>`, as in every command that carries columns; a name that would still
     // appear twice is refused.
@@ -311,5 +235,108 @@ fn bad_input_names_file_line_and_column() {
         stderr(&o).contains("field `input_status`: this column would appear twice"),
         "{}",
         stderr(&o)
+    );
+}
+
+#[test]
+fn a_nominal_model_without_closed_form_solves_from_the_seeds() {
+    // A nominal robot without a closed form needs a seed for every target: the row is
+    // marked, the run exits with the code of failed targets (3).
+    let good = tmp("ur10_targets.csv");
+    std::fs::write(&good, "x,y,z,rz,ry,rx\n2000,0,1500,90,0,90\n").unwrap();
+    let out = tmp("ur10_commands.csv");
+    let ur10_path = "datasets/robots/ur10.toml";
+    let ur10_nominal = |robot: &str, targets: &std::path::Path, out: &std::path::Path| {
+        let (targets, out) = (targets.to_str().unwrap(), out.to_str().unwrap());
+        robocal(&[
+            "compensate",
+            "--nominal",
+            ur10_path,
+            "--robot",
+            robot,
+            "--targets",
+            targets,
+            "--out",
+            out,
+            "--decimals",
+            "9",
+        ])
+    };
+    let o = ur10_nominal(ur10_path, &good, &out);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("no closed-form inverse kinematics")
+            && err.contains(":2: no-seed: the nominal model has no closed form")
+            && err.contains("(give q1..qN columns or --seed)"),
+        "{err}"
+    );
+    assert!(std::fs::read_to_string(&out).unwrap().contains("no-seed"));
+    // Seeded, the target is solved: the UR10 as both models, so the command is the target
+    // itself and the joints the configuration it was made at (the seed 3 deg away), with an
+    // empty branch.
+    let ur10 = robocal::model::read_robot(ur10_path).unwrap();
+    let q = [30.0f64, -70.0, 80.0, -100.0, -60.0, 20.0];
+    let pose = robocal::kinematics::pose_to_file(&robocal::kinematics::tool_pose(
+        &ur10,
+        &q.map(f64::to_radians),
+    ));
+    let cells: Vec<String> = pose
+        .iter()
+        .chain(&q.map(|v| v + 3.0))
+        .map(|v| format!("{v:.12}"))
+        .collect();
+    std::fs::write(
+        &good,
+        format!("x,y,z,rz,ry,rx,q1,q2,q3,q4,q5,q6\n{}\n", cells.join(",")),
+    )
+    .unwrap();
+    let o = ur10_nominal(ur10_path, &good, &out);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("across frames"), "{}", stderr(&o));
+    let rows = csv(&std::fs::read_to_string(&out).unwrap());
+    let cell = |name: &str| rows[1][col(&rows, name)].clone();
+    assert_eq!(
+        (cell("branch").as_str(), cell("status").as_str()),
+        ("", "ok")
+    );
+    for (j, want) in q.iter().enumerate() {
+        let got: f64 = cell(&format!("q{}", j + 1)).parse().unwrap();
+        assert!(
+            (got - want).abs() < 1e-6,
+            "q{}: {got} against {want}",
+            j + 1
+        );
+    }
+    for (c, want) in ["cmd_x", "cmd_y", "cmd_z"].iter().zip(&pose) {
+        let got: f64 = cell(c).parse().unwrap();
+        assert!((got - want).abs() < 1e-6, "{c}: {got} against {want}");
+    }
+    // A calibrated base registered 3 m away (a tracker's frame): the summary separates the
+    // change of frame from the correction, here none (the same arm).
+    let text = std::fs::read_to_string(ur10_path).unwrap();
+    let moved_text = text.replacen("x = 0.0", "x = 3000.0", 1);
+    assert_ne!(moved_text, text);
+    let moved = tmp("ur10_moved_base.toml");
+    std::fs::write(&moved, &moved_text).unwrap();
+    let pose = robocal::kinematics::pose_to_file(&robocal::kinematics::tool_pose(
+        &robocal::model::Robot::from_toml(&moved_text).unwrap(),
+        &q.map(f64::to_radians),
+    ));
+    let cells: Vec<String> = pose.iter().chain(&q).map(|v| format!("{v:.12}")).collect();
+    std::fs::write(
+        &good,
+        format!("x,y,z,rz,ry,rx,q1,q2,q3,q4,q5,q6\n{}\n", cells.join(",")),
+    )
+    .unwrap();
+    let o = ur10_nominal(moved.to_str().unwrap(), &good, &out);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("by 3000.000 mm on average")
+            && err
+                .contains("across frames: the calibrated model's base lies 3000.0 mm and 0.0 deg")
+            && err.contains("the targets move by 0.000 mm on average (max 0.000 mm)"),
+        "{err}"
     );
 }

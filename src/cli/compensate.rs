@@ -27,8 +27,9 @@ pub struct CompensateArgs {
     compensator: Option<PathBuf>,
     /// Desired tool poses: CSV with x,y,z (mm) and rz,ry,rx (deg, R = Rz Ry Rx), or x,y,z
     /// only (the orientation is then the calibrated robot's at the seed joints). Optional
-    /// q1..qN (deg) seed each row (branch and turns; all empty: no seed) and are renamed
-    /// seed_q1..seed_qN; other columns are carried through.
+    /// q1..qN (deg) seed each row (branch and turns; without a nominal closed form the start
+    /// of the solve, required; all empty: no seed) and are renamed seed_q1..seed_qN; other
+    /// columns are carried through.
     #[arg(long)]
     targets: PathBuf,
     /// Seed joints "j1,...,jN" (deg) for rows without their own (no q1..qN columns, or all
@@ -111,6 +112,11 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     let mut out_rows = Vec::with_capacity(t.rows.len());
     let mut failed = Vec::new();
     let mut shifts = Vec::new();
+    // The targets carried into the nominal model's world frame (B_n B_c^-1 T): the shift
+    // without the change of frame, where the calibrated base was registered elsewhere.
+    let calibrated = comp.as_ref().map_or(&robot, |c| &c.robot);
+    let to_nominal = nominal.base().transform() * calibrated.base().transform().inverse();
+    let mut moved = Vec::new();
     let mut outside = Vec::new();
     let mut dws = robocal::neural::predict::PredictWorkspace::default();
     for r in 0..t.rows.len() {
@@ -129,6 +135,8 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
                     row.push(check.describe());
                 }
                 shifts.push((c.fake.translation.vector - c.desired.translation.vector).norm());
+                let carried = to_nominal * c.desired;
+                moved.push((c.fake.translation.vector - carried.translation.vector).norm());
             }
             Err(why) => {
                 let blanks = (if with_orientation { 0 } else { 3 }) + 1 + n + 6 + 2;
@@ -178,12 +186,11 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         note,
     };
     if let (Some(mean), Some(max)) = (report.shift_mean_mm, report.shift_max_mm) {
-        let calibrated = comp.as_ref().map_or(&robot, |c| &c.robot);
         eprintln!(
             "compensate: {} of {total} targets solved; the commands move the tool positions by \
              {mean:.3} mm on average (max {max:.3} mm) from the desired ones{}",
             report.solved,
-            frame_change(&nominal, calibrated)
+            frame_change(&nominal, calibrated, &moved)
         );
     }
     if let Some(p) = &a.report {
@@ -194,20 +201,23 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
 
 /// Where the calibrated model's base frame lies far from the nominal's (a base registered to
 /// a tracker's frame: more than [`FRAME_CHANGE_MM`] or [`FRAME_CHANGE_DEG`]), the targets are
-/// in the calibrated model's world frame and the commands in the controller's, so the shift
-/// is mostly that change of frame: the words saying so, else nothing.
-fn frame_change(nominal: &Robot, calibrated: &Robot) -> String {
+/// in the calibrated model's world frame and the commands in the nominal model's, so the
+/// shift mixes that change of frame with the correction: the words saying so and the shift
+/// of the targets carried into the nominal frame (`moved`, mm), else nothing.
+fn frame_change(nominal: &Robot, calibrated: &Robot, moved: &[f64]) -> String {
     let d = nominal.base().transform().inverse() * calibrated.base().transform();
     let (mm, deg) = (d.translation.vector.norm(), d.rotation.angle().to_degrees());
-    if mm > FRAME_CHANGE_MM || deg > FRAME_CHANGE_DEG {
-        format!(
-            ", most of it a change of frame: the calibrated model's base lies {mm:.1} mm and \
-             {deg:.1} deg from the nominal's (targets in the calibrated model's world frame, \
-             commands in the controller's base frame)"
-        )
-    } else {
-        String::new()
+    if moved.is_empty() || (mm <= FRAME_CHANGE_MM && deg <= FRAME_CHANGE_DEG) {
+        return String::new();
     }
+    let mean = moved.iter().sum::<f64>() / moved.len() as f64;
+    let max = moved.iter().copied().fold(0.0, f64::max);
+    format!(
+        ", across frames: the calibrated model's base lies {mm:.1} mm and {deg:.1} deg from \
+         the nominal's (targets in the calibrated model's world frame, commands in the \
+         nominal model's); carried into the nominal frame, the targets move by {mean:.3} mm \
+         on average (max {max:.3} mm)"
+    )
 }
 
 /// Base offset (mm) beyond which [`frame_change`] speaks: far beyond a base's calibration

@@ -12,12 +12,13 @@
 //!    seed's branch must return q* itself: that is what the controller will compute from F.
 //!    A target failing any step is a [`Failure`], never a command.
 //!
-//! A controller model without a closed form (a UR arm: no spherical wrist) has no branches:
-//! its controller solves a pose numerically near the joints it is given (URScript's
-//! `get_inverse_kin(pose, qnear)`). Each target then needs seed joints (the configuration
-//! it was taught in): q* is the calibrated model's solution from the seed (step 2), within
-//! the limits, and the nominal model's numerical solve of F from the same seed must return
-//! q* (step 3's check, the controller's view).
+//! For a controller model robocal has no closed form for (a UR arm: no spherical wrist; its
+//! controller has analytic solutions of its own, and picks the one nearest the joints it is
+//! given, as URScript's `get_inverse_kin(pose, qnear)`) no branch is reported. Each target
+//! then needs seed joints (the configuration it was taught in): q* is the calibrated model's
+//! solution from the seed (step 2), within the limits, and the nominal model's numerical
+//! solve of F from the same seed must return q* (step 3's check, the controller's view;
+//! [`Failure::ControllerDiffers`] otherwise).
 
 use super::model::CalibratedModel;
 use crate::data::Target;
@@ -25,7 +26,7 @@ use crate::error::{Error, Result};
 use crate::kinematics::{
     Branch, IkFailure, IkOptions, IkSolver, IkStart, Pose, SphericalWristIk, ToolModel, tool_pose,
 };
-use crate::model::Robot;
+use crate::model::{JointType, Robot};
 use nalgebra::Translation3;
 use std::f64::consts::PI;
 
@@ -70,6 +71,9 @@ pub enum Failure {
     OutsideLimits(Vec<usize>),
     /// The controller would not return q* for the fake target on the seed's branch.
     BranchChanged(String),
+    /// Without a nominal closed form: the nominal model solved for the fake target from the
+    /// seed does not return q*, so a controller solving near the seed would not either.
+    ControllerDiffers(String),
 }
 
 impl Failure {
@@ -82,6 +86,7 @@ impl Failure {
             Failure::NotConverged(_) => "not-converged",
             Failure::OutsideLimits(_) => "outside-limits",
             Failure::BranchChanged(_) => "branch-changed",
+            Failure::ControllerDiffers(_) => "controller-differs",
         }
     }
 }
@@ -109,6 +114,7 @@ impl std::fmt::Display for Failure {
             Failure::Unreachable(m)
             | Failure::NotConverged(m)
             | Failure::BranchChanged(m)
+            | Failure::ControllerDiffers(m)
             | Failure::BadSeed(m) => {
                 write!(f, "{}: {m}", self.code())
             }
@@ -129,13 +135,32 @@ pub struct FakeTargetSolver<'a> {
     sols: Vec<(Branch, [f64; 6])>,
 }
 
-/// Distance (rad) from `a` to `b` with each revolute joint's difference wrapped to [-pi, pi]:
-/// whether two joint vectors are one configuration of the controller.
+/// Distance (rad) from `a` to `b` with each joint's difference wrapped to [-pi, pi] (every
+/// joint revolute, as a closed form's are): whether two joint vectors are one configuration
+/// of the controller.
 fn wrapped_distance(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
         .map(|(x, y)| {
             let d = (x - y + PI).rem_euclid(2.0 * PI) - PI;
+            d * d
+        })
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// [`wrapped_distance`] for any joints of `robot`: a prismatic joint's difference (mm) as it
+/// is, a revolute one's (rad) wrapped.
+fn joint_gap(robot: &Robot, a: &[f64], b: &[f64]) -> f64 {
+    robot
+        .joints()
+        .iter()
+        .zip(a.iter().zip(b))
+        .map(|(j, (x, y))| {
+            let d = match j.joint_type {
+                JointType::Revolute => (x - y + PI).rem_euclid(2.0 * PI) - PI,
+                JointType::Prismatic => x - y,
+            };
             d * d
         })
         .sum::<f64>()
@@ -161,10 +186,12 @@ impl<'a> FakeTargetSolver<'a> {
             Ok(c) => (IkStart::Nominal(c.clone()), None),
             Err(why) => (
                 IkStart::Seed(why.clone()),
+                // F = FK_nominal(q*) is reached exactly at q*: the default tolerances, so that
+                // near a singularity a loose solve does not land 1e-6 rad away.
                 Some(IkSolver::new(
                     CalibratedModel::identified(nominal),
                     IkStart::Seed(why.clone()),
-                    opts,
+                    IkOptions::default(),
                 )),
             ),
         };
@@ -203,7 +230,8 @@ impl<'a> FakeTargetSolver<'a> {
         found
     }
 
-    /// The command for one desired pose; `seed` (rad, mm) chooses the branch and turns.
+    /// The command for one desired pose; `seed` (rad, mm) chooses the branch and turns (with
+    /// a nominal closed form) or starts the solve (without one: then it is required).
     pub fn solve(
         &mut self,
         desired: &Target,
@@ -319,17 +347,17 @@ impl<'a> FakeTargetSolver<'a> {
             .expect("a solver without a closed form has the nominal model's");
         match controller.nearest(&fake, Some(seed)) {
             Ok(back) => {
-                let apart = wrapped_distance(&back.solution.q, &sol.q);
+                let apart = joint_gap(self.nominal, &back.solution.q, &sol.q);
                 if apart >= SAME_JOINTS_RAD {
-                    return Err(Failure::BranchChanged(format!(
-                        "the nominal model solves the command from the seed {:.4} deg away \
-                         from the calibrated solution: the controller would take other joints",
-                        apart.to_degrees()
+                    return Err(Failure::ControllerDiffers(format!(
+                        "the nominal model solves the command from the seed at joints \
+                         {apart:.3e} (rad, mm) from the calibrated solution: a controller \
+                         solving near the seed would take those"
                     )));
                 }
             }
             Err(e) => {
-                return Err(Failure::BranchChanged(format!(
+                return Err(Failure::ControllerDiffers(format!(
                     "the nominal model does not solve the command from the seed: {e}"
                 )));
             }

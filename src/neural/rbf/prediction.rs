@@ -79,7 +79,7 @@ impl Rbf {
     /// The units' distances go into a buffer of 64 at a time and their responses are
     /// taken over it ([`super::Covariance::responses_in_place`], vectorised); the outputs
     /// add the units in order. Where every kernel serves one output, as in networks fitted
-    /// now, and there are at most [`INTERLEAVED`] of them, the kernels take each block of
+    /// now, and there are at most eight of them (`INTERLEAVED`), the kernels take each block of
     /// units in turn and their sums advance side by side: each output's sum is one chain of
     /// additions, which bounded a prediction's speed while the outputs ran one after another
     /// (the same additions in the same order, so the same bits).
