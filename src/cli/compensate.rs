@@ -156,14 +156,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         .context("writing the commands")?;
     super::predict::warn_outside(&a.targets, &outside, true);
     let total = t.rows.len();
-    let (mean, max) = if shifts.is_empty() {
-        (None, None)
-    } else {
-        (
-            Some(shifts.iter().sum::<f64>() / shifts.len() as f64),
-            Some(shifts.iter().copied().fold(0.0, f64::max)),
-        )
-    };
+    let (mean, max) = mean_and_max(&shifts).unzip();
     let report = CompensateReport {
         nominal: a.nominal.display().to_string(),
         robot: a.robot.display().to_string(),
@@ -207,17 +200,28 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
 fn frame_change(nominal: &Robot, calibrated: &Robot, moved: &[f64]) -> String {
     let d = nominal.base().transform().inverse() * calibrated.base().transform();
     let (mm, deg) = (d.translation.vector.norm(), d.rotation.angle().to_degrees());
-    if moved.is_empty() || (mm <= FRAME_CHANGE_MM && deg <= FRAME_CHANGE_DEG) {
+    let Some((mean, max)) = mean_and_max(moved) else {
+        return String::new();
+    };
+    if mm <= FRAME_CHANGE_MM && deg <= FRAME_CHANGE_DEG {
         return String::new();
     }
-    let mean = moved.iter().sum::<f64>() / moved.len() as f64;
-    let max = moved.iter().copied().fold(0.0, f64::max);
     format!(
         ", across frames: the calibrated model's base lies {mm:.1} mm and {deg:.1} deg from \
          the nominal's (targets in the calibrated model's world frame, commands in the \
          nominal model's); carried into the nominal frame, the targets move by {mean:.3} mm \
          on average (max {max:.3} mm)"
     )
+}
+
+/// The mean and the largest of the shifts `v` (mm); None for none.
+fn mean_and_max(v: &[f64]) -> Option<(f64, f64)> {
+    (!v.is_empty()).then(|| {
+        (
+            v.iter().sum::<f64>() / v.len() as f64,
+            v.iter().copied().fold(0.0, f64::max),
+        )
+    })
 }
 
 /// Base offset (mm) beyond which [`frame_change`] speaks: far beyond a base's calibration

@@ -24,9 +24,10 @@ use super::model::CalibratedModel;
 use crate::data::Target;
 use crate::error::{Error, Result};
 use crate::kinematics::{
-    Branch, IkFailure, IkOptions, IkSolver, IkStart, Pose, SphericalWristIk, ToolModel, tool_pose,
+    Branch, IkFailure, IkOptions, IkSolution, IkSolver, IkStart, Pose, SphericalWristIk, ToolModel,
+    tool_pose,
 };
-use crate::model::{JointType, Robot};
+use crate::model::{Robot, joint_distance};
 use nalgebra::Translation3;
 use std::f64::consts::PI;
 
@@ -127,17 +128,26 @@ impl std::fmt::Display for Failure {
 /// calibrated model, with reused buffers.
 pub struct FakeTargetSolver<'a> {
     nominal: &'a Robot,
-    /// The nominal closed form, or why there is none.
-    closed: std::result::Result<SphericalWristIk, String>,
+    controller: Controller<'a>,
     ik: IkSolver<CalibratedModel<'a>>,
-    /// Without a closed form: the nominal model's numerical solve, as the controller's.
-    controller: Option<IkSolver<CalibratedModel<'a>>>,
     sols: Vec<(Branch, [f64; 6])>,
 }
 
-/// Distance (rad) from `a` to `b` with each joint's difference wrapped to [-pi, pi] (every
-/// joint revolute, as a closed form's are): whether two joint vectors are one configuration
-/// of the controller.
+/// How the controller turns a command back into joints, as the solver checks it.
+// One per solver, built once per run: the variants' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
+enum Controller<'a> {
+    /// The nominal closed form, on the seed's branch.
+    ClosedForm(SphericalWristIk),
+    /// No closed form (`why`): the nominal model solved numerically from the seed.
+    Numerical {
+        why: String,
+        ik: IkSolver<CalibratedModel<'a>>,
+    },
+}
+
+/// Distance (rad) from `a` to `b` with each revolute joint's difference wrapped to [-pi, pi]:
+/// whether two joint vectors are one configuration of the controller.
 fn wrapped_distance(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
@@ -149,29 +159,11 @@ fn wrapped_distance(a: &[f64], b: &[f64]) -> f64 {
         .sqrt()
 }
 
-/// [`wrapped_distance`] for any joints of `robot`: a prismatic joint's difference (mm) as it
-/// is, a revolute one's (rad) wrapped.
-fn joint_gap(robot: &Robot, a: &[f64], b: &[f64]) -> f64 {
-    robot
-        .joints()
-        .iter()
-        .zip(a.iter().zip(b))
-        .map(|(j, (x, y))| {
-            let d = match j.joint_type {
-                JointType::Revolute => (x - y + PI).rem_euclid(2.0 * PI) - PI,
-                JointType::Prismatic => x - y,
-            };
-            d * d
-        })
-        .sum::<f64>()
-        .sqrt()
-}
-
 impl<'a> FakeTargetSolver<'a> {
     /// `nominal` is the controller's model; `model` the calibrated one. Both must have the
     /// same joints. Without a nominal closed form every target needs seed joints.
     pub fn new(nominal: &'a Robot, model: CalibratedModel<'a>) -> Result<Self> {
-        let closed = SphericalWristIk::new(nominal).map_err(|e| e.to_string());
+        let closed = SphericalWristIk::new(nominal);
         if !model.robot().same_joints(nominal) {
             return Err(Error::Invalid(
                 "the calibrated model's joints differ from the nominal model's".into(),
@@ -182,24 +174,27 @@ impl<'a> FakeTargetSolver<'a> {
             tol_rotation_rad: 1e-9,
             ..IkOptions::default()
         };
-        let (start, controller) = match &closed {
-            Ok(c) => (IkStart::Nominal(c.clone()), None),
-            Err(why) => (
-                IkStart::Seed(why.clone()),
-                // F = FK_nominal(q*) is reached exactly at q*: the default tolerances, so that
-                // near a singularity a loose solve does not land 1e-6 rad away.
-                Some(IkSolver::new(
+        let (start, controller) = match closed {
+            Ok(c) => (IkStart::Nominal(c.clone()), Controller::ClosedForm(c)),
+            Err(e) => {
+                let why = e.to_string();
+                // F = FK_nominal(q*) is reached exactly at q*: the default tolerances, so
+                // that near a singularity a loose solve does not land 1e-6 rad away.
+                let ik = IkSolver::new(
                     CalibratedModel::identified(nominal),
                     IkStart::Seed(why.clone()),
                     IkOptions::default(),
-                )),
-            ),
+                );
+                (
+                    IkStart::Seed(why.clone()),
+                    Controller::Numerical { why, ik },
+                )
+            }
         };
         Ok(FakeTargetSolver {
             nominal,
             ik: IkSolver::new(model, start, opts),
             controller,
-            closed,
             sols: Vec::with_capacity(8),
         })
     }
@@ -207,14 +202,17 @@ impl<'a> FakeTargetSolver<'a> {
     /// Why the nominal model has no closed form (every target then needs seed joints and
     /// has no branch); None when it has one.
     pub fn without_closed_form(&self) -> Option<&str> {
-        self.closed.as_ref().err().map(String::as_str)
+        match &self.controller {
+            Controller::ClosedForm(_) => None,
+            Controller::Numerical { why, .. } => Some(why),
+        }
     }
 
     /// The branch of the nominal closed form that returns `q` (mod 2 pi) for FK_nominal(q);
     /// None at a singularity, where the branches merge, or without a closed form.
     pub fn branch_of(&mut self, q: &[f64]) -> Option<Branch> {
         let f = tool_pose(self.nominal, q);
-        let Ok(closed) = &self.closed else {
+        let Controller::ClosedForm(closed) = &self.controller else {
             return None;
         };
         closed.solve_branches(&f, &mut self.sols);
@@ -254,8 +252,8 @@ impl<'a> FakeTargetSolver<'a> {
                 Pose::from_parts(Translation3::from(*x), r)
             }
         };
-        if self.controller.is_some() {
-            return self.solve_from_seed(target, seed);
+        if let Controller::Numerical { ik: controller, .. } = &mut self.controller {
+            return solve_from_seed(&mut self.ik, controller, self.nominal, target, seed);
         }
         // A seed fixes the branch (the configuration the robot program was taught in).
         let seed_branch = seed.and_then(|s| self.branch_of(s));
@@ -307,69 +305,65 @@ impl<'a> FakeTargetSolver<'a> {
                 )));
             }
         }
-        Ok(Command {
-            desired: target,
-            fake: tool_pose(self.nominal, &sol.q),
-            branch: Some(branch),
+        let fake = tool_pose(self.nominal, &sol.q);
+        Ok(Command::new(target, fake, Some(branch), sol))
+    }
+}
+
+impl Command {
+    /// The command of solution `sol` for `desired`, `fake` = FK_nominal(sol.q).
+    fn new(desired: Pose, fake: Pose, branch: Option<Branch>, sol: IkSolution) -> Command {
+        Command {
+            desired,
+            fake,
+            branch,
             iterations: sol.iterations,
             position_residual_mm: sol.position_error_mm,
             rotation_residual_rad: sol.rotation_error_rad,
             q: sol.q,
-        })
-    }
-    /// [`FakeTargetSolver::solve`] for a nominal model without a closed form: q* from the
-    /// seed, and the nominal model solved for F = FK_nominal(q*) from the same seed must
-    /// return q* (what a controller solving near the seed computes).
-    fn solve_from_seed(
-        &mut self,
-        target: Pose,
-        seed: Option<&[f64]>,
-    ) -> std::result::Result<Command, Failure> {
-        let seed = seed.ok_or(Failure::NoSeedWithoutClosedForm)?;
-        let failure = |e: IkFailure| match e {
-            IkFailure::BadSeed(m) => Failure::BadSeed(m),
-            IkFailure::OutsideLimits(j) => Failure::OutsideLimits(j),
-            e => Failure::NotConverged(e.to_string()),
-        };
-        let sol = self
-            .ik
-            .nearest(&target, Some(seed))
-            .map_err(failure)?
-            .solution;
-        let outside = self.nominal.joints_outside_limits(&sol.q);
-        if !outside.is_empty() {
-            return Err(Failure::OutsideLimits(outside));
         }
-        let fake = tool_pose(self.nominal, &sol.q);
-        let controller = self
-            .controller
-            .as_mut()
-            .expect("a solver without a closed form has the nominal model's");
-        match controller.nearest(&fake, Some(seed)) {
-            Ok(back) => {
-                let apart = joint_gap(self.nominal, &back.solution.q, &sol.q);
-                if apart >= SAME_JOINTS_RAD {
-                    return Err(Failure::ControllerDiffers(format!(
-                        "the nominal model solves the command from the seed at joints \
-                         {apart:.3e} (rad, mm) from the calibrated solution: a controller \
-                         solving near the seed would take those"
-                    )));
-                }
-            }
-            Err(e) => {
+    }
+}
+
+/// [`FakeTargetSolver::solve`] for a nominal model without a closed form: q* from the seed
+/// by `ik` (the calibrated model), and `controller` (the nominal model) solved for F =
+/// FK_nominal(q*) from the same seed must return q*, whole turns included: what a controller
+/// solving near the seed computes.
+fn solve_from_seed(
+    ik: &mut IkSolver<CalibratedModel<'_>>,
+    controller: &mut IkSolver<CalibratedModel<'_>>,
+    nominal: &Robot,
+    target: Pose,
+    seed: Option<&[f64]>,
+) -> std::result::Result<Command, Failure> {
+    let seed = seed.ok_or(Failure::NoSeedWithoutClosedForm)?;
+    let failure = |e: IkFailure| match e {
+        IkFailure::BadSeed(m) => Failure::BadSeed(m),
+        IkFailure::OutsideLimits(j) => Failure::OutsideLimits(j),
+        e => Failure::NotConverged(e.to_string()),
+    };
+    let sol = ik.nearest(&target, Some(seed)).map_err(failure)?.solution;
+    let outside = nominal.joints_outside_limits(&sol.q);
+    if !outside.is_empty() {
+        return Err(Failure::OutsideLimits(outside));
+    }
+    let fake = tool_pose(nominal, &sol.q);
+    match controller.nearest(&fake, Some(seed)) {
+        Ok(back) => {
+            let apart = joint_distance(&back.solution.q, &sol.q);
+            if apart >= SAME_JOINTS_RAD {
                 return Err(Failure::ControllerDiffers(format!(
-                    "the nominal model does not solve the command from the seed: {e}"
+                    "the nominal model solves the command from the seed at joints {apart:.3e} \
+                     (rad, mm) from the calibrated solution: a controller solving near the \
+                     seed would take those"
                 )));
             }
         }
-        Ok(Command {
-            desired: target,
-            fake,
-            branch: None,
-            iterations: sol.iterations,
-            position_residual_mm: sol.position_error_mm,
-            rotation_residual_rad: sol.rotation_error_rad,
-            q: sol.q,
-        })
+        Err(e) => {
+            return Err(Failure::ControllerDiffers(format!(
+                "the nominal model does not solve the command from the seed: {e}"
+            )));
+        }
     }
+    Ok(Command::new(target, fake, None, sol))
 }
