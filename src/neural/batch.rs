@@ -1,7 +1,10 @@
 //! The training samples as matrices (one row per sample) for fast batched passes of an MLP:
 //! the penalised objective of [`super::samples`] and its gradient by matrix products, and the
 //! variable projection of phase 2 (the output layer solved for the hidden layer given).
+//! The products run on [`super::products`]'s kernel where it gives the bits of nalgebra's
+//! (AVX2 and FMA, every dimension above nalgebra's small ones), on nalgebra elsewhere.
 
+use super::products::{NALGEBRA_SMALL, Simd, abt, fast, transpose_into};
 use super::samples::{Samples, weight_norm2};
 use super::vectors::{add_products, sub_products};
 use super::weights::Weights;
@@ -35,14 +38,34 @@ pub struct Batch<'a> {
     /// The samples' maps (rows x outputs each) packed for passes over the samples: entry
     /// (row, c) of sample k at (row outputs + c) n + k, every sample's side by side.
     maps: Vec<f64>,
-    /// W1^T and W2^T, copied in at every pass (an owned transpose per pass would allocate).
+    /// W1^T and W2^T, copied in at every pass (an owned transpose per pass would allocate;
+    /// [`super::products`] reads W1 in place and needs W2^T only).
     w1t: DMatrix<f64>,
     w2t: DMatrix<f64>,
+    /// AVX2 and FMA where every dimension takes `dgemm`'s fused kernel: the products then run
+    /// on [`super::products::abt`], which reads both operands a column at a time, on the
+    /// transposed copies below (a sample per column; all four empty without).
+    simd: Option<Simd>,
+    /// X^T (inputs x samples), formed once.
+    xt: DMatrix<f64>,
+    /// Z^T (hidden units x samples): the activations as the kernel computes them (Z is its
+    /// transpose).
+    zt: DMatrix<f64>,
+    /// Gh^T (hidden units x samples): the hidden layer's gradients as the kernel computes them.
+    ght: DMatrix<f64>,
+    /// B^T (target columns x samples), formed once.
+    bt: DMatrix<f64>,
 }
 
 impl<'a> Batch<'a> {
     /// The matrices of `s` and workspaces sized for networks shaped as `w`.
     pub fn new(s: &'a Samples, w: &Weights) -> Self {
+        Self::with_kernels(s, w, true)
+    }
+
+    /// [`Batch::new`], running nalgebra's products throughout unless `kernels` (the products
+    /// of [`super::products`] where they give nalgebra's bits).
+    fn with_kernels(s: &'a Samples, w: &Weights, kernels: bool) -> Self {
         let (n, rows) = (s.len(), s.rows());
         let (nh, ni, no) = (w.hidden(), w.inputs(), w.outputs());
         let x = DMatrix::from_fn(n, ni, |k, i| s.x[k][i]);
@@ -64,6 +87,14 @@ impl<'a> Batch<'a> {
             }
             packing
         });
+        let simd = fast(&[n, ni, nh, no, rows]).filter(|_| kernels);
+        // The transposed copies only where the kernels run.
+        let t = |r: usize| DMatrix::zeros(if simd.is_some() { r } else { 0 }, n);
+        let (mut xt, zt, ght, mut bt) = (t(ni), t(nh), t(nh), t(rows));
+        if simd.is_some() {
+            transpose_into(&x, &mut xt);
+            transpose_into(&b, &mut bt);
+        }
         Batch {
             s,
             x,
@@ -82,11 +113,24 @@ impl<'a> Batch<'a> {
             maps,
             w1t: DMatrix::zeros(ni, nh),
             w2t: DMatrix::zeros(nh, no),
+            simd,
+            xt,
+            zt,
+            ght,
+            bt,
         }
     }
 
     /// Hidden activations of every sample into `z`.
     fn hidden(&mut self, w: &Weights) {
+        if let Some(simd) = self.simd {
+            // Z^T = W1 X^T, a sample per column, its activations, and Z.
+            let nh = self.zt.nrows();
+            abt(simd, &w.w1, &self.x, false, self.zt.as_mut_slice(), nh);
+            super::logistic::logistic_columns_in_place(self.zt.as_mut_slice(), w.b1.as_slice());
+            transpose_into(&self.zt, &mut self.z);
+            return;
+        }
         self.w1t.tr_copy_from(&w.w1);
         self.x.mul_to(&self.w1t, &mut self.z);
         let n = self.z.nrows();
@@ -104,8 +148,13 @@ impl<'a> Batch<'a> {
 
     /// Outputs and residuals from the activations in `z`; the sum of squared residuals.
     fn outputs(&mut self, w: &Weights) -> f64 {
-        self.w2t.tr_copy_from(&w.w2);
-        self.z.mul_to(&self.w2t, &mut self.y);
+        if let Some(simd) = self.simd {
+            let n = self.y.nrows();
+            abt(simd, &self.z, &w.w2, false, self.y.as_mut_slice(), n);
+        } else {
+            self.w2t.tr_copy_from(&w.w2);
+            self.z.mul_to(&self.w2t, &mut self.y);
+        }
         for (o, mut col) in self.y.column_iter_mut().enumerate() {
             col.add_scalar_mut(w.b2[o]);
         }
@@ -169,8 +218,13 @@ impl<'a> Batch<'a> {
             a = DMatrix::zeros(nh + 1, nh + 1);
         }
         a.fill(0.0);
-        gemm_tn(&self.z, &self.z, a.view_mut((0, 0), (nh, nh)));
-        column_sums(&self.z, &mut self.sums);
+        if let Some(simd) = self.simd {
+            abt(simd, &self.zt, &self.zt, true, a.as_mut_slice(), nh + 1);
+            row_sums(&self.zt, &mut self.sums);
+        } else {
+            gemm_tn(&self.z, &self.z, a.view_mut((0, 0), (nh, nh)));
+            column_sums(&self.z, &mut self.sums);
+        }
         for (j, &s) in self.sums.iter().enumerate() {
             a[(j, nh)] = s;
             a[(nh, j)] = s;
@@ -183,7 +237,10 @@ impl<'a> Batch<'a> {
             (nh + 1, targets),
             "projection: rhs sized in new"
         );
-        gemm_tn(&self.z, &self.b, rhs.view_mut((0, 0), (nh, targets)));
+        match self.simd {
+            Some(simd) => abt(simd, &self.zt, &self.bt, false, rhs.as_mut_slice(), nh + 1),
+            None => gemm_tn(&self.z, &self.b, rhs.view_mut((0, 0), (nh, targets))),
+        }
         for (c, &s) in self.b_sums.iter().enumerate() {
             rhs[(nh, c)] = s;
         }
@@ -233,8 +290,22 @@ impl<'a> Batch<'a> {
         }
         // dF/dW2 = Gy^T H, dF/dH = Gy W2, dF/dZ = dF/dH . H (1 - H), dF/dW1 = Gz^T X.
         super::vectors::tr_mul_to(&self.gy, &self.z, &mut self.gw2);
-        self.gy.mul_to(&w.w2, &mut self.gh);
-        let (gh, z) = (self.gh.as_mut_slice(), self.z.as_slice());
+        let (gh, z) = if let Some(simd) = self.simd {
+            // Gh^T = W2^T Gy^T, a sample per column, as Z^T.
+            self.w2t.tr_copy_from(&w.w2);
+            abt(
+                simd,
+                &self.w2t,
+                &self.gy,
+                false,
+                self.ght.as_mut_slice(),
+                nh,
+            );
+            (self.ght.as_mut_slice(), self.zt.as_slice())
+        } else {
+            self.gy.mul_to(&w.w2, &mut self.gh);
+            (self.gh.as_mut_slice(), self.z.as_slice())
+        };
         // As wide as the processor allows (AVX2 as well as the baseline's two values), the
         // same operations: a pass over every sample and hidden unit per evaluation.
         pulp::Arch::new().dispatch(
@@ -245,14 +316,29 @@ impl<'a> Batch<'a> {
                 }
             },
         );
-        gemm_tn(&self.gh, &self.x, self.gw1.view_mut((0, 0), (nh, ni)));
+        match self.simd {
+            // Gh^T X = Gh^T (X^T)^T.
+            Some(simd) => abt(
+                simd,
+                &self.ght,
+                &self.xt,
+                false,
+                self.gw1.as_mut_slice(),
+                nh,
+            ),
+            None => gemm_tn(&self.gh, &self.x, self.gw1.view_mut((0, 0), (nh, ni))),
+        }
         let (off_b1, off_w2, off_b2) = (nh * ni, nh * ni + nh, nh * ni + nh + no * nh);
         // The weights and the gradient's blocks by slices (row-major in the gradient,
         // column-major in the matrices); sums from 0 in row order, as nalgebra's `sum`.
         let decay = 2.0 * lambda / m;
         let g = grad.as_mut_slice();
         let (gw1, w1) = (self.gw1.as_slice(), w.w1.as_slice());
-        column_sums(&self.gh, &mut g[off_b1..off_b1 + nh]);
+        if self.simd.is_some() {
+            row_sums(&self.ght, &mut g[off_b1..off_b1 + nh]);
+        } else {
+            column_sums(&self.gh, &mut g[off_b1..off_b1 + nh]);
+        }
         for j in 0..nh {
             for i in 0..ni {
                 g[j * ni + i] = gw1[i * nh + j] + decay * w1[i * nh + j];
@@ -289,9 +375,17 @@ fn column_sums(m: &DMatrix<f64>, out: &mut [f64]) {
     }
 }
 
-/// Dimensions up to which nalgebra's `gemm` runs its own loops instead of `matrixmultiply`'s
-/// `dgemm` (nalgebra 0.34's `SMALL_DIM`).
-const NALGEBRA_SMALL: usize = 5;
+/// The sum of every row of `m` into `out` (one per row), each added in column order from 0:
+/// [`column_sums`] of m^T, the rows side by side.
+fn row_sums(m: &DMatrix<f64>, out: &mut [f64]) {
+    debug_assert_eq!(out.len(), m.nrows(), "row_sums: one sum per row");
+    out.fill(0.0);
+    for column in m.as_slice().chunks_exact(m.nrows().max(1)) {
+        for (t, v) in out.iter_mut().zip(column) {
+            *t += v;
+        }
+    }
+}
 
 /// `out` = A^T B (A: rows x m, B: rows x n, out: m x n), the numbers of nalgebra's `gemm` on a
 /// transposed copy of A, without the copy (written one cache line per number, it cost more
@@ -396,8 +490,11 @@ mod tests {
         }
         let mut sums = vec![f64::NAN; 33];
         column_sums(&m, &mut sums);
+        let mut rows = vec![f64::NAN; 33];
+        row_sums(&m.transpose(), &mut rows);
         for (j, s) in sums.iter().enumerate() {
             assert_eq!(s.to_bits(), m.column(j).sum().to_bits(), "column {j}");
+            assert_eq!(rows[j].to_bits(), s.to_bits(), "row {j}");
         }
         // In another order the sums differ: the comparison above can tell.
         let reversed: f64 = m.column(0).iter().rev().sum();
@@ -491,6 +588,58 @@ mod tests {
                     "maps {with_maps}, entry {c}: {fd} vs {}",
                     g[c]
                 );
+            }
+        }
+    }
+
+    /// On shapes where every product takes `dgemm`'s kernel (more than five samples, inputs,
+    /// hidden units and outputs), the batch's passes on [`super::super::products`] give the
+    /// bits of its passes on nalgebra's products: the objective and gradient with and without
+    /// maps, and the projection's output layer, value and gradient; and both agree with the
+    /// per-sample objective.
+    #[test]
+    fn the_kernels_give_the_bits_of_nalgebras_products() {
+        let (ni, nh, no, n) = (7, 9, 6, 37);
+        let w = Weights {
+            w1: DMatrix::from_fn(nh, ni, |i, j| ((i * 7 + j * 3) as f64 * 0.37).sin()),
+            b1: DVector::from_fn(nh, |i, _| (i as f64 * 0.9).cos()),
+            w2: DMatrix::from_fn(no, nh, |i, j| ((i * 5 + j) as f64 * 0.53).sin()),
+            b2: DVector::from_fn(no, |i, _| i as f64 * 0.1 - 0.2),
+        };
+        for with_maps in [false, true] {
+            let mut s = Samples::default();
+            let mut maps = Vec::new();
+            for k in 0..n {
+                let t = k as f64;
+                s.x.push((0..ni).map(|i| (t * 0.7 + i as f64).sin() * 1.3).collect());
+                s.b.push((0..no).map(|o| (t * 0.3 - o as f64).cos() * 0.4).collect());
+                maps.push(DMatrix::from_fn(no, no, |i, j| {
+                    ((k + i * 2 + j) as f64).cos()
+                }));
+            }
+            s.maps = with_maps.then_some(maps);
+            let mut fast = Batch::new(&s, &w);
+            #[cfg(target_arch = "x86_64")]
+            assert_eq!(
+                fast.simd.is_some(),
+                pulp::x86::V3::try_new().is_some(),
+                "the kernels run on this shape where the processor has AVX2 and FMA"
+            );
+            let mut plain = Batch::with_kernels(&s, &w, false);
+            let (mut gf, mut gp) = (DVector::zeros(w.len()), DVector::zeros(w.len()));
+            let ff = fast.objective(&w, 0.3, &mut gf);
+            let fp = plain.objective(&w, 0.3, &mut gp);
+            assert_eq!(ff.to_bits(), fp.to_bits(), "maps {with_maps}");
+            assert_eq!(gf, gp);
+            let mut gd = DVector::zeros(w.len());
+            let fd = objective(&s, &w, 0.3, &mut gd);
+            assert!((ff - fd).abs() < 1e-12 && (&gf - &gd).amax() < 1e-12);
+            if !with_maps {
+                let (mut wf, mut wp) = (w.clone(), w.clone());
+                let ff = fast.objective_projected(&mut wf, 0.3, &mut gf);
+                let fp = plain.objective_projected(&mut wp, 0.3, &mut gp);
+                assert_eq!(ff.to_bits(), fp.to_bits());
+                assert_eq!((wf.to_vector(), gf), (wp.to_vector(), gp));
             }
         }
     }

@@ -36,6 +36,22 @@ pub fn logistic_in_place(values: &mut [f64], bias: f64) {
     );
 }
 
+/// `values[i] <- logistic(values[i] + biases[i mod b])` for every i, b = `biases.len()`: the
+/// hidden units of a batch stored a sample per column (`biases` one per unit), the bits of
+/// [`logistic_in_place`] on each unit.
+pub fn logistic_columns_in_place(values: &mut [f64], biases: &[f64]) {
+    pulp::Arch::new().dispatch(
+        #[inline(always)]
+        || {
+            for column in values.chunks_exact_mut(biases.len().max(1)) {
+                for (v, b) in column.iter_mut().zip(biases) {
+                    *v = logistic_vectorised(*v + b);
+                }
+            }
+        },
+    );
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -12,6 +12,7 @@ pub mod logistic;
 pub mod net;
 pub mod parallel;
 pub mod predict;
+pub mod products;
 pub mod rbf;
 pub mod refine;
 pub mod repeats;
