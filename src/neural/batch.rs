@@ -4,7 +4,7 @@
 //! The products run on [`super::products`]'s kernel where it gives the bits of nalgebra's
 //! (AVX2 and FMA, every dimension above nalgebra's small ones), on nalgebra elsewhere.
 
-use super::products::{NALGEBRA_SMALL, Simd, abt, fast, transpose_into};
+use super::products::{Isa, NALGEBRA_SMALL, abt, fast, transpose_into};
 use super::samples::{Samples, weight_norm2};
 use super::vectors::{add_products, sub_products};
 use super::weights::Weights;
@@ -42,18 +42,24 @@ pub struct Batch<'a> {
     /// [`super::products`] reads W1 in place and needs W2^T only).
     w1t: DMatrix<f64>,
     w2t: DMatrix<f64>,
-    /// AVX2 and FMA where every dimension takes `dgemm`'s fused kernel: the products then run
-    /// on [`super::products::abt`], which reads both operands a column at a time, on the
-    /// transposed copies below (a sample per column; all four empty without).
-    simd: Option<Simd>,
-    /// X^T (inputs x samples), formed once.
+    /// AVX2 and FMA where the samples, inputs and hidden units take `dgemm`'s fused kernel:
+    /// the hidden layer's products (X W1^T, Z^T Z) then run on [`super::products::abt`].
+    simd: Option<Isa>,
+    /// The same where the outputs do too: the products with the output layer (Z W2^T, Gy W2)
+    /// and the hidden layer's gradient (Gh^T X) run on it.
+    simd_out: Option<Isa>,
+    /// The same where the target columns do too: the projection's Z^T B runs on it.
+    simd_rhs: Option<Isa>,
+    /// X^T (inputs x samples), formed once, for Gh^T X (empty where nalgebra multiplies).
     xt: DMatrix<f64>,
-    /// Z^T (hidden units x samples): the activations as the kernel computes them (Z is its
-    /// transpose).
+    /// Z^T (hidden units x samples): the activations as the kernel computes them (Z is their
+    /// transpose; empty where nalgebra multiplies).
     zt: DMatrix<f64>,
-    /// Gh^T (hidden units x samples): the hidden layer's gradients as the kernel computes them.
+    /// Gh^T (hidden units x samples): the hidden layer's gradients as the kernel computes them
+    /// (empty where nalgebra multiplies, which fills `gh` instead).
     ght: DMatrix<f64>,
-    /// B^T (target columns x samples), formed once.
+    /// B^T (target columns x samples), formed once, for Z^T B (empty where nalgebra
+    /// multiplies).
     bt: DMatrix<f64>,
 }
 
@@ -87,14 +93,21 @@ impl<'a> Batch<'a> {
             }
             packing
         });
-        let simd = fast(&[n, ni, nh, no, rows]).filter(|_| kernels);
-        // The transposed copies only where the kernels run.
-        let t = |r: usize| DMatrix::zeros(if simd.is_some() { r } else { 0 }, n);
-        let (mut xt, zt, ght, mut bt) = (t(ni), t(nh), t(nh), t(rows));
-        if simd.is_some() {
+        // Each product on the kernel where nalgebra called `dgemm` for it (every dimension
+        // above its small ones), the transposed copies only where they are read.
+        let simd = fast(&[n, ni, nh]).filter(|_| kernels);
+        let simd_out = simd.filter(|_| no > NALGEBRA_SMALL);
+        let simd_rhs = simd.filter(|_| rows > NALGEBRA_SMALL && s.maps.is_none());
+        let t = |on: bool, r: usize| DMatrix::zeros(if on { r } else { 0 }, n);
+        let (mut xt, mut bt) = (t(simd_out.is_some(), ni), t(simd_rhs.is_some(), rows));
+        if simd_out.is_some() {
             transpose_into(&x, &mut xt);
+        }
+        if simd_rhs.is_some() {
             transpose_into(&b, &mut bt);
         }
+        let (zt, ght) = (t(simd.is_some(), nh), t(simd_out.is_some(), nh));
+        let gh = DMatrix::zeros(n, if simd_out.is_some() { 0 } else { nh });
         Batch {
             s,
             x,
@@ -103,7 +116,7 @@ impl<'a> Batch<'a> {
             y: DMatrix::zeros(n, no),
             r: DMatrix::zeros(n, rows),
             gy: DMatrix::zeros(n, no),
-            gh: DMatrix::zeros(n, nh),
+            gh,
             gw1: DMatrix::zeros(nh, ni),
             gw2: DMatrix::zeros(no, nh),
             sums: vec![0.0; nh],
@@ -114,6 +127,8 @@ impl<'a> Batch<'a> {
             w1t: DMatrix::zeros(ni, nh),
             w2t: DMatrix::zeros(nh, no),
             simd,
+            simd_out,
+            simd_rhs,
             xt,
             zt,
             ght,
@@ -126,6 +141,7 @@ impl<'a> Batch<'a> {
         if let Some(simd) = self.simd {
             // Z^T = W1 X^T, a sample per column, its activations, and Z.
             let nh = self.zt.nrows();
+            debug_assert_eq!(w.hidden(), nh, "hidden: the batch's shape");
             abt(simd, &w.w1, &self.x, false, self.zt.as_mut_slice(), nh);
             super::logistic::logistic_columns_in_place(self.zt.as_mut_slice(), w.b1.as_slice());
             transpose_into(&self.zt, &mut self.z);
@@ -148,7 +164,7 @@ impl<'a> Batch<'a> {
 
     /// Outputs and residuals from the activations in `z`; the sum of squared residuals.
     fn outputs(&mut self, w: &Weights) -> f64 {
-        if let Some(simd) = self.simd {
+        if let Some(simd) = self.simd_out {
             let n = self.y.nrows();
             abt(simd, &self.z, &w.w2, false, self.y.as_mut_slice(), n);
         } else {
@@ -237,7 +253,7 @@ impl<'a> Batch<'a> {
             (nh + 1, targets),
             "projection: rhs sized in new"
         );
-        match self.simd {
+        match self.simd_rhs {
             Some(simd) => abt(simd, &self.zt, &self.bt, false, rhs.as_mut_slice(), nh + 1),
             None => gemm_tn(&self.z, &self.b, rhs.view_mut((0, 0), (nh, targets))),
         }
@@ -290,7 +306,7 @@ impl<'a> Batch<'a> {
         }
         // dF/dW2 = Gy^T H, dF/dH = Gy W2, dF/dZ = dF/dH . H (1 - H), dF/dW1 = Gz^T X.
         super::vectors::tr_mul_to(&self.gy, &self.z, &mut self.gw2);
-        let (gh, z) = if let Some(simd) = self.simd {
+        let (gh, z) = if let Some(simd) = self.simd_out {
             // Gh^T = W2^T Gy^T, a sample per column, as Z^T.
             self.w2t.tr_copy_from(&w.w2);
             abt(
@@ -316,7 +332,7 @@ impl<'a> Batch<'a> {
                 }
             },
         );
-        match self.simd {
+        match self.simd_out {
             // Gh^T X = Gh^T (X^T)^T.
             Some(simd) => abt(
                 simd,
@@ -334,7 +350,7 @@ impl<'a> Batch<'a> {
         let decay = 2.0 * lambda / m;
         let g = grad.as_mut_slice();
         let (gw1, w1) = (self.gw1.as_slice(), w.w1.as_slice());
-        if self.simd.is_some() {
+        if self.simd_out.is_some() {
             row_sums(&self.ght, &mut g[off_b1..off_b1 + nh]);
         } else {
             column_sums(&self.gh, &mut g[off_b1..off_b1 + nh]);
@@ -592,54 +608,67 @@ mod tests {
         }
     }
 
-    /// On shapes where every product takes `dgemm`'s kernel (more than five samples, inputs,
-    /// hidden units and outputs), the batch's passes on [`super::super::products`] give the
-    /// bits of its passes on nalgebra's products: the objective and gradient with and without
-    /// maps, and the projection's output layer, value and gradient; and both agree with the
-    /// per-sample objective.
+    /// On shapes where products take `dgemm`'s kernel (more than five samples, inputs and
+    /// hidden units; more than five outputs and target columns, or three of either, where
+    /// those products run on nalgebra's loops), the batch's passes on
+    /// [`super::super::products`] give the bits of its passes on nalgebra's products: the
+    /// objective and gradient with and without maps, and the projection's output layer, value
+    /// and gradient; and both agree with the per-sample objective.
     #[test]
     fn the_kernels_give_the_bits_of_nalgebras_products() {
-        let (ni, nh, no, n) = (7, 9, 6, 37);
-        let w = Weights {
-            w1: DMatrix::from_fn(nh, ni, |i, j| ((i * 7 + j * 3) as f64 * 0.37).sin()),
-            b1: DVector::from_fn(nh, |i, _| (i as f64 * 0.9).cos()),
-            w2: DMatrix::from_fn(no, nh, |i, j| ((i * 5 + j) as f64 * 0.53).sin()),
-            b2: DVector::from_fn(no, |i, _| i as f64 * 0.1 - 0.2),
-        };
-        for with_maps in [false, true] {
+        let (ni, nh, n) = (7, 9, 37);
+        let bits = |v: &DVector<f64>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        // (outputs, target columns, maps)
+        for (no, rows, with_maps) in [(6, 6, false), (6, 6, true), (3, 3, false), (6, 3, true)] {
+            let w = Weights {
+                w1: DMatrix::from_fn(nh, ni, |i, j| ((i * 7 + j * 3) as f64 * 0.37).sin()),
+                b1: DVector::from_fn(nh, |i, _| (i as f64 * 0.9).cos()),
+                w2: DMatrix::from_fn(no, nh, |i, j| ((i * 5 + j) as f64 * 0.53).sin()),
+                b2: DVector::from_fn(no, |i, _| i as f64 * 0.1 - 0.2),
+            };
             let mut s = Samples::default();
             let mut maps = Vec::new();
             for k in 0..n {
                 let t = k as f64;
                 s.x.push((0..ni).map(|i| (t * 0.7 + i as f64).sin() * 1.3).collect());
-                s.b.push((0..no).map(|o| (t * 0.3 - o as f64).cos() * 0.4).collect());
-                maps.push(DMatrix::from_fn(no, no, |i, j| {
+                s.b.push(
+                    (0..rows)
+                        .map(|o| (t * 0.3 - o as f64).cos() * 0.4)
+                        .collect(),
+                );
+                maps.push(DMatrix::from_fn(rows, no, |i, j| {
                     ((k + i * 2 + j) as f64).cos()
                 }));
             }
             s.maps = with_maps.then_some(maps);
-            let mut fast = Batch::new(&s, &w);
+            let case = format!("{no} outputs, {rows} target columns, maps {with_maps}");
+            let mut kernel = Batch::new(&s, &w);
             #[cfg(target_arch = "x86_64")]
-            assert_eq!(
-                fast.simd.is_some(),
-                pulp::x86::V3::try_new().is_some(),
-                "the kernels run on this shape where the processor has AVX2 and FMA"
-            );
+            {
+                let v3 = pulp::x86::V3::try_new().is_some();
+                assert_eq!(kernel.simd.is_some(), v3, "{case}");
+                assert_eq!(kernel.simd_out.is_some(), v3 && no == 6, "{case}");
+                assert_eq!(kernel.simd_rhs.is_some(), v3 && !with_maps && rows == 6);
+            }
             let mut plain = Batch::with_kernels(&s, &w, false);
-            let (mut gf, mut gp) = (DVector::zeros(w.len()), DVector::zeros(w.len()));
-            let ff = fast.objective(&w, 0.3, &mut gf);
+            let (mut gk, mut gp) = (DVector::zeros(w.len()), DVector::zeros(w.len()));
+            let fk = kernel.objective(&w, 0.3, &mut gk);
             let fp = plain.objective(&w, 0.3, &mut gp);
-            assert_eq!(ff.to_bits(), fp.to_bits(), "maps {with_maps}");
-            assert_eq!(gf, gp);
+            assert_eq!(fk.to_bits(), fp.to_bits(), "{case}");
+            assert_eq!(bits(&gk), bits(&gp), "{case}");
             let mut gd = DVector::zeros(w.len());
             let fd = objective(&s, &w, 0.3, &mut gd);
-            assert!((ff - fd).abs() < 1e-12 && (&gf - &gd).amax() < 1e-12);
+            assert!(
+                (fk - fd).abs() < 1e-12 && (&gk - &gd).amax() < 1e-12,
+                "{case}"
+            );
             if !with_maps {
-                let (mut wf, mut wp) = (w.clone(), w.clone());
-                let ff = fast.objective_projected(&mut wf, 0.3, &mut gf);
+                let (mut wk, mut wp) = (w.clone(), w.clone());
+                let fk = kernel.objective_projected(&mut wk, 0.3, &mut gk);
                 let fp = plain.objective_projected(&mut wp, 0.3, &mut gp);
-                assert_eq!(ff.to_bits(), fp.to_bits());
-                assert_eq!((wf.to_vector(), gf), (wp.to_vector(), gp));
+                assert_eq!(fk.to_bits(), fp.to_bits(), "{case}");
+                assert_eq!(bits(&gk), bits(&gp), "{case}");
+                assert_eq!(bits(&wk.to_vector()), bits(&wp.to_vector()), "{case}");
             }
         }
     }

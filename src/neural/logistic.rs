@@ -83,5 +83,15 @@ mod tests {
         for (got, z) in v.iter().zip(&z) {
             assert_eq!(got.to_bits(), logistic_vectorised(z + 0.5).to_bits(), "{z}");
         }
+        // A batch stored a sample per column: the bits of each unit over the batch.
+        let biases = [0.5, -1.25, 3.0];
+        let mut columns = z[..51].to_vec();
+        logistic_columns_in_place(&mut columns, &biases);
+        for (unit, &b) in biases.iter().enumerate() {
+            let mut one: Vec<f64> = z[..51].iter().skip(unit).step_by(3).copied().collect();
+            logistic_in_place(&mut one, b);
+            let got: Vec<f64> = columns.iter().skip(unit).step_by(3).copied().collect();
+            assert_eq!(got, one, "unit {unit}");
+        }
     }
 }

@@ -2,22 +2,25 @@
 //! calls for them: `matrixmultiply`'s `dgemm` where every dimension exceeds
 //! [`NALGEBRA_SMALL`] (nalgebra's own loops below, which the batch runs itself).
 //!
-//! `dgemm`'s fused kernel (chosen where the processor has FMA and AVX2) computes each entry as
-//! one chain of fused multiply-adds over the inner index in order from +0, restarted every
-//! [`KC`] indices, each chain added to the entry (`C = ab + 0` for the first, `C = ab + C`
-//! after). [`abt`] computes the same chains on operands laid out so that both are read in
-//! place, C = A B^T with A and B column-major and the chains running over their columns (the
-//! batch keeps a transposed copy of the samples and of the hidden activations for the
-//! products over the samples), where `dgemm` first copies both into packed panels. Its tiles
-//! are 8 x 6 entries, twelve chains in flight, where `dgemm`'s 8 x 4 keep eight. A symmetric
-//! A A^T computes its lower triangle and mirrors it: a fused multiply-add does not depend on
-//! the order of its two factors. On Case D's 150 samples and a 24-32-6 network, one projected
-//! objective with its gradient took 85-89 us on `dgemm` and 64-70 us here (criterion, the
-//! same hour; the packing was a quarter of `dgemm`'s time, 8 x 4 tiles here 8 % slower than
-//! 8 x 6).
+//! `dgemm`'s AVX2 kernel (chosen where the processor has FMA and AVX2 but not AVX-512)
+//! computes each entry as one chain of fused multiply-adds over the inner index in order from
+//! +0, restarted every 256 indices (`KC`), each chain added to the entry (`C = ab + 0` for the
+//! first, `C = ab + C` after). [`abt`] computes the same chains on operands laid out so that
+//! both are read in place, C = A B^T with A and B column-major and the chains running over
+//! their columns (the batch keeps a transposed copy of the samples and of the hidden
+//! activations for the products over the samples), where `dgemm` first copies both into
+//! packed panels. Its tiles are 8 x 6 entries, twelve chains in flight, where `dgemm`'s AVX2
+//! tiles of 8 x 4 keep eight. A symmetric A A^T computes its lower triangle and mirrors it: a
+//! fused multiply-add does not depend on the order of its two factors. On Case D's 150
+//! samples and a 30-32-6 network, one projected objective with its gradient took 90 / 102 /
+//! 93 us on `dgemm` and 78 / 74 / 68 us here (criterion, alternated the same hour; the
+//! packing was a quarter of `dgemm`'s time, 8 x 4 tiles here 8 % slower than 8 x 6).
 //!
-//! Where pulp's V3 (AVX2 and FMA) is not there, `dgemm` does not run its fused kernel: the
-//! batch runs nalgebra's products ([`fast`] says which).
+//! Where the processor has AVX-512, `dgemm` runs its AVX-512 kernel: the same chains, the
+//! first block stored as `ab` rather than `ab + 0`, which differ only for a chain whose
+//! products all underflow to -0 (-0 there, +0 here). Where pulp's V3 (x86-64-v3: AVX2, FMA
+//! and the rest) is not there, `dgemm` does not run a fused kernel: the batch runs nalgebra's
+//! products ([`fast`] says which).
 
 use nalgebra::DMatrix;
 
@@ -25,21 +28,23 @@ use nalgebra::DMatrix;
 /// `dgemm` (nalgebra 0.34's `SMALL_DIM`).
 pub const NALGEBRA_SMALL: usize = 5;
 
-/// `matrixmultiply`'s `D_KC`: the inner indices one chain of its kernel runs over.
-pub const KC: usize = 256;
+/// `matrixmultiply`'s `D_KC`: the inner indices one chain of its kernel runs over (a build of
+/// `matrixmultiply` with `MATMUL_DGEMM_KC` set to another value would give other bits; the
+/// tests would say so).
+const KC: usize = 256;
 
-/// The instruction set the kernels run on (none off x86-64).
+/// The instruction set the kernel runs on (none off x86-64).
 #[cfg(target_arch = "x86_64")]
-pub type Simd = pulp::x86::V3;
-/// The instruction set the kernels run on (none off x86-64).
+pub type Isa = pulp::x86::V3;
+/// The instruction set the kernel runs on (none off x86-64).
 #[cfg(not(target_arch = "x86_64"))]
 #[derive(Clone, Copy, Debug)]
-pub enum Simd {}
+pub enum Isa {}
 
 /// AVX2 with FMA, where products whose dimensions all exceed [`NALGEBRA_SMALL`] (every one of
 /// `dims`) run through `dgemm`'s fused kernel: [`abt`] then gives their bits. None where the
 /// caller must run nalgebra's products.
-pub fn fast(dims: &[usize]) -> Option<Simd> {
+pub fn fast(dims: &[usize]) -> Option<Isa> {
     if dims.iter().any(|&d| d <= NALGEBRA_SMALL) {
         return None;
     }
@@ -52,10 +57,11 @@ pub fn fast(dims: &[usize]) -> Option<Simd> {
 /// `C = A B^T` (A: m x k, B: n x k, both column-major) into `out`, entry (r, c) at
 /// `out[c ldo + r]` (a column-major matrix with `ldo` rows, or its top-left block): each
 /// entry the chain sum_p A(r, p) B(c, p) of `dgemm`'s fused kernel, so the bits of nalgebra's
-/// product of A by a transposed copy of B (and of B A^T transposed). With `symmetric` (B is A)
-/// the lower triangle is computed and mirrored.
+/// product of A by a transposed copy of B (and of B A^T transposed). With `symmetric` (B is A,
+/// the same matrix) the lower triangle is computed and mirrored. Without chains (k = 0) C is
+/// zero.
 pub fn abt(
-    simd: Simd,
+    simd: Isa,
     a: &DMatrix<f64>,
     b: &DMatrix<f64>,
     symmetric: bool,
@@ -65,7 +71,7 @@ pub fn abt(
     let (m, k) = a.shape();
     let n = b.nrows();
     assert!(
-        b.ncols() == k && (!symmetric || m == n),
+        b.ncols() == k && (!symmetric || std::ptr::eq(a, b)),
         "abt: shapes {:?} {:?}^T",
         a.shape(),
         b.shape(),
@@ -75,6 +81,12 @@ pub fn abt(
         "abt: {m} x {n} entries with {ldo} rows beyond {} values",
         out.len()
     );
+    if k == 0 {
+        for column in out.chunks_mut(ldo).take(n) {
+            column[..m].fill(0.0);
+        }
+        return;
+    }
     #[cfg(target_arch = "x86_64")]
     simd.vectorize(Abt {
         simd,
@@ -157,7 +169,8 @@ fn store_part(c: &mut [f64], v: f64x4) {
 
 /// The columns of C one tile computes: 2 x 6 accumulators in AVX2 registers, twelve chains in
 /// flight (with four columns, eight chains, the projected objective took 8 % longer: each
-/// chain waits on its last multiply-add).
+/// chain waits on its last multiply-add). The dispatch in [`Abt`] instantiates tiles of 1 to
+/// 6 columns.
 #[cfg(target_arch = "x86_64")]
 const COLUMNS: usize = 6;
 
@@ -194,7 +207,7 @@ impl pulp::NullaryFnOnce for Abt<'_> {
             symmetric,
         } = self;
         for p0 in (0..k).step_by(KC) {
-            let t = Tile {
+            let t = Block {
                 a,
                 b,
                 m,
@@ -211,18 +224,18 @@ impl pulp::NullaryFnOnce for Abt<'_> {
                 let end = if symmetric { (r + width).min(n) } else { n };
                 for c in (0..end).step_by(COLUMNS) {
                     match (width, (end - c).min(COLUMNS)) {
-                        (8, 6) => t.block::<2, 6>(simd, r, width, c, out),
-                        (8, 5) => t.block::<2, 5>(simd, r, width, c, out),
-                        (8, 4) => t.block::<2, 4>(simd, r, width, c, out),
-                        (8, 3) => t.block::<2, 3>(simd, r, width, c, out),
-                        (8, 2) => t.block::<2, 2>(simd, r, width, c, out),
-                        (8, _) => t.block::<2, 1>(simd, r, width, c, out),
-                        (_, 6) => t.block::<1, 6>(simd, r, width, c, out),
-                        (_, 5) => t.block::<1, 5>(simd, r, width, c, out),
-                        (_, 4) => t.block::<1, 4>(simd, r, width, c, out),
-                        (_, 3) => t.block::<1, 3>(simd, r, width, c, out),
-                        (_, 2) => t.block::<1, 2>(simd, r, width, c, out),
-                        _ => t.block::<1, 1>(simd, r, width, c, out),
+                        (8, 6) => t.tile::<2, 6>(simd, r, width, c, out),
+                        (8, 5) => t.tile::<2, 5>(simd, r, width, c, out),
+                        (8, 4) => t.tile::<2, 4>(simd, r, width, c, out),
+                        (8, 3) => t.tile::<2, 3>(simd, r, width, c, out),
+                        (8, 2) => t.tile::<2, 2>(simd, r, width, c, out),
+                        (8, _) => t.tile::<2, 1>(simd, r, width, c, out),
+                        (_, 6) => t.tile::<1, 6>(simd, r, width, c, out),
+                        (_, 5) => t.tile::<1, 5>(simd, r, width, c, out),
+                        (_, 4) => t.tile::<1, 4>(simd, r, width, c, out),
+                        (_, 3) => t.tile::<1, 3>(simd, r, width, c, out),
+                        (_, 2) => t.tile::<1, 2>(simd, r, width, c, out),
+                        _ => t.tile::<1, 1>(simd, r, width, c, out),
                     }
                 }
                 r += width;
@@ -238,9 +251,9 @@ impl pulp::NullaryFnOnce for Abt<'_> {
     }
 }
 
-/// [`abt`]'s product over one block of the chains' indices.
+/// [`abt`]'s product over one block of [`KC`] of the chains' indices (or fewer, the last).
 #[cfg(target_arch = "x86_64")]
-struct Tile<'s> {
+struct Block<'s> {
     a: &'s [f64],
     b: &'s [f64],
     m: usize,
@@ -251,11 +264,11 @@ struct Tile<'s> {
 }
 
 #[cfg(target_arch = "x86_64")]
-impl Tile<'_> {
+impl Block<'_> {
     /// Entries r..r + `width` (4 RV, or fewer than 4 with RV 1) by c..c + NC: one chain of
     /// fused multiply-adds per entry over the block's indices.
     #[inline(always)]
-    fn block<const RV: usize, const NC: usize>(
+    fn tile<const RV: usize, const NC: usize>(
         &self,
         simd: pulp::x86::V3,
         r: usize,
@@ -356,6 +369,8 @@ mod tests {
             (33, 300, 11),
             (9, 520, 6),
             (6, 6, 7),
+            (7, 300, 10),
+            (12, 260, 6),
         ];
         let mut checked = 0;
         for (m, k, n) in shapes {
@@ -378,6 +393,11 @@ mod tests {
             let mut got = DMatrix::from_element(m, m, f64::NAN);
             abt(simd, &a, &a, true, got.as_mut_slice(), m);
             assert_eq!(bits(&got), bits(&want), "symmetric {m} x {k}");
+            // Without chains, zero.
+            let empty = DMatrix::<f64>::zeros(m, 0);
+            let mut zero = DMatrix::from_element(m, m, f64::NAN);
+            abt(simd, &empty, &empty, true, zero.as_mut_slice(), m);
+            assert!(zero.iter().all(|&v| v == 0.0));
         }
         #[cfg(target_arch = "x86_64")]
         if pulp::x86::V3::try_new().is_some() {
@@ -385,12 +405,17 @@ mod tests {
         }
         // Where a dimension is nalgebra's small one, the batch runs nalgebra's loops.
         assert!(fast(&[5, 100, 100]).is_none() && fast(&[100, 100, 5]).is_none());
-        // A product rounded otherwise differs from the kernel's (a sum of the products
-        // without fusing): the comparisons above can tell.
+        // Where the kernel runs, a sum of the same products rounded one by one differs from
+        // nalgebra's somewhere: the comparisons above can tell a multiply-add that is not
+        // fused.
         let (a, b) = (spread(40, 30, 5), spread(8, 30, 6));
-        let product = &a * b.transpose();
-        let unfused: f64 = (0..30).map(|p| a[(3, p)] * b[(2, p)]).sum();
-        assert_ne!(unfused.to_bits(), product[(3, 2)].to_bits());
+        if fast(&[40, 30, 8]).is_some() {
+            let product = &a * b.transpose();
+            let unfused = DMatrix::from_fn(40, 8, |r, c| {
+                (0..30).fold(0.0, |t, p| t + a[(r, p)] * b[(c, p)])
+            });
+            assert_ne!(bits(&unfused), bits(&product));
+        }
     }
 
     #[test]
