@@ -4,7 +4,7 @@
 //! The products run on [`super::products`]'s kernel where it gives the bits of nalgebra's
 //! (AVX2 and FMA, every dimension above nalgebra's small ones), on nalgebra elsewhere.
 
-use super::products::{Isa, NALGEBRA_SMALL, abt, fast, transpose_into};
+use super::products::{Isa, NALGEBRA_SMALL, abt, fast};
 use super::samples::{Samples, weight_norm2};
 use super::vectors::{add_products, sub_products};
 use super::weights::Weights;
@@ -39,7 +39,7 @@ pub struct Batch<'a> {
     /// (row, c) of sample k at (row outputs + c) n + k, every sample's side by side.
     maps: Vec<f64>,
     /// W1^T and W2^T, copied in at every pass (an owned transpose per pass would allocate;
-    /// [`super::products`] reads W1 in place and needs W2^T only).
+    /// [`super::products`] reads W1 in place, W1^T is then empty, and needs W2^T only).
     w1t: DMatrix<f64>,
     w2t: DMatrix<f64>,
     /// AVX2 and FMA where the samples, inputs and hidden units take `dgemm`'s fused kernel:
@@ -101,10 +101,10 @@ impl<'a> Batch<'a> {
         let t = |on: bool, r: usize| DMatrix::zeros(if on { r } else { 0 }, n);
         let (mut xt, mut bt) = (t(simd_out.is_some(), ni), t(simd_rhs.is_some(), rows));
         if simd_out.is_some() {
-            transpose_into(&x, &mut xt);
+            x.transpose_to(&mut xt);
         }
         if simd_rhs.is_some() {
-            transpose_into(&b, &mut bt);
+            b.transpose_to(&mut bt);
         }
         let (zt, ght) = (t(simd.is_some(), nh), t(simd_out.is_some(), nh));
         let gh = DMatrix::zeros(n, if simd_out.is_some() { 0 } else { nh });
@@ -124,7 +124,8 @@ impl<'a> Batch<'a> {
             normal: DMatrix::zeros(nh + 1, nh + 1),
             rhs: DMatrix::zeros(nh + 1, rows),
             maps,
-            w1t: DMatrix::zeros(ni, nh),
+            // Read where nalgebra computes the hidden layer only.
+            w1t: DMatrix::zeros(ni, if simd.is_some() { 0 } else { nh }),
             w2t: DMatrix::zeros(nh, no),
             simd,
             simd_out,
@@ -144,7 +145,7 @@ impl<'a> Batch<'a> {
             debug_assert_eq!(w.hidden(), nh, "hidden: the batch's shape");
             abt(simd, &w.w1, &self.x, false, self.zt.as_mut_slice(), nh);
             super::logistic::logistic_columns_in_place(self.zt.as_mut_slice(), w.b1.as_slice());
-            transpose_into(&self.zt, &mut self.z);
+            self.zt.transpose_to(&mut self.z);
             return;
         }
         self.w1t.tr_copy_from(&w.w1);

@@ -106,49 +106,10 @@ pub fn abt(
     }
 }
 
-/// `t <- m^T` (t: m's columns x its rows), both column-major.
-pub fn transpose_into(m: &DMatrix<f64>, t: &mut DMatrix<f64>) {
-    let (r, c) = m.shape();
-    assert_eq!(t.shape(), (c, r), "transpose_into: shapes");
-    if r == 0 || c == 0 {
-        return;
-    }
-    let (src, dst) = (m.as_slice(), t.as_mut_slice());
-    // Four columns of t (rows of m) at a time, m read a column at a time: each value of m
-    // read once, and four cache lines of t written side by side.
-    for (i, block) in dst.chunks_mut(4 * c).enumerate() {
-        let i = 4 * i;
-        if block.len() == 4 * c {
-            let (d0, rest) = block.split_at_mut(c);
-            let (d1, rest) = rest.split_at_mut(c);
-            let (d2, d3) = rest.split_at_mut(c);
-            let lines = d0
-                .iter_mut()
-                .zip(d1.iter_mut())
-                .zip(d2.iter_mut())
-                .zip(d3.iter_mut());
-            for ((((t0, t1), t2), t3), column) in lines.zip(src.chunks_exact(r)) {
-                let v = &column[i..i + 4];
-                (*t0, *t1, *t2, *t3) = (v[0], v[1], v[2], v[3]);
-            }
-        } else {
-            for (k, line) in block.chunks_exact_mut(c).enumerate() {
-                for (t, column) in line.iter_mut().zip(src.chunks_exact(r)) {
-                    *t = column[i + k];
-                }
-            }
-        }
-    }
-}
-
+#[cfg(target_arch = "x86_64")]
+use super::vectors::{load4, store4};
 #[cfg(target_arch = "x86_64")]
 use pulp::{Simd as _, f64x4};
-
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn load(c: &[f64]) -> f64x4 {
-    f64x4(c[0], c[1], c[2], c[3])
-}
 
 /// The first four values of `c`, or those there are with zeros after them.
 #[cfg(target_arch = "x86_64")]
@@ -299,7 +260,7 @@ impl Block<'_> {
                     // SAFETY: ap is A's column p from row r, whose 4 RV values lie within A
                     // (asserted for every p of the block).
                     let q = unsafe { ap.add(4 * v).cast::<[f64; 4]>().read_unaligned() };
-                    *x = f64x4(q[0], q[1], q[2], q[3]);
+                    *x = load4(&q);
                 }
                 for (cc, chains) in acc.iter_mut().enumerate() {
                     // SAFETY: bp is B's column p from row c, whose NC values lie within B.
@@ -327,9 +288,8 @@ impl Block<'_> {
             for (v, &chain) in chains.iter().enumerate() {
                 let dst = &mut column[4 * v..(4 * v + 4).min(width)];
                 if full {
-                    let sum = if self.first { zero } else { load(dst) };
-                    let sum = simd.add_f64s(chain, sum);
-                    dst.copy_from_slice(&[sum.0, sum.1, sum.2, sum.3]);
+                    let sum = if self.first { zero } else { load4(dst) };
+                    store4(dst, simd.add_f64s(chain, sum));
                 } else {
                     let sum = if self.first { zero } else { load_part(dst) };
                     store_part(dst, simd.add_f64s(chain, sum));
@@ -416,13 +376,5 @@ mod tests {
             });
             assert_ne!(bits(&unfused), bits(&product));
         }
-    }
-
-    #[test]
-    fn transposes() {
-        let m = spread(19, 11, 0);
-        let mut t = DMatrix::zeros(11, 19);
-        transpose_into(&m, &mut t);
-        assert_eq!(t, m.transpose());
     }
 }

@@ -55,12 +55,11 @@ fn dot_plain(a: &[f64], b: &[f64]) -> f64 {
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn dot_v3(simd: pulp::x86::V3, a: &[f64], b: &[f64]) -> f64 {
-    use pulp::{Simd, f64x4};
-    let load = |c: &[f64]| f64x4(c[0], c[1], c[2], c[3]);
+    use pulp::Simd;
     let (mut lo, mut hi) = (simd.splat_f64s(0.0), simd.splat_f64s(0.0));
     for (ca, cb) in a.chunks_exact(8).zip(b.chunks_exact(8)) {
-        lo = simd.add_f64s(lo, simd.mul_f64s(load(&ca[..4]), load(&cb[..4])));
-        hi = simd.add_f64s(hi, simd.mul_f64s(load(&ca[4..]), load(&cb[4..])));
+        lo = simd.add_f64s(lo, simd.mul_f64s(load4(&ca[..4]), load4(&cb[..4])));
+        hi = simd.add_f64s(hi, simd.mul_f64s(load4(&ca[4..]), load4(&cb[4..])));
     }
     finish(a, b, [lo.0, lo.1, lo.2, lo.3], [hi.0, hi.1, hi.2, hi.3])
 }
@@ -76,6 +75,20 @@ fn finish(a: &[f64], b: &[f64], lo: [f64; 4], hi: [f64; 4]) -> f64 {
         res += a[k] * b[k];
     }
     res
+}
+
+/// The first four values of `c` in an AVX2 register.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(super) fn load4(c: &[f64]) -> pulp::f64x4 {
+    pulp::f64x4(c[0], c[1], c[2], c[3])
+}
+
+/// `v` into the first four values of `c`.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(super) fn store4(c: &mut [f64], v: pulp::f64x4) {
+    c[..4].copy_from_slice(&[v.0, v.1, v.2, v.3]);
 }
 
 /// a . b: nalgebra's `a.dot(&b)`.
@@ -156,22 +169,21 @@ impl<const SUB: bool> pulp::NullaryFnOnce for ElementwiseV3<'_, SUB> {
 
     #[inline(always)]
     fn call(self) {
-        use pulp::{Simd, f64x4};
+        use pulp::Simd;
         let simd = self.simd;
-        let load = |c: &[f64]| f64x4(c[0], c[1], c[2], c[3]);
         for ((yc, ac), xc) in self
             .y
             .chunks_exact_mut(4)
             .zip(self.a.chunks_exact(4))
             .zip(self.x.chunks_exact(4))
         {
-            let p = simd.mul_f64s(load(ac), load(xc));
+            let p = simd.mul_f64s(load4(ac), load4(xc));
             let v = if SUB {
-                simd.sub_f64s(load(yc), p)
+                simd.sub_f64s(load4(yc), p)
             } else {
-                simd.add_f64s(load(yc), p)
+                simd.add_f64s(load4(yc), p)
             };
-            yc.copy_from_slice(&[v.0, v.1, v.2, v.3]);
+            store4(yc, v);
         }
     }
 }
