@@ -76,10 +76,121 @@ pub mod json_number {
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// A write waiting for its transaction: the complete temporary file beside its destination.
+/// A write waiting for its transaction: the complete temporary file beside its destination
+/// (or, for a stream, in the system's temporary folder).
 struct Staged {
     path: PathBuf,
+    target: Target,
     tmp: tempfile::NamedTempFile,
+}
+
+/// Where the bytes written to a path land.
+#[derive(Clone, Debug, PartialEq)]
+enum Target {
+    /// A file replaced by a rename: the path itself, or the file its symbolic links lead to
+    /// (the links stay links).
+    File(PathBuf),
+    /// A device, a FIFO or a socket (`/dev/null`, a pipe), or this process's standard
+    /// output or error: written in place, at the end of the command, as a stream. A rename
+    /// there would put a plain file where the device or the link was.
+    Stream,
+}
+
+/// The most symbolic links followed before a path is taken as it is (Linux's own limit).
+const MAX_LINKS: usize = 40;
+
+/// Where writing to `path` lands ([`Target`]). Symbolic links are followed by hand, so that
+/// one naming a file that does not exist yet is written through too; a link into `/proc`
+/// or `/dev/fd` (`/dev/stdout`) names an open stream.
+fn target_of(path: &Path) -> Target {
+    let mut p = path.to_path_buf();
+    for _ in 0..MAX_LINKS {
+        let Ok(link) = std::fs::read_link(&p) else {
+            break;
+        };
+        p = match p.parent() {
+            Some(dir) if link.is_relative() => dir.join(link),
+            _ => link,
+        };
+        if p.starts_with("/proc") || p.starts_with("/dev/fd") {
+            return Target::Stream;
+        }
+    }
+    match std::fs::metadata(&p) {
+        Ok(m) if m.is_dir() => Target::File(p),
+        Ok(m) if !m.is_file() || standard_stream(&m).is_some() => Target::Stream,
+        _ => Target::File(p),
+    }
+}
+
+/// This process's standard output or error.
+#[derive(Clone, Copy)]
+enum Standard {
+    Out,
+    Err,
+}
+
+/// Which of this process's standard output and error `m` is the file behind, if either (a
+/// shell's `> file` given as `--out` too: a rename would leave the process writing to a
+/// deleted file).
+#[cfg(unix)]
+fn standard_stream(m: &std::fs::Metadata) -> Option<Standard> {
+    use std::os::fd::AsFd;
+    use std::os::unix::fs::MetadataExt;
+    let same = |fd: std::os::fd::BorrowedFd| {
+        fd.try_clone_to_owned()
+            .ok()
+            .and_then(|fd| std::fs::File::from(fd).metadata().ok())
+            .is_some_and(|s| s.dev() == m.dev() && s.ino() == m.ino())
+    };
+    if same(std::io::stdout().as_fd()) {
+        Some(Standard::Out)
+    } else if same(std::io::stderr().as_fd()) {
+        Some(Standard::Err)
+    } else {
+        None
+    }
+}
+
+#[cfg(not(unix))]
+fn standard_stream(_: &std::fs::Metadata) -> Option<Standard> {
+    None
+}
+
+/// Puts a finished temporary file where it belongs: renamed over a file, or copied into a
+/// stream: this process's own standard output or error through their handles (the text
+/// printed around it keeps its order), any other stream opened for appending.
+fn deliver(path: &Path, target: &Target, tmp: tempfile::NamedTempFile) -> Result<()> {
+    match target {
+        Target::File(to) => tmp
+            .persist(to)
+            .map(|_| ())
+            .map_err(|e| Error::io(path, bare(e.error))),
+        Target::Stream => write_stream(path, &tmp),
+    }
+}
+
+/// [`deliver`] into a stream.
+fn write_stream(path: &Path, tmp: &tempfile::NamedTempFile) -> Result<()> {
+    let bytes = std::fs::read(tmp.path()).map_err(|e| Error::io(path, e))?;
+    let written = match std::fs::metadata(path)
+        .ok()
+        .and_then(|m| standard_stream(&m))
+    {
+        Some(Standard::Out) => {
+            let mut o = std::io::stdout().lock();
+            o.write_all(&bytes).and_then(|_| o.flush())
+        }
+        Some(Standard::Err) => {
+            let mut e = std::io::stderr().lock();
+            e.write_all(&bytes).and_then(|_| e.flush())
+        }
+        None => std::fs::OpenOptions::new()
+            .append(true)
+            .open(path)
+            .and_then(|mut f| f.write_all(&bytes)),
+    };
+    written.map_err(|e| Error::io(path, e))
 }
 
 /// The open transaction of this thread: its staged writes and the folders it created.
@@ -114,19 +225,27 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 /// nothing.
 pub struct AtomicWriter {
     path: PathBuf,
+    target: Target,
     out: std::io::BufWriter<tempfile::NamedTempFile>,
 }
 
 impl AtomicWriter {
-    /// A temporary file beside `path`.
+    /// A temporary file beside `path` (beside the file its links lead to; for a stream, in
+    /// the system's temporary folder).
     pub fn create(path: &Path) -> Result<AtomicWriter> {
-        let dir = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
+        let target = target_of(path);
+        let temp = std::env::temp_dir();
+        let dir = match &target {
+            Target::Stream => temp.as_path(),
+            Target::File(to) => match to.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p,
+                _ => Path::new("."),
+            },
         };
         let tmp = temporary_in(dir, path).map_err(|e| Error::io(path, bare(e)))?;
         Ok(AtomicWriter {
             path: path.to_path_buf(),
+            target,
             out: std::io::BufWriter::new(tmp),
         })
     }
@@ -136,9 +255,11 @@ impl AtomicWriter {
         &self.path
     }
 
-    /// Flushes and renames the file into place (or stages it for the open transaction).
+    /// Flushes and renames the file into place, or copies it into a stream (or stages it for
+    /// the open transaction).
     pub fn finish(self) -> Result<()> {
         let path = self.path;
+        let target = self.target;
         let tmp = self
             .out
             .into_inner()
@@ -151,17 +272,17 @@ impl AtomicWriter {
                 t.writes.retain(|w| w.path != path);
                 t.writes.push(Staged {
                     path: path.clone(),
+                    target: target.clone(),
                     tmp,
                 });
                 None
             }
             None => Some(tmp),
         });
-        if let Some(tmp) = staged {
-            tmp.persist(&path)
-                .map_err(|e| Error::io(&path, bare(e.error)))?;
+        match staged {
+            Some(tmp) => deliver(&path, &target, tmp),
+            None => Ok(()),
         }
-        Ok(())
     }
 }
 
@@ -258,10 +379,7 @@ pub fn all_or_nothing<T, E: From<Error>>(
     match result {
         Ok(v) => {
             for w in t.writes {
-                let path = w.path;
-                w.tmp
-                    .persist(&path)
-                    .map_err(|e| Error::io(&path, bare(e.error)))?;
+                deliver(&w.path, &w.target, w.tmp)?;
             }
             Ok(v)
         }
@@ -282,20 +400,24 @@ pub fn all_or_nothing<T, E: From<Error>>(
 /// here, before any output is renamed into place.
 fn destinations_ready(writes: &[Staged]) -> Result<()> {
     for w in writes {
-        if w.path.is_dir() {
+        // A stream exists and takes what it is given.
+        let Target::File(to) = &w.target else {
+            continue;
+        };
+        if to.is_dir() {
             return Err(Error::io(
                 &w.path,
                 std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a folder"),
             ));
         }
-        if !w.path.exists() {
+        if !to.exists() {
             match std::fs::OpenOptions::new()
                 .write(true)
                 .create_new(true)
-                .open(&w.path)
+                .open(to)
             {
                 Ok(_) => {
-                    let _ = std::fs::remove_file(&w.path);
+                    let _ = std::fs::remove_file(to);
                 }
                 // Another writer made it meanwhile: the name is one the folder takes.
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
@@ -458,5 +580,60 @@ mod mode_tests {
         std::fs::set_permissions(&a, std::fs::Permissions::from_mode(0o640)).unwrap();
         write_atomic(&a, b"two").unwrap();
         assert_eq!(mode(&a), 0o640);
+    }
+}
+
+#[cfg(all(test, unix))]
+mod link_tests {
+    use super::{Result, all_or_nothing, write_atomic};
+    use std::os::unix::fs::FileTypeExt;
+
+    #[test]
+    fn links_are_written_through_and_stay_links() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("real")).unwrap();
+        let (file, link) = (dir.path().join("real/a.csv"), dir.path().join("a.csv"));
+        std::fs::write(&file, "old").unwrap();
+        std::os::unix::fs::symlink("real/a.csv", &link).unwrap();
+        write_atomic(&link, b"new").unwrap();
+        assert!(std::fs::symlink_metadata(&link).unwrap().is_symlink());
+        assert_eq!(std::fs::read(&file).unwrap(), b"new");
+        // A link to a file not there yet (and a link to that link), in a transaction.
+        let (second, chain) = (dir.path().join("b.csv"), dir.path().join("c.csv"));
+        std::os::unix::fs::symlink(dir.path().join("real/b.csv"), &second).unwrap();
+        std::os::unix::fs::symlink("b.csv", &chain).unwrap();
+        let r: Result<()> = all_or_nothing(|| write_atomic(&chain, b"made"));
+        r.unwrap();
+        assert!(std::fs::symlink_metadata(&second).unwrap().is_symlink());
+        assert!(std::fs::symlink_metadata(&chain).unwrap().is_symlink());
+        assert_eq!(
+            std::fs::read(dir.path().join("real/b.csv")).unwrap(),
+            b"made"
+        );
+        // No temporary file is left beside the links or their files.
+        let count = |d: &std::path::Path| std::fs::read_dir(d).unwrap().count();
+        assert_eq!((count(dir.path()), count(&dir.path().join("real"))), (4, 2));
+    }
+
+    #[test]
+    fn a_fifo_is_written_into_not_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("pipe");
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .expect("mkfifo runs");
+        assert!(made.success());
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || std::fs::read(fifo).unwrap())
+        };
+        let r: Result<()> = all_or_nothing(|| write_atomic(&fifo, b"through the pipe\n"));
+        r.unwrap();
+        // Checked before joining: had the pipe been replaced, its reader would wait forever.
+        let kind = std::fs::symlink_metadata(&fifo).unwrap().file_type();
+        assert!(kind.is_fifo(), "{kind:?}");
+        assert_eq!(reader.join().unwrap(), b"through the pipe\n");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 }

@@ -138,7 +138,8 @@ fn unreachable_pose_is_an_error_for_one_pose_and_marked_in_a_batch() {
         "{}",
         stdout(&o)
     );
-    assert!(stderr(&o).contains("line 2"), "{}", stderr(&o));
+    let line = format!("{}:2: ", input.display());
+    assert!(stderr(&o).contains(&line), "{}", stderr(&o));
 }
 
 fn expect_failure(args: &[&str], needles: &[&str]) {

@@ -1026,3 +1026,36 @@ fn a_reading_logged_with_other_joints_is_left_out_of_training() {
     assert!(report.notes.iter().any(|n| n.contains("kept as asked")));
     assert_ne!(kept.to_file_text().unwrap(), c.to_file_text().unwrap());
 }
+
+/// The MLPs' hidden units or penalty given: the RBF network alone (no MLP) is no candidate,
+/// a blend with those MLPs still is; without them the RBF network alone is tried.
+#[test]
+fn mlp_flags_keep_the_rbf_network_alone_out() {
+    use robocal::neural::compensator::{Form, Network, Refine};
+    let (model, train) = case_d_offsets();
+    let networks = |hidden: Option<usize>, penalty: Option<f64>| {
+        let opts = CompensatorOptions {
+            form: Some(Form::Pose),
+            members: Some(1),
+            refine: Refine::Off,
+            hidden,
+            penalty,
+            ..Default::default()
+        };
+        let (_, report) = Compensator::train(&model, &train, &opts, &|_, _| {}).unwrap();
+        let sel = report.selection.expect("cross-validated");
+        let mut n: Vec<Network> = sel.candidates.iter().map(|c| c.settings.network).collect();
+        n.dedup();
+        let chosen = &sel.candidates[sel.chosen].settings;
+        if let Some(h) = hidden {
+            assert_eq!(chosen.hidden, h, "{chosen:?}");
+        }
+        n
+    };
+    for (h, p) in [(Some(8), None), (None, Some(1.0)), (Some(8), Some(1.0))] {
+        let n = networks(h, p);
+        assert!(!n.contains(&Network::Rbf), "{h:?} {p:?}: {n:?}");
+        assert!(n.contains(&Network::Mix), "{h:?} {p:?}: {n:?}");
+    }
+    assert!(networks(None, None).contains(&Network::Rbf));
+}

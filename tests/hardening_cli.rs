@@ -1031,3 +1031,106 @@ fn edge_inputs_of_train_and_evaluate() {
          measure orientation",
     );
 }
+
+/// Edge inputs of the twenty-third session's hunt: `--json` keeps carried ids as written;
+/// `/dev/null` takes any number of outputs and stays a device; a joint column after a gap
+/// names the missing one; a training that learned nothing says so; a file whose rows were
+/// all skipped as bad names them; `ik`'s failures name their file.
+#[test]
+fn edge_inputs_of_the_twenty_third_hunt() {
+    use common::FANUC;
+    let file = |name: &str, text: &str| {
+        let p = common::tmp(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let ids = file(
+        "hunt_ids.csv",
+        "id,q1,q2,q3,q4,q5,q6\n007,0,0,0,0,0,0\n1.50,5,5,5,5,5,5\n",
+    );
+    let o = robocal(&["fk", "--robot", FANUC, "--joints", &ids, "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(
+        (v[0]["id"].as_str(), v[1]["id"].as_str()),
+        (Some("007"), Some("1.50"))
+    );
+    assert!(v[1]["q1"].is_number() && v[1]["x"].is_number(), "{v}");
+
+    #[cfg(unix)]
+    {
+        let o = robocal(&[
+            "identify",
+            "--robot",
+            FANUC,
+            "--data",
+            "datasets/case_d/calibration.csv",
+            "--out",
+            "/dev/null",
+            "--report",
+            "/dev/null",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        use std::os::unix::fs::FileTypeExt;
+        let kind = std::fs::symlink_metadata("/dev/null").unwrap().file_type();
+        assert!(kind.is_char_device(), "/dev/null replaced: {kind:?}");
+    }
+
+    let gap = file("hunt_gap.csv", "q1,q2,q4,x,y,z\n0,0,0,1,2,3\n");
+    let out = common::tmp("hunt_gap_out.csv");
+    refused(
+        &["import", &gap, "--out", out.to_str().unwrap()],
+        "q3 is not in the file",
+    );
+    assert!(!out.exists());
+
+    let rcal = common::tmp("hunt_zero.rcal");
+    let o = common::train_fanuc(
+        "datasets/case_d/training.csv",
+        rcal.to_str().unwrap(),
+        &[
+            "--momentum-epochs",
+            "0",
+            "--max-epochs",
+            "0",
+            "--members",
+            "1",
+            "--hidden",
+            "4",
+            "--form",
+            "joint",
+            "--encoding",
+            "sincos",
+            "--penalty",
+            "1",
+            "--refine",
+            "none",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("misses its own training rows by more than the model alone"));
+
+    let bad = file(
+        "hunt_bad.csv",
+        "q1,q2,q3,q4,q5,q6,x,y,z\n0,0,0,0,0,x,1,2,3\n0,0,0,0,0,0,1,2\n",
+    );
+    refused_saying(
+        &[
+            "evaluate",
+            "--robot",
+            FANUC,
+            "--data",
+            &bad,
+            "--skip-bad-rows",
+        ],
+        &[
+            "all 2 rows were skipped as bad",
+            "hunt_bad.csv:2",
+            "hunt_bad.csv:3",
+        ],
+    );
+
+    let far = file("hunt_far.csv", "x,y,z,rz,ry,rx\n9000,0,0,0,0,0\n");
+    let o = robocal(&["ik", "--robot", FANUC, "--poses", &far]);
+    assert!(stderr(&o).contains(&format!("{far}:2: ")), "{}", stderr(&o));
+}

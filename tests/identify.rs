@@ -540,3 +540,51 @@ fn cost_only_and_normal_equation_passes_give_the_same_cost_bits() {
         }
     }
 }
+
+#[test]
+fn positions_in_metres_or_inches_are_refused_and_a_moved_frame_is_not() {
+    let nominal = fanuc();
+    let (set, _) = simulate(&table_6_1(&nominal), 40, 5, true, Observe::Pose);
+    let opts = Options {
+        params: "full".into(),
+        ..Options::default()
+    };
+    let scaled = |k: f64, turn: bool| {
+        let mut s = set.clone();
+        let r = nalgebra::Rotation3::from_euler_angles(0.4, -1.1, 2.5);
+        for m in &mut s.rows {
+            let p = m.position.unwrap() * k;
+            m.position = Some(if turn {
+                r * p + nalgebra::Vector3::new(3500.0, -800.0, 120.0)
+            } else {
+                p
+            });
+            if turn {
+                m.rotation = m.rotation.map(|q| r * q);
+            }
+        }
+        s
+    };
+    for (k, name) in [
+        (1e-3, "metres"),
+        (1.0 / 25.4, "inches"),
+        (25.4, "mm read as inches"),
+    ] {
+        let e = identify(&nominal, &scaled(k, false), &opts)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("Positions must be in mm"), "{name}: {e}");
+    }
+    // Moved and turned (a tracker's frame) the spread is the same: identified as well.
+    let rms = |s: &MeasurementSet| {
+        let id = identify(&nominal, s, &opts).unwrap();
+        evaluate_model(&id.robot, s, Measure::Pose)
+            .unwrap()
+            .position_rms_mm()
+    };
+    let (moved, here) = (rms(&scaled(1.0, true)), rms(&set));
+    assert!(
+        moved < 0.1 && (moved - here).abs() < 1e-3,
+        "{moved} vs {here}"
+    );
+}

@@ -227,3 +227,52 @@ fn bad_plans_are_refused_with_the_reason() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("ur10.toml"), "{}", stderr(&o));
 }
+
+/// A list that identifies fewer parameters than configurations spread over the region do is
+/// evaluated with a warning naming what it leaves out (its prediction leaves their errors
+/// out); a list that identifies them all is evaluated without one.
+#[test]
+fn a_list_that_identifies_less_than_a_spread_is_said_to_be_optimistic() {
+    let same = tmp("plan_same30.csv");
+    let mut text = String::from("q1,q2,q3,q4,q5,q6\n");
+    for _ in 0..30 {
+        text.push_str("10,20,30,40,50,60\n");
+    }
+    std::fs::write(&same, text).unwrap();
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        FANUC,
+        "--evaluate",
+        same.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("the list identifies 6 of the 30 parameters") && err.contains("optimistic"),
+        "{err}"
+    );
+    assert!(err.contains("a3") && !err.contains("theta1"), "{err}");
+    let spread = tmp("plan_spread.csv");
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        FANUC,
+        "--count",
+        "40",
+        "--seed",
+        "3",
+        "--out",
+        spread.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        FANUC,
+        "--evaluate",
+        spread.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("optimistic"), "{}", stderr(&o));
+}

@@ -52,6 +52,11 @@ pub fn sigma(s: &str) -> Result<f64, String> {
     real(s, "sigma", false)
 }
 
+/// `plan --target-mm`: a mean position error above 0, at most [`MAX_SIGMA`] (mm).
+pub fn target_mm(s: &str) -> Result<f64, String> {
+    real(s, "target mean position error (mm)", false)
+}
+
 /// A simulated noise sigma: 0 (no noise) to [`MAX_SIGMA`].
 pub fn noise(s: &str) -> Result<f64, String> {
     real(s, "noise sigma", true)

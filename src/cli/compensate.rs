@@ -152,7 +152,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     }
     bar.finish_and_clear();
     a.output
-        .emit(&headers, &out_rows)
+        .emit(&headers, &out_rows, written.len())
         .context("writing the commands")?;
     super::predict::warn_outside(&a.targets, &outside, true);
     let total = t.rows.len();

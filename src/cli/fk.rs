@@ -60,6 +60,7 @@ pub fn run(a: FkArgs) -> Result<()> {
     let robot = read_robot(&a.robot)?;
     let n = robot.dof();
     let written: Vec<String> = POSE_COLUMNS.iter().map(|s| s.to_string()).collect();
+    let written_count = written.len();
     let (headers, rows, joints, lines) = match (&a.q, &a.joints) {
         (Some(q), _) => {
             let q = joints_arg(&robot, q, "--q")?;
@@ -99,6 +100,6 @@ pub fn run(a: FkArgs) -> Result<()> {
     let source = a.joints.as_deref().unwrap_or(Path::new("--q"));
     warn_beyond_limits(source, &outside);
     a.output
-        .emit(&headers, &out_rows)
+        .emit(&headers, &out_rows, written_count)
         .with_context(|| "writing the FK output".to_string())
 }

@@ -10,7 +10,7 @@ use clap::Args;
 use robocal::data::{POSE_COLUMNS, Target, TargetTable, joint_columns};
 use robocal::kinematics::{IkFailure, IkOptions, IkSolver, IkStart, RobotModel, pose_from_file};
 use robocal::model::read_robot;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 #[command(group = clap::ArgGroup::new("input").required(true))]
@@ -80,6 +80,7 @@ pub fn run(a: IkArgs) -> Result<()> {
     let mut written = vec!["solution".to_string()];
     written.extend(joint_columns(n));
     written.push("status".into());
+    let written_count = written.len();
     // Inputs: headers, cells, targets, per-row seed (internal units), file lines.
     let (headers, rows, targets, row_seeds, lines) = match (&a.pose, &a.poses) {
         (Some(p), _) => {
@@ -147,9 +148,10 @@ pub fn run(a: IkArgs) -> Result<()> {
             failed.len(),
             rows.len()
         );
+        let file = a.poses.as_deref().unwrap_or(Path::new("--pose"));
         for (line, why) in &failed {
-            eprintln!("  line {line}: {why}");
+            eprintln!("  {}:{line}: {why}", file.display());
         }
     }
-    a.output.emit(&headers, &out_rows)
+    a.output.emit(&headers, &out_rows, written_count)
 }

@@ -30,9 +30,10 @@ pub struct OutputArgs {
 }
 
 impl OutputArgs {
-    /// Writes rows as CSV or JSON, to the file or stdout.
-    pub fn emit(&self, headers: &[String], rows: &[Vec<String>]) -> Result<()> {
-        emit(headers, rows, self.json, self.out.as_deref())
+    /// Writes rows as CSV or JSON, to the file or stdout; the last `written` columns are the
+    /// command's, the others carried from its input ([`rows_to_json`]).
+    pub fn emit(&self, headers: &[String], rows: &[Vec<String>], written: usize) -> Result<()> {
+        emit(headers, rows, written, self.json, self.out.as_deref())
     }
 }
 
@@ -106,41 +107,64 @@ pub fn pose_arg(s: &str, what: &str) -> Result<Vec<f64>> {
     Ok(v)
 }
 
-/// A cell as JSON: a number when it reads as one, else a string.
+/// A cell the command reads or writes as a number, as JSON: a number when finite, `null`
+/// when empty (no value), else its text (`inf`, `nan`, a status word).
 pub fn json_cell(cell: &str) -> serde_json::Value {
     match cell.parse::<f64>() {
         Ok(v) if v.is_finite() => serde_json::json!(v),
+        _ if cell.is_empty() => serde_json::Value::Null,
         _ => serde_json::Value::String(cell.to_string()),
     }
 }
 
-/// Rows as JSON objects keyed by the headers.
-pub fn rows_to_json(headers: &[String], rows: &[Vec<String>]) -> serde_json::Value {
-    serde_json::Value::Array(
-        rows.iter()
-            .map(|r| {
-                let obj = headers
-                    .iter()
-                    .zip(r)
-                    .map(|(h, c)| (h.clone(), json_cell(c)))
-                    .collect();
-                serde_json::Value::Object(obj)
-            })
-            .collect(),
-    )
+/// Whether a carried input column holds numbers the command read (joints q1.., the pose's
+/// x y z rz ry rx; renamed `input_...` where the output has its own): the other carried
+/// columns (ids, labels) are text, kept as written (`007` is not 7).
+fn read_as_number(header: &str) -> bool {
+    let name = header.strip_prefix("input_").unwrap_or(header);
+    robocal::data::POSE_COLUMNS.contains(&name)
+        || name
+            .strip_prefix('q')
+            .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+}
+
+/// Rows as JSON objects, keys in column order; the last `written` columns are the command's
+/// ([`json_cell`]), the carried ones text unless the command read them as numbers.
+pub fn rows_to_json(headers: &[String], rows: &[Vec<String>], written: usize) -> String {
+    let carried = headers.len().saturating_sub(written);
+    let numeric: Vec<bool> = (headers.iter().enumerate())
+        .map(|(i, h)| i >= carried || read_as_number(h))
+        .collect();
+    let mut out = String::from("[");
+    for (r, row) in rows.iter().enumerate() {
+        out.push_str(if r == 0 { "\n  {" } else { ",\n  {" });
+        for (i, (h, c)) in headers.iter().zip(row).enumerate() {
+            let value = if numeric[i] {
+                json_cell(c)
+            } else {
+                serde_json::Value::String(c.clone())
+            };
+            out.push_str(if i == 0 { "\n    " } else { ",\n    " });
+            out.push_str(&serde_json::Value::String(h.clone()).to_string());
+            out.push_str(": ");
+            out.push_str(&value.to_string());
+        }
+        out.push_str("\n  }");
+    }
+    out.push_str(if rows.is_empty() { "]\n" } else { "\n]\n" });
+    out
 }
 
 /// Writes rows as CSV (or JSON) to `out`, atomically, or to stdout when `out` is None.
 pub fn emit(
     headers: &[String],
     rows: &[Vec<String>],
+    written: usize,
     json: bool,
     out: Option<&Path>,
 ) -> Result<()> {
     let bytes = if json {
-        let mut b = serde_json::to_vec_pretty(&rows_to_json(headers, rows))?;
-        b.push(b'\n');
-        b
+        rows_to_json(headers, rows, written).into_bytes()
     } else {
         let mut w = robocal::data::table::CsvOut::new(headers)?;
         for r in rows {
@@ -156,5 +180,48 @@ pub fn emit(
                 .write_all(&bytes)
                 .context("writing to stdout")
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::rows_to_json;
+
+    #[test]
+    fn json_keeps_carried_text_as_written_and_the_column_order() {
+        let headers: Vec<String> = ["id", "q1", "note", "input_x", "z", "x", "status"]
+            .map(String::from)
+            .into();
+        let rows = vec![
+            ["007", "1.5", "1e5", "3", "", "2.25", "ok"]
+                .map(String::from)
+                .into(),
+            ["1.0", "-0", "", "4", "inf", "nan", "unreachable"]
+                .map(String::from)
+                .into(),
+        ];
+        let text = rows_to_json(&headers, &rows, 3);
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let want = serde_json::json!([
+            {"id": "007", "q1": 1.5, "note": "1e5", "input_x": 3.0, "z": null, "x": 2.25,
+             "status": "ok"},
+            {"id": "1.0", "q1": -0.0, "note": "", "input_x": 4.0, "z": "inf", "x": "nan",
+             "status": "unreachable"},
+        ]);
+        assert_eq!(v, want);
+        // Keys in column order, laid out as serde_json's pretty printer does.
+        let keys: Vec<usize> = headers
+            .iter()
+            .map(|h| text.find(&format!("\"{h}\"")).unwrap())
+            .collect();
+        assert!(keys.is_sorted(), "{text}");
+        // Laid out as serde_json's pretty printer lays out an array of objects.
+        let one = rows_to_json(&headers[..2], &[rows[0][..2].to_vec()], 1);
+        let pretty = serde_json::to_string_pretty(&serde_json::json!([{"id": "007"}])).unwrap();
+        assert_eq!(
+            one,
+            pretty.replace("\"007\"", "\"007\",\n    \"q1\": 1.5") + "\n"
+        );
+        assert_eq!(rows_to_json(&headers, &[], 3), "[]\n");
     }
 }

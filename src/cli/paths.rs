@@ -67,6 +67,10 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
             );
         }
         let Some(r) = resolved(path) else { continue };
+        // A device or a pipe (`/dev/null`, `/dev/stdout`) takes every output given it.
+        if std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+            continue;
+        }
         if let Some((f, p, _)) = ins.iter().find(|(_, _, i)| *i == r) {
             bail!(
                 "{flag} {} is the same file as an input ({f} {}): refusing to overwrite an input; \
@@ -152,5 +156,11 @@ mod tests {
         let report = plots.join("r.json");
         assert!(guard(&[], &[req("--plot", &plots), req("--report", &report)]).is_ok());
         assert!(guard(&[], &[req("--report", &report)]).is_err());
+        // A device takes every output given it.
+        #[cfg(unix)]
+        {
+            let null = Path::new("/dev/null");
+            assert!(guard(&[], &[req("--out", null), req("--report", null)]).is_ok());
+        }
     }
 }

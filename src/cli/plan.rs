@@ -27,7 +27,7 @@ pub struct PlanArgs {
     #[arg(long, value_parser = super::bounds::count, required_unless_present_any = ["target_mm", "evaluate"], conflicts_with_all = ["target_mm", "evaluate"])]
     count: Option<usize>,
     /// Plan the fewest units whose predicted mean position error is at most this (mm).
-    #[arg(long, value_parser = super::bounds::sigma, conflicts_with = "evaluate")]
+    #[arg(long, value_parser = super::bounds::target_mm, conflicts_with = "evaluate")]
     target_mm: Option<f64>,
     /// Predict the accuracy of an existing list instead of planning (CSV with q1..qN, deg;
     /// consecutive rows pair up for relative and distance).
@@ -225,6 +225,21 @@ pub fn run(a: PlanArgs) -> Result<()> {
     )?
     .into_configurations();
     let sigmas = a.sigma.sigmas();
+    // A list to evaluate is held against what configurations spread over the region
+    // identify (the pool `plan` would draw): parameters the list leaves out keep their
+    // nominal values, and its prediction leaves their errors out.
+    let spread = match &a.evaluate {
+        Some(_) => Some(Design::new(
+            &robot,
+            &a.params,
+            measure,
+            sigmas,
+            &pool::draw(&robot, &region, &limits, a.pool, per, a.seed)?,
+            cloud.clone(),
+            RANK_TOL,
+        )?),
+        None => None,
+    };
     let design = Design::new(
         &robot,
         &a.params,
@@ -271,6 +286,32 @@ pub fn run(a: PlanArgs) -> Result<()> {
             format!(" ({} left out: {})", dropped.len(), dropped.join(", "))
         }
     );
+    if let (Some(list), Some(spread)) = (&a.evaluate, &spread) {
+        let spread_drops: Vec<usize> = spread
+            .identifiability
+            .dropped
+            .iter()
+            .map(|d| d.param)
+            .collect();
+        let missed: Vec<String> = (design.identifiability.dropped.iter())
+            .filter(|d| !spread_drops.contains(&d.param))
+            .map(|d| names[d.param].name())
+            .collect();
+        if !missed.is_empty() {
+            eprintln!(
+                "warning: {}: the list identifies {} of the {} parameters that {} configurations \
+                 spread over the region identify; {} ({}) keep their nominal values, and the \
+                 prediction below leaves their errors out: it is optimistic, not comparable \
+                 with a planned list's",
+                list.display(),
+                design.p(),
+                spread.p(),
+                a.pool,
+                missed.len(),
+                missed.join(", ")
+            );
+        }
+    }
     let (units, chosen) = match (&a.evaluate, a.target_mm, a.count) {
         (Some(_), _, _) => ((0..design.units()).collect::<Vec<_>>(), None),
         (None, Some(t), _) => {
@@ -351,7 +392,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
                 cells
             })
             .collect();
-        emit(&headers, &cells, false, Some(out))?;
+        emit(&headers, &cells, headers.len(), false, Some(out))?;
         println!("wrote {} ({} rows)", out.display(), rows.len());
     }
     if let Some(path) = &a.report {

@@ -86,7 +86,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     super::fk::warn_beyond_limits(&a.joints, &beyond);
     warn_outside(&a.joints, &outside, true);
     a.output
-        .emit(&headers, &out)
+        .emit(&headers, &out, written.len())
         .with_context(|| "writing the predictions".to_string())
 }
 

@@ -146,6 +146,46 @@ enum Controller<'a> {
     },
 }
 
+/// The largest difference of joint-axis distances ([`axis_distance_gap`]) a calibrated model
+/// may have from its nominal, as a fraction of the arm's size: calibrations change them by
+/// millimetres, another robot's model by tens of percent.
+pub const GEOMETRY_GAP: f64 = 0.1;
+
+/// How far `calibrated`'s arm is from `nominal`'s, whatever the base and tool frames: at
+/// eight configurations spread over the nominal's joint ranges, every distance between two
+/// joint frames' origins (on the joint axes, mm) in each model; returns the largest
+/// difference between the models' and the largest of the nominal's (the arm's size, mm).
+/// The base frame (the measurement frame once calibrated) and the tool (which the controller
+/// may take as the flange) drop out.
+pub fn axis_distance_gap(nominal: &Robot, calibrated: &Robot) -> (f64, f64) {
+    use crate::kinematics::{Frames, frames};
+    let (mut a, mut b) = (Frames::new(nominal), Frames::new(calibrated));
+    let n = nominal.dof();
+    let (mut gap, mut scale) = (0.0_f64, 0.0_f64);
+    for k in 0..8 {
+        let q: Vec<f64> = (nominal.joints().iter().enumerate())
+            .map(|(j, joint)| {
+                let [lo, hi] = joint.limits_internal();
+                // A fixed low-discrepancy spread: the golden ratio's multiples mod 1.
+                let t = ((k * n + j) as f64 * 0.618_033_988_749_895 + 0.25).fract();
+                lo + (hi - lo) * t
+            })
+            .collect();
+        frames(nominal, &q, &mut a);
+        frames(calibrated, &q, &mut b);
+        for i in 0..n {
+            for j in i + 1..n {
+                let d = |f: &Frames| {
+                    (f.joint[i].translation.vector - f.joint[j].translation.vector).norm()
+                };
+                gap = gap.max((d(&a) - d(&b)).abs());
+                scale = scale.max(d(&a));
+            }
+        }
+    }
+    (gap, scale.max(1.0))
+}
+
 /// Distance (rad) from `a` to `b` with each revolute joint's difference wrapped to [-pi, pi]:
 /// whether two joint vectors are one configuration of the controller.
 fn wrapped_distance(a: &[f64], b: &[f64]) -> f64 {
@@ -168,6 +208,16 @@ impl<'a> FakeTargetSolver<'a> {
             return Err(Error::Invalid(
                 "the calibrated model's joints differ from the nominal model's".into(),
             ));
+        }
+        let (gap, scale) = axis_distance_gap(nominal, model.robot());
+        if gap > GEOMETRY_GAP * scale {
+            return Err(Error::Invalid(format!(
+                "the calibrated model is not a calibration of the nominal one: the distances \
+                 between its joint axes differ from the nominal's by up to {gap:.0} mm ({:.0} % \
+                 of the arm's {scale:.0} mm), where a calibration moves them by millimetres: \
+                 give the calibrated model of this robot",
+                100.0 * gap / scale
+            )));
         }
         let opts = IkOptions {
             tol_position_mm: 1e-6,

@@ -97,6 +97,56 @@ fn spread_across_line(points: &[Vector3<f64>]) -> f64 {
     ((ev[1] + ev[2]).max(0.0) / n).sqrt()
 }
 
+/// RMS distance (mm) of `points` from their centroid.
+fn spread_about_centre(points: &[Vector3<f64>]) -> f64 {
+    let n = points.len().max(1) as f64;
+    let mean = points.iter().sum::<Vector3<f64>>() / n;
+    (points
+        .iter()
+        .map(|p| (p - mean).norm_squared())
+        .sum::<f64>()
+        / n)
+        .sqrt()
+}
+
+/// The least spread (mm RMS about their centre) of the model's tool positions at which the
+/// scale of the measured positions is checked ([`check_position_scale`]): closer together,
+/// a tool the model lacks could change the spread by more than [`SCALE_LIMIT`].
+pub const SCALE_MIN_SPREAD_MM: f64 = 100.0;
+
+/// How many times larger or smaller the measured positions' spread may be than the model's
+/// before the file is refused ([`check_position_scale`]): a frame moves and turns the points,
+/// which keeps their spread; a calibration changes it by millimetres.
+pub const SCALE_LIMIT: f64 = 2.0;
+
+/// Refuses measured positions whose spread about their centre differs from the model's tool
+/// positions at the same joints by more than [`SCALE_LIMIT`] times: positions in metres
+/// (1/1000) or inches (1/25.4) instead of mm, which a registration and the identified
+/// lengths would otherwise silently absorb (a robot a thousand times smaller). Not checked
+/// where the model's positions spread less than [`SCALE_MIN_SPREAD_MM`].
+pub fn check_position_scale(robot: &Robot, set: &MeasurementSet) -> Result<()> {
+    let (measured, model): (Vec<Vector3<f64>>, Vec<Vector3<f64>>) = set
+        .rows
+        .iter()
+        .filter_map(|m| Some((m.position?, tool_pose(robot, &m.q).translation.vector)))
+        .unzip();
+    let (ours, theirs) = (spread_about_centre(&model), spread_about_centre(&measured));
+    if measured.len() < 3 || ours < SCALE_MIN_SPREAD_MM {
+        return Ok(());
+    }
+    let ratio = theirs / ours;
+    if (1.0 / SCALE_LIMIT..=SCALE_LIMIT).contains(&ratio) {
+        return Ok(());
+    }
+    Err(Error::Invalid(format!(
+        "{}: the measured positions (columns x, y, z) spread {theirs:.4} mm RMS about their \
+         centre, the model's tool positions at the same joints {ours:.1} mm: {ratio:.4} times \
+         as far (positions in metres give 0.001, in inches 0.0394). Positions must be in mm: \
+         convert the file, or import it with a profile whose length_unit is right",
+        set.source.display()
+    )))
+}
+
 /// Registers the base (and, with `tool`, the tool) of `robot` to the positions of `set`.
 /// The base (and tool) must be 6-DOF transform rows; needs at least 3 rows with positions that
 /// are not collinear.

@@ -7,7 +7,7 @@ use super::nelder_mead::solve_nelder_mead;
 use super::problem::{
     IdentifyWorkspace, Measure, Normal, Observations, Sigmas, normal_equations, residual,
 };
-use super::register::{Registration, register};
+use super::register::{Registration, check_position_scale, register};
 use super::select::{is_compliance, select};
 use super::solve::{
     Method, Solution, SolveOptions, StopReason, covariance, covariance_from, solve_gradient,
@@ -518,6 +518,9 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
     let base_free = candidates.iter().any(|&c| params[c].slot == Slot::Base);
     let tool_free = candidates.iter().any(|&c| params[c].slot == Slot::Tool);
     let uses_positions = matches!(measure, Measure::Pose | Measure::Position);
+    if uses_positions {
+        check_position_scale(nominal, set)?;
+    }
     let mut start = nominal.clone();
     let mut registration = None;
     if opts.register
@@ -572,8 +575,9 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         if round == super::unmodelled::MAX_ROUNDS {
             warnings.push(format!(
                 "the unmodelled error added to the sigmas did not settle in {round} rounds \
-                 (last {:?}, then {:?}): the weights are those of the last round",
-                unmodelled, tau
+                 (last {}, then {}): the weights are those of the last round",
+                unmodelled.describe().unwrap_or_else(|| "none".into()),
+                tau.describe().unwrap_or_else(|| "none".into())
             ));
             break;
         }

@@ -244,9 +244,11 @@ pub fn choose(design: &Design, n: usize, criterion: Criterion, fixed: &[usize]) 
     }
     if n * design.dim <= p {
         return Err(Error::Invalid(format!(
-            "{n} units give {} equations for {p} identifiable parameters: at least {} are needed",
+            "{n} units give {} equations for {p} identifiable parameters: at least {} units \
+             ({} equations) are needed",
             n * design.dim,
-            p / design.dim + 1
+            p / design.dim + 1,
+            (p / design.dim + 1) * design.dim
         )));
     }
     let mut fixed = fixed.to_vec();

@@ -160,10 +160,7 @@ fn bound(t: &Table, r: usize, col: usize, v: f64, max: f64, what: &str) -> Resul
     if v.abs() > max {
         return Err(Error::input(
             t.location(r, col),
-            format!(
-                "`{}` is beyond the bound of a {what}",
-                shown(&t.rows[r][col])
-            ),
+            format!("`{}` is beyond the bound of {what}", shown(&t.rows[r][col])),
         ));
     }
     Ok(())
@@ -205,7 +202,7 @@ fn parse_row(
                 i[k],
                 a[k],
                 crate::model::file::MAX_ANGLE_DEG.to_radians(),
-                "orientation angle (2 turns)",
+                "an orientation angle (2 turns)",
             )?;
         }
         // Columns are the angles about x, y, z; each convention takes them in its order.
@@ -225,7 +222,7 @@ fn parse_row(
     if let Some(i) = c.distance {
         m.distance = t.optional_number(r, i)?;
         if let Some(d) = m.distance {
-            bound(t, r, i, lu.to_mm(d), MAX_LENGTH_MM, "distance (100 m)")?;
+            bound(t, r, i, lu.to_mm(d), MAX_LENGTH_MM, "a distance (100 m)")?;
         }
         if m.distance.is_some_and(|d| d < 0.0) {
             return Err(Error::input(
@@ -281,13 +278,13 @@ fn check_bounds(
     let max_joint = crate::model::file::MAX_JOINT_DEG.to_radians();
     for ((&col, &v), j) in c.joints.iter().zip(&m.q).zip(joints) {
         match j.joint_type {
-            JointType::Revolute => bound(t, r, col, v, max_joint, "joint angle (4 turns)")?,
-            JointType::Prismatic => bound(t, r, col, v, MAX_LENGTH_MM, "joint length (100 m)")?,
+            JointType::Revolute => bound(t, r, col, v, max_joint, "a joint angle (4 turns)")?,
+            JointType::Prismatic => bound(t, r, col, v, MAX_LENGTH_MM, "a joint length (100 m)")?,
         }
     }
     if let (Some(i), Some(p)) = (c.position, m.position) {
         for k in 0..3 {
-            bound(t, r, i[k], p[k], MAX_LENGTH_MM, "position (100 m)")?;
+            bound(t, r, i[k], p[k], MAX_LENGTH_MM, "a position (100 m)")?;
         }
     }
     for (idx, v, min, max, what) in [
@@ -296,14 +293,14 @@ fn check_bounds(
             m.sigma_position,
             1e-6,
             1e3,
-            "position standard deviation (1 nm to 1 m)",
+            "a position standard deviation (1 nm to 1 m)",
         ),
         (
             c.sigma_angles,
             m.sigma_rotation,
             1e-9,
             1.0,
-            "orientation standard deviation (1 nrad to 1 rad)",
+            "an orientation standard deviation (1 nrad to 1 rad)",
         ),
     ] {
         if let (Some(i), Some(v)) = (idx, v) {
@@ -312,10 +309,7 @@ fn check_bounds(
                 if v[k] < min {
                     return Err(Error::input(
                         t.location(r, i[k]),
-                        format!(
-                            "`{}` is below the bound of a {what}",
-                            shown(&t.rows[r][i[k]])
-                        ),
+                        format!("`{}` is below the bound of {what}", shown(&t.rows[r][i[k]])),
                     ));
                 }
             }
@@ -414,6 +408,22 @@ pub fn parse_measurements(
     }
     bad.sort_by_key(|(line, _)| *line);
     report.skipped = bad;
+    if rows.is_empty() && !report.skipped.is_empty() {
+        let shown: Vec<&str> = (report.skipped.iter().take(3))
+            .map(|(_, why)| why.as_str())
+            .collect();
+        return Err(Error::Invalid(format!(
+            "{}: no measurement rows: all {} rows were skipped as bad ({}{})",
+            t.path.display(),
+            report.skipped.len(),
+            shown.join("; "),
+            if report.skipped.len() > 3 {
+                "; ..."
+            } else {
+                ""
+            }
+        )));
+    }
     if rows.is_empty() {
         return Err(Error::input(Location::file(&t.path), "no measurement rows"));
     }

@@ -55,6 +55,9 @@ pub(super) struct Space {
     /// The RBF network's search start tried by cross-validation.
     pub(super) rbf_start: usize,
     pub(super) try_rbf: bool,
+    /// The RBF network alone may be a candidate: not where the MLPs' hidden units or
+    /// penalty are given (those set up MLPs, which the RBF network alone has none of).
+    pub(super) rbf_alone: bool,
     pub(super) open: bool,
 }
 
@@ -166,6 +169,7 @@ impl Space {
             base,
             rbf_start,
             try_rbf,
+            rbf_alone: opts.hidden.is_none() && opts.penalty.is_none(),
             open,
         })
     }

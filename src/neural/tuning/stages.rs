@@ -126,7 +126,8 @@ impl Search<'_, '_, '_> {
     }
 
     /// Stage 3b: an RBF network from its search start, with the best pose-form MLPs (their
-    /// mean and the RBF network's blended at the best share) and alone, against the best so
+    /// mean and the RBF network's blended at the best share) and alone (unless the MLPs' hidden
+    /// units or penalty are given: those ask for MLPs), against the best so
     /// far. The hyperparameters come from all training rows once; each fold fits only the
     /// weights. An error where the network is fixed to a blend and no MLP was fitted.
     pub(super) fn rbf(&mut self) -> Result<()> {
@@ -142,7 +143,7 @@ impl Search<'_, '_, '_> {
                 ..self.candidates[p].settings.clone()
             });
         }
-        if !space.mix_only {
+        if !space.mix_only && space.rbf_alone {
             list.push(Settings {
                 network: Network::Rbf,
                 form: Form::Pose,
