@@ -100,31 +100,51 @@ enum Target {
 const MAX_LINKS: usize = 40;
 
 /// Where writing to `path` lands ([`Target`]). Symbolic links are followed by hand, so that
-/// one naming a file that does not exist yet is written through too; a link into `/proc`
-/// or `/dev/fd` (`/dev/stdout`) names an open stream.
-fn target_of(path: &Path) -> Target {
+/// one naming a file that does not exist yet is written through too; a path in `/proc` or
+/// `/dev/fd`, or a link into them (`/dev/stdout`), names an open stream. A loop of links is
+/// an error.
+fn target_of(path: &Path) -> std::io::Result<Target> {
+    let open_stream = |p: &Path| p.starts_with("/proc") || p.starts_with("/dev/fd");
     let mut p = path.to_path_buf();
-    for _ in 0..MAX_LINKS {
-        let Ok(link) = std::fs::read_link(&p) else {
-            break;
-        };
+    let mut links = 0;
+    while let Ok(link) = std::fs::read_link(&p) {
+        if open_stream(&p) {
+            return Ok(Target::Stream);
+        }
+        links += 1;
+        if links > MAX_LINKS {
+            return Err(std::io::Error::other(format!(
+                "more than {MAX_LINKS} symbolic links in a row (a loop?)"
+            )));
+        }
         p = match p.parent() {
             Some(dir) if link.is_relative() => dir.join(link),
             _ => link,
         };
-        if p.starts_with("/proc") || p.starts_with("/dev/fd") {
-            return Target::Stream;
-        }
     }
-    match std::fs::metadata(&p) {
+    if open_stream(&p) {
+        return Ok(Target::Stream);
+    }
+    Ok(match std::fs::metadata(&p) {
         Ok(m) if m.is_dir() => Target::File(p),
         Ok(m) if !m.is_file() || standard_stream(&m).is_some() => Target::Stream,
         _ => Target::File(p),
+    })
+}
+
+/// The file a write to `path` replaces, through its symbolic links (also a file not there
+/// yet); None for a stream (a device, a pipe, this process's standard output) or a loop of
+/// links. Two outputs with the same target would overwrite one another.
+pub fn output_file(path: &Path) -> Option<PathBuf> {
+    match target_of(path) {
+        Ok(Target::File(p)) => Some(p),
+        _ => None,
     }
 }
 
 /// This process's standard output or error.
 #[derive(Clone, Copy)]
+#[cfg_attr(not(unix), allow(dead_code))]
 enum Standard {
     Out,
     Err,
@@ -158,8 +178,8 @@ fn standard_stream(_: &std::fs::Metadata) -> Option<Standard> {
 }
 
 /// Puts a finished temporary file where it belongs: renamed over a file, or copied into a
-/// stream: this process's own standard output or error through their handles (the text
-/// printed around it keeps its order), any other stream opened for appending.
+/// stream: this process's own standard output or error through their handles (after the
+/// text the command printed before it), any other stream opened for appending.
 fn deliver(path: &Path, target: &Target, tmp: tempfile::NamedTempFile) -> Result<()> {
     match target {
         Target::File(to) => tmp
@@ -170,25 +190,20 @@ fn deliver(path: &Path, target: &Target, tmp: tempfile::NamedTempFile) -> Result
     }
 }
 
-/// [`deliver`] into a stream.
+/// [`deliver`] into a stream, copied from the temporary file (a million rows need no memory).
 fn write_stream(path: &Path, tmp: &tempfile::NamedTempFile) -> Result<()> {
-    let bytes = std::fs::read(tmp.path()).map_err(|e| Error::io(path, e))?;
+    let mut from = std::fs::File::open(tmp.path()).map_err(|e| Error::io(path, e))?;
+    let mut copy = |to: &mut dyn Write| std::io::copy(&mut from, to).and_then(|_| to.flush());
     let written = match std::fs::metadata(path)
         .ok()
         .and_then(|m| standard_stream(&m))
     {
-        Some(Standard::Out) => {
-            let mut o = std::io::stdout().lock();
-            o.write_all(&bytes).and_then(|_| o.flush())
-        }
-        Some(Standard::Err) => {
-            let mut e = std::io::stderr().lock();
-            e.write_all(&bytes).and_then(|_| e.flush())
-        }
+        Some(Standard::Out) => copy(&mut std::io::stdout().lock()),
+        Some(Standard::Err) => copy(&mut std::io::stderr().lock()),
         None => std::fs::OpenOptions::new()
             .append(true)
             .open(path)
-            .and_then(|mut f| f.write_all(&bytes)),
+            .and_then(|mut f| copy(&mut f)),
     };
     written.map_err(|e| Error::io(path, e))
 }
@@ -233,7 +248,7 @@ impl AtomicWriter {
     /// A temporary file beside `path` (beside the file its links lead to; for a stream, in
     /// the system's temporary folder).
     pub fn create(path: &Path) -> Result<AtomicWriter> {
-        let target = target_of(path);
+        let target = target_of(path).map_err(|e| Error::io(path, e))?;
         let temp = std::env::temp_dir();
         let dir = match &target {
             Target::Stream => temp.as_path(),
@@ -378,7 +393,11 @@ pub fn all_or_nothing<T, E: From<Error>>(
     DISCARDED.set(if result.is_err() { t.writes.len() } else { 0 });
     match result {
         Ok(v) => {
-            for w in t.writes {
+            // Files first, streams last: a stream that fails (a closed pipe, a full device)
+            // fails after every file is in place, and its error names it.
+            let (streams, files): (Vec<Staged>, Vec<Staged>) =
+                (t.writes.into_iter()).partition(|w| w.target == Target::Stream);
+            for w in files.into_iter().chain(streams) {
                 deliver(&w.path, &w.target, w.tmp)?;
             }
             Ok(v)
@@ -613,6 +632,21 @@ mod link_tests {
         // No temporary file is left beside the links or their files.
         let count = |d: &std::path::Path| std::fs::read_dir(d).unwrap().count();
         assert_eq!((count(dir.path()), count(&dir.path().join("real"))), (4, 2));
+    }
+
+    #[test]
+    fn a_loop_of_links_is_an_error_naming_the_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+        std::os::unix::fs::symlink("b", &a).unwrap();
+        std::os::unix::fs::symlink("a", &b).unwrap();
+        let e = write_atomic(&a, b"x").unwrap_err().to_string();
+        assert!(
+            e.contains("symbolic links") && e.contains(&*a.to_string_lossy()),
+            "{e}"
+        );
+        assert!(std::fs::symlink_metadata(&a).unwrap().is_symlink());
+        assert!(std::fs::symlink_metadata(&b).unwrap().is_symlink());
     }
 
     #[test]

@@ -520,20 +520,26 @@ fn ur10_targets_are_solved_from_their_seeds_without_a_closed_form() {
 }
 
 /// Another robot's model given as the calibrated one is refused: the distances between the
-/// joint axes (which neither the measurement frame nor the tool changes) differ by far more
-/// than a calibration moves them; the FANUC's own calibrations pass, by millimetres.
+/// flange positions at the same joints (which neither the measurement frame nor the tool
+/// changes) differ by far more than a calibration moves them; the FANUC's own calibrations
+/// pass, by millimetres, and so does the UR10 written in another convention.
 #[test]
 fn a_calibrated_model_of_another_robot_is_refused() {
-    use robocal::compensation::fake_target::{GEOMETRY_GAP, axis_distance_gap};
+    use robocal::compensation::fake_target::{GEOMETRY_GAP, arm_distance_gap};
     let s = load("nongeometric_robot", None);
     let calibrated = identified(&s);
-    let (gap, scale) = axis_distance_gap(&s.nominal, &calibrated);
+    let (gap, scale) = arm_distance_gap(&s.nominal, &calibrated);
     assert!(gap < 10.0 && scale > 2000.0, "{gap} mm of {scale}");
-    let (gap, _) = axis_distance_gap(&s.nominal, &s.truth);
+    let (gap, _) = arm_distance_gap(&s.nominal, &s.truth);
     assert!(gap < 10.0, "{gap}");
     assert!(FakeTargetSolver::new(&s.nominal, CalibratedModel::identified(&calibrated)).is_ok());
-    let ur10 = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
-    let (gap, scale) = axis_distance_gap(&ur10, &calibrated);
+    let robots = root().join("datasets/robots");
+    let ur10 = read_robot(robots.join("ur10.toml")).unwrap();
+    let hayati = read_robot(robots.join("ur10_mdh_hayati.toml")).unwrap();
+    let (gap, scale) = arm_distance_gap(&ur10, &hayati);
+    assert!(gap < 1e-6 && scale > 1000.0, "{gap} mm of {scale}");
+    assert!(FakeTargetSolver::new(&ur10, CalibratedModel::identified(&hayati)).is_ok());
+    let (gap, scale) = arm_distance_gap(&ur10, &calibrated);
     assert!(gap > GEOMETRY_GAP * scale, "{gap} mm of {scale}");
     let e = FakeTargetSolver::new(&ur10, CalibratedModel::identified(&calibrated))
         .err()

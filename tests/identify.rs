@@ -575,6 +575,8 @@ fn positions_in_metres_or_inches_are_refused_and_a_moved_frame_is_not() {
             .to_string();
         assert!(e.contains("Positions must be in mm"), "{name}: {e}");
     }
+    // A spread a long tool could explain (3x) is not refused.
+    assert!(identify(&nominal, &scaled(3.0, false), &opts).is_ok());
     // Moved and turned (a tracker's frame) the spread is the same: identified as well.
     let rms = |s: &MeasurementSet| {
         let id = identify(&nominal, s, &opts).unwrap();

@@ -118,10 +118,11 @@ pub fn json_cell(cell: &str) -> serde_json::Value {
 }
 
 /// Whether a carried input column holds numbers the command read (joints q1.., the pose's
-/// x y z rz ry rx; renamed `input_...` where the output has its own): the other carried
-/// columns (ids, labels) are text, kept as written (`007` is not 7).
+/// x y z rz ry rx; renamed `input_...` where the output has its own, seeds `seed_q1..`):
+/// the other carried columns (ids, labels) are text, kept as written (`007` is not 7).
 fn read_as_number(header: &str) -> bool {
     let name = header.strip_prefix("input_").unwrap_or(header);
+    let name = name.strip_prefix("seed_").unwrap_or(name);
     robocal::data::POSE_COLUMNS.contains(&name)
         || name
             .strip_prefix('q')
@@ -189,24 +190,24 @@ mod tests {
 
     #[test]
     fn json_keeps_carried_text_as_written_and_the_column_order() {
-        let headers: Vec<String> = ["id", "q1", "note", "input_x", "z", "x", "status"]
+        let headers: Vec<String> = ["id", "q1", "note", "input_x", "seed_q2", "z", "x", "status"]
             .map(String::from)
             .into();
         let rows = vec![
-            ["007", "1.5", "1e5", "3", "", "2.25", "ok"]
+            ["007", "1.5", "1e5", "3", "7", "", "2.25", "ok"]
                 .map(String::from)
                 .into(),
-            ["1.0", "-0", "", "4", "inf", "nan", "unreachable"]
+            ["1.0", "-0", "", "4", "", "inf", "nan", "unreachable"]
                 .map(String::from)
                 .into(),
         ];
         let text = rows_to_json(&headers, &rows, 3);
         let v: serde_json::Value = serde_json::from_str(&text).unwrap();
         let want = serde_json::json!([
-            {"id": "007", "q1": 1.5, "note": "1e5", "input_x": 3.0, "z": null, "x": 2.25,
-             "status": "ok"},
-            {"id": "1.0", "q1": -0.0, "note": "", "input_x": 4.0, "z": "inf", "x": "nan",
-             "status": "unreachable"},
+            {"id": "007", "q1": 1.5, "note": "1e5", "input_x": 3.0, "seed_q2": 7.0, "z": null,
+             "x": 2.25, "status": "ok"},
+            {"id": "1.0", "q1": -0.0, "note": "", "input_x": 4.0, "seed_q2": null, "z": "inf",
+             "x": "nan", "status": "unreachable"},
         ]);
         assert_eq!(v, want);
         // Keys in column order, laid out as serde_json's pretty printer does.

@@ -66,7 +66,15 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
                 parent.display()
             );
         }
-        let Some(r) = resolved(path) else { continue };
+        // Through its links, also to a file not there yet: where the write lands.
+        let landing = robocal::io::output_file(path);
+        let Some(r) = landing
+            .as_deref()
+            .and_then(resolved)
+            .or_else(|| resolved(path))
+        else {
+            continue;
+        };
         // A device or a pipe (`/dev/null`, `/dev/stdout`) takes every output given it.
         if std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
             continue;
@@ -161,6 +169,13 @@ mod tests {
         {
             let null = Path::new("/dev/null");
             assert!(guard(&[], &[req("--out", null), req("--report", null)]).is_ok());
+            // A link to a file not there yet and that file: one file.
+            let (link, file) = (dir.path().join("link.csv"), dir.path().join("later.csv"));
+            std::os::unix::fs::symlink("later.csv", &link).unwrap();
+            let e = guard(&[], &[req("--out", &link), req("--report", &file)])
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("name the same file"), "{e}");
         }
     }
 }

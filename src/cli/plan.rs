@@ -229,15 +229,24 @@ pub fn run(a: PlanArgs) -> Result<()> {
     // identify (the pool `plan` would draw): parameters the list leaves out keep their
     // nominal values, and its prediction leaves their errors out.
     let spread = match &a.evaluate {
-        Some(_) => Some(Design::new(
-            &robot,
-            &a.params,
-            measure,
-            sigmas,
-            &pool::draw(&robot, &region, &limits, a.pool, per, a.seed)?,
-            cloud.clone(),
-            RANK_TOL,
-        )?),
+        Some(_) => Some(
+            Design::new(
+                &robot,
+                &a.params,
+                measure,
+                sigmas,
+                &pool::draw(&robot, &region, &limits, a.pool, per, a.seed)?,
+                cloud.clone(),
+                RANK_TOL,
+            )
+            .with_context(|| {
+                format!(
+                    "what {} configurations spread over the region identify, to hold the list \
+                     against",
+                    a.pool
+                )
+            })?,
+        ),
         None => None,
     };
     let design = Design::new(
@@ -297,7 +306,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
             .filter(|d| !spread_drops.contains(&d.param))
             .map(|d| names[d.param].name())
             .collect();
-        if !missed.is_empty() {
+        if design.p() < spread.p() {
             eprintln!(
                 "warning: {}: the list identifies {} of the {} parameters that {} configurations \
                  spread over the region identify; {} ({}) keep their nominal values, and the \

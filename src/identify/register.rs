@@ -116,8 +116,9 @@ pub const SCALE_MIN_SPREAD_MM: f64 = 100.0;
 
 /// How many times larger or smaller the measured positions' spread may be than the model's
 /// before the file is refused ([`check_position_scale`]): a frame moves and turns the points,
-/// which keeps their spread; a calibration changes it by millimetres.
-pub const SCALE_LIMIT: f64 = 2.0;
+/// which keeps their spread, and a calibration changes it by millimetres; a long tool the
+/// nominal model lacks can change it a few times over, a wrong unit by 25.4 or 1000.
+pub const SCALE_LIMIT: f64 = 8.0;
 
 /// Refuses measured positions whose spread about their centre differs from the model's tool
 /// positions at the same joints by more than [`SCALE_LIMIT`] times: positions in metres
@@ -141,8 +142,10 @@ pub fn check_position_scale(robot: &Robot, set: &MeasurementSet) -> Result<()> {
     Err(Error::Invalid(format!(
         "{}: the measured positions (columns x, y, z) spread {theirs:.4} mm RMS about their \
          centre, the model's tool positions at the same joints {ours:.1} mm: {ratio:.4} times \
-         as far (positions in metres give 0.001, in inches 0.0394). Positions must be in mm: \
-         convert the file, or import it with a profile whose length_unit is right",
+         as far (positions in metres give 0.001, in inches 0.0394; a measured point that \
+         stays put while the flange moves, near 0). Positions must be in mm: convert the \
+         file (a profile with length_unit = \"m\" imports metres), or measure a point that \
+         moves with the tool",
         set.source.display()
     )))
 }
