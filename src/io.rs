@@ -91,9 +91,10 @@ enum Target {
     /// (the links stay links).
     File(PathBuf),
     /// A device, a FIFO or a socket (`/dev/null`, a pipe), or this process's standard
-    /// output or error: written in place, at the end of the command, as a stream. A rename
-    /// there would put a plain file where the device or the link was.
-    Stream,
+    /// output or error (which, when it is one of them: written through its handle): written
+    /// in place, at the end of the command, as a stream. A rename there would put a plain
+    /// file where the device or the link was.
+    Stream(Option<Standard>),
 }
 
 /// The most symbolic links followed before a path is taken as it is (Linux's own limit).
@@ -105,11 +106,19 @@ const MAX_LINKS: usize = 40;
 /// an error.
 fn target_of(path: &Path) -> std::io::Result<Target> {
     let open_stream = |p: &Path| p.starts_with("/proc") || p.starts_with("/dev/fd");
+    // Through the links, as opening the path would go.
+    let stream = || {
+        Target::Stream(
+            std::fs::metadata(path)
+                .ok()
+                .and_then(|m| standard_stream(&m)),
+        )
+    };
     let mut p = path.to_path_buf();
     let mut links = 0;
     while let Ok(link) = std::fs::read_link(&p) {
         if open_stream(&p) {
-            return Ok(Target::Stream);
+            return Ok(stream());
         }
         links += 1;
         if links > MAX_LINKS {
@@ -123,11 +132,13 @@ fn target_of(path: &Path) -> std::io::Result<Target> {
         };
     }
     if open_stream(&p) {
-        return Ok(Target::Stream);
+        return Ok(stream());
     }
     Ok(match std::fs::metadata(&p) {
         Ok(m) if m.is_dir() => Target::File(p),
-        Ok(m) if !m.is_file() || standard_stream(&m).is_some() => Target::Stream,
+        Ok(m) if !m.is_file() || standard_stream(&m).is_some() => {
+            Target::Stream(standard_stream(&m))
+        }
         _ => Target::File(p),
     })
 }
@@ -143,7 +154,7 @@ pub fn output_file(path: &Path) -> Option<PathBuf> {
 }
 
 /// This process's standard output or error.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(not(unix), allow(dead_code))]
 enum Standard {
     Out,
@@ -186,18 +197,19 @@ fn deliver(path: &Path, target: &Target, tmp: tempfile::NamedTempFile) -> Result
             .persist(to)
             .map(|_| ())
             .map_err(|e| Error::io(path, bare(e.error))),
-        Target::Stream => write_stream(path, &tmp),
+        Target::Stream(standard) => write_stream(path, *standard, &tmp),
     }
 }
 
 /// [`deliver`] into a stream, copied from the temporary file (a million rows need no memory).
-fn write_stream(path: &Path, tmp: &tempfile::NamedTempFile) -> Result<()> {
-    let mut from = std::fs::File::open(tmp.path()).map_err(|e| Error::io(path, e))?;
+fn write_stream(
+    path: &Path,
+    standard: Option<Standard>,
+    tmp: &tempfile::NamedTempFile,
+) -> Result<()> {
+    let mut from = tmp.reopen().map_err(|e| Error::io(path, e))?;
     let mut copy = |to: &mut dyn Write| std::io::copy(&mut from, to).and_then(|_| to.flush());
-    let written = match std::fs::metadata(path)
-        .ok()
-        .and_then(|m| standard_stream(&m))
-    {
+    let written = match standard {
         Some(Standard::Out) => copy(&mut std::io::stdout().lock()),
         Some(Standard::Err) => copy(&mut std::io::stderr().lock()),
         None => std::fs::OpenOptions::new()
@@ -251,7 +263,7 @@ impl AtomicWriter {
         let target = target_of(path).map_err(|e| Error::io(path, e))?;
         let temp = std::env::temp_dir();
         let dir = match &target {
-            Target::Stream => temp.as_path(),
+            Target::Stream(_) => temp.as_path(),
             Target::File(to) => match to.parent() {
                 Some(p) if !p.as_os_str().is_empty() => p,
                 _ => Path::new("."),
@@ -396,7 +408,7 @@ pub fn all_or_nothing<T, E: From<Error>>(
             // Files first, streams last: a stream that fails (a closed pipe, a full device)
             // fails after every file is in place, and its error names it.
             let (streams, files): (Vec<Staged>, Vec<Staged>) =
-                (t.writes.into_iter()).partition(|w| w.target == Target::Stream);
+                (t.writes.into_iter()).partition(|w| matches!(w.target, Target::Stream(_)));
             for w in files.into_iter().chain(streams) {
                 deliver(&w.path, &w.target, w.tmp)?;
             }

@@ -146,7 +146,7 @@ pub fn rows_to_json(headers: &[String], rows: &[Vec<String>], written: usize) ->
                 serde_json::Value::String(c.clone())
             };
             out.push_str(if i == 0 { "\n    " } else { ",\n    " });
-            out.push_str(&serde_json::Value::String(h.clone()).to_string());
+            out.push_str(&serde_json::Value::from(h.as_str()).to_string());
             out.push_str(": ");
             out.push_str(&value.to_string());
         }
@@ -210,7 +210,7 @@ mod tests {
              "x": "nan", "status": "unreachable"},
         ]);
         assert_eq!(v, want);
-        // Keys in column order, laid out as serde_json's pretty printer does.
+        // Keys in column order.
         let keys: Vec<usize> = headers
             .iter()
             .map(|h| text.find(&format!("\"{h}\"")).unwrap())

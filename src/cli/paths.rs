@@ -66,19 +66,12 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
                 parent.display()
             );
         }
-        // Through its links, also to a file not there yet: where the write lands.
-        let landing = robocal::io::output_file(path);
-        let Some(r) = landing
-            .as_deref()
-            .and_then(resolved)
-            .or_else(|| resolved(path))
-        else {
+        // Where the write lands, through its links (also to a file not there yet). None for
+        // a device or a pipe (`/dev/null`, `/dev/stdout`), which takes every output given
+        // it, or a loop of links, which the write reports.
+        let Some(r) = robocal::io::output_file(path).and_then(|p| resolved(&p)) else {
             continue;
         };
-        // A device or a pipe (`/dev/null`, `/dev/stdout`) takes every output given it.
-        if std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
-            continue;
-        }
         if let Some((f, p, _)) = ins.iter().find(|(_, _, i)| *i == r) {
             bail!(
                 "{flag} {} is the same file as an input ({f} {}): refusing to overwrite an input; \

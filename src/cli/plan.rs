@@ -295,7 +295,9 @@ pub fn run(a: PlanArgs) -> Result<()> {
             format!(" ({} left out: {})", dropped.len(), dropped.join(", "))
         }
     );
-    if let (Some(list), Some(spread)) = (&a.evaluate, &spread) {
+    if let (Some(list), Some(spread)) = (&a.evaluate, &spread)
+        && design.p() < spread.p()
+    {
         let spread_drops: Vec<usize> = spread
             .identifiability
             .dropped
@@ -306,20 +308,18 @@ pub fn run(a: PlanArgs) -> Result<()> {
             .filter(|d| !spread_drops.contains(&d.param))
             .map(|d| names[d.param].name())
             .collect();
-        if design.p() < spread.p() {
-            eprintln!(
-                "warning: {}: the list identifies {} of the {} parameters that {} configurations \
-                 spread over the region identify; {} ({}) keep their nominal values, and the \
-                 prediction below leaves their errors out: it is optimistic, not comparable \
-                 with a planned list's",
-                list.display(),
-                design.p(),
-                spread.p(),
-                a.pool,
-                missed.len(),
-                missed.join(", ")
-            );
-        }
+        eprintln!(
+            "warning: {}: the list identifies {} of the {} parameters that {} configurations \
+             spread over the region identify; {} ({}) keep their nominal values, and the \
+             prediction below leaves their errors out: it is optimistic, not comparable \
+             with a planned list's",
+            list.display(),
+            design.p(),
+            spread.p(),
+            a.pool,
+            missed.len(),
+            missed.join(", ")
+        );
     }
     let (units, chosen) = match (&a.evaluate, a.target_mm, a.count) {
         (Some(_), _, _) => ((0..design.units()).collect::<Vec<_>>(), None),

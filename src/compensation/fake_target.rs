@@ -158,7 +158,7 @@ pub const GEOMETRY_GAP: f64 = 0.1;
 /// models' distances and the largest of the nominal's (the arm's size, mm). The base frame
 /// (the measurement frame once calibrated) and the tool (which the controller may take as
 /// the flange) drop out, and so does how each row's convention places its frames along the
-/// joint axes (the UR10 in DH and in MDH with Hayati rows agree to 1e-13 mm).
+/// joint axes (the UR10 in DH and in MDH with Hayati rows agree to 5e-13 mm).
 pub fn arm_distance_gap(nominal: &Robot, calibrated: &Robot) -> (f64, f64) {
     use crate::kinematics::{Frames, frames};
     const CONFIGURATIONS: usize = 16;

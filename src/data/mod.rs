@@ -67,10 +67,11 @@ pub fn no_extra_joint(t: &table::Table, n: usize) -> crate::error::Result<()> {
             continue;
         }
         let k: usize = digits.parse().unwrap_or(usize::MAX);
-        if (1..=n).contains(&k) && *h == format!("q{k}") {
+        let spelled = *h == format!("q{k}");
+        if spelled && (1..=n).contains(&k) {
             continue;
         }
-        let why = if *h != format!("q{k}") || k == 0 {
+        let why = if !spelled || k == 0 {
             format!("joint columns are named q1..q{n} (no leading zero, from 1)")
         } else if t.column(&format!("q{}", n + 1)).is_none() {
             format!(
@@ -120,7 +121,7 @@ mod tests {
         ] {
             let e = check(header, n).unwrap_err();
             assert!(e.contains(&format!("f.csv:1: field `{column}`")), "{e}");
-            assert!(e.contains("f.csv") && e.contains(says), "{header}: {e}");
+            assert!(e.contains(says), "{header}: {e}");
         }
     }
 }

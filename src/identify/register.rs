@@ -79,34 +79,33 @@ fn set_transform(robot: &Robot, slot: Slot, p: &Pose) -> Result<Robot> {
 /// line are on it.
 pub const MIN_SPREAD_MM: f64 = 1e-3;
 
+/// The scatter matrix of `points` about their centroid (mm^2): sum of (p - mean)(p - mean)^T.
+fn centred_scatter(points: &[Vector3<f64>]) -> Matrix3<f64> {
+    let n = points.len().max(1) as f64;
+    let mean = points.iter().sum::<Vector3<f64>>() / n;
+    points
+        .iter()
+        .map(|p| (p - mean) * (p - mean).transpose())
+        .sum()
+}
+
 /// RMS distance (mm) of `points` from their best-fitting line: the square root of the sum of
 /// the two smaller eigenvalues of the centred scatter matrix, over the count.
 fn spread_across_line(points: &[Vector3<f64>]) -> f64 {
     if points.len() < 2 {
         return 0.0;
     }
-    let n = points.len() as f64;
-    let mean = points.iter().sum::<Vector3<f64>>() / n;
-    let mut scatter = nalgebra::Matrix3::zeros();
-    for p in points {
-        let d = p - mean;
-        scatter += d * d.transpose();
-    }
-    let mut ev: Vec<f64> = scatter.symmetric_eigenvalues().iter().copied().collect();
+    let mut ev: Vec<f64> = (centred_scatter(points).symmetric_eigenvalues().iter())
+        .copied()
+        .collect();
     ev.sort_by(|a, b| b.total_cmp(a));
-    ((ev[1] + ev[2]).max(0.0) / n).sqrt()
+    ((ev[1] + ev[2]).max(0.0) / points.len() as f64).sqrt()
 }
 
-/// RMS distance (mm) of `points` from their centroid.
+/// RMS distance (mm) of `points` from their centroid: the square root of the centred
+/// scatter's trace over the count.
 fn spread_about_centre(points: &[Vector3<f64>]) -> f64 {
-    let n = points.len().max(1) as f64;
-    let mean = points.iter().sum::<Vector3<f64>>() / n;
-    (points
-        .iter()
-        .map(|p| (p - mean).norm_squared())
-        .sum::<f64>()
-        / n)
-        .sqrt()
+    (centred_scatter(points).trace() / points.len().max(1) as f64).sqrt()
 }
 
 /// The least spread (mm RMS about their centre) of the model's tool positions at which the
