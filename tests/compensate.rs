@@ -525,7 +525,7 @@ fn ur10_targets_are_solved_from_their_seeds_without_a_closed_form() {
 /// pass, by millimetres, and so does the UR10 written in another convention.
 #[test]
 fn a_calibrated_model_of_another_robot_is_refused() {
-    use robocal::compensation::fake_target::{GEOMETRY_GAP, arm_distance_gap};
+    use robocal::kinematics::{GEOMETRY_GAP, arm_distance_gap};
     let s = load("nongeometric_robot", None);
     let calibrated = identified(&s);
     let (gap, scale) = arm_distance_gap(&s.nominal, &calibrated);

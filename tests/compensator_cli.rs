@@ -2,6 +2,7 @@
 
 mod common;
 use common::{CHEAP_TRAIN, FANUC, accuracy, json, robocal, stderr, stdout, tmp};
+const UR10: &str = "datasets/robots/ur10.toml";
 
 #[test]
 fn identify_train_evaluate_and_predict() {
@@ -193,6 +194,31 @@ fn identify_train_evaluate_and_predict() {
     ]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("other joints"), "{}", stderr(&o));
+
+    // A compensator of this FANUC beside a UR10 (six revolute joints too) is refused by
+    // evaluate and compensate, naming the file: it ran its own FANUC model on UR10 rows
+    // (metres off) with a note and exit 0.
+    for args in [
+        &["evaluate", "--data", "datasets/case_d/test_truth.csv"][..],
+        &[
+            "compensate",
+            "--nominal",
+            UR10,
+            "--targets",
+            "datasets/case_d/test_truth.csv",
+        ][..],
+    ] {
+        let mut all = args.to_vec();
+        all.extend(["--robot", UR10, "--compensator", comp.to_str().unwrap()]);
+        let o = robocal(&all);
+        assert!(!o.status.success(), "{}", stdout(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains(comp.to_str().unwrap())
+                && e.contains("trained for another robot than the robot given"),
+            "{e}"
+        );
+    }
 }
 
 #[test]

@@ -1134,3 +1134,58 @@ fn edge_inputs_of_the_twenty_third_hunt() {
     let o = robocal(&["ik", "--robot", FANUC, "--poses", &far]);
     assert!(stderr(&o).contains(&format!("{far}:2: ")), "{}", stderr(&o));
 }
+
+/// Session 24: `ik` on an exact closed form tells a pose out of reach from one whose
+/// solutions leave the limits; `compensate` warns about seed joints beyond the limits (a row's
+/// own, or `--seed` where a row takes it), which it took without a word.
+#[test]
+fn edge_inputs_of_the_twenty_fourth_session() {
+    use common::FANUC;
+    let o = robocal(&["ik", "--robot", FANUC, "--pose", "9000,0,0,0,0,0"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("out of the arm's reach"),
+        "{}",
+        stderr(&o)
+    );
+
+    let targets = common::tmp("seeds_beyond.csv");
+    std::fs::write(
+        &targets,
+        "x,y,z,rz,ry,rx,q1,q2,q3,q4,q5,q6\n\
+         1800,0,1500,0,90,0,10,0,0,0,0,0\n\
+         1800,0,1500,0,90,0,175,0,0,0,0,0\n\
+         1800,0,1500,0,90,0,,,,,,\n",
+    )
+    .unwrap();
+    let t = targets.to_str().unwrap();
+    let run = |seed: &str| {
+        robocal(&[
+            "compensate",
+            "--nominal",
+            FANUC,
+            "--robot",
+            "datasets/case_d/true_robot.toml",
+            "--targets",
+            t,
+            "--seed",
+            seed,
+        ])
+    };
+    let o = run("0,0,0,0,120,0");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains(&format!(
+            "{t}: 1 row(s) have seed joints outside the robot's limits (lines 3)"
+        )) && e.contains("--seed leaves the limits of joint(s) 5"),
+        "{e}"
+    );
+    assert!(
+        stdout(&o).lines().skip(1).all(|l| l.ends_with(",ok")),
+        "{}",
+        stdout(&o)
+    );
+    let o = run("0,0,0,0,20,0");
+    assert!(!stderr(&o).contains("--seed leaves"), "{}", stderr(&o));
+}

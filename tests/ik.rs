@@ -387,3 +387,50 @@ fn ik_strategy_nearest_all_and_branch() {
         Err(IkFailure::BadSeed(_))
     ));
 }
+
+/// An exact closed form tells a pose out of reach from one whose solutions all leave the
+/// limits, naming the joints of the nearest (both were "no solution within the joint limits").
+#[test]
+fn exact_ik_tells_out_of_reach_from_outside_the_limits() {
+    use robocal::kinematics::{IkFailure, IkSolver, IkStart, RobotModel, tool_pose};
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/fanuc_r2000ib_210f.toml"),
+    )
+    .unwrap();
+    // Joint 1 within +-10 deg: a pose at q1 = 90 deg has its solutions at q1 = 90 and -90 deg.
+    let narrow = text.replacen("limits = [-150.0, 150.0]", "limits = [-10.0, 10.0]", 1);
+    assert_ne!(narrow, text);
+    for src in [&text, &narrow] {
+        let robot = parse_robot(src, Path::new("fanuc.toml")).unwrap();
+        let start = IkStart::choose(&robot, None).unwrap();
+        assert!(matches!(start, IkStart::Exact(_)));
+        let mut solver = IkSolver::new(RobotModel::new(&robot), start, IkOptions::default());
+        let mut far = tool_pose(&robot, &[0.0; 6]);
+        far.translation.vector *= 10.0;
+        for e in [
+            solver.nearest(&far, None).unwrap_err(),
+            solver.all(&far, None).unwrap_err(),
+        ] {
+            assert!(matches!(e, IkFailure::Unreachable(_)), "{e}");
+            assert!(e.to_string().contains("out of the arm's reach"), "{e}");
+        }
+        let turned = tool_pose(&robot, &[90f64.to_radians(), 0.1, 0.1, 0.2, 0.3, 0.4]);
+        if std::ptr::eq(src, &text) {
+            assert!(solver.nearest(&turned, None).is_ok());
+            continue;
+        }
+        for e in [
+            solver.nearest(&turned, None).unwrap_err(),
+            solver.all(&turned, None).unwrap_err(),
+        ] {
+            assert!(
+                matches!(&e, IkFailure::OutsideLimits(j) if j == &vec![0]),
+                "{e}"
+            );
+            assert_eq!(
+                e.to_string(),
+                "the nearest solution leaves the limits of joint 1"
+            );
+        }
+    }
+}

@@ -98,6 +98,34 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     };
 
     let tt = TargetTable::read(&a.targets, &nominal, true)?;
+    if let Some(s) = &global_seed
+        && tt.seeds.iter().any(Option::is_none)
+    {
+        let beyond = nominal.joints_outside_limits(s);
+        if !beyond.is_empty() {
+            eprintln!(
+                "warning: --seed leaves the limits of joint(s) {}: it still picks the branch \
+                 and the turns, and every solution is held to the limits",
+                join_joints(&beyond)
+            );
+        }
+    }
+    let seeds_beyond: Vec<usize> = (tt.seeds.iter().zip(&tt.table.lines))
+        .filter(|(s, _)| {
+            s.as_ref()
+                .is_some_and(|s| !nominal.joints_outside_limits(s).is_empty())
+        })
+        .map(|(_, &line)| line)
+        .collect();
+    if !seeds_beyond.is_empty() {
+        eprintln!(
+            "warning: {}: {} row(s) have seed joints outside the robot's limits (lines {}): they \
+             still pick the branch and the turns, and every solution is held to the limits",
+            a.targets.display(),
+            seeds_beyond.len(),
+            robocal::data::measurement::list_lines(&seeds_beyond)
+        );
+    }
     let with_orientation = tt.with_orientation;
     let written = written_columns(n, with_orientation, comp.is_some());
     let headers = tt.output_headers(&written)?;
@@ -290,4 +318,11 @@ fn failure_message(targets: &std::path::Path, failed: &[(usize, Failure)], total
         msg.push_str(&format!("\n  ... and {} more", failed.len() - 20));
     }
     msg
+}
+
+/// 1-based joint numbers of 0-based `joints`, comma-separated.
+fn join_joints(joints: &[usize]) -> String {
+    (joints.iter().map(|j| (j + 1).to_string()))
+        .collect::<Vec<_>>()
+        .join(", ")
 }

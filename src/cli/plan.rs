@@ -69,7 +69,8 @@ pub struct PlanArgs {
     /// Validation configurations the prediction averages over (1 to 100000).
     #[arg(long, default_value_t = 300)]
     validation: usize,
-    /// The planned configurations (CSV: id, pair, q1..qN in deg).
+    /// The planned configurations (CSV: id, pair, q1..qN in deg); with --evaluate (optional
+    /// there), the list's configurations in the same columns.
     #[arg(long, required_unless_present = "evaluate")]
     out: Option<PathBuf>,
     /// Everything the plan found, as JSON.

@@ -25,7 +25,7 @@ use crate::data::Target;
 use crate::error::{Error, Result};
 use crate::kinematics::{
     Branch, IkFailure, IkOptions, IkSolution, IkSolver, IkStart, Pose, SphericalWristIk, ToolModel,
-    tool_pose,
+    another_arm, tool_pose,
 };
 use crate::model::{Robot, joint_distance};
 use nalgebra::Translation3;
@@ -146,52 +146,6 @@ enum Controller<'a> {
     },
 }
 
-/// The largest difference of arm distances ([`arm_distance_gap`]) a calibrated model may
-/// have from its nominal, as a fraction of the arm's size: calibrations change them by
-/// millimetres, another robot's model by tens of percent.
-pub const GEOMETRY_GAP: f64 = 0.1;
-
-/// How far `calibrated`'s arm is from `nominal`'s, whatever the base and tool frames: at
-/// sixteen configurations spread over the nominal's joint ranges, the position of the chain's
-/// last frame (the flange: after the last joint's row, before the tool) in each model, and
-/// every distance between two of them (mm); returns the largest difference between the
-/// models' distances and the largest of the nominal's (the arm's size, mm). The base frame
-/// (the measurement frame once calibrated) and the tool (which the controller may take as
-/// the flange) drop out, and so does how each row's convention places its frames along the
-/// joint axes (the UR10 in DH and in MDH with Hayati rows agree to 5e-13 mm).
-pub fn arm_distance_gap(nominal: &Robot, calibrated: &Robot) -> (f64, f64) {
-    use crate::kinematics::{Frames, frames};
-    const CONFIGURATIONS: usize = 16;
-    let (mut a, mut b) = (Frames::new(nominal), Frames::new(calibrated));
-    let n = nominal.dof();
-    let mut ends = Vec::with_capacity(CONFIGURATIONS);
-    for k in 0..CONFIGURATIONS {
-        let q: Vec<f64> = (nominal.joints().iter().enumerate())
-            .map(|(j, joint)| {
-                let [lo, hi] = joint.limits_internal();
-                // A fixed low-discrepancy spread: the golden ratio's multiples mod 1.
-                let t = ((k * n + j) as f64 * 0.618_033_988_749_895 + 0.25).fract();
-                lo + (hi - lo) * t
-            })
-            .collect();
-        frames(nominal, &q, &mut a);
-        frames(calibrated, &q, &mut b);
-        ends.push((
-            a.link[n - 1].translation.vector,
-            b.link[n - 1].translation.vector,
-        ));
-    }
-    let (mut gap, mut scale) = (0.0_f64, 0.0_f64);
-    for (i, (pa, pb)) in ends.iter().enumerate() {
-        for (qa, qb) in &ends[i + 1..] {
-            let (da, db) = ((pa - qa).norm(), (pb - qb).norm());
-            gap = gap.max((da - db).abs());
-            scale = scale.max(da);
-        }
-    }
-    (gap, scale.max(1.0))
-}
-
 /// Distance (rad) from `a` to `b` with each revolute joint's difference wrapped to [-pi, pi]:
 /// whether two joint vectors are one configuration of the controller.
 fn wrapped_distance(a: &[f64], b: &[f64]) -> f64 {
@@ -215,14 +169,10 @@ impl<'a> FakeTargetSolver<'a> {
                 "the calibrated model's joints differ from the nominal model's".into(),
             ));
         }
-        let (gap, scale) = arm_distance_gap(nominal, model.robot());
-        if gap > GEOMETRY_GAP * scale {
+        if let Some(gap) = another_arm(nominal, model.robot()) {
             return Err(Error::Invalid(format!(
-                "the calibrated model is not a calibration of the nominal one: the distances \
-                 between its flange positions at the same joints differ from the nominal's by \
-                 up to {gap:.0} mm ({:.0} % of the arm's {scale:.0} mm), where a calibration \
-                 moves them by millimetres: give the calibrated model of this robot",
-                100.0 * gap / scale
+                "the calibrated model is not a calibration of the nominal one: {gap}: give the \
+                 calibrated model of this robot"
             )));
         }
         let opts = IkOptions {

@@ -88,13 +88,14 @@ pub enum IkFailure {
     NoSeed,
     /// Seed joints that do not fit the robot.
     BadSeed(String),
-    /// The closed form has no solution (within the limits, for an exact one).
+    /// The closed form has no solution: the pose is out of the arm's reach (or of its wrist's).
     Unreachable(String),
     /// More than [`MAX_SOLUTIONS`] solutions within the limits (ranges of many turns).
     TooMany,
     /// No numerical solve converged; the last one's report.
     NotConverged(String),
-    /// The best solution leaves the limits of these 0-based joints.
+    /// The best solution (for an exact closed form, the nearest of its solutions, all of
+    /// which leave the limits) leaves the limits of these 0-based joints.
     OutsideLimits(Vec<usize>),
 }
 
@@ -112,11 +113,22 @@ impl std::fmt::Display for IkFailure {
             IkFailure::NotConverged(m) => write!(f, "{m}"),
             IkFailure::OutsideLimits(j) => write!(
                 f,
-                "solution outside the limits of joint(s) {:?}",
-                j.iter().map(|j| j + 1).collect::<Vec<_>>()
+                "the nearest solution leaves the limits of joint{} {}",
+                if j.len() == 1 { "" } else { "s" },
+                j.iter()
+                    .map(|j| (j + 1).to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ),
         }
     }
+}
+
+/// An exact closed form without a solution: no branch reaches the pose.
+fn out_of_reach() -> IkFailure {
+    IkFailure::Unreachable(
+        "the pose is out of the arm's reach (the closed form has no solution)".into(),
+    )
 }
 
 /// A solution and the closed form's branch it comes from (none for a seeded solve).
@@ -302,9 +314,10 @@ impl<M: ToolModel> IkSolver<M> {
             let starts = self.starts(target, &reference, None);
             return match starts.first() {
                 Some((false, _, b, q)) => Ok(self.exact(target, q, Some(*b))),
-                _ => Err(IkFailure::Unreachable(
-                    "no solution within the joint limits".into(),
+                Some((true, _, _, q)) => Err(IkFailure::OutsideLimits(
+                    self.model.robot().joints_outside_limits(q),
                 )),
+                None => Err(out_of_reach()),
             };
         }
         let sols = self.refined(target, seed, &reference)?;
@@ -369,9 +382,13 @@ impl<M: ToolModel> IkSolver<M> {
                 return Err(IkFailure::TooMany);
             }
             if self.copies.is_empty() {
-                return Err(IkFailure::Unreachable(
-                    "no solution within the joint limits".into(),
-                ));
+                let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
+                return Err(match self.starts(target, &reference, None).first() {
+                    Some((_, _, _, q)) => {
+                        IkFailure::OutsideLimits(self.model.robot().joints_outside_limits(q))
+                    }
+                    None => out_of_reach(),
+                });
             }
             return Ok(self.copies.iter().map(|q| q.to_vec()).collect());
         }

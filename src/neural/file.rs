@@ -110,7 +110,9 @@ impl Compensator {
     }
 
     /// Reads a compensator file to run with `robot`'s joints: a compensator trained for other
-    /// joints (number or type) is an error naming the file.
+    /// joints (number or type), or whose model is another arm than `robot`
+    /// ([`crate::kinematics::another_arm`]: the distances between flange positions differ by
+    /// more than a tenth of the arm), is an error naming the file.
     pub fn load_for(path: &Path, robot: &Robot) -> Result<Compensator> {
         let c = Self::load(path)?;
         if !c.robot.same_joints(robot) {
@@ -131,6 +133,15 @@ impl Compensator {
                      robot given ({})",
                     kinds(&c.robot),
                     kinds(robot)
+                ),
+            ));
+        }
+        if let Some(gap) = crate::kinematics::another_arm(robot, &c.robot) {
+            return Err(Error::input(
+                Location::file(path),
+                format!(
+                    "the compensator was trained for another robot than the robot given: \
+                     between its model and the robot given, {gap}"
                 ),
             ));
         }
