@@ -17,7 +17,7 @@ use robocal::model::{Robot, read_robot};
 use robocal::neural::compensator::{Compensator, CompensatorOptions};
 use robocal::neural::predict::PredictWorkspace;
 use robocal::sim::{actual_pose, nongeometric::NonGeometric};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -539,6 +539,22 @@ fn a_calibrated_model_of_another_robot_is_refused() {
     let (gap, scale) = arm_distance_gap(&ur10, &hayati);
     assert!(gap < 1e-6 && scale > 1000.0, "{gap} mm of {scale}");
     assert!(FakeTargetSolver::new(&ur10, CalibratedModel::identified(&hayati)).is_ok());
+    // The FANUC with joint 6's offset moved from its row into the tool: the same poses, the
+    // flange 235 mm elsewhere (its distances 402 mm off, over 10 % of the arm), the tool's
+    // distances the same.
+    let text = std::fs::read_to_string(robots.join("fanuc_r2000ib_210f.toml")).unwrap();
+    let tool_at = text.find("[tool]").unwrap();
+    let moved = format!(
+        "{}[tool]\nconvention = \"transform\"\nx = 182.0\ny = 0.0\nz = -440.0\nrz = 0.0\n\
+         ry = 180.0\nrx = 0.0\n",
+        text[..tool_at].replacen("d = -235.0", "d = 0.0", 1)
+    );
+    let moved = robocal::model::file::parse_robot(&moved, Path::new("moved.toml")).unwrap();
+    let q = [0.3, 0.2, -0.1, 0.5, 0.7, -0.4];
+    let (a, b) = (tool_pose(&s.nominal, &q), tool_pose(&moved, &q));
+    assert!((a.translation.vector - b.translation.vector).norm() < 1e-9);
+    assert!(robocal::kinematics::another_arm(&s.nominal, &moved).is_none());
+    assert!(FakeTargetSolver::new(&s.nominal, CalibratedModel::identified(&moved)).is_ok());
     let (gap, scale) = arm_distance_gap(&ur10, &calibrated);
     assert!(gap > GEOMETRY_GAP * scale, "{gap} mm of {scale}");
     let e = FakeTargetSolver::new(&ur10, CalibratedModel::identified(&calibrated))

@@ -357,3 +357,99 @@ fn relative_pairs_consecutive_and_labelled() {
     let e = pairs(&set).unwrap_err().to_string();
     assert!(e.contains("rel.csv:2") && e.contains("3 rows"), "{e}");
 }
+
+/// Rodrigues' formula written out: the rotation by `angle` (rad) about the unit `axis`.
+fn rodrigues(axis: Vector3<f64>, angle: f64) -> Matrix3<f64> {
+    let (s, c) = angle.sin_cos();
+    let k = Matrix3::new(
+        0.0, -axis.z, axis.y, axis.z, 0.0, -axis.x, -axis.y, axis.x, 0.0,
+    );
+    Matrix3::identity() + k * s + k * k * (1.0 - c)
+}
+
+/// A rotation vector (UR's tool pose) and a quaternion (scalar first, ABB's and many trackers'
+/// exports) read as the rotation Rodrigues' formula gives; a quaternion off unit norm, a
+/// partial group, `euler` beside them and an unknown form are errors naming file, line and
+/// field.
+#[test]
+fn rotation_vectors_and_quaternions_are_read_as_their_rotations() {
+    let fanuc = robot("fanuc_r2000ib_210f.toml");
+    let axis = Vector3::new(1.0, -2.0, 2.0) / 3.0;
+    let angle = 2.5_f64; // rad, beyond 90 deg
+    let expect = rodrigues(axis, angle);
+    let (h, w) = ((angle / 2.0).sin(), (angle / 2.0).cos());
+    let r = axis * angle;
+    let dir = std::env::temp_dir().join(format!("robocal_orient_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let read = |profile: &str, csv: &str| {
+        let p = dir.join("p.toml");
+        std::fs::write(&p, profile).unwrap();
+        let d = dir.join("d.csv");
+        std::fs::write(&d, csv).unwrap();
+        Profile::read(&p)
+            .and_then(|pr| read_measurements(&d, &fanuc, &pr, &ReadOptions::default()))
+            .map(|(set, _)| set)
+            .map_err(|e| e.to_string())
+    };
+    let joints = "q1,q2,q3,q4,q5,q6";
+    let zeros = "0,0,0,0,0,0";
+    // The rotation vector in degrees (angle_unit), and in radians as UR reports it.
+    for (unit, scale) in [("deg", angle.to_degrees() / angle), ("rad", 1.0)] {
+        let csv = format!(
+            "{joints},x,y,z,rx,ry,rz\n{zeros},1,2,3,{},{},{}\n",
+            r.x * scale,
+            r.y * scale,
+            r.z * scale
+        );
+        let set = read(
+            &format!("orientation = \"rotation_vector\"\nangle_unit = \"{unit}\"\n"),
+            &csv,
+        )
+        .unwrap();
+        let got = set.rows[0].rotation.unwrap();
+        assert!(
+            (got.matrix() - expect).abs().max() < 1e-14,
+            "{unit}: {got:?}"
+        );
+    }
+    // The quaternion, its columns named by the profile (one of them `rx`: unused here), with
+    // the sign of every component flipped (the same rotation) and rounded to 6 decimals.
+    let profile = "orientation = \"quaternion\"\n[columns]\nqw = \"Q0\"\nqx = \"rx\"\n";
+    for sign in [1.0, -1.0] {
+        let [a, b, c, d] = [w, axis.x * h, axis.y * h, axis.z * h].map(|v| sign * v);
+        let csv =
+            format!("{joints},x,y,z,Q0,rx,qy,qz\n{zeros},1,2,3,{a:.6},{b:.6},{c:.6},{d:.6}\n");
+        let got = read(profile, &csv).unwrap().rows[0].rotation.unwrap();
+        assert!((got.matrix() - expect).abs().max() < 1e-5, "{got:?}");
+    }
+    let csv = format!(
+        "{joints},x,y,z,Q0,rx,qy,qz\n{zeros},1,2,3,{w},{},{},{}\n",
+        axis.x * h,
+        axis.y * h,
+        axis.z * h
+    );
+    let got = read(profile, &csv).unwrap().rows[0].rotation.unwrap();
+    assert!((got.matrix() - expect).abs().max() < 1e-14, "{got:?}");
+
+    // Errors, each naming the file, the line and the field.
+    let bad_norm = format!("{joints},x,y,z,qw,qx,qy,qz\n{zeros},1,2,3,0.9,0,0,0\n");
+    let e = read("orientation = \"quaternion\"\n", &bad_norm).unwrap_err();
+    assert!(
+        e.contains("d.csv:2: field `qw`") && e.contains("norm 0.9"),
+        "{e}"
+    );
+    let partial = format!("{joints},x,y,z,qw,qx,qy\n{zeros},1,2,3,1,0,0\n");
+    let e = read("orientation = \"quaternion\"\n", &partial).unwrap_err();
+    assert!(
+        e.contains("d.csv:1: field `qz`") && e.contains("group of four"),
+        "{e}"
+    );
+    let e = read("orientation = \"quaternion\"\neuler = \"zyx\"\n", &partial).unwrap_err();
+    assert!(e.contains("p.toml:2: field `euler`"), "{e}");
+    let e = read("orientation = \"matrix\"\n", &partial).unwrap_err();
+    assert!(
+        e.contains("p.toml:1: field `orientation`") && e.contains("rotation_vector"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

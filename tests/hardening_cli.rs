@@ -1177,8 +1177,8 @@ fn edge_inputs_of_the_twenty_fourth_session() {
     let e = stderr(&o);
     assert!(
         e.contains(&format!(
-            "{t}: 1 row(s) have seed joints outside the robot's limits (lines 3)"
-        )) && e.contains("--seed leaves the limits of joint(s) 5"),
+            "{t}: 1 row(s) have seed joints outside the calibrated model's limits (lines 3)"
+        )) && e.contains("--seed leaves the calibrated model's limits of joint(s) 5"),
         "{e}"
     );
     assert!(

@@ -433,4 +433,27 @@ fn exact_ik_tells_out_of_reach_from_outside_the_limits() {
             );
         }
     }
+    // Numerically (Case D's true robot, started from the narrowed nominal's closed form): the
+    // solve nearest the seed names the failure, not the last one tried (joints 1, 2, 3).
+    let read = |rel: &str| {
+        let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(rel))
+            .unwrap()
+            .replacen("limits = [-150.0, 150.0]", "limits = [-10.0, 10.0]", 1);
+        parse_robot(&text, Path::new(rel)).unwrap()
+    };
+    let (real, nominal) = (
+        read("datasets/case_d/true_robot.toml"),
+        read("datasets/robots/fanuc_r2000ib_210f.toml"),
+    );
+    let start = IkStart::choose(&real, Some(&nominal)).unwrap();
+    assert!(matches!(start, IkStart::Nominal(_)));
+    let mut solver = IkSolver::new(RobotModel::new(&real), start, IkOptions::default());
+    let turned = tool_pose(&real, &[90f64.to_radians(), 0.1, 0.1, 0.2, 0.3, 0.4]);
+    for seed in [None, Some(&[0.0, 0.1, 0.1, 0.2, 0.3, 0.5][..])] {
+        let e = solver.nearest(&turned, seed).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "the nearest solution leaves the limits of joint 1"
+        );
+    }
 }

@@ -98,14 +98,18 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     };
 
     let tt = TargetTable::read(&a.targets, &nominal, true)?;
+    // The limits every solution is held to: the calibrated model's.
+    let calibrated = comp.as_ref().map_or(&robot, |c| &c.robot);
+    let picks = "still pick the branch and the turns (and, for a position-only target, the \
+                 orientation), and every solution is held to the limits";
     if let Some(s) = &global_seed
         && tt.seeds.iter().any(Option::is_none)
     {
-        let beyond = nominal.joints_outside_limits(s);
+        let beyond = calibrated.joints_outside_limits(s);
         if !beyond.is_empty() {
             eprintln!(
-                "warning: --seed leaves the limits of joint(s) {}: it still picks the branch \
-                 and the turns, and every solution is held to the limits",
+                "warning: --seed leaves the calibrated model's limits of joint(s) {}: its \
+                 joints {picks}",
                 join_joints(&beyond)
             );
         }
@@ -113,14 +117,14 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     let seeds_beyond: Vec<usize> = (tt.seeds.iter().zip(&tt.table.lines))
         .filter(|(s, _)| {
             s.as_ref()
-                .is_some_and(|s| !nominal.joints_outside_limits(s).is_empty())
+                .is_some_and(|s| !calibrated.joints_outside_limits(s).is_empty())
         })
         .map(|(_, &line)| line)
         .collect();
     if !seeds_beyond.is_empty() {
         eprintln!(
-            "warning: {}: {} row(s) have seed joints outside the robot's limits (lines {}): they \
-             still pick the branch and the turns, and every solution is held to the limits",
+            "warning: {}: {} row(s) have seed joints outside the calibrated model's limits \
+             (lines {}): they {picks}",
             a.targets.display(),
             seeds_beyond.len(),
             robocal::data::measurement::list_lines(&seeds_beyond)
@@ -142,7 +146,6 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     let mut shifts = Vec::new();
     // The targets carried into the nominal model's world frame (B_n B_c^-1 T): the shift
     // without the change of frame, where the calibrated base was registered elsewhere.
-    let calibrated = comp.as_ref().map_or(&robot, |c| &c.robot);
     let to_nominal = nominal.base().transform() * calibrated.base().transform().inverse();
     let mut moved = Vec::new();
     let mut outside = Vec::new();

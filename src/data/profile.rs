@@ -6,12 +6,16 @@
 //! joint_unit = "rad"         # deg | rad (prismatic joints: the length unit)
 //! length_unit = "mm"         # mm | m (positions and their sigmas)
 //! angle_unit = "deg"         # deg | rad (orientation angles and their sigmas)
+//! orientation = "euler"      # euler (three angles, composed as `euler` says; default)
+//!                            # | rotation_vector (rx, ry, rz: axis times angle, as a UR
+//!                            #   controller reports; angle_unit) | quaternion (qw, qx, qy, qz)
 //! euler = "xyz_intrinsic"    # zyx (R = Rz Ry Rx) | xyz_intrinsic (R = Rx Ry Rz)
 //!                            # | xyz_extrinsic (R = Rz Ry Rx, roll-pitch-yaw about fixed axes)
 //! [columns]
 //! joints = ["j1", "j2", ...] # in chain order; default q1..qN
 //! x = "X"                    # positions; default x, y, z
 //! rx = "RX"                  # the angle about each axis; default rx, ry, rz
+//! qw = "Q0"                  # quaternion (orientation = "quaternion"); default qw, qx, qy, qz
 //! sx = "SX"                  # sigmas (optional): sx sy sz srx sry srz
 //! id = "Timestamp"           # optional: id, set, pair, distance
 //! ```
@@ -61,6 +65,18 @@ impl LengthUnit {
     }
 }
 
+/// How a row's orientation is written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Orientation {
+    /// Three angles about x, y and z (angle unit), composed as the profile's `euler` says.
+    Euler,
+    /// The rotation vector (rx, ry, rz): the axis times the angle (angle unit), R = exp(\[r\]x),
+    /// as a UR controller reports its tool pose.
+    RotationVector,
+    /// A unit quaternion (qw, qx, qy, qz), scalar first: within 1e-3 of unit norm, normalised.
+    Quaternion,
+}
+
 /// Column names of each measurement field in the source file.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Columns {
@@ -68,8 +84,11 @@ pub struct Columns {
     pub joints: Option<Vec<String>>,
     /// Position x, y and z (length unit); default `x, y, z`.
     pub position: [String; 3],
-    /// Angle about x, y and z (whatever the convention's order of composition).
+    /// Angle about x, y and z (whatever the convention's order of composition), or the
+    /// rotation vector's x, y and z; default `rx, ry, rz`.
     pub angles: [String; 3],
+    /// Quaternion w, x, y and z (orientation = "quaternion"); default `qw, qx, qy, qz`.
+    pub quaternion: [String; 4],
     /// Standard deviations of x, y and z (length unit); default `sx, sy, sz`.
     pub sigma_position: [String; 3],
     /// Standard deviations of the angles about x, y and z (angle unit); default
@@ -98,7 +117,9 @@ pub struct Profile {
     pub length_unit: LengthUnit,
     /// Unit of orientation angles and their sigmas.
     pub angle_unit: AngleUnit,
-    /// How the three orientation angles compose into a rotation.
+    /// How the orientation is written.
+    pub orientation: Orientation,
+    /// How the three orientation angles compose into a rotation (orientation = "euler").
     pub euler: EulerConvention,
     /// Column name of each field.
     pub columns: Columns,
@@ -113,11 +134,13 @@ impl Default for Profile {
             joint_unit: AngleUnit::Deg,
             length_unit: LengthUnit::Mm,
             angle_unit: AngleUnit::Deg,
+            orientation: Orientation::Euler,
             euler: EulerConvention::Zyx,
             columns: Columns {
                 joints: None,
                 position: s(["x", "y", "z"]),
                 angles: s(["rx", "ry", "rz"]),
+                quaternion: ["qw", "qx", "qy", "qz"].map(String::from),
                 sigma_position: s(["sx", "sy", "sz"]),
                 sigma_angles: s(["srx", "sry", "srz"]),
                 id: "id".into(),
@@ -137,6 +160,7 @@ struct ProfileFile {
     joint_unit: Option<String>,
     length_unit: Option<String>,
     angle_unit: Option<String>,
+    orientation: Option<String>,
     euler: Option<String>,
     #[serde(default)]
     columns: ColumnsFile,
@@ -152,6 +176,10 @@ struct ColumnsFile {
     rx: Option<String>,
     ry: Option<String>,
     rz: Option<String>,
+    qw: Option<String>,
+    qx: Option<String>,
+    qy: Option<String>,
+    qz: Option<String>,
     sx: Option<String>,
     sy: Option<String>,
     sz: Option<String>,
@@ -227,6 +255,27 @@ impl Profile {
                 ));
             }
         };
+        p.orientation = match f.orientation.as_deref() {
+            None | Some("euler") => Orientation::Euler,
+            Some("rotation_vector") => Orientation::RotationVector,
+            Some("quaternion") => Orientation::Quaternion,
+            Some(o) => {
+                return Err(bad(
+                    "orientation",
+                    format!(
+                        "unknown orientation `{o}` (expected euler, rotation_vector or quaternion)"
+                    ),
+                ));
+            }
+        };
+        if p.orientation != Orientation::Euler && f.euler.is_some() {
+            return Err(bad(
+                "euler",
+                "`euler` composes three angles: it does not apply to a rotation vector or a \
+                 quaternion (orientation)"
+                    .into(),
+            ));
+        }
         p.euler = match f.euler.as_deref() {
             None | Some("zyx") => EulerConvention::Zyx,
             Some("xyz_intrinsic") => EulerConvention::XyzIntrinsic,
@@ -254,6 +303,9 @@ impl Profile {
         for (slot, v) in cols.angles.iter_mut().zip([c.rx, c.ry, c.rz]) {
             set(slot, v);
         }
+        for (slot, v) in (cols.quaternion.iter_mut()).zip([c.qw, c.qx, c.qy, c.qz]) {
+            set(slot, v);
+        }
         for (slot, v) in cols.sigma_position.iter_mut().zip([c.sx, c.sy, c.sz]) {
             set(slot, v);
         }
@@ -269,13 +321,20 @@ impl Profile {
         if let Some(j) = &cols.joints {
             fields.extend(j.iter().map(|c| ("joints".to_string(), c)));
         }
+        // The orientation's columns: the quaternion's, or the three angles' (the other
+        // form's names are not read, so they may name anything).
+        let orientation: Vec<(&str, &String)> = if p.orientation == Orientation::Quaternion {
+            ["qw", "qx", "qy", "qz"]
+                .into_iter()
+                .zip(&cols.quaternion)
+                .collect()
+        } else {
+            ["rx", "ry", "rz"].into_iter().zip(&cols.angles).collect()
+        };
         let named = [
             ("x", &cols.position[0]),
             ("y", &cols.position[1]),
             ("z", &cols.position[2]),
-            ("rx", &cols.angles[0]),
-            ("ry", &cols.angles[1]),
-            ("rz", &cols.angles[2]),
             ("sx", &cols.sigma_position[0]),
             ("sy", &cols.sigma_position[1]),
             ("sz", &cols.sigma_position[2]),
@@ -287,7 +346,7 @@ impl Profile {
             ("pair", &cols.pair),
             ("distance", &cols.distance),
         ];
-        fields.extend(named.iter().map(|(f, c)| (f.to_string(), *c)));
+        fields.extend((orientation.iter().chain(&named)).map(|(f, c)| (f.to_string(), *c)));
         for (i, (field, column)) in fields.iter().enumerate() {
             if let Some((first, _)) = fields[..i].iter().find(|(_, c)| c == column) {
                 return Err(bad(

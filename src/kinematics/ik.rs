@@ -94,8 +94,8 @@ pub enum IkFailure {
     TooMany,
     /// No numerical solve converged; the last one's report.
     NotConverged(String),
-    /// The best solution (for an exact closed form, the nearest of its solutions, all of
-    /// which leave the limits) leaves the limits of these 0-based joints.
+    /// Every solution found leaves the limits; the nearest the seed (or the middle of the
+    /// ranges) leaves those of these 0-based joints.
     OutsideLimits(Vec<usize>),
 }
 
@@ -277,6 +277,9 @@ impl<M: ToolModel> IkSolver<M> {
             self.no_start()
         };
         let mut sols: Vec<IkSolution> = Vec::new();
+        // Of the solutions outside the limits, the nearest the reference names the failure;
+        // a solve that did not converge only where none converged.
+        let mut nearest_outside = f64::INFINITY;
         for q0 in &starts {
             match self.refine(target, q0) {
                 Ok(sol) if sol.outside_limits.is_empty() => {
@@ -289,8 +292,17 @@ impl<M: ToolModel> IkSolver<M> {
                         sols.push(sol);
                     }
                 }
-                Ok(sol) => failure = IkFailure::OutsideLimits(sol.outside_limits),
-                Err(e) => failure = IkFailure::NotConverged(e.to_string()),
+                Ok(sol) => {
+                    let d = joint_distance(&sol.q, reference);
+                    if d < nearest_outside {
+                        nearest_outside = d;
+                        failure = IkFailure::OutsideLimits(sol.outside_limits);
+                    }
+                }
+                Err(e) if nearest_outside.is_infinite() => {
+                    failure = IkFailure::NotConverged(e.to_string())
+                }
+                Err(_) => {}
             }
         }
         if sols.is_empty() {

@@ -140,8 +140,9 @@ impl Compensator {
             return Err(Error::input(
                 Location::file(path),
                 format!(
-                    "the compensator was trained for another robot than the robot given: \
-                     between its model and the robot given, {gap}"
+                    "the compensator was trained for another robot than the robot given (or \
+                     the robot file is another robot's): between its model and the robot \
+                     given, {gap}"
                 ),
             ));
         }

@@ -3,13 +3,17 @@
 
 use super::{JointInfo, Measurement, MeasurementSet, list_lines};
 use crate::data::joint_columns;
-use crate::data::profile::{AngleUnit, Profile};
+use crate::data::profile::{AngleUnit, Orientation, Profile};
 use crate::data::table::{Table, shown};
 use crate::error::{Error, Location, Result};
 use crate::geometry::rotation::EulerConvention;
 use crate::model::{JointType, MAX_LENGTH_MM, Robot};
-use nalgebra::Vector3;
+use nalgebra::{Quaternion, Rotation3, UnitQuaternion, Vector3};
 use std::path::Path;
+
+/// How far a quaternion's norm may be from 1: components rounded to 6 decimals move it by
+/// 2e-6 at most; 1e-3 is a rounding to 3 decimals, and beyond it a column is not a quaternion's.
+pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-3;
 
 /// How strictly rows are read.
 #[derive(Debug, Clone, Copy, Default)]
@@ -54,6 +58,25 @@ fn group(t: &Table, names: &[String; 3], what: &str) -> Result<Option<[usize; 3]
     }
 }
 
+/// Column indices of a quaternion (w, x, y, z); all present or all absent.
+fn quaternion_group(t: &Table, names: &[String; 4]) -> Result<Option<[usize; 4]>> {
+    let idx: Vec<Option<usize>> = names.iter().map(|n| t.column(n)).collect();
+    match idx.iter().flatten().copied().collect::<Vec<usize>>()[..] {
+        [] => Ok(None),
+        [w, x, y, z] => Ok(Some([w, x, y, z])),
+        _ => {
+            let missing: Vec<&str> = (names.iter().zip(&idx))
+                .filter(|(_, i)| i.is_none())
+                .map(|(n, _)| n.as_str())
+                .collect();
+            Err(Error::input(
+                Location::at(&t.path, 1, missing.join(", ")),
+                "quaternion columns must come as a group of four (w, x, y, z); missing column(s)",
+            ))
+        }
+    }
+}
+
 /// Reads a measurement file for `robot` through `profile` ([`Profile::default`] reads
 /// canonical CSV).
 pub fn read_measurements(
@@ -76,7 +99,9 @@ pub fn read_canonical(path: &Path, robot: &Robot) -> Result<MeasurementSet> {
 struct Columns {
     joints: Vec<usize>,
     position: Option<[usize; 3]>,
+    /// Three angles or a rotation vector (as the profile's orientation says).
     angles: Option<[usize; 3]>,
+    quaternion: Option<[usize; 4]>,
     sigma_position: Option<[usize; 3]>,
     sigma_angles: Option<[usize; 3]>,
     distance: Option<usize>,
@@ -110,17 +135,23 @@ impl Columns {
             .map(|c| t.require(c))
             .collect::<Result<_>>()?;
         let position = group(t, &cols.position, "position")?;
-        let angles = group(t, &cols.angles, "orientation")?;
+        let (angles, quaternion) = match profile.orientation {
+            Orientation::Quaternion => (None, quaternion_group(t, &cols.quaternion)?),
+            _ => (group(t, &cols.angles, "orientation")?, None),
+        };
         let sigma_position = group(t, &cols.sigma_position, "position sigma")?;
         let sigma_angles = group(t, &cols.sigma_angles, "orientation sigma")?;
         let distance = t.column(&cols.distance);
-        if position.is_none() && angles.is_none() && distance.is_none() {
+        if position.is_none() && angles.is_none() && quaternion.is_none() && distance.is_none() {
             return Err(Error::input(
                 Location::file(&t.path),
                 format!(
                     "no measurement columns: expected position ({}), orientation ({}) or distance ({})",
                     cols.position.join(", "),
-                    cols.angles.join(", "),
+                    match profile.orientation {
+                        Orientation::Quaternion => cols.quaternion.join(", "),
+                        _ => cols.angles.join(", "),
+                    },
                     cols.distance
                 ),
             ));
@@ -137,12 +168,14 @@ impl Columns {
         {
             used.extend(g);
         }
+        used.extend(quaternion.into_iter().flatten());
         used.extend([distance, id, set, pair].into_iter().flatten());
         let extra = (0..t.headers.len()).filter(|i| !used.contains(i)).collect();
         Ok(Columns {
             joints,
             position,
             angles,
+            quaternion,
             sigma_position,
             sigma_angles,
             distance,
@@ -205,12 +238,38 @@ fn parse_row(
                 "an orientation angle (2 turns)",
             )?;
         }
-        // Columns are the angles about x, y, z; each convention takes them in its order.
-        let ordered = match profile.euler {
-            EulerConvention::Zyx => [a.z, a.y, a.x],
-            EulerConvention::XyzIntrinsic | EulerConvention::XyzExtrinsic => [a.x, a.y, a.z],
-        };
-        m.rotation = Some(profile.euler.to_rotation(ordered));
+        m.rotation = Some(if profile.orientation == Orientation::RotationVector {
+            Rotation3::new(a)
+        } else {
+            // Columns are the angles about x, y, z; each convention takes them in its order.
+            let ordered = match profile.euler {
+                EulerConvention::Zyx => [a.z, a.y, a.x],
+                EulerConvention::XyzIntrinsic | EulerConvention::XyzExtrinsic => [a.x, a.y, a.z],
+            };
+            profile.euler.to_rotation(ordered)
+        });
+    }
+    if let Some(i) = c.quaternion {
+        let v = t.numbers(r, &i)?;
+        let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        // Exports round each component; a norm off by more than their rounding is not a
+        // rotation's.
+        if !((1.0 - QUATERNION_NORM_TOLERANCE)..=(1.0 + QUATERNION_NORM_TOLERANCE)).contains(&norm)
+        {
+            return Err(Error::input(
+                t.location(r, i[0]),
+                format!(
+                    "({}, {}, {}, {}) is not a unit quaternion (norm {norm:.6}, not within \
+                     {QUATERNION_NORM_TOLERANCE:e} of 1)",
+                    shown(&t.rows[r][i[0]]),
+                    shown(&t.rows[r][i[1]]),
+                    shown(&t.rows[r][i[2]]),
+                    shown(&t.rows[r][i[3]]),
+                ),
+            ));
+        }
+        let q = UnitQuaternion::from_quaternion(Quaternion::new(v[0], v[1], v[2], v[3]));
+        m.rotation = Some(q.to_rotation_matrix());
     }
     if let Some(i) = c.sigma_position {
         m.sigma_position = Some(vec3(i, &|v| lu.to_mm(v))?);
