@@ -281,10 +281,21 @@ fn impossible_targets_are_failures_not_commands() {
         solver.solve(&Target::Pose(far), None),
         Err(Failure::Unreachable(_))
     ));
-    // A far target with a seed: the calibrated model's IK cannot reach it either.
+    // A far target with a seed: refused before any solve, beyond the arm's reach bound
+    // (it was a solve that did not converge).
     let seed = s.test_truth.rows[0].q.clone();
+    match solver.solve(&Target::Pose(far), Some(&seed)) {
+        Err(Failure::Unreachable(m)) => assert!(m.contains("the arm reaches at most"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+    // Just beyond the bound (within its margin): the calibrated model's IK from the seed
+    // cannot reach it either.
+    let reach = robocal::kinematics::Reach::of(&robot);
+    let near = Pose::translation(0.0, 0.0, 0.0);
+    let mut just = near;
+    just.translation.vector = reach.anchor + nalgebra::Vector3::x() * (1.05 * reach.bound_mm);
     assert!(matches!(
-        solver.solve(&Target::Pose(far), Some(&seed)),
+        solver.solve(&Target::Pose(just), Some(&seed)),
         Err(Failure::NotConverged(_))
     ));
     let p = truth_pose(&s.test_truth.rows[0]).translation.vector;

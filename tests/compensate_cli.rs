@@ -159,11 +159,14 @@ fn position_targets_keep_the_seed_orientation_and_failures_are_marked() {
         err.contains("warning: 1 of 2 targets have no command"),
         "{err}"
     );
-    assert!(err.contains("positions.csv:3: not-converged"), "{err}");
+    assert!(
+        err.contains("positions.csv:3: unreachable: the target is 99999 mm from the robot's base"),
+        "{err}"
+    );
     let rows = csv(&std::fs::read_to_string(&out).unwrap());
     assert_eq!(rows[0][..7], ["name", "x", "y", "z", "rz", "ry", "rx"]);
     assert_eq!(rows[1][col(&rows, "status")], "ok");
-    assert!(rows[2][col(&rows, "status")].starts_with("not-converged"));
+    assert!(rows[2][col(&rows, "status")].starts_with("unreachable"));
     assert_eq!(rows[2][col(&rows, "q1")], "", "a failed row has no joints");
     assert_eq!(
         rows[2][col(&rows, "cmd_x")],

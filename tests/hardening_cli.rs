@@ -87,12 +87,13 @@ fn sizes_are_bounded() {
 
 #[test]
 fn sigmas_are_finite_positive_and_bounded() {
-    for v in ["0", "nan", "-1", "inf", "1e308"] {
+    // 1e-7 reads back from no measurement file (sigma columns take 1e-6 mm and up).
+    for v in ["0", "nan", "-1", "inf", "1e308", "1e-7"] {
         let flag = format!("--sigma-pos={v}");
         for cmd in ["train", "identify"] {
             refused(
                 &[cmd, "--robot", UR10, "--data", "none.csv", &flag],
-                "give a sigma above 0 up to 1000",
+                "give a sigma from 1e-6 up to 1000",
             );
         }
         if v != "0" {
@@ -101,7 +102,7 @@ fn sigmas_are_finite_positive_and_bounded() {
                     "simulate", "--robot", UR10, "--count", "3", "--seed", "1", "--out", "x.csv",
                     &flag,
                 ],
-                "give a noise sigma from 0 up to 1000",
+                "give a noise sigma of 0 or from 1e-6 up to 1000",
             );
         }
     }
@@ -1135,8 +1136,7 @@ fn edge_inputs_of_the_twenty_third_hunt() {
     assert!(stderr(&o).contains(&format!("{far}:2: ")), "{}", stderr(&o));
 }
 
-/// Session 24: `ik` on an exact closed form tells a pose out of reach from one whose
-/// solutions leave the limits; `compensate` warns about seed joints beyond the limits (a row's
+/// Session 24: `ik` says how far a pose beyond the arm's reach is; `compensate` warns about seed joints beyond the limits (a row's
 /// own, or `--seed` where a row takes it), which it took without a word.
 #[test]
 fn edge_inputs_of_the_twenty_fourth_session() {
@@ -1144,7 +1144,9 @@ fn edge_inputs_of_the_twenty_fourth_session() {
     let o = robocal(&["ik", "--robot", FANUC, "--pose", "9000,0,0,0,0,0"]);
     assert!(!o.status.success());
     assert!(
-        stderr(&o).contains("out of the arm's reach"),
+        stderr(&o).contains(
+            "unreachable: the target is 9000 mm from the robot's base and the arm reaches at most"
+        ),
         "{}",
         stderr(&o)
     );
@@ -1188,4 +1190,133 @@ fn edge_inputs_of_the_twenty_fourth_session() {
     );
     let o = run("0,0,0,0,20,0");
     assert!(!stderr(&o).contains("--seed leaves"), "{}", stderr(&o));
+}
+
+/// Session 24's hunt of `import`, `split` and `simulate`: an export's own columns that a
+/// canonical reader would take as fields are carried renamed (the output read back); a
+/// profile that expects an orientation the file lacks, or names no joints, is refused; `split`
+/// without joint columns is refused; orientation angles that look like radians are warned of.
+#[test]
+fn edge_inputs_of_the_twenty_fourth_hunt() {
+    use common::FANUC;
+    let file = |name: &str, text: &str| {
+        let p = common::tmp(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    // Quaternions beside the export's own Euler angles, a joint-like q7, and an `x`: the
+    // profile reads J1..J6, X, Y, Z and the quaternion.
+    let mut csv = String::from("J1,J2,J3,J4,J5,J6,X,Y,Z,qw,qx,qy,qz,rx,ry,rz,q7,x\n");
+    for k in 0..4 {
+        csv += &format!("{k},1,2,3,4,5,1500,{k}00,900,1,0,0,0,10,20,30,7,8\n");
+    }
+    let data = file("hunt24_quat.csv", &csv);
+    let profile = file(
+        "hunt24_quat.toml",
+        "orientation = \"quaternion\"\n[columns]\njoints = [\"J1\", \"J2\", \"J3\", \"J4\", \
+         \"J5\", \"J6\"]\nx = \"X\"\ny = \"Y\"\nz = \"Z\"\n",
+    );
+    let out = common::tmp("hunt24_quat_out.csv");
+    let o = robocal(&[
+        "import",
+        &data,
+        "--profile",
+        &profile,
+        "--robot",
+        FANUC,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(
+            "renamed: rx as input_rx, ry as input_ry, rz as input_rz, q7 as input_q7, x as input_x"
+        ),
+        "{}",
+        stderr(&o)
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        text.starts_with(
+            "q1,q2,q3,q4,q5,q6,x,y,z,rz,ry,rx,input_rx,input_ry,input_rz,input_q7,input_x\n"
+        ),
+        "{text}"
+    );
+    let o = robocal(&[
+        "evaluate",
+        "--robot",
+        FANUC,
+        "--data",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    // The same profile on a file without the quaternion: refused, not read as positions.
+    let positions = file(
+        "hunt24_positions.csv",
+        "J1,J2,J3,J4,J5,J6,X,Y,Z\n0,1,2,3,4,5,1500,0,900\n",
+    );
+    refused_saying(
+        &[
+            "import",
+            &positions,
+            "--profile",
+            &profile,
+            "--out",
+            "never.csv",
+        ],
+        &[
+            "hunt24_positions.csv",
+            "columns qw, qx, qy, qz, which the file does not have",
+        ],
+    );
+    // A profile naming no joints, a quaternion column without the quaternion form.
+    for (text, field) in [
+        ("[columns]\njoints = []\n", "field `joints`"),
+        ("[columns]\nqw = \"Q0\"\n", "field `qw`"),
+    ] {
+        let p = file("hunt24_bad.toml", text);
+        refused_saying(
+            &["import", &positions, "--profile", &p, "--out", "never.csv"],
+            &["hunt24_bad.toml:", field],
+        );
+    }
+    // split, like import, needs joint columns.
+    let nojoint = file("hunt24_nojoint.csv", "id,x,y,z\n1,1,2,3\n2,4,5,6\n");
+    refused_saying(
+        &[
+            "split",
+            &nojoint,
+            "--seed",
+            "1",
+            "--out-a",
+            "never_a.csv",
+            "--out-b",
+            "never_b.csv",
+        ],
+        &["hunt24_nojoint.csv: no joint columns q1, q2"],
+    );
+    assert!(!std::path::Path::new("never_a.csv").exists());
+
+    // Euler angles in radians in a file read in degrees: warned of.
+    let mut rad = String::from("q1,q2,q3,q4,q5,q6,x,y,z,rz,ry,rx\n");
+    for k in 0..3 {
+        rad += &format!("{k},1,2,3,4,5,1500,{k}00,900,3.1,-0.4,2.9\n");
+    }
+    let rad = file("hunt24_rad.csv", &rad);
+    let out = common::tmp("hunt24_rad_out.csv");
+    let o = robocal(&[
+        "import",
+        &rad,
+        "--robot",
+        FANUC,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("every orientation value (rx, ry, rz) is within +-6.3"),
+        "{}",
+        stderr(&o)
+    );
 }

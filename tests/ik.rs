@@ -392,7 +392,7 @@ fn ik_strategy_nearest_all_and_branch() {
 /// limits, naming the joints of the nearest (both were "no solution within the joint limits").
 #[test]
 fn exact_ik_tells_out_of_reach_from_outside_the_limits() {
-    use robocal::kinematics::{IkFailure, IkSolver, IkStart, RobotModel, tool_pose};
+    use robocal::kinematics::{IkFailure, IkSolver, IkStart, Reach, RobotModel, tool_pose};
     let text = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/fanuc_r2000ib_210f.toml"),
     )
@@ -405,14 +405,30 @@ fn exact_ik_tells_out_of_reach_from_outside_the_limits() {
         let start = IkStart::choose(&robot, None).unwrap();
         assert!(matches!(start, IkStart::Exact(_)));
         let mut solver = IkSolver::new(RobotModel::new(&robot), start, IkOptions::default());
-        let mut far = tool_pose(&robot, &[0.0; 6]);
-        far.translation.vector *= 10.0;
-        for e in [
-            solver.nearest(&far, None).unwrap_err(),
-            solver.all(&far, None).unwrap_err(),
+        // 5 % beyond the reach bound: the closed form finds no solution; ten times beyond:
+        // refused before any solve, saying how far.
+        let reach = Reach::of(&robot);
+        let zero = tool_pose(&robot, &[0.0; 6]);
+        let out = (zero.translation.vector - reach.anchor).normalize();
+        for (times, says) in [
+            (
+                1.05,
+                "out of the arm's reach (the closed form has no solution)",
+            ),
+            (10.0, "mm from the robot's base and the arm reaches at most"),
         ] {
-            assert!(matches!(e, IkFailure::Unreachable(_)), "{e}");
-            assert!(e.to_string().contains("out of the arm's reach"), "{e}");
+            let mut far = zero;
+            far.translation.vector = reach.anchor + out * (times * reach.bound_mm);
+            for e in [
+                solver.nearest(&far, None).unwrap_err(),
+                solver.all(&far, None).unwrap_err(),
+            ] {
+                assert!(
+                    matches!(e, IkFailure::Unreachable(_) | IkFailure::OutOfReach(_)),
+                    "{e}"
+                );
+                assert!(e.to_string().contains(says), "{e}");
+            }
         }
         let turned = tool_pose(&robot, &[90f64.to_radians(), 0.1, 0.1, 0.2, 0.3, 0.4]);
         if std::ptr::eq(src, &text) {
@@ -456,4 +472,68 @@ fn exact_ik_tells_out_of_reach_from_outside_the_limits() {
             "the nearest solution leaves the limits of joint 1"
         );
     }
+}
+
+/// The reach bound holds at every configuration drawn (prismatic joints and compliances
+/// included) and is not loose (of 20,000 drawn configurations the farthest reaches 95 % of
+/// it on the UR10, 80 % on the slider arm), and a numerical solve refuses a target beyond it
+/// before iterating.
+#[test]
+fn the_reach_bound_holds_and_refuses_far_targets() {
+    use robocal::kinematics::{IkFailure, IkSolver, IkStart, Reach, RobotModel, tool_pose};
+    let slider = parse_robot(
+        "[base]\nconvention = \"transform\"\nx = 100.0\nz = 400.0\nrx = 30.0\n\
+         [[joint]]\nconvention = \"dh\"\nd = 300\na = 50\nalpha = 90\nlimits = [-170, 170]\n\
+         [[joint]]\nconvention = \"dh\"\ntype = \"prismatic\"\ntheta = 90\nalpha = -90\n\
+         limits = [-200, 600]\n\
+         [[joint]]\nconvention = \"dh\"\na = 250\nlimits = [-120, 120]\n\
+         [tool]\nconvention = \"transform\"\nx = 40.0\nz = 80.0\n",
+        Path::new("slider.toml"),
+    )
+    .unwrap();
+    let compliant = read_robot(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/nongeometric_robot/true_robot.toml"),
+    )
+    .unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    for (name, robot, tight) in [
+        ("fanuc", robot_file("fanuc_r2000ib_210f.toml"), None),
+        ("ur10", robot_file("ur10.toml"), Some(0.9)),
+        ("slider", slider, Some(0.75)),
+        ("compliant", compliant, None),
+    ] {
+        let reach = Reach::of(&robot);
+        let mut far = 0.0_f64;
+        for _ in 0..20_000 {
+            let q = random_q(&robot, &mut rng);
+            far = far.max(reach.distance_mm(&tool_pose(&robot, &q).translation.vector));
+        }
+        assert!(
+            far <= reach.bound_mm * (1.0 + 1e-12),
+            "{name}: {far} > {}",
+            reach.bound_mm
+        );
+        if let Some(t) = tight {
+            assert!(
+                far >= t * reach.bound_mm,
+                "{name}: {far} of {}",
+                reach.bound_mm
+            );
+        }
+    }
+    // The UR10 solved numerically from a seed: 9 m away is refused at once, not after a
+    // stalled solve ("the target may be out of reach").
+    let ur = robot_file("ur10.toml");
+    let start = IkStart::choose(&ur, None).unwrap();
+    let mut solver = IkSolver::new(RobotModel::new(&ur), start, IkOptions::default());
+    let mut target = tool_pose(&ur, &[0.0; 6]);
+    target.translation.vector = nalgebra::Vector3::new(9000.0, 0.0, 0.0);
+    let seed = [0.0, -1.5, 1.5, 0.0, 1.5, 0.0];
+    let e = solver.nearest(&target, Some(&seed)).unwrap_err();
+    assert!(matches!(e, IkFailure::OutOfReach(_)), "{e}");
+    assert!(
+        e.to_string()
+            .contains("mm from the robot's base and the arm reaches at most"),
+        "{e}"
+    );
 }

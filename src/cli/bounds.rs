@@ -9,6 +9,10 @@ pub const MAX_DECIMALS: usize = 17;
 pub const MAX_COUNT: usize = 1_000_000;
 /// Largest tracker or noise sigma accepted (mm, mrad): far beyond any real instrument.
 pub const MAX_SIGMA: f64 = 1000.0;
+/// Smallest non-zero tracker or noise sigma (mm, mrad): 1 nm and 1 nrad, the bounds a
+/// measurement file's sigma columns are read within (a simulated file's sigmas must read
+/// back), and a weight of 1e12 per mm^-2 already beyond any instrument.
+pub const MIN_SIGMA: f64 = 1e-6;
 
 fn whole(s: &str, what: &str, lo: usize, hi: usize) -> Result<usize, String> {
     let n: usize = s
@@ -39,25 +43,29 @@ fn real(s: &str, what: &str, zero_ok: bool) -> Result<f64, String> {
     let v: f64 = s
         .parse()
         .map_err(|_| format!("`{s}` is not a number ({what})"))?;
-    let low_ok = if zero_ok { v >= 0.0 } else { v > 0.0 };
+    let low_ok = (zero_ok && v == 0.0) || v >= MIN_SIGMA;
     if !(v.is_finite() && low_ok && v <= MAX_SIGMA) {
-        let low = if zero_ok { "from 0" } else { "above 0" };
+        let low = if zero_ok {
+            format!("of 0 or from {MIN_SIGMA:e}")
+        } else {
+            format!("from {MIN_SIGMA:e}")
+        };
         return Err(format!("give a {what} {low} up to {MAX_SIGMA} (got {s})"));
     }
     Ok(v)
 }
 
-/// A tracker sigma that weights rows (identify, train): above 0, at most [`MAX_SIGMA`].
+/// A tracker sigma that weights rows (identify, train): [`MIN_SIGMA`] to [`MAX_SIGMA`].
 pub fn sigma(s: &str) -> Result<f64, String> {
     real(s, "sigma", false)
 }
 
-/// `plan --target-mm`: a mean position error above 0, at most [`MAX_SIGMA`] (mm).
+/// `plan --target-mm`: a mean position error of [`MIN_SIGMA`] to [`MAX_SIGMA`] (mm).
 pub fn target_mm(s: &str) -> Result<f64, String> {
     real(s, "target mean position error (mm)", false)
 }
 
-/// A simulated noise sigma: 0 (no noise) to [`MAX_SIGMA`].
+/// A simulated noise sigma: 0 (no noise), or [`MIN_SIGMA`] to [`MAX_SIGMA`].
 pub fn noise(s: &str) -> Result<f64, String> {
     real(s, "noise sigma", true)
 }

@@ -45,11 +45,11 @@ impl DataArgs {
 /// Set-level tracker sigmas for rows that carry none (identify, train).
 #[derive(Args, Debug, Clone)]
 pub struct SigmaArgs {
-    /// Position sigma (mm, above 0 up to 1000) for rows without sx,sy,sz (default 0.033, the
+    /// Position sigma (mm, 1e-6 to 1000) for rows without sx,sy,sz (default 0.033, the
     /// thesis's tracker).
     #[arg(long, value_parser = super::bounds::sigma)]
     pub sigma_pos: Option<f64>,
-    /// Orientation sigma (mrad, above 0 up to 1000) for rows without srx,sry,srz (default
+    /// Orientation sigma (mrad, 1e-6 to 1000) for rows without srx,sry,srz (default
     /// 0.174).
     #[arg(long, value_parser = super::bounds::sigma)]
     pub sigma_rot: Option<f64>,
@@ -83,6 +83,30 @@ pub fn print_report(path: &Path, report: &ReadReport) {
             eprintln!("  {why}");
         }
     }
+}
+
+/// The joints of a file read without a robot file (`import`, `split`): as many as the
+/// profile names, else as many as `q1, q2, ...` head `input`'s columns; none is an error
+/// naming the file. With a robot file, 0 (the robot says).
+pub fn counted_joints(input: &Path, robot: Option<&PathBuf>, profile: &Profile) -> Result<usize> {
+    Ok(match (robot, &profile.columns.joints) {
+        (Some(_), _) => 0,
+        (None, Some(j)) => j.len(),
+        (None, None) => {
+            let t = Table::read_with(input, profile.delimiter, profile.decimal_comma)?;
+            let n = (1..)
+                .take_while(|i| t.column(&format!("q{i}")).is_some())
+                .count();
+            if n == 0 {
+                anyhow::bail!(
+                    "{}: no joint columns q1, q2, ... (give --robot, or a profile that names \
+                     them)",
+                    input.display()
+                );
+            }
+            n
+        }
+    })
 }
 
 /// Reads an optional robot argument.

@@ -1,10 +1,11 @@
 //! `robocal import`: a foreign export to canonical CSV through an import profile.
 
-use super::data_args::{DataArgs, joints_of};
-use anyhow::{Result, bail};
+use super::data_args::{DataArgs, counted_joints, joints_of};
+use anyhow::Result;
 use clap::Args;
+use robocal::data::joint_columns;
+use robocal::data::measurement::Layout;
 use robocal::data::measurement::write_measurements;
-use robocal::data::{Table, joint_columns};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -33,24 +34,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
         &[req("--out", &a.out)],
     )?;
     let profile = a.data.profile()?;
-    let n = match (&a.robot, &profile.columns.joints) {
-        (Some(_), _) => 0,
-        (None, Some(j)) => j.len(),
-        (None, None) => {
-            // Count q1, q2, ... in the header.
-            let t = Table::read_with(&a.input, profile.delimiter, profile.decimal_comma)?;
-            let n = (1..)
-                .take_while(|i| t.column(&format!("q{i}")).is_some())
-                .count();
-            if n == 0 {
-                bail!(
-                    "{}: no joint columns q1, q2, ... (give a profile that names them)",
-                    a.input.display()
-                );
-            }
-            n
-        }
-    };
+    let n = counted_joints(&a.input, a.robot.as_ref(), &profile)?;
     if a.robot.is_none() {
         eprintln!(
             "note: no --robot: joints are taken as revolute and their limits are not checked"
@@ -59,6 +43,17 @@ pub fn run(a: ImportArgs) -> Result<()> {
     let joints = joints_of(a.robot.as_ref(), n)?;
     let set = a.data.read(&a.input, &joints)?;
     super::output::writing(write_measurements(&set, &joints, &a.out), &a.out)?;
+    let written = Layout::of(&set).carried_names(joints.len());
+    let renamed: Vec<String> = (set.extra_columns.iter().zip(&written))
+        .filter(|(a, b)| a != b)
+        .map(|(a, b)| format!("{a} as {b}"))
+        .collect();
+    if !renamed.is_empty() {
+        eprintln!(
+            "note: carried column(s) a canonical reader would take as fields were renamed: {}",
+            renamed.join(", ")
+        );
+    }
     let what = match (set.has_position(), set.has_rotation()) {
         (true, true) => "poses",
         (true, false) => "positions",

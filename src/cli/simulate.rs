@@ -32,10 +32,10 @@ pub struct SimulateArgs {
     /// Random seed (configurations and noise).
     #[arg(long)]
     seed: u64,
-    /// Noise on each position coordinate (mm, one standard deviation; 0 to 1000).
+    /// Noise on each position coordinate (mm, one standard deviation; 0, or 1e-6 to 1000).
     #[arg(long, default_value_t = 0.0, value_parser = super::bounds::noise)]
     sigma_pos: f64,
-    /// Noise on each orientation component (mrad, one standard deviation; 0 to 1000).
+    /// Noise on each orientation component (mrad, one standard deviation; 0, or 1e-6 to 1000).
     #[arg(long, default_value_t = 0.0, value_parser = super::bounds::noise)]
     sigma_rot: f64,
     /// What the sensor reports.

@@ -1,9 +1,8 @@
 //! `robocal split`: a seeded random split of a measurement set (calibration / validation).
 
-use super::data_args::{DataArgs, joints_of};
+use super::data_args::{DataArgs, counted_joints, joints_of};
 use anyhow::{Result, bail};
 use clap::Args;
-use robocal::data::Table;
 use robocal::data::measurement::{split, write_measurements};
 use std::path::PathBuf;
 
@@ -19,6 +18,7 @@ pub struct SplitArgs {
     /// Fraction of rows for the first output.
     #[arg(long, default_value_t = 0.5)]
     fraction: f64,
+    /// Seed of the random split (the same seed gives the same parts).
     #[arg(long)]
     seed: u64,
     /// First part (canonical CSV).
@@ -43,16 +43,7 @@ pub fn run(a: SplitArgs) -> Result<()> {
         bail!("--fraction must be within 0..1");
     }
     let profile = a.data.profile()?;
-    let n = match (&a.robot, &profile.columns.joints) {
-        (None, Some(j)) => j.len(),
-        (None, None) => {
-            let t = Table::read_with(&a.input, profile.delimiter, profile.decimal_comma)?;
-            (1..)
-                .take_while(|i| t.column(&format!("q{i}")).is_some())
-                .count()
-        }
-        _ => 0,
-    };
+    let n = counted_joints(&a.input, a.robot.as_ref(), &profile)?;
     let joints = joints_of(a.robot.as_ref(), n)?;
     let set = a.data.read(&a.input, &joints)?;
     let (x, y) = split(&set, a.fraction, a.seed);

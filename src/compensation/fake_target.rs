@@ -269,6 +269,7 @@ impl<'a> FakeTargetSolver<'a> {
             .map_err(|e| match e {
                 IkFailure::NotConverged(m) => Failure::NotConverged(m),
                 IkFailure::BadSeed(m) => Failure::BadSeed(m),
+                IkFailure::OutOfReach(m) => Failure::Unreachable(m),
                 // No closed-form start on the seed's branch, and the seed could not start
                 // the solve either: there is none, or it is at a singularity (no branch).
                 _ if seed.is_none() => Failure::Unreachable(
@@ -345,6 +346,7 @@ fn solve_from_seed(
     let seed = seed.ok_or(Failure::NoSeedWithoutClosedForm)?;
     let failure = |e: IkFailure| match e {
         IkFailure::BadSeed(m) => Failure::BadSeed(m),
+        IkFailure::OutOfReach(m) => Failure::Unreachable(m),
         IkFailure::OutsideLimits(j) => Failure::OutsideLimits(j),
         e => Failure::NotConverged(e.to_string()),
     };

@@ -295,6 +295,25 @@ impl Profile {
                 *slot = v;
             }
         };
+        if p.orientation != Orientation::Quaternion {
+            let named = [("qw", &c.qw), ("qx", &c.qx), ("qy", &c.qy), ("qz", &c.qz)];
+            if let Some((field, _)) = named.iter().find(|(_, v)| v.is_some()) {
+                return Err(bad(
+                    field,
+                    "a quaternion column, but the profile's orientation is not \
+                     \"quaternion\" (set orientation = \"quaternion\")"
+                        .into(),
+                ));
+            }
+        }
+        if c.joints.as_ref().is_some_and(Vec::is_empty) {
+            return Err(bad(
+                "joints",
+                "the profile names no joint columns: name them in chain order, or leave \
+                 `joints` out for q1..qN"
+                    .into(),
+            ));
+        }
         let cols = &mut p.columns;
         cols.joints = c.joints;
         for (slot, v) in cols.position.iter_mut().zip([c.x, c.y, c.z]) {

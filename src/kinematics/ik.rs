@@ -17,9 +17,9 @@
 //! distinct one; [`IkSolver::from_nearest_start`] (target compensation) solves once from the
 //! nearest start on a given branch, the configuration the controller keeps.
 
-use super::Pose;
 use super::ik_closed::{Branch, MAX_SOLUTIONS, SphericalWristIk};
 use super::ik_numeric::{IkOptions, IkSolution, IkTarget, IkWorkspace, ToolModel, solve_model};
+use super::{Pose, Reach};
 use crate::error::{Error, Result};
 use crate::geometry::rotation::rotation_vector;
 use crate::model::Robot;
@@ -90,6 +90,8 @@ pub enum IkFailure {
     BadSeed(String),
     /// The closed form has no solution: the pose is out of the arm's reach (or of its wrist's).
     Unreachable(String),
+    /// The target lies beyond the arm's reach ([`Reach`], with [`REACH_MARGIN`]): how far.
+    OutOfReach(String),
     /// More than [`MAX_SOLUTIONS`] solutions within the limits (ranges of many turns).
     TooMany,
     /// No numerical solve converged; the last one's report.
@@ -104,7 +106,7 @@ impl std::fmt::Display for IkFailure {
         match self {
             IkFailure::NoSeed => write!(f, "no seed joints to start the numerical solve"),
             IkFailure::BadSeed(m) => write!(f, "bad seed: {m}"),
-            IkFailure::Unreachable(m) => write!(f, "unreachable: {m}"),
+            IkFailure::Unreachable(m) | IkFailure::OutOfReach(m) => write!(f, "unreachable: {m}"),
             IkFailure::TooMany => write!(
                 f,
                 "more than {MAX_SOLUTIONS} solutions within the joint limits (ranges of many \
@@ -150,7 +152,12 @@ pub struct IkSolver<M: ToolModel> {
     branches: Vec<(Branch, [f64; 6])>,
     copies: Vec<[f64; 6]>,
     mid: Vec<f64>,
+    reach: Reach,
 }
+
+/// How far beyond the model's [`Reach`] a target must lie to be refused before any solve: a
+/// compensator's correction (millimetres) moves the tool beyond its robot's bound by far less.
+pub const REACH_MARGIN: f64 = 1.1;
 
 impl<M: ToolModel> IkSolver<M> {
     /// A solver of `model` starting as `start` says, numerical solves to `opts`.
@@ -158,6 +165,7 @@ impl<M: ToolModel> IkSolver<M> {
         let robot = model.robot();
         let ws = IkWorkspace::new(robot);
         let mid = robot.mid_joints();
+        let reach = Reach::of(robot);
         IkSolver {
             model,
             start,
@@ -166,7 +174,21 @@ impl<M: ToolModel> IkSolver<M> {
             branches: Vec::with_capacity(8),
             copies: Vec::new(),
             mid,
+            reach,
         }
+    }
+
+    /// A target beyond [`REACH_MARGIN`] times the model's reach as a failure saying how far.
+    fn check_reach(&self, target: &Pose) -> std::result::Result<(), IkFailure> {
+        let d = self.reach.distance_mm(&target.translation.vector);
+        let bound = self.reach.bound_mm;
+        if d > REACH_MARGIN * bound {
+            return Err(IkFailure::OutOfReach(format!(
+                "the target is {d:.0} mm from the robot's base and the arm reaches at most \
+                 {bound:.0} mm from it"
+            )));
+        }
+        Ok(())
     }
 
     /// The model solved for.
@@ -321,6 +343,7 @@ impl<M: ToolModel> IkSolver<M> {
         seed: Option<&[f64]>,
     ) -> std::result::Result<Solved, IkFailure> {
         self.check_seed(seed)?;
+        self.check_reach(target)?;
         let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
         if let IkStart::Exact(_) = self.start {
             let starts = self.starts(target, &reference, None);
@@ -358,6 +381,7 @@ impl<M: ToolModel> IkSolver<M> {
         branch: Option<Branch>,
     ) -> std::result::Result<Solved, IkFailure> {
         self.check_seed(seed)?;
+        self.check_reach(target)?;
         let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
         let (b, q0) = match self.starts(target, &reference, branch).first() {
             Some((_, _, b, q)) => (Some(*b), q.to_vec()),
@@ -389,6 +413,7 @@ impl<M: ToolModel> IkSolver<M> {
         seed: Option<&[f64]>,
     ) -> std::result::Result<Vec<Vec<f64>>, IkFailure> {
         self.check_seed(seed)?;
+        self.check_reach(target)?;
         if let IkStart::Exact(ik) = &self.start {
             if !ik.solve(target, &mut self.copies) {
                 return Err(IkFailure::TooMany);

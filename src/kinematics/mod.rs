@@ -9,6 +9,7 @@ pub mod ik_closed;
 pub mod ik_numeric;
 pub mod jacobian;
 pub mod load;
+pub mod reach;
 pub mod same_arm;
 pub mod subproblems;
 
@@ -19,6 +20,7 @@ pub use ik_numeric::{
     IkOptions, IkSolution, IkTarget, IkWorkspace, RobotModel, ToolModel, solve_model, solve_numeric,
 };
 pub use jacobian::joint_jacobian;
+pub use reach::Reach;
 pub use same_arm::{GEOMETRY_GAP, another_arm, arm_distance_gap};
 
 pub use crate::geometry::{Pose, pose_from_file, pose_to_file};

@@ -139,6 +139,25 @@ impl Columns {
             Orientation::Quaternion => (None, quaternion_group(t, &cols.quaternion)?),
             _ => (group(t, &cols.angles, "orientation")?, None),
         };
+        // A profile that says how the orientation is written (its form, or its columns'
+        // names) expects one: without its columns the rows would be read as positions only.
+        let defaults = Profile::default().columns;
+        let expects_orientation =
+            profile.orientation != Orientation::Euler || cols.angles != defaults.angles;
+        if expects_orientation && angles.is_none() && quaternion.is_none() {
+            let names = match profile.orientation {
+                Orientation::Quaternion => cols.quaternion.join(", "),
+                _ => cols.angles.join(", "),
+            };
+            return Err(Error::input(
+                Location::file(&t.path),
+                format!(
+                    "the profile reads the orientation from columns {names}, which the file \
+                     does not have (for positions only, leave `orientation` and the orientation \
+                     columns out of the profile)"
+                ),
+            ));
+        }
         let sigma_position = group(t, &cols.sigma_position, "position sigma")?;
         let sigma_angles = group(t, &cols.sigma_angles, "orientation sigma")?;
         let distance = t.column(&cols.distance);
@@ -487,6 +506,24 @@ pub fn parse_measurements(
         return Err(Error::input(Location::file(&t.path), "no measurement rows"));
     }
     check_joints(t, &rows, joints, profile, opts, &mut report)?;
+    // Orientation angles (or a rotation vector) in degrees that all stay within a turn's
+    // radians: a UR controller's rotation vector, say, in rad.
+    if let Some(i) = c.angles
+        && profile.angle_unit == AngleUnit::Deg
+        && rows.len() >= 3
+    {
+        let max = (0..t.rows.len())
+            .filter_map(|r| t.numbers(r, &i).ok())
+            .flatten()
+            .fold(0.0_f64, |m, v| m.max(v.abs()));
+        if max > 0.0 && max <= 6.3 {
+            report.warnings.push(format!(
+                "every orientation value ({}) is within +-6.3 although the file's angles are in \
+                 degrees: are they radians? (set angle_unit = \"rad\" in a profile)",
+                cols.angles.join(", ")
+            ));
+        }
+    }
     Ok((
         MeasurementSet {
             source: t.path.clone(),

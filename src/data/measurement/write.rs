@@ -67,8 +67,37 @@ impl Layout {
         push(self.distance, &["distance"]);
         push(self.sigma_position, &["sx", "sy", "sz"]);
         push(self.sigma_rotation, &["srx", "sry", "srz"]);
-        headers.extend(self.extra.iter().cloned());
+        let carried = self.carried_names(joints.len());
+        headers.extend(carried);
         headers
+    }
+
+    /// The carried columns' names as written: a name a canonical reader would take as a
+    /// field (`x`, `rx`, `id`, a joint-like `q7`, ...: the export's own columns beside those
+    /// its profile mapped) becomes `input_<name>` (again, until it is unique), so that the
+    /// file reads back with the fields it was written with.
+    pub fn carried_names(&self, joints: usize) -> Vec<String> {
+        const FIELDS: [&str; 16] = [
+            "id", "set", "pair", "x", "y", "z", "rz", "ry", "rx", "distance", "sx", "sy", "sz",
+            "srx", "sry", "srz",
+        ];
+        let joint_like = |h: &str| {
+            h.strip_prefix('q')
+                .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+        };
+        let mut taken: Vec<String> = joint_columns(joints);
+        taken.extend(FIELDS.iter().map(|f| f.to_string()));
+        let mut names = Vec::with_capacity(self.extra.len());
+        for e in &self.extra {
+            let mut name = e.clone();
+            while taken.contains(&name) || joint_like(&name) || names.contains(&name) {
+                name = format!("input_{name}");
+            }
+            names.push(name);
+        }
+        // An original `input_x` after a renamed `x` is renamed in turn (the loop above), so
+        // every name is unique.
+        names
     }
 
     /// The cells of one row (mm, deg), blank where the row lacks a group the layout has.
