@@ -1298,6 +1298,62 @@ fn edge_inputs_of_the_twenty_fourth_hunt() {
     );
     assert!(!std::path::Path::new("never_a.csv").exists());
 
+    // A file delimited by `;` read as canonical CSV, and a delimiter ending the header: hints.
+    let semi = file(
+        "hunt24_semi.csv",
+        "q1;q2;q3;q4;q5;q6;x;y;z\n0;1;2;3;4;5;1;2;3\n",
+    );
+    refused_saying(
+        &["import", &semi, "--out", "never.csv"],
+        &["no joint columns", "set delimiter = \";\" in a profile"],
+    );
+    refused_saying(
+        &["evaluate", "--robot", FANUC, "--data", &semi],
+        &["field `q1`", "set delimiter = \";\" in a profile"],
+    );
+    let trailing = file(
+        "hunt24_trailing.csv",
+        "q1,q2,q3,q4,q5,q6,x,y,z,\n0,1,2,3,4,5,1,2,3,\n",
+    );
+    refused_saying(
+        &["import", &trailing, "--out", "never.csv"],
+        &["field `#10`", "a delimiter at the end of the line?"],
+    );
+    // -0 is written 0; one row is "1 position".
+    let one = file(
+        "hunt24_one.csv",
+        "q1,q2,q3,q4,q5,q6,x,y,z\n-0,0,0,0,0,0,1,2,3\n",
+    );
+    let out = common::tmp("hunt24_one_out.csv");
+    let o = robocal(&["import", &one, "--out", out.to_str().unwrap()]);
+    assert!(
+        stderr(&o).contains("imported 1 position (6 joints"),
+        "{}",
+        stderr(&o)
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.ends_with("\n0,0,0,0,0,0,1,2,3\n"), "{text}");
+
+    // A joint beyond its limits: the warning names the first, its value and its limits.
+    let beyond = file(
+        "hunt24_beyond.csv",
+        "q1,q2,q3,q4,q5,q6,x,y,z\n10,75,20,30,40,50,1,2,3\n",
+    );
+    let out = common::tmp("hunt24_beyond_out.csv");
+    let o = robocal(&[
+        "import",
+        &beyond,
+        "--robot",
+        FANUC,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        stderr(&o).contains("(lines 2); line 2: joint 2 at 75.0000 deg, beyond [-50, 70]"),
+        "{}",
+        stderr(&o)
+    );
+
     // Euler angles in radians in a file read in degrees: warned of.
     let mut rad = String::from("q1,q2,q3,q4,q5,q6,x,y,z,rz,ry,rx\n");
     for k in 0..3 {

@@ -100,8 +100,9 @@ pub fn counted_joints(input: &Path, robot: Option<&PathBuf>, profile: &Profile) 
             if n == 0 {
                 anyhow::bail!(
                     "{}: no joint columns q1, q2, ... (give --robot, or a profile that names \
-                     them)",
-                    input.display()
+                     them){}",
+                    input.display(),
+                    t.delimiter_hint()
                 );
             }
             n

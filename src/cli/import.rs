@@ -60,10 +60,16 @@ pub fn run(a: ImportArgs) -> Result<()> {
         (false, true) => "orientations",
         (false, false) => "distances",
     };
+    let what = if set.rows.len() == 1 {
+        what.trim_end_matches('s')
+    } else {
+        what
+    };
     eprintln!(
-        "imported {} {what} ({} joints: {}) into {}",
+        "imported {} {what} ({} joint{}: {}) into {}",
         set.rows.len(),
         joints.len(),
+        if joints.len() == 1 { "" } else { "s" },
         joint_columns(joints.len()).join(","),
         a.out.display()
     );

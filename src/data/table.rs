@@ -120,9 +120,14 @@ impl Table {
         }
         for (i, h) in headers.iter().enumerate() {
             if h.is_empty() {
+                let last = i + 1 == headers.len();
                 return Err(Error::input(
                     Location::at(path, 1, format!("#{}", i + 1)),
-                    "empty column name in the header",
+                    if last {
+                        "empty column name in the header (a delimiter at the end of the line?)"
+                    } else {
+                        "empty column name in the header"
+                    },
                 ));
             }
             if headers[..i].contains(h) {
@@ -174,15 +179,39 @@ impl Table {
             Error::input(
                 Location::at(&self.path, 1, name),
                 format!(
-                    "missing column (the header has: {})",
+                    "missing column (the header has: {}){}",
                     self.headers
                         .iter()
                         .map(|h| shown(h))
                         .collect::<Vec<_>>()
-                        .join(", ")
+                        .join(", "),
+                    self.delimiter_hint()
                 ),
             )
         })
+    }
+
+    /// A hint for a header read as one column that holds another delimiter (`;`, a tab, `|`):
+    /// "; the header is one column holding `;`: set delimiter = ";" in a profile", else empty.
+    pub fn delimiter_hint(&self) -> String {
+        match &self.headers[..] {
+            [h] => [';', '\t', '|', ',']
+                .into_iter()
+                .find(|&c| h.contains(c))
+                .map(|c| {
+                    let shown = if c == '\t' {
+                        "\\t".to_string()
+                    } else {
+                        c.to_string()
+                    };
+                    format!(
+                        "; the header is one column holding `{shown}`: set delimiter = \"{shown}\" \
+                         in a profile"
+                    )
+                })
+                .unwrap_or_default(),
+            _ => String::new(),
+        }
     }
 
     /// Location of a cell, for messages.

@@ -158,9 +158,28 @@ impl JointInfo {
     }
 
     fn outside(joints: &[JointInfo], q: &[f64]) -> bool {
-        joints.iter().zip(q).any(|(j, v)| {
-            j.limits
-                .is_some_and(|[lo, hi]| *v < lo - 1e-9 || *v > hi + 1e-9)
+        Self::first_outside(joints, q).is_some()
+    }
+
+    /// The first joint of `q` beyond its limits, in words (file units: deg, mm): "joint 2 at
+    /// 75 deg, beyond [-50, 70]".
+    fn first_outside(joints: &[JointInfo], q: &[f64]) -> Option<String> {
+        (joints.iter().zip(q).enumerate()).find_map(|(i, (j, &v))| {
+            let [lo, hi] = j.limits?;
+            (v < lo - 1e-9 || v > hi + 1e-9).then(|| {
+                let f = |x: f64| j.joint_type.to_file(x);
+                let unit = match j.joint_type {
+                    JointType::Revolute => "deg",
+                    JointType::Prismatic => "mm",
+                };
+                format!(
+                    "joint {} at {:.4} {unit}, beyond [{}, {}]",
+                    i + 1,
+                    f(v),
+                    f(lo),
+                    f(hi)
+                )
+            })
         })
     }
 }

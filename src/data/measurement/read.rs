@@ -412,10 +412,13 @@ fn check_joints(
         .map(|m| m.line)
         .collect();
     if !outside.is_empty() {
+        let first =
+            (rows.iter()).find_map(|m| JointInfo::first_outside(joints, &m.q).map(|w| (m.line, w)));
         let msg = format!(
-            "{} row(s) have joints outside the robot's limits (lines {})",
+            "{} row(s) have joints outside the robot's limits (lines {}){}",
             outside.len(),
-            list_lines(&outside)
+            list_lines(&outside),
+            first.map_or(String::new(), |(line, w)| format!("; line {line}: {w}"))
         );
         if opts.strict {
             return Err(Error::input(Location::file(&t.path), msg));

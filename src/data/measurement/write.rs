@@ -102,7 +102,8 @@ impl Layout {
 
     /// The cells of one row (mm, deg), blank where the row lacks a group the layout has.
     pub fn cells(&self, m: &Measurement, joints: &[JointInfo]) -> Vec<String> {
-        let num = |v: f64| format!("{v}");
+        // -0 (an angle of an exact rotation, say) is written 0.
+        let num = |v: f64| format!("{}", if v == 0.0 { 0.0 } else { v });
         let mut c: Vec<String> = Vec::new();
         let text = |o: &Option<String>| o.clone().unwrap_or_default();
         if self.id {
