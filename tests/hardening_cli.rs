@@ -1033,6 +1033,13 @@ fn edge_inputs_of_train_and_evaluate() {
     );
 }
 
+/// Writes `text` as `name` in this test's folder; its path.
+fn file(name: &str, text: &str) -> String {
+    let p = common::tmp(name);
+    std::fs::write(&p, text).unwrap();
+    p.to_str().unwrap().to_string()
+}
+
 /// Edge inputs of the twenty-third session's hunt: `--json` keeps carried ids as written;
 /// `/dev/null` takes any number of outputs and stays a device; a joint column after a gap
 /// names the missing one; a training that learned nothing says so; a file whose rows were
@@ -1040,11 +1047,6 @@ fn edge_inputs_of_train_and_evaluate() {
 #[test]
 fn edge_inputs_of_the_twenty_third_hunt() {
     use common::FANUC;
-    let file = |name: &str, text: &str| {
-        let p = common::tmp(name);
-        std::fs::write(&p, text).unwrap();
-        p.to_str().unwrap().to_string()
-    };
     let ids = file(
         "hunt_ids.csv",
         "id,q1,q2,q3,q4,q5,q6\n007,0,0,0,0,0,0\n1.50,5,5,5,5,5,5\n",
@@ -1199,10 +1201,14 @@ fn edge_inputs_of_the_twenty_fourth_session() {
 #[test]
 fn edge_inputs_of_the_twenty_fourth_hunt() {
     use common::FANUC;
-    let file = |name: &str, text: &str| {
-        let p = common::tmp(name);
-        std::fs::write(&p, text).unwrap();
-        p.to_str().unwrap().to_string()
+    // `import INPUT [FLAGS] --out NAME` (NAME in this test's folder): its output and the path.
+    let import = |input: &str, flags: &[&str], name: &str| {
+        let out = common::tmp(name);
+        let path = out.to_str().unwrap().to_string();
+        let mut args = vec!["import", input];
+        args.extend_from_slice(flags);
+        args.extend(["--out", path.as_str()]);
+        (robocal(&args), out)
     };
     // Quaternions beside the export's own Euler angles, a joint-like q7, and an `x`: the
     // profile reads J1..J6, X, Y, Z and the quaternion.
@@ -1216,17 +1222,11 @@ fn edge_inputs_of_the_twenty_fourth_hunt() {
         "orientation = \"quaternion\"\n[columns]\njoints = [\"J1\", \"J2\", \"J3\", \"J4\", \
          \"J5\", \"J6\"]\nx = \"X\"\ny = \"Y\"\nz = \"Z\"\n",
     );
-    let out = common::tmp("hunt24_quat_out.csv");
-    let o = robocal(&[
-        "import",
+    let (o, out) = import(
         &data,
-        "--profile",
-        &profile,
-        "--robot",
-        FANUC,
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+        &["--profile", &profile, "--robot", FANUC],
+        "hunt24_quat_out.csv",
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains(
@@ -1324,8 +1324,7 @@ fn edge_inputs_of_the_twenty_fourth_hunt() {
         "hunt24_one.csv",
         "q1,q2,q3,q4,q5,q6,x,y,z\n-0,0,0,0,0,0,1,2,3\n",
     );
-    let out = common::tmp("hunt24_one_out.csv");
-    let o = robocal(&["import", &one, "--out", out.to_str().unwrap()]);
+    let (o, out) = import(&one, &[], "hunt24_one_out.csv");
     assert!(
         stderr(&o).contains("imported 1 position (6 joints"),
         "{}",
@@ -1339,15 +1338,7 @@ fn edge_inputs_of_the_twenty_fourth_hunt() {
         "hunt24_beyond.csv",
         "q1,q2,q3,q4,q5,q6,x,y,z\n10,75,20,30,40,50,1,2,3\n",
     );
-    let out = common::tmp("hunt24_beyond_out.csv");
-    let o = robocal(&[
-        "import",
-        &beyond,
-        "--robot",
-        FANUC,
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (o, _) = import(&beyond, &["--robot", FANUC], "hunt24_beyond_out.csv");
     assert!(
         stderr(&o).contains("(lines 2); line 2: joint 2 at 75.0000 deg, beyond [-50, 70]"),
         "{}",
@@ -1360,15 +1351,7 @@ fn edge_inputs_of_the_twenty_fourth_hunt() {
         rad += &format!("{k},1,2,3,4,5,1500,{k}00,900,3.1,-0.4,2.9\n");
     }
     let rad = file("hunt24_rad.csv", &rad);
-    let out = common::tmp("hunt24_rad_out.csv");
-    let o = robocal(&[
-        "import",
-        &rad,
-        "--robot",
-        FANUC,
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (o, _) = import(&rad, &["--robot", FANUC], "hunt24_rad_out.csv");
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains("every orientation value (rx, ry, rz) is within +-6.3"),

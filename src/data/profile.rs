@@ -216,14 +216,28 @@ impl Profile {
                 msg,
             )
         };
-        let angle = |v: &Option<String>, field: &str, default: AngleUnit| match v.as_deref() {
-            None => Ok(default),
-            Some("deg") => Ok(AngleUnit::Deg),
-            Some("rad") => Ok(AngleUnit::Rad),
-            Some(o) => Err(bad(
-                field,
-                format!("unknown unit `{o}` (expected deg or rad)"),
-            )),
+        // A keyword field: absent is the first choice; another word is an error listing them.
+        fn pick<T: Copy>(
+            v: &Option<String>,
+            choices: &[(&str, T)],
+            unknown: impl FnOnce(String) -> Error,
+        ) -> Result<T> {
+            let Some(word) = v.as_deref() else {
+                return Ok(choices[0].1);
+            };
+            if let Some((_, t)) = choices.iter().find(|(w, _)| *w == word) {
+                return Ok(*t);
+            }
+            let names: Vec<&str> = choices.iter().map(|(w, _)| *w).collect();
+            let (last, rest) = names.split_last().expect("choices are given");
+            Err(unknown(format!(
+                "`{word}` (expected {} or {last})",
+                rest.join(", ")
+            )))
+        }
+        let angle = |v: &Option<String>, field: &str| {
+            let units = [("deg", AngleUnit::Deg), ("rad", AngleUnit::Rad)];
+            pick(v, &units, |w| bad(field, format!("unknown unit {w}")))
         };
         let mut p = Profile::default();
         if let Some(d) = &f.delimiter {
@@ -243,31 +257,22 @@ impl Profile {
                 "a decimal comma needs another delimiter (e.g. \";\")".into(),
             ));
         }
-        p.joint_unit = angle(&f.joint_unit, "joint_unit", AngleUnit::Deg)?;
-        p.angle_unit = angle(&f.angle_unit, "angle_unit", AngleUnit::Deg)?;
-        p.length_unit = match f.length_unit.as_deref() {
-            None | Some("mm") => LengthUnit::Mm,
-            Some("m") => LengthUnit::M,
-            Some(o) => {
-                return Err(bad(
-                    "length_unit",
-                    format!("unknown unit `{o}` (expected mm or m)"),
-                ));
-            }
-        };
-        p.orientation = match f.orientation.as_deref() {
-            None | Some("euler") => Orientation::Euler,
-            Some("rotation_vector") => Orientation::RotationVector,
-            Some("quaternion") => Orientation::Quaternion,
-            Some(o) => {
-                return Err(bad(
-                    "orientation",
-                    format!(
-                        "unknown orientation `{o}` (expected euler, rotation_vector or quaternion)"
-                    ),
-                ));
-            }
-        };
+        p.joint_unit = angle(&f.joint_unit, "joint_unit")?;
+        p.angle_unit = angle(&f.angle_unit, "angle_unit")?;
+        p.length_unit = pick(
+            &f.length_unit,
+            &[("mm", LengthUnit::Mm), ("m", LengthUnit::M)],
+            |w| bad("length_unit", format!("unknown unit {w}")),
+        )?;
+        p.orientation = pick(
+            &f.orientation,
+            &[
+                ("euler", Orientation::Euler),
+                ("rotation_vector", Orientation::RotationVector),
+                ("quaternion", Orientation::Quaternion),
+            ],
+            |w| bad("orientation", format!("unknown orientation {w}")),
+        )?;
         if p.orientation != Orientation::Euler && f.euler.is_some() {
             return Err(bad(
                 "euler",
@@ -276,19 +281,15 @@ impl Profile {
                     .into(),
             ));
         }
-        p.euler = match f.euler.as_deref() {
-            None | Some("zyx") => EulerConvention::Zyx,
-            Some("xyz_intrinsic") => EulerConvention::XyzIntrinsic,
-            Some("xyz_extrinsic") => EulerConvention::XyzExtrinsic,
-            Some(o) => {
-                return Err(bad(
-                    "euler",
-                    format!(
-                        "unknown convention `{o}` (expected zyx, xyz_intrinsic or xyz_extrinsic)"
-                    ),
-                ));
-            }
-        };
+        p.euler = pick(
+            &f.euler,
+            &[
+                ("zyx", EulerConvention::Zyx),
+                ("xyz_intrinsic", EulerConvention::XyzIntrinsic),
+                ("xyz_extrinsic", EulerConvention::XyzExtrinsic),
+            ],
+            |w| bad("euler", format!("unknown convention {w}")),
+        )?;
         let c = f.columns;
         let set = |slot: &mut String, v: Option<String>| {
             if let Some(v) = v {
