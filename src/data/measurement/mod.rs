@@ -168,10 +168,7 @@ impl JointInfo {
             let [lo, hi] = j.limits?;
             (v < lo - 1e-9 || v > hi + 1e-9).then(|| {
                 let f = |x: f64| j.joint_type.to_file(x);
-                let unit = match j.joint_type {
-                    JointType::Revolute => "deg",
-                    JointType::Prismatic => "mm",
-                };
+                let unit = j.joint_type.file_unit();
                 format!(
                     "joint {} at {:.4} {unit}, beyond [{}, {}]",
                     i + 1,
