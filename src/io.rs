@@ -153,6 +153,12 @@ pub fn output_file(path: &Path) -> Option<PathBuf> {
     }
 }
 
+/// Whether writing to `path` lands in this process's standard output (`/dev/stdout`, or the
+/// file a shell's `>` sent it to).
+pub fn is_standard_output(path: &Path) -> bool {
+    matches!(target_of(path), Ok(Target::Stream(Some(Standard::Out))))
+}
+
 /// This process's standard output or error.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(not(unix), allow(dead_code))]

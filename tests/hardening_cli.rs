@@ -1359,3 +1359,164 @@ fn edge_inputs_of_the_twenty_fourth_hunt() {
         stderr(&o)
     );
 }
+
+/// Edge inputs of the twenty-fifth session: an output that is the command's own standard
+/// output holds the file alone (the summary goes to standard error); `report` reads a report
+/// saved with a byte-order mark and names a listed picture that is missing; a profile naming
+/// the wrong number of joints is named; the first bad line is the error, a bad cell before a
+/// row of the wrong length; a quote never closed is refused where it opens.
+#[test]
+fn edge_inputs_of_the_twenty_fifth_session() {
+    use common::FANUC;
+    let calibration = "datasets/case_d/calibration.csv";
+    // `identify --out F > F`: F is the robot file, and the summary is on standard error.
+    let out = common::tmp("s25_identified.toml");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_robocal"))
+        .args(["identify", "--robot", FANUC, "--data", calibration])
+        .args(["--params", "offsets", "--out", out.to_str().unwrap()])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::fs::File::create(&out).unwrap())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.starts_with("# robocal robot model"), "{text}");
+    assert!(stderr(&o).contains("identify: 30 rows"), "{}", stderr(&o));
+    robocal::model::Robot::from_toml(&text).unwrap();
+    // `--out /dev/stdout` into a pipe: the pipe holds the file alone.
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        FANUC,
+        "--data",
+        calibration,
+        "--params",
+        "offsets",
+        "--out",
+        "/dev/stdout",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).starts_with("# robocal robot model"),
+        "{}",
+        stdout(&o)
+    );
+    assert!(stderr(&o).contains("identify: 30 rows"), "{}", stderr(&o));
+    // Without it, the summary stays on standard output.
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        FANUC,
+        "--data",
+        calibration,
+        "--params",
+        "offsets",
+        "--out",
+        common::tmp("s25_identified2.toml").to_str().unwrap(),
+    ]);
+    assert!(stdout(&o).contains("identify: 30 rows"), "{}", stdout(&o));
+
+    // `report`: a report saved with a byte-order mark, and a picture the list names but the
+    // folder lacks.
+    let run = common::tmp("s25_run");
+    let report = run.join("identify.json");
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        FANUC,
+        "--data",
+        calibration,
+        "--params",
+        "offsets",
+        "--out",
+        common::tmp("s25_identified3.toml").to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+        "--plot",
+        run.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json = std::fs::read(&report).unwrap();
+    std::fs::write(&report, [b"\xef\xbb\xbf".as_slice(), &json].concat()).unwrap();
+    let page = common::tmp("s25_page.html");
+    let o = robocal(&[
+        "report",
+        run.to_str().unwrap(),
+        "--out",
+        page.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::remove_file(run.join("identify_calibration_position.png")).unwrap();
+    refused_saying(
+        &["report", run.to_str().unwrap(), "--out", "never.html"],
+        &[
+            "figures.json: lists `identify_calibration_position.png`, which is not in",
+            "draw the pictures again (--plot",
+        ],
+    );
+
+    // A profile naming three joints for a six-joint robot: the profile is named.
+    let profile = file(
+        "s25_three.toml",
+        "[columns]\njoints = [\"q1\", \"q2\", \"q3\"]\n",
+    );
+    refused_saying(
+        &[
+            "import",
+            calibration,
+            "--profile",
+            &profile,
+            "--robot",
+            FANUC,
+            "--out",
+            "never.csv",
+        ],
+        &[
+            "s25_three.toml: the profile names 3 joint columns (q1, q2, q3), the robot has 6 \
+             joints (reading datasets/case_d/calibration.csv)",
+        ],
+    );
+
+    // A bad number on line 3 and a row of the wrong length on line 4: line 3 is the error,
+    // for measurements, joints (fk) and targets (ik) alike.
+    let header = "q1,q2,q3,q4,q5,q6,x,y,z\n";
+    let bad = file(
+        "s25_order.csv",
+        &format!("{header}0,1,2,3,4,5,1,2,3\n0,1,x,3,4,5,1,2,3\n0,1,2,3,4,5,1,2\n"),
+    );
+    refused(
+        &["evaluate", "--robot", FANUC, "--data", &bad],
+        "s25_order.csv:3: field `q3`",
+    );
+    refused(
+        &["fk", "--robot", FANUC, "--joints", &bad],
+        "s25_order.csv:3",
+    );
+    let targets = file(
+        "s25_targets.csv",
+        "x,y,z,rz,ry,rx\n1500,0,900,0,90,0\n1500,0,x,0,90,0\n1500,0,900,0\n",
+    );
+    refused(
+        &["ik", "--robot", FANUC, "--poses", &targets],
+        "s25_targets.csv:3: field `z`",
+    );
+    // The bad line first the other way round: the row of the wrong length.
+    let short = file(
+        "s25_short.csv",
+        &format!("{header}0,1,2,3,4,5,1,2\n0,1,x,3,4,5,1,2,3\n"),
+    );
+    refused(
+        &["evaluate", "--robot", FANUC, "--data", &short],
+        "s25_short.csv:2: 8 cells, but the header has 9 columns",
+    );
+
+    // A quote opened on the last line and never closed.
+    let quote = file(
+        "s25_quote.csv",
+        &format!("id,{header}a,0,1,2,3,4,5,1,2,3\n\"b,0,1,2,3,4,5,1,2,3\n"),
+    );
+    refused(
+        &["import", &quote, "--out", "never.csv"],
+        "s25_quote.csv:3: malformed CSV: a quoted cell opened here is never closed",
+    );
+}

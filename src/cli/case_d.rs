@@ -31,21 +31,32 @@ pub struct CaseDArgs {
 }
 
 fn print_set(s: &CaseDSet) {
-    println!("\n{} - {} unseen test poses", s.title, s.test_rows);
-    println!(
+    say!("\n{} - {} unseen test poses", s.title, s.test_rows);
+    say!(
         "{:<27} | {:>17} | {:>27} | {:>27}",
-        "model", "thesis Table 6.6", "vs truth", "vs measured"
+        "model",
+        "thesis Table 6.6",
+        "vs truth",
+        "vs measured"
     );
-    println!(
+    say!(
         "{:<27} | {:>8} {:>8} | {:>8} {:>8} {:>9} | {:>8} {:>8} {:>9}",
-        "", "mm", "deg", "mean mm", "coord mm", "mean deg", "mean mm", "coord mm", "mean deg"
+        "",
+        "mm",
+        "deg",
+        "mean mm",
+        "coord mm",
+        "mean deg",
+        "mean mm",
+        "coord mm",
+        "mean deg"
     );
     for r in &s.rows {
         let thesis = match (r.thesis_mm, r.thesis_deg) {
             (Some(p), Some(o)) => format!("{p:>8.4} {o:>8.4}"),
             _ => format!("{:>17}", "-"),
         };
-        println!(
+        say!(
             "{:<27} | {thesis} | {:>8.4} {:>8.4} {:>9.4} | {:>8.4} {:>8.4} {:>9.4}",
             r.label,
             r.truth.position_mean_mm(),
@@ -61,7 +72,7 @@ fn print_set(s: &CaseDSet) {
             .gain_after_compliance
             .map(|c| format!(", {c:.1}x after full + compliance"))
             .unwrap_or_default();
-        println!(
+        say!(
             "the compensator lowers the mean position error vs truth {o:.1}x after offsets, {f:.1}x after full identification{compliance}"
         );
     }
@@ -134,7 +145,7 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
             a.datasets.display()
         )
     })?;
-    println!(
+    say!(
         "Case D (thesis 6.4): identification on the 30 calibration poses, then a compensator \
          trained on the 150 training poses (seed {}; settings and the refinement of the \
          identified parameters chosen by cross-validation unless fixed by flags).",
@@ -144,11 +155,11 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
     for s in &report.sets {
         for r in &s.rows {
             if let Some(settings) = &r.settings {
-                println!("  {}, {}: {settings}", s.set.folder(), r.label);
+                say!("  {}, {}: {settings}", s.set.folder(), r.label);
             }
         }
     }
-    println!(
+    say!(
         "Errors on the test poses: mean Euclidean position (mm), mean per coordinate |dx|,|dy|,|dz| \
          (mm, the thesis's measure), mean orientation angle (deg)."
     );
@@ -157,7 +168,7 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
     }
     if let Some(dir) = &a.plot {
         let figs = plot(dir, &a.datasets, &rows)?;
-        println!("\nplots: {figs} pictures in {}", dir.display());
+        say!("\nplots: {figs} pictures in {}", dir.display());
     }
     if let Some(p) = &a.report {
         write_report(p, &Report::CaseD(report))?;

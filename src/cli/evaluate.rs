@@ -98,7 +98,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         .transpose()?;
     let model_rows = row_errors(&set, m, |q| tool_pose(&robot, q))?;
     let s = summarize(&model_rows);
-    println!(
+    say!(
         "evaluate: {} on {} ({} rows, measure {})",
         a.robot.display(),
         a.data.display(),
@@ -160,7 +160,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     if let (Some(path), Some(r)) = (&a.check_against, &reference) {
         // Said whatever it found: a check that could not run is not a clean result.
         let (mine, theirs) = (rows_checked(&robot, &set), rows_checked(&robot, r));
-        println!(
+        say!(
             "checked against {}: {mine} row(s) with a position and an orientation, against \
              themselves and {theirs} of its rows; {} carry another configuration's reading",
             path.display(),
@@ -190,11 +190,11 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             "with the compensator"
         };
         if let Some(c) = row.stats.position_per_coordinate_mean_mm {
-            println!("mean per-coordinate position error |dx|,|dy|,|dz| ({what}): {c:.4} mm");
+            say!("mean per-coordinate position error |dx|,|dy|,|dz| ({what}): {c:.4} mm");
         }
     }
     if let Some(note) = &report.note {
-        println!("{note}");
+        say!("{note}");
     }
     warn_outside(&a.data, &outside, false);
     if let Some(dir) = &a.plot {
@@ -209,7 +209,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             });
         }
         let figs = error_figures(dir, "evaluate", "evaluation data", &set, &runs)?;
-        println!("plots: {} pictures in {}", figs.len(), dir.display());
+        say!("plots: {} pictures in {}", figs.len(), dir.display());
     }
     if let Some(path) = &a.report {
         write_report(path, &Report::Evaluate(report))?;

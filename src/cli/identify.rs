@@ -133,12 +133,12 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     print_identified(&report);
     print_stats(&report.accuracy);
     for n in &report.notes {
-        println!("note: {n}");
+        say!("note: {n}");
     }
     for w in &report.warnings {
         eprintln!("warning: {w}");
     }
-    println!("wrote {}", a.out.display());
+    say!("wrote {}", a.out.display());
     if let Some(dir) = &a.plot {
         let mut figs = 0;
         let sets = [
@@ -168,7 +168,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
             )?
             .len();
         }
-        println!("plots: {figs} pictures in {}", dir.display());
+        say!("plots: {figs} pictures in {}", dir.display());
     }
     if let Some(path) = &a.report {
         write_report(path, &Report::Identify(report))?;
@@ -177,7 +177,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
 }
 
 fn print_identified(r: &IdentifyReport) {
-    println!(
+    say!(
         "identify: {} rows of {}, measure {}, method {:?}, parameters `{}`",
         r.rows,
         r.data,
@@ -186,12 +186,12 @@ fn print_identified(r: &IdentifyReport) {
         r.params
     );
     if let Some(rms) = r.registration_rms_mm {
-        println!(
+        say!(
             "registration of the base{}: RMS {rms:.4} mm",
             if r.registration_tool { " and tool" } else { "" },
         );
     }
-    println!(
+    say!(
         "identifiability: {} candidates, rank {} (SVD) / {} (pivoted QR), condition number {:.4e} \
          (column-scaled); identifiable set: {} parameters, condition number {:.4e}",
         r.candidates,
@@ -216,24 +216,34 @@ fn print_identified(r: &IdentifyReport) {
                     .join(" ")
             )
         };
-        println!("  left out {:<12} {why}", d.name);
+        say!("  left out {:<12} {why}", d.name);
     }
-    println!(
+    say!(
         "solution: {} iterations, {}; variance factor s^2 = {:.4}",
-        r.iterations, r.stop, r.variance_factor
+        r.iterations,
+        r.stop,
+        r.variance_factor
     );
     if let Some(note) = r.unmodelled.note("the rows") {
-        println!("weights: {note}");
+        say!("weights: {note}");
     }
     let w = super::summary::unit_width(r.parameters.iter().map(|p| p.unit.as_str()));
-    println!(
+    say!(
         "{:<12} {:<w$} {:>14} {:>14} {:>12}",
-        "parameter", "unit", "nominal", "estimate", "std"
+        "parameter",
+        "unit",
+        "nominal",
+        "estimate",
+        "std"
     );
     for p in &r.parameters {
-        println!(
+        say!(
             "{:<12} {:<w$} {:>14.6} {:>14.6} {:>12.6}",
-            p.name, p.unit, p.nominal, p.estimate, p.std
+            p.name,
+            p.unit,
+            p.nominal,
+            p.estimate,
+            p.std
         );
     }
     if !r.correlations.is_empty() {
@@ -242,17 +252,17 @@ fn print_identified(r: &IdentifyReport) {
             .iter()
             .map(|c| format!("{}/{} {:+.3}", c.a, c.b, c.correlation))
             .collect();
-        println!("correlated (|r| > 0.9): {}", list.join(", "));
+        say!("correlated (|r| > 0.9): {}", list.join(", "));
     }
     if r.outliers.is_empty() {
-        println!("outliers (> {} robust sigmas): none", r.outlier_k);
+        say!("outliers (> {} robust sigmas): none", r.outlier_k);
     } else {
         let lines: Vec<String> = r
             .outliers
             .iter()
             .map(|o| format!("line {} ({:.1})", o.line, o.robust_sigmas))
             .collect();
-        println!(
+        say!(
             "outliers (> {} robust sigmas): {}",
             r.outlier_k,
             lines.join(", ")

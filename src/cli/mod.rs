@@ -1,5 +1,29 @@
 //! The `robocal` command line: a thin layer over the library.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Set when one of the command's outputs is this process's standard output (`--out
+/// /dev/stdout`, or `--out F > F`): the summary lines then go to standard error, so that the
+/// output holds the file's bytes alone and reads back.
+static SUMMARY_ON_STDERR: AtomicBool = AtomicBool::new(false);
+
+/// Whether [`say!`] writes to standard error ([`SUMMARY_ON_STDERR`]).
+fn summary_on_stderr() -> bool {
+    SUMMARY_ON_STDERR.load(Ordering::Relaxed)
+}
+
+/// `println!` for a command's summary lines: to standard output, or to standard error where an
+/// output file is standard output ([`SUMMARY_ON_STDERR`]).
+macro_rules! say {
+    ($($arg:tt)*) => {
+        if $crate::cli::summary_on_stderr() {
+            eprintln!($($arg)*)
+        } else {
+            println!($($arg)*)
+        }
+    };
+}
+
 mod bounds;
 mod case_d;
 mod choices;

@@ -35,6 +35,9 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
         .collect();
     let mut seen: Vec<(&str, &Path, PathBuf)> = Vec::new();
     for (flag, path) in outputs.iter().flatten() {
+        if robocal::io::is_standard_output(path) {
+            super::SUMMARY_ON_STDERR.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
         // `--plot` names a folder of pictures; every other output is a file.
         let folder = *flag == "--plot";
         if folder && path.is_file() {

@@ -137,9 +137,12 @@ fn configurations(path: &PathBuf, robot: &Robot) -> Result<Vec<Vec<f64>>> {
 }
 
 fn print_prediction(label: &str, p: &Prediction) {
-    println!(
+    say!(
         "{label}: position mean {:.4} mm, p95 {:.4} mm; orientation mean {:.4} deg, p95 {:.4} deg",
-        p.position_mm.mean, p.position_mm.p95, p.orientation_deg.mean, p.orientation_deg.p95
+        p.position_mm.mean,
+        p.position_mm.p95,
+        p.orientation_deg.mean,
+        p.orientation_deg.p95
     );
 }
 
@@ -268,7 +271,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
     })?;
     let names = design.robot.parameters();
     for n in &design.notes {
-        println!("note: {n}");
+        say!("note: {n}");
     }
     let dropped: Vec<String> = design
         .identifiability
@@ -276,7 +279,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
         .iter()
         .map(|d| names[d.param].name())
         .collect();
-    println!(
+    say!(
         "plan: {} candidate units ({} row{} each{}), measure {}, {} identifiable parameters{}",
         candidates.units.len(),
         per,
@@ -326,7 +329,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
         (Some(_), _, _) => ((0..design.units()).collect::<Vec<_>>(), None),
         (None, Some(t), _) => {
             let (c, _) = smallest_meeting(&design, criterion, t, a.seed)?;
-            println!("target {t} mm: {} units", c.units.len());
+            say!("target {t} mm: {} units", c.units.len());
             (c.units.clone(), Some(c))
         }
         (None, None, Some(n)) => {
@@ -342,7 +345,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
         )
     })?;
     if let Some(c) = &chosen {
-        println!(
+        say!(
             "criterion {}: {:.6} after the greedy start, {:.6} after {} exchange(s)",
             criterion.name(),
             c.greedy_value,
@@ -350,9 +353,9 @@ pub fn run(a: PlanArgs) -> Result<()> {
             c.exchanges
         );
     }
-    println!("parameter    unit     predicted std");
+    say!("parameter    unit     predicted std");
     for p in &prediction.parameters {
-        println!("{:<12} {:<8} {:>14.6}", p.name, p.unit, p.std);
+        say!("{:<12} {:<8} {:>14.6}", p.name, p.unit, p.std);
     }
     print_prediction(
         &format!(
@@ -403,7 +406,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
             })
             .collect();
         emit(&headers, &cells, headers.len(), false, Some(out))?;
-        println!("wrote {} ({} rows)", out.display(), rows.len());
+        say!("wrote {} ({} rows)", out.display(), rows.len());
     }
     if let Some(path) = &a.report {
         let report = Report {

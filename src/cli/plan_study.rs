@@ -76,17 +76,17 @@ pub fn run_study(a: PlanStudyArgs) -> Result<()> {
         outcomes.push(run(case, &setup, &mut |_| bar.inc(1))?);
     }
     bar.finish_and_clear();
-    println!(
+    say!(
         "mean position error against the truth over 300 validation configurations, {} seeds, identification of `full` (mm)",
         a.seeds
     );
-    println!("{TABLE_HEADER}");
+    say!("{TABLE_HEADER}");
     for ((case, name, _), o) in cases.iter().zip(&outcomes) {
         if let Some(row) = o.table_row(&case.name, name) {
-            println!("{row}");
+            say!("{row}");
         }
     }
-    println!("\nmedian error (mm) against the number of configurations measured:");
+    say!("\nmedian error (mm) against the number of configurations measured:");
     for ((case, name, _), o) in cases.iter().zip(&outcomes) {
         let line = |s: &[Series]| {
             s.iter()
@@ -94,8 +94,8 @@ pub fn run_study(a: PlanStudyArgs) -> Result<()> {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        println!("{} {name}: planned {}", case.name, line(&o.planned));
-        println!("{} {name}: random  {}", case.name, line(&o.random));
+        say!("{} {name}: planned {}", case.name, line(&o.planned));
+        say!("{} {name}: random  {}", case.name, line(&o.random));
     }
     if let Some(dir) = &a.plot {
         for ((case, name, _), o) in cases.iter().zip(&outcomes) {

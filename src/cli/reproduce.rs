@@ -33,7 +33,7 @@ pub fn run(a: ReproduceArgs) -> Result<()> {
             robot_path.display()
         )
     })?;
-    println!(
+    say!(
         "Shipped data sets (one draw each); errors against the noisy measurements unless marked truth."
     );
     let mut cases = Vec::new();
@@ -41,32 +41,42 @@ pub fn run(a: ReproduceArgs) -> Result<()> {
         let data = load_shipped(&a.datasets, case, &nominal)?;
         let run = run_case(&nominal, case, &data)?;
         let c = ReproduceCase::new(&data, &run);
-        println!(
+        say!(
             "\ncase {} ({} calibration, {} validation rows); variance factor {:.3}",
-            c.case, c.calibration_rows, c.validation_rows, c.variance_factor
+            c.case,
+            c.calibration_rows,
+            c.validation_rows,
+            c.variance_factor
         );
         for t in &c.thesis {
-            println!(
+            say!(
                 "  thesis: {:<34} {:>9.4} -> {:>8.4}",
-                t.figure, t.before, t.after
+                t.figure,
+                t.before,
+                t.after
             );
         }
-        println!(
+        say!(
             "  {:<46} {:>9} {:>9} {:>11}",
-            "robocal", "before", "after", "after/truth"
+            "robocal",
+            "before",
+            "after",
+            "after/truth"
         );
         for f in &c.figures {
             let truth = f
                 .after_vs_truth
                 .map_or_else(|| "-".to_string(), |t| format!("{t:.4}"));
-            println!(
+            say!(
                 "  {:<46} {:>9.4} {:>9.4} {truth:>11}",
-                f.figure, f.before, f.after
+                f.figure,
+                f.before,
+                f.after
             );
         }
         cases.push(c);
     }
-    println!(
+    say!(
         "\nThe same protocols over seeds 1..={} (simulated afresh): median [min, max]",
         a.seeds
     );
@@ -74,9 +84,13 @@ pub fn run(a: ReproduceArgs) -> Result<()> {
     for case in [Case::A, Case::BSim, Case::C] {
         let runs = runs_over_seeds(&nominal, &a.datasets, case, a.seeds)?;
         for f in SeedFigure::of(case, &runs) {
-            println!(
+            say!(
                 "  case {:<6} {:<50} {:.4} [{:.4}, {:.4}]",
-                f.case, f.figure, f.median, f.min, f.max
+                f.case,
+                f.figure,
+                f.median,
+                f.min,
+                f.max
             );
             over_seeds.push(f);
         }

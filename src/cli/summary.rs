@@ -28,13 +28,16 @@ fn fmt_stats(s: &ErrorStats) -> (String, String) {
 /// Prints a report's accuracy table (before/after pairs of error statistics).
 pub fn print_stats(rows: &[Accuracy]) {
     let w = rows.iter().map(|r| r.data.len()).fold(12, usize::max);
-    println!(
+    say!(
         "{:<w$} {:<7} {:>39}   {:>26}",
-        "set", "model", "position mm: mean rms p95 max", "orientation deg: mean rms max"
+        "set",
+        "model",
+        "position mm: mean rms p95 max",
+        "orientation deg: mean rms max"
     );
     for r in rows {
         let (p, o) = fmt_stats(&r.stats);
-        println!("{:<w$} {:<7} {p:>39}   {o:>26}", r.data, r.model);
+        say!("{:<w$} {:<7} {p:>39}   {o:>26}", r.data, r.model);
     }
 }
 
@@ -42,7 +45,7 @@ pub fn print_stats(rows: &[Accuracy]) {
 /// how far the model's residuals of one configuration differ, and the pure error no
 /// compensator can remove.
 pub fn print_repeats(r: &Repeats) {
-    println!(
+    say!(
         "repeats: {} configurations measured more than once ({} rows); the model's position \
          residuals of one configuration differ by {:.4} mm (median), at most {:.4} mm (lines \
          {} and {}); pure error {:.4} mm RMS, which no compensator can remove",
@@ -59,14 +62,14 @@ pub fn print_repeats(r: &Repeats) {
 /// Prints the rows of a set (`what`: "training", "validation", ...) that carry another
 /// configuration's reading, one line each, after what becomes of them (`fate`).
 pub fn print_shared(what: &str, shared: &[SharedReading], fate: &str) {
-    println!(
+    say!(
         "shared readings: {} {what} row(s) carry the reading of another configuration that \
          the model puts {SEPARATION_MM} mm or more away, a reading logged with other joints \
          ({fate}):",
         shared.len()
     );
     for s in shared {
-        println!("  {}", s.describe());
+        say!("  {}", s.describe());
     }
 }
 

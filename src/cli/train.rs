@@ -53,7 +53,7 @@ pub struct TrainArgs {
 
 /// Prints the cross-validation table.
 fn print_selection(sel: &Selection) {
-    println!(
+    say!(
         "cross-validation ({} folds of whole configurations; RMS over every held-out row):",
         sel.folds
     );
@@ -63,7 +63,7 @@ fn print_selection(sel: &Selection) {
         .iter()
         .filter_map(|c| c.settings.refine.as_ref().map(|r| r.len()))
         .fold(10, usize::max);
-    println!(
+    say!(
         "  {:>5} {:<7} {:<5} {:<6} {:>6} {:>7} {:>7} {:>5} {:<w$} {:>11} {:>15}",
         "stage",
         "network",
@@ -81,7 +81,7 @@ fn print_selection(sel: &Selection) {
         s.orientation_rms_deg
             .map_or("-".into(), |r| format!("{r:.4}"))
     };
-    println!(
+    say!(
         "  {:>5} {:<m$} {:>11.4} {:>15}",
         "-",
         "model alone",
@@ -115,7 +115,7 @@ fn print_selection(sel: &Selection) {
             (Network::Mix, Some(x)) => x.to_string(),
             _ => "-".into(),
         };
-        println!(
+        say!(
             "{} {:>5} {:<7} {:<5} {:<6} {:>6} {:>7} {:>7} {:>5} {:<w$} {score}",
             if i == sel.chosen { "*" } else { " " },
             c.stage,
@@ -129,7 +129,7 @@ fn print_selection(sel: &Selection) {
             s.refine.as_deref().unwrap_or("-"),
         );
         if let Some(e) = &c.error {
-            println!("        {e}");
+            say!("        {e}");
         }
     }
 }
@@ -181,15 +181,19 @@ fn print_fit(
     let groups = configuration_groups(searched);
     let configurations = group_count(&groups);
     if !report.refined.is_empty() {
-        println!(
+        say!(
             "refined on the training rows (exact identification, {} parameters):",
             report.refined.len()
         );
         let w = super::summary::unit_width(report.refined.iter().map(|p| p.unit.as_str()));
         for p in &report.refined {
-            println!(
+            say!(
                 "  {:<12} {:<w$} {:>14.6} -> {:>14.6}  (std {:.6})",
-                p.name, p.unit, p.before, p.after, p.std
+                p.name,
+                p.unit,
+                p.before,
+                p.after,
+                p.std
             );
         }
     }
@@ -199,7 +203,7 @@ fn print_fit(
         report.selection_seconds, report.fit_seconds
     );
     if let Some(r) = &c.rbf {
-        println!(
+        say!(
             "rbf network: {} units ({} inputs), one Gaussian process per output ({} \
              covariance), its hyperparameters searched on {}{}",
             r.units(),
@@ -230,7 +234,7 @@ fn print_fit(
                 _ => format!("outputs {}-{}", outs.start + 1, outs.end),
             };
             let widths: Vec<String> = k.widths.iter().map(|w| format!("{w:.3}")).collect();
-            println!(
+            say!(
                 "  {name}: noise variance {:.4} of signal {:.4}, widths {} (standardised inputs)",
                 k.noise_variance,
                 k.signal_variance,
@@ -240,7 +244,7 @@ fn print_fit(
     }
     if n.is_empty() {
         if c.rbf.is_none() {
-            println!("networks: none, the compensator is the model alone; {timing}");
+            say!("networks: none, the compensator is the model alone; {timing}");
         }
     } else {
         let stops: std::collections::BTreeSet<&str> = n.iter().map(|r| r.stop.describe()).collect();
@@ -249,7 +253,7 @@ fn print_fit(
             Phase2::Lbfgs => format!("L-BFGS ({most} iterations)"),
             _ => format!("LM ({most} epochs)"),
         };
-        println!(
+        say!(
             "networks: {} x {}-{}-{} ({} inputs); phase 1 {} epochs, phase 2 {phase2} per \
              network; stopped: {}; {timing}",
             n.len(),
@@ -289,7 +293,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     .with_context(|| format!("training on {}", a.data.display()))?;
     let seconds = started.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    println!(
+    say!(
         "train: {} rows of {}, model {}",
         set.rows.len(),
         a.data.display(),
@@ -301,9 +305,9 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     if let Some(sel) = &report.selection {
         print_selection(sel);
     }
-    println!("settings: {}", report.settings.describe());
+    say!("settings: {}", report.settings.describe());
     for n in &report.notes {
-        println!("note: {n}");
+        say!("note: {n}");
     }
     // The rows cross-validation saw: the training rows but those left out for carrying
     // another configuration's reading.
@@ -448,9 +452,9 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         }
     }
     super::output::writing(c.save(&a.out), &a.out)?;
-    println!("wrote {}", a.out.display());
+    say!("wrote {}", a.out.display());
     if let Some(dir) = &a.plot {
-        println!("plots: {figs} pictures in {}", dir.display());
+        say!("plots: {figs} pictures in {}", dir.display());
     }
     if let Some(p) = &a.report {
         write_report(p, &Report::Train(report))?;

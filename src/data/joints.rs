@@ -44,7 +44,7 @@ pub struct JointTable {
 impl JointTable {
     /// Reads `path`: columns q1..qN of `robot` required, each value within [`joint_bound`].
     pub fn read(path: impl AsRef<Path>, robot: &Robot) -> Result<JointTable> {
-        JointTable::from_table(Table::read(path)?, robot)
+        JointTable::from_table(Table::read_keeping_malformed(path)?, robot)
     }
 
     /// The joint table of an already parsed table (for example from [`Table::parse`]).
@@ -54,9 +54,7 @@ impl JointTable {
             .iter()
             .map(|c| table.require(c))
             .collect::<Result<_>>()?;
-        let joints = (0..table.rows.len())
-            .map(|r| row_joints(&table, r, &idx, robot))
-            .collect::<Result<_>>()?;
+        let joints = table.parse_rows(|r| row_joints(&table, r, &idx, robot))?;
         Ok(JointTable { table, joints })
     }
 

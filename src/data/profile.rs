@@ -123,6 +123,9 @@ pub struct Profile {
     pub euler: EulerConvention,
     /// Column name of each field.
     pub columns: Columns,
+    /// The file the profile was read from, which messages about it name; None for the
+    /// canonical form.
+    pub path: Option<std::path::PathBuf>,
 }
 
 impl Default for Profile {
@@ -148,6 +151,7 @@ impl Default for Profile {
                 pair: "pair".into(),
                 distance: "distance".into(),
             },
+            path: None,
         }
     }
 }
@@ -239,7 +243,10 @@ impl Profile {
             let units = [("deg", AngleUnit::Deg), ("rad", AngleUnit::Rad)];
             pick(v, &units, |w| bad(field, format!("unknown unit {w}")))
         };
-        let mut p = Profile::default();
+        let mut p = Profile {
+            path: Some(path.to_path_buf()),
+            ..Profile::default()
+        };
         if let Some(d) = &f.delimiter {
             let b = d.as_bytes();
             if b.len() != 1 {

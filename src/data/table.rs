@@ -18,18 +18,77 @@ pub struct Table {
     /// Numbers use a decimal comma (`1,5`), as European exports do.
     pub decimal_comma: bool,
     /// Rows left out of `rows` because their cell count differs from the header's:
-    /// (line, message). [`Table::read`] makes the first one an error; measurement reading
-    /// either does the same or drops and lists them (`--skip-bad-rows`).
+    /// (line, message). [`Table::read`] makes the first one an error, [`Table::parse_rows`]
+    /// unless an earlier line is bad; measurement reading does the latter, or drops and lists
+    /// them (`--skip-bad-rows`).
     pub malformed: Vec<(usize, String)>,
+}
+
+/// The byte offset of a quote that opens a cell and is never closed, as the csv crate reads
+/// quotes: one opens a cell only as its first byte, two in a quoted cell are one quote, and
+/// one closes it. The crate takes the rest of the file into such a cell without a word.
+fn unclosed_quote(bytes: &[u8], delimiter: u8) -> Option<usize> {
+    let mut open: Option<usize> = None;
+    let mut cell_start = true;
+    let mut i = if bytes.starts_with(b"\xef\xbb\xbf") {
+        3
+    } else {
+        0
+    };
+    while i < bytes.len() {
+        let b = bytes[i];
+        if open.is_some() {
+            if b == b'"' {
+                if bytes.get(i + 1) == Some(&b'"') {
+                    i += 1;
+                } else {
+                    open = None;
+                    cell_start = false;
+                }
+            }
+        } else if b == b'"' && cell_start {
+            open = Some(i);
+        } else {
+            cell_start = b == delimiter || b == b'\n' || b == b'\r';
+        }
+        i += 1;
+    }
+    open
 }
 
 impl Table {
     /// Reads a comma-separated file with one header row. Every row must have as many cells
     /// as the header; header names must be unique; blank lines are skipped.
     pub fn read(path: impl AsRef<Path>) -> Result<Table> {
+        let t = Table::read_keeping_malformed(path)?;
+        t.reject_malformed()?;
+        Ok(t)
+    }
+
+    /// [`Table::read`], but rows whose cell count differs from the header's are kept in
+    /// `malformed` for [`Table::parse_rows`] to report in line order (after a bad cell on an
+    /// earlier line). A file whose rows are all malformed is refused here.
+    pub fn read_keeping_malformed(path: impl AsRef<Path>) -> Result<Table> {
         let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        Table::checked(&bytes, path)
+        let t = Table::parse(&bytes, path, b',', false)?;
+        t.require_rows()?;
+        Ok(t)
+    }
+
+    /// Each row parsed by `parse` (given its index), in file order. The first bad line is
+    /// the error, be it a cell `parse` refuses or a row of the wrong length ([`Table::malformed`]).
+    pub fn parse_rows<T>(&self, mut parse: impl FnMut(usize) -> Result<T>) -> Result<Vec<T>> {
+        let first_malformed = self.malformed.first().map_or(usize::MAX, |(line, _)| *line);
+        let mut out = Vec::with_capacity(self.rows.len());
+        for r in 0..self.rows.len() {
+            if self.lines[r] > first_malformed {
+                break;
+            }
+            out.push(parse(r)?);
+        }
+        self.reject_malformed()?;
+        Ok(out)
     }
 
     /// A comma-separated table given as text (in code), with the rules of [`Table::read`];
@@ -41,18 +100,21 @@ impl Table {
     fn checked(bytes: &[u8], path: &Path) -> Result<Table> {
         let t = Table::parse(bytes, path, b',', false)?;
         t.reject_malformed()?;
-        if t.rows.is_empty() {
-            // A header alone is a file cut short or a template, never an empty batch to skip.
-            return Err(Error::input(
-                Location {
-                    file: t.path.clone(),
-                    line: None,
-                    field: None,
-                },
-                "no data rows (only a header or nothing at all)",
-            ));
-        }
+        t.require_rows()?;
         Ok(t)
+    }
+
+    /// Refuses a table without data rows (naming its first malformed row, if it has one).
+    fn require_rows(&self) -> Result<()> {
+        if !self.rows.is_empty() {
+            return Ok(());
+        }
+        self.reject_malformed()?;
+        // A header alone is a file cut short or a template, never an empty batch to skip.
+        Err(Error::input(
+            Location::file(&self.path),
+            "no data rows (only a header or nothing at all)",
+        ))
     }
 
     /// The first malformed row as an error, if there is one.
@@ -79,6 +141,17 @@ impl Table {
 
     /// Parses CSV bytes; `path` is used in messages.
     pub fn parse(bytes: &[u8], path: &Path, delimiter: u8, decimal_comma: bool) -> Result<Table> {
+        if let Some(at) = unclosed_quote(bytes, delimiter) {
+            let line = 1 + bytes[..at].iter().filter(|&&b| b == b'\n').count();
+            return Err(Error::input(
+                Location {
+                    file: path.to_path_buf(),
+                    line: Some(line),
+                    field: None,
+                },
+                "malformed CSV: a quoted cell opened here is never closed (a missing '\"'?)",
+            ));
+        }
         let mut rdr = csv::ReaderBuilder::new()
             .delimiter(delimiter)
             .has_headers(true)
@@ -316,6 +389,41 @@ mod tests {
         .unwrap();
         assert_eq!(t.number(0, 0).unwrap(), 1.5);
         assert_eq!(t.number(0, 1).unwrap(), -22.5);
+    }
+
+    #[test]
+    fn a_quote_never_closed_is_refused_where_it_opens() {
+        // As the csv crate reads quotes: the cells below are read alike by it and by the scan.
+        for ok in [
+            "id,q1\n\"a\",1\n",
+            "id,q1\n\"a \"\"b\"\"\",1\n",
+            "id,q1\nab\"c,1\n",
+            "id,q1\n\"a,\nb\",1\n",
+            "\u{feff}\"id\",q1\na,1\n",
+        ] {
+            assert!(parse(ok).is_ok(), "{ok:?}");
+            assert_eq!(unclosed_quote(ok.as_bytes(), b','), None, "{ok:?}");
+        }
+        let e = parse("id,q1\na,1\n\"b,2\n").unwrap_err().to_string();
+        assert!(e.contains("d.csv:3") && e.contains("never closed"), "{e}");
+        let semicolons = |s: &str| Table::parse(s.as_bytes(), Path::new("d.csv"), b';', false);
+        let e = semicolons("id;q1\na;\"1\n").unwrap_err().to_string();
+        assert!(e.contains("never closed"), "{e}");
+        assert!(semicolons("id;q1\na;\"1\"\n").is_ok());
+        // With commas between cells, that quote is inside the cell `a;"1`: a letter.
+        assert!(parse("id;q1\na;\"1\n").is_ok());
+    }
+
+    #[test]
+    fn a_bad_cell_before_a_malformed_row_is_the_error() {
+        let t = parse("id,q1\na,x\nb,1,2\n").unwrap();
+        let e = t.parse_rows(|r| t.number(r, 1)).unwrap_err().to_string();
+        assert!(e.contains("d.csv:2") && e.contains("`x`"), "{e}");
+        let t = parse("id,q1\na,1\nb,1,2\nc,x\n").unwrap();
+        let e = t.parse_rows(|r| t.number(r, 1)).unwrap_err().to_string();
+        assert!(e.contains("d.csv:3") && e.contains("3 cells"), "{e}");
+        let t = parse("id,q1\na,1\nb,2\n").unwrap();
+        assert_eq!(t.parse_rows(|r| t.number(r, 1)).unwrap(), vec![1.0, 2.0]);
     }
 
     #[test]

@@ -48,7 +48,7 @@ pub struct TargetTable {
 impl TargetTable {
     /// Reads `path` for `robot`; `positions` allows tables without orientation columns.
     pub fn read(path: impl AsRef<Path>, robot: &Robot, positions: bool) -> Result<TargetTable> {
-        TargetTable::from_table(Table::read(path)?, robot, positions)
+        TargetTable::from_table(Table::read_keeping_malformed(path)?, robot, positions)
     }
 
     /// The target table of an already parsed table (for example from [`Table::parse`]).
@@ -92,10 +92,8 @@ impl TargetTable {
             }
         };
         let seed_idx: Vec<usize> = seed_idx.into_iter().flatten().collect();
-        let mut targets = Vec::with_capacity(table.rows.len());
-        let mut seeds = Vec::with_capacity(table.rows.len());
-        for r in 0..table.rows.len() {
-            let cols: Vec<usize> = pos_idx.iter().chain(&rot_idx).copied().collect();
+        let cols: Vec<usize> = pos_idx.iter().chain(&rot_idx).copied().collect();
+        let parsed = table.parse_rows(|r| {
             let v = table.numbers(r, &cols)?;
             for (k, (x, &c)) in v.iter().zip(&cols).enumerate() {
                 let max = pose_bound(k);
@@ -106,18 +104,20 @@ impl TargetTable {
                     ));
                 }
             }
-            targets.push(if with_orientation {
+            let target = if with_orientation {
                 Target::Pose(pose_from_file([v[0], v[1], v[2], v[3], v[4], v[5]]))
             } else {
                 Target::Position(Vector3::new(v[0], v[1], v[2]))
-            });
+            };
             let empty = seed_idx.iter().all(|&c| table.rows[r][c].trim().is_empty());
-            seeds.push(if with_seeds && !empty {
+            let seed = if with_seeds && !empty {
                 Some(robot.joints_to_internal(&row_joints(&table, r, &seed_idx, robot)?))
             } else {
                 None
-            });
-        }
+            };
+            Ok((target, seed))
+        })?;
+        let (targets, seeds) = parsed.into_iter().unzip();
         Ok(TargetTable {
             table,
             targets,

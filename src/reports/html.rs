@@ -281,7 +281,19 @@ fn inside(dir: &Path, name: &str) -> Result<std::path::PathBuf> {
         ))
     };
     let root = dir.canonicalize().map_err(|e| Error::io(dir, e))?;
-    let real = path.canonicalize().map_err(|e| Error::io(&path, e))?;
+    let real = path.canonicalize().map_err(|e| {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            Error::Invalid(format!(
+                "{}: lists `{name}`, which is not in {}: draw the pictures again (--plot {}) or \
+                 remove its entry",
+                crate::plot::manifest_path(dir).display(),
+                dir.display(),
+                dir.display()
+            ))
+        } else {
+            Error::io(&path, e)
+        }
+    })?;
     if !real.starts_with(&root) {
         return Err(outside());
     }
@@ -349,7 +361,8 @@ pub fn render(dir: &Path) -> Result<String> {
         let bytes = crate::io::read_capped(path, MAX_EMBED_BYTES)?;
         let text = String::from_utf8(bytes)
             .map_err(|_| Error::Invalid(format!("{}: not UTF-8 text", path.display())))?;
-        let report = Report::from_json(&text, path)?;
+        // A byte-order mark, as some Windows editors save UTF-8, is not JSON.
+        let report = Report::from_json(text.strip_prefix('\u{feff}').unwrap_or(&text), path)?;
         let name = path
             .file_name()
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned());

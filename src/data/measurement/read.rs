@@ -122,11 +122,17 @@ impl Columns {
         }
         let joint_names = cols.joints.clone().unwrap_or_else(|| joint_columns(n));
         if joint_names.len() != n {
+            // The profile is what to mend: named where it was read from a file.
+            let (at, data) = match &profile.path {
+                Some(p) => (p, format!(" (reading {})", t.path.display())),
+                None => (&t.path, String::new()),
+            };
             return Err(Error::input(
-                Location::file(&t.path),
+                Location::file(at),
                 format!(
-                    "the profile names {} joint columns, the robot has {n} joints",
-                    joint_names.len()
+                    "the profile names {} joint columns ({}), the robot has {n} joints{data}",
+                    joint_names.len(),
+                    joint_names.join(", ")
                 ),
             ));
         }
@@ -471,22 +477,25 @@ pub fn parse_measurements(
             cols.sigma_position.join(", ")
         ));
     }
-    if !opts.skip_bad_rows {
-        t.reject_malformed()?;
-    }
     let mut bad: Vec<(usize, String)> = t
         .malformed
         .iter()
         .map(|(line, msg)| (*line, format!("{}:{line}: {msg}", t.path.display())))
         .collect();
-    let mut rows = Vec::with_capacity(t.rows.len());
-    for r in 0..t.rows.len() {
-        match parse_row(t, r, &c, joints, profile) {
-            Ok(m) => rows.push(m),
-            Err(e) if opts.skip_bad_rows => bad.push((t.lines[r], e.to_string())),
-            Err(e) => return Err(e),
+    let rows = if opts.skip_bad_rows {
+        let mut rows = Vec::with_capacity(t.rows.len());
+        for r in 0..t.rows.len() {
+            match parse_row(t, r, &c, joints, profile) {
+                Ok(m) => rows.push(m),
+                Err(e) => bad.push((t.lines[r], e.to_string())),
+            }
         }
-    }
+        rows
+    } else {
+        // The first bad line stops the read: a cell that does not parse or a row of the
+        // wrong length.
+        t.parse_rows(|r| parse_row(t, r, &c, joints, profile))?
+    };
     bad.sort_by_key(|(line, _)| *line);
     report.skipped = bad;
     if rows.is_empty() && !report.skipped.is_empty() {
