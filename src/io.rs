@@ -154,9 +154,28 @@ pub fn output_file(path: &Path) -> Option<PathBuf> {
 }
 
 /// Whether writing to `path` lands in this process's standard output (`/dev/stdout`, or the
-/// file a shell's `>` sent it to).
+/// file a shell's `>` sent it to) and stays there: a file, a pipe or a terminal, not a
+/// device that discards what it gets (`--out /dev/null > /dev/null`).
 pub fn is_standard_output(path: &Path) -> bool {
-    matches!(target_of(path), Ok(Target::Stream(Some(Standard::Out))))
+    use std::io::IsTerminal;
+    let sink = || {
+        #[cfg(unix)]
+        {
+            use std::os::fd::AsFd;
+            use std::os::unix::fs::FileTypeExt;
+            let stdout = std::io::stdout();
+            let device = stdout
+                .as_fd()
+                .try_clone_to_owned()
+                .ok()
+                .and_then(|fd| std::fs::File::from(fd).metadata().ok())
+                .is_some_and(|m| m.file_type().is_char_device());
+            device && !stdout.is_terminal()
+        }
+        #[cfg(not(unix))]
+        false
+    };
+    matches!(target_of(path), Ok(Target::Stream(Some(Standard::Out)))) && !sink()
 }
 
 /// This process's standard output or error.

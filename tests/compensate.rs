@@ -574,3 +574,90 @@ fn a_calibrated_model_of_another_robot_is_refused() {
         .to_string();
     assert!(e.contains("not a calibration of the nominal"), "{e}");
 }
+
+/// A calibrated base registered to a tracker's frame (metres and degrees from the nominal's,
+/// as `identify` with registration writes it): the nominal closed form starts the solves in
+/// that frame, so targets are solved without seeds. Every target was "unreachable: out of the
+/// nominal model's reach" before (the closed form solved them in the nominal's frame).
+#[test]
+fn targets_in_a_registered_frame_are_solved_without_seeds() {
+    let s = load("case_d", None);
+    let identified = identified(&s);
+    let p = |name: &str| identified.find_param(name).unwrap();
+    let far = identified
+        .with_params(&[
+            (p("base.x"), identified.param(p("base.x")) + 3000.0),
+            (p("base.y"), identified.param(p("base.y")) - 1200.0),
+            (
+                p("base.rz"),
+                identified.param(p("base.rz")) + 30f64.to_radians(),
+            ),
+            (
+                p("base.rx"),
+                identified.param(p("base.rx")) + 2f64.to_radians(),
+            ),
+        ])
+        .unwrap();
+    let mut solver = FakeTargetSolver::new(&s.nominal, CalibratedModel::identified(&far)).unwrap();
+    for m in s.test_truth.rows.iter().take(25) {
+        let target = tool_pose(&far, &m.q);
+        let c = solver.solve(&Target::Pose(target), None).unwrap();
+        let reached = tool_pose(&far, &c.q);
+        assert!(
+            (reached.translation.vector - target.translation.vector).norm() < 1e-5,
+            "line {}",
+            m.line
+        );
+        let fake = tool_pose(&s.nominal, &c.q);
+        assert!((fake.translation.vector - c.fake.translation.vector).norm() < 1e-9);
+    }
+    // `ik --robot far --nominal nominal`: the same starts.
+    let start = IkStart::choose(&far, Some(&s.nominal)).unwrap();
+    assert!(matches!(start, IkStart::Nominal(_)));
+    let mut ik = IkSolver::new(
+        CalibratedModel::identified(&far),
+        start,
+        IkOptions::default(),
+    );
+    for m in s.test_truth.rows.iter().take(25) {
+        let target = tool_pose(&far, &m.q);
+        let solved = ik.nearest(&target, None).unwrap();
+        let reached = tool_pose(&far, &solved.solution.q);
+        assert!((reached.translation.vector - target.translation.vector).norm() < 1e-5);
+    }
+}
+
+/// Near the wrist singularity a calibrated joint-5 offset puts the seed's q5 on one side of
+/// 0 and the nominal's view of the same pose on the other: the closed-form start on the
+/// seed's branch is then the other wrist configuration, half a turn of q4 away. The seed
+/// itself, an exact solution, starts the solve instead (it was "branch-changed").
+#[test]
+fn a_seed_next_to_the_wrist_singularity_is_its_own_command() {
+    let s = load("case_d", None);
+    let theta5 = s.nominal.find_param("theta5").unwrap();
+    let calibrated = s
+        .nominal
+        .with_param(theta5, s.nominal.param(theta5) + 0.05f64.to_radians())
+        .unwrap();
+    let mut solver =
+        FakeTargetSolver::new(&s.nominal, CalibratedModel::identified(&calibrated)).unwrap();
+    for q5 in [-0.03, -0.01, -0.001, 0.02] {
+        let seed: Vec<f64> = [10.0, 20.0, -10.0, 15.0, q5, 5.0]
+            .iter()
+            .map(|d: &f64| d.to_radians())
+            .collect();
+        let target = tool_pose(&calibrated, &seed);
+        let c = solver
+            .solve(&Target::Pose(target), Some(&seed))
+            .unwrap_or_else(|f| panic!("q5 = {q5} deg: {f}"));
+        let apart = robocal::kinematics::joint_distance(&c.q, &seed);
+        assert!(apart < 1e-6, "q5 = {q5} deg: {apart} rad from the seed");
+    }
+    // At the singularity itself the branch is ambiguous, and that is the failure.
+    let seed: Vec<f64> = [10.0f64, 20.0, -10.0, 15.0, 0.0, 5.0]
+        .iter()
+        .map(|d| d.to_radians())
+        .collect();
+    let target = tool_pose(&calibrated, &seed);
+    assert!(solver.solve(&Target::Pose(target), Some(&seed)).is_err());
+}

@@ -1402,6 +1402,30 @@ fn edge_inputs_of_the_twenty_fifth_session() {
         stdout(&o)
     );
     assert!(stderr(&o).contains("identify: 30 rows"), "{}", stderr(&o));
+    // `--out /dev/null` with standard output there too: the summary is discarded with it,
+    // not moved to standard error.
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_robocal"))
+        .args(["identify", "--robot", FANUC, "--data", calibration])
+        .args(["--params", "offsets", "--out", "/dev/null"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("identify: 30 rows"), "{}", stderr(&o));
+    // Both streams into a pipe whose reader has gone: the shell's code for a closed pipe,
+    // not a panic.
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_robocal"))
+        .args(["identify", "--robot", FANUC, "--data", calibration])
+        .args(["--params", "offsets", "--out", "/dev/stdout"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(writer.try_clone().unwrap())
+        .stderr(writer)
+        .status()
+        .unwrap();
+    assert_eq!(status.code(), Some(141), "{status:?}");
     // Without it, the summary stays on standard output.
     let o = robocal(&[
         "identify",
@@ -1453,6 +1477,16 @@ fn edge_inputs_of_the_twenty_fifth_session() {
             "figures.json: lists `identify_calibration_position.png`, which is not in",
             "draw the pictures again (--plot",
         ],
+    );
+    // A name leading out of the folder is refused as such, there or not.
+    std::fs::write(
+        run.join("figures.json"),
+        r#"[{"png": "../elsewhere/x.png", "svg": "x.svg", "title": "t", "caption": "c"}]"#,
+    )
+    .unwrap();
+    refused(
+        &["report", run.to_str().unwrap(), "--out", "never.html"],
+        "`../elsewhere/x.png` lies outside the run folder",
     );
 
     // A profile naming three joints for a six-joint robot: the profile is named.
@@ -1508,6 +1542,138 @@ fn edge_inputs_of_the_twenty_fifth_session() {
     refused(
         &["evaluate", "--robot", FANUC, "--data", &short],
         "s25_short.csv:2: 8 cells, but the header has 9 columns",
+    );
+
+    // `ik --poses`: a pose whose solutions all leave the limits has the status code of
+    // `compensate` (outside-limits), and a batch with failures exits 3.
+    let poses = file(
+        "s25_poses.csv",
+        "id,x,y,z,rz,ry,rx\nfar,5000,0,0,0,0,0\norigin,0,0,0,0,0,0\n",
+    );
+    let o = robocal(&["ik", "--robot", FANUC, "--poses", &poses]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("origin,0,0,0,0,0,0,,,,,,,,\"outside-limits: the nearest solution"),
+        "{}",
+        stdout(&o)
+    );
+
+    // `plan --evaluate`: a row beyond the limits is named by its line; rows below the floor
+    // are named in a warning; sigma columns are said not to be read; relative measures pair
+    // rows as `identify` does, so an odd count is fine.
+    let mut list = String::from("id,q1,q2,q3,q4,q5,q6,sx,sy,sz\n");
+    for k in 0..11 {
+        list += &format!("{k},{},{},-5,10,40,0,1,1,1\n", 10 * k - 50, k % 5);
+    }
+    let beyond = file(
+        "s25_plan_beyond.csv",
+        &format!("{list}12,200,0,0,0,40,0,1,1,1\n"),
+    );
+    refused(
+        &["plan", "--robot", FANUC, "--evaluate", &beyond],
+        "s25_plan_beyond.csv: line 13: joint 1 at 200.0000 deg, beyond [-150, 150]",
+    );
+    let list = file("s25_plan_list.csv", &list);
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        FANUC,
+        "--evaluate",
+        &list,
+        "--measure",
+        "relative",
+        "--params",
+        "offsets",
+        "--floor-mm",
+        "1700",
+        "--validation",
+        "20",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (out, err) = (stdout(&o), stderr(&o));
+    assert!(
+        out.contains("plan: 10 candidate units (2 rows each)"),
+        "{out}"
+    );
+    assert!(
+        err.contains("11 row(s) break the cell's constraints (--margin-deg, --floor-mm, --forbid; lines 2, 3,"),
+        "{err}"
+    );
+    assert!(
+        err.contains("its sigma columns (sx, sy, sz) are not read"),
+        "{err}"
+    );
+    // An orientation measure cannot see lengths: a warning names them.
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        FANUC,
+        "--count",
+        "30",
+        "--pool",
+        "300",
+        "--validation",
+        "20",
+        "--measure",
+        "orientation",
+        "--out",
+        common::tmp("s25_orientation_plan.csv").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("warning: measure orientation cannot identify")
+            && stderr(&o).contains("a2, d2, a3"),
+        "{}",
+        stderr(&o)
+    );
+    // From candidates: each row's line there, and --pool refused beside them.
+    let planned = common::tmp("s25_from_candidates.csv");
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        FANUC,
+        "--candidates",
+        "datasets/case_d/training.csv",
+        "--count",
+        "30",
+        "--validation",
+        "20",
+        "--out",
+        planned.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&planned).unwrap();
+    let training = std::fs::read_to_string("datasets/case_d/training.csv").unwrap();
+    let training: Vec<&str> = training.lines().collect();
+    for row in text.lines().skip(1) {
+        let cells: Vec<&str> = row.split(',').collect();
+        let line: usize = cells[1].parse().unwrap();
+        let there: Vec<f64> = training[line - 1]
+            .split(',')
+            .skip(1)
+            .take(6)
+            .map(|c| c.parse().unwrap())
+            .collect();
+        let here: Vec<f64> = cells[2..8].iter().map(|c| c.parse().unwrap()).collect();
+        for (a, b) in here.iter().zip(&there) {
+            assert!((a - b).abs() < 1e-9, "{row} against line {line}");
+        }
+    }
+    refused(
+        &[
+            "plan",
+            "--robot",
+            FANUC,
+            "--candidates",
+            "datasets/case_d/training.csv",
+            "--count",
+            "5",
+            "--pool",
+            "10",
+            "--out",
+            "never.csv",
+        ],
+        "'--candidates <CANDIDATES>' cannot be used with '--pool <POOL>'",
     );
 
     // A quote opened on the last line and never closed.

@@ -208,7 +208,7 @@ fn bad_plans_are_refused_with_the_reason() {
     ]);
     assert!(!o.status.success());
     assert!(
-        stderr(&o).contains("1 row(s) lie beyond the joint limits"),
+        stderr(&o).contains("beyond.csv: line 3: joint 1 at 400.0000 deg, beyond [-150, 150]"),
         "{}",
         stderr(&o)
     );

@@ -8,7 +8,7 @@ use robocal::compensation::{CalibratedModel, Command, Failure, FakeTargetSolver}
 use robocal::data::{POSE_COLUMNS, TargetTable, joint_columns};
 use robocal::kinematics::pose_to_file;
 use robocal::model::{Robot, read_robot};
-use robocal::reports::compensate::TargetFailure;
+use robocal::reports::compensate::{FrameChange, TargetFailure};
 use robocal::reports::{CompensateReport, Report};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -208,14 +208,27 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
             .collect(),
         lines_outside_domain: outside,
         note,
+        frame_change: frame_change(&nominal, calibrated, &moved),
     };
-    if let (Some(mean), Some(max)) = (report.shift_mean_mm, report.shift_max_mm) {
-        eprintln!(
+    match (report.shift_mean_mm, report.shift_max_mm) {
+        (Some(mean), Some(max)) => {
+            eprintln!(
             "compensate: {} of {total} targets solved; the commands move the tool positions by \
              {mean:.3} mm on average (max {max:.3} mm) from the desired ones{}",
             report.solved,
-            frame_change(&nominal, calibrated, &moved)
-        );
+            report.frame_change.as_ref().map_or(String::new(), |f| format!(
+                ", across frames: the calibrated model's base lies {:.1} mm and {:.1} deg from \
+                 the nominal's (targets in the calibrated model's world frame, commands in the \
+                 nominal model's); carried into the nominal frame, the targets move by {:.3} mm \
+                 on average (max {:.3} mm)",
+                f.base_offset_mm,
+                f.base_rotation_deg,
+                f.carried_shift_mean_mm,
+                f.carried_shift_max_mm
+            ))
+        )
+        }
+        _ => eprintln!("compensate: 0 of {total} targets solved"),
     }
     if let Some(p) = &a.report {
         super::summary::write_report(p, &Report::Compensate(report))?;
@@ -226,23 +239,19 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
 /// Where the calibrated model's base frame lies far from the nominal's (a base registered to
 /// a tracker's frame: more than [`FRAME_CHANGE_MM`] or [`FRAME_CHANGE_DEG`]), the targets are
 /// in the calibrated model's world frame and the commands in the nominal model's, so the
-/// shift mixes that change of frame with the correction: the words saying so and the shift
-/// of the targets carried into the nominal frame (`moved`, mm), else nothing.
-fn frame_change(nominal: &Robot, calibrated: &Robot, moved: &[f64]) -> String {
+/// shift mixes that change of frame with the correction: the change, and the shift of the
+/// targets carried into the nominal frame (`moved`, mm); else (or with no target solved)
+/// None.
+fn frame_change(nominal: &Robot, calibrated: &Robot, moved: &[f64]) -> Option<FrameChange> {
     let d = nominal.base().transform().inverse() * calibrated.base().transform();
     let (mm, deg) = (d.translation.vector.norm(), d.rotation.angle().to_degrees());
-    let Some((mean, max)) = mean_and_max(moved) else {
-        return String::new();
-    };
-    if mm <= FRAME_CHANGE_MM && deg <= FRAME_CHANGE_DEG {
-        return String::new();
-    }
-    format!(
-        ", across frames: the calibrated model's base lies {mm:.1} mm and {deg:.1} deg from \
-         the nominal's (targets in the calibrated model's world frame, commands in the \
-         nominal model's); carried into the nominal frame, the targets move by {mean:.3} mm \
-         on average (max {max:.3} mm)"
-    )
+    let (mean, max) = mean_and_max(moved)?;
+    (mm > FRAME_CHANGE_MM || deg > FRAME_CHANGE_DEG).then_some(FrameChange {
+        base_offset_mm: mm,
+        base_rotation_deg: deg,
+        carried_shift_mean_mm: mean,
+        carried_shift_max_mm: max,
+    })
 }
 
 /// The mean and the largest of the shifts `v` (mm); None for none.

@@ -39,16 +39,25 @@ pub struct IkArgs {
 }
 
 /// The library's message, with the flags that would help.
+/// A failure as the status column and the warning give it: its code first (as
+/// `compensate`'s statuses), then what to do.
 fn explain(f: &IkFailure) -> String {
-    match f {
-        IkFailure::NoSeed => "no seed: give --seed or q1..qN columns".into(),
+    let text = match f {
+        IkFailure::NoSeed => "give --seed or q1..qN columns".into(),
         IkFailure::TooMany => format!("{f}: leave out --all for the one nearest the seed"),
-        IkFailure::BadSeed(_) => format!("{f} (--seed or the q1..qN columns)"),
+        IkFailure::BadSeed(m) => format!("{m} (--seed or the q1..qN columns)"),
         other => other.to_string(),
+    };
+    let code = f.code();
+    match text.strip_prefix(code).and_then(|t| t.strip_prefix(": ")) {
+        Some(_) => text,
+        None => format!("{code}: {text}"),
     }
 }
 
-pub fn run(a: IkArgs) -> Result<()> {
+/// Runs `ik`; true when some poses of `--poses` have no solution (the file marks them, and
+/// the command exits with [`super::EXIT_SOME_TARGETS_FAILED`]).
+pub fn run(a: IkArgs) -> Result<bool> {
     use super::paths::{guard, opt, req};
     guard(
         &[
@@ -153,5 +162,6 @@ pub fn run(a: IkArgs) -> Result<()> {
             eprintln!("  {}:{line}: {why}", file.display());
         }
     }
-    a.output.emit(&headers, &out_rows, written_count)
+    a.output.emit(&headers, &out_rows, written_count)?;
+    Ok(!failed.is_empty())
 }

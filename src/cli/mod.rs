@@ -98,11 +98,12 @@ enum Command {
     PlanStudy(plan_study::PlanStudyArgs),
 }
 
-/// Exit code of `compensate` when some targets have no command (the others are written).
+/// Exit code of `compensate` when some targets have no command, and of `ik --poses` when some
+/// poses have no solution (the others are written).
 pub const EXIT_SOME_TARGETS_FAILED: u8 = 3;
 
 /// Runs the command line; errors are printed with their context and give exit code 1 (2 for
-/// a usage error, from clap; [`EXIT_SOME_TARGETS_FAILED`] from `compensate`). A command's
+/// a usage error, from clap; [`EXIT_SOME_TARGETS_FAILED`] from `compensate` and `ik`). A command's
 /// output files appear together when it succeeds, and none of them when it fails.
 pub fn main() -> ExitCode {
     quiet_on_closed_stdout();
@@ -112,7 +113,11 @@ pub fn main() -> ExitCode {
         Command::Fk(a) => fk::run(a),
         Command::Plan(a) => plan::run(a),
         Command::PlanStudy(a) => plan_study::run_study(a),
-        Command::Ik(a) => ik::run(a),
+        Command::Ik(a) => ik::run(a).map(|failed| {
+            if failed {
+                code = ExitCode::from(EXIT_SOME_TARGETS_FAILED);
+            }
+        }),
         Command::Import(a) => import::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Split(a) => split::run(a),
@@ -145,8 +150,9 @@ pub fn main() -> ExitCode {
     }
 }
 
-/// `robocal ... | head` closes our stdout early; Rust's `println!` then panics. End quietly
-/// with the shell's code for SIGPIPE (128 + 13) instead of printing a panic.
+/// `robocal ... | head` closes our stdout early; Rust's `println!` then panics (and
+/// `eprintln!` with `2>&1`, or where [`say!`] prints on standard error). End quietly with the
+/// shell's code for SIGPIPE (128 + 13) instead of printing a panic.
 fn quiet_on_closed_stdout() {
     let default = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
@@ -156,7 +162,9 @@ fn quiet_on_closed_stdout() {
             .map(String::as_str)
             .or_else(|| info.payload().downcast_ref::<&str>().copied())
             .unwrap_or("");
-        if msg.contains("failed printing to stdout") && msg.contains("Broken pipe") {
+        let printing =
+            msg.contains("failed printing to stdout") || msg.contains("failed printing to stderr");
+        if printing && msg.contains("Broken pipe") {
             std::process::exit(141);
         }
         default(info);

@@ -47,7 +47,7 @@ pub struct PlanArgs {
     #[arg(long)]
     region: Option<PathBuf>,
     /// Candidate units drawn (1 to 200000).
-    #[arg(long, default_value_t = 5000)]
+    #[arg(long, default_value_t = 5000, conflicts_with = "candidates")]
     pool: usize,
     /// What the plan maximises.
     #[arg(long, value_enum, default_value_t = Criterion::D)]
@@ -69,8 +69,9 @@ pub struct PlanArgs {
     /// Validation configurations the prediction averages over (1 to 100000).
     #[arg(long, default_value_t = 300)]
     validation: usize,
-    /// The planned configurations (CSV: id, pair, q1..qN in deg); with --evaluate (optional
-    /// there), the list's configurations in the same columns.
+    /// The planned configurations (CSV: id, pair, q1..qN in deg; from --candidates, each
+    /// row's line there in source_line); with --evaluate (optional there), the list's
+    /// configurations in the same columns (for relative and distance, each pair's two rows).
     #[arg(long, required_unless_present = "evaluate")]
     out: Option<PathBuf>,
     /// Everything the plan found, as JSON.
@@ -127,13 +128,96 @@ fn constraints(a: &PlanArgs) -> Result<Constraints> {
     })
 }
 
-/// The configurations of a joints CSV (rad, mm).
-fn configurations(path: &PathBuf, robot: &Robot) -> Result<Vec<Vec<f64>>> {
+/// The configurations of a joints CSV (rad, mm) and the table read.
+fn configurations(path: &PathBuf, robot: &Robot) -> Result<(Vec<Vec<f64>>, JointTable)> {
     let t = JointTable::read(path, robot)?;
     if t.joints.is_empty() {
         bail!("{}: no rows", path.display());
     }
-    Ok((0..t.joints.len()).map(|r| t.internal(r, robot)).collect())
+    Ok((
+        (0..t.joints.len()).map(|r| t.internal(r, robot)).collect(),
+        t,
+    ))
+}
+
+/// The file lines of the configurations `qs` (read from `t`) that `constraints` refuse.
+fn refused_lines(
+    robot: &Robot,
+    qs: &[Vec<f64>],
+    t: &JointTable,
+    constraints: &Constraints,
+) -> Vec<usize> {
+    let mut ws = robocal::kinematics::Frames::new(robot);
+    (qs.iter().zip(&t.table.lines))
+        .filter(|(q, _)| constraints.check(robot, q, &mut ws).is_some())
+        .map(|(_, &line)| line)
+        .collect()
+}
+
+/// The units of the list `--evaluate` predicts for: a configuration each, or for relative
+/// and distance the pairs `identify` forms of its rows (consecutive rows, (1, 2), (2, 3),
+/// ..., or the two rows of each label of a `pair` column). A row beyond the joint limits is
+/// an error naming its line; rows the cell's constraints (`--margin-deg`, `--floor-mm`,
+/// `--forbid`) refuse are kept (the list is what will be measured) and named in a warning.
+fn evaluated_list(
+    path: &PathBuf,
+    robot: &Robot,
+    per: usize,
+    cell: &Constraints,
+) -> Result<(Pool, Vec<usize>)> {
+    let (qs, t) = configurations(path, robot)?;
+    let joints = robocal::data::measurement::JointInfo::of(robot);
+    let beyond = refused_lines(robot, &qs, &t, &Constraints::default());
+    if let Some(&line) = beyond.first() {
+        let r = t.table.lines.iter().position(|&l| l == line).unwrap_or(0);
+        let why = robocal::data::measurement::JointInfo::first_outside(&joints, &qs[r])
+            .unwrap_or_default();
+        bail!(
+            "{}: line {line}: {why}: the prediction is for configurations the robot can reach \
+             ({} row(s) beyond the limits of its robot file: lines {})",
+            path.display(),
+            beyond.len(),
+            robocal::data::measurement::list_lines(&beyond)
+        );
+    }
+    // A list `plan` evaluates is joints; a measured file's sigmas are not its noise model.
+    let sigma_columns: Vec<&str> = ["sx", "sy", "sz", "srx", "sry", "srz"]
+        .into_iter()
+        .filter(|c| t.table.column(c).is_some())
+        .collect();
+    if !sigma_columns.is_empty() {
+        eprintln!(
+            "warning: {}: its sigma columns ({}) are not read: the prediction takes \
+             --sigma-pos and --sigma-rot for every unit",
+            path.display(),
+            sigma_columns.join(", ")
+        );
+    }
+    let refused = refused_lines(robot, &qs, &t, cell);
+    if !refused.is_empty() {
+        eprintln!(
+            "warning: {}: {} row(s) break the cell's constraints (--margin-deg, --floor-mm, \
+             --forbid; lines {}): predicted as listed",
+            path.display(),
+            refused.len(),
+            robocal::data::measurement::list_lines(&refused)
+        );
+    }
+    let lines = t.table.lines.clone();
+    if per == 1 {
+        let what = path.display().to_string();
+        let pool = pool::from_configurations(robot, &qs, &Constraints::default(), 1, &what)?;
+        return Ok((pool, lines));
+    }
+    let labels: Vec<Option<&str>> = match t.table.column("pair") {
+        Some(c) => (t.table.rows.iter())
+            .map(|row| Some(row[c].as_str()).filter(|l| !l.is_empty()))
+            .collect(),
+        None => vec![None; qs.len()],
+    };
+    let pairs = robocal::data::pairs::pairs_of(&labels, &lines, path)?;
+    let pool = pool::from_pairs(robot, &qs, &pairs, &Constraints::default());
+    Ok((pool, lines))
 }
 
 fn print_prediction(label: &str, p: &Prediction) {
@@ -144,6 +228,64 @@ fn print_prediction(label: &str, p: &Prediction) {
         p.orientation_deg.mean,
         p.orientation_deg.p95
     );
+}
+
+/// Configurations the pose measure's identifiability is checked on (a rank analysis of the
+/// pool's first ones: enough for every parameter a pose set identifies).
+const POSE_CHECK_CONFIGURATIONS: usize = 500;
+
+/// Warns of the parameters pose measurements of the pool's configurations would identify and
+/// `measure` (position, orientation, relative, distance) cannot: they keep their nominal
+/// values in the plan, and its predicted errors leave their errors out (lengths under
+/// orientation measurements, the base under distances).
+fn warn_unseen(
+    robot: &Robot,
+    params: &str,
+    measure: robocal::identify::Measure,
+    sigmas: robocal::identify::Sigmas,
+    pool: &Pool,
+    design: &Design,
+) -> Result<()> {
+    let single = Pool {
+        units: (pool.units.iter().flatten())
+            .take(POSE_CHECK_CONFIGURATIONS)
+            .map(|q| vec![q.clone()])
+            .collect(),
+        refused: Default::default(),
+        sources: Vec::new(),
+    };
+    let cloud = vec![single.units[0][0].clone()];
+    let pose = Design::new(
+        robot,
+        params,
+        robocal::identify::Measure::Pose,
+        sigmas,
+        &single,
+        cloud,
+        RANK_TOL,
+    )
+    .context("the parameters pose measurements would identify, to hold the measure against")?;
+    let names = pose.robot.parameters();
+    let unseen: Vec<String> = (pose.params.iter())
+        .filter(|&&c| {
+            let name = names[c].name();
+            let seen = design.robot.parameters();
+            !design.params.iter().any(|&d| seen[d].name() == name)
+        })
+        .map(|&c| names[c].name())
+        .collect();
+    if !unseen.is_empty() {
+        eprintln!(
+            "warning: measure {} cannot identify {} of the {} parameters pose measurements of \
+             these configurations identify ({}): they keep their nominal values, and the \
+             predicted errors below leave their errors out",
+            measure.name(),
+            unseen.len(),
+            pose.p(),
+            unseen.join(", ")
+        );
+    }
+    Ok(())
 }
 
 pub fn run(a: PlanArgs) -> Result<()> {
@@ -175,48 +317,33 @@ pub fn run(a: PlanArgs) -> Result<()> {
         Some(p) => Region::read(p, &robot)?,
         None => Region::limits(&robot),
     };
-    let candidates: Pool = match (&a.evaluate, &a.candidates) {
-        (Some(p), _) => {
-            let what = p.display().to_string();
-            let pool = pool::from_configurations(
-                &robot,
-                &configurations(p, &robot)?,
-                &Constraints::default(),
-                per,
-                &what,
-            )?;
-            if pool.refused.limits > 0 {
-                bail!(
-                    "{what}: {} row(s) lie beyond the joint limits of {}: the prediction is for \
-                     configurations the robot can reach",
-                    pool.refused.limits,
-                    a.robot.display()
-                );
-            }
-            pool
-        }
+    // The pool, and the file lines of its configurations where they were given.
+    let (candidates, lines): (Pool, Vec<usize>) = match (&a.evaluate, &a.candidates) {
+        (Some(p), _) => evaluated_list(p, &robot, per, &limits)?,
         (None, Some(p)) => {
             let what = p.display().to_string();
-            let pool = pool::from_configurations(
-                &robot,
-                &configurations(p, &robot)?,
-                &limits,
-                per,
-                &what,
-            )?;
+            let (qs, t) = configurations(p, &robot)?;
+            let pool = pool::from_configurations(&robot, &qs, &limits, per, &what)?;
             if pool.refused.total() > 0 {
                 eprintln!(
-                    "note: {}: {} candidate row(s) refused by the constraints (limits and margin {}, floor {}, forbidden box {})",
+                    "note: {}: {} candidate row(s) refused by the constraints (limits and margin \
+                     {}, floor {}, forbidden box {}; lines {})",
                     what,
                     pool.refused.total(),
                     pool.refused.limits,
                     pool.refused.floor,
-                    pool.refused.forbidden
+                    pool.refused.forbidden,
+                    robocal::data::measurement::list_lines(&refused_lines(
+                        &robot, &qs, &t, &limits
+                    ))
                 );
             }
-            pool
+            (pool, t.table.lines.clone())
         }
-        (None, None) => pool::draw(&robot, &region, &limits, a.pool, per, a.seed)?,
+        (None, None) => (
+            pool::draw(&robot, &region, &limits, a.pool, per, a.seed)?,
+            Vec::new(),
+        ),
     };
     // The cloud comes from its own stream of the seed: the pool does not move it.
     let cloud = pool::draw(
@@ -325,6 +452,9 @@ pub fn run(a: PlanArgs) -> Result<()> {
             missed.join(", ")
         );
     }
+    if measure != robocal::identify::Measure::Pose {
+        warn_unseen(&robot, &a.params, measure, sigmas, &candidates, &design)?;
+    }
     let (units, chosen) = match (&a.evaluate, a.target_mm, a.count) {
         (Some(_), _, _) => ((0..design.units()).collect::<Vec<_>>(), None),
         (None, Some(t), _) => {
@@ -388,9 +518,18 @@ pub fn run(a: PlanArgs) -> Result<()> {
         .collect();
     if let Some(out) = &a.out {
         let n = robot.dof();
+        // Where each row came from in a given file: its ids are the plan's order.
+        let source_lines: Vec<usize> = units
+            .iter()
+            .flat_map(|&u| candidates.sources.get(u).into_iter().flatten())
+            .map(|&i| lines[i])
+            .collect();
         let mut headers = vec!["id".to_string()];
         if per == 2 {
             headers.push("pair".into());
+        }
+        if !source_lines.is_empty() {
+            headers.push("source_line".into());
         }
         headers.extend(robocal::data::joint_columns(n));
         let cells: Vec<Vec<String>> = rows
@@ -400,6 +539,9 @@ pub fn run(a: PlanArgs) -> Result<()> {
                 let mut cells = vec![format!("{}", k + 1)];
                 if per == 2 {
                     cells.push(format!("{}", k / 2 + 1));
+                }
+                if let Some(line) = source_lines.get(k) {
+                    cells.push(line.to_string());
                 }
                 cells.extend(q.iter().map(|v| num(*v, None)));
                 cells

@@ -34,6 +34,12 @@ use std::f64::consts::PI;
 /// Largest difference (rad) between q* and the controller's solution for F on the same branch.
 const SAME_JOINTS_RAD: f64 = 1e-6;
 
+/// Joint distance (rad, mm) from its seed beyond which a command solved from the closed-form
+/// start is another configuration than the seed's (a wrist turned half a turn: 3 rad and
+/// more), not the seed's own moved by the calibration (hundredths of a radian): the seed
+/// then starts a solve too ([`FakeTargetSolver::solve`]).
+const SEED_FAR_RAD: f64 = 0.5;
+
 /// A solved target.
 #[derive(Debug, Clone)]
 pub struct Command {
@@ -181,7 +187,12 @@ impl<'a> FakeTargetSolver<'a> {
             ..IkOptions::default()
         };
         let (start, controller) = match closed {
-            Ok(c) => (IkStart::Nominal(c.clone()), Controller::ClosedForm(c)),
+            // The starts in the calibrated model's world frame, the controller's view in the
+            // nominal's.
+            Ok(c) => (
+                IkStart::Nominal(c.placed_as(nominal, model.robot())),
+                Controller::ClosedForm(c),
+            ),
             Err(e) => {
                 let why = e.to_string();
                 // F = FK_nominal(q*) is reached exactly at q*: the default tolerances, so
@@ -263,7 +274,7 @@ impl<'a> FakeTargetSolver<'a> {
         }
         // A seed fixes the branch (the configuration the robot program was taught in).
         let seed_branch = seed.and_then(|s| self.branch_of(s));
-        let solved = self
+        let first = self
             .ik
             .from_nearest_start(&target, seed, seed_branch)
             .map_err(|e| match e {
@@ -280,13 +291,52 @@ impl<'a> FakeTargetSolver<'a> {
                 _ => Failure::Unreachable(
                     "out of the nominal model's reach, and the seed is at a singularity".into(),
                 ),
-            })?;
-        let Some(branch) = solved.branch.or(seed_branch) else {
-            return Err(Failure::Unreachable(
-                "out of the nominal model's reach, and the seed is at a singularity".into(),
-            ));
+            })
+            .and_then(|solved| {
+                let Some(branch) = solved.branch.or(seed_branch) else {
+                    return Err(Failure::Unreachable(
+                        "out of the nominal model's reach, and the seed is at a singularity".into(),
+                    ));
+                };
+                self.command(target, solved.solution, branch)
+            });
+        // Near a wrist singularity the closed-form start on the seed's branch can lie on the
+        // other side of it (q5 of the other sign, q4 and q6 half a turn away) when the
+        // calibrated model puts the seed's q5 on one side and the nominal on the other. Its
+        // solve then fails, or lands on a wrist configuration far from the seed's. The seed
+        // itself then starts a solve too, and its command is kept if it keeps the seed's
+        // branch and lies nearer the seed; else the first outcome stands.
+        let (Some(s), Some(branch)) = (seed, seed_branch) else {
+            return first;
         };
-        let sol = solved.solution;
+        let retry = match &first {
+            Ok(c) => joint_distance(&c.q, s) > SEED_FAR_RAD,
+            Err(f) => !matches!(f, Failure::BadSeed(_)),
+        };
+        if !retry {
+            return first;
+        }
+        let from_seed = self
+            .ik
+            .from_start(&target, s)
+            .ok()
+            .and_then(|sol| self.command(target, sol, branch).ok());
+        match (first, from_seed) {
+            (Ok(c), Some(d)) if joint_distance(&d.q, s) < joint_distance(&c.q, s) => Ok(d),
+            (Err(_), Some(d)) => Ok(d),
+            (first, _) => first,
+        }
+    }
+
+    /// The command of the calibrated solution `sol` for `target` on the controller's `branch`:
+    /// a failure where `sol` leaves the limits (the calibrated model's or the controller's)
+    /// or where the controller's closed form would return another branch for it.
+    fn command(
+        &mut self,
+        target: Pose,
+        sol: IkSolution,
+        branch: Branch,
+    ) -> std::result::Result<Command, Failure> {
         // The calibrated model's limits and the controller's (usually the same).
         let mut outside = sol.outside_limits.clone();
         for j in self.nominal.joints_outside_limits(&sol.q) {

@@ -7,6 +7,7 @@
 use super::measurement::MeasurementSet;
 use crate::error::{Error, Location, Result};
 use nalgebra::Vector3;
+use std::path::Path;
 
 /// One pair: row indices a and b.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -19,28 +20,37 @@ pub struct Pair {
 
 /// The pairs of a set.
 pub fn pairs(set: &MeasurementSet) -> Result<Vec<Pair>> {
-    let labelled = set.rows.iter().filter(|m| m.pair.is_some()).count();
+    let labels: Vec<Option<&str>> = set.rows.iter().map(|m| m.pair.as_deref()).collect();
+    let lines: Vec<usize> = set.rows.iter().map(|m| m.line).collect();
+    pairs_of(&labels, &lines, &set.source)
+}
+
+/// The pairs of rows with `pair` labels `labels` (None: no label) on file lines `lines` of
+/// `source` (for messages), by the rule of [`pairs`]: consecutive rows where no row has a
+/// label, else the two rows of each label.
+pub fn pairs_of(labels: &[Option<&str>], lines: &[usize], source: &Path) -> Result<Vec<Pair>> {
+    let labelled = labels.iter().flatten().count();
     if labelled == 0 {
-        if set.rows.len() < 2 {
+        if labels.len() < 2 {
             return Err(Error::input(
-                Location::file(&set.source),
+                Location::file(source),
                 "relative measurements need at least two rows",
             ));
         }
-        return Ok((0..set.rows.len() - 1)
+        return Ok((0..labels.len() - 1)
             .map(|k| Pair { a: k, b: k + 1 })
             .collect());
     }
-    if let Some(m) = set.rows.iter().find(|m| m.pair.is_none()) {
+    if let Some(i) = labels.iter().position(Option::is_none) {
         return Err(Error::input(
-            Location::at(&set.source, m.line, "pair"),
+            Location::at(source, lines[i], "pair"),
             "some rows have a pair label and this one has none",
         ));
     }
     let mut order: Vec<&str> = Vec::new();
     let mut members: Vec<Vec<usize>> = Vec::new();
-    for (i, m) in set.rows.iter().enumerate() {
-        let label = m.pair.as_deref().unwrap_or_default();
+    for (i, label) in labels.iter().enumerate() {
+        let label = label.unwrap_or_default();
         match order.iter().position(|l| *l == label) {
             Some(k) => members[k].push(i),
             None => {
@@ -55,7 +65,7 @@ pub fn pairs(set: &MeasurementSet) -> Result<Vec<Pair>> {
         .map(|(rows, label)| match rows.as_slice() {
             [a, b] => Ok(Pair { a: *a, b: *b }),
             _ => Err(Error::input(
-                Location::at(&set.source, set.rows[rows[0]].line, "pair"),
+                Location::at(source, lines[rows[0]], "pair"),
                 format!(
                     "pair `{label}` has {} rows; a pair needs exactly 2",
                     rows.len()

@@ -3,8 +3,9 @@
 //!
 //! 1. A model with a closed form of its own ([`IkStart::Exact`], thesis App. B) is solved by
 //!    it; no numerical solve.
-//! 2. Else the closed form of a nearby model (the nominal, [`IkStart::Nominal`]) gives the
-//!    starts: each of its solutions in the whole-turn copy nearest the reference joints
+//! 2. Else the closed form of a nearby model (the nominal, [`IkStart::Nominal`], placed at the
+//!    model's base and tool: [`SphericalWristIk::placed_as`]) gives the starts: each of its
+//!    solutions in the whole-turn copy nearest the reference joints
 //!    ([`SphericalWristIk::nearest_copy`]), copies within the limits first, then by
 //!    [`joint_distance`] to the reference. Numerical IK of the model ([`solve_model`]) refines
 //!    them.
@@ -33,8 +34,9 @@ const SAME_SOLUTION: f64 = 1e-7;
 pub enum IkStart {
     /// The model's own closed form: exact solutions, no numerical solve.
     Exact(SphericalWristIk),
-    /// A rigid model's closed form starts numerical solves of the model: the nominal's, or
-    /// for a compliant robot its own without the compliances.
+    /// A rigid model's closed form starts numerical solves of the model: the nominal's
+    /// (placed at the model's base and tool), or for a compliant robot its own without the
+    /// compliances.
     Nominal(SphericalWristIk),
     /// Only the caller's seed starts the numerical solve; the text says why the model has no
     /// closed form.
@@ -65,7 +67,7 @@ impl IkStart {
                     let ik = SphericalWristIk::new(nom).map_err(|e| {
                         Error::Invalid(format!("the nominal model has no closed form: {e}"))
                     })?;
-                    Ok(IkStart::Nominal(ik))
+                    Ok(IkStart::Nominal(ik.placed_as(nom, robot)))
                 }
                 None => Ok(IkStart::Seed(why.to_string())),
             },
@@ -99,6 +101,21 @@ pub enum IkFailure {
     /// Every solution found leaves the limits; the nearest the seed (or the middle of the
     /// ranges) leaves those of these 0-based joints.
     OutsideLimits(Vec<usize>),
+}
+
+impl IkFailure {
+    /// A short code for a status column: `no-seed`, `bad-seed`, `unreachable`, `too-many`,
+    /// `not-converged` or `outside-limits`.
+    pub fn code(&self) -> &'static str {
+        match self {
+            IkFailure::NoSeed => "no-seed",
+            IkFailure::BadSeed(_) => "bad-seed",
+            IkFailure::Unreachable(_) | IkFailure::OutOfReach(_) => "unreachable",
+            IkFailure::TooMany => "too-many",
+            IkFailure::NotConverged(_) => "not-converged",
+            IkFailure::OutsideLimits(_) => "outside-limits",
+        }
+    }
 }
 
 impl std::fmt::Display for IkFailure {
@@ -402,6 +419,21 @@ impl<M: ToolModel> IkSolver<M> {
             solution,
             branch: b,
         })
+    }
+
+    /// One numerical solve from `start` (rad, mm) as given: a seed's own configuration,
+    /// where the closed-form start near it leads to another (near a singularity, where the
+    /// model and the closed form's robot put a joint on either side of it). The solution may
+    /// leave the limits (see its `outside_limits`).
+    pub fn from_start(
+        &mut self,
+        target: &Pose,
+        start: &[f64],
+    ) -> std::result::Result<IkSolution, IkFailure> {
+        self.check_seed(Some(start))?;
+        self.check_reach(target)?;
+        self.refine(target, start)
+            .map_err(|e| IkFailure::NotConverged(e.to_string()))
     }
 
     /// Every distinct solution within the limits: for an exact closed form every whole-turn

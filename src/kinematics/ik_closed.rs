@@ -162,6 +162,31 @@ impl SphericalWristIk {
         })
     }
 
+    /// This solver for the arm moved in the world by `left` and carrying `right` beyond its
+    /// tool: the closed form of the robot whose tool pose is left T(q) right (mm), T(q) this
+    /// solver's. A pose carried along keeps its joint values and branches: the solver reads
+    /// only the axes' geometry relative to the target.
+    pub fn moved(&self, left: &Pose, right: &Pose) -> SphericalWristIk {
+        let point = |p: &V3| left.transform_point(&(*p).into()).coords;
+        SphericalWristIk {
+            w: self.w.map(|w| left.rotation * w),
+            p: self.p.map(|p| point(&p)),
+            w0: point(&self.w0),
+            m_inv: (left * self.m_inv.inverse() * right).inverse(),
+            limits: self.limits,
+        }
+    }
+
+    /// The closed form of `nominal` (this solver's robot) placed at `robot`'s base and tool
+    /// ([`SphericalWristIk::moved`]): starts for the numerical solves of `robot`, a
+    /// calibration of `nominal`, in `robot`'s world frame, which a base registered to a
+    /// tracker puts metres from the nominal's.
+    pub fn placed_as(&self, nominal: &Robot, robot: &Robot) -> SphericalWristIk {
+        let left = robot.base().transform() * nominal.base().transform().inverse();
+        let right = nominal.tool().transform().inverse() * robot.tool().transform();
+        self.moved(&left, &right)
+    }
+
     /// Every solution for `target` (tool pose, mm), wrapped to [-pi, pi), ignoring limits.
     /// Up to 8; none when the pose is out of reach. At a singularity (wrist centre on axis 1,
     /// or q5 such that axes 4 and 6 align) one representative of the continuum is returned.

@@ -4,6 +4,7 @@
 //! orientation measures, a pair of configurations for the relative and distance measures
 //! (both rows of a pair are measured).
 
+use crate::data::pairs::Pair;
 use crate::error::{Error, Result};
 use crate::kinematics::{Frames, frames};
 use crate::model::Robot;
@@ -121,6 +122,9 @@ pub struct Pool {
     pub units: Vec<Vec<Vec<f64>>>,
     /// What the constraints refused while the pool was made.
     pub refused: Refused,
+    /// For a pool of given configurations, the index of each unit's configurations among
+    /// them (where a plan's choice came from); empty for a drawn pool.
+    pub sources: Vec<Vec<usize>>,
 }
 
 impl Pool {
@@ -186,7 +190,11 @@ pub fn draw(
             }
         }
     }
-    Ok(Pool { units, refused })
+    Ok(Pool {
+        units,
+        refused,
+        sources: Vec::new(),
+    })
 }
 
 /// Groups given configurations (rad, mm) into units of `per_unit` consecutive rows, leaving
@@ -206,22 +214,63 @@ pub fn from_configurations(
             configurations.len()
         )));
     }
+    let n = configurations.len();
+    Ok(from_units(
+        robot,
+        configurations,
+        (0..n)
+            .step_by(per_unit)
+            .map(|k| (k..k + per_unit).collect()),
+        constraints,
+    ))
+}
+
+/// Units of the rows of each pair of `configurations` (rad, mm), as `identify` pairs the
+/// rows of a relative or distance measurement ([`crate::data::pairs::pairs_of`]: (1, 2),
+/// (2, 3), ... or by label), leaving out those the constraints refuse.
+pub fn from_pairs(
+    robot: &Robot,
+    configurations: &[Vec<f64>],
+    pairs: &[Pair],
+    constraints: &Constraints,
+) -> Pool {
+    from_units(
+        robot,
+        configurations,
+        pairs.iter().map(|p| vec![p.a, p.b]),
+        constraints,
+    )
+}
+
+/// The pool of the units of `configurations` that `units` lists (indices), leaving out those
+/// with a configuration the constraints refuse.
+fn from_units(
+    robot: &Robot,
+    configurations: &[Vec<f64>],
+    units: impl Iterator<Item = Vec<usize>>,
+    constraints: &Constraints,
+) -> Pool {
     let mut ws = Frames::new(robot);
-    let mut refused = Refused::default();
-    let mut units = Vec::new();
-    for chunk in configurations.chunks(per_unit) {
+    let mut pool = Pool {
+        units: Vec::new(),
+        refused: Refused::default(),
+        sources: Vec::new(),
+    };
+    for unit in units {
         let mut ok = true;
-        for q in chunk {
-            if let Some(r) = constraints.check(robot, q, &mut ws) {
-                refused.count(r);
+        for &i in &unit {
+            if let Some(r) = constraints.check(robot, &configurations[i], &mut ws) {
+                pool.refused.count(r);
                 ok = false;
             }
         }
         if ok {
-            units.push(chunk.to_vec());
+            pool.units
+                .push(unit.iter().map(|&i| configurations[i].clone()).collect());
+            pool.sources.push(unit);
         }
     }
-    Ok(Pool { units, refused })
+    pool
 }
 
 #[cfg(test)]

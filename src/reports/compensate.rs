@@ -42,4 +42,23 @@ pub struct CompensateReport {
     pub lines_outside_domain: Vec<usize>,
     /// A note on the model the compensator runs with, if it is not the robot file's.
     pub note: Option<String>,
+    /// Where the calibrated base lies far from the nominal's (a base registered to a
+    /// tracker): the change of frame the shifts above include.
+    #[serde(default)]
+    pub frame_change: Option<FrameChange>,
+}
+
+/// The calibrated model's base against the nominal's, and the shift of the commands from the
+/// targets carried into the nominal frame (B_n B_c^-1 T): the correction without the change
+/// of frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrameChange {
+    /// Distance between the two bases' origins (mm).
+    pub base_offset_mm: f64,
+    /// Rotation between them (deg).
+    pub base_rotation_deg: f64,
+    /// Mean shift of the commands from the carried targets (mm), over the solved.
+    pub carried_shift_mean_mm: f64,
+    /// Largest such shift (mm).
+    pub carried_shift_max_mm: f64,
 }

@@ -280,6 +280,14 @@ fn inside(dir: &Path, name: &str) -> Result<std::path::PathBuf> {
             crate::plot::manifest_path(dir).display()
         ))
     };
+    // Found from the name: a missing file out there is no less outside.
+    let leaves = Path::new(name).components().any(|c| {
+        use std::path::Component::{ParentDir, Prefix, RootDir};
+        matches!(c, ParentDir | RootDir | Prefix(_))
+    });
+    if leaves {
+        return Err(outside());
+    }
     let root = dir.canonicalize().map_err(|e| Error::io(dir, e))?;
     let real = path.canonicalize().map_err(|e| {
         if e.kind() == std::io::ErrorKind::NotFound {

@@ -163,7 +163,7 @@ impl JointInfo {
 
     /// The first joint of `q` beyond its limits, in words (file units: deg, mm): "joint 2 at
     /// 75 deg, beyond [-50, 70]".
-    fn first_outside(joints: &[JointInfo], q: &[f64]) -> Option<String> {
+    pub fn first_outside(joints: &[JointInfo], q: &[f64]) -> Option<String> {
         (joints.iter().zip(q).enumerate()).find_map(|(i, (j, &v))| {
             let [lo, hi] = j.limits?;
             (v < lo - 1e-9 || v > hi + 1e-9).then(|| {
