@@ -1676,6 +1676,48 @@ fn edge_inputs_of_the_twenty_fifth_session() {
         "'--candidates <CANDIDATES>' cannot be used with '--pool <POOL>'",
     );
 
+    // `--members 0` is the model alone: a flag shaping a network is refused, not dropped.
+    for flags in [
+        &["--network", "mlp"][..],
+        &["--network", "rbf"],
+        &["--hidden", "5"],
+        &["--form", "pose"],
+    ] {
+        let mut args = vec![
+            "train",
+            "--robot",
+            FANUC,
+            "--data",
+            "datasets/case_d/training.csv",
+            "--out",
+            "never.rcal",
+            "--members",
+            "0",
+        ];
+        args.extend_from_slice(flags);
+        refused(
+            &args,
+            &format!(
+                "--members 0 keeps the model alone, no network: not with {}",
+                flags[0]
+            ),
+        );
+    }
+    // `plan-study --plot` on a file: refused before the study runs.
+    let afile = file("s25_afile", "not a folder\n");
+    refused(
+        &[
+            "plan-study",
+            "--seeds",
+            "1",
+            "--pool",
+            "100",
+            "--plot",
+            &afile,
+        ],
+        "is a file: give a folder for the pictures",
+    );
+
     // A quote opened on the last line and never closed.
     let quote = file(
         "s25_quote.csv",
@@ -1685,4 +1727,31 @@ fn edge_inputs_of_the_twenty_fifth_session() {
         &["import", &quote, "--out", "never.csv"],
         "s25_quote.csv:3: malformed CSV: a quoted cell opened here is never closed",
     );
+    // Also under --skip-bad-rows: the rows after it are not one bad row to drop.
+    let early = file(
+        "s25_quote_early.csv",
+        &format!("id,{header}\"a,0,1,2,3,4,5,1,2,3\nb,0,1,2,3,4,5,1,2,3\nc,0,1,2,3,4,5,1,2,3\n"),
+    );
+    refused(
+        &["import", &early, "--skip-bad-rows", "--out", "never.csv"],
+        "s25_quote_early.csv:2: malformed CSV: a quoted cell opened here is never closed",
+    );
+    // A list row at a limit up to the readers' tolerance (70 deg written with a last digit
+    // off) is within it for plan as for fk.
+    let edge = file(
+        "s25_plan_edge.csv",
+        "q1,q2,q3,q4,q5,q6\n0,0,0,0,-30,0\n10,70.00000001,-20,0,-30,0\n20,5,5,0,-40,0\n",
+    );
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        FANUC,
+        "--evaluate",
+        &edge,
+        "--params",
+        "offsets",
+        "--validation",
+        "20",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
 }

@@ -68,13 +68,12 @@ fn print_set(s: &CaseDSet) {
         );
     }
     if let (Some(o), Some(f)) = (s.gain_after_offsets, s.gain_after_full) {
-        let compliance = s
-            .gain_after_compliance
-            .map(|c| format!(", {c:.1}x after full + compliance"))
-            .unwrap_or_default();
-        say!(
-            "the compensator lowers the mean position error vs truth {o:.1}x after offsets, {f:.1}x after full identification{compliance}"
+        let mut gains = vec![(o, "after offsets"), (f, "after full identification")];
+        gains.extend(
+            s.gain_after_compliance
+                .map(|c| (c, "after full + compliance")),
         );
+        say!("{}", gain_words(&gains));
     }
 }
 
@@ -174,4 +173,44 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
         write_report(p, &Report::CaseD(report))?;
     }
     Ok(())
+}
+
+/// The compensator's gains (the model alone's mean position error over the compensated one's,
+/// each with what it follows) in words; a gain below 1 is said as the rise it is.
+fn gain_words(gains: &[(f64, &str)]) -> String {
+    if gains.iter().all(|(g, _)| *g >= 1.0) {
+        let words: Vec<String> = gains.iter().map(|(g, w)| format!("{g:.1}x {w}")).collect();
+        return format!(
+            "the compensator lowers the mean position error vs truth {}",
+            words.join(", ")
+        );
+    }
+    let words: Vec<String> = gains
+        .iter()
+        .map(|&(g, w)| match g {
+            g if g >= 1.0 => format!("{g:.1}x lower {w}"),
+            g => format!("{:.2}x higher {w}", 1.0 / g),
+        })
+        .collect();
+    format!(
+        "the compensator's mean position error vs truth against the model alone: {}",
+        words.join(", ")
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_gain_below_one_is_said_as_a_rise() {
+        assert_eq!(
+            super::gain_words(&[(33.7, "after offsets"), (3.1, "after full identification")]),
+            "the compensator lowers the mean position error vs truth 33.7x after offsets, 3.1x \
+             after full identification"
+        );
+        assert_eq!(
+            super::gain_words(&[(4.4, "after offsets"), (0.8, "after full identification")]),
+            "the compensator's mean position error vs truth against the model alone: 4.4x \
+             lower after offsets, 1.25x higher after full identification"
+        );
+    }
 }

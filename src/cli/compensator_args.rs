@@ -77,7 +77,8 @@ pub struct CompensatorArgs {
     /// residual). Default: chosen by cross-validation (0.1, 1, 10, then a factor 3 around the best).
     #[arg(long)]
     pub penalty: Option<f64>,
-    /// Networks in the ensemble (0 to 50; the prediction is their mean; 0: the model alone).
+    /// Networks in the ensemble (0 to 50; the prediction is their mean; 0: the model alone,
+    /// not with the flags that shape a network).
     /// Default: 1 or 4, or none where no network lowers the error by 2 % or more and
     /// significantly row by row, by cross-validation.
     #[arg(long)]
@@ -190,6 +191,23 @@ impl CompensatorArgs {
         {
             bail!("--members {m}: give 0 to 50 networks");
         }
+        if self.members == Some(0) {
+            // The model alone: a flag that shapes a network would be dropped without a word.
+            let shaping = [
+                ("--network", self.network.is_some()),
+                ("--form", self.form.is_some()),
+                ("--encoding", self.encoding.is_some()),
+                ("--hidden", self.hidden.is_some()),
+                ("--penalty", self.penalty.is_some()),
+                ("--rbf-start", self.rbf_start.is_some()),
+                ("--rbf-kernel", self.rbf_kernel.is_some()),
+                ("--rbf-search-rows", self.rbf_search_rows.is_some()),
+                ("--rbf-search-blocks", self.rbf_search_blocks.is_some()),
+            ];
+            if let Some((flag, _)) = shaping.iter().find(|(_, given)| *given) {
+                bail!("--members 0 keeps the model alone, no network: not with {flag}");
+            }
+        }
         if let Some(k) = self.folds
             && !(2..=20).contains(&k)
         {
@@ -279,7 +297,7 @@ impl CompensatorArgs {
                 );
             }
             if self.members.is_some_and(|m| m > 1) {
-                bail!("--network rbf: --members takes 0 or 1 (the RBF network is deterministic)");
+                bail!("--network rbf: --members takes 1 (the RBF network is deterministic)");
             }
         }
         Ok(CompensatorOptions {

@@ -170,8 +170,9 @@ fn evaluated_list(
     let beyond = refused_lines(robot, &qs, &t, &Constraints::default());
     if let Some(&line) = beyond.first() {
         let r = t.table.lines.iter().position(|&l| l == line).unwrap_or(0);
+        // Both judge the limits with one tolerance: a row refused has a joint to name.
         let why = robocal::data::measurement::JointInfo::first_outside(&joints, &qs[r])
-            .unwrap_or_default();
+            .unwrap_or_else(|| "beyond the joint limits".into());
         bail!(
             "{}: line {line}: {why}: the prediction is for configurations the robot can reach \
              ({} row(s) beyond the limits of its robot file: lines {})",
@@ -235,9 +236,10 @@ fn print_prediction(label: &str, p: &Prediction) {
 const POSE_CHECK_CONFIGURATIONS: usize = 500;
 
 /// Warns of the parameters pose measurements of the pool's configurations would identify and
-/// `measure` (position, orientation, relative, distance) cannot: they keep their nominal
-/// values in the plan, and its predicted errors leave their errors out (lengths under
-/// orientation measurements, the base under distances).
+/// `measure` (position, orientation, relative, distance) cannot on the same pool (`design`;
+/// `what` names the pool in the warning):
+/// they keep their nominal values in the plan, and its predicted errors leave their errors
+/// out (lengths under orientation measurements, the base under distances).
 fn warn_unseen(
     robot: &Robot,
     params: &str,
@@ -245,6 +247,7 @@ fn warn_unseen(
     sigmas: robocal::identify::Sigmas,
     pool: &Pool,
     design: &Design,
+    what: &str,
 ) -> Result<()> {
     let single = Pool {
         units: (pool.units.iter().flatten())
@@ -277,8 +280,8 @@ fn warn_unseen(
     if !unseen.is_empty() {
         eprintln!(
             "warning: measure {} cannot identify {} of the {} parameters pose measurements of \
-             these configurations identify ({}): they keep their nominal values, and the \
-             predicted errors below leave their errors out",
+             {what} identify ({}): they keep their nominal values, and the predicted errors \
+             below leave their errors out",
             measure.name(),
             unseen.len(),
             pose.p(),
@@ -359,14 +362,18 @@ pub fn run(a: PlanArgs) -> Result<()> {
     // A list to evaluate is held against what configurations spread over the region
     // identify (the pool `plan` would draw): parameters the list leaves out keep their
     // nominal values, and its prediction leaves their errors out.
-    let spread = match &a.evaluate {
-        Some(_) => Some(
+    let spread_pool = match &a.evaluate {
+        Some(_) => Some(pool::draw(&robot, &region, &limits, a.pool, per, a.seed)?),
+        None => None,
+    };
+    let spread = match &spread_pool {
+        Some(spread_pool) => Some(
             Design::new(
                 &robot,
                 &a.params,
                 measure,
                 sigmas,
-                &pool::draw(&robot, &region, &limits, a.pool, per, a.seed)?,
+                spread_pool,
                 cloud.clone(),
                 RANK_TOL,
             )
@@ -453,7 +460,17 @@ pub fn run(a: PlanArgs) -> Result<()> {
         );
     }
     if measure != robocal::identify::Measure::Pose {
-        warn_unseen(&robot, &a.params, measure, sigmas, &candidates, &design)?;
+        // What the measure cannot see at all: against the spread configurations where a list
+        // is evaluated (what the list itself leaves out is the warning above).
+        let (pool, against, what) = match (&spread_pool, &spread) {
+            (Some(p), Some(d)) => (
+                p,
+                d,
+                format!("{} configurations spread over the region", a.pool),
+            ),
+            _ => (&candidates, &design, "these configurations".to_string()),
+        };
+        warn_unseen(&robot, &a.params, measure, sigmas, pool, against, &what)?;
     }
     let (units, chosen) = match (&a.evaluate, a.target_mm, a.count) {
         (Some(_), _, _) => ((0..design.units()).collect::<Vec<_>>(), None),

@@ -49,6 +49,8 @@ fn curve(label: &str, series: &[Series], predicted: bool) -> Curve {
 }
 
 pub fn run_study(a: PlanStudyArgs) -> Result<()> {
+    // The picture folder checked before the study's minutes, not after.
+    super::paths::guard(&[], &[super::paths::opt("--plot", a.plot.as_ref())])?;
     if !(1..=200).contains(&a.seeds) {
         bail!("--seeds {}: give 1 to 200", a.seeds);
     }

@@ -20,8 +20,8 @@ pub fn load_compensator(
     let c = Compensator::load_for(path, robot)?;
     let note = c.runs_another_model(robot).then(|| {
         format!(
-            "note: the compensator runs in series with its own model (embedded; refined in \
-             training), not with {}",
+            "note: the compensator runs in series with its own model (embedded: the model it \
+             was trained with, or that model refined in training), not with {}",
             robot_path.display()
         )
     });

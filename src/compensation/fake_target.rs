@@ -35,10 +35,11 @@ use std::f64::consts::PI;
 const SAME_JOINTS_RAD: f64 = 1e-6;
 
 /// Joint distance (rad, mm) from its seed beyond which a command solved from the closed-form
-/// start is another configuration than the seed's (a wrist turned half a turn: 3 rad and
-/// more), not the seed's own moved by the calibration (hundredths of a radian): the seed
-/// then starts a solve too ([`FakeTargetSolver::solve`]).
-const SEED_FAR_RAD: f64 = 0.5;
+/// start may be another configuration than the seed's (a wrist turned half a turn: 3 rad and
+/// more; near the singularity q4 and q6 swung by tens of degrees), not the seed's own moved by
+/// the calibration (hundredths of a radian): the seed then starts a solve too, and the
+/// nearer command is kept ([`FakeTargetSolver::solve`]).
+const SEED_FAR_RAD: f64 = 0.1;
 
 /// A solved target.
 #[derive(Debug, Clone)]

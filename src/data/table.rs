@@ -141,14 +141,20 @@ impl Table {
 
     /// Parses CSV bytes; `path` is used in messages.
     pub fn parse(bytes: &[u8], path: &Path, delimiter: u8, decimal_comma: bool) -> Result<Table> {
-        // The csv crate reads the rest of the file, from a quote never closed, into one cell
-        // of the last record: that record is this error instead (in line order with the
-        // others, or at once when it is the header).
-        let unclosed = unclosed_quote(bytes, delimiter).map(|at| {
+        // The csv crate reads the rest of the file, from a quote never closed, into one cell:
+        // refused at once (also under --skip-bad-rows: it is not one bad row but all after).
+        if let Some(at) = unclosed_quote(bytes, delimiter) {
             let line = 1 + bytes[..at].iter().filter(|&&b| b == b'\n').count();
-            let msg = "malformed CSV: a quoted cell opened here is never closed (a missing '\"'?)";
-            (at, line, msg.to_string())
-        });
+            return Err(Error::input(
+                Location {
+                    file: path.to_path_buf(),
+                    line: Some(line),
+                    field: None,
+                },
+                "malformed CSV: a quoted cell opened here is never closed (a missing '\"'?), \
+                 which would take the rest of the file",
+            ));
+        }
         let mut rdr = csv::ReaderBuilder::new()
             .delimiter(delimiter)
             .has_headers(true)
@@ -210,18 +216,13 @@ impl Table {
         let mut rows = Vec::new();
         let mut lines = Vec::new();
         let mut malformed = Vec::new();
-        // The last record kept: where it starts (byte) and whether it is a row.
-        let mut last: Option<(usize, bool)> = None;
         for rec in rdr.records() {
             let rec = rec.map_err(csv_err)?;
-            let start = rec.position().map_or(0, |p| p.byte() as usize);
-            let line = line_at(start as u64);
+            let line = rec.position().map_or(0, |p| line_at(p.byte()));
             if rec.len() == 1 && rec[0].is_empty() {
                 continue;
             }
-            let row = rec.len() == headers.len();
-            last = Some((start, row));
-            if !row {
+            if rec.len() != headers.len() {
                 let msg = format!(
                     "{} cells, but the header has {} columns",
                     rec.len(),
@@ -232,29 +233,6 @@ impl Table {
             }
             rows.push(rec.iter().map(str::to_string).collect());
             lines.push(line);
-        }
-        if let Some((at, line, msg)) = unclosed {
-            match last {
-                Some((start, row)) if start <= at => {
-                    if row {
-                        rows.pop();
-                        lines.pop();
-                    } else {
-                        malformed.pop();
-                    }
-                    malformed.push((line, msg));
-                }
-                _ => {
-                    return Err(Error::input(
-                        Location {
-                            file: path.to_path_buf(),
-                            line: Some(line),
-                            field: None,
-                        },
-                        msg,
-                    ));
-                }
-            }
         }
         Ok(Table {
             path: path.to_path_buf(),
@@ -429,28 +407,19 @@ mod tests {
             assert!(parse(ok).is_ok(), "{ok:?}");
             assert_eq!(unclosed_quote(ok.as_bytes(), b','), None, "{ok:?}");
         }
-        let never_closed = |s: &str| {
-            let t = parse(s)?;
-            t.parse_rows(|r| t.number(r, 1))
-        };
-        let e = never_closed("id,q1\na,1\n\"b,2\n").unwrap_err().to_string();
+        let e = parse("id,q1\na,1\n\"b,2\n").unwrap_err().to_string();
         assert!(e.contains("d.csv:3") && e.contains("never closed"), "{e}");
-        // An earlier bad line is the error; the quote is, after a multi-line cell.
-        let e = never_closed("id,q1\na,x\n\"b,2\n").unwrap_err().to_string();
-        assert!(e.contains("d.csv:2") && e.contains("`x`"), "{e}");
-        let e = never_closed("id,q1\n\"a\nb\",1\n\nc,\"2\n")
+        // After a multi-line cell, its own line; a lone quote on the last line; the header.
+        let e = parse("id,q1\n\"a\nb\",1\n\nc,\"2\n")
             .unwrap_err()
             .to_string();
         assert!(e.contains("d.csv:5") && e.contains("never closed"), "{e}");
-        // In the header, it is refused at once.
+        let e = parse("id,q1\na,1\n\"\n").unwrap_err().to_string();
+        assert!(e.contains("d.csv:3") && e.contains("never closed"), "{e}");
         let e = parse("id,\"q1\na,1\n").unwrap_err().to_string();
         assert!(e.contains("d.csv:1") && e.contains("never closed"), "{e}");
         let semicolons = |s: &str| Table::parse(s.as_bytes(), Path::new("d.csv"), b';', false);
-        let e = semicolons("id;q1\na;\"1\n")
-            .unwrap()
-            .reject_malformed()
-            .unwrap_err()
-            .to_string();
+        let e = semicolons("id;q1\na;\"1\n").unwrap_err().to_string();
         assert!(e.contains("never closed"), "{e}");
         assert!(semicolons("id;q1\na;\"1\"\n").is_ok());
         // With commas between cells, that quote is inside the cell `a;"1`: a letter.

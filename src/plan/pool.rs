@@ -26,6 +26,10 @@ pub struct Constraints {
     pub forbidden: Option<(Vector3<f64>, Vector3<f64>)>,
 }
 
+/// How far (rad, mm) a configuration may pass a limit (less its margin) and still be within
+/// it, as the data readers and the kinematics judge limits.
+const LIMIT_TOLERANCE: f64 = 1e-9;
+
 /// Why a configuration was refused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Refusal {
@@ -69,7 +73,8 @@ impl Constraints {
         for (v, j) in q.iter().zip(robot.joints()) {
             let [lo, hi] = j.limits_internal();
             let m = self.margin_of(j);
-            if *v < lo + m || *v > hi - m {
+            // The tolerance of every other limit check (a file's 70 deg read back as radians).
+            if *v < lo + m - LIMIT_TOLERANCE || *v > hi - m + LIMIT_TOLERANCE {
                 return Some(Refusal::Limits);
             }
         }
