@@ -1682,6 +1682,7 @@ fn edge_inputs_of_the_twenty_fifth_session() {
         &["--network", "rbf"],
         &["--hidden", "5"],
         &["--form", "pose"],
+        &["--max-epochs", "3"],
     ] {
         let mut args = vec![
             "train",

@@ -78,7 +78,7 @@ pub struct CompensatorArgs {
     #[arg(long)]
     pub penalty: Option<f64>,
     /// Networks in the ensemble (0 to 50; the prediction is their mean; 0: the model alone,
-    /// not with the flags that shape a network).
+    /// not with --network, --form, --encoding, --hidden, --penalty, --max-epochs or --rbf-*).
     /// Default: 1 or 4, or none where no network lowers the error by 2 % or more and
     /// significantly row by row, by cross-validation.
     #[arg(long)]
@@ -199,6 +199,7 @@ impl CompensatorArgs {
                 ("--encoding", self.encoding.is_some()),
                 ("--hidden", self.hidden.is_some()),
                 ("--penalty", self.penalty.is_some()),
+                ("--max-epochs", self.max_epochs.is_some()),
                 ("--rbf-start", self.rbf_start.is_some()),
                 ("--rbf-kernel", self.rbf_kernel.is_some()),
                 ("--rbf-search-rows", self.rbf_search_rows.is_some()),
