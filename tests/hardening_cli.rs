@@ -1369,12 +1369,18 @@ fn edge_inputs_of_the_twenty_fourth_hunt() {
 fn edge_inputs_of_the_twenty_fifth_session() {
     use common::FANUC;
     let calibration = "datasets/case_d/calibration.csv";
+    // `identify` of the FANUC's offsets on Case D into `out`, with `extra` flags.
+    let identify = |out: &str, extra: &[&str]| {
+        let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_robocal"));
+        c.args(["identify", "--robot", FANUC, "--data", calibration])
+            .args(["--params", "offsets", "--out", out])
+            .args(extra)
+            .current_dir(env!("CARGO_MANIFEST_DIR"));
+        c
+    };
     // `identify --out F > F`: F is the robot file, and the summary is on standard error.
     let out = common::tmp("s25_identified.toml");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_robocal"))
-        .args(["identify", "--robot", FANUC, "--data", calibration])
-        .args(["--params", "offsets", "--out", out.to_str().unwrap()])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+    let o = identify(out.to_str().unwrap(), &[])
         .stdout(std::fs::File::create(&out).unwrap())
         .output()
         .unwrap();
@@ -1384,17 +1390,7 @@ fn edge_inputs_of_the_twenty_fifth_session() {
     assert!(stderr(&o).contains("identify: 30 rows"), "{}", stderr(&o));
     robocal::model::Robot::from_toml(&text).unwrap();
     // `--out /dev/stdout` into a pipe: the pipe holds the file alone.
-    let o = robocal(&[
-        "identify",
-        "--robot",
-        FANUC,
-        "--data",
-        calibration,
-        "--params",
-        "offsets",
-        "--out",
-        "/dev/stdout",
-    ]);
+    let o = identify("/dev/stdout", &[]).output().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stdout(&o).starts_with("# robocal robot model"),
@@ -1404,10 +1400,7 @@ fn edge_inputs_of_the_twenty_fifth_session() {
     assert!(stderr(&o).contains("identify: 30 rows"), "{}", stderr(&o));
     // `--out /dev/null` with standard output there too: the summary is discarded with it,
     // not moved to standard error.
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_robocal"))
-        .args(["identify", "--robot", FANUC, "--data", calibration])
-        .args(["--params", "offsets", "--out", "/dev/null"])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+    let o = identify("/dev/null", &[])
         .stdout(std::process::Stdio::null())
         .output()
         .unwrap();
@@ -1417,48 +1410,33 @@ fn edge_inputs_of_the_twenty_fifth_session() {
     // not a panic.
     let (reader, writer) = std::io::pipe().unwrap();
     drop(reader);
-    let status = std::process::Command::new(env!("CARGO_BIN_EXE_robocal"))
-        .args(["identify", "--robot", FANUC, "--data", calibration])
-        .args(["--params", "offsets", "--out", "/dev/stdout"])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+    let status = identify("/dev/stdout", &[])
         .stdout(writer.try_clone().unwrap())
         .stderr(writer)
         .status()
         .unwrap();
     assert_eq!(status.code(), Some(141), "{status:?}");
     // Without it, the summary stays on standard output.
-    let o = robocal(&[
-        "identify",
-        "--robot",
-        FANUC,
-        "--data",
-        calibration,
-        "--params",
-        "offsets",
-        "--out",
-        common::tmp("s25_identified2.toml").to_str().unwrap(),
-    ]);
+    let out2 = common::tmp("s25_identified2.toml");
+    let o = identify(out2.to_str().unwrap(), &[]).output().unwrap();
     assert!(stdout(&o).contains("identify: 30 rows"), "{}", stdout(&o));
 
     // `report`: a report saved with a byte-order mark, and a picture the list names but the
     // folder lacks.
     let run = common::tmp("s25_run");
     let report = run.join("identify.json");
-    let o = robocal(&[
-        "identify",
-        "--robot",
-        FANUC,
-        "--data",
-        calibration,
-        "--params",
-        "offsets",
-        "--out",
-        common::tmp("s25_identified3.toml").to_str().unwrap(),
-        "--report",
-        report.to_str().unwrap(),
-        "--plot",
-        run.to_str().unwrap(),
-    ]);
+    let out3 = common::tmp("s25_identified3.toml");
+    let o = identify(
+        out3.to_str().unwrap(),
+        &[
+            "--report",
+            report.to_str().unwrap(),
+            "--plot",
+            run.to_str().unwrap(),
+        ],
+    )
+    .output()
+    .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     let json = std::fs::read(&report).unwrap();
     std::fs::write(&report, [b"\xef\xbb\xbf".as_slice(), &json].concat()).unwrap();
