@@ -158,24 +158,32 @@ pub fn output_file(path: &Path) -> Option<PathBuf> {
 /// device that discards what it gets (`--out /dev/null > /dev/null`).
 pub fn is_standard_output(path: &Path) -> bool {
     use std::io::IsTerminal;
+    #[cfg(unix)]
     let sink = || {
-        #[cfg(unix)]
-        {
-            use std::os::fd::AsFd;
-            use std::os::unix::fs::FileTypeExt;
-            let stdout = std::io::stdout();
-            let device = stdout
-                .as_fd()
-                .try_clone_to_owned()
-                .ok()
-                .and_then(|fd| std::fs::File::from(fd).metadata().ok())
-                .is_some_and(|m| m.file_type().is_char_device());
-            device && !stdout.is_terminal()
-        }
-        #[cfg(not(unix))]
-        false
+        use std::os::fd::AsFd;
+        use std::os::unix::fs::FileTypeExt;
+        let device =
+            metadata_of(std::io::stdout().as_fd()).is_some_and(|m| m.file_type().is_char_device());
+        device && !std::io::stdout().is_terminal()
     };
+    #[cfg(not(unix))]
+    let sink = || false;
     matches!(target_of(path), Ok(Target::Stream(Some(Standard::Out)))) && !sink()
+}
+
+/// The metadata of the file behind an open descriptor (one of this process's standard
+/// streams), if it can be read.
+#[cfg(unix)]
+fn metadata_of(fd: std::os::fd::BorrowedFd) -> Option<std::fs::Metadata> {
+    fd.try_clone_to_owned()
+        .ok()
+        .and_then(|fd| std::fs::File::from(fd).metadata().ok())
+}
+
+/// `text` without the byte-order mark some Windows editors put before UTF-8 (not part of
+/// JSON or CSV).
+pub fn without_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}').unwrap_or(text)
 }
 
 /// This process's standard output or error.
@@ -194,10 +202,7 @@ fn standard_stream(m: &std::fs::Metadata) -> Option<Standard> {
     use std::os::fd::AsFd;
     use std::os::unix::fs::MetadataExt;
     let same = |fd: std::os::fd::BorrowedFd| {
-        fd.try_clone_to_owned()
-            .ok()
-            .and_then(|fd| std::fs::File::from(fd).metadata().ok())
-            .is_some_and(|s| s.dev() == m.dev() && s.ino() == m.ino())
+        metadata_of(fd).is_some_and(|s| s.dev() == m.dev() && s.ino() == m.ino())
     };
     if same(std::io::stdout().as_fd()) {
         Some(Standard::Out)

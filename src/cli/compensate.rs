@@ -211,23 +211,15 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         frame_change: frame_change(&nominal, calibrated, &moved),
     };
     match (report.shift_mean_mm, report.shift_max_mm) {
-        (Some(mean), Some(max)) => {
-            eprintln!(
+        (Some(mean), Some(max)) => eprintln!(
             "compensate: {} of {total} targets solved; the commands move the tool positions by \
              {mean:.3} mm on average (max {max:.3} mm) from the desired ones{}",
             report.solved,
-            report.frame_change.as_ref().map_or(String::new(), |f| format!(
-                ", across frames: the calibrated model's base lies {:.1} mm and {:.1} deg from \
-                 the nominal's (targets in the calibrated model's world frame, commands in the \
-                 nominal model's); carried into the nominal frame, the targets move by {:.3} mm \
-                 on average (max {:.3} mm)",
-                f.base_offset_mm,
-                f.base_rotation_deg,
-                f.carried_shift_mean_mm,
-                f.carried_shift_max_mm
-            ))
-        )
-        }
+            report
+                .frame_change
+                .as_ref()
+                .map_or(String::new(), across_frames)
+        ),
         _ => eprintln!("compensate: 0 of {total} targets solved"),
     }
     if let Some(p) = &a.report {
@@ -252,6 +244,17 @@ fn frame_change(nominal: &Robot, calibrated: &Robot, moved: &[f64]) -> Option<Fr
         carried_shift_mean_mm: mean,
         carried_shift_max_mm: max,
     })
+}
+
+/// The summary's words on a change of frame ([`frame_change`]).
+fn across_frames(f: &FrameChange) -> String {
+    format!(
+        ", across frames: the calibrated model's base lies {:.1} mm and {:.1} deg from the \
+         nominal's (targets in the calibrated model's world frame, commands in the nominal \
+         model's); carried into the nominal frame, the targets move by {:.3} mm on average \
+         (max {:.3} mm)",
+        f.base_offset_mm, f.base_rotation_deg, f.carried_shift_mean_mm, f.carried_shift_max_mm
+    )
 }
 
 /// The mean and the largest of the shifts `v` (mm); None for none.

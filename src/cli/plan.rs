@@ -140,18 +140,25 @@ fn configurations(path: &PathBuf, robot: &Robot) -> Result<(Vec<Vec<f64>>, Joint
     ))
 }
 
-/// The file lines of the configurations `qs` (read from `t`) that `constraints` refuse.
+/// The file lines of the configurations `qs` (read from `t`) that `constraints` refuse,
+/// each with its index in `qs`.
 fn refused_lines(
     robot: &Robot,
     qs: &[Vec<f64>],
     t: &JointTable,
     constraints: &Constraints,
-) -> Vec<usize> {
+) -> Vec<(usize, usize)> {
     let mut ws = robocal::kinematics::Frames::new(robot);
-    (qs.iter().zip(&t.table.lines))
-        .filter(|(q, _)| constraints.check(robot, q, &mut ws).is_some())
-        .map(|(_, &line)| line)
+    (qs.iter().zip(&t.table.lines).enumerate())
+        .filter(|(_, (q, _))| constraints.check(robot, q, &mut ws).is_some())
+        .map(|(r, (_, &line))| (line, r))
         .collect()
+}
+
+/// "2, 5, 9": the lines of [`refused_lines`].
+fn lines_of(refused: &[(usize, usize)]) -> String {
+    let lines: Vec<usize> = refused.iter().map(|&(line, _)| line).collect();
+    robocal::data::measurement::list_lines(&lines)
 }
 
 /// The units of the list `--evaluate` predicts for: a configuration each, or for relative
@@ -168,8 +175,7 @@ fn evaluated_list(
     let (qs, t) = configurations(path, robot)?;
     let joints = robocal::data::measurement::JointInfo::of(robot);
     let beyond = refused_lines(robot, &qs, &t, &Constraints::default());
-    if let Some(&line) = beyond.first() {
-        let r = t.table.lines.iter().position(|&l| l == line).unwrap_or(0);
+    if let Some(&(line, r)) = beyond.first() {
         // Both judge the limits with one tolerance: a row refused has a joint to name.
         let why = robocal::data::measurement::JointInfo::first_outside(&joints, &qs[r])
             .unwrap_or_else(|| "beyond the joint limits".into());
@@ -178,7 +184,7 @@ fn evaluated_list(
              ({} row(s) beyond the limits of its robot file: lines {})",
             path.display(),
             beyond.len(),
-            robocal::data::measurement::list_lines(&beyond)
+            lines_of(&beyond)
         );
     }
     // A list `plan` evaluates is joints; a measured file's sigmas are not its noise model.
@@ -201,7 +207,7 @@ fn evaluated_list(
              --forbid; lines {}): predicted as listed",
             path.display(),
             refused.len(),
-            robocal::data::measurement::list_lines(&refused)
+            lines_of(&refused)
         );
     }
     let lines = t.table.lines.clone();
@@ -268,14 +274,14 @@ fn warn_unseen(
         RANK_TOL,
     )
     .context("the parameters pose measurements would identify, to hold the measure against")?;
+    let seen: Vec<String> = {
+        let names = design.robot.parameters();
+        design.params.iter().map(|&d| names[d].name()).collect()
+    };
     let names = pose.robot.parameters();
     let unseen: Vec<String> = (pose.params.iter())
-        .filter(|&&c| {
-            let name = names[c].name();
-            let seen = design.robot.parameters();
-            !design.params.iter().any(|&d| seen[d].name() == name)
-        })
         .map(|&c| names[c].name())
+        .filter(|name| !seen.contains(name))
         .collect();
     if !unseen.is_empty() {
         eprintln!(
@@ -336,9 +342,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
                     pool.refused.limits,
                     pool.refused.floor,
                     pool.refused.forbidden,
-                    robocal::data::measurement::list_lines(&refused_lines(
-                        &robot, &qs, &t, &limits
-                    ))
+                    lines_of(&refused_lines(&robot, &qs, &t, &limits))
                 );
             }
             (pool, t.table.lines.clone())

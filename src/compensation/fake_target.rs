@@ -41,6 +41,11 @@ const SAME_JOINTS_RAD: f64 = 1e-6;
 /// nearer command is kept ([`FakeTargetSolver::solve`]).
 const SEED_FAR_RAD: f64 = 0.1;
 
+/// Why a target has no start: no closed-form solution on the seed's branch, and a seed at a
+/// singularity (no branch) that cannot start the solve.
+const SEED_AT_SINGULARITY: &str =
+    "out of the nominal model's reach, and the seed is at a singularity";
+
 /// A solved target.
 #[derive(Debug, Clone)]
 pub struct Command {
@@ -289,15 +294,11 @@ impl<'a> FakeTargetSolver<'a> {
                      model try"
                         .into(),
                 ),
-                _ => Failure::Unreachable(
-                    "out of the nominal model's reach, and the seed is at a singularity".into(),
-                ),
+                _ => Failure::Unreachable(SEED_AT_SINGULARITY.into()),
             })
             .and_then(|solved| {
                 let Some(branch) = solved.branch.or(seed_branch) else {
-                    return Err(Failure::Unreachable(
-                        "out of the nominal model's reach, and the seed is at a singularity".into(),
-                    ));
+                    return Err(Failure::Unreachable(SEED_AT_SINGULARITY.into()));
                 };
                 self.command(target, solved.solution, branch)
             });

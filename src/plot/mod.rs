@@ -118,8 +118,7 @@ pub fn read_manifest(dir: &Path) -> Result<Vec<Figure>> {
         None => String::from_utf8(crate::io::read_capped(&path, 16 << 20)?)
             .map_err(|_| Error::Invalid(format!("{}: not UTF-8 text", path.display())))?,
     };
-    // A byte-order mark (a list edited on Windows) is not JSON.
-    serde_json::from_str(text.strip_prefix('\u{feff}').unwrap_or(&text))
+    serde_json::from_str(crate::io::without_bom(&text))
         .map_err(|e| Error::Invalid(format!("{}: not a figure list: {e}", path.display())))
 }
 

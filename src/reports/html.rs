@@ -369,8 +369,7 @@ pub fn render(dir: &Path) -> Result<String> {
         let bytes = crate::io::read_capped(path, MAX_EMBED_BYTES)?;
         let text = String::from_utf8(bytes)
             .map_err(|_| Error::Invalid(format!("{}: not UTF-8 text", path.display())))?;
-        // A byte-order mark, as some Windows editors save UTF-8, is not JSON.
-        let report = Report::from_json(text.strip_prefix('\u{feff}').unwrap_or(&text), path)?;
+        let report = Report::from_json(crate::io::without_bom(&text), path)?;
         let name = path
             .file_name()
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
