@@ -1661,6 +1661,12 @@ fn edge_inputs_of_the_twenty_fifth_session() {
         &["--hidden", "5"],
         &["--form", "pose"],
         &["--max-epochs", "3"],
+        // Flags with a default, given at their default value: still refused.
+        &["--momentum-epochs", "50"],
+        &["--phase2", "auto"],
+        &["--goal", "0"],
+        &["--max-fail", "6"],
+        &["--validation-fraction", "0"],
     ] {
         let mut args = vec![
             "train",

@@ -19,7 +19,7 @@ pub struct CaseDArgs {
     #[arg(long, default_value = "datasets")]
     datasets: PathBuf,
     #[command(flatten)]
-    build: CompensatorArgs,
+    pub(super) build: CompensatorArgs,
     #[command(flatten)]
     sigma: SigmaArgs,
     /// JSON report of every row (statistics against truth and measurements, training).

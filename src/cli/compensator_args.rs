@@ -78,7 +78,9 @@ pub struct CompensatorArgs {
     #[arg(long)]
     pub penalty: Option<f64>,
     /// Networks in the ensemble (0 to 50; the prediction is their mean; 0: the model alone,
-    /// not with --network, --form, --encoding, --hidden, --penalty, --max-epochs or --rbf-*).
+    /// not with --network, --form, --encoding, --hidden, --penalty, the training flags
+    /// --momentum-epochs, --max-epochs, --phase2, --goal, --max-fail, --validation-fraction,
+    /// or --rbf-*).
     /// Default: 1 or 4, or none where no network lowers the error by 2 % or more and
     /// significantly row by row, by cross-validation.
     #[arg(long)]
@@ -167,9 +169,18 @@ pub struct CompensatorArgs {
     /// network has the rest). Default: chosen by cross-validation among 0.05, 0.1, ..., 0.95.
     #[arg(long)]
     pub mlp_share: Option<f64>,
+    /// The ids of the flags given on the command line (set after parsing, [`super::main`]):
+    /// a flag with a default cannot otherwise be told from its default.
+    #[arg(skip)]
+    pub given: Vec<String>,
 }
 
 impl CompensatorArgs {
+    /// Whether the flag of id `id` (its field's name) was given on the command line.
+    fn was_given(&self, id: &str) -> bool {
+        self.given.iter().any(|g| g == id)
+    }
+
     /// The library options; out-of-range values are refused with the flag's name.
     pub fn options(
         &self,
@@ -200,6 +211,14 @@ impl CompensatorArgs {
                 ("--hidden", self.hidden.is_some()),
                 ("--penalty", self.penalty.is_some()),
                 ("--max-epochs", self.max_epochs.is_some()),
+                ("--momentum-epochs", self.was_given("momentum_epochs")),
+                ("--phase2", self.was_given("phase2")),
+                ("--goal", self.was_given("goal")),
+                ("--max-fail", self.was_given("max_fail")),
+                (
+                    "--validation-fraction",
+                    self.was_given("validation_fraction"),
+                ),
                 ("--rbf-start", self.rbf_start.is_some()),
                 ("--rbf-kernel", self.rbf_kernel.is_some()),
                 ("--rbf-search-rows", self.rbf_search_rows.is_some()),

@@ -47,7 +47,7 @@ mod split;
 mod summary;
 mod train;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -107,7 +107,23 @@ pub const EXIT_SOME_TARGETS_FAILED: u8 = 3;
 /// output files appear together when it succeeds, and none of them when it fails.
 pub fn main() -> ExitCode {
     quiet_on_closed_stdout();
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
+    let mut cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    if let Some((_, m)) = matches.subcommand() {
+        // Which flags were given, for the checks that refuse a flag with a default.
+        let given: Vec<String> = m
+            .ids()
+            .filter(|id| {
+                m.value_source(id.as_str()) == Some(clap::parser::ValueSource::CommandLine)
+            })
+            .map(|id| id.to_string())
+            .collect();
+        match &mut cli.command {
+            Command::Train(a) => a.build.given = given,
+            Command::CaseD(a) => a.build.given = given,
+            _ => {}
+        }
+    }
     let mut code = ExitCode::SUCCESS;
     let result = robocal::io::all_or_nothing(|| match cli.command {
         Command::Fk(a) => fk::run(a),

@@ -36,7 +36,7 @@ pub struct TrainArgs {
     #[command(flatten)]
     read: DataArgs,
     #[command(flatten)]
-    build: CompensatorArgs,
+    pub(super) build: CompensatorArgs,
     /// Tracker sigmas for rows without their own (refinement).
     #[command(flatten)]
     sigma: SigmaArgs,

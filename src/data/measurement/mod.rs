@@ -169,10 +169,15 @@ impl JointInfo {
             (v < lo - 1e-9 || v > hi + 1e-9).then(|| {
                 let f = |x: f64| j.joint_type.to_file(x);
                 let unit = j.joint_type.file_unit();
+                // 4 decimals, unless they would read as inside the range (70.00000006 beyond
+                // [-50, 70] printed as 70.0000): then every digit.
+                let mut at = format!("{:.4}", f(v));
+                if at.parse::<f64>().is_ok_and(|a| a >= f(lo) && a <= f(hi)) {
+                    at = f(v).to_string();
+                }
                 format!(
-                    "joint {} at {:.4} {unit}, beyond [{}, {}]",
+                    "joint {} at {at} {unit}, beyond [{}, {}]",
                     i + 1,
-                    f(v),
                     f(lo),
                     f(hi)
                 )
@@ -239,4 +244,26 @@ pub fn split(set: &MeasurementSet, fraction: f64, seed: u64) -> (MeasurementSet,
         extra_columns: set.extra_columns.clone(),
     };
     (part(true), part(false))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_joint_just_beyond_its_limit_is_not_printed_as_inside() {
+        let joints = vec![JointInfo {
+            joint_type: JointType::Revolute,
+            limits: Some([(-50f64).to_radians(), 70f64.to_radians()]),
+        }];
+        // 6e-8 deg beyond: outside by more than the 1e-9 rad tolerance, 70.0000 to 4 decimals.
+        let q = [(70.0 + 6e-8f64).to_radians()];
+        let said = JointInfo::first_outside(&joints, &q).unwrap();
+        assert!(said.starts_with("joint 1 at 70.00000006"), "{said}");
+        assert!(said.ends_with("deg, beyond [-50, 70]"), "{said}");
+        // Clearly beyond: 4 decimals.
+        let said = JointInfo::first_outside(&joints, &[75f64.to_radians()]).unwrap();
+        assert_eq!(said, "joint 1 at 75.0000 deg, beyond [-50, 70]");
+        assert!(JointInfo::first_outside(&joints, &[70f64.to_radians()]).is_none());
+    }
 }
