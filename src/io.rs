@@ -260,6 +260,14 @@ struct Transaction {
 thread_local! {
     static OPEN: RefCell<Option<Transaction>> = const { RefCell::new(None) };
     static DISCARDED: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+    static KEPT: RefCell<Vec<PathBuf>> = const { RefCell::new(Vec::new()) };
+}
+
+/// The outputs the last [`all_or_nothing`] had put in place before one of its streams failed
+/// (a full device, a closed pipe): complete files, kept (empty after a success or an earlier
+/// failure, which keeps none).
+pub fn kept_outputs() -> Vec<PathBuf> {
+    KEPT.with_borrow(Clone::clone)
 }
 
 /// The number of output files the last failed [`all_or_nothing`] had prepared and discarded
@@ -433,14 +441,24 @@ pub fn all_or_nothing<T, E: From<Error>>(
         r => r,
     };
     DISCARDED.set(if result.is_err() { t.writes.len() } else { 0 });
+    KEPT.set(Vec::new());
     match result {
         Ok(v) => {
             // Files first, streams last: a stream that fails (a closed pipe, a full device)
-            // fails after every file is in place, and its error names it.
+            // fails after every file is in place, and its error names it; what was put in
+            // place before it is told ([`kept_outputs`]), the rest discarded.
             let (streams, files): (Vec<Staged>, Vec<Staged>) =
                 (t.writes.into_iter()).partition(|w| matches!(w.target, Target::Stream(_)));
-            for w in files.into_iter().chain(streams) {
-                deliver(&w.path, &w.target, w.tmp)?;
+            let all: Vec<Staged> = files.into_iter().chain(streams).collect();
+            let total = all.len();
+            let mut kept = Vec::new();
+            for w in all {
+                if let Err(e) = deliver(&w.path, &w.target, w.tmp) {
+                    DISCARDED.set(total - kept.len() - 1);
+                    KEPT.set(kept);
+                    return Err(E::from(e));
+                }
+                kept.push(w.path);
             }
             Ok(v)
         }

@@ -750,7 +750,7 @@ fn second_review_round() {
             "--out",
             &p("a.toml"),
         ],
-        "--outlier-k 0",
+        "give a cut of 1 to 1e6 robust sigmas, or inf to report none (got 0)",
     );
     refused(
         &["fk", "--robot", fanuc, "--q", "1e308,0,0,0,0,0"],

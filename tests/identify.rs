@@ -368,6 +368,117 @@ fn unknown_tracker_frame_is_registered_then_identified() {
 }
 
 #[test]
+fn a_registration_never_moves_a_parameter_left_unselected() {
+    // The registration writes all six base fields (and the tool's): with only base.rz
+    // selected, the held base.x..rx must come back as they went in.
+    let nominal = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
+    let p = |n: &str| nominal.find_param(n).unwrap();
+    let truth = nominal
+        .with_params(&[
+            (p("base.x"), 4.0),
+            (p("base.rz"), 0.4f64.to_radians()),
+            (p("theta3"), 0.05f64.to_radians()),
+        ])
+        .unwrap();
+    let (set, _) = simulate(&truth, 60, 5, false, Observe::Position);
+    let run = |params: &str| {
+        identify(
+            &nominal,
+            &set,
+            &Options {
+                params: params.into(),
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    };
+    let held = [
+        "base.x", "base.y", "base.z", "base.ry", "base.rx", "tool.x", "tool.y",
+    ];
+    let id = run("offsets,base.rz,tool.z");
+    assert!(id.registration.is_none());
+    assert!(
+        id.notes
+            .iter()
+            .any(|n| n.contains("no registration") && n.contains("base.x")),
+        "{:?}",
+        id.notes
+    );
+    for name in held {
+        let (was, now) = (nominal.param(p(name)), id.robot.param(p(name)));
+        assert_eq!(was.to_bits(), now.to_bits(), "{name}: {was} -> {now}");
+    }
+    // Base fully selected, tool in part: the base is registered, the tool is not.
+    let id = run("offsets,base,tool.z");
+    assert!(id.registration.as_ref().is_some_and(|r| r.tool.is_none()));
+    assert!(
+        id.notes
+            .iter()
+            .any(|n| n.contains("tool is not registered")),
+        "{:?}",
+        id.notes
+    );
+    for name in ["tool.x", "tool.y", "tool.rz"] {
+        let (was, now) = (nominal.param(p(name)), id.robot.param(p(name)));
+        assert_eq!(was.to_bits(), now.to_bits(), "{name}: {was} -> {now}");
+    }
+    // The identified base.x is the truth's: base.x was free there.
+    assert!((id.robot.param(p("base.x")) - 4.0).abs() < 1e-6);
+}
+
+#[test]
+fn a_skipped_row_breaks_consecutive_pairs_instead_of_pairing_its_neighbours() {
+    // Case C's chained relative measurements, line 6 (the fifth row) corrupted: dropping it
+    // must drop the two pairs it belongs to, not pair rows 4 and 6 as one measured step.
+    let nominal = fanuc();
+    let src = std::fs::read_to_string(root().join("datasets/case_c/calibration.csv")).unwrap();
+    let mut lines: Vec<String> = src.lines().map(String::from).collect();
+    let mut cells: Vec<&str> = lines[5].split(',').collect();
+    cells[2] = "oops";
+    lines[5] = cells.join(",");
+    let path = std::env::temp_dir().join(format!("robocal_chain_{}.csv", std::process::id()));
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+    let read = |skip| {
+        let opts = robocal::data::ReadOptions {
+            strict: false,
+            skip_bad_rows: skip,
+        };
+        robocal::data::read_measurements(&path, &nominal, &Profile::default(), &opts)
+    };
+    assert!(read(false).is_err(), "line 6 must be bad");
+    let (set, report) = read(true).unwrap();
+    assert_eq!(report.skipped.len(), 1);
+    assert!(
+        report
+            .warnings
+            .iter()
+            .any(|w| w.contains("leave out the 1 pair(s)")),
+        "{report:?}"
+    );
+    let full = read_measurements(
+        &root().join("datasets/case_c/calibration.csv"),
+        &nominal,
+        &Profile::default(),
+        &Default::default(),
+    )
+    .unwrap()
+    .0;
+    let errors = |s: &MeasurementSet| {
+        robocal::evaluate::row_errors(s, Measure::Relative, |q| tool_pose(&nominal, q)).unwrap()
+    };
+    // The full file's pairs without the two that hold line 6 (as a or as b: b's lines 6, 7).
+    let expected: Vec<_> = (errors(&full).into_iter())
+        .filter(|e| e.line != 6 && e.line != 7)
+        .collect();
+    assert_eq!(errors(&set), expected);
+    assert_eq!(expected.len(), full.rows.len() - 3);
+    // A subset that leaves the row out pairs the same way.
+    let sub = robocal::data::measurement::subset(&full, |i| i != 4);
+    assert_eq!(errors(&sub), expected);
+    std::fs::remove_file(&path).ok();
+}
+
+#[test]
 fn bad_problems_are_errors() {
     let nominal = fanuc();
     let truth = table_6_1(&nominal);

@@ -197,4 +197,219 @@ fn reproduce_prints_the_thesis_beside_ours() {
     ] {
         assert!(stdout.contains(needle), "{needle} missing in {stdout}");
     }
+    // A truth file that lost rows is refused, not read as the truth of the rows it kept.
+    let copy = tmp("reproduce_datasets");
+    std::fs::remove_dir_all(&copy).ok();
+    for dir in [
+        "robots",
+        "deviations",
+        "regions",
+        "case_a",
+        "case_b_sim",
+        "case_c",
+        "case_d",
+    ] {
+        std::fs::create_dir_all(copy.join(dir)).unwrap();
+        for f in std::fs::read_dir(common::root().join("datasets").join(dir)).unwrap() {
+            let f = f.unwrap().path();
+            std::fs::copy(&f, copy.join(dir).join(f.file_name().unwrap())).unwrap();
+        }
+    }
+    let truth = copy.join("case_a/validation_truth.csv");
+    let body = std::fs::read_to_string(&truth).unwrap();
+    std::fs::write(
+        &truth,
+        body.lines().take(3).collect::<Vec<_>>().join("\n") + "\n",
+    )
+    .unwrap();
+    let o = robocal(&[
+        "reproduce",
+        "--datasets",
+        copy.to_str().unwrap(),
+        "--seeds",
+        "1",
+    ]);
+    let (_, stderr) = text(&o);
+    assert!(!o.status.success(), "{stderr}");
+    assert!(stderr.contains("(2 rows against 15 measured)"), "{stderr}");
+}
+
+/// A copy of Case A's calibration rows with row 3's joint 1 at 200 deg (beyond its limit, a
+/// reading paired with the wrong joints), and of its validation rows in metres.
+fn case_a_damaged() -> (String, String) {
+    let src =
+        std::fs::read_to_string(common::root().join("datasets/case_a/calibration.csv")).unwrap();
+    let mut lines: Vec<String> = src.lines().map(String::from).collect();
+    let mut cells: Vec<&str> = lines[3].split(',').collect();
+    cells[1] = "200";
+    lines[3] = cells.join(",");
+    let cal = tmp("q200.csv");
+    std::fs::write(&cal, lines.join("\n") + "\n").unwrap();
+    let src =
+        std::fs::read_to_string(common::root().join("datasets/case_a/validation.csv")).unwrap();
+    let mut out = vec![src.lines().next().unwrap().to_string()];
+    for l in src.lines().skip(1) {
+        let mut cells: Vec<String> = l.split(',').map(String::from).collect();
+        for c in &mut cells[7..10] {
+            *c = format!("{}", c.parse::<f64>().unwrap() / 1000.0);
+        }
+        out.push(cells.join(","));
+    }
+    let metres = tmp("validation_m.csv");
+    std::fs::write(&metres, out.join("\n") + "\n").unwrap();
+    (
+        cal.to_str().unwrap().to_string(),
+        metres.to_str().unwrap().to_string(),
+    )
+}
+
+#[test]
+fn a_model_that_misses_by_metres_or_does_worse_on_validation_is_flagged() {
+    let (cal, metres) = case_a_damaged();
+    let out = tmp("q200.toml");
+    let report = tmp("q200.json");
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        FANUC,
+        "--data",
+        &cal,
+        "--validate",
+        "datasets/case_a/validation.csv",
+        "--params",
+        "offsets",
+        "--out",
+        out.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("still misses its calibration rows by"),
+        "{err}"
+    );
+    assert!(
+        err.contains("misses the validation rows by more than the nominal"),
+        "{err}"
+    );
+    // The JSON report lists them, and the read's warning (joint 1 beyond its limit) too.
+    let r = common::json(&report);
+    let warnings: Vec<&str> = (r["warnings"].as_array().unwrap().iter())
+        .map(|w| w.as_str().unwrap())
+        .collect();
+    assert_eq!(warnings.len(), 3, "{warnings:?}");
+    assert!(warnings[0].contains("q200.csv") && warnings[0].contains("joint 1 at 200.0000 deg"));
+    assert!(warnings[1].contains("still misses") && warnings[2].contains("validation rows"));
+    // Case A as shipped: none of them.
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        FANUC,
+        "--data",
+        "datasets/case_a/calibration.csv",
+        "--validate",
+        "datasets/case_a/validation.csv",
+        "--params",
+        "offsets",
+        "--sigma-pos",
+        "0.05",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        o.status.success() && !stderr(&o).contains("warning"),
+        "{}",
+        stderr(&o)
+    );
+    // Its rows carry their own sigmas: the flag is said to be unused, not silently dropped.
+    assert!(
+        stdout(&o).contains("note: --sigma-pos is not used"),
+        "{}",
+        stdout(&o)
+    );
+    // Validation rows in metres are refused, as calibration rows are, and by evaluate too.
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        FANUC,
+        "--data",
+        "datasets/case_a/calibration.csv",
+        "--validate",
+        &metres,
+        "--out",
+        tmp("never.toml").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success() && stderr(&o).contains("validation_m.csv: the measured positions"));
+    assert!(!tmp("never.toml").exists());
+    let o = robocal(&["evaluate", "--robot", FANUC, "--data", &metres]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("Positions must be in mm"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// A stream that fails after the files are in place (a full device) names what was kept.
+#[test]
+#[cfg(target_os = "linux")]
+fn a_full_device_after_the_files_names_the_files_kept() {
+    let report = tmp("full_device.json");
+    std::fs::remove_file(&report).ok();
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        FANUC,
+        "--data",
+        "datasets/case_a/calibration.csv",
+        "--params",
+        "offsets",
+        "--out",
+        "/dev/full",
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("error: /dev/full: No space left on device"),
+        "{err}"
+    );
+    let kept = format!(
+        "note: 1 output(s) had been written, complete, before it failed: {}",
+        report.display()
+    );
+    assert!(err.contains(&kept), "{err}");
+    common::json(&report);
+}
+
+#[test]
+fn rows_copied_to_the_last_digit_are_said_to_shrink_the_deviations() {
+    let src =
+        std::fs::read_to_string(common::root().join("datasets/case_a/calibration.csv")).unwrap();
+    let rows: Vec<&str> = src.lines().collect();
+    let doubled = tmp("doubled.csv");
+    std::fs::write(
+        &doubled,
+        [&rows[..], &rows[1..3]].concat().join("\n") + "\n",
+    )
+    .unwrap();
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        FANUC,
+        "--data",
+        doubled.to_str().unwrap(),
+        "--params",
+        "offsets",
+        "--out",
+        tmp("doubled.toml").to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("2 row(s) repeat an earlier row to the last digit")
+            && err.contains("line 22 repeats line 2, line 23 repeats line 3)"),
+        "{err}"
+    );
 }

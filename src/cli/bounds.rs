@@ -55,6 +55,23 @@ fn real(s: &str, what: &str, zero_ok: bool) -> Result<f64, String> {
     Ok(v)
 }
 
+/// Largest finite `identify --outlier-k` (robust sigmas): beyond it no row of a real file is
+/// an outlier; `inf` says so directly.
+pub const MAX_OUTLIER_K: f64 = 1e6;
+
+/// `identify --outlier-k`: 1 to [`MAX_OUTLIER_K`] robust sigmas, or `inf` (none reported).
+pub fn outlier_k(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number (robust sigmas)"))?;
+    if v == f64::INFINITY || (1.0..=MAX_OUTLIER_K).contains(&v) {
+        return Ok(v);
+    }
+    Err(format!(
+        "give a cut of 1 to {MAX_OUTLIER_K:e} robust sigmas, or inf to report none (got {s})"
+    ))
+}
+
 /// A tracker sigma that weights rows (identify, train): [`MIN_SIGMA`] to [`MAX_SIGMA`].
 pub fn sigma(s: &str) -> Result<f64, String> {
     real(s, "sigma", false)

@@ -34,11 +34,21 @@ impl DataArgs {
 
     /// Reads a measurement file and prints what the read noticed.
     pub fn read(&self, path: &Path, joints: &[JointInfo]) -> Result<MeasurementSet> {
+        Ok(self.read_noted(path, joints)?.0)
+    }
+
+    /// [`DataArgs::read`], also returning what the read noticed as one line per warning
+    /// (for a JSON report).
+    pub fn read_noted(
+        &self,
+        path: &Path,
+        joints: &[JointInfo],
+    ) -> Result<(MeasurementSet, Vec<String>)> {
         let profile = self.profile()?;
         let t = Table::read_with(path, profile.delimiter, profile.decimal_comma)?;
         let (set, report) = parse_measurements(&t, joints, &profile, &self.options())?;
         print_report(path, &report);
-        Ok(set)
+        Ok((set, report_lines(path, &report)))
     }
 }
 
@@ -56,6 +66,22 @@ pub struct SigmaArgs {
 }
 
 impl SigmaArgs {
+    /// A note for each sigma flag given that no row of `set` uses: every row carries its
+    /// own sigma columns of that kind.
+    pub fn unused(&self, set: &MeasurementSet) -> Vec<String> {
+        let own = |f: fn(&robocal::data::Measurement) -> bool| set.rows.iter().all(f);
+        [
+            (self.sigma_pos.is_some() && own(|m| m.sigma_position.is_some()))
+                .then_some("--sigma-pos is not used: every row carries its own position sigmas"),
+            (self.sigma_rot.is_some() && own(|m| m.sigma_rotation.is_some()))
+                .then_some("--sigma-rot is not used: every row carries its own orientation sigmas"),
+        ]
+        .into_iter()
+        .flatten()
+        .map(String::from)
+        .collect()
+    }
+
     /// The sigmas in internal units (mm, rad), defaults where not given.
     pub fn sigmas(&self) -> robocal::identify::Sigmas {
         let d = robocal::identify::Sigmas::default();
@@ -64,6 +90,26 @@ impl SigmaArgs {
             rotation_rad: self.sigma_rot.map_or(d.rotation_rad, |s| s * 1e-3),
         }
     }
+}
+
+/// What [`print_report`] prints, one line per warning and one for the dropped rows (their
+/// reasons joined), each naming `path`.
+fn report_lines(path: &Path, report: &ReadReport) -> Vec<String> {
+    let mut out: Vec<String> = (report.warnings.iter())
+        .map(|w| format!("{}: {w}", path.display()))
+        .collect();
+    if !report.skipped.is_empty() {
+        let lines: Vec<usize> = report.skipped.iter().map(|(l, _)| *l).collect();
+        let why: Vec<&str> = report.skipped.iter().map(|(_, w)| w.as_str()).collect();
+        out.push(format!(
+            "{}: dropped {} bad row(s) (lines {}): {}",
+            path.display(),
+            lines.len(),
+            list_lines(&lines),
+            why.join("; ")
+        ));
+    }
+    out
 }
 
 /// Prints warnings and dropped rows to stderr.
@@ -122,16 +168,13 @@ pub fn read_set(args: &DataArgs, path: &Path, robot: &Robot) -> Result<Measureme
     args.read(path, &JointInfo::of(robot))
 }
 
-/// The main data set and the optional validation set of a command.
-pub fn read_sets(
-    args: &DataArgs,
-    data: &Path,
-    validate: Option<&Path>,
-    robot: &Robot,
-) -> Result<(MeasurementSet, Option<MeasurementSet>)> {
-    let set = read_set(args, data, robot)?;
-    let val = validate.map(|p| read_set(args, p, robot)).transpose()?;
-    Ok((set, val))
+/// The data of a fit on measurements, as [`open_fit`] reads them.
+pub struct FitInputs {
+    pub robot: Robot,
+    pub data: MeasurementSet,
+    pub validation: Option<MeasurementSet>,
+    /// What the reads noticed (printed already), one line each, for a JSON report.
+    pub read_warnings: Vec<String>,
 }
 
 /// The model and the data of a fit on measurements (`identify`, `train`), after refusing
@@ -144,7 +187,7 @@ pub fn open_fit(
     out: &Path,
     report: Option<&PathBuf>,
     plot: Option<&PathBuf>,
-) -> Result<(Robot, MeasurementSet, Option<MeasurementSet>)> {
+) -> Result<FitInputs> {
     use super::paths::{guard, opt, req};
     guard(
         &[
@@ -160,6 +203,20 @@ pub fn open_fit(
         ],
     )?;
     let model = read_robot(robot)?;
-    let (set, val) = read_sets(read, data, validate.map(|p| p.as_path()), &model)?;
-    Ok((model, set, val))
+    let joints = JointInfo::of(&model);
+    let (set, mut read_warnings) = read.read_noted(data, &joints)?;
+    let val = match validate {
+        Some(p) => {
+            let (v, w) = read.read_noted(p, &joints)?;
+            read_warnings.extend(w);
+            Some(v)
+        }
+        None => None,
+    };
+    Ok(FitInputs {
+        robot: model,
+        data: set,
+        validation: val,
+        read_warnings,
+    })
 }

@@ -84,6 +84,10 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     // What `identify` asks of the rows for this measure (an orientation in every row, pairs,
     // ...): a measure the file cannot give is refused, not reported as empty columns.
     robocal::identify::problem::Observations::new(&set, m, Default::default())?;
+    // Positions in metres or inches, refused as `identify` refuses them.
+    if matches!(m, Measure::Pose | Measure::Position) {
+        robocal::identify::register::check_position_scale(&robot, &set)?;
+    }
     if a.check_against.is_some() && !matches!(m, Measure::Pose | Measure::Position) {
         anyhow::bail!(
             "--check-against compares the readings of single rows (measure pose or position), \

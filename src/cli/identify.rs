@@ -1,12 +1,13 @@
 //! `robocal identify`.
 
 use super::choices::{Measure, Method, RobustLoss};
-use super::data_args::{DataArgs, SigmaArgs, open_fit};
+use super::data_args::{DataArgs, FitInputs, SigmaArgs, open_fit};
 use super::summary::{print_stats, write_report};
 use anyhow::Result;
 use clap::Args;
 use robocal::data::MeasurementSet;
-use robocal::evaluate::{RowError, row_errors, summarize};
+use robocal::evaluate::{ErrorStats, RowError, row_errors, summarize};
+use robocal::identify::register::check_position_scale;
 use robocal::identify::{Options, SolveOptions, identify};
 use robocal::kinematics::tool_pose;
 use robocal::model::write_robot;
@@ -29,7 +30,8 @@ pub struct IdentifyArgs {
     #[command(flatten)]
     read: DataArgs,
     /// Parameters: offsets | full | base | tool | joints | compliance | names, comma-separated
-    /// (`compliance`: the joint compliances c1..cN, for a robot file with a [mass] table).
+    /// (`compliance`: the joint compliances c1..cN where the robot file gives masses,
+    /// else the mass-free coefficients k<joint>.<part><link>, e.g. k2.mx3).
     #[arg(long, default_value = "full")]
     params: String,
     /// How to compare measurements (default: pose if the data has orientations, else position).
@@ -48,8 +50,9 @@ pub struct IdentifyArgs {
     /// Iteration limit (1 to 100000).
     #[arg(long, default_value_t = 200, value_parser = super::bounds::iterations)]
     max_iterations: usize,
-    /// Rows beyond this many robust sigmas are reported as outliers.
-    #[arg(long, default_value_t = 3.0)]
+    /// Rows beyond this many robust sigmas are reported as outliers (1 to 1e6, or inf for
+    /// none).
+    #[arg(long, default_value_t = 3.0, value_parser = super::bounds::outlier_k)]
     outlier_k: f64,
     /// Calibrated robot file to write.
     #[arg(long)]
@@ -63,7 +66,12 @@ pub struct IdentifyArgs {
 }
 
 pub fn run_identify(a: IdentifyArgs) -> Result<()> {
-    let (nominal, cal, val) = open_fit(
+    let FitInputs {
+        robot: nominal,
+        data: cal,
+        validation: val,
+        read_warnings,
+    } = open_fit(
         &a.robot,
         &a.data,
         a.validate.as_ref(),
@@ -72,12 +80,6 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         a.report.as_ref(),
         a.plot.as_ref(),
     )?;
-    if a.outlier_k.is_nan() || a.outlier_k < 1.0 {
-        anyhow::bail!(
-            "--outlier-k {}: give a cut of at least 1 robust sigma (inf reports none)",
-            a.outlier_k
-        );
-    }
     let opts = Options {
         params: a.params.clone(),
         measure: a.measure.map(Into::into),
@@ -93,6 +95,11 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         ..Default::default()
     };
     let id = identify(&nominal, &cal, &opts)?;
+    // The validation rows in metres or inches, refused as the calibration rows are.
+    use robocal::identify::Measure as M;
+    if let (Some(v), M::Pose | M::Position) = (&val, id.measure) {
+        check_position_scale(&nominal, v)?;
+    }
     super::output::writing(write_robot(&id.robot, &a.out), &a.out)?;
     let m = id.measure;
     // Row errors before and after, per set: for the statistics and the pictures.
@@ -112,7 +119,9 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         Accuracy::new("calibration", "before", cal_before),
         Accuracy::new("calibration", "after", cal_after),
     ];
+    let mut worse = None;
     if let Some((b, af)) = val_stats {
+        worse = worse_on_validation(&b, &af);
         accuracy.push(Accuracy::new("validation", "before", b));
         accuracy.push(Accuracy::new("validation", "after", af));
     }
@@ -130,6 +139,9 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     );
     // Readings logged with other joints, judged under the identified model.
     report.shared_readings = super::summary::shared_under(&id.robot, &cal, m, None);
+    report.warnings.extend(copied_warning(&cal));
+    report.warnings.extend(worse);
+    report.notes.extend(a.sigma.unused(&cal));
     print_identified(&report);
     print_stats(&report.accuracy);
     for n in &report.notes {
@@ -138,6 +150,8 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     for w in &report.warnings {
         eprintln!("warning: {w}");
     }
+    // Printed when the files were read; in the report with the rest.
+    report.warnings.splice(0..0, read_warnings);
     say!("wrote {}", a.out.display());
     if let Some(dir) = &a.plot {
         let mut figs = 0;
@@ -174,6 +188,56 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         write_report(path, &Report::Identify(report))?;
     }
     Ok(())
+}
+
+/// The warning for rows of `set` that repeat an earlier row to the last digit.
+fn copied_warning(set: &MeasurementSet) -> Option<String> {
+    let copied = robocal::data::measurement::copied_rows(set);
+    if copied.is_empty() {
+        return None;
+    }
+    let shown: Vec<String> = (copied.iter().take(5))
+        .map(|&(i, j)| {
+            format!(
+                "line {} repeats line {}",
+                set.rows[i].line, set.rows[j].line
+            )
+        })
+        .collect();
+    Some(format!(
+        "{}: {} row(s) repeat an earlier row to the last digit, joints and reading ({}{}): a \
+         repeated measurement reads differently in its last digits; copied rows count one \
+         reading twice and make the standard deviations look smaller than they are (by \
+         sqrt(2) for a set doubled). Remove them if they were copied",
+        set.source.display(),
+        copied.len(),
+        shown.join(", "),
+        if copied.len() > 5 { ", ..." } else { "" }
+    ))
+}
+
+/// How much worse (RMS, above which) the identified model may be than the nominal on the
+/// validation rows before it is flagged: noise moves a near-perfect nominal's figure a little.
+const WORSE_ON_VALIDATION: f64 = 1.1;
+
+/// The warning for an identified model that misses the validation rows by more than
+/// [`WORSE_ON_VALIDATION`] times the nominal's RMS (position, else orientation).
+fn worse_on_validation(before: &ErrorStats, after: &ErrorStats) -> Option<String> {
+    let (b, a, unit, what) = match (before.position_mm, after.position_mm) {
+        (Some(b), Some(a)) => (b.rms, a.rms, "mm", "position"),
+        _ => {
+            let (b, a) = (before.orientation_deg?, after.orientation_deg?);
+            (b.rms, a.rms, "deg", "orientation")
+        }
+    };
+    (a > WORSE_ON_VALIDATION * b).then(|| {
+        format!(
+            "the identified model misses the validation rows by more than the nominal one \
+             ({what} RMS {b:.4} -> {a:.4} {unit}): it does not generalise beyond its \
+             calibration rows; check those rows (outliers, joints beyond the limits) and the \
+             selected parameters"
+        )
+    })
 }
 
 fn print_identified(r: &IdentifyReport) {

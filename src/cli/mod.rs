@@ -156,7 +156,20 @@ pub fn main() -> ExitCode {
         Err(e) => {
             eprintln!("error: {}", capped(&format!("{e:#}")));
             let n = robocal::io::discarded_outputs();
-            if n > 0 {
+            let kept = robocal::io::kept_outputs();
+            if !kept.is_empty() {
+                let names: Vec<String> = kept.iter().map(|p| p.display().to_string()).collect();
+                eprintln!(
+                    "note: {} output(s) had been written, complete, before it failed: {}{}",
+                    kept.len(),
+                    capped(&names.join(", ")),
+                    if n > 0 {
+                        format!(" ({n} other(s) discarded)")
+                    } else {
+                        String::new()
+                    }
+                );
+            } else if n > 0 {
                 eprintln!(
                     "note: no output file was written ({n} prepared before the error were discarded)"
                 );

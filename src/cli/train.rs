@@ -268,7 +268,12 @@ fn print_fit(
 }
 
 pub fn run_train(a: TrainArgs) -> Result<()> {
-    let (robot, set, val) = super::data_args::open_fit(
+    let super::data_args::FitInputs {
+        robot,
+        data: set,
+        validation: val,
+        ..
+    } = super::data_args::open_fit(
         &a.robot,
         &a.data,
         a.validate.as_ref(),
@@ -306,7 +311,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         print_selection(sel);
     }
     say!("settings: {}", report.settings.describe());
-    for n in &report.notes {
+    for n in report.notes.iter().chain(&a.sigma.unused(&set)) {
         say!("note: {n}");
     }
     // The rows cross-validation saw: the training rows but those left out for carrying

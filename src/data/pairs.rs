@@ -18,11 +18,29 @@ pub struct Pair {
     pub b: usize,
 }
 
-/// The pairs of a set.
+/// The pairs of a set; consecutive pairing skips the set's chain breaks (a pair across a
+/// dropped row was never measured as one step).
 pub fn pairs(set: &MeasurementSet) -> Result<Vec<Pair>> {
     let labels: Vec<Option<&str>> = set.rows.iter().map(|m| m.pair.as_deref()).collect();
     let lines: Vec<usize> = set.rows.iter().map(|m| m.line).collect();
-    pairs_of(&labels, &lines, &set.source)
+    let pairs = pairs_of(&labels, &lines, &set.source)?;
+    if labels.iter().any(Option::is_some) || set.chain_breaks.is_empty() {
+        return Ok(pairs);
+    }
+    let kept: Vec<Pair> = (pairs.into_iter())
+        .filter(|p| !set.chain_breaks.contains(&p.b))
+        .collect();
+    if kept.is_empty() {
+        return Err(Error::input(
+            Location::file(&set.source),
+            format!(
+                "no two consecutive rows are left to pair: rows dropped between all {} \
+                 (bad rows skipped, or a subset) break every relative measurement",
+                set.rows.len()
+            ),
+        ));
+    }
+    Ok(kept)
 }
 
 /// The pairs of rows with `pair` labels `labels` (None: no label) on file lines `lines` of

@@ -4,6 +4,7 @@
 pub mod identifiability;
 pub mod jacobian;
 pub mod nelder_mead;
+pub mod plausibility;
 pub mod problem;
 pub mod register;
 pub mod run;

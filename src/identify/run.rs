@@ -250,7 +250,8 @@ fn enough_equations(set: &MeasurementSet, obs: &Observations, k: usize) -> Resul
     }
     if obs.len() <= k {
         return Err(Error::Invalid(format!(
-            "{} residual components for {k} identifiable parameters: more measurements are needed",
+            "{}: {} residual components for {k} identifiable parameters: more measurements are needed",
+            set.source.display(),
             obs.len(),
         )));
     }
@@ -505,11 +506,21 @@ fn inverse_diagonal(l: &DMatrix<f64>) -> Vec<f64> {
         .collect()
 }
 
+/// The names of `slot`'s parameters not among `candidates`, joined by commas (None when
+/// all are).
+fn held_fields(robot: &Robot, candidates: &[usize], slot: Slot) -> Option<String> {
+    let held: Vec<String> = (robot.parameters().iter().enumerate())
+        .filter(|(k, p)| p.slot == slot && !candidates.contains(k))
+        .map(|(_, p)| p.name())
+        .collect();
+    (!held.is_empty()).then(|| held.join(", "))
+}
+
 /// Identifies `nominal`'s selected parameters from `set`.
 pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result<Identified> {
     let measure = opts.measure.unwrap_or_else(|| Measure::default_for(set));
     let mut obs = Observations::new(set, measure, opts.sigmas)?;
-    let (completed, candidates, notes) = candidates(nominal, &opts.params)?;
+    let (completed, candidates, mut notes) = candidates(nominal, &opts.params)?;
     let mut warnings = Vec::new();
     let nominal = &completed;
     let params = nominal.parameters();
@@ -528,9 +539,24 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         && uses_positions
         && nominal.base().convention() == Convention::Transform
     {
-        let (r, reg) = register(nominal, set, tool_free)?;
-        start = r;
-        registration = Some(reg);
+        // A registration writes every field of the base (and of the tool): where some are
+        // held, it would change parameters the user did not select.
+        match held_fields(nominal, &candidates, Slot::Base) {
+            Some(held) => notes.push(format!(
+                "no registration of the measurement frame: it sets every base parameter and                  {held} are not selected; the solve starts from the model's base"
+            )),
+            None => {
+                let tool_held = held_fields(nominal, &candidates, Slot::Tool);
+                if let (true, Some(held)) = (tool_free, &tool_held) {
+                    notes.push(format!(
+                        "the tool is not registered with the base: a registration sets every                          tool parameter and {held} are not selected"
+                    ));
+                }
+                let (r, reg) = register(nominal, set, tool_free && tool_held.is_none())?;
+                start = r;
+                registration = Some(reg);
+            }
+        }
     }
 
     // Compliances are analysed with the rest at the (registered) nominal; they come last in
@@ -546,9 +572,13 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         first_normal = Some(normal);
     }
     if cols.is_empty() {
-        return Err(Error::Invalid(
-            "the data identify none of the selected parameters".into(),
-        ));
+        return Err(Error::Invalid(format!(
+            "{}: the data identify none of the selected parameters (`{}`, measure {}): select \
+             parameters this measure can tell apart, or measure more distinct configurations",
+            set.source.display(),
+            opts.params,
+            measure.name()
+        )));
     }
     enough_equations(set, &obs, cols.len())?;
     if ident.selected_condition_number > CONDITION_WARNING {
@@ -596,6 +626,11 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
 
     let (solution, cols, cov, s2) =
         drop_insignificant(nominal, solution, &mut obs, cols, opts, &mut ident)?;
+    warnings.extend(super::plausibility::warning(
+        &solution.robot,
+        &obs,
+        base_free,
+    ));
     let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
     let (parameters, correlations) = parameter_reports(nominal, &solution.robot, &ids, &cov);
     let outliers = outliers(set, &obs, &solution.robot, opts.outlier_k);

@@ -285,6 +285,7 @@ impl Simulation<'_> {
             source: source.clone(),
             rows,
             extra_columns: Vec::new(),
+            chain_breaks: Vec::new(),
         };
         Ok(SimOutput {
             measured: set(measured),

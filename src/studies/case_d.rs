@@ -150,12 +150,14 @@ pub struct SetData {
 pub fn load(datasets: &Path, set: Robotset, nominal: &Robot) -> Result<SetData> {
     let dir = datasets.join(set.folder());
     let read = |name: &str| read_canonical(&dir.join(name), nominal);
-    Ok(SetData {
+    let data = SetData {
         calibration: read("calibration.csv")?,
         training: read("training.csv")?,
         test: read("test.csv")?,
         test_truth: read("test_truth.csv")?,
-    })
+    };
+    super::reproduce::same_configurations(&data.test, &data.test_truth)?;
+    Ok(data)
 }
 
 /// Runs the protocol on one set; `opts.refine` is set per row (the parameters the model was

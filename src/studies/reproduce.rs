@@ -116,11 +116,51 @@ pub fn load_shipped(datasets: &Path, case: Case, robot: &Robot) -> Result<CaseDa
     let dir = datasets.join(case.folder());
     let read = |name: &str| crate::data::read_canonical(&dir.join(name), robot);
     let v = case.validation_name();
-    Ok(CaseData {
+    let data = CaseData {
         calibration: read("calibration.csv")?,
         validation: read(&format!("{v}.csv"))?,
         validation_truth: read(&format!("{v}_truth.csv"))?,
-    })
+    };
+    same_configurations(&data.validation, &data.validation_truth)?;
+    Ok(data)
+}
+
+/// Refuses a truth file that does not hold `measured`'s configurations row for row (the same
+/// joints to the last bit, in the same order): its figures would come from other poses.
+pub fn same_configurations(measured: &MeasurementSet, truth: &MeasurementSet) -> Result<()> {
+    let differ = |i: usize| -> String {
+        match (measured.rows.get(i), truth.rows.get(i)) {
+            (Some(m), Some(t)) => format!(
+                "line {} of the truth has other joints than line {} of the measurements",
+                t.line, m.line
+            ),
+            _ => format!(
+                "{} rows against {} measured",
+                truth.rows.len(),
+                measured.rows.len()
+            ),
+        }
+    };
+    let first = (0..measured.rows.len().max(truth.rows.len())).find(|&i| {
+        match (measured.rows.get(i), truth.rows.get(i)) {
+            (Some(m), Some(t)) => {
+                m.q.iter()
+                    .map(|v| v.to_bits())
+                    .ne(t.q.iter().map(|v| v.to_bits()))
+            }
+            _ => true,
+        }
+    });
+    match first {
+        None => Ok(()),
+        Some(i) => Err(crate::error::Error::Invalid(format!(
+            "{}: not the truth of {} ({}): a truth file holds the measured configurations \
+             row for row",
+            truth.source.display(),
+            measured.source.display(),
+            differ(i)
+        ))),
+    }
 }
 
 /// Simulates a case's data for one seed (see the module docs for the seeds).

@@ -83,6 +83,10 @@ pub struct MeasurementSet {
     pub rows: Vec<Measurement>,
     /// Names of the carried-through columns.
     pub extra_columns: Vec<String>,
+    /// Indices k of rows that do not pair with row k - 1 under consecutive pairing
+    /// ([`crate::data::pairs::pairs`]): a row between them in the file was dropped (a bad row
+    /// skipped, or left out of a subset), so their displacement is not one measured step.
+    pub chain_breaks: Vec<usize>,
 }
 
 impl MeasurementSet {
@@ -93,6 +97,7 @@ impl MeasurementSet {
             source: PathBuf::from(IN_MEMORY),
             rows,
             extra_columns: Vec::new(),
+            chain_breaks: Vec::new(),
         }
     }
 
@@ -204,18 +209,49 @@ pub fn row_name(line: usize, row: usize) -> String {
     }
 }
 
-/// The rows of `set` whose index `keep` accepts, in order (same source and columns).
+/// Rows that repeat an earlier row to the last bit: joints, position, orientation and
+/// distance (a row with none of the three measured takes no part), as (row, earlier row)
+/// indices. A real repeat of a configuration reads differently in the last digits; a copied
+/// row counts its reading twice.
+pub fn copied_rows(set: &MeasurementSet) -> Vec<(usize, usize)> {
+    let key = |m: &Measurement| -> Option<Vec<u64>> {
+        if m.position.is_none() && m.rotation.is_none() && m.distance.is_none() {
+            return None;
+        }
+        let rot = m.rotation.map(|r| *r.matrix());
+        let values = (m.q.iter().copied())
+            .chain(m.position.iter().flat_map(|p| p.iter().copied()))
+            .chain(rot.iter().flat_map(|r| r.iter().copied()))
+            .chain(m.distance);
+        Some(values.map(f64::to_bits).collect())
+    };
+    let mut first: std::collections::HashMap<Vec<u64>, usize> = Default::default();
+    let mut out = Vec::new();
+    for (i, m) in set.rows.iter().enumerate() {
+        let Some(k) = key(m) else { continue };
+        match first.get(&k) {
+            Some(&j) => out.push((i, j)),
+            None => {
+                first.insert(k, i);
+            }
+        }
+    }
+    out
+}
+
+/// The rows of `set` whose index `keep` accepts, in order (same source and columns); the
+/// chain breaks where a row between two kept ones was left out or the chain already broke.
 pub fn subset(set: &MeasurementSet, keep: impl Fn(usize) -> bool) -> MeasurementSet {
+    let kept: Vec<usize> = (0..set.rows.len()).filter(|&i| keep(i)).collect();
+    let chain_breaks = (kept.windows(2).enumerate())
+        .filter(|(_, w)| w[1] != w[0] + 1 || set.chain_breaks.contains(&w[1]))
+        .map(|(k, _)| k + 1)
+        .collect();
     MeasurementSet {
         source: set.source.clone(),
-        rows: set
-            .rows
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| keep(*i))
-            .map(|(_, m)| m.clone())
-            .collect(),
+        rows: kept.iter().map(|&i| set.rows[i].clone()).collect(),
         extra_columns: set.extra_columns.clone(),
+        chain_breaks,
     }
 }
 
@@ -232,17 +268,7 @@ pub fn split(set: &MeasurementSet, fraction: f64, seed: u64) -> (MeasurementSet,
     for &i in &idx[..k] {
         first[i] = true;
     }
-    let part = |want: bool| MeasurementSet {
-        source: set.source.clone(),
-        rows: set
-            .rows
-            .iter()
-            .zip(&first)
-            .filter(|(_, f)| **f == want)
-            .map(|(m, _)| m.clone())
-            .collect(),
-        extra_columns: set.extra_columns.clone(),
-    };
+    let part = |want: bool| subset(set, |i| first[i] == want);
     (part(true), part(false))
 }
 

@@ -497,6 +497,18 @@ pub fn parse_measurements(
         t.parse_rows(|r| parse_row(t, r, &c, joints, profile))?
     };
     bad.sort_by_key(|(line, _)| *line);
+    // A dropped row between two kept ones breaks consecutive pairing there.
+    let chain_breaks: Vec<usize> = (rows.windows(2).enumerate())
+        .filter(|(_, w)| bad.iter().any(|(l, _)| (w[0].line..w[1].line).contains(l)))
+        .map(|(k, _)| k + 1)
+        .collect();
+    if !chain_breaks.is_empty() && rows.iter().all(|m| m.pair.is_none()) {
+        report.warnings.push(format!(
+            "the relative and distance measures, which pair consecutive rows in a file without \
+             a pair column, leave out the {} pair(s) across the dropped row(s)",
+            chain_breaks.len()
+        ));
+    }
     report.skipped = bad;
     if rows.is_empty() && !report.skipped.is_empty() {
         let shown: Vec<&str> = (report.skipped.iter().take(3))
@@ -541,6 +553,7 @@ pub fn parse_measurements(
             source: t.path.clone(),
             rows,
             extra_columns: c.extra.iter().map(|&i| t.headers[i].clone()).collect(),
+            chain_breaks,
         },
         report,
     ))

@@ -135,6 +135,7 @@ mod tests {
             source: "x.csv".into(),
             rows,
             extra_columns: Vec::new(),
+            chain_breaks: Vec::new(),
         };
         let groups = crate::neural::repeats::configuration_groups(&set);
         let f = folds(&groups, 5, 7);
