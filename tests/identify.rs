@@ -400,7 +400,7 @@ fn a_registration_never_moves_a_parameter_left_unselected() {
     assert!(
         id.notes
             .iter()
-            .any(|n| n.contains("no registration") && n.contains("base.x")),
+            .any(|n| n.contains("no registration") && n.contains("parameter and base.x, ")),
         "{:?}",
         id.notes
     );
@@ -414,7 +414,7 @@ fn a_registration_never_moves_a_parameter_left_unselected() {
     assert!(
         id.notes
             .iter()
-            .any(|n| n.contains("tool is not registered")),
+            .any(|n| n.contains("every tool parameter and tool.x, ")),
         "{:?}",
         id.notes
     );

@@ -413,3 +413,22 @@ fn rows_copied_to_the_last_digit_are_said_to_shrink_the_deviations() {
         "{err}"
     );
 }
+
+#[test]
+fn pair_measures_label_their_columns_as_length_errors() {
+    for measure in ["relative", "distance"] {
+        let o = robocal(&[
+            "evaluate",
+            "--robot",
+            FANUC,
+            "--data",
+            "datasets/case_c/validation.csv",
+            "--measure",
+            measure,
+        ]);
+        let (out, err) = text(&o);
+        assert!(o.status.success(), "{err}");
+        assert!(out.contains("length error mm: mean rms p95 max"), "{out}");
+        assert!(!out.contains("position mm: mean"), "{out}");
+    }
+}

@@ -100,13 +100,16 @@ fn report_lines(path: &Path, report: &ReadReport) -> Vec<String> {
         .collect();
     if !report.skipped.is_empty() {
         let lines: Vec<usize> = report.skipped.iter().map(|(l, _)| *l).collect();
-        let why: Vec<&str> = report.skipped.iter().map(|(_, w)| w.as_str()).collect();
+        let why: Vec<&str> = (report.skipped.iter().take(20))
+            .map(|(_, w)| w.as_str())
+            .collect();
         out.push(format!(
-            "{}: dropped {} bad row(s) (lines {}): {}",
+            "{}: dropped {} bad row(s) (lines {}): {}{}",
             path.display(),
             lines.len(),
             list_lines(&lines),
-            why.join("; ")
+            why.join("; "),
+            if lines.len() > 20 { "; ..." } else { "" }
         ));
     }
     out

@@ -186,7 +186,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             &format!("'{CLEAN}' leaves them out"),
         );
     }
-    print_stats(&report.accuracy);
+    print_stats(&report.accuracy, m);
     for row in report.accuracy.iter().filter(|r| r.data == "data") {
         let what = if row.model == "model" {
             "model"

@@ -94,12 +94,14 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         outlier_k: a.outlier_k,
         ..Default::default()
     };
-    let id = identify(&nominal, &cal, &opts)?;
-    // The validation rows in metres or inches, refused as the calibration rows are.
+    // The validation rows in metres or inches, refused (before the solve) as the calibration
+    // rows are.
     use robocal::identify::Measure as M;
-    if let (Some(v), M::Pose | M::Position) = (&val, id.measure) {
+    let measure = opts.measure.unwrap_or_else(|| M::default_for(&cal));
+    if let (Some(v), M::Pose | M::Position) = (&val, measure) {
         check_position_scale(&nominal, v)?;
     }
+    let id = identify(&nominal, &cal, &opts)?;
     super::output::writing(write_robot(&id.robot, &a.out), &a.out)?;
     let m = id.measure;
     // Row errors before and after, per set: for the statistics and the pictures.
@@ -143,7 +145,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     report.warnings.extend(worse);
     report.notes.extend(a.sigma.unused(&cal));
     print_identified(&report);
-    print_stats(&report.accuracy);
+    print_stats(&report.accuracy, report.measure);
     for n in &report.notes {
         say!("note: {n}");
     }
@@ -217,7 +219,8 @@ fn copied_warning(set: &MeasurementSet) -> Option<String> {
 }
 
 /// How much worse (RMS, above which) the identified model may be than the nominal on the
-/// validation rows before it is flagged: noise moves a near-perfect nominal's figure a little.
+/// validation rows before it is flagged, and by at least 0.05 mm (0.005 deg): noise and the
+/// fit's own spread (about sqrt(1 + n/m)) move a near-perfect nominal's figure a little.
 const WORSE_ON_VALIDATION: f64 = 1.1;
 
 /// The warning for an identified model that misses the validation rows by more than
@@ -230,7 +233,8 @@ fn worse_on_validation(before: &ErrorStats, after: &ErrorStats) -> Option<String
             (b.rms, a.rms, "deg", "orientation")
         }
     };
-    (a > WORSE_ON_VALIDATION * b).then(|| {
+    let floor = if unit == "mm" { 0.05 } else { 0.005 };
+    (a > WORSE_ON_VALIDATION * b && a - b > floor).then(|| {
         format!(
             "the identified model misses the validation rows by more than the nominal one \
              ({what} RMS {b:.4} -> {a:.4} {unit}): it does not generalise beyond its \

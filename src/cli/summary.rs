@@ -25,14 +25,20 @@ fn fmt_stats(s: &ErrorStats) -> (String, String) {
     (p, r)
 }
 
-/// Prints a report's accuracy table (before/after pairs of error statistics).
-pub fn print_stats(rows: &[Accuracy]) {
+/// Prints a report's accuracy table (before/after pairs of error statistics) of rows taken
+/// under `measure`: for pairs (relative, distance) the position columns are the error of the
+/// displacement's length, and say so.
+pub fn print_stats(rows: &[Accuracy], measure: robocal::identify::Measure) {
+    use robocal::identify::Measure;
     let w = rows.iter().map(|r| r.data.len()).fold(12, usize::max);
+    let position = match measure {
+        Measure::Relative | Measure::Distance => "length error mm: mean rms p95 max",
+        _ => "position mm: mean rms p95 max",
+    };
     say!(
-        "{:<w$} {:<7} {:>39}   {:>26}",
+        "{:<w$} {:<7} {position:>39}   {:>26}",
         "set",
         "model",
-        "position mm: mean rms p95 max",
         "orientation deg: mean rms max"
     );
     for r in rows {

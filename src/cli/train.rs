@@ -444,7 +444,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         accuracy,
     );
     report.validation_shared_readings = val_shared;
-    print_stats(&report.accuracy);
+    print_stats(&report.accuracy, robocal::identify::Measure::Pose);
     for r in &report.accuracy {
         if let Some(outside) = r.rows_outside_domain
             && outside > 0

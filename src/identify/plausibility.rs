@@ -47,8 +47,15 @@ pub fn misfit(robot: &Robot, obs: &Observations) -> [Option<f64>; 2] {
 
 /// The warning for a model that misses its calibration rows `obs` by more than
 /// [`IMPLAUSIBLE_POSITION_MM`] or [`IMPLAUSIBLE_ROTATION_RAD`] RMS; None within both.
-/// `base_free`: whether the base (measurement frame) was among the parameters solved for.
-pub fn warning(robot: &Robot, obs: &Observations, base_free: bool) -> Option<String> {
+/// `registered`: whether the measurement frame was registered; `tool_free`: whether every
+/// tool parameter was solved for; `robust`: whether a robust loss weighted the rows.
+pub fn warning(
+    robot: &Robot,
+    obs: &Observations,
+    registered: bool,
+    tool_free: bool,
+    robust: bool,
+) -> Option<String> {
     let [pos, rot] = misfit(robot, obs);
     let far: Vec<String> = [
         pos.filter(|p| *p > IMPLAUSIBLE_POSITION_MM)
@@ -62,18 +69,29 @@ pub fn warning(robot: &Robot, obs: &Observations, base_free: bool) -> Option<Str
     if far.is_empty() {
         return None;
     }
-    let frame = if base_free {
+    let frame = if registered {
         ""
     } else {
-        "in a frame the model does not know (select the base too, e.g. `offsets,base`: the \
-         frame is then registered first), "
+        "in a frame the model does not know and was not registered (select every base \
+         parameter, e.g. `offsets,base`, with registration on: the frame is then registered \
+         first), "
+    };
+    let tool = if tool_free {
+        ""
+    } else {
+        "; or the model lacks a tool (marker) offset (select the tool)"
+    };
+    let rows = if robust {
+        "see the outliers"
+    } else {
+        "see the outliers; a robust loss, Huber or Cauchy, weights them down"
     };
     Some(format!(
         "the identified model still misses its calibration rows by {}, far beyond what a \
          calibration leaves (above {IMPLAUSIBLE_POSITION_MM} mm or 1 deg): it does not describe \
          the data. The measurements may be {frame}in another unit, or have joints paired with \
-         another reading; or a few rows are far off (see the outliers; a robust loss, Huber \
-         or Cauchy, weights them down). Do not use this model as it is",
+         another reading{tool}; or a few rows are far off ({rows}). Do not use this model as \
+         it is",
         far.join(" and ")
     ))
 }

@@ -543,13 +543,13 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         // held, it would change parameters the user did not select.
         match held_fields(nominal, &candidates, Slot::Base) {
             Some(held) => notes.push(format!(
-                "no registration of the measurement frame: it sets every base parameter and                  {held} are not selected; the solve starts from the model's base"
+                "no registration of the measurement frame: it sets every base parameter and {held} are not selected; the solve starts from the model's base"
             )),
             None => {
                 let tool_held = held_fields(nominal, &candidates, Slot::Tool);
                 if let (true, Some(held)) = (tool_free, &tool_held) {
                     notes.push(format!(
-                        "the tool is not registered with the base: a registration sets every                          tool parameter and {held} are not selected"
+                        "the tool is not registered with the base: a registration sets every tool parameter and {held} are not selected"
                     ));
                 }
                 let (r, reg) = register(nominal, set, tool_free && tool_held.is_none())?;
@@ -629,7 +629,9 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
     warnings.extend(super::plausibility::warning(
         &solution.robot,
         &obs,
-        base_free,
+        registration.is_some(),
+        held_fields(nominal, &candidates, Slot::Tool).is_none(),
+        opts.robust.is_some(),
     ));
     let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
     let (parameters, correlations) = parameter_reports(nominal, &solution.robot, &ids, &cov);

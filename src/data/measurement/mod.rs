@@ -210,12 +210,15 @@ pub fn row_name(line: usize, row: usize) -> String {
 }
 
 /// Rows that repeat an earlier row to the last bit: joints, position, orientation and
-/// distance (a row with none of the three measured takes no part), as (row, earlier row)
+/// distance (a row with none of the three measured, or with a pair label, takes no part), as
+/// (row, earlier row)
 /// indices. A real repeat of a configuration reads differently in the last digits; a copied
 /// row counts its reading twice.
 pub fn copied_rows(set: &MeasurementSet) -> Vec<(usize, usize)> {
     let key = |m: &Measurement| -> Option<Vec<u64>> {
-        if m.position.is_none() && m.rotation.is_none() && m.distance.is_none() {
+        // A labelled chain repeats each inner row under two pair labels by design.
+        let measured = m.position.is_some() || m.rotation.is_some() || m.distance.is_some();
+        if !measured || m.pair.is_some() {
             return None;
         }
         let rot = m.rotation.map(|r| *r.matrix());
