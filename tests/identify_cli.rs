@@ -234,55 +234,64 @@ fn reproduce_prints_the_thesis_beside_ours() {
     assert!(stderr.contains("(2 rows against 15 measured)"), "{stderr}");
 }
 
+/// `identify` of the FANUC from `data` into `out`, with `extra` flags.
+fn identify_fanuc(data: &str, out: &str, extra: &[&str]) -> std::process::Output {
+    let args = [
+        &["identify", "--robot", FANUC, "--data", data, "--out", out][..],
+        extra,
+    ];
+    robocal(&args.concat())
+}
+
+/// The lines of a shipped file (path from the repository root).
+fn shipped_lines(rel: &str) -> Vec<String> {
+    let text = std::fs::read_to_string(common::root().join(rel)).unwrap();
+    text.lines().map(String::from).collect()
+}
+
+/// `lines` written to the scratch file `name`; its path.
+fn written(name: &str, lines: &[String]) -> String {
+    let path = tmp(name);
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+    path.to_str().unwrap().to_string()
+}
+
 /// A copy of Case A's calibration rows with row 3's joint 1 at 200 deg (beyond its limit, a
 /// reading paired with the wrong joints), and of its validation rows in metres.
 fn case_a_damaged() -> (String, String) {
-    let src =
-        std::fs::read_to_string(common::root().join("datasets/case_a/calibration.csv")).unwrap();
-    let mut lines: Vec<String> = src.lines().map(String::from).collect();
+    let mut lines = shipped_lines("datasets/case_a/calibration.csv");
     let mut cells: Vec<&str> = lines[3].split(',').collect();
     cells[1] = "200";
     lines[3] = cells.join(",");
-    let cal = tmp("q200.csv");
-    std::fs::write(&cal, lines.join("\n") + "\n").unwrap();
-    let src =
-        std::fs::read_to_string(common::root().join("datasets/case_a/validation.csv")).unwrap();
-    let mut out = vec![src.lines().next().unwrap().to_string()];
-    for l in src.lines().skip(1) {
+    let cal = written("q200.csv", &lines);
+    let mut lines = shipped_lines("datasets/case_a/validation.csv");
+    for l in &mut lines[1..] {
         let mut cells: Vec<String> = l.split(',').map(String::from).collect();
         for c in &mut cells[7..10] {
             *c = format!("{}", c.parse::<f64>().unwrap() / 1000.0);
         }
-        out.push(cells.join(","));
+        *l = cells.join(",");
     }
-    let metres = tmp("validation_m.csv");
-    std::fs::write(&metres, out.join("\n") + "\n").unwrap();
-    (
-        cal.to_str().unwrap().to_string(),
-        metres.to_str().unwrap().to_string(),
-    )
+    (cal, written("validation_m.csv", &lines))
 }
 
 #[test]
 fn a_model_that_misses_by_metres_or_does_worse_on_validation_is_flagged() {
     let (cal, metres) = case_a_damaged();
     let out = tmp("q200.toml");
+    let out = out.to_str().unwrap();
     let report = tmp("q200.json");
-    let o = robocal(&[
-        "identify",
-        "--robot",
-        FANUC,
-        "--data",
-        &cal,
+    let validate = [
         "--validate",
         "datasets/case_a/validation.csv",
         "--params",
         "offsets",
-        "--out",
-        out.to_str().unwrap(),
-        "--report",
-        report.to_str().unwrap(),
-    ]);
+    ];
+    let o = identify_fanuc(
+        &cal,
+        out,
+        &[&validate[..], &["--report", report.to_str().unwrap()]].concat(),
+    );
     let err = stderr(&o);
     assert!(o.status.success(), "{err}");
     assert!(
@@ -302,21 +311,11 @@ fn a_model_that_misses_by_metres_or_does_worse_on_validation_is_flagged() {
     assert!(warnings[0].contains("q200.csv") && warnings[0].contains("joint 1 at 200.0000 deg"));
     assert!(warnings[1].contains("still misses") && warnings[2].contains("validation rows"));
     // Case A as shipped: none of them.
-    let o = robocal(&[
-        "identify",
-        "--robot",
-        FANUC,
-        "--data",
+    let o = identify_fanuc(
         "datasets/case_a/calibration.csv",
-        "--validate",
-        "datasets/case_a/validation.csv",
-        "--params",
-        "offsets",
-        "--sigma-pos",
-        "0.05",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+        out,
+        &[&validate[..], &["--sigma-pos", "0.05"]].concat(),
+    );
     assert!(
         o.status.success() && !stderr(&o).contains("warning"),
         "{}",
@@ -329,19 +328,14 @@ fn a_model_that_misses_by_metres_or_does_worse_on_validation_is_flagged() {
         stdout(&o)
     );
     // Validation rows in metres are refused, as calibration rows are, and by evaluate too.
-    let o = robocal(&[
-        "identify",
-        "--robot",
-        FANUC,
-        "--data",
+    let never = tmp("never.toml");
+    let o = identify_fanuc(
         "datasets/case_a/calibration.csv",
-        "--validate",
-        &metres,
-        "--out",
-        tmp("never.toml").to_str().unwrap(),
-    ]);
+        never.to_str().unwrap(),
+        &["--validate", &metres],
+    );
     assert!(!o.status.success() && stderr(&o).contains("validation_m.csv: the measured positions"));
-    assert!(!tmp("never.toml").exists());
+    assert!(!never.exists());
     let o = robocal(&["evaluate", "--robot", FANUC, "--data", &metres]);
     assert!(
         !o.status.success() && stderr(&o).contains("Positions must be in mm"),
@@ -356,19 +350,11 @@ fn a_model_that_misses_by_metres_or_does_worse_on_validation_is_flagged() {
 fn a_full_device_after_the_files_names_the_files_kept() {
     let report = tmp("full_device.json");
     std::fs::remove_file(&report).ok();
-    let o = robocal(&[
-        "identify",
-        "--robot",
-        FANUC,
-        "--data",
+    let o = identify_fanuc(
         "datasets/case_a/calibration.csv",
-        "--params",
-        "offsets",
-        "--out",
         "/dev/full",
-        "--report",
-        report.to_str().unwrap(),
-    ]);
+        &["--params", "offsets", "--report", report.to_str().unwrap()],
+    );
     let err = stderr(&o);
     assert!(!o.status.success(), "{err}");
     assert!(
@@ -385,26 +371,10 @@ fn a_full_device_after_the_files_names_the_files_kept() {
 
 #[test]
 fn rows_copied_to_the_last_digit_are_said_to_shrink_the_deviations() {
-    let src =
-        std::fs::read_to_string(common::root().join("datasets/case_a/calibration.csv")).unwrap();
-    let rows: Vec<&str> = src.lines().collect();
-    let doubled = tmp("doubled.csv");
-    std::fs::write(
-        &doubled,
-        [&rows[..], &rows[1..3]].concat().join("\n") + "\n",
-    )
-    .unwrap();
-    let o = robocal(&[
-        "identify",
-        "--robot",
-        FANUC,
-        "--data",
-        doubled.to_str().unwrap(),
-        "--params",
-        "offsets",
-        "--out",
-        tmp("doubled.toml").to_str().unwrap(),
-    ]);
+    let rows = shipped_lines("datasets/case_a/calibration.csv");
+    let doubled = written("doubled.csv", &[&rows[..], &rows[1..3]].concat());
+    let out = tmp("doubled.toml");
+    let o = identify_fanuc(&doubled, out.to_str().unwrap(), &["--params", "offsets"]);
     let err = stderr(&o);
     assert!(o.status.success(), "{err}");
     assert!(

@@ -92,44 +92,59 @@ impl SigmaArgs {
     }
 }
 
-/// What [`print_report`] prints, one line per warning and one for the dropped rows (their
-/// reasons joined), each naming `path`.
-fn report_lines(path: &Path, report: &ReadReport) -> Vec<String> {
-    let mut out: Vec<String> = (report.warnings.iter())
+/// Most reasons for dropped rows listed, on the terminal and in a report.
+const SKIPPED_SHOWN: usize = 20;
+
+/// The warnings of a read, each naming `path`; and for its dropped rows a heading with their
+/// lines and the first [`SKIPPED_SHOWN`] reasons.
+fn report_parts<'a>(
+    path: &Path,
+    report: &'a ReadReport,
+) -> (Vec<String>, Option<(String, Vec<&'a str>)>) {
+    let warnings = (report.warnings.iter())
         .map(|w| format!("{}: {w}", path.display()))
         .collect();
-    if !report.skipped.is_empty() {
+    let skipped = (!report.skipped.is_empty()).then(|| {
         let lines: Vec<usize> = report.skipped.iter().map(|(l, _)| *l).collect();
-        let why: Vec<&str> = (report.skipped.iter().take(20))
-            .map(|(_, w)| w.as_str())
-            .collect();
-        out.push(format!(
-            "{}: dropped {} bad row(s) (lines {}): {}{}",
+        let heading = format!(
+            "{}: dropped {} bad row(s) (lines {})",
             path.display(),
             lines.len(),
-            list_lines(&lines),
-            why.join("; "),
-            if lines.len() > 20 { "; ..." } else { "" }
-        ));
+            list_lines(&lines)
+        );
+        let why = (report.skipped.iter().take(SKIPPED_SHOWN))
+            .map(|(_, w)| w.as_str())
+            .collect();
+        (heading, why)
+    });
+    (warnings, skipped)
+}
+
+/// What [`print_report`] prints, one line per warning and one for the dropped rows (their
+/// reasons joined), for a JSON report.
+fn report_lines(path: &Path, report: &ReadReport) -> Vec<String> {
+    let (mut out, skipped) = report_parts(path, report);
+    if let Some((heading, why)) = skipped {
+        let more = if report.skipped.len() > SKIPPED_SHOWN {
+            "; ..."
+        } else {
+            ""
+        };
+        out.push(format!("{heading}: {}{more}", why.join("; ")));
     }
     out
 }
 
 /// Prints warnings and dropped rows to stderr.
 pub fn print_report(path: &Path, report: &ReadReport) {
-    for w in &report.warnings {
-        eprintln!("warning: {}: {w}", path.display());
+    let (warnings, skipped) = report_parts(path, report);
+    for w in warnings {
+        eprintln!("warning: {w}");
     }
-    if !report.skipped.is_empty() {
-        let lines: Vec<usize> = report.skipped.iter().map(|(l, _)| *l).collect();
-        eprintln!(
-            "warning: {}: dropped {} bad row(s) (lines {}):",
-            path.display(),
-            lines.len(),
-            list_lines(&lines)
-        );
-        for (_, why) in report.skipped.iter().take(20) {
-            eprintln!("  {why}");
+    if let Some((heading, why)) = skipped {
+        eprintln!("warning: {heading}:");
+        for w in why {
+            eprintln!("  {w}");
         }
     }
 }

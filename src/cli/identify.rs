@@ -8,7 +8,7 @@ use clap::Args;
 use robocal::data::MeasurementSet;
 use robocal::evaluate::{ErrorStats, RowError, row_errors, summarize};
 use robocal::identify::register::check_position_scale;
-use robocal::identify::{Options, SolveOptions, identify};
+use robocal::identify::{Measure as Measured, Options, SolveOptions, identify};
 use robocal::kinematics::tool_pose;
 use robocal::model::write_robot;
 use robocal::plot::{ErrorRun, error_figures};
@@ -96,9 +96,8 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     };
     // The validation rows in metres or inches, refused (before the solve) as the calibration
     // rows are.
-    use robocal::identify::Measure as M;
-    let measure = opts.measure.unwrap_or_else(|| M::default_for(&cal));
-    if let (Some(v), M::Pose | M::Position) = (&val, measure) {
+    let measure = opts.measure.unwrap_or_else(|| Measured::default_for(&cal));
+    if let (Some(v), Measured::Pose | Measured::Position) = (&val, measure) {
         check_position_scale(&nominal, v)?;
     }
     let id = identify(&nominal, &cal, &opts)?;
@@ -141,7 +140,6 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     );
     // Readings logged with other joints, judged under the identified model.
     report.shared_readings = super::summary::shared_under(&id.robot, &cal, m, None);
-    report.warnings.extend(copied_warning(&cal));
     report.warnings.extend(worse);
     report.notes.extend(a.sigma.unused(&cal));
     print_identified(&report);
@@ -190,32 +188,6 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         write_report(path, &Report::Identify(report))?;
     }
     Ok(())
-}
-
-/// The warning for rows of `set` that repeat an earlier row to the last digit.
-fn copied_warning(set: &MeasurementSet) -> Option<String> {
-    let copied = robocal::data::measurement::copied_rows(set);
-    if copied.is_empty() {
-        return None;
-    }
-    let shown: Vec<String> = (copied.iter().take(5))
-        .map(|&(i, j)| {
-            format!(
-                "line {} repeats line {}",
-                set.rows[i].line, set.rows[j].line
-            )
-        })
-        .collect();
-    Some(format!(
-        "{}: {} row(s) repeat an earlier row to the last digit, joints and reading ({}{}): a \
-         repeated measurement reads differently in its last digits; copied rows count one \
-         reading twice and make the standard deviations look smaller than they are (by \
-         sqrt(2) for a set doubled). Remove them if they were copied",
-        set.source.display(),
-        copied.len(),
-        shown.join(", "),
-        if copied.len() > 5 { ", ..." } else { "" }
-    ))
 }
 
 /// How much worse (RMS, above which) the identified model may be than the nominal on the

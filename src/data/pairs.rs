@@ -28,7 +28,7 @@ pub fn pairs(set: &MeasurementSet) -> Result<Vec<Pair>> {
         return Ok(pairs);
     }
     let kept: Vec<Pair> = (pairs.into_iter())
-        .filter(|p| !set.chain_breaks.contains(&p.b))
+        .filter(|p| set.chain_breaks.binary_search(&p.b).is_err())
         .collect();
     if kept.is_empty() {
         return Err(Error::input(

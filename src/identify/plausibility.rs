@@ -7,9 +7,10 @@
 //! model is written and the user decides.
 
 use super::Measure;
-use super::problem::{IdentifyWorkspace, Observations, residual};
+use super::problem::{Observations, residuals};
+use crate::data::MeasurementSet;
+use crate::data::measurement::{copied_rows, row_name};
 use crate::model::Robot;
-use nalgebra::Matrix6xX;
 
 /// Position RMS (mm, per row or pair) on the calibration rows beyond which an identified
 /// model is flagged: ten times what a nominal model of an industrial robot misses by.
@@ -21,7 +22,8 @@ pub const IMPLAUSIBLE_ROTATION_RAD: f64 = std::f64::consts::PI / 180.0;
 
 /// RMS over the observations of the position part (mm, the norm of the position components;
 /// the displacement error of a pair, the length error of a distance) and of the orientation
-/// part (rad) of `robot`'s residuals on `obs`; None for a part the measure lacks.
+/// part (rad) of `robot`'s residuals on `obs`; None for a part the measure lacks. For single
+/// rows these are the RMS figures of `evaluate` (which identify cannot call: it sits above).
 pub fn misfit(robot: &Robot, obs: &Observations) -> [Option<f64>; 2] {
     let (pos, rot) = match obs.measure {
         Measure::Pose => (0..3, 3..6),
@@ -29,20 +31,13 @@ pub fn misfit(robot: &Robot, obs: &Observations) -> [Option<f64>; 2] {
         Measure::Position | Measure::Relative => (0..3, 0..0),
         Measure::Distance => (0..1, 0..0),
     };
-    let mut ws = IdentifyWorkspace::new(robot);
-    let mut r = [0.0; 6];
-    let mut jac = Matrix6xX::zeros(0);
-    let mut sums = [0.0; 2];
-    for o in &obs.items {
-        residual(robot, obs, o, None, &mut ws, &mut r, &mut jac);
-        sums[0] += r[pos.clone()].iter().map(|v| v * v).sum::<f64>();
-        sums[1] += r[rot.clone()].iter().map(|v| v * v).sum::<f64>();
-    }
-    let n = obs.items.len().max(1) as f64;
-    [
-        (!pos.is_empty()).then(|| (sums[0] / n).sqrt()),
-        (!rot.is_empty()).then(|| (sums[1] / n).sqrt()),
-    ]
+    let square = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
+    let rs = residuals(robot, obs);
+    let rms = |part: std::ops::Range<usize>| {
+        let sum: f64 = rs.iter().map(|r| square(&r[part.clone()])).sum();
+        (!part.is_empty()).then(|| (sum / rs.len().max(1) as f64).sqrt())
+    };
+    [rms(pos), rms(rot)]
 }
 
 /// The warning for a model that misses its calibration rows `obs` by more than
@@ -93,5 +88,28 @@ pub fn warning(
          another reading{tool}; or a few rows are far off ({rows}). Do not use this model as \
          it is",
         far.join(" and ")
+    ))
+}
+
+/// The warning for rows of `set` that repeat an earlier row to the last digit
+/// ([`copied_rows`]): they count one reading twice.
+pub fn copied_warning(set: &MeasurementSet) -> Option<String> {
+    let copied = copied_rows(set);
+    if copied.is_empty() {
+        return None;
+    }
+    let name = |i: usize| row_name(set.rows[i].line, i);
+    let shown: Vec<String> = (copied.iter().take(5))
+        .map(|&(i, j)| format!("{} repeats {}", name(i), name(j)))
+        .collect();
+    Some(format!(
+        "{}: {} row(s) repeat an earlier row to the last digit, joints and reading ({}{}): a \
+         repeated measurement reads differently in its last digits; copied rows count one \
+         reading twice and make the standard deviations look smaller than they are (by \
+         sqrt(2) for a set doubled). Remove them if they were copied",
+        set.source.display(),
+        copied.len(),
+        shown.join(", "),
+        if copied.len() > 5 { ", ..." } else { "" }
     ))
 }

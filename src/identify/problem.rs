@@ -263,6 +263,20 @@ fn tool_of(
     }
 }
 
+/// The unweighted residual (mm, rad) of every observation of `obs` at `robot`, in order: the
+/// first `obs.dim()` components of each, as [`residual`] gives them.
+pub fn residuals(robot: &Robot, obs: &Observations) -> Vec<[f64; 6]> {
+    let mut ws = IdentifyWorkspace::new(robot);
+    let mut jac = Matrix6xX::zeros(0);
+    (obs.items.iter())
+        .map(|o| {
+            let mut r = [0.0; 6];
+            residual(robot, obs, o, None, &mut ws, &mut r, &mut jac);
+            r
+        })
+        .collect()
+}
+
 /// Unweighted residual (y - f) of observation `o` into `r[..dim]`; with `cols`, also the
 /// model Jacobian of the same components (dim x cols.len()) into `jac`'s first rows.
 pub fn residual(

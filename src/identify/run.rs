@@ -5,7 +5,7 @@
 use super::identifiability::{CONDITION_WARNING, DropReason, Dropped, Identifiability, analyse};
 use super::nelder_mead::solve_nelder_mead;
 use super::problem::{
-    IdentifyWorkspace, Measure, Normal, Observations, Sigmas, normal_equations, residual,
+    IdentifyWorkspace, Measure, Normal, Observations, Sigmas, normal_equations, residuals,
 };
 use super::register::{Registration, check_position_scale, register};
 use super::select::{is_compliance, select};
@@ -17,7 +17,7 @@ use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
 use crate::model::{Convention, ParamId, Robot, Slot};
 use crate::stats::median;
-use nalgebra::{DMatrix, DVector, Matrix6xX};
+use nalgebra::{DMatrix, DVector};
 
 /// Robust loss for iteratively reweighted least squares.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -142,14 +142,9 @@ pub struct Identified {
 
 /// Weighted residual norm of every observation, divided by sqrt(dim).
 fn normalized_residuals(robot: &Robot, obs: &Observations) -> Vec<f64> {
-    let mut ws = IdentifyWorkspace::new(robot);
-    let mut r = [0.0; 6];
-    let mut jac = Matrix6xX::zeros(0);
     let dim = obs.dim();
-    obs.items
-        .iter()
-        .map(|o| {
-            residual(robot, obs, o, None, &mut ws, &mut r, &mut jac);
+    (residuals(robot, obs).iter().zip(&obs.items))
+        .map(|(r, o)| {
             ((0..dim)
                 .map(|c| (r[c] * o.inv_sigma[c]).powi(2))
                 .sum::<f64>()
@@ -528,6 +523,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
     // An unknown measurement frame: register it (and the tool) first.
     let base_free = candidates.iter().any(|&c| params[c].slot == Slot::Base);
     let tool_free = candidates.iter().any(|&c| params[c].slot == Slot::Tool);
+    let tool_held = held_fields(nominal, &candidates, Slot::Tool);
     let uses_positions = matches!(measure, Measure::Pose | Measure::Position);
     if uses_positions {
         check_position_scale(nominal, set)?;
@@ -546,7 +542,6 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
                 "no registration of the measurement frame: it sets every base parameter and {held} are not selected; the solve starts from the model's base"
             )),
             None => {
-                let tool_held = held_fields(nominal, &candidates, Slot::Tool);
                 if let (true, Some(held)) = (tool_free, &tool_held) {
                     notes.push(format!(
                         "the tool is not registered with the base: a registration sets every tool parameter and {held} are not selected"
@@ -630,9 +625,10 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         &solution.robot,
         &obs,
         registration.is_some(),
-        held_fields(nominal, &candidates, Slot::Tool).is_none(),
+        tool_held.is_none(),
         opts.robust.is_some(),
     ));
+    warnings.extend(super::plausibility::copied_warning(set));
     let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
     let (parameters, correlations) = parameter_reports(nominal, &solution.robot, &ids, &cov);
     let outliers = outliers(set, &obs, &solution.robot, opts.outlier_k);

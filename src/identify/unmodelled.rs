@@ -25,9 +25,8 @@
 //! splits): weighting by the tracker's sigmas left 0.4582-0.5546 mm RMS on the held-out rows,
 //! one common sigma per kind 0.4383-0.4599 mm, on every split lower.
 
-use super::problem::{IdentifyWorkspace, Observations, residual};
+use super::problem::{Observations, residuals};
 use crate::identify::Measure;
-use nalgebra::Matrix6xX;
 
 /// The kinds of residual component: positions (mm), orientations (rad).
 const KINDS: usize = 2;
@@ -144,11 +143,7 @@ pub fn estimate(
     // the fit, and its share of the degrees of freedom with it.
     let mut parts: [Vec<(f64, f64)>; KINDS] = Default::default();
     let mut weight = [0.0; KINDS];
-    let mut ws = IdentifyWorkspace::new(robot);
-    let mut r = [0.0; 6];
-    let mut jac = Matrix6xX::zeros(0);
-    for (o, inv) in obs.items.iter().zip(sigma_inv) {
-        residual(robot, obs, o, None, &mut ws, &mut r, &mut jac);
+    for ((o, inv), r) in obs.items.iter().zip(sigma_inv).zip(residuals(robot, obs)) {
         for c in 0..dim {
             let k = kind_of(obs.measure, c);
             parts[k].push((o.weight * r[c] * r[c], 1.0 / (inv[c] * inv[c])));

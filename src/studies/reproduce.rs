@@ -128,39 +128,26 @@ pub fn load_shipped(datasets: &Path, case: Case, robot: &Robot) -> Result<CaseDa
 /// Refuses a truth file that does not hold `measured`'s configurations row for row (the same
 /// joints to the last bit, in the same order): its figures would come from other poses.
 pub fn same_configurations(measured: &MeasurementSet, truth: &MeasurementSet) -> Result<()> {
-    let differ = |i: usize| -> String {
-        match (measured.rows.get(i), truth.rows.get(i)) {
-            (Some(m), Some(t)) => format!(
-                "line {} of the truth has other joints than line {} of the measurements",
-                t.line, m.line
-            ),
-            _ => format!(
-                "{} rows against {} measured",
-                truth.rows.len(),
-                measured.rows.len()
-            ),
-        }
+    let bits = |q: &[f64]| q.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
+    let why = match (measured.rows.iter().zip(&truth.rows)).find(|(m, t)| bits(&m.q) != bits(&t.q))
+    {
+        Some((m, t)) => format!(
+            "line {} of the truth has other joints than line {} of the measurements",
+            t.line, m.line
+        ),
+        None if measured.rows.len() != truth.rows.len() => format!(
+            "{} rows against {} measured",
+            truth.rows.len(),
+            measured.rows.len()
+        ),
+        None => return Ok(()),
     };
-    let first = (0..measured.rows.len().max(truth.rows.len())).find(|&i| {
-        match (measured.rows.get(i), truth.rows.get(i)) {
-            (Some(m), Some(t)) => {
-                m.q.iter()
-                    .map(|v| v.to_bits())
-                    .ne(t.q.iter().map(|v| v.to_bits()))
-            }
-            _ => true,
-        }
-    });
-    match first {
-        None => Ok(()),
-        Some(i) => Err(crate::error::Error::Invalid(format!(
-            "{}: not the truth of {} ({}): a truth file holds the measured configurations \
-             row for row",
-            truth.source.display(),
-            measured.source.display(),
-            differ(i)
-        ))),
-    }
+    Err(crate::error::Error::Invalid(format!(
+        "{}: not the truth of {} ({why}): a truth file holds the measured configurations row \
+         for row",
+        truth.source.display(),
+        measured.source.display(),
+    )))
 }
 
 /// Simulates a case's data for one seed (see the module docs for the seeds).

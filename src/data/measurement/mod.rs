@@ -86,6 +86,7 @@ pub struct MeasurementSet {
     /// Indices k of rows that do not pair with row k - 1 under consecutive pairing
     /// ([`crate::data::pairs::pairs`]): a row between them in the file was dropped (a bad row
     /// skipped, or left out of a subset), so their displacement is not one measured step.
+    /// Ascending.
     pub chain_breaks: Vec<usize>,
 }
 
@@ -211,8 +212,7 @@ pub fn row_name(line: usize, row: usize) -> String {
 
 /// Rows that repeat an earlier row to the last bit: joints, position, orientation and
 /// distance (a row with none of the three measured, or with a pair label, takes no part), as
-/// (row, earlier row)
-/// indices. A real repeat of a configuration reads differently in the last digits; a copied
+/// (row, earlier row) indices. A real repeat of a configuration reads differently in the last digits; a copied
 /// row counts its reading twice.
 pub fn copied_rows(set: &MeasurementSet) -> Vec<(usize, usize)> {
     let key = |m: &Measurement| -> Option<Vec<u64>> {
@@ -247,7 +247,7 @@ pub fn copied_rows(set: &MeasurementSet) -> Vec<(usize, usize)> {
 pub fn subset(set: &MeasurementSet, keep: impl Fn(usize) -> bool) -> MeasurementSet {
     let kept: Vec<usize> = (0..set.rows.len()).filter(|&i| keep(i)).collect();
     let chain_breaks = (kept.windows(2).enumerate())
-        .filter(|(_, w)| w[1] != w[0] + 1 || set.chain_breaks.contains(&w[1]))
+        .filter(|(_, w)| w[1] != w[0] + 1 || set.chain_breaks.binary_search(&w[1]).is_ok())
         .map(|(k, _)| k + 1)
         .collect();
     MeasurementSet {

@@ -498,8 +498,12 @@ pub fn parse_measurements(
     };
     bad.sort_by_key(|(line, _)| *line);
     // A dropped row between two kept ones breaks consecutive pairing there.
+    // `bad` is sorted by line: the first bad line after row k - 1 decides.
     let chain_breaks: Vec<usize> = (rows.windows(2).enumerate())
-        .filter(|(_, w)| bad.iter().any(|(l, _)| (w[0].line..w[1].line).contains(l)))
+        .filter(|(_, w)| {
+            let next = bad.partition_point(|(l, _)| *l < w[0].line);
+            bad.get(next).is_some_and(|(l, _)| *l < w[1].line)
+        })
         .map(|(k, _)| k + 1)
         .collect();
     if !chain_breaks.is_empty() && rows.iter().all(|m| m.pair.is_none()) {
