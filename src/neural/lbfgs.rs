@@ -5,7 +5,8 @@
 //! Small and ours because the training needs a per-iteration callback (validation-failure
 //! stopping, progress) that minimiser crates do not offer.
 
-use super::vectors::{axpy, dot, norm};
+use super::fused::{Then, differences, step_to, update_dot};
+use super::vectors::{dot, dot_in, norm};
 use nalgebra::DVector;
 use std::collections::VecDeque;
 
@@ -46,7 +47,7 @@ pub fn minimize(
     let memory = memory.max(1);
     let mut g = DVector::zeros(n);
     let mut fx = f(&x, &mut g);
-    let mut pairs: VecDeque<(DVector<f64>, DVector<f64>, f64)> = VecDeque::with_capacity(memory);
+    let mut pairs: VecDeque<Pair> = VecDeque::with_capacity(memory);
     let mut alpha = vec![0.0; memory];
     let (mut d, mut x_new, mut g_new) = (DVector::zeros(n), DVector::zeros(n), DVector::zeros(n));
     // The next pair's storage: the pair dropped from a full memory, or one not kept, is
@@ -56,24 +57,7 @@ pub fn minimize(
         if g.amax() < min_grad {
             return (x, fx, LbfgsStop::MinGradient);
         }
-        // Two-loop recursion: d = -H g.
-        d.copy_from(&g);
-        for (k, (s, y, rho)) in pairs.iter().enumerate().rev() {
-            alpha[k] = rho * dot(s, &d);
-            axpy(&mut d, -alpha[k], y);
-        }
-        let gamma = pairs
-            .back()
-            .map_or(1.0 / norm(&g).max(1e-300), |(s, y, _)| {
-                dot(s, y) / dot(y, y)
-            });
-        d *= gamma;
-        for (k, (s, y, rho)) in pairs.iter().enumerate() {
-            let beta = rho * dot(y, &d);
-            axpy(&mut d, alpha[k] - beta, s);
-        }
-        d.neg_mut();
-        let mut slope = dot(&g, &d);
+        let mut slope = direction(&pairs, &g, &mut d, &mut alpha);
         if slope >= 0.0 {
             // Not a descent direction (curvature information gone stale): restart.
             pairs.clear();
@@ -86,8 +70,7 @@ pub fn minimize(
         let mut step = 1.0;
         let mut accepted = None;
         for _ in 0..40 {
-            x_new.copy_from(&x);
-            axpy(&mut x_new, step, &d);
+            step_to(x_new.as_mut_slice(), x.as_slice(), step, d.as_slice());
             let f_new = f(&x_new, &mut g_new);
             if f_new.is_finite() && f_new <= fx + 1e-4 * step * slope {
                 accepted = Some(f_new);
@@ -106,18 +89,27 @@ pub fn minimize(
         let (mut s, mut y) = spare
             .take()
             .unwrap_or_else(|| (DVector::zeros(n), DVector::zeros(n)));
-        s.copy_from(&x_new);
-        s -= &x;
-        y.copy_from(&g_new);
-        y -= &g;
-        let sy = dot(&s, &y);
-        if sy > 1e-12 * norm(&s) * norm(&y) {
+        let (ss, yy, sy) = differences(
+            s.as_mut_slice(),
+            x_new.as_slice(),
+            x.as_slice(),
+            y.as_mut_slice(),
+            g_new.as_slice(),
+            g.as_slice(),
+        );
+        if sy > 1e-12 * ss.sqrt() * yy.sqrt() {
             if pairs.len() == memory
-                && let Some((old_s, old_y, _)) = pairs.pop_front()
+                && let Some(old) = pairs.pop_front()
             {
-                spare = Some((old_s, old_y));
+                spare = Some((old.s, old.y));
             }
-            pairs.push_back((s, y, 1.0 / sy));
+            pairs.push_back(Pair {
+                s,
+                y,
+                rho: 1.0 / sy,
+                sy,
+                yy,
+            });
         } else {
             spare = Some((s, y));
         }
@@ -131,9 +123,149 @@ pub fn minimize(
     (x, fx, LbfgsStop::MaxIterations)
 }
 
+/// A correction pair of the memory: s = x_{k+1} - x_k, y = g_{k+1} - g_k, rho = 1 / (s . y),
+/// and the dot products s . y and y . y (the scaling of the initial Hessian, Nocedal and
+/// Wright eq. 7.20, when the pair is the newest), taken when the pair was formed.
+struct Pair {
+    s: DVector<f64>,
+    y: DVector<f64>,
+    rho: f64,
+    sy: f64,
+    yy: f64,
+}
+
+/// The search direction d = -H g of the two-loop recursion (Nocedal and Wright, Algorithm
+/// 7.4) into `d`, H0 = gamma I with gamma = s.y / y.y of the newest pair (1 / |g| without
+/// pairs); returns the slope g . d. Each update of d and the dot product the next step takes
+/// of it are one pass ([`update_dot`]), with the bits of the separate operations:
+/// alpha_k = rho_k s_k . d, d <- d - alpha_k y_k (newest pair first), d <- gamma d,
+/// beta_k = rho_k y_k . d, d <- d + (alpha_k - beta_k) s_k (oldest first), d <- -d.
+fn direction(
+    pairs: &VecDeque<Pair>,
+    g: &DVector<f64>,
+    d: &mut DVector<f64>,
+    alpha: &mut [f64],
+) -> f64 {
+    d.copy_from(g);
+    let (Some(newest), Some(oldest)) = (pairs.back(), pairs.front()) else {
+        *d *= 1.0 / norm(g).max(1e-300);
+        d.neg_mut();
+        return dot(g, d);
+    };
+    let gamma = newest.sy / newest.yy;
+    let m = pairs.len();
+    let d = d.as_mut_slice();
+    // The dot product the next step needs, of the d the last update left.
+    let mut next = dot_in(newest.s.as_slice(), d);
+    for k in (0..m).rev() {
+        let p = &pairs[k];
+        alpha[k] = p.rho * next;
+        next = if k > 0 {
+            update_dot(
+                d,
+                -alpha[k],
+                p.y.as_slice(),
+                Then::Keep,
+                pairs[k - 1].s.as_slice(),
+            )
+        } else {
+            update_dot(
+                d,
+                -alpha[k],
+                p.y.as_slice(),
+                Then::Scale(gamma),
+                oldest.y.as_slice(),
+            )
+        };
+    }
+    for k in 0..m {
+        let p = &pairs[k];
+        let beta = p.rho * next;
+        next = if k + 1 < m {
+            update_dot(
+                d,
+                alpha[k] - beta,
+                p.s.as_slice(),
+                Then::Keep,
+                pairs[k + 1].y.as_slice(),
+            )
+        } else {
+            update_dot(
+                d,
+                alpha[k] - beta,
+                p.s.as_slice(),
+                Then::Negate,
+                g.as_slice(),
+            )
+        };
+    }
+    next
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The two-loop recursion as separate operations (nalgebra's `dot`, `axpy`, `*=` and
+    /// `neg_mut`, with [`crate::neural::vectors`]' bits), one after the other.
+    fn direction_separately(pairs: &VecDeque<Pair>, g: &DVector<f64>) -> (DVector<f64>, f64) {
+        use crate::neural::vectors::axpy;
+        let mut d = g.clone();
+        let mut alpha = vec![0.0; pairs.len()];
+        for (k, p) in pairs.iter().enumerate().rev() {
+            alpha[k] = p.rho * dot(&p.s, &d);
+            axpy(&mut d, -alpha[k], &p.y);
+        }
+        let gamma = pairs.back().map_or(1.0 / norm(g).max(1e-300), |p| {
+            dot(&p.s, &p.y) / dot(&p.y, &p.y)
+        });
+        d *= gamma;
+        for (k, p) in pairs.iter().enumerate() {
+            let beta = p.rho * dot(&p.y, &d);
+            axpy(&mut d, alpha[k] - beta, &p.s);
+        }
+        d.neg_mut();
+        let slope = dot(g, &d);
+        (d, slope)
+    }
+
+    #[test]
+    fn the_fused_direction_has_the_separate_operations_bits() {
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for (n, m) in [(1, 1), (9, 3), (992, 10), (1190, 7), (37, 0)] {
+            let mut v = || DVector::from_fn(n, |_, _| next());
+            let g = v();
+            let mut pairs = VecDeque::new();
+            for _ in 0..m {
+                let (s, y) = (v(), v());
+                let (sy, yy) = (dot(&s, &y), dot(&y, &y));
+                pairs.push_back(Pair {
+                    rho: 1.0 / sy,
+                    s,
+                    y,
+                    sy,
+                    yy,
+                });
+            }
+            let (want, want_slope) = direction_separately(&pairs, &g);
+            let mut d = DVector::from_element(n, f64::NAN);
+            let mut alpha = vec![0.0; m];
+            let slope = direction(&pairs, &g, &mut d, &mut alpha);
+            assert_eq!(slope.to_bits(), want_slope.to_bits(), "slope, {n} x {m}");
+            assert!(
+                d.iter()
+                    .zip(want.iter())
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "direction, {n} x {m}"
+            );
+        }
+    }
 
     #[test]
     fn minimises_the_rosenbrock_function() {

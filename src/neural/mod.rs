@@ -7,6 +7,7 @@ pub mod encoding;
 pub mod exponential;
 pub mod file;
 pub mod fit;
+pub mod fused;
 pub mod lbfgs;
 pub mod logistic;
 pub mod net;

@@ -10,7 +10,7 @@ use nalgebra::{DMatrix, DVector};
 /// a . b of equal-length slices in nalgebra's order: eight partial sums over blocks of eight,
 /// added pairwise (0 + 4, 1 + 5, ...), then the tail one by one.
 #[inline(always)]
-fn dot_in(a: &[f64], b: &[f64]) -> f64 {
+pub(super) fn dot_in(a: &[f64], b: &[f64]) -> f64 {
     #[cfg(target_arch = "x86_64")]
     if let Some(simd) = pulp::x86::V3::try_new() {
         return simd.vectorize(DotV3 { simd, a, b });
@@ -66,7 +66,7 @@ fn dot_v3(simd: pulp::x86::V3, a: &[f64], b: &[f64]) -> f64 {
 
 /// The end of [`dot_in`]: the partial sums added in nalgebra's order, then the tail.
 #[inline(always)]
-fn finish(a: &[f64], b: &[f64], lo: [f64; 4], hi: [f64; 4]) -> f64 {
+pub(super) fn finish(a: &[f64], b: &[f64], lo: [f64; 4], hi: [f64; 4]) -> f64 {
     let mut res = 0.0;
     for k in 0..4 {
         res += lo[k] + hi[k];

@@ -58,7 +58,7 @@ pub use space::names_compliance;
 use stages::Search;
 use std::collections::HashMap;
 use std::sync::Mutex;
-use std::sync::atomic::AtomicUsize;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Hidden units tried when not fixed (the middle one first).
 pub const HIDDEN: [usize; 3] = [16, 32, 64];
@@ -232,16 +232,71 @@ pub fn select_settings(
         })?);
     }
     let tried: Vec<String> = space.refines.iter().flatten().cloned().collect();
-    let refined = distinct_refinements(&cv, k, &mut space.refines);
-    // Each candidate is first scored on the race folds; one that is already clearly worse
-    // there than the best so far on the same folds is dropped before the other folds.
+    // Stages 1 to 3 fit every candidate with the first refinement's models; the other
+    // refinements' (stage 4 on) are computed beside them, in one thread: the folds' fits
+    // leave a core idle at the end of most rounds (five folds on two cores), and the
+    // refinements were the first 50 ms of a 150-pose training with nothing beside them.
+    let first = vec![parallel_map(k, |f| cv.model(f, &space.refines[0]))];
+    let race_folds = if k > RACE_FOLDS { RACE_FOLDS } else { k };
+    let mut notes = Vec::new();
+    let with_rbf = space.try_rbf || space.mix_only;
+    let (early, others) = std::thread::scope(|scope| {
+        let others = (space.refines.len() > 1).then(|| {
+            let later = &space.refines[1..];
+            let cv = &cv;
+            scope.spawn(move || {
+                later
+                    .iter()
+                    .map(|spec| (0..k).map(|f| cv.model(f, spec)).collect::<Vec<_>>())
+                    .collect::<Vec<_>>()
+            })
+        });
+        // Each candidate is first scored on the race folds; one that is already clearly
+        // worse there than the best so far on the same folds is dropped before the other
+        // folds.
+        let race = Race {
+            cv: &cv,
+            refines: &space.refines[..1],
+            refined: &first,
+            k,
+            race: race_folds,
+            done: AtomicUsize::new(0),
+            rounds: &rounds,
+            progress,
+        };
+        let mut search = Search {
+            race: &race,
+            space: &space,
+            opts,
+            candidates: Vec::new(),
+            chosen: 0,
+            network_test: None,
+            chosen_rows: None,
+        };
+        let early = stages_1_to_3(&mut search, &mut notes, with_rbf, distinct, k);
+        let others = others.map(|h| h.join().unwrap_or_default());
+        (
+            early.map(|()| {
+                (
+                    search.candidates,
+                    search.chosen,
+                    race.done.load(Ordering::Relaxed),
+                )
+            }),
+            others,
+        )
+    });
+    let (candidates, chosen, done) = early?;
+    let mut all = first;
+    all.extend(others.unwrap_or_default());
+    let refined = distinct_refinements(all, &mut space.refines);
     let race = Race {
         cv: &cv,
         refines: &space.refines,
         refined: &refined,
         k,
-        race: if k > RACE_FOLDS { RACE_FOLDS } else { k },
-        done: AtomicUsize::new(0),
+        race: race_folds,
+        done: AtomicUsize::new(done),
         rounds: &rounds,
         progress,
     };
@@ -249,39 +304,11 @@ pub fn select_settings(
         race: &race,
         space: &space,
         opts,
-        candidates: Vec::new(),
-        chosen: 0,
+        candidates,
+        chosen,
         network_test: None,
         chosen_rows: None,
     };
-    search.first();
-    if search.candidates.iter().all(|c| c.score.is_none()) {
-        return Err(failed(&search.candidates));
-    }
-    // From here on some candidate has a score: the best always exists.
-    let mut notes = Vec::new();
-    if let Some(asked) = opts.folds
-        && k < asked
-    {
-        notes.push(format!(
-            "{asked} folds asked for, but the rows hold {distinct} distinct configurations: \
-             {k} folds"
-        ));
-    }
-    search.chosen = search.best();
-    let with_rbf = space.try_rbf || space.mix_only;
-    if opts.mlp_share.is_some() && !with_rbf {
-        notes.push(format!(
-            "an MLP share was given, but no blend of MLPs and the RBF network was tried (it \
-             needs the pose form, MLPs, and at most {RBF_MAX_ROWS} rows)"
-        ));
-    }
-    if !space.rbf_only {
-        search.mlps(with_rbf);
-    }
-    if with_rbf {
-        search.rbf()?;
-    }
     if space.refines.len() > 1 {
         search.refinement();
     }
@@ -365,6 +392,46 @@ pub fn select_settings(
     ))
 }
 
+/// Stages 1 to 3 of the search (the forms, the MLPs, the RBF network), each candidate fitted
+/// with the first refinement; notes on what the options asked for that could not be had go
+/// to `notes`. An error where every candidate of stage 1 failed.
+fn stages_1_to_3(
+    search: &mut Search,
+    notes: &mut Vec<String>,
+    with_rbf: bool,
+    distinct: usize,
+    k: usize,
+) -> Result<()> {
+    let (space, opts) = (search.space, search.opts);
+    search.first();
+    if search.candidates.iter().all(|c| c.score.is_none()) {
+        return Err(failed(&search.candidates));
+    }
+    // From here on some candidate has a score: the best always exists.
+    if let Some(asked) = opts.folds
+        && k < asked
+    {
+        notes.push(format!(
+            "{asked} folds asked for, but the rows hold {distinct} distinct configurations: \
+             {k} folds"
+        ));
+    }
+    search.chosen = search.best();
+    if opts.mlp_share.is_some() && !with_rbf {
+        notes.push(format!(
+            "an MLP share was given, but no blend of MLPs and the RBF network was tried (it \
+             needs the pose form, MLPs, and at most {RBF_MAX_ROWS} rows)"
+        ));
+    }
+    if !space.rbf_only {
+        search.mlps(with_rbf);
+    }
+    if with_rbf {
+        search.rbf()?;
+    }
+    Ok(())
+}
+
 /// What stage 5's test of the network against the best model alone found (`candidates`: the
 /// search's, which `t` indexes).
 fn network_note(t: &NetworkTest, candidates: &[Candidate]) -> String {
@@ -413,18 +480,19 @@ fn network_note(t: &NetworkTest, candidates: &[Candidate]) -> String {
     format!("{test}, {why}: the compensator is the model alone")
 }
 
-/// The refined models of each refinement of `refines` on each of the `k` folds, computed
-/// once. A refinement whose models are an earlier one's on every fold (the compliances all
-/// screened out) is the same candidate: it is taken out of `refines` before anything is
-/// fitted with it.
+/// The refined models of each refinement of `refines` (`models`, one per fold, in
+/// `refines`' order) that are not an earlier one's. A refinement whose models are an
+/// earlier one's on every fold (the compliances all screened out) is the same candidate: it
+/// is taken out of `refines` before anything is fitted with it.
 fn distinct_refinements(
-    cv: &Cv,
-    k: usize,
+    models: Vec<Vec<Result<Robot>>>,
     refines: &mut Vec<Option<String>>,
 ) -> Vec<Vec<Result<Robot>>> {
+    debug_assert_eq!(models.len(), refines.len(), "a model list per refinement");
     let mut refined: Vec<Vec<Result<Robot>>> = Vec::new();
-    refines.retain(|spec| {
-        let models = parallel_map(k, |f| cv.model(f, spec));
+    let mut models = models.into_iter();
+    refines.retain(|_| {
+        let models = models.next().unwrap_or_default();
         let repeated = refined
             .iter()
             .any(|earlier| earlier.iter().zip(&models).all(|(a, b)| same_model(a, b)));
