@@ -274,7 +274,9 @@ pub fn select_settings(
             chosen_rows: None,
         };
         let early = stages_1_to_3(&mut search, &mut notes, with_rbf, distinct, k);
-        let others = others.map(|h| h.join().unwrap_or_default());
+        // A panic there is a defect: it goes on as one in the refinements' own fits would
+        // have, not as refinements silently left out.
+        let others = others.map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
         (
             early.map(|()| {
                 (
