@@ -7,7 +7,7 @@
 //! one pass. Four values at a time in AVX2 registers (`pulp`'s V3) where the processor has
 //! them; elsewhere the separate operations.
 
-use super::vectors::{dot_in, finish};
+use super::vectors::dot_in;
 
 /// What follows the update d + a x of [`update_dot`], element by element.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -110,7 +110,7 @@ pub fn differences(
 }
 
 #[cfg(target_arch = "x86_64")]
-use super::vectors::{load4, store4};
+use super::vectors::{finish, load4, store4};
 #[cfg(target_arch = "x86_64")]
 use pulp::{Simd as _, f64x4};
 

@@ -1,5 +1,6 @@
-//! The cross-validation workspace: each fold's training and held-out rows, refined models,
-//! and the fits (networks, warm starts, RBF hyperparameters) that candidates share.
+//! The cross-validation workspace: each fold's training and held-out rows, the refinement of
+//! a fold's model, and the fits (networks, warm starts, RBF hyperparameters) that candidates
+//! share.
 
 use super::SHARES;
 use super::rows::{share_sums, sums};
@@ -22,7 +23,8 @@ use std::collections::HashMap;
 use std::sync::Mutex;
 
 /// The cross-validation workspace: folds, each fold's training and held-out rows, and the
-/// refined models of each fold (computed once per refinement).
+/// fits candidates share (the refined models of each fold are computed once per refinement
+/// with [`Cv::model`] and held by the race).
 pub(super) struct Cv<'a> {
     pub(super) robot: &'a Robot,
     pub(super) train: Vec<MeasurementSet>,
@@ -61,6 +63,8 @@ pub(super) type Worked = (Weights, usize);
 pub(super) type WarmStart = (usize, f64, Weights, usize);
 
 impl Cv<'_> {
+    /// The model refined by `spec` on fold `fold`'s training rows (the model as given
+    /// without a refinement).
     pub(super) fn model(&self, fold: usize, spec: &Option<String>) -> Result<Robot> {
         match spec {
             None => Ok(self.robot.clone()),

@@ -396,7 +396,8 @@ pub fn select_settings(
 
 /// Stages 1 to 3 of the search (the forms, the MLPs, the RBF network), each candidate fitted
 /// with the first refinement; notes on what the options asked for that could not be had go
-/// to `notes`. An error where every candidate of stage 1 failed.
+/// to `notes`. An error where every candidate of stage 1 failed, or where the network is
+/// fixed to a blend and no pose-form MLP was fitted to blend ([`Search::rbf`]).
 fn stages_1_to_3(
     search: &mut Search,
     notes: &mut Vec<String>,
