@@ -8,6 +8,7 @@
 //! them; elsewhere the separate operations.
 
 use super::vectors::dot_in;
+use nalgebra::DVector;
 
 /// What follows the update d + a x of [`update_dot`], element by element.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -76,19 +77,26 @@ pub fn step_to(out: &mut [f64], x: &[f64], a: f64, d: &[f64]) {
 /// s <- x_new - x and y <- g_new - g element by element; returns (s . s, y . y, s . y) in
 /// nalgebra's order (the bits of [`super::vectors::dot`] of the new s and y).
 pub fn differences(
-    s: &mut [f64],
-    x_new: &[f64],
-    x: &[f64],
-    y: &mut [f64],
-    g_new: &[f64],
-    g: &[f64],
+    s: &mut DVector<f64>,
+    x_new: &DVector<f64>,
+    x: &DVector<f64>,
+    y: &mut DVector<f64>,
+    g_new: &DVector<f64>,
+    g: &DVector<f64>,
 ) -> (f64, f64, f64) {
     let n = s.len();
     assert!(
         [x_new.len(), x.len(), y.len(), g_new.len(), g.len()]
             .iter()
             .all(|&l| l == n),
-        "differences: slices of unequal lengths"
+        "differences: vectors of unequal lengths"
+    );
+    let (s, y) = (s.as_mut_slice(), y.as_mut_slice());
+    let (x_new, x, g_new, g) = (
+        x_new.as_slice(),
+        x.as_slice(),
+        g_new.as_slice(),
+        g.as_slice(),
     );
     #[cfg(target_arch = "x86_64")]
     if let Some(simd) = pulp::x86::V3::try_new() {
@@ -237,20 +245,19 @@ impl pulp::NullaryFnOnce for DifferencesV3<'_> {
 mod tests {
     use super::*;
     use crate::neural::vectors::{axpy, dot};
-    use nalgebra::DVector;
 
-    /// Values of many magnitudes (1e-6 to 1e6) and both signs, zeros among them (whose sign
-    /// a negation must keep), from a xorshift seeded by `seed`.
-    fn values(mut seed: u64) -> impl FnMut() -> f64 {
+    /// [`crate::neural::vectors`]' test values (many magnitudes, both signs), every
+    /// seventeenth a zero (whose sign a negation must keep).
+    fn values(seed: u64) -> impl FnMut() -> f64 {
+        let mut spread = crate::neural::vectors::tests::values(seed);
+        let mut count = 0usize;
         move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            if seed.is_multiple_of(17) {
-                return 0.0;
+            count += 1;
+            if count.is_multiple_of(17) {
+                0.0
+            } else {
+                spread()
             }
-            let m = (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
-            m * 10f64.powi((seed % 13) as i32 - 6)
         }
     }
 
@@ -298,14 +305,7 @@ mod tests {
             assert_eq!(bits(&trial), bits(&separate), "step, n = {n}");
 
             let (mut s, mut y) = (DVector::from_element(n, f64::NAN), DVector::zeros(n));
-            let (ss, yy, sy) = differences(
-                s.as_mut_slice(),
-                x_new.as_slice(),
-                x.as_slice(),
-                y.as_mut_slice(),
-                g_new.as_slice(),
-                g.as_slice(),
-            );
+            let (ss, yy, sy) = differences(&mut s, &x_new, &x, &mut y, &g_new, &g);
             let (s0, y0) = (&x_new - &x, &g_new - &g);
             assert_eq!(bits(&s), bits(&s0), "s, n = {n}");
             assert_eq!(bits(&y), bits(&y0), "y, n = {n}");

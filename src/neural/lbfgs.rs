@@ -89,14 +89,7 @@ pub fn minimize(
         let (mut s, mut y) = spare
             .take()
             .unwrap_or_else(|| (DVector::zeros(n), DVector::zeros(n)));
-        let (ss, yy, sy) = differences(
-            s.as_mut_slice(),
-            x_new.as_slice(),
-            x.as_slice(),
-            y.as_mut_slice(),
-            g_new.as_slice(),
-            g.as_slice(),
-        );
+        let (ss, yy, sy) = differences(&mut s, &x_new, &x, &mut y, &g_new, &g);
         if sy > 1e-12 * ss.sqrt() * yy.sqrt() {
             if pairs.len() == memory
                 && let Some(old) = pairs.pop_front()

@@ -215,12 +215,12 @@ pub fn tr_mul_to(a: &DMatrix<f64>, b: &DMatrix<f64>, out: &mut DMatrix<f64>) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// Values of many magnitudes (1e-6 to 1e6) and both signs, from a xorshift seeded by
     /// `seed`: sums of them in another order round otherwise.
-    fn values(mut seed: u64) -> impl FnMut() -> f64 {
+    pub(crate) fn values(mut seed: u64) -> impl FnMut() -> f64 {
         move || {
             seed ^= seed << 13;
             seed ^= seed >> 7;

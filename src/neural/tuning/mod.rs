@@ -58,7 +58,7 @@ pub use space::names_compliance;
 use stages::Search;
 use std::collections::HashMap;
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::AtomicUsize;
 
 /// Hidden units tried when not fixed (the middle one first).
 pub const HIDDEN: [usize; 3] = [16, 32, 64];
@@ -236,10 +236,21 @@ pub fn select_settings(
     // refinements' (stage 4 on) are computed beside them, in one thread: the folds' fits
     // leave a core idle at the end of most rounds (five folds on two cores), and the
     // refinements were the first 50 ms of a 150-pose training with nothing beside them.
-    let first = vec![parallel_map(k, |f| cv.model(f, &space.refines[0]))];
-    let race_folds = if k > RACE_FOLDS { RACE_FOLDS } else { k };
+    let first = parallel_map(k, |f| cv.model(f, &space.refines[0]));
     let mut notes = Vec::new();
     let with_rbf = space.try_rbf || space.mix_only;
+    // Each candidate is first scored on the race folds; one that is already clearly worse
+    // there than the best so far on the same folds is dropped before the other folds.
+    let mut race = Race {
+        cv: &cv,
+        refines: space.refines[..1].to_vec(),
+        refined: vec![first],
+        k,
+        race: if k > RACE_FOLDS { RACE_FOLDS } else { k },
+        done: AtomicUsize::new(0),
+        rounds: &rounds,
+        progress,
+    };
     let (early, others) = std::thread::scope(|scope| {
         let others = (space.refines.len() > 1).then(|| {
             let later = &space.refines[1..];
@@ -251,66 +262,21 @@ pub fn select_settings(
                     .collect::<Vec<_>>()
             })
         });
-        // Each candidate is first scored on the race folds; one that is already clearly
-        // worse there than the best so far on the same folds is dropped before the other
-        // folds.
-        let race = Race {
-            cv: &cv,
-            refines: &space.refines[..1],
-            refined: &first,
-            k,
-            race: race_folds,
-            done: AtomicUsize::new(0),
-            rounds: &rounds,
-            progress,
-        };
-        let mut search = Search {
-            race: &race,
-            space: &space,
-            opts,
-            candidates: Vec::new(),
-            chosen: 0,
-            network_test: None,
-            chosen_rows: None,
-        };
+        let mut search = Search::new(&race, &space, opts);
         let early = stages_1_to_3(&mut search, &mut notes, with_rbf, distinct, k);
         // A panic there is a defect: it goes on as one in the refinements' own fits would
         // have, not as refinements silently left out.
         let others = others.map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
-        (
-            early.map(|()| {
-                (
-                    search.candidates,
-                    search.chosen,
-                    race.done.load(Ordering::Relaxed),
-                )
-            }),
-            others,
-        )
+        (early.map(|()| (search.candidates, search.chosen)), others)
     });
-    let (candidates, chosen, done) = early?;
-    let mut all = first;
+    let (candidates, chosen) = early?;
+    let mut all = std::mem::take(&mut race.refined);
     all.extend(others.unwrap_or_default());
-    let refined = distinct_refinements(all, &mut space.refines);
-    let race = Race {
-        cv: &cv,
-        refines: &space.refines,
-        refined: &refined,
-        k,
-        race: race_folds,
-        done: AtomicUsize::new(done),
-        rounds: &rounds,
-        progress,
-    };
-    let mut search = Search {
-        race: &race,
-        space: &space,
-        opts,
-        candidates,
-        chosen,
-        network_test: None,
-        chosen_rows: None,
-    };
+    race.refined = distinct_refinements(all, &mut space.refines);
+    race.refines = space.refines.clone();
+    let mut search = Search::new(&race, &space, opts);
+    search.candidates = candidates;
+    search.chosen = chosen;
     if space.refines.len() > 1 {
         search.refinement();
     }

@@ -18,9 +18,11 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 /// are fitted on the other folds (proxies, [`Race::proxies`], never are).
 pub(super) struct Race<'a, 'c> {
     pub(super) cv: &'a Cv<'c>,
-    pub(super) refines: &'a [Option<String>],
+    /// The refinements candidates can name (the first alone until the others' models are
+    /// in, see [`super::select_settings`]).
+    pub(super) refines: Vec<Option<String>>,
     /// Each refinement's model per fold.
-    pub(super) refined: &'a [Vec<Result<Robot>>],
+    pub(super) refined: Vec<Vec<Result<Robot>>>,
     /// Folds.
     pub(super) k: usize,
     /// Race folds.

@@ -29,7 +29,24 @@ pub(super) struct Search<'r, 'a, 'c> {
     pub(super) chosen_rows: Option<Vec<Vec<RowError>>>,
 }
 
-impl Search<'_, '_, '_> {
+impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
+    /// A search with no candidate yet.
+    pub(super) fn new(
+        race: &'r Race<'a, 'c>,
+        space: &'r Space,
+        opts: &'r CompensatorOptions,
+    ) -> Self {
+        Search {
+            race,
+            space,
+            opts,
+            candidates: Vec::new(),
+            chosen: 0,
+            network_test: None,
+            chosen_rows: None,
+        }
+    }
+
     /// Scores the settings of `list` not yet among the candidates, whatever their outcome
     /// there (stage `stage`).
     fn evaluate(&mut self, stage: usize, list: Vec<Settings>) {
