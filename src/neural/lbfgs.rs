@@ -153,44 +153,22 @@ fn direction(
     for k in (0..m).rev() {
         let p = &pairs[k];
         alpha[k] = p.rho * next;
-        next = if k > 0 {
-            update_dot(
-                d,
-                -alpha[k],
-                p.y.as_slice(),
-                Then::Keep,
-                pairs[k - 1].s.as_slice(),
-            )
-        } else {
-            update_dot(
-                d,
-                -alpha[k],
-                p.y.as_slice(),
-                Then::Scale(gamma),
-                oldest.y.as_slice(),
-            )
+        // After the last pair of the first loop, d is scaled and the second loop begins.
+        let (then, of) = match k {
+            0 => (Then::Scale(gamma), &oldest.y),
+            _ => (Then::Keep, &pairs[k - 1].s),
         };
+        next = update_dot(d, -alpha[k], p.y.as_slice(), then, of.as_slice());
     }
     for k in 0..m {
         let p = &pairs[k];
         let beta = p.rho * next;
-        next = if k + 1 < m {
-            update_dot(
-                d,
-                alpha[k] - beta,
-                p.s.as_slice(),
-                Then::Keep,
-                pairs[k + 1].y.as_slice(),
-            )
-        } else {
-            update_dot(
-                d,
-                alpha[k] - beta,
-                p.s.as_slice(),
-                Then::Negate,
-                g.as_slice(),
-            )
+        // After the last pair, d is negated and the slope is its dot product with g.
+        let (then, of) = match pairs.get(k + 1) {
+            Some(after) => (Then::Keep, &after.y),
+            None => (Then::Negate, g),
         };
+        next = update_dot(d, alpha[k] - beta, p.s.as_slice(), then, of.as_slice());
     }
     next
 }
@@ -224,13 +202,7 @@ mod tests {
 
     #[test]
     fn the_fused_direction_has_the_separate_operations_bits() {
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut next = crate::neural::vectors::tests::values(0x2545_f491_4f6c_dd1d_u64);
         for (n, m) in [(1, 1), (9, 3), (992, 10), (1190, 7), (37, 0)] {
             let mut v = || DVector::from_fn(n, |_, _| next());
             let g = v();

@@ -236,15 +236,15 @@ pub fn select_settings(
     // refinements' (stage 4 on) are computed beside them, in one thread: the folds' fits
     // leave a core idle at the end of most rounds (five folds on two cores), and the
     // refinements were the first 50 ms of a 150-pose training with nothing beside them.
-    let first = parallel_map(k, |f| cv.model(f, &space.refines[0]));
+    let first = space.refines[0].clone();
+    let first_models = parallel_map(k, |f| cv.model(f, &first));
     let mut notes = Vec::new();
     let with_rbf = space.try_rbf || space.mix_only;
     // Each candidate is first scored on the race folds; one that is already clearly worse
     // there than the best so far on the same folds is dropped before the other folds.
     let mut race = Race {
         cv: &cv,
-        refines: space.refines[..1].to_vec(),
-        refined: vec![first],
+        refined: vec![(first, first_models)],
         k,
         race: if k > RACE_FOLDS { RACE_FOLDS } else { k },
         done: AtomicUsize::new(0),
@@ -256,9 +256,8 @@ pub fn select_settings(
             let later = &space.refines[1..];
             let cv = &cv;
             scope.spawn(move || {
-                later
-                    .iter()
-                    .map(|spec| (0..k).map(|f| cv.model(f, spec)).collect::<Vec<_>>())
+                (later.iter())
+                    .map(|spec| (spec.clone(), (0..k).map(|f| cv.model(f, spec)).collect()))
                     .collect::<Vec<_>>()
             })
         });
@@ -270,10 +269,9 @@ pub fn select_settings(
         (early.map(|()| (search.candidates, search.chosen)), others)
     });
     let (candidates, chosen) = early?;
-    let mut all = std::mem::take(&mut race.refined);
-    all.extend(others.unwrap_or_default());
-    race.refined = distinct_refinements(all, &mut space.refines);
-    race.refines = space.refines.clone();
+    race.refined.extend(others.unwrap_or_default());
+    distinct_refinements(&mut race.refined);
+    space.refines = race.refined.iter().map(|(r, _)| r.clone()).collect();
     let mut search = Search::new(&race, &space, opts);
     search.candidates = candidates;
     search.chosen = chosen;
@@ -449,28 +447,19 @@ fn network_note(t: &NetworkTest, candidates: &[Candidate]) -> String {
     format!("{test}, {why}: the compensator is the model alone")
 }
 
-/// The refined models of each refinement of `refines` (`models`, one per fold, in
-/// `refines`' order) that are not an earlier one's. A refinement whose models are an
-/// earlier one's on every fold (the compliances all screened out) is the same candidate: it
-/// is taken out of `refines` before anything is fitted with it.
-fn distinct_refinements(
-    models: Vec<Vec<Result<Robot>>>,
-    refines: &mut Vec<Option<String>>,
-) -> Vec<Vec<Result<Robot>>> {
-    debug_assert_eq!(models.len(), refines.len(), "a model list per refinement");
-    let mut refined: Vec<Vec<Result<Robot>>> = Vec::new();
-    let mut models = models.into_iter();
-    refines.retain(|_| {
-        let models = models.next().unwrap_or_default();
-        let repeated = refined
-            .iter()
-            .any(|earlier| earlier.iter().zip(&models).all(|(a, b)| same_model(a, b)));
+/// Takes out of `refined` (each refinement with its models, one per fold) every refinement
+/// whose models are an earlier one's on every fold (the compliances all screened out): it is
+/// the same candidate, taken out before anything is fitted with it.
+fn distinct_refinements(refined: &mut Vec<(Option<String>, Vec<Result<Robot>>)>) {
+    let mut kept: Vec<(Option<String>, Vec<Result<Robot>>)> = Vec::with_capacity(refined.len());
+    for (spec, models) in refined.drain(..) {
+        let repeated = (kept.iter())
+            .any(|(_, earlier)| earlier.iter().zip(&models).all(|(a, b)| same_model(a, b)));
         if !repeated {
-            refined.push(models);
+            kept.push((spec, models));
         }
-        !repeated
-    });
-    refined
+    }
+    *refined = kept;
 }
 
 /// Whether two refined models are the same kinematics: equal, or both rigid and equal

@@ -18,11 +18,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 /// are fitted on the other folds (proxies, [`Race::proxies`], never are).
 pub(super) struct Race<'a, 'c> {
     pub(super) cv: &'a Cv<'c>,
-    /// The refinements candidates can name (the first alone until the others' models are
-    /// in, see [`super::select_settings`]).
-    pub(super) refines: Vec<Option<String>>,
-    /// Each refinement's model per fold.
-    pub(super) refined: Vec<Vec<Result<Robot>>>,
+    /// Each refinement candidates can name, with its model per fold (the first alone until
+    /// the others' models are in, see [`super::select_settings`]).
+    pub(super) refined: Vec<(Option<String>, Vec<Result<Robot>>)>,
     /// Folds.
     pub(super) k: usize,
     /// Race folds.
@@ -35,19 +33,23 @@ pub(super) struct Race<'a, 'c> {
 }
 
 impl Race<'_, '_> {
+    /// Fold `fold`'s model under the refinement `refine` (the first refinement's where the
+    /// race does not hold `refine`).
+    fn model(&self, refine: &Option<String>, fold: usize) -> Result<&Robot> {
+        let (_, models) = (self.refined.iter())
+            .find(|(r, _)| r == refine)
+            .unwrap_or(&self.refined[0]);
+        models[fold]
+            .as_ref()
+            .map_err(|e| Error::Invalid(e.to_string()))
+    }
+
     /// Held-out errors of `settings` on every fold, fold by fold, in each fold's row order
     /// (the folds' fits are cached: predicting is the work, folds in parallel).
     pub(super) fn held_rows(&self, settings: &Settings) -> Result<Vec<Vec<RowError>>> {
-        let r_idx = self
-            .refines
-            .iter()
-            .position(|r| r == &settings.refine)
-            .unwrap_or(0);
         let round = self.rounds.load(Ordering::Relaxed);
         parallel_map(self.k, |f| {
-            let model = self.refined[r_idx][f]
-                .as_ref()
-                .map_err(|e| Error::Invalid(e.to_string()))?;
+            let model = self.model(&settings.refine, f)?;
             let c = self.cv.fit(f, settings, model, round)?;
             let mut ws = Default::default();
             held_errors(&self.cv.held[f], |q| c.predict(q, &mut ws))
@@ -97,15 +99,9 @@ impl Race<'_, '_> {
             parallel_map(jobs.len(), |j| {
                 let (c, f) = jobs[j];
                 let s = &list[c];
-                let r_idx = self
-                    .refines
-                    .iter()
-                    .position(|r| r == &s.refine)
-                    .unwrap_or(0);
-                let out = match &self.refined[r_idx][f] {
-                    Ok(m) => self.cv.run(f, s, m, round),
-                    Err(e) => Err(Error::Invalid(e.to_string())),
-                };
+                let out = self
+                    .model(&s.refine, f)
+                    .and_then(|m| self.cv.run(f, s, m, round));
                 (self.progress)(self.done.fetch_add(1, Ordering::Relaxed) + 1, total_now);
                 out
             })
