@@ -118,16 +118,9 @@ pub fn differences(
 }
 
 #[cfg(target_arch = "x86_64")]
-use super::vectors::{finish, load4, store4};
+use super::vectors::{finish, lanes, load4, store4};
 #[cfg(target_arch = "x86_64")]
 use pulp::{Simd as _, f64x4};
-
-/// The four lanes of an AVX2 register.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn lanes(v: f64x4) -> [f64; 4] {
-    [v.0, v.1, v.2, v.3]
-}
 
 /// [`update_dot`] as the operation `vectorize` compiles with AVX2 (a method marked
 /// `inline(always)`, as [`super::vectors`]' kernels: a closure is compiled apart from it).

@@ -61,7 +61,7 @@ fn dot_v3(simd: pulp::x86::V3, a: &[f64], b: &[f64]) -> f64 {
         lo = simd.add_f64s(lo, simd.mul_f64s(load4(&ca[..4]), load4(&cb[..4])));
         hi = simd.add_f64s(hi, simd.mul_f64s(load4(&ca[4..]), load4(&cb[4..])));
     }
-    finish(a, b, [lo.0, lo.1, lo.2, lo.3], [hi.0, hi.1, hi.2, hi.3])
+    finish(a, b, lanes(lo), lanes(hi))
 }
 
 /// The end of [`dot_in`]: the partial sums added in nalgebra's order, then the tail.
@@ -82,6 +82,13 @@ pub(super) fn finish(a: &[f64], b: &[f64], lo: [f64; 4], hi: [f64; 4]) -> f64 {
 #[inline(always)]
 pub(super) fn load4(c: &[f64]) -> pulp::f64x4 {
     pulp::f64x4(c[0], c[1], c[2], c[3])
+}
+
+/// The four lanes of an AVX2 register.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(super) fn lanes(v: pulp::f64x4) -> [f64; 4] {
+    [v.0, v.1, v.2, v.3]
 }
 
 /// `v` into the first four values of `c`.
