@@ -182,9 +182,151 @@ pub fn summarize(rows: &[RowError]) -> ErrorStats {
     }
 }
 
+/// Rows named by [`worst_rows`] (each list at most this long).
+pub const WORST_ROWS: usize = 3;
+
+/// One row's position error under the model and with a compensator (mm).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RowComparison {
+    /// Line of the row (of row b for a pair).
+    pub line: usize,
+    /// The model's position error (mm).
+    #[serde(with = "crate::io::json_number")]
+    pub model_mm: f64,
+    /// The position error with the compensator (mm); None when none was evaluated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compensated_mm: Option<f64>,
+}
+
+/// Where a set's largest position errors lie, and where a compensator adds error: the rows
+/// behind a max, which a mean or an RMS does not name.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct WorstRows {
+    /// The rows of largest position error (the compensator's where one was evaluated, else
+    /// the model's), largest first.
+    pub largest: Vec<RowComparison>,
+    /// With a compensator: the rows whose position error it raises most over the model's,
+    /// largest rise first (empty when it raises none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub raised: Vec<RowComparison>,
+    /// With a compensator: how many rows' position error it raises (0 without one).
+    #[serde(default)]
+    pub rows_raised: usize,
+    /// Rows compared (those with a position error).
+    pub rows: usize,
+}
+
+/// The [`WORST_ROWS`] rows of largest position error and, given the compensator's errors
+/// `compensated` (row for row with `model`: the same set and measure), the rows whose error it
+/// raises most. Rows without a position error are skipped; ties go to the earlier line.
+pub fn worst_rows(model: &[RowError], compensated: Option<&[RowError]>) -> Result<WorstRows> {
+    if let Some(c) = compensated
+        && c.len() != model.len()
+    {
+        return Err(crate::error::Error::Invalid(format!(
+            "worst rows: {} compensated row errors for {} model row errors",
+            c.len(),
+            model.len()
+        )));
+    }
+    let rows: Vec<RowComparison> = model
+        .iter()
+        .enumerate()
+        .filter_map(|(i, m)| {
+            Some(RowComparison {
+                line: m.line,
+                model_mm: m.position_mm?,
+                compensated_mm: match compensated {
+                    Some(c) => Some(c[i].position_mm?),
+                    None => None,
+                },
+            })
+        })
+        .collect();
+    let error = |r: &RowComparison| r.compensated_mm.unwrap_or(r.model_mm);
+    let rise = |r: &RowComparison| r.compensated_mm.map_or(0.0, |c| c - r.model_mm);
+    let top = |key: &dyn Fn(&RowComparison) -> f64, keep: &dyn Fn(&RowComparison) -> bool| {
+        let mut v: Vec<RowComparison> = rows.iter().copied().filter(|r| keep(r)).collect();
+        v.sort_by(|a, b| key(b).total_cmp(&key(a)).then(a.line.cmp(&b.line)));
+        v.truncate(WORST_ROWS);
+        v
+    };
+    Ok(WorstRows {
+        largest: top(&error, &|_| true),
+        raised: top(&rise, &|r| rise(r) > 0.0),
+        rows_raised: rows.iter().filter(|r| rise(r) > 0.0).count(),
+        rows: rows.len(),
+    })
+}
+
 /// Statistics of a kinematic model on a set.
 pub fn evaluate_model(robot: &Robot, set: &MeasurementSet, measure: Measure) -> Result<ErrorStats> {
     Ok(summarize(&row_errors(set, measure, |q| {
         tool_pose(robot, q)
     })?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(line: usize, mm: Option<f64>) -> RowError {
+        RowError {
+            line,
+            position_mm: mm,
+            abs_xyz_mm: None,
+            orientation_deg: None,
+        }
+    }
+
+    #[test]
+    fn worst_rows_rank_by_the_compensated_error_and_by_its_rise() {
+        // Lines 2..7: model and compensated errors (mm, exact in binary so that ties are
+        // ties); line 4 has no position.
+        let model = [
+            row(2, Some(1.0)),
+            row(3, Some(0.25)),
+            row(4, None),
+            row(5, Some(0.75)),
+            row(6, Some(0.5)),
+            row(7, Some(0.25)),
+        ];
+        let net = [
+            row(2, Some(0.125)),
+            row(3, Some(0.625)),
+            row(4, None),
+            row(5, Some(1.25)),
+            row(6, Some(0.625)),
+            row(7, Some(0.625)),
+        ];
+        let w = worst_rows(&model, Some(&net)).unwrap();
+        let lines = |v: &[RowComparison]| v.iter().map(|r| r.line).collect::<Vec<_>>();
+        // 1.25 (5), then 0.625 three times: ties to the earlier line (3, 6; 7 is fourth).
+        assert_eq!(lines(&w.largest), vec![5, 3, 6]);
+        assert_eq!(w.largest[0].model_mm, 0.75);
+        assert_eq!(w.largest[0].compensated_mm, Some(1.25));
+        // Rises: 5 +0.5, 3 and 7 +0.375 (the earlier first), 6 +0.125; line 2 falls.
+        assert_eq!(lines(&w.raised), vec![5, 3, 7]);
+        assert_eq!((w.rows_raised, w.rows), (4, 5));
+        // The model alone: its own largest, nothing raised.
+        let alone = worst_rows(&model, None).unwrap();
+        assert_eq!(lines(&alone.largest), vec![2, 5, 6]);
+        assert!(alone.largest.iter().all(|r| r.compensated_mm.is_none()));
+        assert!(alone.raised.is_empty());
+        assert_eq!((alone.rows_raised, alone.rows), (0, 5));
+        // A compensator that lowers every error raises none.
+        let lower: Vec<RowError> = model
+            .iter()
+            .map(|r| row(r.line, r.position_mm.map(|e| e / 2.0)))
+            .collect();
+        let w = worst_rows(&model, Some(&lower)).unwrap();
+        assert!(w.raised.is_empty());
+        assert_eq!(w.rows_raised, 0);
+        assert_eq!(lines(&w.largest), vec![2, 5, 6]);
+        // Row errors of different sets are refused.
+        assert!(worst_rows(&model, Some(&net[..3])).is_err());
+        // No position at all: nothing to name.
+        let none = worst_rows(&[row(2, None)], None).unwrap();
+        assert_eq!((none.largest.len(), none.rows), (0, 0));
+    }
 }

@@ -103,6 +103,38 @@ fn identify_train_evaluate_and_predict() {
             assert!((x - y).abs() <= 1e-9, "{kind} {f}: evaluate {x}, train {y}");
         }
     }
+    // The rows behind the max: the first of the largest is the +net max (and the model's
+    // error there), in order; train names the same validation rows.
+    let w = &e["worst_rows"];
+    let largest = w["largest"].as_array().unwrap();
+    assert_eq!(largest.len(), 3, "{w}");
+    let first = largest[0]["compensated_mm"].as_f64().unwrap();
+    let max = accuracy(&e, "data", "+net")["position_mm"]["max"]
+        .as_f64()
+        .unwrap();
+    assert_eq!(first, max);
+    assert!(
+        largest
+            .windows(2)
+            .all(|p| p[0]["compensated_mm"].as_f64() >= p[1]["compensated_mm"].as_f64()),
+        "{w}"
+    );
+    assert_eq!(w["rows"], 250);
+    assert_eq!(*w, r["validation_worst_rows"], "evaluate against train");
+    let said = format!(
+        "largest data position errors with the compensator (mm): line {} {first:.4} (model {:.4})",
+        largest[0]["line"],
+        largest[0]["model_mm"].as_f64().unwrap()
+    );
+    assert!(stdout(&o).contains(&said), "{said}\n{}", stdout(&o));
+    assert!(
+        stdout(&o).contains(&format!(
+            "the compensator raises the position error of {} of 250 data rows",
+            w["rows_raised"]
+        )),
+        "{}",
+        stdout(&o)
+    );
 
     // predict on the test joints reproduces what evaluate compared.
     let joints = tmp("joints.csv");
@@ -855,7 +887,8 @@ fn a_reading_logged_with_other_joints_is_named_and_left_out_of_the_clean_rows() 
     // Alone, the validation file shows only the reading it shares with itself.
     let (said, alone) = evaluate(&data, "slip_evaluate_alone.json", Some(&comp), None);
     assert!(
-        said.contains("  line 31 carries the reading of line 12 (") && !said.contains("line 40"),
+        said.contains("  line 31 carries the reading of line 12 (")
+            && !said.contains("line 40 carries"),
         "{said}"
     );
     assert_eq!(alone["shared_readings"].as_array().unwrap().len(), 1);

@@ -3,12 +3,13 @@
 use super::data_args::{DataArgs, read_set};
 use super::predict::{load_compensator, warn_outside};
 use super::summary::{
-    clean_accuracy, print_repeats, print_shared, print_stats, shared_under, write_report,
+    clean_accuracy, print_repeats, print_shared, print_stats, print_worst, shared_under,
+    write_report,
 };
 use anyhow::Result;
 use clap::Args;
 use robocal::data::shared_readings::rows_checked;
-use robocal::evaluate::{row_errors, summarize};
+use robocal::evaluate::{row_errors, summarize, worst_rows};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
 use robocal::model::read_robot;
@@ -145,6 +146,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         &model_rows,
         net_rows.as_deref().map(|n| (n, &inside[..])),
     ));
+    let worst = worst_rows(&model_rows, net_rows.as_deref())?;
     let report = EvaluateReport {
         robot: a.robot.display().to_string(),
         compensator: a.compensator.as_ref().map(|p| p.display().to_string()),
@@ -157,6 +159,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         repeats: Repeats::of(&robot, &set),
         shared_readings: shared,
         check_against: a.check_against.as_ref().map(|p| p.display().to_string()),
+        worst_rows: (worst.rows > 0).then_some(worst),
     };
     if let Some(r) = &report.repeats {
         print_repeats(r);
@@ -196,6 +199,9 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         if let Some(c) = row.stats.position_per_coordinate_mean_mm {
             say!("mean per-coordinate position error |dx|,|dy|,|dz| ({what}): {c:.4} mm");
         }
+    }
+    if let Some(w) = &report.worst_rows {
+        print_worst("data", w);
     }
     if let Some(note) = &report.note {
         say!("{note}");

@@ -5,7 +5,7 @@ use robocal::data::MeasurementSet;
 use robocal::data::shared_readings::{
     SEPARATION_MM, SharedReading, shared_readings, shared_readings_with, suspect_rows,
 };
-use robocal::evaluate::{ErrorStats, RowError, summarize};
+use robocal::evaluate::{ErrorStats, RowError, WorstRows, summarize};
 use robocal::identify::Measure;
 use robocal::model::Robot;
 use robocal::neural::repeats::Repeats;
@@ -63,6 +63,49 @@ pub fn print_repeats(r: &Repeats) {
         r.max_spread_lines[1],
         r.pure_error_rms_mm
     );
+}
+
+/// Prints the rows behind a set's largest position errors (`what`: "data", "validation",
+/// ...) and, with a compensator, the rows whose error it raises most.
+pub fn print_worst(what: &str, w: &WorstRows) {
+    if w.largest.is_empty() {
+        return;
+    }
+    let with = w.largest.iter().any(|r| r.compensated_mm.is_some());
+    let rows: Vec<String> = w
+        .largest
+        .iter()
+        .map(|r| match r.compensated_mm {
+            Some(c) => format!("line {} {c:.4} (model {:.4})", r.line, r.model_mm),
+            None => format!("line {} {:.4}", r.line, r.model_mm),
+        })
+        .collect();
+    say!(
+        "largest {what} position errors{} (mm): {}",
+        if with { " with the compensator" } else { "" },
+        rows.join(", ")
+    );
+    if with {
+        let raised: Vec<String> = w
+            .raised
+            .iter()
+            .map(|r| {
+                format!(
+                    "line {} ({:.4} -> {:.4} mm)",
+                    r.line,
+                    r.model_mm,
+                    r.compensated_mm.unwrap_or(f64::NAN)
+                )
+            })
+            .collect();
+        say!(
+            "the compensator raises the position error of {} of {} {what} rows{}{}",
+            w.rows_raised,
+            w.rows,
+            if raised.is_empty() { "" } else { ", most at " },
+            raised.join(", ")
+        );
+    }
 }
 
 /// Prints the rows of a set (`what`: "training", "validation", ...) that carry another

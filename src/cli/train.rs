@@ -6,7 +6,7 @@ use super::summary::{clean_accuracy, print_shared, print_stats, shared_under, wr
 use anyhow::{Context, Result};
 use clap::Args;
 use robocal::data::measurement::subset;
-use robocal::evaluate::{row_errors, summarize};
+use robocal::evaluate::{row_errors, summarize, worst_rows};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
 use robocal::neural::compensator::{Compensator, Network, Refine};
@@ -346,6 +346,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     let mut ws = PredictWorkspace::default();
     let mut accuracy = Vec::new();
     let mut clean = Vec::new();
+    let mut val_worst = None;
     // The training rows' readings logged with other joints were judged in training, under the
     // robot file's model, among themselves; the validation rows' are judged here against
     // their own and the training rows, as `evaluate --check-against` the training file judges
@@ -413,6 +414,9 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             )?
             .len();
         }
+        if name == "validation" {
+            val_worst = Some(worst_rows(&before_rows, Some(&after_rows))?).filter(|w| w.rows > 0);
+        }
         let (before, after) = (summarize(&before_rows), summarize(&after_rows));
         // Fitted to these rows, a compensator that misses them by more than its model has
         // not learned (no epochs, a step limit hit at once): written as asked, but said.
@@ -444,7 +448,11 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         accuracy,
     );
     report.validation_shared_readings = val_shared;
+    report.validation_worst_rows = val_worst;
     print_stats(&report.accuracy, robocal::identify::Measure::Pose);
+    if let Some(w) = &report.validation_worst_rows {
+        super::summary::print_worst("validation", w);
+    }
     for r in &report.accuracy {
         if let Some(outside) = r.rows_outside_domain
             && outside > 0

@@ -265,6 +265,11 @@ pub struct EvaluateReport {
     /// (`--check-against`), if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub check_against: Option<String>,
+    /// The rows of largest position error and those whose error the compensator raises most
+    /// (mm); None without position errors (measure orientation), and in reports written
+    /// before it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub worst_rows: Option<crate::evaluate::WorstRows>,
 }
 
 fn unmodelled_is_none(u: &crate::identify::Unmodelled) -> bool {

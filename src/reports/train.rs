@@ -54,6 +54,11 @@ pub struct TrainReport {
     /// (then left out of the file, and in reports written before it).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub validation_shared_readings: Vec<SharedReading>,
+    /// The validation rows of largest position error with the compensator and those whose
+    /// error it raises most (mm); None without validation rows with positions, and in
+    /// reports written before it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub validation_worst_rows: Option<crate::evaluate::WorstRows>,
 }
 
 impl TrainReport {
@@ -88,6 +93,7 @@ impl TrainReport {
             accuracy,
             training: report,
             validation_shared_readings: Vec::new(),
+            validation_worst_rows: None,
         }
     }
 }
