@@ -36,6 +36,7 @@
 //! `faer`.
 
 mod covariance;
+mod draw;
 mod likelihood;
 mod prediction;
 mod search;
@@ -43,14 +44,15 @@ mod search;
 use super::samples::Samples;
 use crate::error::{Error, Result};
 pub use covariance::Covariance;
+pub use draw::{Draw, HYPER_BLOCKS, HYPER_ROWS, LeftOut};
 use faer::Mat;
 use faer::dyn_stack::MemStack;
 use likelihood::kernel;
 pub use likelihood::{PRIOR_SD, Pairs, neg_log_likelihood};
 use nalgebra::DVector;
 pub use search::{
-    Draw, HYPER_BLOCKS, HYPER_ITERATIONS, HYPER_ROWS, LeftOut, STALL_NATS, STARTS, Search, search,
-    search_best, search_best_without, search_from, search_start_without, search_without,
+    HYPER_ITERATIONS, STALL_NATS, STARTS, Search, search, search_best, search_best_without,
+    search_from, search_start_without, search_without,
 };
 
 /// One output's Gaussian process (or, in files of version 3 and 4, every output's).

@@ -1,9 +1,11 @@
 //! Type-II maximum likelihood of each output's Gaussian process: L-BFGS on the log
 //! hyperparameters from one of [`STARTS`], from all of them, or from given hyperparameters
-//! ([`search_from`]: the final fit's search without the rows it leaves out), on at most
-//! [`HYPER_ROWS`] rows, one per arm configuration.
+//! ([`search_from`]: the final fit's search without the rows it leaves out), on the rows
+//! [`super::draw`] picks: at most [`HYPER_ROWS`](super::HYPER_ROWS) rows in a block, one per
+//! arm configuration.
 
 use super::Covariance;
+use super::draw::{Draw, LeftOut, drawn_blocks};
 use super::likelihood::{Pairs, Scratch, neg_log_likelihood_in, prior_mean};
 use super::{Hyper, check_hyper, shape};
 use crate::error::{Error, Result};
@@ -12,26 +14,7 @@ use crate::neural::parallel::parallel_map;
 use crate::neural::samples::Samples;
 use faer::Mat;
 use nalgebra::DVector;
-use rand::SeedableRng;
-use rand::seq::SliceRandom;
-use rand_chacha::ChaCha8Rng;
 
-/// Rows on which the hyperparameters are fitted at most by default ([`Draw::seeded`]; the
-/// rest only enter the weights).
-pub const HYPER_ROWS: usize = 500;
-/// Disjoint blocks of [`HYPER_ROWS`] rows a search sees at most by default ([`Draw::seeded`]).
-/// Each block's rows are one Gaussian process; the search maximises the sum of the blocks'
-/// log likelihoods (the whole likelihood with the covariances between blocks taken as zero, a
-/// block-diagonal approximation), at a cost linear in the blocks instead of cubic in the rows.
-/// One by default: on real UR10 data, the default `train` with two blocks instead of one
-/// lowered the held-out position RMS over 16 Series B runs with pools of 1000 (4 splits,
-/// training seeds 1-4; fourteenth session, outlier cut 4) from 0.2081 to 0.2072 mm (the worst
-/// run 0.2289 -> 0.2244) and on Series A's pool of 2000 (seeds 1-3) from 0.1400 to 0.1380
-/// (lower in all three), but every step of the search then evaluates two likelihoods (as
-/// many steps as one block's), which doubles its time: 5.3 -> 7.1 s on those 2000 poses,
-/// 5.9 -> 8.3 s on Series B's README split (1000 poses). (Before the draw of one row per
-/// configuration, two blocks had taken the Series B mean from 0.2144 to 0.2108 mm.)
-pub const HYPER_BLOCKS: usize = 1;
 /// Gain in log likelihood (nats) below which a search step counts as idle: of the blocks'
 /// summed objective (with K blocks, a stop about K times stricter for each).
 pub const STALL_NATS: f64 = 1e-3;
@@ -48,75 +31,6 @@ pub const HYPER_ITERATIONS: usize = 60;
 /// hyperparameters cross-validation judged instead ([`search_from`]).
 pub const STARTS: [(f64, f64); 3] = [(1.0, 0.5), (0.2, 0.05), (0.05, 0.01)];
 
-/// Which rows of a set a hyperparameter search sees, and the covariance function whose
-/// hyperparameters it fits: one row per configuration (a seeded choice among a repeated
-/// configuration's rows, see [`Samples::groups`]); all of them where they are at most `rows`,
-/// else blocks of `rows` in the order of a shuffle seeded by `seed`: the first block, then up
-/// to `blocks - 1` more, a last one of fewer rows only if it has `rows / 2` or more and 2
-/// ([`Draw::block_sizes`]);
-/// a block that rows left out leave with fewer than 2 is dropped. A block's cost is cubic in its
-/// rows (a Cholesky factor and an inverse of the n x n kernel matrix per evaluation).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Draw {
-    /// Seed of the shuffle.
-    pub seed: u64,
-    /// Rows searched at most (at least 2).
-    pub rows: usize,
-    /// The covariance function.
-    pub covariance: Covariance,
-    /// Blocks of at most `rows` searched at most (at least 1), their likelihoods summed.
-    pub blocks: usize,
-}
-
-impl Draw {
-    /// The default draw of `seed`: at most [`HYPER_BLOCKS`] blocks of [`HYPER_ROWS`] rows,
-    /// [`Covariance::DEFAULT`].
-    pub fn seeded(seed: u64) -> Draw {
-        Draw {
-            seed,
-            rows: HYPER_ROWS,
-            covariance: Covariance::DEFAULT,
-            blocks: HYPER_BLOCKS,
-        }
-    }
-
-    /// The sizes of the blocks a search of a set of `n` configurations sees (none left out;
-    /// one row per configuration): blocks of `rows` while there are rows and blocks, a last
-    /// smaller one only if it has at least `rows / 2` rows and 2 (and the first always).
-    pub fn block_sizes(&self, n: usize) -> Vec<usize> {
-        let (rows, blocks) = (self.rows.max(1), self.blocks.max(1));
-        (0..blocks)
-            .map(|b| n.saturating_sub(b * rows).min(rows))
-            .enumerate()
-            .filter(|&(b, size)| b == 0 || size >= (rows / 2).max(2))
-            .map(|(_, size)| size)
-            .collect()
-    }
-
-    /// [`Draw::block_sizes`] of a set whose rows are the configuration `groups` (ids as
-    /// [`Samples::groups`]; none left out): the rows the search of that set sees.
-    pub fn block_sizes_of(&self, groups: &[usize]) -> Vec<usize> {
-        let distinct = groups
-            .iter()
-            .collect::<std::collections::HashSet<_>>()
-            .len();
-        self.block_sizes(searched_rows(groups.len(), distinct))
-    }
-}
-
-/// Rows a search takes its blocks from on `rows` rows of `configurations` configurations: one
-/// per configuration, or every row where they are one configuration (measured again and
-/// again, it says nothing of how the error varies between configurations; its rows are all
-/// there is to fit the noise and signal levels on, and the network can learn a constant only,
-/// which `train` notes).
-fn searched_rows(rows: usize, configurations: usize) -> usize {
-    if configurations < 2 {
-        rows
-    } else {
-        configurations
-    }
-}
-
 /// The result of one hyperparameter search.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Search {
@@ -132,29 +46,6 @@ pub struct Search {
 /// objective is the sum of the outputs'.
 pub fn search(s: &Samples, start: usize, draw: Draw) -> Result<Search> {
     search_without(s, start, draw, LeftOut::NONE)
-}
-
-/// Rows a set was taken from a whole set without, for a search that should see the rows the
-/// whole set's search draws, but those.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct LeftOut<'a> {
-    /// Indices in the whole set of the rows taken out (any order; repeats allowed).
-    pub rows: &'a [usize],
-    /// The whole set's configuration group of each of its rows (its [`Samples::groups`]),
-    /// which the draw of one row per configuration needs. Empty: the set's own groups for its
-    /// rows and each row taken out a configuration of its own, exact where no configuration
-    /// repeats; otherwise a configuration whose drawn row is taken out keeps another, the
-    /// rows taken out still count toward the blocks, and the set's groups may part rows that
-    /// a row taken out had joined.
-    pub groups: &'a [usize],
-}
-
-impl LeftOut<'_> {
-    /// Nothing left out: the set is whole.
-    pub const NONE: LeftOut<'static> = LeftOut {
-        rows: &[],
-        groups: &[],
-    };
 }
 
 /// [`search()`] on `s`, a set taken from a whole set without the rows `left_out`: the rows
@@ -259,127 +150,16 @@ struct Searches<'a> {
     covariance: Covariance,
 }
 
-/// The rows of a whole set of `whole` rows (indices in it; `s` is that set less the sorted
-/// rows `left_out`) that a search takes its blocks from, in the order it takes them: a shuffle
-/// seeded by `seed`, of which only the first row of each configuration is kept (every row
-/// where the whole set is one configuration). The
-/// configurations are `whole_groups` (the whole set's groups), or where that is empty the
-/// groups of `s` ([`Samples::groups`]) with each row left out a configuration of its own.
-///
-/// One row per configuration because repeated measurements of one arm configuration agree to
-/// the data's repeatability (0.034 mm on Series B's pool), far closer than rows of different
-/// configurations follow the function of the joints the network learns. Pairs of repeats in
-/// the likelihood pull its noise variance toward that repeatability and its widths narrower,
-/// and the fit then follows its rows too closely between configurations, where it is judged.
-/// On 16 Series B runs with pools of 1000 (4 splits, training seeds 1-4), the default `train`'s
-/// held-out position RMS: 0.2144 mm with rows drawn one by one (as before), 0.2223 with each
-/// configuration's rows drawn together, 0.2081 with one row per configuration.
-fn configurations_in_draw_order(
-    s: &Samples,
-    left_out: &[usize],
-    whole_groups: &[usize],
-    whole: usize,
-    seed: u64,
-) -> Vec<usize> {
-    let mut all: Vec<usize> = (0..whole).collect();
-    all.shuffle(&mut ChaCha8Rng::seed_from_u64(seed ^ 0x7bf));
-    // A configuration: (false, group) for a group, (true, row) for a row left out alone.
-    let configuration = |r: usize| -> (bool, usize) {
-        if !whole_groups.is_empty() {
-            return (false, whole_groups[r]);
-        }
-        match left_out.binary_search(&r) {
-            Ok(_) => (true, r),
-            Err(before) => (false, s.group(r - before)),
-        }
-    };
-    let mut seen = std::collections::HashSet::new();
-    let first: Vec<usize> = all
-        .iter()
-        .copied()
-        .filter(|&r| seen.insert(configuration(r)))
-        .collect();
-    if searched_rows(all.len(), seen.len()) == all.len() {
-        all
-    } else {
-        first
-    }
-}
-
 impl<'a> Searches<'a> {
     fn new(s: &'a Samples, draw: Draw, left_out: LeftOut) -> Result<Searches<'a>> {
-        let (n, _, outputs) = shape(s)?;
-        if draw.rows < 2 {
-            return Err(Error::Invalid(format!(
-                "the RBF network's hyperparameter search on {} rows: it needs at least 2",
-                draw.rows
-            )));
-        }
-        if draw.blocks == 0 {
-            return Err(Error::Invalid(
-                "the RBF network's hyperparameter search on 0 blocks of rows: it needs at least 1"
-                    .into(),
-            ));
-        }
-        let whole_groups = left_out.groups;
-        let mut left_out = left_out.rows.to_vec();
-        left_out.sort_unstable();
-        left_out.dedup();
-        // The whole set's rows, drawn as its own search draws them.
-        let whole = n + left_out.len();
-        if let Some(&last) = left_out.last()
-            && last >= whole
-        {
-            return Err(Error::Invalid(format!(
-                "the RBF network's hyperparameter search: row {last} left out of a set of \
-                 {whole} rows"
-            )));
-        }
-        if !whole_groups.is_empty() && whole_groups.len() != whole {
-            return Err(Error::Invalid(format!(
-                "the RBF network's hyperparameter search: configuration groups of {} rows for \
-                 a whole set of {whole}",
-                whole_groups.len()
-            )));
-        }
-        let all = configurations_in_draw_order(s, &left_out, whole_groups, whole, draw.seed);
-        // Those left out dropped, the others numbered as in `s`.
-        let renumber = |block: &[usize]| -> Vec<usize> {
-            let mut rows = block.to_vec();
-            rows.sort_unstable();
-            rows.into_iter()
-                .filter(|r| left_out.binary_search(r).is_err())
-                .map(|r| r - left_out.partition_point(|&o| o < r))
-                .collect()
-        };
-        let mut at = 0;
-        let drawn: Vec<Vec<usize>> = draw
-            .block_sizes(all.len())
+        let (_, _, outputs) = shape(s)?;
+        let blocks = drawn_blocks(s, draw, left_out)?
             .into_iter()
-            .map(|size| {
-                at += size;
-                renumber(&all[at - size..at])
-            })
-            .collect();
-        let left: usize = drawn.iter().map(Vec::len).sum();
-        let blocks: Vec<(Vec<usize>, Pairs)> = drawn
-            .into_iter()
-            // A block that rows left out leave with fewer than 2 rows says nothing of a
-            // width.
-            .filter(|rows| rows.len() >= 2)
             .map(|rows| {
                 let pairs = Pairs::new(&s.x, &rows);
                 (rows, pairs)
             })
             .collect();
-        if blocks.is_empty() {
-            return Err(Error::Invalid(format!(
-                "the RBF network's hyperparameter search: {whole} rows ({} left out, one row \
-                 searched per arm configuration) leave {left} to search on, no block of them \
-                 2 or more",
-                left_out.len(),
-            )));
-        }
         Ok(Searches {
             s,
             outputs,
@@ -532,7 +312,7 @@ impl Objective {
 mod tests {
     use super::*;
     use crate::neural::rbf::tests::data;
-    use crate::neural::rbf::{Rbf, neg_log_likelihood};
+    use crate::neural::rbf::{HYPER_ROWS, Rbf, neg_log_likelihood};
 
     /// The rows `rows` left out, the whole set's groups not given.
     fn rows_out(rows: &[usize]) -> LeftOut<'_> {
@@ -652,31 +432,6 @@ mod tests {
             groups: &s.groups[1..],
         };
         assert!(Searches::new(&less, Draw::seeded(7), short).is_err());
-    }
-
-    /// Blocks of `rows` while there are rows and blocks; a short last block only from half
-    /// a block; the first block always, however short.
-    #[test]
-    fn block_sizes_fill_whole_blocks_and_keep_a_last_one_of_half_a_block() {
-        let draw = |rows, blocks| Draw {
-            rows,
-            blocks,
-            ..Draw::seeded(1)
-        };
-        assert_eq!(draw(500, 2).block_sizes(2000), vec![500, 500]);
-        assert_eq!(draw(500, 2).block_sizes(1000), vec![500, 500]);
-        assert_eq!(draw(500, 2).block_sizes(750), vec![500, 250]);
-        assert_eq!(draw(500, 2).block_sizes(749), vec![500]);
-        assert_eq!(draw(500, 2).block_sizes(300), vec![300]);
-        assert_eq!(draw(500, 1).block_sizes(2000), vec![500]);
-        assert_eq!(draw(50, 3).block_sizes(150), vec![50, 50, 50]);
-        assert_eq!(draw(100, 4).block_sizes(150), vec![100, 50]);
-        assert_eq!(draw(60, 2).block_sizes(150), vec![60, 60]);
-        assert_eq!(draw(2, 2).block_sizes(1), vec![1]);
-        // A last block of one row is none, whatever half a block is.
-        assert_eq!(draw(3, 2).block_sizes(4), vec![3]);
-        assert_eq!(draw(2, 3).block_sizes(5), vec![2, 2]);
-        assert_eq!(Draw::seeded(1).blocks, HYPER_BLOCKS);
     }
 
     /// The blocks are disjoint runs of one seeded shuffle of the rows: the first is the
