@@ -1,78 +1,8 @@
 //! File output that never leaves a half-written file behind, and a command's outputs that
 //! appear together or not at all ([`all_or_nothing`]).
 
-use crate::error::{Error, Location, Result};
+use crate::error::{Error, Result};
 use std::cell::RefCell;
-
-pub mod json_number {
-    //! Numbers in JSON reports that may be infinite or not a number: finite values as
-    //! numbers, the others as the texts `inf`, `-inf` and `nan` (JSON has no such numbers;
-    //! serde_json would write `null`, which a reader takes for "none"). Use with
-    //! `#[serde(with = "crate::io::json_number")]`; [`option`] for `Option<f64>`, whose
-    //! `null` then always means none.
-
-    use serde::{Deserialize, Deserializer, Serializer};
-
-    /// Writes `v`: a number when finite, else `inf`, `-inf` or `nan`.
-    pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
-        if v.is_finite() {
-            s.serialize_f64(*v)
-        } else if v.is_nan() {
-            s.serialize_str("nan")
-        } else if *v > 0.0 {
-            s.serialize_str("inf")
-        } else {
-            s.serialize_str("-inf")
-        }
-    }
-
-    #[derive(Deserialize)]
-    #[serde(untagged)]
-    enum NumOrText {
-        Num(f64),
-        Text(String),
-    }
-
-    fn read<E: serde::de::Error>(v: NumOrText) -> Result<f64, E> {
-        match v {
-            NumOrText::Num(v) => Ok(v),
-            NumOrText::Text(t) => match t.as_str() {
-                "inf" => Ok(f64::INFINITY),
-                "-inf" => Ok(f64::NEG_INFINITY),
-                "nan" => Ok(f64::NAN),
-                other => Err(E::custom(format!(
-                    "`{other}` is not a number (nor inf, -inf, nan)"
-                ))),
-            },
-        }
-    }
-
-    /// Reads a number or one of the texts `inf`, `-inf`, `nan`.
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-        read(NumOrText::deserialize(d)?)
-    }
-
-    pub mod option {
-        //! `Option<f64>` as [`super`] writes `f64`: `null` for none.
-
-        use serde::{Deserialize, Deserializer, Serializer};
-
-        /// Writes none as `null`, a value as [`super::serialize`] does.
-        pub fn serialize<S: Serializer>(v: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
-            match v {
-                None => s.serialize_none(),
-                Some(x) => super::serialize(x, s),
-            }
-        }
-
-        /// Reads `null` as none, else as [`super::deserialize`] does.
-        pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
-            Option::<super::NumOrText>::deserialize(d)?
-                .map(super::read)
-                .transpose()
-        }
-    }
-}
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -178,12 +108,6 @@ fn metadata_of(fd: std::os::fd::BorrowedFd) -> Option<std::fs::Metadata> {
     fd.try_clone_to_owned()
         .ok()
         .and_then(|fd| std::fs::File::from(fd).metadata().ok())
-}
-
-/// `text` without the byte-order mark some Windows editors put before UTF-8 (not part of
-/// JSON or CSV).
-pub fn without_bom(text: &str) -> &str {
-    text.strip_prefix('\u{feff}').unwrap_or(text)
 }
 
 /// This process's standard output or error.
@@ -505,102 +429,6 @@ fn destinations_ready(writes: &[Staged]) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// Reads a regular file of at most `cap` bytes: a device (`/dev/zero`), a folder or a larger
-/// file is refused by name instead of read until memory runs out.
-pub fn read_capped(path: &Path, cap: u64) -> Result<Vec<u8>> {
-    use std::io::Read;
-    // Checked before opening: opening a FIFO blocks until a writer comes.
-    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
-    if !meta.is_file() {
-        return Err(Error::Invalid(format!(
-            "{}: not a regular file",
-            path.display()
-        )));
-    }
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut bytes = Vec::new();
-    file.take(cap + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| Error::io(path, e))?;
-    if bytes.len() as u64 > cap {
-        return Err(Error::Invalid(format!(
-            "{}: larger than {} MB",
-            path.display(),
-            cap >> 20
-        )));
-    }
-    Ok(bytes)
-}
-
-/// Reads a text file, naming it in the error.
-/// Invalid UTF-8 is refused with its line.
-pub fn read_text(path: &Path) -> Result<String> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    String::from_utf8(bytes).map_err(|e| {
-        let at = e.utf8_error().valid_up_to();
-        let before = &e.as_bytes()[..at];
-        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-        let column = at
-            - before
-                .iter()
-                .rposition(|&b| b == b'\n')
-                .map_or(0, |p| p + 1)
-            + 1;
-        Error::input(
-            Location {
-                file: path.to_path_buf(),
-                line: Some(line),
-                field: None,
-            },
-            format!("invalid UTF-8 at byte {column} of the line"),
-        )
-    })
-}
-
-/// 1-based line of a byte offset of `text`.
-pub fn line_of(text: &str, offset: usize) -> usize {
-    text.as_bytes()[..offset.min(text.len())]
-        .iter()
-        .filter(|&&b| b == b'\n')
-        .count()
-        + 1
-}
-
-/// Parses TOML text into `T`; a syntax or type error names the file, the line and the key.
-pub fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T> {
-    toml::from_str(text).map_err(|e| {
-        let (line, field) = match e.span() {
-            Some(s) => (Some(line_of(text, s.start)), key_at(text, s)),
-            None => (None, None),
-        };
-        Error::input(
-            Location {
-                file: path.to_path_buf(),
-                line,
-                field,
-            },
-            e.message().trim().to_string(),
-        )
-    })
-}
-
-/// The key an error span points at: the key itself, or the key of `key = value` when the span
-/// is the value.
-fn key_at(text: &str, span: std::ops::Range<usize>) -> Option<String> {
-    let start = span.start.min(text.len());
-    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
-    let before = &text[line_start..start];
-    if let Some(eq) = before.find('=') {
-        let key = before[..eq].trim();
-        if !key.is_empty() {
-            return Some(key.to_string());
-        }
-    }
-    let snippet = text.get(span)?.trim();
-    (!snippet.is_empty() && snippet.len() <= 40 && !snippet.contains('\n'))
-        .then(|| snippet.to_string())
 }
 
 #[cfg(test)]
