@@ -84,6 +84,24 @@ fn identify_writes_a_robot_and_a_report_that_evaluate_confirms() {
         .as_f64()
         .unwrap();
     assert!((m - val_mean).abs() < 1e-9, "{m} vs {val_mean}");
+    // Both name the same validation rows behind the max, the first of them the max itself.
+    let w = &r["validation_worst_rows"];
+    assert_eq!(*w, e["worst_rows"], "identify against evaluate");
+    let max = accuracy(&r, "validation", "after")["position_mm"]["max"]
+        .as_f64()
+        .unwrap();
+    assert_eq!(w["largest"][0]["model_mm"].as_f64(), Some(max), "{w}");
+    assert_eq!(
+        (w["rows"].as_u64(), w["rows_raised"].as_u64()),
+        (Some(50), Some(0))
+    );
+    assert!(
+        stdout.contains(&format!(
+            "largest validation position errors (mm): line {} {max:.4}, line ",
+            w["largest"][0]["line"]
+        )),
+        "{stdout}"
+    );
 }
 
 #[test]

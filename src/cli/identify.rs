@@ -6,7 +6,7 @@ use super::summary::{print_stats, write_report};
 use anyhow::Result;
 use clap::Args;
 use robocal::data::MeasurementSet;
-use robocal::evaluate::{ErrorStats, RowError, row_errors, summarize};
+use robocal::evaluate::{ErrorStats, RowError, row_errors, summarize, worst_rows};
 use robocal::identify::register::check_position_scale;
 use robocal::identify::{Measure as Measured, Options, SolveOptions, identify};
 use robocal::kinematics::tool_pose;
@@ -140,10 +140,16 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     );
     // Readings logged with other joints, judged under the identified model.
     report.shared_readings = super::summary::shared_under(&id.robot, &cal, m, None);
+    if let Some((_, after)) = &val_rows {
+        report.validation_worst_rows = Some(worst_rows(after, None)?).filter(|w| w.rows > 0);
+    }
     report.warnings.extend(worse);
     report.notes.extend(a.sigma.unused(&cal));
     print_identified(&report);
     print_stats(&report.accuracy, report.measure);
+    if let Some(w) = &report.validation_worst_rows {
+        super::summary::print_worst("validation", w);
+    }
     for n in &report.notes {
         say!("note: {n}");
     }

@@ -114,6 +114,12 @@ pub struct IdentifyReport {
     /// when there are none (then left out of the file, and in reports written before it).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub shared_readings: Vec<SharedReading>,
+    /// The validation rows of largest position error under the identified model (mm);
+    /// `identify` fills it where validation rows with positions were given,
+    /// [`IdentifyReport::new`] leaves it None. None then left out of the file (and in reports
+    /// written before it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub validation_worst_rows: Option<crate::evaluate::WorstRows>,
     /// The robust loss, if one was used.
     pub robust: Option<RobustLoss>,
     /// Reweighting rounds of the robust loss.
@@ -219,6 +225,7 @@ impl IdentifyReport {
             outlier_k: opts.outlier_k,
             outliers: id.outliers.clone(),
             shared_readings: Vec::new(),
+            validation_worst_rows: None,
             robust: opts.robust,
             robust_rounds: id.robust_rounds,
             singular_values: ident.singular_values.clone(),
