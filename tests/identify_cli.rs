@@ -418,5 +418,11 @@ fn pair_measures_label_their_columns_as_length_errors() {
         assert!(o.status.success(), "{err}");
         assert!(out.contains("length error mm: mean rms p95 max"), "{out}");
         assert!(!out.contains("position mm: mean"), "{out}");
+        // The rows behind the max are pairs, named by their second line.
+        assert!(
+            out.contains("largest data length errors (mm; pairs by their second line): line "),
+            "{out}"
+        );
+        assert!(!out.contains("largest data position"), "{out}");
     }
 }

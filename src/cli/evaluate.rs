@@ -201,7 +201,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         }
     }
     if let Some(w) = &report.worst_rows {
-        print_worst("data", w);
+        print_worst("data", m, w);
     }
     if let Some(note) = &report.note {
         say!("{note}");

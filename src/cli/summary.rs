@@ -66,11 +66,16 @@ pub fn print_repeats(r: &Repeats) {
 }
 
 /// Prints the rows behind a set's largest position errors (`what`: "data", "validation",
-/// ...) and, with a compensator, the rows whose error it raises most.
-pub fn print_worst(what: &str, w: &WorstRows) {
+/// ...) and, with a compensator, the rows whose error it raises most. Under a relative or a
+/// distance measure the errors are of the pairs' lengths, each pair named by its second row.
+pub fn print_worst(what: &str, m: Measure, w: &WorstRows) {
     if w.largest.is_empty() {
         return;
     }
+    let (noun, pairs) = match m {
+        Measure::Relative | Measure::Distance => ("length", "; pairs by their second line"),
+        _ => ("position", ""),
+    };
     let with = w.largest.iter().any(|r| r.compensated_mm.is_some());
     let rows: Vec<String> = w
         .largest
@@ -81,7 +86,7 @@ pub fn print_worst(what: &str, w: &WorstRows) {
         })
         .collect();
     say!(
-        "largest {what} position errors{} (mm): {}",
+        "largest {what} {noun} errors{} (mm{pairs}): {}",
         if with { " with the compensator" } else { "" },
         rows.join(", ")
     );
@@ -99,9 +104,10 @@ pub fn print_worst(what: &str, w: &WorstRows) {
             })
             .collect();
         say!(
-            "the compensator raises the position error of {} of {} {what} rows{}{}",
+            "the compensator raises the {noun} error of {} of {} {what} {}{}{}",
             w.rows_raised,
             w.rows,
+            if pairs.is_empty() { "rows" } else { "pairs" },
             if raised.is_empty() { "" } else { ", most at " },
             raised.join(", ")
         );

@@ -415,7 +415,8 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             .len();
         }
         if name == "validation" {
-            val_worst = Some(worst_rows(&before_rows, Some(&after_rows))?).filter(|w| w.rows > 0);
+            val_worst =
+                Some((m, worst_rows(&before_rows, Some(&after_rows))?)).filter(|(_, w)| w.rows > 0);
         }
         let (before, after) = (summarize(&before_rows), summarize(&after_rows));
         // Fitted to these rows, a compensator that misses them by more than its model has
@@ -448,10 +449,10 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         accuracy,
     );
     report.validation_shared_readings = val_shared;
-    report.validation_worst_rows = val_worst;
+    report.validation_worst_rows = val_worst.as_ref().map(|(_, w)| w.clone());
     print_stats(&report.accuracy, robocal::identify::Measure::Pose);
-    if let Some(w) = &report.validation_worst_rows {
-        super::summary::print_worst("validation", w);
+    if let Some((m, w)) = &val_worst {
+        super::summary::print_worst("validation", *m, w);
     }
     for r in &report.accuracy {
         if let Some(outside) = r.rows_outside_domain
