@@ -185,40 +185,53 @@ pub fn summarize(rows: &[RowError]) -> ErrorStats {
 /// Rows named by [`worst_rows`] (each list at most this long).
 pub const WORST_ROWS: usize = 3;
 
-/// One row's position error under the model and with a compensator (mm).
+/// Least rise of a row's error (mm) that [`worst_rows`] counts as raised by a compensator:
+/// a tenth of a micrometre, below any tracker's resolution, so that rounding in the last
+/// bits of a model the compensator reproduces is not counted as its doing.
+pub const RAISED_MM: f64 = 1e-4;
+
+/// One row's error under the model and with a compensator (mm): the position error, or for
+/// a pair (relative and distance measures) the error of the displacement's length.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct RowComparison {
     /// Line of the row (of row b for a pair).
     pub line: usize,
-    /// The model's position error (mm).
+    /// The model's error (mm).
     #[serde(with = "crate::io::json_number")]
     pub model_mm: f64,
-    /// The position error with the compensator (mm); None when none was evaluated.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// The error with the compensator (mm); None when none was evaluated.
+    #[serde(
+        default,
+        with = "crate::io::json_number::option",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub compensated_mm: Option<f64>,
 }
 
-/// Where a set's largest position errors lie, and where a compensator adds error: the rows
-/// behind a max, which a mean or an RMS does not name.
+/// Where a set's largest errors lie, and where a compensator adds error: the rows behind a
+/// max, which a mean or an RMS does not name. Errors as [`RowComparison`]'s (mm).
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct WorstRows {
-    /// The rows of largest position error (the compensator's where one was evaluated, else
-    /// the model's), largest first.
+    /// The rows of largest error (the compensator's where one was evaluated, else the
+    /// model's), largest first.
     pub largest: Vec<RowComparison>,
-    /// With a compensator: the rows whose position error it raises most over the model's,
-    /// largest rise first (empty when it raises none).
+    /// With a compensator: the rows whose error it raises most over the model's (by
+    /// [`RAISED_MM`] or more), largest rise first; empty when it raises none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub raised: Vec<RowComparison>,
-    /// With a compensator: how many rows' position error it raises (0 without one).
+    /// With a compensator: how many rows' error it raises by [`RAISED_MM`] or more (0
+    /// without one).
     #[serde(default)]
     pub rows_raised: usize,
-    /// Rows compared (those with a position error).
+    /// Rows (or pairs) compared: those with a position or length error.
     pub rows: usize,
 }
 
-/// The [`WORST_ROWS`] rows of largest position error and, given the compensator's errors
+/// The [`WORST_ROWS`] rows of largest error and, given the compensator's errors
 /// `compensated` (row for row with `model`: the same set and measure), the rows whose error it
-/// raises most. Rows without a position error are skipped; ties go to the earlier line.
+/// raises most. Rows without a position or length error are skipped; ties go to the earlier
+/// line. Errors are finite where the files are (both are checked on reading); a
+/// not-a-number error would rank first, as the worst a row can have.
 pub fn worst_rows(model: &[RowError], compensated: Option<&[RowError]>) -> Result<WorstRows> {
     if let Some(c) = compensated
         && c.len() != model.len()
@@ -243,8 +256,10 @@ pub fn worst_rows(model: &[RowError], compensated: Option<&[RowError]>) -> Resul
             })
         })
         .collect();
-    let error = |r: &RowComparison| r.compensated_mm.unwrap_or(r.model_mm);
-    let rise = |r: &RowComparison| r.compensated_mm.map_or(0.0, |c| c - r.model_mm);
+    let worst_first = |v: f64| if v.is_nan() { f64::INFINITY } else { v };
+    let error = |r: &RowComparison| worst_first(r.compensated_mm.unwrap_or(r.model_mm));
+    let rise = |r: &RowComparison| worst_first(r.compensated_mm.map_or(0.0, |c| c - r.model_mm));
+    let raised = |r: &RowComparison| r.compensated_mm.is_some() && rise(r) >= RAISED_MM;
     let top = |key: &dyn Fn(&RowComparison) -> f64, keep: &dyn Fn(&RowComparison) -> bool| {
         let mut v: Vec<RowComparison> = rows.iter().copied().filter(|r| keep(r)).collect();
         v.sort_by(|a, b| key(b).total_cmp(&key(a)).then(a.line.cmp(&b.line)));
@@ -253,8 +268,8 @@ pub fn worst_rows(model: &[RowError], compensated: Option<&[RowError]>) -> Resul
     };
     Ok(WorstRows {
         largest: top(&error, &|_| true),
-        raised: top(&rise, &|r| rise(r) > 0.0),
-        rows_raised: rows.iter().filter(|r| rise(r) > 0.0).count(),
+        raised: top(&rise, &raised),
+        rows_raised: rows.iter().filter(|r| raised(r)).count(),
         rows: rows.len(),
     })
 }
@@ -323,6 +338,18 @@ mod tests {
         assert!(w.raised.is_empty());
         assert_eq!(w.rows_raised, 0);
         assert_eq!(lines(&w.largest), vec![2, 5, 6]);
+        // A rise below RAISED_MM (the last bits of a model reproduced) is not counted.
+        let same: Vec<RowError> = model
+            .iter()
+            .map(|r| row(r.line, r.position_mm.map(|e| e + RAISED_MM / 2.0)))
+            .collect();
+        let w = worst_rows(&model, Some(&same)).unwrap();
+        assert_eq!((w.rows_raised, w.raised.len()), (0, 0));
+        // A not-a-number error is the worst.
+        let mut broken = net.to_vec();
+        broken[5].position_mm = Some(f64::NAN);
+        let w = worst_rows(&model, Some(&broken)).unwrap();
+        assert_eq!((w.largest[0].line, w.raised[0].line), (7, 7));
         // Row errors of different sets are refused.
         assert!(worst_rows(&model, Some(&net[..3])).is_err());
         // No position at all: nothing to name.

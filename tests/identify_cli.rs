@@ -97,7 +97,7 @@ fn identify_writes_a_robot_and_a_report_that_evaluate_confirms() {
     );
     assert!(
         stdout.contains(&format!(
-            "largest validation position errors (mm): line {} {max:.4}, line ",
+            "largest validation position errors of the identified model (mm): line {} {max:.4}, line ",
             w["largest"][0]["line"]
         )),
         "{stdout}"
@@ -420,7 +420,9 @@ fn pair_measures_label_their_columns_as_length_errors() {
         assert!(!out.contains("position mm: mean"), "{out}");
         // The rows behind the max are pairs, named by their second line.
         assert!(
-            out.contains("largest data length errors (mm; pairs by their second line): line "),
+            out.contains(
+                "largest data length errors of the model (mm; pairs by their second line): line "
+            ),
             "{out}"
         );
         assert!(!out.contains("largest data position"), "{out}");

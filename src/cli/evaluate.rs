@@ -201,7 +201,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         }
     }
     if let Some(w) = &report.worst_rows {
-        print_worst("data", m, w);
+        print_worst("data", "the model", m, w);
     }
     if let Some(note) = &report.note {
         say!("{note}");

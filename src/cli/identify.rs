@@ -148,7 +148,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     print_identified(&report);
     print_stats(&report.accuracy, report.measure);
     if let Some(w) = &report.validation_worst_rows {
-        super::summary::print_worst("validation", m, w);
+        super::summary::print_worst("validation", "the identified model", m, w);
     }
     for n in &report.notes {
         say!("note: {n}");

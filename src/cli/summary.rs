@@ -65,16 +65,20 @@ pub fn print_repeats(r: &Repeats) {
     );
 }
 
-/// Prints the rows behind a set's largest position errors (`what`: "data", "validation",
-/// ...) and, with a compensator, the rows whose error it raises most. Under a relative or a
-/// distance measure the errors are of the pairs' lengths, each pair named by its second row.
-pub fn print_worst(what: &str, m: Measure, w: &WorstRows) {
+/// Prints the rows behind a set's largest errors (`what`: "data", "validation", ...; `alone`
+/// names the model whose errors they are when no compensator was evaluated) and, with a
+/// compensator, the rows whose error it raises most over the model's (the figures of the
+/// `model` accuracy row). Under a relative or a distance measure the errors are of the pairs'
+/// lengths, each pair named by its second row.
+pub fn print_worst(what: &str, alone: &str, m: Measure, w: &WorstRows) {
     if w.largest.is_empty() {
         return;
     }
-    let (noun, pairs) = match m {
-        Measure::Relative | Measure::Distance => ("length", "; pairs by their second line"),
-        _ => ("position", ""),
+    let (noun, unit, items) = match m {
+        Measure::Relative | Measure::Distance => {
+            ("length", "mm; pairs by their second line", "pairs")
+        }
+        _ => ("position", "mm", "rows"),
     };
     let with = w.largest.iter().any(|r| r.compensated_mm.is_some());
     let rows: Vec<String> = w
@@ -85,33 +89,44 @@ pub fn print_worst(what: &str, m: Measure, w: &WorstRows) {
             None => format!("line {} {:.4}", r.line, r.model_mm),
         })
         .collect();
+    let whose = if with {
+        "with the compensator".to_string()
+    } else {
+        format!("of {alone}")
+    };
     say!(
-        "largest {what} {noun} errors{} (mm{pairs}): {}",
-        if with { " with the compensator" } else { "" },
+        "largest {what} {noun} errors {whose} ({unit}): {}",
         rows.join(", ")
     );
-    if with {
-        let raised: Vec<String> = w
-            .raised
-            .iter()
-            .map(|r| {
-                format!(
-                    "line {} ({:.4} -> {:.4} mm)",
-                    r.line,
-                    r.model_mm,
-                    r.compensated_mm.unwrap_or(f64::NAN)
-                )
-            })
-            .collect();
-        say!(
-            "the compensator raises the {noun} error of {} of {} {what} {}{}{}",
-            w.rows_raised,
-            w.rows,
-            if pairs.is_empty() { "rows" } else { "pairs" },
-            if raised.is_empty() { "" } else { ", most at " },
-            raised.join(", ")
-        );
+    if !with {
+        return;
     }
+    if w.raised.is_empty() {
+        say!(
+            "the compensator raises no {what} {noun} error over the model's (of {} {items})",
+            w.rows
+        );
+        return;
+    }
+    let raised: Vec<String> = w
+        .raised
+        .iter()
+        .map(|r| {
+            format!(
+                "line {} ({:.4} -> {:.4} mm)",
+                r.line,
+                r.model_mm,
+                r.compensated_mm.unwrap_or(f64::NAN)
+            )
+        })
+        .collect();
+    say!(
+        "the compensator raises the {noun} error of {} of {} {what} {items} over the model's, \
+         most at {}",
+        w.rows_raised,
+        w.rows,
+        raised.join(", ")
+    );
 }
 
 /// Prints the rows of a set (`what`: "training", "validation", ...) that carry another

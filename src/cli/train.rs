@@ -452,7 +452,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     report.validation_worst_rows = val_worst.as_ref().map(|(_, w)| w.clone());
     print_stats(&report.accuracy, robocal::identify::Measure::Pose);
     if let Some((m, w)) = &val_worst {
-        super::summary::print_worst("validation", *m, w);
+        super::summary::print_worst("validation", "the model", *m, w);
     }
     for r in &report.accuracy {
         if let Some(outside) = r.rows_outside_domain
