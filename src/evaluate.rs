@@ -229,10 +229,14 @@ pub struct WorstRows {
 
 /// The [`WORST_ROWS`] rows of largest error and, given the compensator's errors
 /// `compensated` (row for row with `model`: the same set and measure), the rows whose error it
-/// raises most. Rows without a position or length error are skipped; ties go to the earlier
-/// line. Errors are finite where the files are (both are checked on reading); a
-/// not-a-number error would rank first, as the worst a row can have.
-pub fn worst_rows(model: &[RowError], compensated: Option<&[RowError]>) -> Result<WorstRows> {
+/// raises most; None when no row has a position or length error (measure orientation), there
+/// being nothing to name. Rows without one are skipped; ties go to the earlier line. Errors
+/// are finite where the files are (both are checked on reading); a not-a-number error would
+/// rank first, as the worst a row can have.
+pub fn worst_rows(
+    model: &[RowError],
+    compensated: Option<&[RowError]>,
+) -> Result<Option<WorstRows>> {
     if let Some(c) = compensated
         && c.len() != model.len()
     {
@@ -256,22 +260,26 @@ pub fn worst_rows(model: &[RowError], compensated: Option<&[RowError]>) -> Resul
             })
         })
         .collect();
+    if rows.is_empty() {
+        return Ok(None);
+    }
     let worst_first = |v: f64| if v.is_nan() { f64::INFINITY } else { v };
     let error = |r: &RowComparison| worst_first(r.compensated_mm.unwrap_or(r.model_mm));
     let rise = |r: &RowComparison| worst_first(r.compensated_mm.map_or(0.0, |c| c - r.model_mm));
-    let raised = |r: &RowComparison| r.compensated_mm.is_some() && rise(r) >= RAISED_MM;
+    // Without a compensator every rise is 0: nothing is raised.
+    let raised = |r: &RowComparison| rise(r) >= RAISED_MM;
     let top = |key: &dyn Fn(&RowComparison) -> f64, keep: &dyn Fn(&RowComparison) -> bool| {
         let mut v: Vec<RowComparison> = rows.iter().copied().filter(|r| keep(r)).collect();
         v.sort_by(|a, b| key(b).total_cmp(&key(a)).then(a.line.cmp(&b.line)));
         v.truncate(WORST_ROWS);
         v
     };
-    Ok(WorstRows {
+    Ok(Some(WorstRows {
         largest: top(&error, &|_| true),
         raised: top(&rise, &raised),
         rows_raised: rows.iter().filter(|r| raised(r)).count(),
         rows: rows.len(),
-    })
+    }))
 }
 
 /// Statistics of a kinematic model on a set.
@@ -298,23 +306,18 @@ mod tests {
     fn worst_rows_rank_by_the_compensated_error_and_by_its_rise() {
         // Lines 2..7: model and compensated errors (mm, exact in binary so that ties are
         // ties); line 4 has no position.
-        let model = [
-            row(2, Some(1.0)),
-            row(3, Some(0.25)),
-            row(4, None),
-            row(5, Some(0.75)),
-            row(6, Some(0.5)),
-            row(7, Some(0.25)),
+        let table = [
+            (2, Some(1.0), Some(0.125)),
+            (3, Some(0.25), Some(0.625)),
+            (4, None, None),
+            (5, Some(0.75), Some(1.25)),
+            (6, Some(0.5), Some(0.625)),
+            (7, Some(0.25), Some(0.625)),
         ];
-        let net = [
-            row(2, Some(0.125)),
-            row(3, Some(0.625)),
-            row(4, None),
-            row(5, Some(1.25)),
-            row(6, Some(0.625)),
-            row(7, Some(0.625)),
-        ];
-        let w = worst_rows(&model, Some(&net)).unwrap();
+        let model: Vec<RowError> = table.iter().map(|&(l, m, _)| row(l, m)).collect();
+        let net: Vec<RowError> = table.iter().map(|&(l, _, n)| row(l, n)).collect();
+        let worst = |c: Option<&[RowError]>| worst_rows(&model, c).unwrap().unwrap();
+        let w = worst(Some(&net));
         let lines = |v: &[RowComparison]| v.iter().map(|r| r.line).collect::<Vec<_>>();
         // 1.25 (5), then 0.625 three times: ties to the earlier line (3, 6; 7 is fourth).
         assert_eq!(lines(&w.largest), vec![5, 3, 6]);
@@ -324,7 +327,7 @@ mod tests {
         assert_eq!(lines(&w.raised), vec![5, 3, 7]);
         assert_eq!((w.rows_raised, w.rows), (4, 5));
         // The model alone: its own largest, nothing raised.
-        let alone = worst_rows(&model, None).unwrap();
+        let alone = worst(None);
         assert_eq!(lines(&alone.largest), vec![2, 5, 6]);
         assert!(alone.largest.iter().all(|r| r.compensated_mm.is_none()));
         assert!(alone.raised.is_empty());
@@ -334,7 +337,7 @@ mod tests {
             .iter()
             .map(|r| row(r.line, r.position_mm.map(|e| e / 2.0)))
             .collect();
-        let w = worst_rows(&model, Some(&lower)).unwrap();
+        let w = worst(Some(&lower));
         assert!(w.raised.is_empty());
         assert_eq!(w.rows_raised, 0);
         assert_eq!(lines(&w.largest), vec![2, 5, 6]);
@@ -343,17 +346,16 @@ mod tests {
             .iter()
             .map(|r| row(r.line, r.position_mm.map(|e| e + RAISED_MM / 2.0)))
             .collect();
-        let w = worst_rows(&model, Some(&same)).unwrap();
+        let w = worst(Some(&same));
         assert_eq!((w.rows_raised, w.raised.len()), (0, 0));
         // A not-a-number error is the worst.
-        let mut broken = net.to_vec();
+        let mut broken = net.clone();
         broken[5].position_mm = Some(f64::NAN);
-        let w = worst_rows(&model, Some(&broken)).unwrap();
+        let w = worst(Some(&broken));
         assert_eq!((w.largest[0].line, w.raised[0].line), (7, 7));
         // Row errors of different sets are refused.
         assert!(worst_rows(&model, Some(&net[..3])).is_err());
         // No position at all: nothing to name.
-        let none = worst_rows(&[row(2, None)], None).unwrap();
-        assert_eq!((none.largest.len(), none.rows), (0, 0));
+        assert_eq!(worst_rows(&[row(2, None)], None).unwrap(), None);
     }
 }

@@ -146,7 +146,6 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         &model_rows,
         net_rows.as_deref().map(|n| (n, &inside[..])),
     ));
-    let worst = worst_rows(&model_rows, net_rows.as_deref())?;
     let report = EvaluateReport {
         robot: a.robot.display().to_string(),
         compensator: a.compensator.as_ref().map(|p| p.display().to_string()),
@@ -159,7 +158,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         repeats: Repeats::of(&robot, &set),
         shared_readings: shared,
         check_against: a.check_against.as_ref().map(|p| p.display().to_string()),
-        worst_rows: (worst.rows > 0).then_some(worst),
+        worst_rows: worst_rows(&model_rows, net_rows.as_deref())?,
     };
     if let Some(r) = &report.repeats {
         print_repeats(r);

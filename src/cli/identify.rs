@@ -141,7 +141,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     // Readings logged with other joints, judged under the identified model.
     report.shared_readings = super::summary::shared_under(&id.robot, &cal, m, None);
     if let Some((_, after)) = &val_rows {
-        report.validation_worst_rows = Some(worst_rows(after, None)?).filter(|w| w.rows > 0);
+        report.validation_worst_rows = worst_rows(after, None)?;
     }
     report.warnings.extend(worse);
     report.notes.extend(a.sigma.unused(&cal));

@@ -71,9 +71,6 @@ pub fn print_repeats(r: &Repeats) {
 /// `model` accuracy row). Under a relative or a distance measure the errors are of the pairs'
 /// lengths, each pair named by its second row.
 pub fn print_worst(what: &str, alone: &str, m: Measure, w: &WorstRows) {
-    if w.largest.is_empty() {
-        return;
-    }
     let (noun, unit, items) = match m {
         Measure::Relative | Measure::Distance => {
             ("length", "mm; pairs by their second line", "pairs")

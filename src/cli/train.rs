@@ -415,8 +415,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             .len();
         }
         if name == "validation" {
-            val_worst =
-                Some((m, worst_rows(&before_rows, Some(&after_rows))?)).filter(|(_, w)| w.rows > 0);
+            val_worst = worst_rows(&before_rows, Some(&after_rows))?;
         }
         let (before, after) = (summarize(&before_rows), summarize(&after_rows));
         // Fitted to these rows, a compensator that misses them by more than its model has
@@ -449,10 +448,10 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         accuracy,
     );
     report.validation_shared_readings = val_shared;
-    report.validation_worst_rows = val_worst.as_ref().map(|(_, w)| w.clone());
+    report.validation_worst_rows = val_worst;
     print_stats(&report.accuracy, robocal::identify::Measure::Pose);
-    if let Some((m, w)) = &val_worst {
-        super::summary::print_worst("validation", "the model", *m, w);
+    if let (Some(w), Some(v)) = (&report.validation_worst_rows, &val) {
+        super::summary::print_worst("validation", "the model", Measure::default_for(v), w);
     }
     for r in &report.accuracy {
         if let Some(outside) = r.rows_outside_domain
