@@ -100,6 +100,11 @@ pub struct Selection {
     /// alone.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub network_test: Option<NetworkTest>,
+    /// The test of the network with an RBF network chosen after stages 1-4, where the rows no
+    /// hyperparameter search saw failed it and `network_test` then held the best network
+    /// without one against the model alone.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rbf_network_test: Option<NetworkTest>,
 }
 
 /// The network chosen after stages 1-4 of [`super::tuning`] against the best model alone (as
@@ -126,8 +131,32 @@ pub struct NetworkTest {
     pub z: f64,
     /// Held-out rows compared (0: the test could not be run).
     pub rows: usize,
-    /// Whether the network was kept.
+    /// Whether the network was kept: by `unseen`'s figures where that test ran.
     pub kept: bool,
+    /// Where the network carries an RBF network and passed on the figures above (whose
+    /// hyperparameters were searched on rows the folds hold out): the same test on held-out
+    /// rows no hyperparameter search saw, which decides. None where it did not run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unseen: Option<UnseenTest>,
+}
+
+/// [`NetworkTest`] of a network with an RBF network on held-out rows whose values neither its
+/// weights nor its hyperparameters saw.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct UnseenTest {
+    /// How the rows were kept from the search: `folds` (each fold's hyperparameters searched
+    /// on its training rows alone; every held-out row), or `rows` (the held-out rows whose
+    /// configurations the search on all training rows did not draw, where they are at least
+    /// as many as a fold holds out).
+    pub by: String,
+    /// The network's position RMS over the model alone's on those rows, each as judged.
+    #[serde(with = "crate::io::json_number")]
+    pub ratio: f64,
+    /// Paired z on those rows, as [`NetworkTest::z`].
+    #[serde(with = "crate::io::json_number")]
+    pub z: f64,
+    /// Rows compared.
+    pub rows: usize,
 }
 
 /// Sums of squared errors over held-out rows.

@@ -241,6 +241,14 @@ pub(super) fn drawn_blocks(s: &Samples, draw: Draw, left_out: LeftOut) -> Result
     Ok(blocks)
 }
 
+/// The rows of `s` (ascending) that its own search under `draw` sees: [`drawn_blocks`] of the
+/// whole set, the rows whose values the hyperparameters depend on. An error as there.
+pub fn drawn_rows(s: &Samples, draw: Draw) -> Result<Vec<usize>> {
+    let mut rows = drawn_blocks(s, draw, LeftOut::NONE)?.concat();
+    rows.sort_unstable();
+    Ok(rows)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

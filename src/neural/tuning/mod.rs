@@ -222,6 +222,7 @@ pub fn select_settings(
         fitted: Mutex::new(HashMap::new()),
         set,
         hypers: Mutex::new(HashMap::new()),
+        fold_hypers: Mutex::new(HashMap::new()),
         rbf_fits: Mutex::new(HashMap::new()),
     };
     let rounds = AtomicUsize::new(0);
@@ -286,6 +287,8 @@ pub fn select_settings(
         chosen,
         network_test,
         chosen_rows,
+        rbf_network_test,
+        unseen_error,
         ..
     } = search;
     let mut winner = candidates[chosen].settings.clone();
@@ -303,8 +306,21 @@ pub fn select_settings(
              compensator averages {ENSEMBLE}"
         ));
     }
+    if let Some(e) = &unseen_error {
+        notes.push(format!(
+            "the network with an RBF network could not be tested on rows no hyperparameter \
+             search saw ({e}): its cross-validated figures decide"
+        ));
+    }
+    if let Some(t) = &rbf_network_test {
+        notes.push(network_note(t, &candidates, false).replace(
+            ": the compensator is the model alone",
+            ": the best network without an RBF network is held against the model alone instead",
+        ));
+    }
     if let Some(t) = &network_test {
-        notes.push(network_note(t, &candidates));
+        let instead = rbf_network_test.is_some();
+        notes.push(network_note(t, &candidates, instead));
     } else if winner.members == 0 && opts.members != Some(0) {
         notes.push(format!(
             "no network's cross-validated error was {:.0} % or more below the model's alone: \
@@ -354,6 +370,7 @@ pub fn select_settings(
             outlier_k: opts.outlier_k,
             rbf_hyper,
             network_test,
+            rbf_network_test,
         }),
     ))
 }
@@ -401,13 +418,17 @@ fn stages_1_to_3(
 
 /// What stage 5's test of the network against the best model alone found (`candidates`: the
 /// search's, which `t` indexes).
-fn network_note(t: &NetworkTest, candidates: &[Candidate]) -> String {
+/// The note on stage 5's test `t`; `instead` where it holds the best network without an
+/// RBF network against the model alone, one with an RBF network having failed.
+fn network_note(t: &NetworkTest, candidates: &[Candidate], instead: bool) -> String {
     let alone = &candidates[t.alone].settings;
-    let below = (1.0 - t.ratio) * 100.0;
-    let by = if below >= 0.0 {
-        format!("{below:.1} % below")
-    } else {
-        format!("{:.1} % above", -below)
+    let by = |ratio: f64| {
+        let below = (1.0 - ratio) * 100.0;
+        if below >= 0.0 {
+            format!("{below:.1} % below")
+        } else {
+            format!("{:.1} % above", -below)
+        }
     };
     let model = match &alone.refine {
         Some(r) => format!("refine {r}"),
@@ -418,9 +439,36 @@ fn network_note(t: &NetworkTest, candidates: &[Candidate]) -> String {
     } else {
         "no row-by-row test (the held-out rows could not be recomputed as scored)".into()
     };
-    let test = format!(
-        "the network's cross-validated error is {by} the best model alone's ({model}), {rows}"
+    let network = if instead {
+        "the best network without an RBF network"
+    } else {
+        "the network"
+    };
+    let mut test = format!(
+        "{network}'s cross-validated error is {} the best model alone's ({model}), {rows}",
+        by(t.ratio)
     );
+    // The figures that decide: those on rows no hyperparameter search saw, where they ran.
+    if let Some(u) = &t.unseen {
+        test.push_str(", with its RBF hyperparameters searched on all training rows; ");
+        test.push_str(&if u.by == "folds" {
+            format!(
+                "searched on each fold's training rows alone (no search seeing the rows it is \
+                 judged on), {}, paired z {:.1} over {} held-out rows",
+                by(u.ratio),
+                u.z,
+                u.rows
+            )
+        } else {
+            format!(
+                "on the {} held-out rows of configurations that search did not draw, {}, \
+                 paired z {:.1}",
+                u.rows,
+                by(u.ratio),
+                u.z
+            )
+        });
+    }
     if t.kept {
         // The choice is made on position: say where the orientation pays for it.
         let rot = |i: usize| {
@@ -439,7 +487,8 @@ fn network_note(t: &NetworkTest, candidates: &[Candidate]) -> String {
             _ => format!("{test}: the network is kept"),
         };
     }
-    let why = if t.ratio * (1.0 + NETWORK_MARGIN) > 1.0 {
+    let ratio = t.unseen.as_ref().map_or(t.ratio, |u| u.ratio);
+    let why = if ratio * (1.0 + NETWORK_MARGIN) > 1.0 {
         format!("not {:.0} % or more below", NETWORK_MARGIN * 100.0)
     } else {
         format!("not significant row by row (a paired z of -{NETWORK_Z} or lower is needed)")

@@ -1,6 +1,6 @@
 //! The race that scores candidates on the cross-validation folds.
 
-use super::cv::Cv;
+use super::cv::{Cv, Hypers};
 use super::rows::held_errors;
 use super::shares::{add_shares, best_share, open_share};
 use super::{RACE_MARGIN, SHARES};
@@ -47,10 +47,19 @@ impl Race<'_, '_> {
     /// Held-out errors of `settings` on every fold, fold by fold, in each fold's row order
     /// (the folds' fits are cached: predicting is the work, folds in parallel).
     pub(super) fn held_rows(&self, settings: &Settings) -> Result<Vec<Vec<RowError>>> {
+        self.held_rows_as(settings, Hypers::AllRows)
+    }
+
+    /// [`Race::held_rows`] with an RBF network's hyperparameters searched on `hypers`.
+    pub(super) fn held_rows_as(
+        &self,
+        settings: &Settings,
+        hypers: Hypers,
+    ) -> Result<Vec<Vec<RowError>>> {
         let round = self.rounds.load(Ordering::Relaxed);
         parallel_map(self.k, |f| {
             let model = self.model(&settings.refine, f)?;
-            let c = self.cv.fit(f, settings, model, round)?;
+            let c = self.cv.fit_as(f, settings, model, round, hypers)?;
             let mut ws = Default::default();
             held_errors(&self.cv.held[f], |q| c.predict(q, &mut ws))
         })

@@ -1,7 +1,7 @@
 //! The stages of the search ([`super`]'s doc): each scores its candidates in the race, starting
 //! from the best so far, and moves the choice.
 
-use super::cv::searches;
+use super::cv::{Hypers, searches};
 use super::race::Race;
 use super::rank::{best_pose_mlp, better, better_by, cv_rms, paired_z, significant3, vary};
 use super::space::Space;
@@ -10,7 +10,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::evaluate::RowError;
-use crate::neural::selection::{Candidate, NetworkTest};
+use crate::neural::selection::{Candidate, NetworkTest, UnseenTest};
 use crate::neural::settings::{CompensatorOptions, Form, Network, Settings};
 
 /// The search's state between stages: what it draws from, the candidates scored so far and
@@ -27,6 +27,12 @@ pub(super) struct Search<'r, 'a, 'c> {
     /// The held-out errors of the candidate stage 5 chose, fold by fold
     /// ([`Race::held_rows`]), where it computed them.
     pub(super) chosen_rows: Option<Vec<Vec<RowError>>>,
+    /// Stage 5's test of a network with an RBF network that rows no hyperparameter search saw
+    /// failed, where `network_test` then held another network against the model alone.
+    pub(super) rbf_network_test: Option<NetworkTest>,
+    /// Why the test on rows no hyperparameter search saw could not be run, where it could not
+    /// (the candidates' figures then decided).
+    pub(super) unseen_error: Option<String>,
 }
 
 impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
@@ -44,6 +50,8 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             chosen: 0,
             network_test: None,
             chosen_rows: None,
+            rbf_network_test: None,
+            unseen_error: None,
         }
     }
 
@@ -303,10 +311,50 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
         if !self.judged(&self.candidates, best_alone).is_finite() {
             return;
         }
-        // Both judged as every candidate is (a refinement with the compliances that
-        // cross-validation adds on its own carries COMPLIANCE_MARGIN on either side).
-        let ratio =
-            self.judged(&self.candidates, self.chosen) / self.judged(&self.candidates, best_alone);
+        let (mut test, mut rows) = self.network_test_of(self.chosen, best_alone);
+        // A network with an RBF network that passed on the candidates' figures: its
+        // hyperparameters saw the rows the folds hold out, so it is judged again on rows no
+        // search saw. Where it fails there, the best network without one (whose figures never
+        // saw their rows) is held against the model alone instead.
+        if test.kept && self.candidates[test.network].settings.has_rbf() {
+            match self.unseen_test(test.clone(), rows.as_deref()) {
+                Ok(t) if t.kept => test = t,
+                Ok(t) => {
+                    self.rbf_network_test = Some(t.clone());
+                    let other = (0..self.candidates.len())
+                        .filter(|&i| {
+                            let c = &self.candidates[i].settings;
+                            c.has_network() && !c.has_rbf()
+                        })
+                        .fold(None, |b: Option<usize>, i| {
+                            Some(b.map_or(i, |b| better(&self.candidates, b, i..i + 1)))
+                        })
+                        .filter(|&i| cv_rms(&self.candidates, i).is_finite());
+                    (test, rows) = match other {
+                        Some(i) => self.network_test_of(i, best_alone),
+                        None => (t, None),
+                    };
+                }
+                Err(e) => self.unseen_error = Some(e.to_string()),
+            }
+        }
+        self.chosen = if test.kept { test.network } else { best_alone };
+        self.chosen_rows = rows;
+        self.network_test = Some(test);
+    }
+
+    /// Candidate `net` (a network) against `alone` (a model alone) on every held-out row,
+    /// both judged as every candidate is (a refinement with the compliances that
+    /// cross-validation adds on its own carries [`COMPLIANCE_MARGIN`] on either side): kept
+    /// where lower by [`NETWORK_MARGIN`] and significantly lower row by row ([`NETWORK_Z`]).
+    /// With it, the held-out rows of the one it keeps, fold by fold, where they could be had
+    /// again as they were scored.
+    fn network_test_of(
+        &self,
+        net: usize,
+        alone: usize,
+    ) -> (NetworkTest, Option<Vec<Vec<RowError>>>) {
+        let ratio = self.judged(&self.candidates, net) / self.judged(&self.candidates, alone);
         // Each fold's held-out errors: the rows that gave the candidate's score (its fits
         // are cached), checked against it.
         // With them, each row's squared position error (mm^2), fold after fold.
@@ -317,14 +365,9 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             let scored = cv_rms(&self.candidates, i);
             ((rms - scored).abs() <= 1e-9 * scored.max(1e-12)).then_some((folds, squares))
         };
-        let (network, alone) = (held(self.chosen), held(best_alone));
-        let paired = match (&network, &alone) {
-            (Some((_, a)), Some((_, b))) => {
-                let cluster: Vec<usize> = (self.race.cv.held_index.concat().iter())
-                    .map(|&i| self.race.cv.groups[i])
-                    .collect();
-                Some((paired_z(a, b, &cluster), a.len()))
-            }
+        let (network, alone_rows) = (held(net), held(alone));
+        let paired = match (&network, &alone_rows) {
+            (Some((_, a)), Some((_, b))) => Some((paired_z(a, b, &self.clusters()), a.len())),
             _ => None,
         };
         // Where the rows cannot be had again as they were scored (not expected: every fit
@@ -332,18 +375,66 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
         let significant = paired.is_none_or(|(z, _)| z <= -NETWORK_Z);
         let (z, rows) = paired.unwrap_or((f64::NAN, 0));
         let kept = ratio * (1.0 + NETWORK_MARGIN) <= 1.0 && significant;
-        self.network_test = Some(NetworkTest {
-            network: self.chosen,
-            alone: best_alone,
+        let test = NetworkTest {
+            network: net,
+            alone,
             ratio,
             z,
             rows,
             kept,
-        });
-        if !kept {
-            self.chosen = best_alone;
-        }
-        self.chosen_rows = if kept { network } else { alone }.map(|(folds, _)| folds);
+            unseen: None,
+        };
+        (
+            test,
+            if kept { network } else { alone_rows }.map(|(folds, _)| folds),
+        )
+    }
+
+    /// Each held-out row's arm configuration, fold after fold.
+    fn clusters(&self) -> Vec<usize> {
+        let cv = self.race.cv;
+        (cv.held_index.concat().iter())
+            .map(|&i| cv.groups[i])
+            .collect()
+    }
+
+    /// `t`, a network with an RBF network kept on the candidates' figures, tested again as
+    /// [`Search::network_test_of`] on held-out rows whose values neither its weights nor its
+    /// hyperparameters saw ([`Cv::unseen`](super::cv::Cv::unseen)): `t` with its figures there
+    /// and their verdict. `held`: the network's held-out rows as scored, where they are had.
+    fn unseen_test(&self, t: NetworkTest, held: Option<&[Vec<RowError>]>) -> Result<NetworkTest> {
+        let net = &self.candidates[t.network].settings;
+        let alone = &self.candidates[t.alone].settings;
+        let (folds, unseen) = match (self.race.cv.unseen(net.encoding)?, held) {
+            (Some(unseen), Some(held)) => (held.to_vec(), Some(unseen)),
+            (Some(unseen), None) => (self.race.held_rows(net)?, Some(unseen)),
+            (None, _) => (self.race.held_rows_as(net, Hypers::FoldRows)?, None),
+        };
+        let (a, b) = (squares(&folds), squares(&self.race.held_rows(alone)?));
+        let order = self.race.cv.held_index.concat();
+        let clusters = self.clusters();
+        let rows: Vec<usize> = (0..order.len().min(a.len()).min(b.len()))
+            .filter(|&k| unseen.as_ref().is_none_or(|u| u[order[k]]))
+            .collect();
+        let pick = |v: &[f64]| -> Vec<f64> { rows.iter().map(|&k| v[k]).collect() };
+        let (a, b, clusters) = (
+            pick(&a),
+            pick(&b),
+            rows.iter().map(|&k| clusters[k]).collect::<Vec<_>>(),
+        );
+        let rms = |v: &[f64]| (v.iter().sum::<f64>() / v.len().max(1) as f64).sqrt();
+        let ratio = rms(&a) * self.margin(&net.refine) / (rms(&b) * self.margin(&alone.refine));
+        let z = paired_z(&a, &b, &clusters);
+        Ok(NetworkTest {
+            kept: ratio * (1.0 + NETWORK_MARGIN) <= 1.0 && z <= -NETWORK_Z,
+            unseen: Some(UnseenTest {
+                by: if unseen.is_some() { "rows" } else { "folds" }.into(),
+                ratio,
+                z,
+                rows: rows.len(),
+            }),
+            ..t
+        })
     }
 }
 
