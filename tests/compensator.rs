@@ -625,7 +625,9 @@ fn default_selection_races_candidates() {
         .filter_map(|c| c.score.as_ref().map(|s| s.position_rms_mm))
         .fold(f64::INFINITY, f64::min);
     // The best or an ensemble within the tie of it; or the model alone, where the network
-    // held against it did not pass stage 5's test.
+    // held against it did not pass stage 5's test (a network without an RBF network chosen
+    // where one with it failed on rows no search saw would be neither; not on this set).
+    assert!(sel.rbf_network_test.is_none());
     let chosen = sel.candidates[sel.chosen].score.as_ref().unwrap();
     if sel.candidates[sel.chosen].settings.has_network() {
         let tie = robocal::neural::tuning::ENSEMBLE_TIE;

@@ -282,7 +282,7 @@ fn default_beats_the_plain_baseline_on_series_b() {
         // the folds hold out among them; on the held-out rows of the others (401, more than
         // a fold holds out) it is as far ahead (46.8 % below, z -13.7).
         let u = test.unseen.as_ref().expect("tested on rows no search saw");
-        assert_eq!(u.by, "rows", "{test:?}");
+        assert_eq!(u.by, robocal::neural::tuning::Unseen::Rows, "{test:?}");
         let trained = pool.rows.len() - 2;
         assert!(
             u.rows * sel.folds >= trained && u.rows + robocal::neural::rbf::HYPER_ROWS <= trained,
@@ -782,6 +782,9 @@ fn series_pools() {
         );
         if let Some(sel) = &rep.selection {
             println!("  outliers listed: {}", sel.outliers.len());
+            if let Some(t) = &sel.rbf_network_test {
+                println!("  failed on rows no search saw: {t:?}");
+            }
             if let Some(t) = &sel.network_test {
                 println!("  network test: {t:?}");
                 // The network stage 5 did not keep, fitted as it would have been.

@@ -452,6 +452,8 @@ fn a_network_that_learns_only_noise_is_judged_on_rows_no_search_saw() {
     );
     let chosen = &sel["candidates"][rbf["network"].as_u64().unwrap() as usize]["settings"];
     assert_ne!(chosen["network"], "mlp", "{chosen}");
+    // Fixed below with `--refine none`.
+    assert!(chosen["refine"].is_null(), "{chosen}");
     // ... and fails it where each fold's hyperparameters never saw its held-out rows.
     let unseen = &rbf["unseen"];
     assert_eq!(unseen["by"], "folds", "{rbf}");

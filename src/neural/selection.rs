@@ -140,15 +140,25 @@ pub struct NetworkTest {
     pub unseen: Option<UnseenTest>,
 }
 
+/// How [`UnseenTest`]'s rows were kept from the RBF hyperparameter search.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Unseen {
+    /// Each fold's hyperparameters searched on its training rows alone; every held-out row
+    /// judged (where the search on all training rows drew every configuration, or left too
+    /// few out).
+    Folds,
+    /// The held-out rows whose configurations the search on all training rows did not draw
+    /// (where they are at least as many as a fold holds out).
+    Rows,
+}
+
 /// [`NetworkTest`] of a network with an RBF network on held-out rows whose values neither its
 /// weights nor its hyperparameters saw.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct UnseenTest {
-    /// How the rows were kept from the search: `folds` (each fold's hyperparameters searched
-    /// on its training rows alone; every held-out row), or `rows` (the held-out rows whose
-    /// configurations the search on all training rows did not draw, where they are at least
-    /// as many as a fold holds out).
-    pub by: String,
+    /// How the rows were kept from the search.
+    pub by: Unseen,
     /// The network's position RMS over the model alone's on those rows, each as judged.
     #[serde(with = "crate::io::json_number")]
     pub ratio: f64,

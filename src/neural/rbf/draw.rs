@@ -241,8 +241,9 @@ pub(super) fn drawn_blocks(s: &Samples, draw: Draw, left_out: LeftOut) -> Result
     Ok(blocks)
 }
 
-/// The rows of `s` (ascending) that its own search under `draw` sees: [`drawn_blocks`] of the
-/// whole set, the rows whose values the hyperparameters depend on. An error as there.
+/// The rows of `s` (ascending) that its own search under `draw` sees: the blocks of the
+/// whole set (module doc), the rows whose values the hyperparameters depend on. An error
+/// where the draw asks for fewer than 2 rows or no block.
 pub fn drawn_rows(s: &Samples, draw: Draw) -> Result<Vec<usize>> {
     let mut rows = drawn_blocks(s, draw, LeftOut::NONE)?.concat();
     rows.sort_unstable();

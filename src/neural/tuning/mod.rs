@@ -24,7 +24,9 @@
 //! weights); (4) refinement (for a blend, judged first by the RBF network alone fitted on
 //! the race folds only, a proxy never chosen, and the best refinement then tried with the
 //! blend); (5) no network at all, kept unless the network beats it by [`NETWORK_MARGIN`]
-//! and, row by row, with a paired z of [`NETWORK_Z`].
+//! and, row by row, with a paired z of [`NETWORK_Z`]; a network with an RBF network that
+//! passes is tested again on held-out rows no hyperparameter search saw, which decides (where
+//! it fails and the network is not fixed, the best network without one is tested instead).
 //! Candidates are fitted
 //! with a phase 2 of fixed work ([`CV_WORK`]) and without phase 1, and raced: each is scored
 //! on [`RACE_FOLDS`] folds first and dropped there when it is more than [`RACE_MARGIN`] worse
@@ -41,7 +43,7 @@ mod stages;
 
 use super::parallel::parallel_map;
 use super::selection::Sums;
-pub use super::selection::{Candidate, NetworkTest, Outlier, Score, Selection};
+pub use super::selection::{Candidate, NetworkTest, Outlier, Score, Selection, Unseen, UnseenTest};
 pub use super::settings::OUTLIER_K;
 use super::settings::{CompensatorOptions, Network, Refine, Settings};
 use crate::data::MeasurementSet;
@@ -416,9 +418,8 @@ fn stages_1_to_3(
     Ok(())
 }
 
-/// What stage 5's test of the network against the best model alone found (`candidates`: the
-/// search's, which `t` indexes).
-/// The note on stage 5's test `t`; `instead` where it holds the best network without an
+/// The note on stage 5's test `t` of a network against the best model alone (`candidates`:
+/// the search's, which `t` indexes); `instead` where it holds the best network without an
 /// RBF network against the model alone, one with an RBF network having failed.
 fn network_note(t: &NetworkTest, candidates: &[Candidate], instead: bool) -> String {
     let alone = &candidates[t.alone].settings;
@@ -451,7 +452,7 @@ fn network_note(t: &NetworkTest, candidates: &[Candidate], instead: bool) -> Str
     // The figures that decide: those on rows no hyperparameter search saw, where they ran.
     if let Some(u) = &t.unseen {
         test.push_str(", with its RBF hyperparameters searched on all training rows; ");
-        test.push_str(&if u.by == "folds" {
+        test.push_str(&if u.by == Unseen::Folds {
             format!(
                 "searched on each fold's training rows alone (no search seeing the rows it is \
                  judged on), {}, paired z {:.1} over {} held-out rows",

@@ -10,7 +10,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::evaluate::RowError;
-use crate::neural::selection::{Candidate, NetworkTest, UnseenTest};
+use crate::neural::selection::{Candidate, NetworkTest, Unseen, UnseenTest};
 use crate::neural::settings::{CompensatorOptions, Form, Network, Settings};
 
 /// The search's state between stages: what it draws from, the candidates scored so far and
@@ -282,7 +282,9 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
     /// Stage 5: the model alone, without a network, as given and refined (no fits: a refined
     /// model alone can win where the refined model with a network lost the race). A network
     /// must beat the best of them by [`NETWORK_MARGIN`] in cross-validated RMS, and row by
-    /// row with a paired z of [`NETWORK_Z`] or more, to be kept.
+    /// row with a paired z of [`NETWORK_Z`] or more, to be kept; one with an RBF network, on
+    /// held-out rows no hyperparameter search saw as well ([`Search::unseen_test`], which
+    /// searches and fits again where the folds must search their own).
     pub(super) fn model_alone(&mut self) {
         let w = self.candidates[self.chosen].settings.clone();
         let first = self.candidates.len();
@@ -315,23 +317,29 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
         // A network with an RBF network that passed on the candidates' figures: its
         // hyperparameters saw the rows the folds hold out, so it is judged again on rows no
         // search saw. Where it fails there, the best network without one (whose figures never
-        // saw their rows) is held against the model alone instead.
+        // saw their rows), unless the network is fixed to one with an RBF network, is held
+        // against the model alone instead.
         if test.kept && self.candidates[test.network].settings.has_rbf() {
             match self.unseen_test(test.clone(), rows.as_deref()) {
                 Ok(t) if t.kept => test = t,
                 Ok(t) => {
-                    self.rbf_network_test = Some(t.clone());
-                    let other = (0..self.candidates.len())
-                        .filter(|&i| {
-                            let c = &self.candidates[i].settings;
-                            c.has_network() && !c.has_rbf()
-                        })
+                    let fixed = self.space.rbf_only || self.space.mix_only;
+                    let others = (0..self.candidates.len()).filter(|&i| {
+                        let c = &self.candidates[i].settings;
+                        !fixed && c.has_network() && !c.has_rbf()
+                    });
+                    let other = others
                         .fold(None, |b: Option<usize>, i| {
-                            Some(b.map_or(i, |b| better(&self.candidates, b, i..i + 1)))
+                            Some(b.map_or(i, |b| {
+                                better_by(&self.candidates, b, i..i + 1, |c, i| self.judged(c, i))
+                            }))
                         })
-                        .filter(|&i| cv_rms(&self.candidates, i).is_finite());
+                        .filter(|&i| self.judged(&self.candidates, i).is_finite());
                     (test, rows) = match other {
-                        Some(i) => self.network_test_of(i, best_alone),
+                        Some(i) => {
+                            self.rbf_network_test = Some(t);
+                            self.network_test_of(i, best_alone)
+                        }
                         None => (t, None),
                     };
                 }
@@ -412,8 +420,16 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
         };
         let (a, b) = (squares(&folds), squares(&self.race.held_rows(alone)?));
         let order = self.race.cv.held_index.concat();
+        if a.len() != order.len() || b.len() != order.len() {
+            return Err(Error::Invalid(format!(
+                "{} and {} held-out rows of the network and the model alone, of {}",
+                a.len(),
+                b.len(),
+                order.len()
+            )));
+        }
         let clusters = self.clusters();
-        let rows: Vec<usize> = (0..order.len().min(a.len()).min(b.len()))
+        let rows: Vec<usize> = (0..order.len())
             .filter(|&k| unseen.as_ref().is_none_or(|u| u[order[k]]))
             .collect();
         let pick = |v: &[f64]| -> Vec<f64> { rows.iter().map(|&k| v[k]).collect() };
@@ -428,7 +444,11 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
         Ok(NetworkTest {
             kept: ratio * (1.0 + NETWORK_MARGIN) <= 1.0 && z <= -NETWORK_Z,
             unseen: Some(UnseenTest {
-                by: if unseen.is_some() { "rows" } else { "folds" }.into(),
+                by: if unseen.is_some() {
+                    Unseen::Rows
+                } else {
+                    Unseen::Folds
+                },
                 ratio,
                 z,
                 rows: rows.len(),
