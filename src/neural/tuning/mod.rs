@@ -314,15 +314,25 @@ pub fn select_settings(
              search saw ({e}): its cross-validated figures decide"
         ));
     }
+    // Where the network with an RBF network failed on unseen rows and another was held
+    // against the model alone instead, both tests are told, in that order.
+    const OTHER: &str = "the best network without an RBF network";
     if let Some(t) = &rbf_network_test {
-        notes.push(network_note(t, &candidates, false).replace(
-            ": the compensator is the model alone",
-            ": the best network without an RBF network is held against the model alone instead",
-        ));
+        let then = format!("{OTHER} is held against the model alone instead");
+        notes.push(network_note(t, &candidates, "the network", &then));
     }
     if let Some(t) = &network_test {
-        let instead = rbf_network_test.is_some();
-        notes.push(network_note(t, &candidates, instead));
+        let network = if rbf_network_test.is_some() {
+            OTHER
+        } else {
+            "the network"
+        };
+        notes.push(network_note(
+            t,
+            &candidates,
+            network,
+            "the compensator is the model alone",
+        ));
     } else if winner.members == 0 && opts.members != Some(0) {
         notes.push(format!(
             "no network's cross-validated error was {:.0} % or more below the model's alone: \
@@ -419,9 +429,9 @@ fn stages_1_to_3(
 }
 
 /// The note on stage 5's test `t` of a network against the best model alone (`candidates`:
-/// the search's, which `t` indexes); `instead` where it holds the best network without an
-/// RBF network against the model alone, one with an RBF network having failed.
-fn network_note(t: &NetworkTest, candidates: &[Candidate], instead: bool) -> String {
+/// the search's, which `t` indexes): `network` names the network, `then` what follows where
+/// it is not kept.
+fn network_note(t: &NetworkTest, candidates: &[Candidate], network: &str, then: &str) -> String {
     let alone = &candidates[t.alone].settings;
     let by = |ratio: f64| {
         let below = (1.0 - ratio) * 100.0;
@@ -439,11 +449,6 @@ fn network_note(t: &NetworkTest, candidates: &[Candidate], instead: bool) -> Str
         format!("paired z {:.1} over {} held-out rows", t.z, t.rows)
     } else {
         "no row-by-row test (the held-out rows could not be recomputed as scored)".into()
-    };
-    let network = if instead {
-        "the best network without an RBF network"
-    } else {
-        "the network"
     };
     let mut test = format!(
         "{network}'s cross-validated error is {} the best model alone's ({model}), {rows}",
@@ -494,7 +499,7 @@ fn network_note(t: &NetworkTest, candidates: &[Candidate], instead: bool) -> Str
     } else {
         format!("not significant row by row (a paired z of -{NETWORK_Z} or lower is needed)")
     };
-    format!("{test}, {why}: the compensator is the model alone")
+    format!("{test}, {why}: {then}")
 }
 
 /// Takes out of `refined` (each refinement with its models, one per fold) every refinement

@@ -5,13 +5,24 @@ use crate::neural::settings::{Form, Network, Settings};
 
 /// The best-scored pose-form MLP candidate, the partner of a mixed candidate.
 pub(super) fn best_pose_mlp(candidates: &[Candidate]) -> Option<usize> {
+    best_where(
+        candidates,
+        |c| c.form == Form::Pose && c.network == Network::Mlp && c.members > 0,
+        cv_rms,
+    )
+}
+
+/// The candidate whose settings pass `keep` with the lowest score `judged(candidates,
+/// index)` (the first of equals), scored or not; None where none passes.
+pub(super) fn best_where(
+    candidates: &[Candidate],
+    keep: impl Fn(&Settings) -> bool,
+    judged: impl Fn(&[Candidate], usize) -> f64,
+) -> Option<usize> {
     (0..candidates.len())
-        .filter(|&i| {
-            let c = &candidates[i].settings;
-            c.form == Form::Pose && c.network == Network::Mlp && c.members > 0
-        })
+        .filter(|&i| keep(&candidates[i].settings))
         .fold(None, |b: Option<usize>, i| {
-            Some(b.map_or(i, |b| better(candidates, b, i..i + 1)))
+            Some(b.map_or(i, |b| better_by(candidates, b, i..i + 1, &judged)))
         })
 }
 

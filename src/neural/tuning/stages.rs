@@ -3,7 +3,9 @@
 
 use super::cv::{Hypers, searches};
 use super::race::Race;
-use super::rank::{best_pose_mlp, better, better_by, cv_rms, paired_z, significant3, vary};
+use super::rank::{
+    best_pose_mlp, best_where, better, better_by, cv_rms, paired_z, significant3, vary,
+};
 use super::space::Space;
 use super::{
     COMPLIANCE_MARGIN, ENSEMBLE_PROBE, ENSEMBLE_TIE, NETWORK_MARGIN, NETWORK_Z, PENALTY_STEP,
@@ -324,17 +326,12 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
                 Ok(t) if t.kept => test = t,
                 Ok(t) => {
                     let fixed = self.space.rbf_only || self.space.mix_only;
-                    let others = (0..self.candidates.len()).filter(|&i| {
-                        let c = &self.candidates[i].settings;
-                        !fixed && c.has_network() && !c.has_rbf()
-                    });
-                    let other = others
-                        .fold(None, |b: Option<usize>, i| {
-                            Some(b.map_or(i, |b| {
-                                better_by(&self.candidates, b, i..i + 1, |c, i| self.judged(c, i))
-                            }))
-                        })
-                        .filter(|&i| self.judged(&self.candidates, i).is_finite());
+                    let other = best_where(
+                        &self.candidates,
+                        |c| !fixed && c.has_network() && !c.has_rbf(),
+                        |c, i| self.judged(c, i),
+                    )
+                    .filter(|&i| self.judged(&self.candidates, i).is_finite());
                     (test, rows) = match other {
                         Some(i) => {
                             self.rbf_network_test = Some(t);
@@ -369,7 +366,7 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
         let held = |i: usize| -> Option<(Vec<Vec<RowError>>, Vec<f64>)> {
             let folds = self.race.held_rows(&self.candidates[i].settings).ok()?;
             let squares = squares(&folds);
-            let rms = (squares.iter().sum::<f64>() / squares.len().max(1) as f64).sqrt();
+            let rms = root_mean(&squares);
             let scored = cv_rms(&self.candidates, i);
             ((rms - scored).abs() <= 1e-9 * scored.max(1e-12)).then_some((folds, squares))
         };
@@ -413,12 +410,15 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
     fn unseen_test(&self, t: NetworkTest, held: Option<&[Vec<RowError>]>) -> Result<NetworkTest> {
         let net = &self.candidates[t.network].settings;
         let alone = &self.candidates[t.alone].settings;
-        let (folds, unseen) = match (self.race.cv.unseen(net.encoding)?, held) {
-            (Some(unseen), Some(held)) => (held.to_vec(), Some(unseen)),
-            (Some(unseen), None) => (self.race.held_rows(net)?, Some(unseen)),
-            (None, _) => (self.race.held_rows_as(net, Hypers::FoldRows)?, None),
+        let (a, unseen) = match (self.race.cv.unseen(net.encoding)?, held) {
+            (Some(unseen), Some(held)) => (squares(held), Some(unseen)),
+            (Some(unseen), None) => (squares(&self.race.held_rows(net)?), Some(unseen)),
+            (None, _) => (
+                squares(&self.race.held_rows_as(net, Hypers::FoldRows)?),
+                None,
+            ),
         };
-        let (a, b) = (squares(&folds), squares(&self.race.held_rows(alone)?));
+        let b = squares(&self.race.held_rows(alone)?);
         let order = self.race.cv.held_index.concat();
         if a.len() != order.len() || b.len() != order.len() {
             return Err(Error::Invalid(format!(
@@ -438,8 +438,8 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             pick(&b),
             rows.iter().map(|&k| clusters[k]).collect::<Vec<_>>(),
         );
-        let rms = |v: &[f64]| (v.iter().sum::<f64>() / v.len().max(1) as f64).sqrt();
-        let ratio = rms(&a) * self.margin(&net.refine) / (rms(&b) * self.margin(&alone.refine));
+        let ratio =
+            root_mean(&a) * self.margin(&net.refine) / (root_mean(&b) * self.margin(&alone.refine));
         let z = paired_z(&a, &b, &clusters);
         Ok(NetworkTest {
             kept: ratio * (1.0 + NETWORK_MARGIN) <= 1.0 && z <= -NETWORK_Z,
@@ -456,6 +456,11 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             ..t
         })
     }
+}
+
+/// The root of the mean of `squares` (0 for none).
+fn root_mean(squares: &[f64]) -> f64 {
+    (squares.iter().sum::<f64>() / squares.len().max(1) as f64).sqrt()
 }
 
 /// Each held-out row's squared position error (mm^2), fold after fold.
