@@ -316,6 +316,11 @@ fn train_refuses_bad_input_and_predict_refuses_a_corrupt_compensator() {
         &["--rbf-search-rows", "1"],
         &["--rbf-search-rows", "3001"],
         &["--rbf-search-rows", "100", "--network", "mlp"],
+        &["--rbf-search-rows", "60", "--rbf-units", "50"],
+        &["--rbf-units", "1"],
+        &["--rbf-units", "10001"],
+        &["--rbf-units", "50", "--network", "mlp"],
+        &["--rbf-units", "50", "--members", "0"],
         &["--mlp-share", "0"],
         &["--mlp-share", "1"],
         &["--mlp-share", "nan"],
@@ -498,6 +503,41 @@ fn train_and_evaluate_report_the_repeats_of_their_data() {
             ),
         "{out}"
     );
+}
+
+/// `--rbf-units` bounds the RBF network's units: on Case D's 150 training rows, 40 units sit on
+/// a choice of them, which `train` says, and the file holds 40 centres.
+#[test]
+fn train_centres_at_most_rbf_units() {
+    let comp = tmp("units40.rcal");
+    let o = common::train_fanuc(
+        "datasets/case_d/training.csv",
+        comp.to_str().unwrap(),
+        &[
+            "--network",
+            "rbf",
+            "--refine",
+            "none",
+            "--rbf-units",
+            "40",
+            "--rbf-search-rows",
+            "30",
+            "--encoding",
+            "angles",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(
+        out.contains(
+            "rbf network: 40 units (angles inputs) centred on a seeded choice of the final \
+             fit's 150 rows, one per arm configuration first (at most --rbf-units), one \
+             Gaussian process per output"
+        ) && out.contains("its hyperparameters searched on 30 of the rows;"),
+        "{out}"
+    );
+    let c = robocal::neural::compensator::Compensator::load(&comp).unwrap();
+    assert_eq!(c.rbf.unwrap().units(), 40);
 }
 
 /// `--rbf-search-rows` and `--rbf-search-blocks` bound the rows the RBF network's likelihood

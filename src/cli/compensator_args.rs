@@ -6,9 +6,8 @@ use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
 use robocal::neural::compensator::{CompensatorOptions, Refine};
 use robocal::neural::encoding::Encoding;
-use robocal::neural::rbf::{HYPER_BLOCKS, HYPER_ROWS};
+use robocal::neural::rbf::{HYPER_BLOCKS, HYPER_ROWS, MAX_UNITS};
 use robocal::neural::train::{Epoch, Phase2, Progress, TrainOptions};
-use robocal::neural::tuning::RBF_MAX_ROWS;
 
 /// Whether refinement adds the joints' gravity compliances, on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -141,7 +140,7 @@ pub struct CompensatorArgs {
     /// nothing else open takes, output by output, the start of highest likelihood).
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=3))]
     pub rbf_start: Option<u8>,
-    /// Rows of each block the RBF network's likelihood search sees at most, 2 to 3000
+    /// Rows of each block the RBF network's likelihood search sees at most, 2 to the units
     /// (default 500), one per arm configuration: on a larger training set a seeded choice of
     /// them, the other rows (and a configuration's repeats) entering its weights only. Its
     /// cost grows with the cube of the rows: on 2000 real UR10 poses, one block of 1000 rows
@@ -149,6 +148,12 @@ pub struct CompensatorArgs {
     /// s to 11-15 s (squared-exponential kernel).
     #[arg(long)]
     pub rbf_search_rows: Option<usize>,
+    /// Units the RBF network carries at most, 2 to 10000 (default 3000): on a larger training
+    /// set they are centred on a seeded choice of its rows, one per arm configuration first,
+    /// and the other rows train the MLPs only. Its fit's memory grows with the square of the
+    /// units (72 MB per output at 3000) and its time with the cube.
+    #[arg(long)]
+    pub rbf_units: Option<usize>,
     /// Disjoint blocks of those rows the likelihood search sees at most on a larger training
     /// set, their log likelihoods added, 1 to 8 (default 1; a last block of fewer rows only
     /// from half a block). Its cost grows with the blocks: on 2000 real UR10 poses, 2 blocks
@@ -223,6 +228,7 @@ impl CompensatorArgs {
                 ("--rbf-kernel", self.rbf_kernel.is_some()),
                 ("--rbf-search-rows", self.rbf_search_rows.is_some()),
                 ("--rbf-search-blocks", self.rbf_search_blocks.is_some()),
+                ("--rbf-units", self.rbf_units.is_some()),
             ];
             if let Some((flag, _)) = shaping.iter().find(|(_, given)| *given) {
                 bail!("--members 0 keeps the model alone, no network: not with {flag}");
@@ -285,9 +291,18 @@ impl CompensatorArgs {
         if self.rbf_kernel.is_some() && self.network == Some(Network::Mlp) {
             bail!("--rbf-kernel sets up the RBF network: not with --network mlp");
         }
+        let units = self.rbf_units.unwrap_or(MAX_UNITS);
+        if let Some(u) = self.rbf_units {
+            if !(2..=10_000).contains(&u) {
+                bail!("--rbf-units {u}: give 2 to 10000 units");
+            }
+            if self.network == Some(Network::Mlp) {
+                bail!("--rbf-units sets up the RBF network: not with --network mlp");
+            }
+        }
         if let Some(rows) = self.rbf_search_rows {
-            if !(2..=RBF_MAX_ROWS).contains(&rows) {
-                bail!("--rbf-search-rows {rows}: give 2 to {RBF_MAX_ROWS} rows");
+            if !(2..=units).contains(&rows) {
+                bail!("--rbf-search-rows {rows}: give 2 to {units} rows (the units, --rbf-units)");
             }
             if self.network == Some(Network::Mlp) {
                 bail!("--rbf-search-rows sets up the RBF network: not with --network mlp");
@@ -313,7 +328,7 @@ impl CompensatorArgs {
             if self.hidden.is_some() || self.penalty.is_some() {
                 bail!(
                     "--hidden and --penalty set up an MLP; an RBF network has one unit per \
-                     training row and fits its own noise level"
+                     training row (up to --rbf-units) and fits its own noise level"
                 );
             }
             if self.members.is_some_and(|m| m > 1) {
@@ -352,6 +367,7 @@ impl CompensatorArgs {
                 progress: progress.then(epoch_bar),
                 rbf_search_rows: self.rbf_search_rows.unwrap_or(HYPER_ROWS),
                 rbf_search_blocks: self.rbf_search_blocks.map_or(HYPER_BLOCKS, usize::from),
+                rbf_units: units,
                 rbf_covariance: self
                     .rbf_kernel
                     .map_or(robocal::neural::rbf::Covariance::DEFAULT, Into::into),

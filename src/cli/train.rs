@@ -204,10 +204,20 @@ fn print_fit(
     );
     if let Some(r) = &c.rbf {
         say!(
-            "rbf network: {} units ({} inputs), one Gaussian process per output ({} \
+            "rbf network: {} units ({} inputs){}, one Gaussian process per output ({} \
              covariance), its hyperparameters searched on {}{}",
             r.units(),
             c.encoding.name(),
+            // At most `--rbf-units`: on a larger set, centred on a choice of the rows.
+            if r.units() < rows.saturating_sub(outliers) {
+                format!(
+                    " centred on a seeded choice of the final fit's {} rows, one per arm \
+                     configuration first (at most --rbf-units)",
+                    rows.saturating_sub(outliers)
+                )
+            } else {
+                String::new()
+            },
             r.kernels.first().map_or("-", |k| k.covariance.name()),
             // The draw is of the rows cross-validation saw: the training rows but those left
             // out for carrying another configuration's reading, outliers included.

@@ -4,7 +4,7 @@
 use super::compensator::Compensator;
 use super::domain::Domain;
 use super::parallel::parallel_map;
-use super::rbf::{LeftOut, Rbf, search_from, search_start_without};
+use super::rbf::{LeftOut, Rbf, search_from, search_start_without, unit_rows};
 use super::refine::{RefinedParam, refine};
 use super::repeats::Repeats;
 use super::selection::Selection;
@@ -123,7 +123,14 @@ pub(crate) fn fit_with(
             RbfHyper::From(from) => search_from(x, from, draw, left)?.hyper,
             RbfHyper::Search => search_start_without(x, settings.rbf_start, draw, left)?.hyper,
         };
-        Some(Rbf::with_hyper_on(x, &hyper, draw.covariance, parallel)?)
+        // On a large set the units sit on a choice of its rows; the others train the MLPs.
+        let centred = unit_rows(x, draw.seed, train_opts.rbf_units.max(2)).map(|r| x.pick(&r));
+        Some(Rbf::with_hyper_on(
+            centred.as_ref().unwrap_or(x),
+            &hyper,
+            draw.covariance,
+            parallel,
+        )?)
     } else {
         None
     };

@@ -209,8 +209,8 @@ pub enum Refine {
 /// How to build a compensator: each choice left None is made by cross-validation.
 #[derive(Debug, Clone)]
 pub struct CompensatorOptions {
-    /// The network kind; None: cross-validation decides (an RBF network is tried on sets of
-    /// at most [`super::tuning::RBF_MAX_ROWS`] rows).
+    /// The network kind; None: cross-validation decides (an RBF network is tried on the pose
+    /// form, with at most [`super::train::TrainOptions::rbf_units`] units).
     pub network: Option<Network>,
     /// The RBF network's search start ([`super::rbf::STARTS`]); None: the first (smooth)
     /// start where cross-validation runs, else the highest likelihood, output by output.

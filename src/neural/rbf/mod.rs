@@ -44,7 +44,7 @@ mod search;
 use super::samples::Samples;
 use crate::error::{Error, Result};
 pub use covariance::Covariance;
-pub use draw::{Draw, HYPER_BLOCKS, HYPER_ROWS, LeftOut, drawn_rows};
+pub use draw::{Draw, HYPER_BLOCKS, HYPER_ROWS, LeftOut, MAX_UNITS, drawn_rows, unit_rows};
 use faer::Mat;
 use faer::dyn_stack::MemStack;
 use likelihood::kernel;

@@ -131,6 +131,10 @@ pub struct TrainOptions {
     /// The RBF network's covariance function: default [`crate::neural::rbf::Covariance::DEFAULT`]
     /// (Matern 5/2).
     pub rbf_covariance: crate::neural::rbf::Covariance,
+    /// Units an RBF network carries at most (at least 2): on a set of more rows they are
+    /// centred on a seeded choice of its rows ([`crate::neural::rbf::unit_rows`]); default
+    /// [`crate::neural::rbf::MAX_UNITS`]. The fit's cost is cubic in them.
+    pub rbf_units: usize,
 }
 
 impl TrainOptions {
@@ -167,6 +171,7 @@ impl Default for TrainOptions {
             rbf_search_rows: crate::neural::rbf::HYPER_ROWS,
             rbf_search_blocks: crate::neural::rbf::HYPER_BLOCKS,
             rbf_covariance: crate::neural::rbf::Covariance::DEFAULT,
+            rbf_units: crate::neural::rbf::MAX_UNITS,
         }
     }
 }

@@ -113,12 +113,6 @@ pub const SHARES: [f64; 19] = [
     0.9, 0.95,
 ];
 
-/// Rows up to which cross-validation tries an RBF network when the network is not fixed: its
-/// weights solve with the kernel matrix of every row (n^2 numbers, a factorisation cubic in
-/// n), which MLPs do not need. The hyperparameter search itself sees at most
-/// [`super::rbf::HYPER_BLOCKS`] blocks of [`super::rbf::HYPER_ROWS`] rows.
-pub const RBF_MAX_ROWS: usize = 3000;
-
 /// Ensemble size tried against a single network when not fixed.
 pub const ENSEMBLE: usize = 4;
 /// The selection refined when refinement is left to cross-validation ([`Refine::Auto`]):
@@ -179,7 +173,7 @@ pub fn select_settings(
     opts: &CompensatorOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<(Settings, Option<Selection>)> {
-    let mut space = Space::of(robot, opts, set)?;
+    let mut space = Space::of(robot, opts)?;
     if !space.open {
         // Nothing to choose (a fixed mix, its share given, keeps, output by output, the start
         // of highest likelihood).
@@ -414,10 +408,11 @@ fn stages_1_to_3(
     }
     search.chosen = search.best();
     if opts.mlp_share.is_some() && !with_rbf {
-        notes.push(format!(
+        notes.push(
             "an MLP share was given, but no blend of MLPs and the RBF network was tried (it \
-             needs the pose form, MLPs, and at most {RBF_MAX_ROWS} rows)"
-        ));
+             needs the pose form and MLPs)"
+                .to_string(),
+        );
     }
     if !space.rbf_only {
         search.mlps(with_rbf);

@@ -1,8 +1,7 @@
 //! What the options leave open: the lists each stage of the search draws from, the settings
 //! it starts from, and the refinements tried.
 
-use super::{AUTO_REFINE, HIDDEN, PENALTIES, RBF_MAX_ROWS};
-use crate::data::MeasurementSet;
+use super::{AUTO_REFINE, HIDDEN, PENALTIES};
 use crate::error::{Error, Result};
 use crate::model::Robot;
 use crate::neural::encoding::Encoding;
@@ -62,11 +61,7 @@ pub(super) struct Space {
 }
 
 impl Space {
-    pub(super) fn of(
-        robot: &Robot,
-        opts: &CompensatorOptions,
-        set: &MeasurementSet,
-    ) -> Result<Space> {
+    pub(super) fn of(robot: &Robot, opts: &CompensatorOptions) -> Result<Space> {
         if let Some(s) = opts.mlp_share {
             check_share(s)?;
         }
@@ -143,12 +138,10 @@ impl Space {
         // 0.286 against 0.296; 0.253 against 0.251; 0.244 against 0.265 mm).
         let rbf_start = opts.rbf_start.unwrap_or(0);
         // An RBF network (alone or with the MLPs) is tried where the network is left open
-        // (and not fixed at none, `members` 0: the model alone), on the pose form, while its
-        // kernel matrix stays small.
-        let try_rbf = opts.network.is_none()
-            && opts.members != Some(0)
-            && forms.contains(&Form::Pose)
-            && set.rows.len() <= RBF_MAX_ROWS;
+        // (and not fixed at none, `members` 0: the model alone), on the pose form; on a large
+        // set its units sit on a choice of the rows (`TrainOptions::rbf_units`).
+        let try_rbf =
+            opts.network.is_none() && opts.members != Some(0) && forms.contains(&Form::Pose);
         let open = refines.len() > 1
             || forms.len() > 1
             || encodings.len() > 1
