@@ -1063,22 +1063,23 @@ fn mlp_flags_keep_the_rbf_network_alone_out() {
 }
 
 /// On a set of more rows than the RBF network may carry units (`rbf_units`), its units sit on
-/// the rows `unit_rows` chooses (one per configuration first, the search's rows among them),
-/// its weights are those of the same Gaussian processes fitted on those rows alone, and
-/// cross-validation still tries it: before, a set of more than 3000 rows was given MLPs only,
+/// the rows `unit_rows` chooses (one per configuration first, the search's rows among them,
+/// the whole set's choice where the final fit leaves rows out), its weights are those of the
+/// same Gaussian processes fitted on those rows alone, and cross-validation still tries it:
+/// before, a set of more than 3000 rows was given MLPs only when the network was left open,
 /// and on real UR10 data more rows then made a worse compensator (`MAX_UNITS`' doc).
 #[test]
 fn an_rbf_network_on_more_rows_than_units_centres_them_on_a_choice_of_rows() {
     use robocal::neural::compensator::{Network, Refine};
-    use robocal::neural::rbf::{Draw, Hyper, Rbf, drawn_rows, unit_rows};
-    let (model, train) = case_d_offsets();
+    use robocal::neural::rbf::{Draw, Hyper, LeftOut, Rbf, drawn_rows, unit_rows};
+    let (model, clean) = case_d_offsets();
     let units = 60;
-    let opts = |network| {
+    let opts = |network, drop_outliers| {
         let defaults = CompensatorOptions::default();
         CompensatorOptions {
             network,
             refine: Refine::Off,
-            drop_outliers: false,
+            drop_outliers,
             train: TrainOptions {
                 rbf_units: units,
                 rbf_search_rows: 40,
@@ -1087,7 +1088,7 @@ fn an_rbf_network_on_more_rows_than_units_centres_them_on_a_choice_of_rows() {
             ..defaults
         }
     };
-    let (_, report) = Compensator::train(&model, &train, &opts(None), &|_, _| {}).unwrap();
+    let (_, report) = Compensator::train(&model, &clean, &opts(None, false), &|_, _| {}).unwrap();
     let sel = report.selection.expect("cross-validated");
     assert!(
         sel.candidates
@@ -1095,52 +1096,88 @@ fn an_rbf_network_on_more_rows_than_units_centres_them_on_a_choice_of_rows() {
             .any(|c| c.settings.network == Network::Rbf && c.error.is_none()),
         "no RBF candidate scored"
     );
-    let (c, report) =
-        Compensator::train(&model, &train, &opts(Some(Network::Rbf)), &|_, _| {}).unwrap();
-    let rbf = c.rbf.expect("an RBF network");
-    assert_eq!(rbf.units(), units);
-    let s = robocal::neural::targets::build(&model, &train, Form::Pose, report.settings.encoding)
-        .unwrap()
-        .samples;
     let seed = CompensatorOptions::default().train.seed;
-    let rows = unit_rows(&s, seed, units).expect("more rows than units");
-    assert_eq!(rows.len(), units);
-    let searched = drawn_rows(
-        &s,
-        Draw {
-            rows: 40,
-            ..Draw::seeded(seed)
-        },
-    )
-    .unwrap();
-    assert!(searched.iter().all(|r| rows.contains(r)), "{searched:?}");
-    let picked = s.pick(&rows);
-    assert_eq!(rbf.centres, picked.x);
-    // The same processes on the chosen rows alone (hyperparameters back in the log domain).
-    let h = Hyper::from_iterator(
-        rbf.kernels.len() * (s.x[0].len() + 2),
-        rbf.kernels.iter().flat_map(|k| {
-            k.widths
-                .iter()
-                .map(|l| l.ln())
-                .chain([k.signal_variance.ln(), k.noise_variance.ln()])
-                .collect::<Vec<f64>>()
-        }),
-    );
-    let alone = Rbf::with_hyper(&picked, &h, rbf.kernels[0].covariance).unwrap();
-    let scale = alone
-        .weights
-        .iter()
-        .flatten()
-        .fold(0.0f64, |m, w| m.max(w.abs()));
-    for (a, b) in alone
-        .weights
-        .iter()
-        .flatten()
-        .zip(rbf.weights.iter().flatten())
-    {
-        assert!((a - b).abs() <= 1e-9 * scale, "{a} {b}");
+    let draw = Draw {
+        rows: 40,
+        ..Draw::seeded(seed)
+    };
+    // The network's hyperparameters back in the log domain.
+    let hyper = |rbf: &Rbf| {
+        Hyper::from_iterator(
+            rbf.kernels.len() * (rbf.kernels[0].widths.len() + 2),
+            rbf.kernels.iter().flat_map(|k| {
+                k.widths
+                    .iter()
+                    .map(|l| l.ln())
+                    .chain([k.signal_variance.ln(), k.noise_variance.ln()])
+                    .collect::<Vec<f64>>()
+            }),
+        )
+    };
+    // Row 40 moved 3 mm: listed by cross-validation and left out of the final fit where
+    // outliers are dropped.
+    let bad = 40;
+    let mut moved = clean.clone();
+    if let Some(p) = moved.rows[bad].position.as_mut() {
+        p.x += 3.0;
     }
-    // As many units as rows: every row carries one.
-    assert!(unit_rows(&s, seed, s.len()).is_none());
+    for (train, drop) in [(&clean, false), (&moved, true)] {
+        let (c, report) =
+            Compensator::train(&model, train, &opts(Some(Network::Rbf), drop), &|_, _| {}).unwrap();
+        let listed: Vec<usize> = report
+            .selection
+            .as_ref()
+            .map(|s| s.outliers.iter().map(|o| o.row).collect())
+            .unwrap_or_default();
+        assert_eq!(listed.is_empty(), !drop, "{listed:?}");
+        let fitted = robocal::neural::tuning::subset(train, |i| !(drop && listed.contains(&i)));
+        assert_eq!(report.rbf_centred_on, Some(fitted.rows.len()));
+        let rbf = c.rbf.expect("an RBF network");
+        assert_eq!(rbf.units(), units);
+        let build = |set| {
+            robocal::neural::targets::build(&model, set, Form::Pose, report.settings.encoding)
+                .unwrap()
+                .samples
+        };
+        let (all, s) = (build(train), build(&fitted));
+        let left = LeftOut {
+            rows: if drop { &listed } else { &[] },
+            groups: if drop { &all.groups } else { &[] },
+        };
+        let rows = unit_rows(&s, seed, units, left)
+            .unwrap()
+            .expect("more rows than units");
+        assert_eq!(rows.len(), units);
+        let picked = s.pick(&rows);
+        assert_eq!(rbf.centres, picked.x);
+        // The rows the search of the whole set drew, but those left out, carry units.
+        let searched: Vec<usize> = drawn_rows(&all, draw)
+            .unwrap()
+            .into_iter()
+            .filter(|r| !(drop && listed.contains(r)))
+            .map(|r| r - listed.iter().filter(|&&o| drop && o < r).count())
+            .collect();
+        assert!(searched.iter().all(|r| rows.contains(r)), "{searched:?}");
+        // The same processes on the chosen rows alone.
+        let alone = Rbf::with_hyper(&picked, &hyper(&rbf), rbf.kernels[0].covariance).unwrap();
+        let scale = alone
+            .weights
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, w| m.max(w.abs()));
+        for (a, b) in alone
+            .weights
+            .iter()
+            .flatten()
+            .zip(rbf.weights.iter().flatten())
+        {
+            assert!((a - b).abs() <= 1e-9 * scale, "{a} {b}");
+        }
+        // As many units as rows: every row carries one.
+        assert!(
+            unit_rows(&s, seed, s.len(), LeftOut::NONE)
+                .unwrap()
+                .is_none()
+        );
+    }
 }

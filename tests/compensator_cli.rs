@@ -503,6 +503,33 @@ fn train_and_evaluate_report_the_repeats_of_their_data() {
             ),
         "{out}"
     );
+    // With 62 units, on a choice of the 65 rows that takes each configuration first.
+    let o = common::train_fanuc(
+        data.to_str().unwrap(),
+        rbf.to_str().unwrap(),
+        &[
+            "--network",
+            "rbf",
+            "--refine",
+            "none",
+            "--keep-outliers",
+            "--rbf-units",
+            "62",
+        ],
+    );
+    let out = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        out.contains("rbf network: 62 units (")
+            && out.contains(
+                " inputs) centred on a seeded choice of the final fit's 65 rows, one per arm \
+                 configuration first (at most --rbf-units)"
+            )
+            && out.contains(
+                "its hyperparameters searched on 60 of the rows, one per arm configuration;"
+            ),
+        "{out}"
+    );
 }
 
 /// `--rbf-units` bounds the RBF network's units: on Case D's 150 training rows, 40 units sit on
@@ -531,8 +558,7 @@ fn train_centres_at_most_rbf_units() {
     assert!(
         out.contains(
             "rbf network: 40 units (angles inputs) centred on a seeded choice of the final \
-             fit's 150 rows, one per arm configuration first (at most --rbf-units), one \
-             Gaussian process per output"
+             fit's 150 rows (at most --rbf-units), one Gaussian process per output"
         ) && out.contains("its hyperparameters searched on 30 of the rows;"),
         "{out}"
     );

@@ -88,8 +88,8 @@ choice! {
         /// The thesis's multilayer perceptron: one logistic hidden layer, trained by momentum
         /// then L-BFGS (an ensemble of them where it helps).
         Mlp,
-        /// A radial-basis-function network with one unit per training row (a Gaussian
-        /// process's posterior mean); pose form only.
+        /// A radial-basis-function network with one unit per training row, at most
+        /// --rbf-units (a Gaussian process's posterior mean); pose form only.
         Rbf,
         /// The MLPs' mean and an RBF network blended, the MLPs' share chosen by
         /// cross-validation or fixed by --mlp-share (pose form only).

@@ -52,11 +52,11 @@ pub enum Phase2Arg {
 #[derive(Args, Debug, Clone)]
 pub struct CompensatorArgs {
     /// The network: `mlp` (the thesis's multilayer perceptron, in ensembles where that
-    /// helps), `rbf` (one unit per training row, widths and weights of one Gaussian
-    /// process's posterior mean per output; pose form only; its cost grows with the cube of
-    /// the rows) or
+    /// helps), `rbf` (one unit per training row, at most --rbf-units, widths and weights of
+    /// one Gaussian process's posterior mean per output; pose form only; its cost grows with
+    /// the cube of the units) or
     /// `mix` (the MLPs' mean and an RBF network averaged; pose form only). Default: chosen by
-    /// cross-validation (rbf and mix tried on up to 3000 rows). Without --members,
+    /// cross-validation. Without --members,
     /// cross-validation may still keep the model alone where no network is both 2 % better
     /// and significantly better row by row.
     #[arg(long, value_enum)]
@@ -140,8 +140,8 @@ pub struct CompensatorArgs {
     /// nothing else open takes, output by output, the start of highest likelihood).
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=3))]
     pub rbf_start: Option<u8>,
-    /// Rows of each block the RBF network's likelihood search sees at most, 2 to the units
-    /// (default 500), one per arm configuration: on a larger training set a seeded choice of
+    /// Rows of each block the RBF network's likelihood search sees at most, 2 to 3000 and to
+    /// the units (default 500, or the units where fewer), one per arm configuration: on a larger training set a seeded choice of
     /// them, the other rows (and a configuration's repeats) entering its weights only. Its
     /// cost grows with the cube of the rows: on 2000 real UR10 poses, one block of 1000 rows
     /// instead of 500 lowered the held-out RMS by 5.5 % and took the default `train` from 4.5
@@ -151,7 +151,8 @@ pub struct CompensatorArgs {
     /// Units the RBF network carries at most, 2 to 10000 (default 3000): on a larger training
     /// set they are centred on a seeded choice of its rows, one per arm configuration first,
     /// and the other rows train the MLPs only. Its fit's memory grows with the square of the
-    /// units (72 MB per output at 3000) and its time with the cube.
+    /// units (72 MB per output at 3000, 800 MB at 10000; an output per core at once) and its
+    /// time with the cube.
     #[arg(long)]
     pub rbf_units: Option<usize>,
     /// Disjoint blocks of those rows the likelihood search sees at most on a larger training
@@ -300,9 +301,15 @@ impl CompensatorArgs {
                 bail!("--rbf-units sets up the RBF network: not with --network mlp");
             }
         }
+        // The search's cost is cubic in its rows, at every one of its steps: no more than the
+        // units, nor than 3000 (the largest before units were bounded).
+        let search_max = units.min(3000);
         if let Some(rows) = self.rbf_search_rows {
-            if !(2..=units).contains(&rows) {
-                bail!("--rbf-search-rows {rows}: give 2 to {units} rows (the units, --rbf-units)");
+            if !(2..=search_max).contains(&rows) {
+                bail!(
+                    "--rbf-search-rows {rows}: give 2 to {search_max} rows (at most the units, \
+                     --rbf-units, and 3000)"
+                );
             }
             if self.network == Some(Network::Mlp) {
                 bail!("--rbf-search-rows sets up the RBF network: not with --network mlp");
@@ -365,7 +372,7 @@ impl CompensatorArgs {
                     Phase2Arg::Lbfgs => Phase2::Lbfgs,
                 },
                 progress: progress.then(epoch_bar),
-                rbf_search_rows: self.rbf_search_rows.unwrap_or(HYPER_ROWS),
+                rbf_search_rows: self.rbf_search_rows.unwrap_or(HYPER_ROWS.min(units)),
                 rbf_search_blocks: self.rbf_search_blocks.map_or(HYPER_BLOCKS, usize::from),
                 rbf_units: units,
                 rbf_covariance: self

@@ -209,14 +209,16 @@ fn print_fit(
             r.units(),
             c.encoding.name(),
             // At most `--rbf-units`: on a larger set, centred on a choice of the rows.
-            if r.units() < rows.saturating_sub(outliers) {
-                format!(
-                    " centred on a seeded choice of the final fit's {} rows, one per arm \
-                     configuration first (at most --rbf-units)",
-                    rows.saturating_sub(outliers)
-                )
-            } else {
-                String::new()
+            match report.rbf_centred_on {
+                Some(fitted) if configurations < rows => format!(
+                    " centred on a seeded choice of the final fit's {fitted} rows, one per \
+                     arm configuration first (at most --rbf-units)"
+                ),
+                Some(fitted) => format!(
+                    " centred on a seeded choice of the final fit's {fitted} rows (at most \
+                     --rbf-units)"
+                ),
+                None => String::new(),
             },
             r.kernels.first().map_or("-", |k| k.covariance.name()),
             // The draw is of the rows cross-validation saw: the training rows but those left

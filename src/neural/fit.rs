@@ -48,6 +48,11 @@ pub struct CompensatorReport {
     /// before it).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub shared_readings: Vec<SharedReading>,
+    /// Rows of the final fit, where the RBF network's units sit on a choice of them (more rows
+    /// than [`TrainOptions::rbf_units`], see [`crate::neural::rbf::unit_rows`]); None: a unit
+    /// on every row, or no RBF network (then left out of the file).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rbf_centred_on: Option<usize>,
 }
 
 impl Compensator {
@@ -67,6 +72,11 @@ impl Compensator {
         };
         let started = std::time::Instant::now();
         let (c, networks) = fit_with(&robot, set, settings, train_opts, true, true, Vec::new())?;
+        let rbf_centred_on = c
+            .rbf
+            .as_ref()
+            .filter(|r| r.units() < set.rows.len())
+            .map(|_| set.rows.len());
         Ok((
             c,
             CompensatorReport {
@@ -79,6 +89,7 @@ impl Compensator {
                 fit_seconds: started.elapsed().as_secs_f64(),
                 repeats: Repeats::of(&robot, set),
                 shared_readings: Vec::new(),
+                rbf_centred_on,
             },
         ))
     }
@@ -123,8 +134,9 @@ pub(crate) fn fit_with(
             RbfHyper::From(from) => search_from(x, from, draw, left)?.hyper,
             RbfHyper::Search => search_start_without(x, settings.rbf_start, draw, left)?.hyper,
         };
-        // On a large set the units sit on a choice of its rows; the others train the MLPs.
-        let centred = unit_rows(x, draw.seed, train_opts.rbf_units.max(2)).map(|r| x.pick(&r));
+        // On a large set the units sit on a choice of its rows (the whole set's, where rows
+        // were left out); the others train the MLPs.
+        let centred = unit_rows(x, draw.seed, train_opts.rbf_units, left)?.map(|r| x.pick(&r));
         Some(Rbf::with_hyper_on(
             centred.as_ref().unwrap_or(x),
             &hyper,

@@ -76,8 +76,9 @@ pub enum Network {
     /// then L-BFGS (an ensemble of them where it helps).
     #[default]
     Mlp,
-    /// A radial-basis-function network with one unit per training row, widths and weights of
-    /// a Gaussian process's posterior mean per output ([`super::rbf`]); pose form only.
+    /// A radial-basis-function network with one unit per training row (at most
+    /// [`super::train::TrainOptions::rbf_units`], on a choice of the rows), widths and weights
+    /// of a Gaussian process's posterior mean per output ([`super::rbf`]); pose form only.
     Rbf,
     /// The MLPs' mean and an RBF network blended (pose form only; the MLPs' share
     /// [`Settings::mlp_share`]): the MLPs follow the smooth trend, the RBF network the sharp

@@ -1,5 +1,6 @@
 //! Training a compensator: what the options leave open is chosen by cross-validation
-//! ([`super::tuning`]), then the chosen settings are fitted on every row ([`super::fit`]).
+//! ([`super::tuning`]), then the chosen settings are fitted on every row ([`super::fit`]; an
+//! RBF network's units on at most [`super::train::TrainOptions::rbf_units`] of them).
 
 use super::compensator::Compensator;
 use super::fit::CompensatorReport;

@@ -10,7 +10,8 @@ use serde::{Deserialize, Serialize};
 /// The RBF network of a compensator, as `train` shows it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RbfSummary {
-    /// Units (one per training row).
+    /// Units: one per training row, or at most `--rbf-units` on a choice of them (the
+    /// training report's `rbf_centred_on` then gives the final fit's rows).
     pub units: usize,
     /// The Gaussian processes, in output order (one per output: dx, dy, dz in mm and rx, ry,
     /// rz in mrad, in the robot's base frame, standardised), each with its width per input

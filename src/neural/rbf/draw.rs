@@ -118,10 +118,10 @@ impl LeftOut<'_> {
     };
 }
 
-/// The rows of a whole set of `whole` rows (indices in it; `s` is that set less the sorted
-/// rows `left_out`) that a search takes its blocks from, in the order it takes them: a shuffle
-/// seeded by `seed`, of which only the first row of each configuration is kept (every row
-/// where the whole set is one configuration). The
+/// The rows of the whole set (`s` less the sorted rows `left_out`, its rows in the order of
+/// [`shuffled`]) that a search takes its blocks from, in the order it takes them: of the
+/// shuffle `all` only the first row of each configuration (every row where the whole set is
+/// one configuration). The
 /// configurations are `whole_groups` (the whole set's groups), or where that is empty the
 /// groups of `s` ([`Samples::groups`]) with each row left out a configuration of its own.
 ///
@@ -137,11 +137,8 @@ fn configurations_in_draw_order(
     s: &Samples,
     left_out: &[usize],
     whole_groups: &[usize],
-    whole: usize,
-    seed: u64,
+    all: Vec<usize>,
 ) -> Vec<usize> {
-    let mut all: Vec<usize> = (0..whole).collect();
-    all.shuffle(&mut ChaCha8Rng::seed_from_u64(seed ^ 0x7bf));
     // A configuration: (false, group) for a group, (true, row) for a row left out alone.
     let configuration = |r: usize| -> (bool, usize) {
         if !whole_groups.is_empty() {
@@ -170,44 +167,96 @@ fn configurations_in_draw_order(
 /// matrix per output (n^2 numbers, a factorisation cubic in n: 72 MB and about 9 GFLOP per
 /// output at 3000), so on larger sets the units are centred on a choice of the rows
 /// ([`unit_rows`]: a subset-of-data Gaussian process) and the other rows train the MLPs
-/// only. Before, sets of more than 3000 rows were given no RBF network at all, and more
-/// data made a worse compensator: on real UR10 data (Series A, 1412 held-out poses) the
+/// only. Before, sets of more than 3000 rows were given no RBF network at all where the
+/// network was left open (a fixed one put a unit on every row), and more data made a worse
+/// compensator: on real UR10 data (Series A, 1412 held-out poses) the
 /// default `train` on a pool of 8003 reached 0.1537 mm RMS (MLPs alone), on 2001 of those
 /// rows 0.1383 and on 2961 of them 0.1278 (both with an RBF network); with 3000 units on a
-/// choice of the 8003, 0.1296. More units keep helping, at a cost cubic in them: on two
-/// pools of 5178 (4237 held out) 0.1545 and 0.1574 mm with MLPs alone (25 and 26 s), 0.1326
-/// and 0.1412 with 2000 units (26 and 24 s), 0.1237 and 0.1317 with 3000 (41 and 34 s),
-/// 0.1116 and 0.1239 with 4500 (52 and 50 s). 3000 was the largest set given an RBF
-/// network before: sets up to it are fitted as they were.
+/// choice of the 8003, 0.1323. More units keep helping, at a cost cubic in them: on two
+/// pools of 5178 (4237 held out) 0.1545 and 0.1574 mm with MLPs alone (25 and 26 s), 0.1310
+/// and 0.1417 with 2000 units (30 and 21 s), 0.1214 and 0.1336 with 3000 (45 and 34 s),
+/// 0.1136 and 0.1245 with 4500 (59 and 52 s). 3000 was the largest set given an RBF
+/// network before: sets up to it are fitted as they were. Sets a little larger (up to 4000
+/// with 4 folds) carry a unit on every row in the folds and 3000 in the final fit.
 pub const MAX_UNITS: usize = 3000;
 
-/// The rows of `s` (ascending) on which an RBF network of at most `max` units centres them,
-/// None where every row carries one (`s` has `max` rows or fewer): the rows in the order of
-/// the search's draw of `seed` ([`Draw`]: a seeded shuffle, one row per configuration, so
-/// that the rows a search of `s` by `seed` sees are among them where they are `max` or
-/// fewer), then the configurations' other
-/// rows in the same shuffle, the first `max` of these. Spread over the configurations first
-/// because repeats of one configuration add little where the other configurations are
-/// missing (the reasons the search's draw takes one row per configuration).
-pub fn unit_rows(s: &Samples, seed: u64, max: usize) -> Option<Vec<usize>> {
-    let n = s.x.len();
-    if n <= max {
-        return None;
+/// The rows of a whole set of `whole` rows in the order of the search's seeded shuffle.
+fn shuffled(whole: usize, seed: u64) -> Vec<usize> {
+    let mut all: Vec<usize> = (0..whole).collect();
+    all.shuffle(&mut ChaCha8Rng::seed_from_u64(seed ^ 0x7bf));
+    all
+}
+
+/// The rows `left_out` sorted and without repeats, and the number of rows of the whole set
+/// `s` was taken from; an error where they do not fit it.
+fn whole_set(s: &Samples, left_out: LeftOut) -> Result<(Vec<usize>, usize)> {
+    let mut left = left_out.rows.to_vec();
+    left.sort_unstable();
+    left.dedup();
+    let whole = s.x.len() + left.len();
+    if let Some(&last) = left.last()
+        && last >= whole
+    {
+        return Err(Error::Invalid(format!(
+            "the RBF network's rows: row {last} left out of a set of {whole} rows"
+        )));
     }
-    let first = configurations_in_draw_order(s, &[], &[], n, seed);
-    let mut taken = vec![false; n];
+    if !left_out.groups.is_empty() && left_out.groups.len() != whole {
+        return Err(Error::Invalid(format!(
+            "the RBF network's rows: configuration groups of {} rows for a whole set of \
+             {whole}",
+            left_out.groups.len()
+        )));
+    }
+    Ok((left, whole))
+}
+
+/// Rows of the whole set (indices in it) numbered as in the set less the sorted rows `left`,
+/// those left out dropped.
+fn renumbered(rows: impl Iterator<Item = usize>, left: &[usize]) -> impl Iterator<Item = usize> {
+    rows.filter(|r| left.binary_search(r).is_err())
+        .map(|r| r - left.partition_point(|&o| o < r))
+}
+
+/// The rows of `s` (ascending) on which an RBF network of at most `max` units centres them,
+/// None where every row carries one (`s` has `max` rows or fewer). The whole set's rows (`s`
+/// and the rows `left_out`, as for the search) are taken in the order of the search's draw of
+/// `seed` ([`Draw`]: a seeded shuffle, one row per configuration), then its configurations'
+/// other rows in the same shuffle; of these, the first `max` that `s` holds. So the rows a
+/// search of `s` by `seed` with the same `left_out` sees are among them where its blocks hold
+/// `max` rows or fewer, and a set taken from a larger one without some rows (a fold's
+/// training rows) centres its units on the larger set's choice, less those rows, topped up
+/// in the same order. Spread over the configurations first because repeats of one
+/// configuration add little where the other configurations are missing (the reasons the
+/// search's draw takes one row per configuration). An error for fewer than 2 units or
+/// where `left_out` does not fit.
+pub fn unit_rows(
+    s: &Samples,
+    seed: u64,
+    max: usize,
+    left_out: LeftOut,
+) -> Result<Option<Vec<usize>>> {
+    if max < 2 {
+        return Err(Error::Invalid(format!(
+            "an RBF network of at most {max} units: it needs at least 2"
+        )));
+    }
+    if s.x.len() <= max {
+        return Ok(None);
+    }
+    let (left, whole) = whole_set(s, left_out)?;
+    let all = shuffled(whole, seed);
+    let first = configurations_in_draw_order(s, &left, left_out.groups, all.clone());
+    let mut taken = vec![false; whole];
     for &r in &first {
         taken[r] = true;
     }
-    let mut all: Vec<usize> = (0..n).collect();
-    all.shuffle(&mut ChaCha8Rng::seed_from_u64(seed ^ 0x7bf));
-    let mut rows: Vec<usize> = first
+    let order = first
         .into_iter()
-        .chain(all.into_iter().filter(|&r| !taken[r]))
-        .take(max)
-        .collect();
+        .chain(all.into_iter().filter(|&r| !taken[r]));
+    let mut rows: Vec<usize> = renumbered(order, &left).take(max).collect();
     rows.sort_unstable();
-    Some(rows)
+    Ok(Some(rows))
 }
 
 /// The blocks of rows (indices in `s`, ascending in each block) a search of `s` sees under
@@ -215,7 +264,6 @@ pub fn unit_rows(s: &Samples, seed: u64, max: usize) -> Option<Vec<usize>> {
 /// error where the draw asks for fewer than 2 rows or no block, where `left_out` does not fit
 /// the whole set, or where no block of 2 rows or more is left.
 pub(super) fn drawn_blocks(s: &Samples, draw: Draw, left_out: LeftOut) -> Result<Vec<Vec<usize>>> {
-    let n = s.x.len();
     if draw.rows < 2 {
         return Err(Error::Invalid(format!(
             "the RBF network's hyperparameter search on {} rows: it needs at least 2",
@@ -229,35 +277,14 @@ pub(super) fn drawn_blocks(s: &Samples, draw: Draw, left_out: LeftOut) -> Result
         ));
     }
     let whole_groups = left_out.groups;
-    let mut left_out = left_out.rows.to_vec();
-    left_out.sort_unstable();
-    left_out.dedup();
     // The whole set's rows, drawn as its own search draws them.
-    let whole = n + left_out.len();
-    if let Some(&last) = left_out.last()
-        && last >= whole
-    {
-        return Err(Error::Invalid(format!(
-            "the RBF network's hyperparameter search: row {last} left out of a set of \
-             {whole} rows"
-        )));
-    }
-    if !whole_groups.is_empty() && whole_groups.len() != whole {
-        return Err(Error::Invalid(format!(
-            "the RBF network's hyperparameter search: configuration groups of {} rows for \
-             a whole set of {whole}",
-            whole_groups.len()
-        )));
-    }
-    let all = configurations_in_draw_order(s, &left_out, whole_groups, whole, draw.seed);
+    let (left_out, whole) = whole_set(s, left_out)?;
+    let all = configurations_in_draw_order(s, &left_out, whole_groups, shuffled(whole, draw.seed));
     // Those left out dropped, the others numbered as in `s`.
     let renumber = |block: &[usize]| -> Vec<usize> {
         let mut rows = block.to_vec();
         rows.sort_unstable();
-        rows.into_iter()
-            .filter(|r| left_out.binary_search(r).is_err())
-            .map(|r| r - left_out.partition_point(|&o| o < r))
-            .collect()
+        renumbered(rows.into_iter(), &left_out).collect()
     };
     let mut at = 0;
     let drawn: Vec<Vec<usize>> = draw
@@ -301,7 +328,10 @@ mod tests {
 
     /// Twelve configurations, the first four measured three times: units on a choice of the
     /// rows take every configuration before any repeat, hold the rows the search of the same
-    /// seed draws, and are a seeded choice.
+    /// seed draws (also where they are fewer than the configurations), grow as prefixes of one
+    /// order, and are a seeded choice; a set taken from the whole without some rows centres
+    /// on the whole set's choice less those rows, and the search of that set (told the rows
+    /// left out) draws among them.
     #[test]
     fn unit_rows_spread_over_the_configurations_first() {
         let mut s = Samples::default();
@@ -312,29 +342,78 @@ mod tests {
                 s.groups.push(c);
             }
         }
+        let units = |s: &Samples, seed, max, left| unit_rows(s, seed, max, left).unwrap();
+        let configurations = |s: &Samples, rows: &[usize]| {
+            rows.iter()
+                .map(|&r| s.group(r))
+                .collect::<std::collections::HashSet<usize>>()
+                .len()
+        };
         assert_eq!(s.len(), 20);
-        assert_eq!(unit_rows(&s, 1, 20), None);
-        for (seed, max) in [(1, 12), (1, 15), (2, 15), (3, 19)] {
-            let rows = unit_rows(&s, seed, max).unwrap();
+        assert_eq!(units(&s, 1, 20, LeftOut::NONE), None);
+        assert!(unit_rows(&s, 1, 1, LeftOut::NONE).is_err());
+        for seed in [1, 2, 3] {
+            let mut before: Vec<usize> = Vec::new();
+            for max in 2..20 {
+                let rows = units(&s, seed, max, LeftOut::NONE).unwrap();
+                assert_eq!(rows.len(), max);
+                assert!(rows.windows(2).all(|w| w[0] < w[1]), "{rows:?}");
+                assert_eq!(configurations(&s, &rows), max.min(12), "{seed} {max}");
+                assert!(before.iter().all(|r| rows.contains(r)), "{seed} {max}");
+                before = rows.clone();
+                for (rows_searched, blocks) in [(max, 1), (2, 1), (max / 2, 2)] {
+                    if rows_searched < 2 {
+                        continue;
+                    }
+                    let draw = Draw {
+                        rows: rows_searched,
+                        blocks,
+                        ..Draw::seeded(seed)
+                    };
+                    let searched = drawn_rows(&s, draw).unwrap();
+                    assert!(
+                        searched.iter().all(|r| rows.contains(r)),
+                        "{seed} {max}: {searched:?} {rows:?}"
+                    );
+                }
+            }
+        }
+        assert_ne!(
+            units(&s, 1, 15, LeftOut::NONE),
+            units(&s, 2, 15, LeftOut::NONE)
+        );
+        // Rows 0 and 5 (of configurations 0 and 1) and 13 (configuration 7) left out.
+        let left = [13, 0, 5];
+        let mut sorted = left.to_vec();
+        sorted.sort_unstable();
+        let kept: Vec<usize> = (0..20).filter(|r| !left.contains(r)).collect();
+        let part = s.pick(&kept);
+        for (seed, max) in [(1, 6), (2, 9), (3, 14)] {
+            let whole = LeftOut {
+                rows: &left,
+                groups: &s.groups,
+            };
+            let rows = units(&part, seed, max, whole).unwrap();
             assert_eq!(rows.len(), max);
-            assert!(rows.windows(2).all(|w| w[0] < w[1]), "{rows:?}");
-            let configurations: std::collections::HashSet<usize> =
-                rows.iter().map(|&r| s.group(r)).collect();
-            assert_eq!(configurations.len(), 12, "seed {seed}, {max}: {rows:?}");
+            // The whole set's first units that the part holds: its choice of max + 3 less
+            // the rows left out holds them all.
+            let of_whole = units(&s, seed, max + left.len(), LeftOut::NONE).unwrap();
+            assert!(
+                rows.iter().all(|&r| of_whole.contains(&kept[r])),
+                "{seed} {max}: {rows:?} {of_whole:?}"
+            );
             let draw = Draw {
-                rows: 8,
+                rows: max.min(5),
                 ..Draw::seeded(seed)
             };
-            let searched = drawn_rows(&s, draw).unwrap();
+            let searched = drawn_blocks(&part, draw, whole).unwrap().concat();
             assert!(searched.iter().all(|r| rows.contains(r)), "{searched:?}");
         }
-        // Fewer units than configurations: one row of each configuration taken at most.
-        let rows = unit_rows(&s, 1, 9).unwrap();
-        let configurations: std::collections::HashSet<usize> =
-            rows.iter().map(|&r| s.group(r)).collect();
-        assert_eq!(configurations.len(), 9);
-        assert_ne!(unit_rows(&s, 1, 15), unit_rows(&s, 2, 15));
-        assert_eq!(unit_rows(&s, 2, 15), unit_rows(&s, 2, 15));
+        let wrong = LeftOut {
+            rows: &[40],
+            groups: &[],
+        };
+        assert!(unit_rows(&part, 1, 5, wrong).is_err());
     }
 
     /// Blocks of `rows` while there are rows and blocks; a short last block only from half

@@ -1,7 +1,8 @@
 //! A radial-basis-function network (Broomhead and Lowe, 1988) whose widths and output weights
 //! are those of Gaussian processes' posterior means (Rasmussen and Williams 2006, eqs. 2.25,
-//! 5.8 and 5.9): one unit per training row, centred on its normalised input, and for each
-//! output o its own kernel,
+//! 5.8 and 5.9): one unit per training row (at most [`MAX_UNITS`] by default, on a choice of
+//! the rows beyond: [`unit_rows`]), centred on its normalised input, and for each output o its
+//! own kernel,
 //!
 //!   y_o(x) = sum_i w_io k(sum_d ((x_d - c_id) / l_od)^2),
 //!
@@ -31,7 +32,8 @@
 //! centre its output falls to zero: the compensator becomes the model. Its cost is cubic in
 //! the rows, so the hyperparameters are fitted on at most [`HYPER_BLOCKS`] blocks of
 //! [`HYPER_ROWS`] of them (one per arm configuration, a seeded choice; the blocks'
-//! likelihoods added) and only the weights use every row. The likelihood has several modes
+//! likelihoods added) and only the weights use every row that carries a unit. The likelihood
+//! has several modes
 //! on real data, so the search can run from each of [`STARTS`]; the factorisations use
 //! `faer`.
 

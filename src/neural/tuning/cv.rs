@@ -231,6 +231,10 @@ impl Cv<'_> {
                                 self.hyper_without(settings.encoding, start, fold)?
                             }
                         }),
+                        // On a set of more rows than units, the fold's units are the whole
+                        // set's choice less the held-out rows ([`rbf::unit_rows`]).
+                        rbf_left_out: self.held_index[fold].clone(),
+                        rbf_whole_groups: self.groups.clone(),
                         ..self.opts.train.clone()
                     };
                     let c = crate::neural::fit::fit_with(
