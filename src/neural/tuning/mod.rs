@@ -23,7 +23,9 @@
 //! and 3; the folds fit only its
 //! weights); (4) refinement (for a blend, judged first by the RBF network alone fitted on
 //! the race folds only, a proxy never chosen, and the best refinement then tried with the
-//! blend); (5) no network at all, kept unless the network beats it by [`NETWORK_MARGIN`]
+//! blend), of the leader and, where it could carry it past the leader, of the best of the
+//! other family (MLPs alone, or networks with an RBF network, alone or blended); (5) no
+//! network at all, kept unless the network beats it by [`NETWORK_MARGIN`]
 //! and, row by row, with a paired z of [`NETWORK_Z`]; a network with an RBF network that
 //! passes is tested again on held-out rows no hyperparameter search saw, which decides (where
 //! it fails and the network is not fixed, the best network without one is tested instead).
@@ -263,15 +265,17 @@ pub fn select_settings(
         // A panic there is a defect: it goes on as one in the refinements' own fits would
         // have, not as refinements silently left out.
         let others = others.map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
-        (early.map(|()| (search.candidates, search.chosen)), others)
+        let found = (search.candidates, search.chosen, search.mlp_chosen);
+        (early.map(|()| found), others)
     });
-    let (candidates, chosen) = early?;
+    let (candidates, chosen, mlp_chosen) = early?;
     race.refined.extend(others.unwrap_or_default());
     distinct_refinements(&mut race.refined);
     space.refines = race.refined.iter().map(|(r, _)| r.clone()).collect();
     let mut search = Search::new(&race, &space, opts);
     search.candidates = candidates;
     search.chosen = chosen;
+    search.mlp_chosen = mlp_chosen;
     if space.refines.len() > 1 {
         search.refinement();
     }

@@ -35,6 +35,9 @@ pub(super) struct Search<'r, 'a, 'c> {
     /// Why the test on rows no hyperparameter search saw could not be run, where it could not
     /// (the candidates' figures then decided).
     pub(super) unseen_error: Option<String>,
+    /// The MLPs' choice of stages 1-3 (the ensemble's tie rule applied), before the RBF
+    /// network's candidates.
+    pub(super) mlp_chosen: Option<usize>,
 }
 
 impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
@@ -54,6 +57,7 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             chosen_rows: None,
             rbf_network_test: None,
             unseen_error: None,
+            mlp_chosen: None,
         }
     }
 
@@ -159,6 +163,9 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
     /// weights. An error where the network is fixed to a blend and no MLP was fitted.
     pub(super) fn rbf(&mut self) -> Result<()> {
         let space = self.space;
+        if !self.candidates.is_empty() {
+            self.mlp_chosen = Some(self.chosen);
+        }
         let pose_mlp = best_pose_mlp(&self.candidates);
         let first = self.candidates.len();
         let mut list = Vec::new();
@@ -207,12 +214,60 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
     /// Stage 4: refinement, judged for the network it will carry (early in the search, with
     /// an unregularised single network, it looked worse where it finally helped 1.3x; judged
     /// with one network instead of the ensemble, it lost by 0.6 % where the ensemble kept it
-    /// 1.1 % better on held-out real data).
+    /// 1.1 % better on held-out real data). The leader is refined, and the best of the other
+    /// family (the MLPs' choice where the leader carries an RBF network, the best network
+    /// with an RBF network where it does not) where the refinement could carry it past the
+    /// leader ([`Search::may_overtake`]): a refinement changes the residual the networks
+    /// learn, and the two families answer it differently. On a simulated FANUC with joint
+    /// compliance and gear errors (2000 poses, the shipped non-geometric robot's errors, 1000
+    /// test poses), the RBF network led unrefined (0.0915 mm against the MLPs' 0.1669) and was
+    /// the only one refined (0.0755 with the compliances), while the MLPs refined with the
+    /// compliances reach 0.0655; against the truth 0.0276 against 0.0245 mm RMS, 0.0072
+    /// against 0.0033 deg.
     pub(super) fn refinement(&mut self) {
         let space = self.space;
-        let refines = &space.refines;
-        let w = self.candidates[self.chosen].settings.clone();
+        let leader = self.chosen;
+        let w = self.candidates[leader].settings.clone();
         let first = self.candidates.len();
+        let mut list = self.refinements_of(&w);
+        if !space.rbf_only && !space.mix_only {
+            let rival = if w.has_rbf() {
+                self.mlp_chosen
+            } else {
+                best_where(&self.candidates[..first], Settings::has_rbf, |c, i| {
+                    self.judged(c, i)
+                })
+            }
+            .filter(|&r| {
+                r != leader && self.candidates[r].score.is_some() && self.may_overtake(leader, r)
+            });
+            if let Some(r) = rival {
+                let rs = self.candidates[r].settings.clone();
+                list.extend(self.refinements_of(&rs));
+            }
+        }
+        self.evaluate(4, list);
+        // A fixed mixed network stays one.
+        let mix_only = space.mix_only;
+        let eligible = |candidates: &[Candidate], i: usize| {
+            if mix_only && candidates[i].settings.network != Network::Mix {
+                f64::INFINITY
+            } else {
+                self.judged(candidates, i)
+            }
+        };
+        self.chosen = better_by(
+            &self.candidates,
+            self.chosen,
+            first..self.candidates.len(),
+            eligible,
+        );
+    }
+
+    /// The refinements of candidate settings `w` to try: each of the space's, or for a blend
+    /// the best by its proxies and its own (see below).
+    fn refinements_of(&mut self, w: &Settings) -> Vec<Settings> {
+        let refines = &self.space.refines;
         // A mixed network's share is chosen again for each other refinement.
         let share = self.opts.mlp_share;
         let other = |s: &mut Settings, r: Option<String>| {
@@ -221,7 +276,7 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             }
             s.refine = r;
         };
-        let mut list = vary(&w, refines, other);
+        let mut list = vary(w, refines, other);
         if w.network == Network::Mix {
             // A blend's MLPs cost most of its fits, and a refinement changes the residual they
             // learn. The refinements are judged first with the RBF network alone (the blend's
@@ -263,57 +318,23 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
                 .cloned();
             list.retain(|s| s.refine == w.refine || Some(&s.refine) == best.as_ref());
         }
-        // The best candidate of the other network family (MLPs alone where the leader carries
-        // an RBF network, and the other way round) is refined as well where the refinement
-        // could carry it past the leader: a refinement changes the residual the networks
-        // learn, and the two families answer it differently. On a simulated FANUC with joint
-        // compliance and gear errors (2000 poses, the shipped non-geometric robot's errors,
-        // 1000 test poses), the RBF network led unrefined (0.0915 mm against the MLPs' 0.1669)
-        // and was the only one refined (0.0755 with the compliances), while the MLPs refined
-        // with the compliances reach 0.0655; against the truth 0.0276 against 0.0245 mm RMS,
-        // 0.0072 against 0.0033 deg.
-        if !space.rbf_only && !space.mix_only {
-            let rival = best_where(
-                &self.candidates[..first],
-                |s| s.has_rbf() != w.has_rbf(),
-                |c, i| self.judged(c, i),
-            )
-            .filter(|&r| self.candidates[r].score.is_some() && self.may_overtake(&w, r));
-            if let Some(r) = rival {
-                let rs = self.candidates[r].settings.clone();
-                list.extend(vary(&rs, refines, other));
-            }
-        }
-        self.evaluate(4, list);
-        // A fixed mixed network stays one.
-        let mix_only = space.mix_only;
-        let eligible = |candidates: &[Candidate], i: usize| {
-            if mix_only && candidates[i].settings.network != Network::Mix {
-                f64::INFINITY
-            } else {
-                self.judged(candidates, i)
-            }
-        };
-        self.chosen = better_by(
-            &self.candidates,
-            self.chosen,
-            first..self.candidates.len(),
-            eligible,
-        );
+        list
     }
 
-    /// Whether a refinement could carry candidate `rival` past the leader `w` (both
-    /// unrefined, stages 1-3): whether the rival's cross-validated mean square, less the
-    /// largest part of the model alone's that a refinement removes (its held-out rows, as
-    /// stage 5 scores them), falls below the leader's. A refinement removes from a network's
-    /// residual about what it removes from the model's, less what the network had learnt of
-    /// it. On real tracker data a refinement removes little (Series A's pool of 2000: the
-    /// model alone's RMS 0.4379 -> 0.4208 mm with the compliances), far less than the MLPs
-    /// trail the RBF network by (0.2263 against 0.1412 mm), and the MLPs' refinements, which
-    /// cost 1.2-1.5 s there, are not tried; on the simulated compliant robot above the
-    /// compliances take the model alone from 0.5107 to 0.0815 mm, more than the whole of the
-    /// MLPs' 0.1669. Where a score cannot be had, the rival is tried.
-    fn may_overtake(&self, w: &Settings, rival: usize) -> bool {
+    /// Whether a refinement could carry candidate `rival` past the candidate `leader` (both
+    /// unrefined, stages 1-3): whether for some refinement the rival's cross-validated mean
+    /// square, less the part of the model alone's that the refinement removes (on the
+    /// held-out rows, as stage 5 scores the model alone), judged with the refinement's margin,
+    /// falls below the leader's. A refinement removes from a network's residual about what
+    /// it removes from the model's, less what the network had learnt of it. On real tracker
+    /// data a refinement removes little (Series A's pool of 2000: the model alone's RMS 0.4379
+    /// -> 0.4208 mm with the compliances), far less than the MLPs trail the RBF network by
+    /// (0.2263 against 0.1412 mm), and the MLPs' refinements, which cost 1.2-1.5 s there, are
+    /// not tried; on the simulated compliant robot above the compliances take the model alone
+    /// from 0.5107 to 0.0815 mm, more than the whole of the MLPs' 0.1669. Where a score cannot
+    /// be had, the rival is tried.
+    fn may_overtake(&self, leader: usize, rival: usize) -> bool {
+        let w = &self.candidates[leader].settings;
         let mean_square = |r: &Option<String>| {
             let alone = Settings {
                 network: Network::Mlp,
@@ -329,15 +350,17 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
         let Some(unrefined) = mean_square(&w.refine) else {
             return true;
         };
-        let mut removed: f64 = 0.0;
-        for r in &self.space.refines {
-            match mean_square(r) {
-                Some(m) => removed = removed.max(unrefined - m),
-                None => return true,
-            }
-        }
-        let rival = cv_rms(&self.candidates, rival);
-        (rival * rival - removed).max(0.0).sqrt() < self.judged(&self.candidates, self.chosen)
+        let lead = self.judged(&self.candidates, leader);
+        let rival = cv_rms(&self.candidates, rival).powi(2);
+        self.space
+            .refines
+            .iter()
+            .filter(|r| **r != w.refine)
+            .any(|r| {
+                mean_square(r).is_none_or(|m| {
+                    (rival - (unrefined - m)).max(0.0).sqrt() * self.margin(r) < lead
+                })
+            })
     }
 
     /// Stage 5: the model alone, without a network, as given and refined (no fits: a refined
