@@ -1065,9 +1065,10 @@ fn mlp_flags_keep_the_rbf_network_alone_out() {
 /// On a set of more rows than the RBF network may carry units (`rbf_units`), its units sit on
 /// the rows `unit_rows` chooses (one per configuration first, the search's rows among them,
 /// the whole set's choice where the final fit leaves rows out), its weights are those of the
-/// same Gaussian processes fitted on those rows alone, and cross-validation still tries it:
-/// before, a set of more than 3000 rows was given MLPs only when the network was left open,
-/// and on real UR10 data more rows then made a worse compensator (`MAX_UNITS`' doc).
+/// same Gaussian processes fitted on those rows alone, and cross-validation scores it with
+/// each fold's units on the whole set's choice less the fold's held-out rows. (Before, a set
+/// of more than 3000 rows was given MLPs only when the network was left open, and on real
+/// UR10 data more rows then made a worse compensator: `MAX_UNITS`' doc.)
 #[test]
 fn an_rbf_network_on_more_rows_than_units_centres_them_on_a_choice_of_rows() {
     use robocal::neural::compensator::{Network, Refine};

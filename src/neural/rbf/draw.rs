@@ -384,8 +384,6 @@ mod tests {
         );
         // Rows 0 and 5 (of configurations 0 and 1) and 13 (configuration 7) left out.
         let left = [13, 0, 5];
-        let mut sorted = left.to_vec();
-        sorted.sort_unstable();
         let kept: Vec<usize> = (0..20).filter(|r| !left.contains(r)).collect();
         let part = s.pick(&kept);
         for (seed, max) in [(1, 6), (2, 9), (3, 14)] {

@@ -265,17 +265,14 @@ pub fn select_settings(
         // A panic there is a defect: it goes on as one in the refinements' own fits would
         // have, not as refinements silently left out.
         let others = others.map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
-        let found = (search.candidates, search.chosen, search.mlp_chosen);
+        let found = search.found();
         (early.map(|()| found), others)
     });
-    let (candidates, chosen, mlp_chosen) = early?;
+    let found = early?;
     race.refined.extend(others.unwrap_or_default());
     distinct_refinements(&mut race.refined);
     space.refines = race.refined.iter().map(|(r, _)| r.clone()).collect();
-    let mut search = Search::new(&race, &space, opts);
-    search.candidates = candidates;
-    search.chosen = chosen;
-    search.mlp_chosen = mlp_chosen;
+    let mut search = Search::resume(&race, &space, opts, found);
     if space.refines.len() > 1 {
         search.refinement();
     }

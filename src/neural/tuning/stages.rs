@@ -37,7 +37,15 @@ pub(super) struct Search<'r, 'a, 'c> {
     pub(super) unseen_error: Option<String>,
     /// The MLPs' choice of stages 1-3 (the ensemble's tie rule applied), before the RBF
     /// network's candidates.
-    pub(super) mlp_chosen: Option<usize>,
+    mlp_chosen: Option<usize>,
+}
+
+/// What stages 1-3 found: the state the later stages go on from, in a search of their own
+/// (their race holds the refinements' models).
+pub(super) struct Found {
+    candidates: Vec<Candidate>,
+    chosen: usize,
+    mlp_chosen: Option<usize>,
 }
 
 impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
@@ -58,6 +66,30 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             rbf_network_test: None,
             unseen_error: None,
             mlp_chosen: None,
+        }
+    }
+
+    /// What stages 1-3 found, to go on from ([`Search::resume`]).
+    pub(super) fn found(self) -> Found {
+        Found {
+            candidates: self.candidates,
+            chosen: self.chosen,
+            mlp_chosen: self.mlp_chosen,
+        }
+    }
+
+    /// A search that goes on from what stages 1-3 `found`, in `race`.
+    pub(super) fn resume(
+        race: &'r Race<'a, 'c>,
+        space: &'r Space,
+        opts: &'r CompensatorOptions,
+        found: Found,
+    ) -> Self {
+        Search {
+            candidates: found.candidates,
+            chosen: found.chosen,
+            mlp_chosen: found.mlp_chosen,
+            ..Search::new(race, space, opts)
         }
     }
 
@@ -337,15 +369,10 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
         let w = &self.candidates[leader].settings;
         let mean_square = |r: &Option<String>| {
             let alone = Settings {
-                network: Network::Mlp,
-                members: 0,
-                rbf_start: None,
-                mlp_share: None,
                 refine: r.clone(),
-                ..w.clone()
+                ..model_alone_of(w)
             };
-            let s = squares(&self.race.held_rows(&alone).ok()?);
-            Some(root_mean(&s).powi(2))
+            Some(mean(&squares(&self.race.held_rows(&alone).ok()?)))
         };
         let Some(unrefined) = mean_square(&w.refine) else {
             return true;
@@ -370,15 +397,8 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
     /// held-out rows no hyperparameter search saw as well ([`Search::unseen_test`], which
     /// searches and fits again where the folds must search their own).
     pub(super) fn model_alone(&mut self) {
-        let w = self.candidates[self.chosen].settings.clone();
+        let alone = model_alone_of(&self.candidates[self.chosen].settings);
         let first = self.candidates.len();
-        let alone = Settings {
-            network: Network::Mlp,
-            members: 0,
-            rbf_start: None,
-            mlp_share: None,
-            ..w
-        };
         self.evaluate(5, vary(&alone, &self.space.refines, |s, r| s.refine = r));
         let new = first..self.candidates.len();
         if new.is_empty() {
@@ -540,9 +560,26 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
     }
 }
 
+/// The settings of the model alone, without a network, as `w` names the model and its
+/// refinement.
+fn model_alone_of(w: &Settings) -> Settings {
+    Settings {
+        network: Network::Mlp,
+        members: 0,
+        rbf_start: None,
+        mlp_share: None,
+        ..w.clone()
+    }
+}
+
+/// The mean of `values` (0 for none).
+fn mean(values: &[f64]) -> f64 {
+    values.iter().sum::<f64>() / values.len().max(1) as f64
+}
+
 /// The root of the mean of `squares` (0 for none).
 fn root_mean(squares: &[f64]) -> f64 {
-    (squares.iter().sum::<f64>() / squares.len().max(1) as f64).sqrt()
+    mean(squares).sqrt()
 }
 
 /// Each held-out row's squared position error (mm^2), fold after fold.
