@@ -14,6 +14,7 @@ use crate::data::MeasurementSet;
 use crate::data::pairs::{Pair, distance, pairs};
 use crate::error::Result;
 use crate::geometry::rotation::angle_between;
+use crate::identify::plausibility::{IMPLAUSIBLE_POSITION_MM, IMPLAUSIBLE_ROTATION_RAD};
 use crate::identify::problem::Measure;
 use crate::kinematics::{Pose, tool_pose};
 use crate::model::Robot;
@@ -280,6 +281,38 @@ pub fn worst_rows(
         rows_raised: rows.iter().filter(|r| raised(r)).count(),
         rows: rows.len(),
     }))
+}
+
+/// What a model misses a set's rows by, where it is beyond any calibration's miss
+/// ([`IMPLAUSIBLE_POSITION_MM`] or [`IMPLAUSIBLE_ROTATION_RAD`] RMS, those `identify` flags
+/// its own fit by): "X mm RMS in position and Y deg RMS in orientation", the parts beyond;
+/// None within both. A model that misses by this much is another robot's, or the rows are in
+/// a frame it does not know (or in another unit).
+pub fn beyond_calibration(stats: &ErrorStats) -> Option<String> {
+    let pos = stats.position_mm.map(|p| p.rms);
+    let rot = stats.orientation_deg.map(|r| r.rms);
+    let far: Vec<String> = [
+        pos.filter(|p| *p > IMPLAUSIBLE_POSITION_MM)
+            .map(|p| format!("{p:.4} mm RMS in position")),
+        rot.filter(|r| r.to_radians() > IMPLAUSIBLE_ROTATION_RAD)
+            .map(|r| format!("{r:.4} deg RMS in orientation")),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    (!far.is_empty()).then(|| far.join(" and "))
+}
+
+/// The warning `evaluate` and `train` give where the model `robot` (named so) misses the rows
+/// of `file` by what [`beyond_calibration`] finds: None where it does not.
+pub fn implausible_model_warning(robot: &str, file: &str, stats: &ErrorStats) -> Option<String> {
+    let by = beyond_calibration(stats)?;
+    Some(format!(
+        "{robot} misses the rows of {file} by {by}, far beyond what a nominal or calibrated model \
+         misses by (above {IMPLAUSIBLE_POSITION_MM} mm or 1 deg): it does not describe these \
+         measurements. Is it a model of this robot, and are the rows in its base frame (a model \
+         identified with the base selected registers the tracker's frame)?"
+    ))
 }
 
 /// Statistics of a kinematic model on a set.

@@ -1740,3 +1740,231 @@ fn edge_inputs_of_the_twenty_fifth_session() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// `text`'s CSV rows with the cells of columns 7-9 (x, y, z in the shipped files) divided by
+/// `by`: positions in another unit.
+fn positions_divided(text: &str, by: f64) -> String {
+    let mut out = String::new();
+    for (i, line) in text.lines().enumerate() {
+        let cells: Vec<String> = line
+            .split(',')
+            .enumerate()
+            .map(|(c, v)| match (i, c) {
+                (1.., 7..=9) => (v.parse::<f64>().unwrap() / by).to_string(),
+                _ => v.to_string(),
+            })
+            .collect();
+        out += &(cells.join(",") + "\n");
+    }
+    out
+}
+
+/// Edge inputs of the sixtieth session's hunt: positions in metres refused by `train` as by
+/// `identify` and `evaluate`; another robot's model said to miss by metres; a file with
+/// carriage returns alone as line ends names its lines; `split` keeps labelled pairs whole;
+/// `plan --evaluate` refuses a list identification would; bounds say their unit.
+#[test]
+fn edge_inputs_of_the_sixtieth_hunt() {
+    use common::FANUC;
+    let (training, _) = shipped("datasets/case_d/training.csv", "id");
+    let model = common::tmp("s60_offsets.toml");
+    common::identify_case_d(&model, &["--params", "offsets"]);
+    let model = model.to_str().unwrap();
+    // Training rows (and validation rows) in metres: refused before any training.
+    let metres = file("s60_metres.csv", &positions_divided(&training, 1000.0));
+    let train = |data: &str, out: &str, extra: &[&str]| {
+        let mut args = vec!["train", "--robot", model, "--data", data];
+        args.extend_from_slice(&["--out", out, "--members", "1", "--hidden", "4"]);
+        args.extend_from_slice(&["--form", "joint", "--encoding", "gravity", "--penalty", "1"]);
+        args.extend_from_slice(&["--refine", "none", "--max-epochs", "2"]);
+        args.extend_from_slice(extra);
+        robocal(&args)
+    };
+    for (data, extra) in [
+        (metres.as_str(), vec![]),
+        ("datasets/case_d/training.csv", vec!["--validate", &metres]),
+    ] {
+        let o = train(data, "never.rcal", &extra);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{extra:?}: {err}");
+        assert!(
+            err.contains("s60_metres.csv: the measured positions") && err.contains("0.0010 times"),
+            "{err}"
+        );
+        // The unit is the error, not a model that misses by metres.
+        assert!(!err.contains("misses the rows"), "{err}");
+    }
+    assert!(!std::path::Path::new("never.rcal").exists());
+    // Another robot's model: trained as asked, but said to miss by metres; `evaluate` says so
+    // too. The right model is not said to.
+    let far = "misses the rows of datasets/case_d/training.csv by";
+    let o = robocal(&[
+        "evaluate",
+        "--robot",
+        UR10,
+        "--data",
+        "datasets/case_d/training.csv",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!("warning: {UR10} {far}")),
+        "{}",
+        stderr(&o)
+    );
+    assert!(
+        stderr(&o).contains("mm RMS in position and"),
+        "{}",
+        stderr(&o)
+    );
+    let o = robocal(&[
+        "evaluate",
+        "--robot",
+        model,
+        "--data",
+        "datasets/case_d/training.csv",
+    ]);
+    assert!(
+        o.status.success() && !stderr(&o).contains(far),
+        "{}",
+        stderr(&o)
+    );
+    let out = common::tmp("s60_ur10.rcal");
+    let mut args = vec![
+        "train",
+        "--robot",
+        UR10,
+        "--data",
+        "datasets/case_d/training.csv",
+    ];
+    args.extend_from_slice(&[
+        "--out",
+        out.to_str().unwrap(),
+        "--members",
+        "1",
+        "--hidden",
+        "4",
+    ]);
+    args.extend_from_slice(&["--form", "joint", "--encoding", "gravity", "--penalty", "1"]);
+    args.extend_from_slice(&["--refine", "none", "--max-epochs", "2"]);
+    let o = robocal(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(far) && stderr(&o).contains("trained and written as asked"),
+        "{}",
+        stderr(&o)
+    );
+    let o = train("datasets/case_d/training.csv", out.to_str().unwrap(), &[]);
+    assert!(
+        o.status.success() && !stderr(&o).contains(far),
+        "{}",
+        stderr(&o)
+    );
+
+    // Carriage returns alone as line ends (old Mac and some spreadsheet exports): a bad cell
+    // is named at its own line, and a dropped row breaks the chain of consecutive pairs.
+    let (calibration, _) = shipped("datasets/case_d/calibration.csv", "id");
+    let mut lines: Vec<String> = calibration.lines().map(str::to_string).collect();
+    let cells: Vec<&str> = lines[9].split(',').collect();
+    lines[9] = [&cells[..8], &["nan"], &cells[9..]].concat().join(",");
+    for (name, end) in [("s60_lf.csv", "\n"), ("s60_cr.csv", "\r")] {
+        let data = file(name, &(lines.join(end) + end));
+        let o = robocal(&[
+            "identify",
+            "--robot",
+            FANUC,
+            "--data",
+            &data,
+            "--measure",
+            "relative",
+            "--params",
+            "offsets",
+            "--skip-bad-rows",
+            "--out",
+            common::tmp(&format!("{name}.toml")).to_str().unwrap(),
+        ]);
+        let err = stderr(&o);
+        assert!(o.status.success(), "{name}: {err}");
+        assert!(
+            err.contains("dropped 1 bad row(s) (lines 10)"),
+            "{name}: {err}"
+        );
+        assert!(
+            err.contains("leave out the 1 pair(s) across"),
+            "{name}: {err}"
+        );
+    }
+
+    // `split` keeps the rows of a pair label in one part, and says so.
+    let mut paired = String::from("pair,q1,q2,q3,q4,q5,q6,x,y,z\n");
+    for (i, line) in training.lines().skip(1).take(40).enumerate() {
+        let c: Vec<&str> = line.split(',').collect();
+        paired += &format!("p{},{}\n", i / 2, c[1..10].join(","));
+    }
+    let paired = file("s60_paired.csv", &paired);
+    let (a, b) = (common::tmp("s60_a.csv"), common::tmp("s60_b.csv"));
+    let o = robocal(&[
+        "split",
+        &paired,
+        "--robot",
+        FANUC,
+        "--seed",
+        "1",
+        "--out-a",
+        a.to_str().unwrap(),
+        "--out-b",
+        b.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("split 40 rows (20 pair labels, each kept whole in one part)"),
+        "{}",
+        stderr(&o)
+    );
+    let labels = |p: &std::path::Path| -> Vec<String> {
+        let text = std::fs::read_to_string(p).unwrap();
+        let t = robocal::data::table::Table::from_text(&text).unwrap();
+        let c = t.column("pair").unwrap();
+        t.rows.iter().map(|r| r[c].clone()).collect()
+    };
+    let (la, lb) = (labels(&a), labels(&b));
+    assert_eq!(la.len() + lb.len(), 40);
+    for l in &la {
+        assert_eq!(la.iter().filter(|x| *x == l).count(), 2, "{la:?}");
+        assert!(!lb.contains(l), "{la:?} {lb:?}");
+    }
+    // A fraction too small for one row is shown as given, not as 300 digits.
+    refused(
+        &[
+            "split",
+            &paired,
+            "--fraction",
+            "1e-300",
+            "--seed",
+            "1",
+            "--out-a",
+            "never_a.csv",
+            "--out-b",
+            "never_b.csv",
+        ],
+        "(40 rows, --fraction 1e-300)",
+    );
+
+    // `plan --evaluate` of 5 rows (30 equations for 30 parameters): refused as identify refuses.
+    let five: String = training.lines().take(6).collect::<Vec<_>>().join("\n") + "\n";
+    let five = file("s60_five.csv", &five);
+    refused(
+        &["plan", "--robot", FANUC, &format!("--evaluate={five}")],
+        "5 units give 30 equations for 30 identifiable parameters: at least 6 units",
+    );
+
+    // Bounds say their unit.
+    let huge = file("s60_huge.csv", "q1,q2,q3,q4,q5,q6\n0,1e30,0,0,0,0\n");
+    refused(
+        &["fk", "--robot", FANUC, "--joints", &huge],
+        "beyond the bound of 1440 deg (4 turns)",
+    );
+    refused(
+        &["ik", "--robot", FANUC, "--pose", "2000,0,1000,0,0,1e9"],
+        "beyond the bound of 720 deg (2 turns)",
+    );
+}

@@ -9,7 +9,7 @@ use super::summary::{
 use anyhow::Result;
 use clap::Args;
 use robocal::data::shared_readings::rows_checked;
-use robocal::evaluate::{row_errors, summarize, worst_rows};
+use robocal::evaluate::{implausible_model_warning, row_errors, summarize, worst_rows};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
 use robocal::model::read_robot;
@@ -189,6 +189,10 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         );
     }
     print_stats(&report.accuracy, m);
+    let robot_name = a.robot.display().to_string();
+    if let Some(w) = implausible_model_warning(&robot_name, &a.data.display().to_string(), &s) {
+        eprintln!("warning: {w}");
+    }
     for row in report.accuracy.iter().filter(|r| r.data == "data") {
         let what = if row.model == "model" {
             "model"

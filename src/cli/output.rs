@@ -83,8 +83,9 @@ pub fn joints_arg(robot: &robocal::model::Robot, s: &str, what: &str) -> Result<
         let max = robocal::data::joints::joint_bound(j.joint_type);
         if v.abs() > max {
             bail!(
-                "{what}: value {} ({v:e}) is beyond the bound of {max}",
-                i + 1
+                "{what}: value {} ({v:e}) is beyond the bound of {}",
+                i + 1,
+                robocal::data::joints::joint_bound_text(j.joint_type)
             );
         }
     }
@@ -99,8 +100,9 @@ pub fn pose_arg(s: &str, what: &str) -> Result<Vec<f64>> {
         let max = robocal::data::targets::pose_bound(i);
         if x.abs() > max {
             bail!(
-                "{what}: value {} ({x:e}) is beyond the bound of {max}",
-                i + 1
+                "{what}: value {} ({x:e}) is beyond the bound of {}",
+                i + 1,
+                robocal::data::targets::pose_bound_text(i)
             );
         }
     }

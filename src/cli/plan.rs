@@ -10,7 +10,9 @@ use robocal::identify::identifiability::RANK_TOL;
 use robocal::model::{Robot, read_robot};
 use robocal::plan::design::per_unit;
 use robocal::plan::predict::Prediction;
-use robocal::plan::{Constraints, Design, Pool, choose, pool, predict, smallest_meeting};
+use robocal::plan::{
+    Constraints, Design, Pool, choose, enough_equations, pool, predict, smallest_meeting,
+};
 use robocal::sim::Region;
 use std::path::PathBuf;
 
@@ -477,7 +479,12 @@ pub fn run(a: PlanArgs) -> Result<()> {
         warn_unseen(&robot, &a.params, measure, sigmas, pool, against, &what)?;
     }
     let (units, chosen) = match (&a.evaluate, a.target_mm, a.count) {
-        (Some(_), _, _) => ((0..design.units()).collect::<Vec<_>>(), None),
+        (Some(p), _, _) => {
+            // As identification would refuse the list: too few equations.
+            enough_equations(&design, design.units())
+                .with_context(|| format!("--evaluate {}", p.display()))?;
+            ((0..design.units()).collect::<Vec<_>>(), None)
+        }
         (None, Some(t), _) => {
             let (c, _) = smallest_meeting(&design, criterion, t, a.seed)?;
             say!("target {t} mm: {} units", c.units.len());

@@ -3,7 +3,7 @@
 use super::data_args::{DataArgs, counted_joints, joints_of};
 use anyhow::{Result, bail};
 use clap::Args;
-use robocal::data::measurement::{split, write_measurements};
+use robocal::data::measurement::{pair_units, split, write_measurements};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -50,7 +50,7 @@ pub fn run(a: SplitArgs) -> Result<()> {
     for (part, flag) in [(&x, "--out-a"), (&y, "--out-b")] {
         if part.rows.is_empty() {
             bail!(
-                "{flag} would get no rows ({} rows, --fraction {}): a file without rows is \
+                "{flag} would get no rows ({} rows, --fraction {:?}): a file without rows is \
                  refused by every command",
                 set.rows.len(),
                 a.fraction
@@ -59,8 +59,15 @@ pub fn run(a: SplitArgs) -> Result<()> {
     }
     write_measurements(&x, &joints, &a.out_a)?;
     write_measurements(&y, &joints, &a.out_b)?;
+    // Rows that share a pair label went to one part together: said, with the count.
+    let labels = pair_units(&set).iter().filter(|u| u.len() > 1).count();
+    let kept = if labels > 0 {
+        format!(" ({labels} pair labels, each kept whole in one part)")
+    } else {
+        String::new()
+    };
     eprintln!(
-        "split {} rows: {} into {}, {} into {}",
+        "split {} rows{kept}: {} into {}, {} into {}",
         set.rows.len(),
         x.rows.len(),
         a.out_a.display(),

@@ -6,7 +6,7 @@ use super::summary::{clean_accuracy, print_shared, print_stats, shared_under, wr
 use anyhow::{Context, Result};
 use clap::Args;
 use robocal::data::measurement::subset;
-use robocal::evaluate::{row_errors, summarize, worst_rows};
+use robocal::evaluate::{implausible_model_warning, row_errors, summarize, worst_rows};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
 use robocal::neural::compensator::{Compensator, Network, Refine};
@@ -294,6 +294,23 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         a.report.as_ref(),
         a.plot.as_ref(),
     )?;
+    // Rows in metres or inches, refused before the training (which refuses its own rows so
+    // too) and before the model's misfit below, which a wrong unit would explain.
+    for s in std::iter::once(&set).chain(&val) {
+        robocal::identify::register::check_position_scale(&robot, s)?;
+    }
+    // A model far off its rows is said before the training, not after it: the network would
+    // learn the model's mismatch, not the robot's errors.
+    let model_stats = summarize(&row_errors(&set, Measure::default_for(&set), |q| {
+        tool_pose(&robot, q)
+    })?);
+    let (robot_name, data_name) = (a.robot.display().to_string(), a.data.display().to_string());
+    if let Some(w) = implausible_model_warning(&robot_name, &data_name, &model_stats) {
+        eprintln!(
+            "warning: {w} The compensator would learn the model's mismatch, not the robot's \
+             errors; it is trained and written as asked"
+        );
+    }
     let terminal = std::io::stderr().is_terminal();
     let opts = a.build.options(a.sigma.sigmas(), terminal)?;
     if let (Refine::Params(spec), Some(false)) = (&opts.refine, opts.compliance)

@@ -16,6 +16,15 @@ pub fn joint_bound(joint_type: JointType) -> f64 {
     }
 }
 
+/// [`joint_bound`] as messages give it, with its unit: "1440 deg (4 turns)" or "100000 mm
+/// (100 m)".
+pub fn joint_bound_text(joint_type: JointType) -> String {
+    match joint_type {
+        JointType::Revolute => format!("{MAX_JOINT_DEG} deg (4 turns)"),
+        JointType::Prismatic => format!("{MAX_LENGTH_MM} mm (100 m)"),
+    }
+}
+
 /// Row `r`'s values of columns `cols` as joints of `robot` (file units), each within
 /// [`joint_bound`].
 pub(super) fn row_joints(t: &Table, r: usize, cols: &[usize], robot: &Robot) -> Result<Vec<f64>> {
@@ -25,7 +34,10 @@ pub(super) fn row_joints(t: &Table, r: usize, cols: &[usize], robot: &Robot) -> 
         if v.abs() > max {
             return Err(Error::input(
                 t.location(r, c),
-                format!("{v:e} is beyond the bound of {max}"),
+                format!(
+                    "{v:e} is beyond the bound of {}",
+                    joint_bound_text(j.joint_type)
+                ),
             ));
         }
     }

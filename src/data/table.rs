@@ -17,8 +17,8 @@ pub struct Table {
     pub lines: Vec<usize>,
     /// Numbers use a decimal comma (`1,5`), as European exports do.
     pub decimal_comma: bool,
-    /// Rows left out of `rows` because their cell count differs from the header's:
-    /// (line, message). [`Table::read`] makes the first one an error, [`Table::parse_rows`]
+    /// Rows left out of `rows` because their cell count differs from the header's or a cell
+    /// is not UTF-8 text: (line, message). [`Table::read`] makes the first one an error, [`Table::parse_rows`]
     /// unless an earlier line is bad; measurement reading does the latter, or drops and lists
     /// them (`--skip-bad-rows`).
     pub malformed: Vec<(usize, String)>,
@@ -54,6 +54,15 @@ fn unclosed_quote(bytes: &[u8], delimiter: u8) -> Option<usize> {
         i += 1;
     }
     open
+}
+
+/// The byte offset of every line end of `bytes`: a line feed, a carriage return followed by
+/// one (counted once, at the feed) or a carriage return alone (the line end of old Mac and
+/// some spreadsheet exports, which the csv crate reads as one too).
+fn line_ends(bytes: &[u8]) -> Vec<usize> {
+    (0..bytes.len())
+        .filter(|&i| bytes[i] == b'\n' || (bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n')))
+        .collect()
 }
 
 impl Table {
@@ -144,7 +153,7 @@ impl Table {
         // The csv crate reads the rest of the file, from a quote never closed, into one cell:
         // refused at once (also under --skip-bad-rows: it is not one bad row but all after).
         if let Some(at) = unclosed_quote(bytes, delimiter) {
-            let line = 1 + bytes[..at].iter().filter(|&&b| b == b'\n').count();
+            let line = 1 + line_ends(bytes).partition_point(|&p| p < at);
             return Err(Error::input(
                 Location {
                     file: path.to_path_buf(),
@@ -155,15 +164,17 @@ impl Table {
                  which would take the rest of the file",
             ));
         }
+        // Records as bytes: a cell that is not UTF-8 text is then one bad row, named by its
+        // line and column (and dropped under --skip-bad-rows), not the whole file refused.
+        // Cells are trimmed as text below (Unicode white space, as the crate's text records).
         let mut rdr = csv::ReaderBuilder::new()
             .delimiter(delimiter)
             .has_headers(true)
             .flexible(true)
-            .trim(csv::Trim::All)
             .from_reader(bytes);
         // The csv crate does not count the blank lines it skips, so lines come from offsets.
         // A record after blank lines is reported at the first blank line: skip them.
-        let newlines: Vec<usize> = (0..bytes.len()).filter(|&i| bytes[i] == b'\n').collect();
+        let newlines = line_ends(bytes);
         let line_at = |byte: u64| {
             let mut end = (byte as usize).min(bytes.len());
             while end < bytes.len() && (bytes[end] == b'\n' || bytes[end] == b'\r') {
@@ -182,12 +193,17 @@ impl Table {
                 format!("malformed CSV: {e}"),
             )
         };
-        let headers: Vec<String> = rdr
-            .headers()
-            .map_err(csv_err)?
-            .iter()
-            .map(|s| s.trim_start_matches('\u{feff}').to_string())
-            .collect();
+        let header = rdr.byte_headers().map_err(csv_err)?.clone();
+        let mut headers = Vec::with_capacity(header.len());
+        for (i, h) in header.iter().enumerate() {
+            let Ok(h) = std::str::from_utf8(h) else {
+                return Err(Error::input(
+                    Location::at(path, 1, format!("#{}", i + 1)),
+                    "a column name is not UTF-8 text: save the file as UTF-8 (or plain ASCII)",
+                ));
+            };
+            headers.push(h.trim().trim_start_matches('\u{feff}').trim().to_string());
+        }
         if headers.iter().all(|h| h.is_empty()) {
             return Err(Error::input(
                 Location::file(path),
@@ -216,10 +232,27 @@ impl Table {
         let mut rows = Vec::new();
         let mut lines = Vec::new();
         let mut malformed = Vec::new();
-        for rec in rdr.records() {
+        for rec in rdr.byte_records() {
             let rec = rec.map_err(csv_err)?;
             let line = rec.position().map_or(0, |p| line_at(p.byte()));
-            if rec.len() == 1 && rec[0].is_empty() {
+            let cells: Vec<std::result::Result<&str, _>> = rec
+                .iter()
+                .map(|c| std::str::from_utf8(c).map(str::trim))
+                .collect();
+            if let [Ok("")] = cells[..] {
+                continue;
+            }
+            if let Some(c) = cells.iter().position(|c| c.is_err()) {
+                let column = headers
+                    .get(c)
+                    .map_or_else(|| format!("cell {}", c + 1), |h| format!("column `{h}`"));
+                malformed.push((
+                    line,
+                    format!(
+                        "{column}: the cell is not UTF-8 text (a file saved in another encoding, \
+                         e.g. Windows-1252 or Latin-1?): save it as UTF-8"
+                    ),
+                ));
                 continue;
             }
             if rec.len() != headers.len() {
@@ -231,7 +264,7 @@ impl Table {
                 malformed.push((line, msg));
                 continue;
             }
-            rows.push(rec.iter().map(str::to_string).collect());
+            rows.push(cells.into_iter().flatten().map(str::to_string).collect());
             lines.push(line);
         }
         Ok(Table {
@@ -444,6 +477,49 @@ mod tests {
         assert_eq!(t.rows.len(), 2);
         assert_eq!(t.lines, vec![2, 4]);
         assert_eq!(t.number(1, 1).unwrap(), 2.0);
+    }
+
+    #[test]
+    fn lines_end_with_a_feed_a_return_and_feed_or_a_return_alone() {
+        // The same table with the three line ends (and blank lines): the same lines.
+        for end in ["\n", "\r\n", "\r"] {
+            let text = ["id,q1", "a,1", "", "b,2", "c,x", ""].join(end);
+            let t = parse(&text).unwrap();
+            assert_eq!(t.lines, vec![2, 4, 5], "{end:?}");
+            let e = t.number(2, 1).unwrap_err().to_string();
+            assert!(e.contains("d.csv:5"), "{end:?}: {e}");
+            let e = parse(&["id,q1", "a,1", "b,\"2"].join(end))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("d.csv:3") && e.contains("never closed"),
+                "{end:?}: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_cell_that_is_not_utf8_is_one_bad_row_named_by_line_and_column() {
+        // 0xE9 is e-acute in Latin-1, no UTF-8 on its own.
+        let bytes = b"id,q1,note\na,1,ok\nb,2,caf\xe9\nc,3,ok\n";
+        let t = Table::parse(bytes, Path::new("d.csv"), b',', false).unwrap();
+        assert_eq!(t.lines, vec![2, 4]);
+        assert_eq!(t.rows[1], vec!["c", "3", "ok"]);
+        let e = t.reject_malformed().unwrap_err().to_string();
+        assert!(
+            e.contains("d.csv:3") && e.contains("`note`") && e.contains("not UTF-8"),
+            "{e}"
+        );
+        let e = Table::parse(b"id,q\xe91\na,1\n", Path::new("d.csv"), b',', false)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("d.csv:1") && e.contains("#2") && e.contains("UTF-8"),
+            "{e}"
+        );
+        // Cells are trimmed of Unicode white space, as before (a no-break space here).
+        let t = parse("id , q1\n a ,\u{a0}1\u{a0}\n").unwrap();
+        assert_eq!((t.headers[1].as_str(), t.rows[0][1].as_str()), ("q1", "1"));
     }
 
     #[test]

@@ -19,6 +19,16 @@ pub fn pose_bound(k: usize) -> f64 {
     if k < 3 { MAX_LENGTH_MM } else { MAX_ANGLE_DEG }
 }
 
+/// [`pose_bound`] of value `k` as messages give it, with its unit: "100000 mm (100 m)" or
+/// "720 deg (2 turns)".
+pub fn pose_bound_text(k: usize) -> String {
+    if k < 3 {
+        format!("{MAX_LENGTH_MM} mm (100 m)")
+    } else {
+        format!("{MAX_ANGLE_DEG} deg (2 turns)")
+    }
+}
+
 /// What a row asks the tool to reach.
 #[derive(Debug, Clone, Copy)]
 pub enum Target {
@@ -100,7 +110,7 @@ impl TargetTable {
                 if x.abs() > max {
                     return Err(Error::input(
                         table.location(r, c),
-                        format!("{x:e} is beyond the bound of {max}"),
+                        format!("{x:e} is beyond the bound of {}", pose_bound_text(k)),
                     ));
                 }
             }

@@ -12,6 +12,7 @@ use crate::data::MeasurementSet;
 use crate::data::measurement::{row_name, subset};
 use crate::data::shared_readings::{SharedReading, shared_readings, suspect_rows};
 use crate::error::Result;
+use crate::identify::register::check_position_scale;
 use crate::model::Robot;
 
 impl Compensator {
@@ -21,7 +22,8 @@ impl Compensator {
     /// `opts.drop_outliers` is false, rows that carry another configuration's reading
     /// ([`crate::data::shared_readings`], under `robot`) take part in neither, and the rows
     /// cross-validation lists as outliers are left out of the final fit; the report names
-    /// both by their index in `set`.
+    /// both by their index in `set`. Positions whose spread differs from the model's by a
+    /// unit's factor (metres, inches) are refused ([`check_position_scale`]).
     pub fn train(
         robot: &Robot,
         set: &MeasurementSet,
@@ -29,6 +31,9 @@ impl Compensator {
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<(Compensator, CompensatorReport)> {
         let started = std::time::Instant::now();
+        // Positions in metres or inches, refused as `identify` and `evaluate` refuse them: a
+        // network would learn the factor, and its file would write metres as mm.
+        check_position_scale(robot, set)?;
         // A row that carries another configuration's reading is no measurement of its own
         // joints: it scores no candidate and trains no network (unless outliers are kept).
         let shared = shared_readings(robot, set);

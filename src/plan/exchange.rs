@@ -231,17 +231,11 @@ fn shortlist(
     ranked.into_iter().take(SHORTLIST).map(|(u, _)| u).collect()
 }
 
-/// Chooses `n` distinct units of `design`'s pool maximising `criterion`. `fixed` units (a
-/// plan to extend) are kept and count towards n. An error when n exceeds the pool or gives
-/// no more equations than parameters.
-pub fn choose(design: &Design, n: usize, criterion: Criterion, fixed: &[usize]) -> Result<Chosen> {
-    let units = design.units();
+/// An error unless `n` units of `design` give more equations than it has identifiable
+/// parameters, as identification asks: as many leave no residual to judge the fit by (and
+/// fewer do not determine it).
+pub fn enough_equations(design: &Design, n: usize) -> Result<()> {
     let p = design.p();
-    if n > units {
-        return Err(Error::Invalid(format!(
-            "{n} units asked for from a pool of {units}"
-        )));
-    }
     if n * design.dim <= p {
         return Err(Error::Invalid(format!(
             "{n} units give {} equations for {p} identifiable parameters: at least {} units \
@@ -251,6 +245,20 @@ pub fn choose(design: &Design, n: usize, criterion: Criterion, fixed: &[usize]) 
             (p / design.dim + 1) * design.dim
         )));
     }
+    Ok(())
+}
+
+/// Chooses `n` distinct units of `design`'s pool maximising `criterion`. `fixed` units (a
+/// plan to extend) are kept and count towards n. An error when n exceeds the pool or gives
+/// no more equations than parameters.
+pub fn choose(design: &Design, n: usize, criterion: Criterion, fixed: &[usize]) -> Result<Chosen> {
+    let units = design.units();
+    if n > units {
+        return Err(Error::Invalid(format!(
+            "{n} units asked for from a pool of {units}"
+        )));
+    }
+    enough_equations(design, n)?;
     let mut fixed = fixed.to_vec();
     fixed.sort_unstable();
     fixed.dedup();

@@ -18,7 +18,7 @@ pub mod predict;
 
 pub use criterion::Criterion;
 pub use design::Design;
-pub use exchange::{Chosen, choose};
+pub use exchange::{Chosen, choose, enough_equations};
 pub use pool::{Constraints, Pool};
 pub use predict::{Prediction, predict};
 

@@ -259,25 +259,106 @@ pub fn subset(set: &MeasurementSet, keep: impl Fn(usize) -> bool) -> Measurement
 }
 
 /// Splits a set into two by a seeded random draw: `fraction` of the rows (rounded) go to the
-/// first part; both keep file order.
+/// first part; both keep file order. Rows that share a pair label (a relative or distance
+/// pair, [`crate::data::pairs`]) go to one part together: the draw is then over the labels
+/// (and the unlabelled rows, one by one), and the first part takes them in the drawn order
+/// until it holds the rounded fraction of the rows or, with a pair that crosses it, one more.
+/// A set without pair labels is drawn row by row.
 pub fn split(set: &MeasurementSet, fraction: f64, seed: u64) -> (MeasurementSet, MeasurementSet) {
     use rand::SeedableRng;
     use rand::seq::SliceRandom;
     let n = set.rows.len();
-    let mut idx: Vec<usize> = (0..n).collect();
-    idx.shuffle(&mut rand_chacha::ChaCha8Rng::seed_from_u64(seed));
     let k = ((n as f64) * fraction.clamp(0.0, 1.0)).round() as usize;
+    let mut units = pair_units(set);
+    units.shuffle(&mut rand_chacha::ChaCha8Rng::seed_from_u64(seed));
     let mut first = vec![false; n];
-    for &i in &idx[..k] {
-        first[i] = true;
+    let mut taken = 0;
+    for unit in &units {
+        if taken >= k {
+            break;
+        }
+        for &i in unit {
+            first[i] = true;
+        }
+        taken += unit.len();
     }
     let part = |want: bool| subset(set, |i| first[i] == want);
     (part(true), part(false))
 }
 
+/// The rows of `set` that [`split`] keeps together, in file order of their first row: the rows
+/// of each pair label, and each unlabelled row alone.
+pub fn pair_units(set: &MeasurementSet) -> Vec<Vec<usize>> {
+    let mut units: Vec<Vec<usize>> = Vec::with_capacity(set.rows.len());
+    let mut of_label: std::collections::HashMap<&str, usize> = Default::default();
+    for (i, m) in set.rows.iter().enumerate() {
+        match m.pair.as_deref() {
+            Some(label) => match of_label.get(label) {
+                Some(&u) => units[u].push(i),
+                None => {
+                    of_label.insert(label, units.len());
+                    units.push(vec![i]);
+                }
+            },
+            None => units.push(vec![i]),
+        }
+    }
+    units
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn split_keeps_labelled_pairs_whole_and_draws_unlabelled_rows_as_before() {
+        use rand::SeedableRng;
+        use rand::seq::SliceRandom;
+        let row = |i: usize, pair: Option<String>| Measurement {
+            line: i + 2,
+            pair,
+            ..Measurement::new(vec![i as f64])
+        };
+        // Unlabelled: the rows of a seeded shuffle of the indices, the first k of them.
+        let plain = MeasurementSet::from_rows((0..41).map(|i| row(i, None)).collect());
+        for (fraction, seed) in [(0.3f64, 1), (0.5, 7), (0.9, 11)] {
+            let mut idx: Vec<usize> = (0..41).collect();
+            idx.shuffle(&mut rand_chacha::ChaCha8Rng::seed_from_u64(seed));
+            let k = (41.0 * fraction).round() as usize;
+            let mut want: Vec<usize> = idx[..k].iter().map(|&i| i + 2).collect();
+            want.sort_unstable();
+            let (a, b) = split(&plain, fraction, seed);
+            let lines: Vec<usize> = a.rows.iter().map(|m| m.line).collect();
+            assert_eq!(lines, want);
+            assert_eq!(a.rows.len() + b.rows.len(), 41);
+        }
+        // 20 pairs p0..p19 (rows 2j, 2j + 1) and 3 unlabelled rows: no label in both parts.
+        let mut rows: Vec<Measurement> = (0..40)
+            .map(|i| row(i, Some(format!("p{}", i / 2))))
+            .collect();
+        rows.extend((40..43).map(|i| row(i, None)));
+        let paired = MeasurementSet::from_rows(rows);
+        assert_eq!(pair_units(&paired).len(), 23);
+        for seed in 0..20 {
+            let (a, b) = split(&paired, 0.5, seed);
+            let labels = |s: &MeasurementSet| -> Vec<String> {
+                s.rows.iter().filter_map(|m| m.pair.clone()).collect()
+            };
+            let (la, lb) = (labels(&a), labels(&b));
+            assert!(la.iter().all(|l| !lb.contains(l)), "seed {seed}");
+            for l in la.iter().chain(&lb) {
+                let count = la.iter().chain(&lb).filter(|x| *x == l).count();
+                assert_eq!(count, 2, "seed {seed}: {l}");
+            }
+            // round(21.5) = 22 rows asked for; a pair crossing it adds one.
+            assert!(
+                (22..=23).contains(&a.rows.len()),
+                "seed {seed}: {}",
+                a.rows.len()
+            );
+            assert_eq!(a.rows.len() + b.rows.len(), 43);
+        }
+    }
 
     #[test]
     fn a_joint_just_beyond_its_limit_is_not_printed_as_inside() {
