@@ -9,7 +9,7 @@ use super::summary::{
 use anyhow::Result;
 use clap::Args;
 use robocal::data::shared_readings::rows_checked;
-use robocal::evaluate::{implausible_model_warning, row_errors, summarize, worst_rows};
+use robocal::evaluate::{misplaced_model_warning, row_errors, summarize, worst_rows};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
 use robocal::model::read_robot;
@@ -189,8 +189,14 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         );
     }
     print_stats(&report.accuracy, m);
-    let robot_name = a.robot.display().to_string();
-    if let Some(w) = implausible_model_warning(&robot_name, &a.data.display().to_string(), &s) {
+    // Measures of single rows only: a pair's displacement or length does not see the frame.
+    // With a compensator, said where the model it runs (refined or not) misses too.
+    if matches!(m, Measure::Pose | Measure::Position)
+        && let Some(w) = misplaced_model_warning(&a.robot.display().to_string(), &robot, &set)
+        && comp
+            .as_ref()
+            .is_none_or(|c| misplaced_model_warning("", &c.robot, &set).is_some())
+    {
         eprintln!("warning: {w}");
     }
     for row in report.accuracy.iter().filter(|r| r.data == "data") {

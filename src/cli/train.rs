@@ -6,7 +6,7 @@ use super::summary::{clean_accuracy, print_shared, print_stats, shared_under, wr
 use anyhow::{Context, Result};
 use clap::Args;
 use robocal::data::measurement::subset;
-use robocal::evaluate::{implausible_model_warning, row_errors, summarize, worst_rows};
+use robocal::evaluate::{misplaced_model_warning, row_errors, summarize, worst_rows};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
 use robocal::neural::compensator::{Compensator, Network, Refine};
@@ -299,16 +299,11 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     for s in std::iter::once(&set).chain(&val) {
         robocal::identify::register::check_position_scale(&robot, s)?;
     }
-    // A model far off its rows is said before the training, not after it: the network would
-    // learn the model's mismatch, not the robot's errors.
-    let model_stats = summarize(&row_errors(&set, Measure::default_for(&set), |q| {
-        tool_pose(&robot, q)
-    })?);
-    let (robot_name, data_name) = (a.robot.display().to_string(), a.data.display().to_string());
-    if let Some(w) = implausible_model_warning(&robot_name, &data_name, &model_stats) {
+    // A model far off its rows is said before the training, not after it.
+    if let Some(w) = misplaced_model_warning(&a.robot.display().to_string(), &robot, &set) {
         eprintln!(
-            "warning: {w} The compensator would learn the model's mismatch, not the robot's \
-             errors; it is trained and written as asked"
+            "warning: {w} The compensator is trained and written as asked: its refinement may \
+             take up a frame or a tool, never another robot"
         );
     }
     let terminal = std::io::stderr().is_terminal();

@@ -67,15 +67,16 @@ fn line_ends(bytes: &[u8]) -> Vec<usize> {
 
 impl Table {
     /// Reads a comma-separated file with one header row. Every row must have as many cells
-    /// as the header; header names must be unique; blank lines are skipped.
+    /// as the header, each UTF-8 text; header names must be unique; blank lines are skipped.
+    /// Lines end with a line feed, a carriage return and line feed, or a carriage return alone.
     pub fn read(path: impl AsRef<Path>) -> Result<Table> {
         let t = Table::read_keeping_malformed(path)?;
         t.reject_malformed()?;
         Ok(t)
     }
 
-    /// [`Table::read`], but rows whose cell count differs from the header's are kept in
-    /// `malformed` for [`Table::parse_rows`] to report in line order (after a bad cell on an
+    /// [`Table::read`], but rows whose cell count differs from the header's (or with a cell
+    /// that is not UTF-8) are kept in `malformed` for [`Table::parse_rows`] to report in line order (after a bad cell on an
     /// earlier line). A file whose rows are all malformed is refused here.
     pub fn read_keeping_malformed(path: impl AsRef<Path>) -> Result<Table> {
         let path = path.as_ref();

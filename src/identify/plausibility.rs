@@ -64,7 +64,9 @@ pub fn warning(
     if far.is_empty() {
         return None;
     }
-    let frame = if registered {
+    // A distance between two poses of the tool is the same in every frame: the frame is no
+    // cause there.
+    let frame = if registered || matches!(obs.measure, Measure::Distance) {
         ""
     } else {
         "in a frame the model does not know and was not registered (select every base \

@@ -262,7 +262,8 @@ pub fn subset(set: &MeasurementSet, keep: impl Fn(usize) -> bool) -> Measurement
 /// first part; both keep file order. Rows that share a pair label (a relative or distance
 /// pair, [`crate::data::pairs`]) go to one part together: the draw is then over the labels
 /// (and the unlabelled rows, one by one), and the first part takes them in the drawn order
-/// until it holds the rounded fraction of the rows or, with a pair that crosses it, one more.
+/// until it holds the rounded fraction of the rows or, with a pair that crosses it, one more,
+/// but never every row where the fraction asks for fewer (the second part would be empty).
 /// A set without pair labels is drawn row by row.
 pub fn split(set: &MeasurementSet, fraction: f64, seed: u64) -> (MeasurementSet, MeasurementSet) {
     use rand::SeedableRng;
@@ -274,7 +275,7 @@ pub fn split(set: &MeasurementSet, fraction: f64, seed: u64) -> (MeasurementSet,
     let mut first = vec![false; n];
     let mut taken = 0;
     for unit in &units {
-        if taken >= k {
+        if taken >= k || (taken + unit.len() == n && k < n) {
             break;
         }
         for &i in unit {
@@ -357,6 +358,15 @@ mod tests {
                 a.rows.len()
             );
             assert_eq!(a.rows.len() + b.rows.len(), 43);
+        }
+        // Pairs alone, 39 of 40 rows asked for: the second part keeps a pair; 1 of 40, the
+        // first takes one; all of them, all.
+        let pairs_only = MeasurementSet::from_rows(paired.rows[..40].to_vec());
+        for seed in 0..10 {
+            for (fraction, first) in [(0.98, 38), (0.02, 2), (1.0, 40), (0.0, 0)] {
+                let (a, _) = split(&pairs_only, fraction, seed);
+                assert_eq!(a.rows.len(), first, "{fraction} seed {seed}");
+            }
         }
     }
 
