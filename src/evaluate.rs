@@ -299,19 +299,13 @@ pub fn misplaced_model_warning(
     robot: &Robot,
     set: &MeasurementSet,
 ) -> Option<String> {
-    let mut errors: Vec<f64> = (set.rows.iter())
+    let errors: Vec<f64> = (set.rows.iter())
         .filter_map(|m| Some((m.position? - tool_pose(robot, &m.q).translation.vector).norm()))
         .collect();
     if errors.is_empty() {
         return None;
     }
-    errors.sort_by(f64::total_cmp);
-    let n = errors.len();
-    let median = if n % 2 == 1 {
-        errors[n / 2]
-    } else {
-        0.5 * (errors[n / 2 - 1] + errors[n / 2])
-    };
+    let (n, median) = (errors.len(), crate::stats::median(&errors));
     (median > MISPLACED_MEDIAN_MM).then(|| {
         format!(
             "{robot_name} misses the positions of {} by {median:.1} mm (median over {n} rows), \

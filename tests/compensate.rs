@@ -661,3 +661,36 @@ fn a_seed_next_to_the_wrist_singularity_is_its_own_command() {
     let target = tool_pose(&calibrated, &seed);
     assert!(solver.solve(&Target::Pose(target), Some(&seed)).is_err());
 }
+
+/// A straight wrist (q5 = 0), the calibrated model the nominal itself: every target comes
+/// back at its seed joints, on the seed's branch. The closed form splits q4 + q6 as its
+/// arithmetic falls there; the command must not (half of such targets were refused as a
+/// branch change, the others moved the wrist by up to 240 deg).
+#[test]
+fn a_straight_wrist_is_commanded_at_its_seed() {
+    let nominal = read_robot(root().join("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
+    let mut solver =
+        FakeTargetSolver::new(&nominal, CalibratedModel::identified(&nominal)).unwrap();
+    let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(61);
+    for _ in 0..60 {
+        let mut q: Vec<f64> = (nominal.joints().iter())
+            .map(|j| {
+                let [lo, hi] = j.limits_internal();
+                rand::Rng::random_range(&mut rng, 0.8 * lo..=0.8 * hi)
+            })
+            .collect();
+        q[4] = 0.0;
+        let target = tool_pose(&nominal, &q);
+        let cmd = solver
+            .solve(&Target::Pose(target), Some(&q))
+            .unwrap_or_else(|e| panic!("{q:?}: {e}"));
+        let gap = cmd
+            .q
+            .iter()
+            .zip(&q)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(gap < 1e-6, "{gap} rad: {:?} for {q:?}", cmd.q);
+        assert!(cmd.branch.is_some());
+    }
+}

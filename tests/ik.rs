@@ -9,6 +9,7 @@ use robocal::kinematics::{
 };
 use robocal::model::file::parse_robot;
 use robocal::model::{Robot, read_robot};
+use std::f64::consts::PI;
 use std::path::Path;
 
 fn robot_file(name: &str) -> Robot {
@@ -536,4 +537,62 @@ fn the_reach_bound_holds_and_refuses_far_targets() {
             .contains("mm from the robot's base and the arm reaches at most"),
         "{e}"
     );
+}
+
+/// At a wrist singularity (q5 = 0 on the FANUC: axes 4 and 6 aligned) the pose fixes only
+/// q4 + s q6: the solution nearest a reference splits that sum nearest it, so a reference on
+/// the continuum comes back as it is (the closed form alone splits it as its arithmetic falls),
+/// and every solution listed reaches the pose.
+#[test]
+fn a_straight_wrist_keeps_the_seeds_split_of_joints_4_and_6() {
+    let robot = robot_file("fanuc_r2000ib_210f.toml");
+    let ik = SphericalWristIk::new(&robot).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(60);
+    let mut sols = Vec::new();
+    let mut outside = 0;
+    for _ in 0..60 {
+        let mut q = random_q(&robot, &mut rng);
+        q[4] = 0.0;
+        let target = tool_pose(&robot, &q);
+        // The seed itself, exactly.
+        let got = ik.solve_nearest(&target, &q).unwrap();
+        assert!(joint_gap(&got, &q) < 1e-9, "{got:?} for {q:?}");
+        // Another split of the same sum, q4 + d and q6 - s d: that split, not the seed's.
+        let d = rng.random_range(-1.0..1.0);
+        let keeps = |s: f64| {
+            let mut o = q.clone();
+            o[3] += d;
+            o[5] -= s * d;
+            (pose_errors(&tool_pose(&robot, &o), &target).1 < 1e-9).then_some(o)
+        };
+        let other = keeps(1.0)
+            .or_else(|| keeps(-1.0))
+            .expect("a split of q4 + s q6 keeps the pose");
+        let got = ik.solve_nearest(&target, &other).unwrap();
+        let (dp, dr) = pose_errors(&tool_pose(&robot, &got), &target);
+        assert!(dp < 1e-6 && dr < 1e-9, "{dp} mm {dr} rad");
+        assert!(robot.joints_outside_limits(&got).is_empty(), "{got:?}");
+        if robot.joints_outside_limits(&other).is_empty() {
+            assert!(joint_gap(&got, &other) < 1e-9, "{got:?} for {other:?}");
+        } else {
+            // That split leaves joint 4's or 6's range (+-180 deg): the continuum's split with
+            // one of them at an end of its range, the rest as the reference.
+            let ends = [3, 5].iter().any(|&j| (got[j].abs() - PI).abs() < 1e-12);
+            assert!(ends, "{got:?} for {other:?}");
+            assert!(
+                joint_gap(&got[..3], &other[..3]) < 1e-9,
+                "{got:?} for {other:?}"
+            );
+            outside += 1;
+        }
+        // Every listed solution reaches the pose; around the seed, the seed is among them.
+        assert!(ik.solve_around(&target, &q, &mut sols));
+        assert!(sols.iter().any(|s| joint_gap(s, &q) < 1e-9));
+        for s in &sols {
+            let (dp, dr) = pose_errors(&tool_pose(&robot, s), &target);
+            assert!(dp < 1e-6 && dr < 1e-9, "{dp} mm {dr} rad");
+        }
+    }
+    // Both kinds of reference were met.
+    assert!((1..60).contains(&outside), "{outside}");
 }

@@ -23,6 +23,7 @@
 use super::model::CalibratedModel;
 use crate::data::Target;
 use crate::error::{Error, Result};
+use crate::geometry::rotation::rotation_vector;
 use crate::kinematics::{
     Branch, IkFailure, IkOptions, IkSolution, IkSolver, IkStart, Pose, SphericalWristIk, ToolModel,
     another_arm, tool_pose,
@@ -40,6 +41,11 @@ const SAME_JOINTS_RAD: f64 = 1e-6;
 /// the calibration (hundredths of a radian): the seed then starts a solve too, and the
 /// nearer command is kept ([`FakeTargetSolver::solve`]).
 const SEED_FAR_RAD: f64 = 0.1;
+
+/// Pose change (mm, rad) below which the calibrated robot counts as reaching the same pose with
+/// another split of q4 + s q6 at a straight wrist ([`FakeTargetSolver::solve`]).
+const SPLIT_FREE_MM: f64 = 1e-6;
+const SPLIT_FREE_RAD: f64 = 1e-9;
 
 /// Why a target has no start: no closed-form solution on the seed's branch, and a seed at a
 /// singularity (no branch) that cannot start the solve.
@@ -234,18 +240,41 @@ impl<'a> FakeTargetSolver<'a> {
     /// The branch of the nominal closed form that returns `q` (mod 2 pi) for FK_nominal(q);
     /// None at a singularity, where the branches merge, or without a closed form.
     pub fn branch_of(&mut self, q: &[f64]) -> Option<Branch> {
+        match self.branches_of(q)[..] {
+            [b] => Some(b),
+            _ => None,
+        }
+    }
+
+    /// Every branch of the nominal closed form that returns `q` (mod 2 pi) for
+    /// FK_nominal(q): one, or more at a singularity where branches merge (none without a
+    /// closed form). At a wrist singularity, where the closed form splits q4 + s q6 as its
+    /// arithmetic falls, a solution counts as `q` where it is `q` split otherwise.
+    pub fn branches_of(&mut self, q: &[f64]) -> Vec<Branch> {
         let f = tool_pose(self.nominal, q);
         let Controller::ClosedForm(closed) = &self.controller else {
-            return None;
+            return Vec::new();
         };
         closed.solve_branches(&f, &mut self.sols);
-        let mut found = None;
-        for (b, s) in &self.sols {
-            if wrapped_distance(s, q) < SAME_JOINTS_RAD {
-                if found.is_some() {
-                    return None;
+        let mut found: Vec<Branch> = (self.sols.iter())
+            .filter(|(_, s)| {
+                wrapped_distance(&closed.wrist_split_nearest(s, q), q) < SAME_JOINTS_RAD
+            })
+            .map(|(b, _)| *b)
+            .collect();
+        // A straight wrist is on both wrist flips, whether the closed form listed the two
+        // (equal to its rounding) or one.
+        if let Ok(q) = <[f64; 6]>::try_from(q)
+            && closed.straight_wrist(&q).is_some()
+        {
+            for b in found.clone() {
+                let flip = Branch {
+                    wrist: 1 - b.wrist,
+                    ..b
+                };
+                if !found.contains(&flip) {
+                    found.push(flip);
                 }
-                found = Some(*b);
             }
         }
         found
@@ -278,8 +307,13 @@ impl<'a> FakeTargetSolver<'a> {
         if let Controller::Numerical { ik: controller, .. } = &mut self.controller {
             return solve_from_seed(&mut self.ik, controller, self.nominal, target, seed);
         }
-        // A seed fixes the branch (the configuration the robot program was taught in).
-        let seed_branch = seed.and_then(|s| self.branch_of(s));
+        // A seed fixes the branch (the configuration the robot program was taught in); a seed
+        // where branches merge (a straight wrist) admits each of them.
+        let seed_branches = seed.map_or_else(Vec::new, |s| self.branches_of(s));
+        let seed_branch = match seed_branches[..] {
+            [b] => Some(b),
+            _ => None,
+        };
         let first = self
             .ik
             .from_nearest_start(&target, seed, seed_branch)
@@ -297,10 +331,15 @@ impl<'a> FakeTargetSolver<'a> {
                 _ => Failure::Unreachable(SEED_AT_SINGULARITY.into()),
             })
             .and_then(|solved| {
-                let Some(branch) = solved.branch.or(seed_branch) else {
-                    return Err(Failure::Unreachable(SEED_AT_SINGULARITY.into()));
+                let allowed: Vec<Branch> = if seed_branches.len() > 1 {
+                    seed_branches.clone()
+                } else {
+                    solved.branch.or(seed_branch).into_iter().collect()
                 };
-                self.command(target, solved.solution, branch)
+                if allowed.is_empty() {
+                    return Err(Failure::Unreachable(SEED_AT_SINGULARITY.into()));
+                }
+                self.command(target, solved.solution, &allowed)
             });
         // Near a wrist singularity the closed-form start on the seed's branch can lie on the
         // other side of it (q5 of the other sign, q4 and q6 half a turn away) when the
@@ -308,7 +347,7 @@ impl<'a> FakeTargetSolver<'a> {
         // solve then fails, or lands on a wrist configuration far from the seed's. The seed
         // itself then starts a solve too, and its command is kept if it keeps the seed's
         // branch and lies nearer the seed; else the first outcome stands.
-        let (Some(s), Some(branch)) = (seed, seed_branch) else {
+        let Some(s) = seed.filter(|_| !seed_branches.is_empty()) else {
             return first;
         };
         let retry = match &first {
@@ -322,7 +361,7 @@ impl<'a> FakeTargetSolver<'a> {
             .ik
             .from_start(&target, s)
             .ok()
-            .and_then(|sol| self.command(target, sol, branch).ok());
+            .and_then(|sol| self.command(target, sol, &seed_branches).ok());
         match (first, from_seed) {
             (Ok(c), Some(d)) if joint_distance(&d.q, s) < joint_distance(&c.q, s) => Ok(d),
             (Err(_), Some(d)) => Ok(d),
@@ -330,14 +369,15 @@ impl<'a> FakeTargetSolver<'a> {
         }
     }
 
-    /// The command of the calibrated solution `sol` for `target` on the controller's `branch`:
-    /// a failure where `sol` leaves the limits (the calibrated model's or the controller's)
-    /// or where the controller's closed form would return another branch for it.
+    /// The command of the calibrated solution `sol` for `target` on one of the controller's
+    /// branches `allowed` (the seed's; more than one where the seed lies where they merge): a
+    /// failure where `sol` leaves the limits (the calibrated model's or the controller's) or
+    /// where the controller's closed form would return it on none of them.
     fn command(
         &mut self,
         target: Pose,
         sol: IkSolution,
-        branch: Branch,
+        allowed: &[Branch],
     ) -> std::result::Result<Command, Failure> {
         // The calibrated model's limits and the controller's (usually the same).
         let mut outside = sol.outside_limits.clone();
@@ -350,18 +390,48 @@ impl<'a> FakeTargetSolver<'a> {
         if !outside.is_empty() {
             return Err(Failure::OutsideLimits(outside));
         }
-        match self.branch_of(&sol.q) {
-            Some(b) if b == branch => {}
-            Some(b) => {
+        // At a singularity where branches merge (a straight wrist: both flips), the solution
+        // is on each of them: the controller asked for any of them returns it.
+        let found = self.branches_of(&sol.q);
+        let seeds: Vec<String> = allowed.iter().map(Branch::to_string).collect();
+        let seeds = seeds.join(" or ");
+        let branch = match (found.iter().find(|b| allowed.contains(b)), &found[..]) {
+            (Some(b), _) => *b,
+            (None, [b]) => {
                 return Err(Failure::BranchChanged(format!(
-                    "the seed is on branch {branch}, the calibrated solution on {b}"
+                    "the seed is on branch {seeds}, the calibrated solution on {b}"
                 )));
             }
-            None => {
+            (None, _) => {
                 return Err(Failure::BranchChanged(format!(
                     "the calibrated solution is at a singularity of the nominal model, where \
-                     branch {branch} is ambiguous"
+                     branch {seeds} is ambiguous"
                 )));
+            }
+        };
+        // There the controller splits q4 + s q6 by a rule of its own: the command holds only
+        // where the calibrated robot reaches the same pose with every split (a calibration
+        // whose wrist is straight there too), not where a calibrated q5 offset turns it.
+        if let Controller::ClosedForm(closed) = &self.controller
+            && let Ok(q) = <[f64; 6]>::try_from(&sol.q[..])
+            && let Some(s) = closed.straight_wrist(&q)
+        {
+            let at = self.ik.model().pose(&q);
+            for turn in [0.5, 2.0] {
+                let mut other = q;
+                other[3] += turn;
+                other[5] -= s * turn;
+                let p = self.ik.model().pose(&other);
+                let dp = (p.translation.vector - at.translation.vector).norm();
+                let dr = rotation_vector(&(p.rotation * at.rotation.inverse())).norm();
+                if dp > SPLIT_FREE_MM || dr > SPLIT_FREE_RAD {
+                    return Err(Failure::BranchChanged(format!(
+                        "the calibrated solution is at a wrist singularity of the nominal model \
+                         (branch {seeds}), where the controller splits q4 and q6 by its own \
+                         rule, and the calibrated robot reaches other poses with other splits \
+                         ({dp:.3e} mm for {turn} rad)"
+                    )));
+                }
             }
         }
         let fake = tool_pose(self.nominal, &sol.q);

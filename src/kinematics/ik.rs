@@ -447,7 +447,8 @@ impl<M: ToolModel> IkSolver<M> {
         self.check_seed(seed)?;
         self.check_reach(target)?;
         if let IkStart::Exact(ik) = &self.start {
-            if !ik.solve(target, &mut self.copies) {
+            let reference = seed.unwrap_or(&self.mid);
+            if !ik.solve_around(target, reference, &mut self.copies) {
                 return Err(IkFailure::TooMany);
             }
             if self.copies.is_empty() {

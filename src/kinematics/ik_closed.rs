@@ -25,6 +25,13 @@ type V3 = Vector3<f64>;
 /// Tolerance (mm) for axes meeting in a point, and (unit-vector norm) for parallel axes.
 const STRUCTURE_TOL: f64 = 1e-7;
 
+/// Sine of the angle between axis 4 and axis 6 (as q5 turns it) below which the wrist counts
+/// as singular ([`SphericalWristIk::wrist_split_nearest`]). The closed form's q5 there is good
+/// to about the square root of the rounding (subproblem 2 takes a square root: 1e-8 rad), so
+/// the bound must lie above that; a solution within it is put on the singularity, which
+/// turns the tool by at most this angle (3e-5 mm at 300 mm from the wrist).
+pub const WRIST_ALIGNED: f64 = 1e-7;
+
 /// Which of the closed form's up to 8 solutions: one of two roots for joint 1 (shoulder), for
 /// joint 3 (elbow) and for joints 4-5 (wrist flip), in the solver's fixed order. A controller's
 /// configuration flags name the same choice; a pose keeps its branch under small changes away
@@ -189,7 +196,9 @@ impl SphericalWristIk {
 
     /// Every solution for `target` (tool pose, mm), wrapped to [-pi, pi), ignoring limits.
     /// Up to 8; none when the pose is out of reach. At a singularity (wrist centre on axis 1,
-    /// or q5 such that axes 4 and 6 align) one representative of the continuum is returned.
+    /// or q5 such that axes 4 and 6 align) one representative of the continuum is returned
+    /// (at the wrist's, an arbitrary split of q4 + s q6: see
+    /// [`SphericalWristIk::wrist_split_nearest`]).
     pub fn solve_unlimited(&self, target: &Pose, out: &mut Vec<[f64; 6]>) {
         out.clear();
         self.each_solution(target, |_, q| out.push(q));
@@ -258,9 +267,20 @@ impl SphericalWristIk {
     /// 360 deg that the limits allow; solutions equal modulo 360 deg (within 1e-9 rad) are
     /// merged first, so the copies are distinct. At most [`MAX_SOLUTIONS`] are listed: false
     /// when more exist (joint ranges of many turns; see [`SphericalWristIk::solve_nearest`]).
+    /// At a wrist singularity, the split of q4 + s q6 nearest the middle of the ranges.
     pub fn solve(&self, target: &Pose, out: &mut Vec<[f64; 6]>) -> bool {
+        let mid = self.limits.map(|[lo, hi]| 0.5 * (lo + hi));
+        self.solve_around(target, &mid, out)
+    }
+
+    /// [`SphericalWristIk::solve`], a wrist singularity's split of q4 + s q6 the one nearest
+    /// `reference` (rad).
+    pub fn solve_around(&self, target: &Pose, reference: &[f64], out: &mut Vec<[f64; 6]>) -> bool {
         let mut raw = Vec::with_capacity(8);
         self.solve_unlimited(target, &mut raw);
+        for q in &mut raw {
+            *q = self.wrist_split_within_limits(q, reference);
+        }
         out.clear();
         for q in distinct_mod_turn(&raw) {
             if !self.push_copies(&q, out) {
@@ -289,10 +309,93 @@ impl SphericalWristIk {
         best.map(|(_, q)| q)
     }
 
+    /// At a wrist singularity of `q` (q5 turns axis 6 onto axis 4, or onto its opposite, to
+    /// within [`WRIST_ALIGNED`]) the pose depends on q4 + s q6 alone, not on q4 and q6 each
+    /// (s = +1 or -1 as the two axes then point the same way or opposite ways: R4 R5 R6 =
+    /// Rot(w4, q4 + s q6) R5): `q` put on the singularity (q5 where the axes align exactly)
+    /// with that sum split nearest `reference` (rad; q4 and q6 each moved by half the sum's
+    /// change, over the sum's nearest whole turn), so that a reference on the continuum is
+    /// returned as it is. Elsewhere `q` unchanged.
+    pub fn wrist_split_nearest(&self, q: &[f64; 6], reference: &[f64]) -> [f64; 6] {
+        let Some(s) = self.straight_wrist(q) else {
+            return *q;
+        };
+        let [.., w4, w5, w6] = &self.w;
+        let d = wrap(q[3] + s * q[5] - (reference[3] + s * reference[5]));
+        let mut out = *q;
+        out[3] = reference[3] + 0.5 * d;
+        out[4] = q[4] + wrap(rotate_onto(w5, w6, &(w4 * s)) - q[4]);
+        out[5] = reference[5] + s * 0.5 * d;
+        out
+    }
+
+    /// s of [`SphericalWristIk::wrist_split_nearest`] (+1 or -1) where `q` is at a wrist
+    /// singularity (within [`WRIST_ALIGNED`]); None elsewhere.
+    pub fn straight_wrist(&self, q: &[f64; 6]) -> Option<f64> {
+        let [.., w4, w5, w6] = &self.w;
+        let v = rot(w5, q[4]) * w6;
+        (w4.cross(&v).norm() <= WRIST_ALIGNED).then(|| w4.dot(&v).signum())
+    }
+
     /// The copy of `q` (each joint shifted by whole turns) nearest `reference` (rad) joint by
     /// joint among the copies within the limits, and true; when some joint has no copy within
-    /// its limits, the copy nearest `reference` and false.
+    /// its limits, the copy nearest `reference` and false. At a wrist singularity, q4 and q6
+    /// split first as [`SphericalWristIk::wrist_split_within_limits`] does.
     pub fn nearest_copy(&self, q: &[f64; 6], reference: &[f64]) -> ([f64; 6], bool) {
+        self.turn_copy(&self.wrist_split_within_limits(q, reference), reference)
+    }
+
+    /// [`SphericalWristIk::wrist_split_nearest`] within joint 4's and joint 6's ranges: of
+    /// the splits q4 + s q6 = t + 2 pi n whose q4 and q6 both lie within them (each line of the
+    /// continuum through the ranges' box, from the point nearest `reference` along the line
+    /// to the box), the one nearest `reference` (rad); the unconstrained split where no line
+    /// crosses the box. `q` unchanged away from a wrist singularity.
+    pub fn wrist_split_within_limits(&self, q: &[f64; 6], reference: &[f64]) -> [f64; 6] {
+        let split = self.wrist_split_nearest(q, reference);
+        let Some(s) = self.straight_wrist(&split) else {
+            return split;
+        };
+        let tau = 2.0 * PI;
+        let ([lo4, hi4], [lo6, hi6]) = (self.limits[3], self.limits[5]);
+        let (r4, r6) = (reference[3], reference[5]);
+        let t = split[3] + s * split[5];
+        // The lines a + s b = t + 2 pi n that cross the box.
+        let (c_lo, c_hi) = (lo4 + (s * lo6).min(s * hi6), hi4 + (s * lo6).max(s * hi6));
+        let (n_lo, n_hi) = (((c_lo - t) / tau).ceil(), ((c_hi - t) / tau).floor());
+        let mut best: Option<(f64, f64, f64)> = None;
+        let mut n = n_lo;
+        // Ranges of many turns hold many lines; the nearest lie within a turn or two of the
+        // reference's sum, so a few hundred cover any real robot.
+        while n <= n_hi && n - n_lo < 512.0 {
+            let d = t + n * tau - (r4 + s * r6);
+            let (a0, b0) = (r4 + 0.5 * d, r6 + s * 0.5 * d);
+            // Along the line: a = a0 + l, b = b0 - s l, both within their ranges.
+            let (l4, h4) = (lo4 - a0, hi4 - a0);
+            let (l6, h6) = if s > 0.0 {
+                (b0 - hi6, b0 - lo6)
+            } else {
+                (lo6 - b0, hi6 - b0)
+            };
+            let (lo, hi) = (l4.max(l6), h4.min(h6));
+            if lo <= hi {
+                let l = 0f64.clamp(lo, hi);
+                let (a, b) = (a0 + l, b0 - s * l);
+                let dist = (a - r4).powi(2) + (b - r6).powi(2);
+                if best.is_none_or(|(d, ..)| dist < d) {
+                    best = Some((dist, a, b));
+                }
+            }
+            n += 1.0;
+        }
+        let mut out = split;
+        if let Some((_, a, b)) = best {
+            (out[3], out[5]) = (a, b);
+        }
+        out
+    }
+
+    /// [`SphericalWristIk::nearest_copy`] of `q` as it is (whole turns only).
+    fn turn_copy(&self, q: &[f64; 6], reference: &[f64]) -> ([f64; 6], bool) {
         let tau = 2.0 * PI;
         let mut cand = *q;
         let mut inside = true;

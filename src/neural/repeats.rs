@@ -154,13 +154,7 @@ impl Repeats {
             }
             spreads.push(spread);
         }
-        spreads.sort_by(f64::total_cmp);
-        let n = spreads.len();
-        let median = if n % 2 == 1 {
-            spreads[n / 2]
-        } else {
-            0.5 * (spreads[n / 2 - 1] + spreads[n / 2])
-        };
+        let (n, median) = (spreads.len(), crate::stats::median(&spreads));
         let (max_spread_mm, max_spread_lines) = worst?;
         Some(Repeats {
             configurations: n,
