@@ -367,9 +367,7 @@ fn ik_strategy_nearest_all_and_branch() {
             .find(|(_, s)| s.iter().zip(&q).all(|(a, b)| (a - b).abs() < 1e-9))
             .map(|(b, _)| *b)
             .expect("q is one of the nominal's solutions for its own pose");
-        let one = solver
-            .from_nearest_start(&target, Some(&q), Some(b))
-            .unwrap();
+        let one = solver.from_nearest_start(&target, Some(&q), &[b]).unwrap();
         assert_eq!(one.branch, Some(b));
         let d = q
             .iter()
@@ -384,7 +382,7 @@ fn ik_strategy_nearest_all_and_branch() {
         Err(IkFailure::BadSeed(_))
     ));
     assert!(matches!(
-        solver.from_nearest_start(&target, Some(&[0.0; 7]), None),
+        solver.from_nearest_start(&target, Some(&[0.0; 7]), &[]),
         Err(IkFailure::BadSeed(_))
     ));
 }
@@ -595,4 +593,21 @@ fn a_straight_wrist_keeps_the_seeds_split_of_joints_4_and_6() {
     }
     // Both kinds of reference were met.
     assert!((1..60).contains(&outside), "{outside}");
+    // A standard-DH wrist of +-360 deg ranges at q5 = 0 and 180 deg: axes 4 and 6 the same
+    // way and opposite ways (q4 + q6, then q4 - q6 fixed); the seed comes back either way.
+    let robot = parse_robot(DH_SPHERICAL, Path::new("dh.toml")).unwrap();
+    let ik = SphericalWristIk::new(&robot).unwrap();
+    let mut signs = Vec::new();
+    for _ in 0..40 {
+        let mut q = random_q(&robot, &mut rng);
+        q[4] = if signs.len() % 2 == 0 { 0.0 } else { PI };
+        let target = tool_pose(&robot, &q);
+        let got = ik.solve_nearest(&target, &q).unwrap();
+        assert!(joint_gap(&got, &q) < 1e-9, "{got:?} for {q:?}");
+        let (dp, dr) = pose_errors(&tool_pose(&robot, &got), &target);
+        assert!(dp < 1e-6 && dr < 1e-9, "{dp} mm {dr} rad");
+        let q6: [f64; 6] = q.clone().try_into().unwrap();
+        signs.push(ik.straight_wrist(&q6).unwrap());
+    }
+    assert!(signs.contains(&1.0) && signs.contains(&-1.0), "{signs:?}");
 }

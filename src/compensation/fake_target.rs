@@ -43,7 +43,8 @@ const SAME_JOINTS_RAD: f64 = 1e-6;
 const SEED_FAR_RAD: f64 = 0.1;
 
 /// Pose change (mm, rad) below which the calibrated robot counts as reaching the same pose with
-/// another split of q4 + s q6 at a straight wrist ([`FakeTargetSolver::solve`]).
+/// another split of q4 + s q6 at a straight wrist (checked by `FakeTargetSolver::command`, at
+/// the solution put on the nominal's singularity).
 const SPLIT_FREE_MM: f64 = 1e-6;
 const SPLIT_FREE_RAD: f64 = 1e-9;
 
@@ -281,8 +282,37 @@ impl<'a> FakeTargetSolver<'a> {
     }
 
     /// The command for one desired pose; `seed` (rad, mm) chooses the branch and turns (with
-    /// a nominal closed form) or starts the solve (without one: then it is required).
+    /// a nominal closed form) or starts the solve (without one: then it is required). A pose
+    /// the nominal closed form has no solution for, which the calibrated model's solve from
+    /// the seed does not reach either, is `Unreachable`, as `ik` says it (not `NotConverged`).
     pub fn solve(
+        &mut self,
+        desired: &Target,
+        seed: Option<&[f64]>,
+    ) -> std::result::Result<Command, Failure> {
+        let out = self.solve_seeded(desired, seed);
+        let Err(Failure::NotConverged(why)) = &out else {
+            return out;
+        };
+        let Controller::ClosedForm(closed) = &self.controller else {
+            return out;
+        };
+        let target = match desired {
+            Target::Pose(p) => *p,
+            Target::Position(_) => return out,
+        };
+        closed.solve_branches(&target, &mut self.sols);
+        if !self.sols.is_empty() {
+            return out;
+        }
+        Err(Failure::Unreachable(format!(
+            "out of the nominal model's reach (its closed form has no solution), and the \
+             calibrated model's solve from the seed does not reach it either: {why}"
+        )))
+    }
+
+    /// [`FakeTargetSolver::solve`] before a failed solve is told apart from an unreachable pose.
+    fn solve_seeded(
         &mut self,
         desired: &Target,
         seed: Option<&[f64]>,
@@ -316,7 +346,7 @@ impl<'a> FakeTargetSolver<'a> {
         };
         let first = self
             .ik
-            .from_nearest_start(&target, seed, seed_branch)
+            .from_nearest_start(&target, seed, &seed_branches)
             .map_err(|e| match e {
                 IkFailure::NotConverged(m) => Failure::NotConverged(m),
                 IkFailure::BadSeed(m) => Failure::BadSeed(m),
@@ -416,6 +446,9 @@ impl<'a> FakeTargetSolver<'a> {
             && let Ok(q) = <[f64; 6]>::try_from(&sol.q[..])
             && let Some(s) = closed.straight_wrist(&q)
         {
+            // On the singularity itself (a numerical solution lies up to WRIST_ALIGNED off
+            // it, where a split turns the tool by that much times the split).
+            let q = closed.wrist_split_nearest(&q, &q);
             let at = self.ik.model().pose(&q);
             for turn in [0.5, 2.0] {
                 let mut other = q;

@@ -223,13 +223,14 @@ impl<M: ToolModel> IkSolver<M> {
         &self.mid
     }
 
-    /// The closed form's solutions for `target` (on `branch` if given), each in its copy
-    /// nearest `reference`, ordered: within the limits first, then by distance.
+    /// The closed form's solutions for `target` (on one of `branches` if any are given),
+    /// each in its copy nearest `reference`, ordered: within the limits first, then by
+    /// distance.
     fn starts(
         &mut self,
         target: &Pose,
         reference: &[f64],
-        branch: Option<Branch>,
+        branches: &[Branch],
     ) -> Vec<(bool, f64, Branch, [f64; 6])> {
         let Some(ik) = self.start.closed_form() else {
             return Vec::new();
@@ -238,7 +239,7 @@ impl<M: ToolModel> IkSolver<M> {
         let mut starts: Vec<(bool, f64, Branch, [f64; 6])> = self
             .branches
             .iter()
-            .filter(|(b, _)| branch.is_none_or(|o| o == *b))
+            .filter(|(b, _)| branches.is_empty() || branches.contains(b))
             .map(|(b, q)| {
                 let (c, inside) = ik.nearest_copy(q, reference);
                 (!inside, joint_distance(&c, reference), *b, c)
@@ -306,7 +307,7 @@ impl<M: ToolModel> IkSolver<M> {
     ) -> std::result::Result<Vec<IkSolution>, IkFailure> {
         let mut starts: Vec<Vec<f64>> = seed.map(<[f64]>::to_vec).into_iter().collect();
         starts.extend(
-            self.starts(target, reference, None)
+            self.starts(target, reference, &[])
                 .into_iter()
                 .map(|(_, _, _, q)| q.to_vec()),
         );
@@ -363,7 +364,7 @@ impl<M: ToolModel> IkSolver<M> {
         self.check_reach(target)?;
         let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
         if let IkStart::Exact(_) = self.start {
-            let starts = self.starts(target, &reference, None);
+            let starts = self.starts(target, &reference, &[]);
             return match starts.first() {
                 Some((false, _, b, q)) => Ok(self.exact(target, q, Some(*b))),
                 Some((true, _, _, q)) => Err(IkFailure::OutsideLimits(
@@ -386,24 +387,24 @@ impl<M: ToolModel> IkSolver<M> {
     }
 
     /// One solve from the closed-form start nearest `seed` (or the middle of the ranges) on
-    /// `branch` if given, within the limits if one is. The start's branch is the
-    /// configuration kept (target compensation: the controller's), so no other start is
-    /// tried; where the closed form has no solution the seed starts the solve, but only with
-    /// a `branch` (the seed's) to keep. The solution may leave the limits (see its
-    /// `outside_limits`).
+    /// one of `branches` if any are given (the seed's: one, or both wrist flips at a straight
+    /// wrist), within the limits if one is. The start's branch is the configuration kept
+    /// (target compensation: the controller's), so no other start is tried; where the closed
+    /// form has no solution the seed starts the solve, but only with `branches` (the seed's)
+    /// to keep. The solution may leave the limits (see its `outside_limits`).
     pub fn from_nearest_start(
         &mut self,
         target: &Pose,
         seed: Option<&[f64]>,
-        branch: Option<Branch>,
+        branches: &[Branch],
     ) -> std::result::Result<Solved, IkFailure> {
         self.check_seed(seed)?;
         self.check_reach(target)?;
         let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
-        let (b, q0) = match self.starts(target, &reference, branch).first() {
+        let (b, q0) = match self.starts(target, &reference, branches).first() {
             Some((_, _, b, q)) => (Some(*b), q.to_vec()),
-            None => match (seed, branch) {
-                (Some(s), Some(_)) => (None, s.to_vec()),
+            None => match seed {
+                Some(s) if !branches.is_empty() => (None, s.to_vec()),
                 _ => return Err(self.no_start()),
             },
         };
@@ -453,7 +454,7 @@ impl<M: ToolModel> IkSolver<M> {
             }
             if self.copies.is_empty() {
                 let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
-                return Err(match self.starts(target, &reference, None).first() {
+                return Err(match self.starts(target, &reference, &[]).first() {
                     Some((_, _, _, q)) => {
                         IkFailure::OutsideLimits(self.model.robot().joints_outside_limits(q))
                     }

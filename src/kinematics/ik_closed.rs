@@ -29,7 +29,10 @@ const STRUCTURE_TOL: f64 = 1e-7;
 /// as singular ([`SphericalWristIk::wrist_split_nearest`]). The closed form's q5 there is good
 /// to about the square root of the rounding (subproblem 2 takes a square root: 1e-8 rad), so
 /// the bound must lie above that; a solution within it is put on the singularity, which
-/// turns the tool by at most this angle (3e-5 mm at 300 mm from the wrist).
+/// turns the tool by about this angle over the sine between axes 5 and 6 (1e-7 rad for a
+/// wrist whose axes 5 and 6 are perpendicular: 3e-5 mm at 300 mm from the wrist). A pose read
+/// from a file of 4 decimals of a degree (1.7e-6 rad) lies outside it: its closed-form split
+/// is then the arithmetic's (a numerical solve from the seed keeps the seed's).
 pub const WRIST_ALIGNED: f64 = 1e-7;
 
 /// Which of the closed form's up to 8 solutions: one of two roots for joint 1 (shoulder), for
@@ -66,6 +69,12 @@ pub struct SphericalWristIk {
     m_inv: Pose,
     /// Joint limits (rad).
     limits: [[f64; 2]; 6],
+    /// The q5 (rad) at which axis 6 lies on axis 4 (first) and on its opposite (second),
+    /// where some q5 does: the wrist's singularities ([`SphericalWristIk::straight_wrist`]).
+    straight: [Option<f64>; 2],
+    /// |w5 x w6|: the radius of the cone axis 6 sweeps about axis 5, so that q5 off a
+    /// singular value by e turns axis 6 off axis 4 by about e times this.
+    cone: f64,
 }
 
 /// Closest points of two lines (point, unit direction); None when parallel.
@@ -160,12 +169,20 @@ impl SphericalWristIk {
         for (l, j) in limits.iter_mut().zip(robot.joints()) {
             *l = j.limits_internal();
         }
+        // Axis 6 meets +-axis 4 as q5 turns where both make the same angle with axis 5.
+        let straight = [1.0, -1.0].map(|s: f64| {
+            let target = w[3] * s;
+            ((w[4].dot(&w[5]) - w[4].dot(&target)).abs() < STRUCTURE_TOL)
+                .then(|| wrap(rotate_onto(&w[4], &w[5], &target)))
+        });
         Ok(SphericalWristIk {
             w,
             p,
             w0,
             m_inv: f.tool.inverse(),
             limits,
+            straight,
+            cone: w[4].cross(&w[5]).norm(),
         })
     }
 
@@ -181,6 +198,8 @@ impl SphericalWristIk {
             w0: point(&self.w0),
             m_inv: (left * self.m_inv.inverse() * right).inverse(),
             limits: self.limits,
+            straight: self.straight,
+            cone: self.cone,
         }
     }
 
@@ -313,18 +332,23 @@ impl SphericalWristIk {
     /// within [`WRIST_ALIGNED`]) the pose depends on q4 + s q6 alone, not on q4 and q6 each
     /// (s = +1 or -1 as the two axes then point the same way or opposite ways: R4 R5 R6 =
     /// Rot(w4, q4 + s q6) R5): `q` put on the singularity (q5 where the axes align exactly)
-    /// with that sum split nearest `reference` (rad; q4 and q6 each moved by half the sum's
-    /// change, over the sum's nearest whole turn), so that a reference on the continuum is
-    /// returned as it is. Elsewhere `q` unchanged.
+    /// with that sum split nearest `reference` (rad: q4 and q6 the reference's, each moved by
+    /// half of what the sum lacks, over the sum's nearest whole turn), so that a reference on
+    /// the continuum is returned as it is. Elsewhere `q` unchanged.
     pub fn wrist_split_nearest(&self, q: &[f64; 6], reference: &[f64]) -> [f64; 6] {
-        let Some(s) = self.straight_wrist(q) else {
-            return *q;
-        };
-        let [.., w4, w5, w6] = &self.w;
+        match self.straight_wrist(q) {
+            Some(s) => self.split_nearest(q, s, reference),
+            None => *q,
+        }
+    }
+
+    /// [`SphericalWristIk::wrist_split_nearest`] of a `q` at a straight wrist of sign `s`.
+    fn split_nearest(&self, q: &[f64; 6], s: f64, reference: &[f64]) -> [f64; 6] {
         let d = wrap(q[3] + s * q[5] - (reference[3] + s * reference[5]));
+        let singular = self.straight[usize::from(s < 0.0)].unwrap_or(q[4]);
         let mut out = *q;
         out[3] = reference[3] + 0.5 * d;
-        out[4] = q[4] + wrap(rotate_onto(w5, w6, &(w4 * s)) - q[4]);
+        out[4] = q[4] + wrap(singular - q[4]);
         out[5] = reference[5] + s * 0.5 * d;
         out
     }
@@ -332,9 +356,16 @@ impl SphericalWristIk {
     /// s of [`SphericalWristIk::wrist_split_nearest`] (+1 or -1) where `q` is at a wrist
     /// singularity (within [`WRIST_ALIGNED`]); None elsewhere.
     pub fn straight_wrist(&self, q: &[f64; 6]) -> Option<f64> {
-        let [.., w4, w5, w6] = &self.w;
-        let v = rot(w5, q[4]) * w6;
-        (w4.cross(&v).norm() <= WRIST_ALIGNED).then(|| w4.dot(&v).signum())
+        // No trigonometry: this runs for every closed-form solution.
+        let near =
+            |at: Option<f64>| at.is_some_and(|a| wrap(q[4] - a).abs() * self.cone <= WRIST_ALIGNED);
+        if near(self.straight[0]) {
+            Some(1.0)
+        } else if near(self.straight[1]) {
+            Some(-1.0)
+        } else {
+            None
+        }
     }
 
     /// The copy of `q` (each joint shifted by whole turns) nearest `reference` (rad) joint by
@@ -351,22 +382,32 @@ impl SphericalWristIk {
     /// to the box), the one nearest `reference` (rad); the unconstrained split where no line
     /// crosses the box. `q` unchanged away from a wrist singularity.
     pub fn wrist_split_within_limits(&self, q: &[f64; 6], reference: &[f64]) -> [f64; 6] {
-        let split = self.wrist_split_nearest(q, reference);
-        let Some(s) = self.straight_wrist(&split) else {
-            return split;
+        let Some(s) = self.straight_wrist(q) else {
+            return *q;
         };
+        let split = self.split_nearest(q, s, reference);
         let tau = 2.0 * PI;
         let ([lo4, hi4], [lo6, hi6]) = (self.limits[3], self.limits[5]);
         let (r4, r6) = (reference[3], reference[5]);
         let t = split[3] + s * split[5];
-        // The lines a + s b = t + 2 pi n that cross the box.
+        // The lines a + s b = t + 2 pi n that cross the box, searched outwards from the one
+        // through the reference (n = 0: the split is that line's point nearest it). Ranges of
+        // many turns hold many lines; the nearest within the box lie a line or two from the
+        // first that crosses it, so 512 cover any real robot.
         let (c_lo, c_hi) = (lo4 + (s * lo6).min(s * hi6), hi4 + (s * lo6).max(s * hi6));
         let (n_lo, n_hi) = (((c_lo - t) / tau).ceil(), ((c_hi - t) / tau).floor());
+        let n0 = 0f64.clamp(n_lo.min(n_hi), n_hi.max(n_lo));
         let mut best: Option<(f64, f64, f64)> = None;
-        let mut n = n_lo;
-        // Ranges of many turns hold many lines; the nearest lie within a turn or two of the
-        // reference's sum, so a few hundred cover any real robot.
-        while n <= n_hi && n - n_lo < 512.0 {
+        for k in 0..512 {
+            // n0, n0 + 1, n0 - 1, n0 + 2, ...
+            let step = ((k + 1) / 2) as f64;
+            let n = if k % 2 == 1 { n0 + step } else { n0 - step };
+            if n < n_lo || n > n_hi {
+                if n0 + step > n_hi && n0 - step < n_lo {
+                    break;
+                }
+                continue;
+            }
             let d = t + n * tau - (r4 + s * r6);
             let (a0, b0) = (r4 + 0.5 * d, r6 + s * 0.5 * d);
             // Along the line: a = a0 + l, b = b0 - s l, both within their ranges.
@@ -385,7 +426,6 @@ impl SphericalWristIk {
                     best = Some((dist, a, b));
                 }
             }
-            n += 1.0;
         }
         let mut out = split;
         if let Some((_, a, b)) = best {
