@@ -289,33 +289,34 @@ pub fn worst_rows(
 /// a tracker's reflector on an arm) or a frame not registered (metres).
 pub const MISPLACED_MEDIAN_MM: f64 = 100.0;
 
-/// The warning `evaluate` and `train` give where the model `robot` (named so) misses half
-/// the rows of `set` or more by more than [`MISPLACED_MEDIAN_MM`] in position (the median of
-/// |p_measured - p_model| over the rows with a position): another robot's model, a tool it
+/// The median position error (mm) of `robot` over the rows of `set` with a position, and
+/// their count, where it exceeds [`MISPLACED_MEDIAN_MM`]: another robot's model, a tool it
 /// lacks, or rows in a frame it does not know. The median, not the RMS, so that a few rows
 /// far off (listed elsewhere as such) do not raise it; None within it or without positions.
+pub fn misplaced_median(robot: &Robot, set: &MeasurementSet) -> Option<(f64, usize)> {
+    let errors: Vec<f64> = (set.rows.iter())
+        .filter_map(|m| Some((m.position? - tool_pose(robot, &m.q).translation.vector).norm()))
+        .collect();
+    let median = crate::stats::median(&errors);
+    (!errors.is_empty() && median > MISPLACED_MEDIAN_MM).then_some((median, errors.len()))
+}
+
+/// The warning `evaluate` and `train` give where [`misplaced_median`] finds the model `robot`
+/// (named so) far off the rows of `set`.
 pub fn misplaced_model_warning(
     robot_name: &str,
     robot: &Robot,
     set: &MeasurementSet,
 ) -> Option<String> {
-    let errors: Vec<f64> = (set.rows.iter())
-        .filter_map(|m| Some((m.position? - tool_pose(robot, &m.q).translation.vector).norm()))
-        .collect();
-    if errors.is_empty() {
-        return None;
-    }
-    let (n, median) = (errors.len(), crate::stats::median(&errors));
-    (median > MISPLACED_MEDIAN_MM).then(|| {
-        format!(
-            "{robot_name} misses the positions of {} by {median:.1} mm (median over {n} rows), \
-             more than {MISPLACED_MEDIAN_MM} mm, ten times what a nominal model misses by: it \
-             is not a model of this robot in the rows' frame. Is it this robot's file, does it \
-             carry the tool (the reflector's offset), and are the rows in its base frame (a \
-             model identified with the base selected registers the tracker's frame)?",
-            set.source.display()
-        )
-    })
+    let (median, n) = misplaced_median(robot, set)?;
+    Some(format!(
+        "{robot_name} misses the positions of {} by {median:.1} mm (median over {n} rows), \
+         more than {MISPLACED_MEDIAN_MM} mm, ten times what a nominal model misses by: it is \
+         not a model of this robot in the rows' frame. Is it this robot's file, does it carry \
+         the tool (the reflector's offset), and are the rows in its base frame (a model \
+         identified with the base selected registers the tracker's frame)?",
+        set.source.display()
+    ))
 }
 
 /// Statistics of a kinematic model on a set.

@@ -1772,8 +1772,9 @@ fn edge_inputs_of_the_sixtieth_hunt() {
     let model = model.to_str().unwrap();
     // Training rows (and validation rows) in metres: refused before any training.
     let metres = file("s60_metres.csv", &positions_divided(&training, 1000.0));
-    let train = |data: &str, out: &str, extra: &[&str]| {
-        let mut args = vec!["train", "--robot", model, "--data", data];
+    // A small fixed network (no search): the checks come before any training.
+    let train = |robot: &str, data: &str, out: &str, extra: &[&str]| {
+        let mut args = vec!["train", "--robot", robot, "--data", data];
         args.extend_from_slice(&["--out", out, "--members", "1", "--hidden", "4"]);
         args.extend_from_slice(&["--form", "joint", "--encoding", "gravity", "--penalty", "1"]);
         args.extend_from_slice(&["--refine", "none", "--max-epochs", "2"]);
@@ -1784,7 +1785,7 @@ fn edge_inputs_of_the_sixtieth_hunt() {
         (metres.as_str(), vec![]),
         ("datasets/case_d/training.csv", vec!["--validate", &metres]),
     ] {
-        let o = train(data, "never.rcal", &extra);
+        let o = train(model, data, "never.rcal", &extra);
         let err = stderr(&o);
         assert!(!o.status.success(), "{extra:?}: {err}");
         assert!(
@@ -1843,31 +1844,15 @@ fn edge_inputs_of_the_sixtieth_hunt() {
         stderr(&o)
     );
     let out = common::tmp("s60_ur10.rcal");
-    let mut args = vec![
-        "train",
-        "--robot",
-        UR10,
-        "--data",
-        "datasets/case_d/training.csv",
-    ];
-    args.extend_from_slice(&[
-        "--out",
-        out.to_str().unwrap(),
-        "--members",
-        "1",
-        "--hidden",
-        "4",
-    ]);
-    args.extend_from_slice(&["--form", "joint", "--encoding", "gravity", "--penalty", "1"]);
-    args.extend_from_slice(&["--refine", "none", "--max-epochs", "2"]);
-    let o = robocal(&args);
+    let out = out.to_str().unwrap();
+    let o = train(UR10, "datasets/case_d/training.csv", out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains(far) && stderr(&o).contains("never another robot"),
         "{}",
         stderr(&o)
     );
-    let o = train("datasets/case_d/training.csv", out.to_str().unwrap(), &[]);
+    let o = train(model, "datasets/case_d/training.csv", out, &[]);
     assert!(
         o.status.success() && !stderr(&o).contains(far),
         "{}",

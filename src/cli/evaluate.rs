@@ -9,7 +9,9 @@ use super::summary::{
 use anyhow::Result;
 use clap::Args;
 use robocal::data::shared_readings::rows_checked;
-use robocal::evaluate::{misplaced_model_warning, row_errors, summarize, worst_rows};
+use robocal::evaluate::{
+    misplaced_median, misplaced_model_warning, row_errors, summarize, worst_rows,
+};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
 use robocal::model::read_robot;
@@ -195,7 +197,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         && let Some(w) = misplaced_model_warning(&a.robot.display().to_string(), &robot, &set)
         && comp
             .as_ref()
-            .is_none_or(|c| misplaced_model_warning("", &c.robot, &set).is_some())
+            .is_none_or(|c| misplaced_median(&c.robot, &set).is_some())
     {
         eprintln!("warning: {w}");
     }

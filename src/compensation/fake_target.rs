@@ -238,15 +238,6 @@ impl<'a> FakeTargetSolver<'a> {
         }
     }
 
-    /// The branch of the nominal closed form that returns `q` (mod 2 pi) for FK_nominal(q);
-    /// None at a singularity, where the branches merge, or without a closed form.
-    pub fn branch_of(&mut self, q: &[f64]) -> Option<Branch> {
-        match self.branches_of(q)[..] {
-            [b] => Some(b),
-            _ => None,
-        }
-    }
-
     /// Every branch of the nominal closed form that returns `q` (mod 2 pi) for
     /// FK_nominal(q): one, or more at a singularity where branches merge (none without a
     /// closed form). At a wrist singularity, where the closed form splits q4 + s q6 as its

@@ -390,24 +390,15 @@ impl SphericalWristIk {
         let ([lo4, hi4], [lo6, hi6]) = (self.limits[3], self.limits[5]);
         let (r4, r6) = (reference[3], reference[5]);
         let t = split[3] + s * split[5];
-        // The lines a + s b = t + 2 pi n that cross the box, searched outwards from the one
-        // through the reference (n = 0: the split is that line's point nearest it). Ranges of
-        // many turns hold many lines; the nearest within the box lie a line or two from the
-        // first that crosses it, so 512 cover any real robot.
+        // The lines a + s b = t + 2 pi n that cross the box; n = 0 is the line through the
+        // reference's nearest split. Ranges of many turns hold many lines: those within 256
+        // of it hold the nearest of any real robot.
         let (c_lo, c_hi) = (lo4 + (s * lo6).min(s * hi6), hi4 + (s * lo6).max(s * hi6));
-        let (n_lo, n_hi) = (((c_lo - t) / tau).ceil(), ((c_hi - t) / tau).floor());
-        let n0 = 0f64.clamp(n_lo.min(n_hi), n_hi.max(n_lo));
+        let n_lo = ((c_lo - t) / tau).ceil().max(-256.0);
+        let n_hi = ((c_hi - t) / tau).floor().min(256.0);
         let mut best: Option<(f64, f64, f64)> = None;
-        for k in 0..512 {
-            // n0, n0 + 1, n0 - 1, n0 + 2, ...
-            let step = ((k + 1) / 2) as f64;
-            let n = if k % 2 == 1 { n0 + step } else { n0 - step };
-            if n < n_lo || n > n_hi {
-                if n0 + step > n_hi && n0 - step < n_lo {
-                    break;
-                }
-                continue;
-            }
+        let mut n = n_lo;
+        while n <= n_hi {
             let d = t + n * tau - (r4 + s * r6);
             let (a0, b0) = (r4 + 0.5 * d, r6 + s * 0.5 * d);
             // Along the line: a = a0 + l, b = b0 - s l, both within their ranges.
@@ -426,6 +417,7 @@ impl SphericalWristIk {
                     best = Some((dist, a, b));
                 }
             }
+            n += 1.0;
         }
         let mut out = split;
         if let Some((_, a, b)) = best {
