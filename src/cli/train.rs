@@ -260,10 +260,16 @@ fn print_fit(
         }
     } else {
         let stops: std::collections::BTreeSet<&str> = n.iter().map(|r| r.stop.describe()).collect();
+        let fewest = n.iter().map(|r| r.lm_epochs).min().unwrap_or(0);
         let most = n.iter().map(|r| r.lm_epochs).max().unwrap_or(0);
+        let steps = if fewest == most {
+            format!("{most}")
+        } else {
+            format!("{fewest}-{most}")
+        };
         let phase2 = match n[0].phase2 {
-            Phase2::Lbfgs => format!("L-BFGS ({most} iterations)"),
-            _ => format!("LM ({most} epochs)"),
+            Phase2::Lbfgs => format!("L-BFGS ({steps} iterations)"),
+            _ => format!("LM ({steps} epochs)"),
         };
         say!(
             "networks: {} x {}-{}-{} ({} inputs); phase 1 {} epochs, phase 2 {phase2} per \

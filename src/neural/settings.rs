@@ -116,8 +116,10 @@ pub struct Settings {
     /// held-out error by [`super::tuning::NETWORK_MARGIN`] or more and significantly row by
     /// row ([`super::tuning::NETWORK_Z`]).
     pub members: usize,
-    /// The RBF network's hyperparameter search start ([`super::rbf::STARTS`]); None: every
-    /// start, the highest likelihood kept output by output.
+    /// The RBF network's hyperparameter search start ([`super::rbf::STARTS`], counted from 0
+    /// here, from 1 in reports as on the command line); None: every start, the highest
+    /// likelihood kept output by output.
+    #[serde(with = "counted_from_one")]
     pub rbf_start: Option<usize>,
     /// Model parameters re-estimated on the training rows first (a selection as for
     /// `identify`), or None.
@@ -302,5 +304,65 @@ impl CompensatorOptions {
             budget: false,
             ..Default::default()
         }
+    }
+}
+
+/// An index kept from 0 that reports write from 1, as `--rbf-start` and
+/// [`Settings::describe`] count it (a report of an earlier version, which wrote 0 for the
+/// first start, is refused rather than read one start off).
+mod counted_from_one {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(k: &Option<usize>, s: S) -> Result<S::Ok, S::Error> {
+        match k {
+            Some(k) => s.serialize_some(&(k + 1)),
+            None => s.serialize_none(),
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<usize>, D::Error> {
+        match Option::<usize>::deserialize(d)? {
+            Some(0) => Err(serde::de::Error::custom(
+                "rbf_start counts from 1 (as --rbf-start does); 0 is a report of an earlier \
+                 version, which counted from 0",
+            )),
+            k => Ok(k.map(|k| k - 1)),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reports_count_the_rbf_start_from_one_as_the_command_line_does() {
+        let s = Settings {
+            network: Network::Mix,
+            form: Form::Pose,
+            encoding: Encoding::Gravity,
+            hidden: 64,
+            penalty: 1.0,
+            members: 2,
+            rbf_start: Some(0),
+            refine: None,
+            mlp_share: Some(0.05),
+        };
+        assert!(s.describe().contains("rbf start 1"), "{}", s.describe());
+        let json = serde_json::to_string(&s).unwrap();
+        assert!(json.contains("\"rbf_start\":1"), "{json}");
+        assert_eq!(serde_json::from_str::<Settings>(&json).unwrap(), s);
+        let every = Settings {
+            rbf_start: None,
+            ..s.clone()
+        };
+        let json = serde_json::to_string(&every).unwrap();
+        assert!(json.contains("\"rbf_start\":null"), "{json}");
+        assert_eq!(serde_json::from_str::<Settings>(&json).unwrap(), every);
+        let old = json.replace("\"rbf_start\":null", "\"rbf_start\":0");
+        let e = serde_json::from_str::<Settings>(&old)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("counts from 1"), "{e}");
     }
 }

@@ -1,6 +1,7 @@
 //! The chart kinds: per-measurement errors, histograms, training curve, position scatter.
 
 use super::{Chart, DrawResult};
+use crate::neural::train::Phase2;
 use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
@@ -243,6 +244,8 @@ pub struct TrainingCurve {
     pub curve: Vec<(usize, f64, f64)>,
     /// Epochs of the first (momentum) phase.
     pub momentum_epochs: usize,
+    /// The second phase's method (its steps follow the momentum epochs on the x axis).
+    pub phase2: Phase2,
 }
 
 impl Chart for TrainingCurve {
@@ -270,7 +273,10 @@ impl Chart for TrainingCurve {
             .y_label_area_size(80)
             .build_cartesian_2d(0.0..last as f64, lo..hi)?;
         c.configure_mesh()
-            .x_desc("epoch (phase 1: SGD with momentum, then Levenberg-Marquardt)")
+            .x_desc(match self.phase2 {
+                Phase2::Lbfgs => "epoch (phase 1: SGD with momentum), then L-BFGS iteration",
+                _ => "epoch (phase 1: SGD with momentum, then Levenberg-Marquardt)",
+            })
             .y_desc("mean squared error (normalised outputs, log scale)")
             .x_label_formatter(&|x| format!("{x:.0}"))
             .y_label_formatter(&|v| format!("{:.2e}", 10f64.powf(*v)))

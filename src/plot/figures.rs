@@ -5,7 +5,7 @@ use super::{Figure, save};
 use crate::data::MeasurementSet;
 use crate::error::Result;
 use crate::evaluate::RowError;
-use crate::neural::train::TrainReport;
+use crate::neural::train::{Phase2, TrainReport};
 use std::path::Path;
 
 /// The errors of several predictors on one set, each named (e.g. "nominal", "identified").
@@ -134,7 +134,15 @@ pub fn error_figures(
     Ok(figs)
 }
 
-/// The training curve of a compensator: `{prefix}_training`.
+/// What phase 2's steps are called: epochs of Levenberg-Marquardt, iterations of L-BFGS.
+fn phase2_steps(phase2: Phase2) -> &'static str {
+    match phase2 {
+        Phase2::Lbfgs => "L-BFGS iterations",
+        _ => "Levenberg-Marquardt epochs",
+    }
+}
+
+/// The training curve of a compensator's first network: `{prefix}_training`.
 pub fn training_figure(
     dir: &Path,
     prefix: &str,
@@ -146,16 +154,18 @@ pub fn training_figure(
         &format!("{prefix}_training"),
         &format!("Training curve, {what}"),
         &format!(
-            "Mean squared error of the normalised network outputs by epoch, {what}: {} SGD \
-             momentum epochs, then {} Levenberg-Marquardt epochs; stopped: {}.",
+            "Mean squared error of the normalised network outputs by epoch, {what} (its first \
+             network): {} SGD momentum epochs, then {} {}; stopped: {}.",
             report.momentum_epochs,
             report.lm_epochs,
+            phase2_steps(report.phase2),
             report.stop.describe()
         ),
         &TrainingCurve {
             title: format!("Training curve, {what}"),
             curve: report.curve.clone(),
             momentum_epochs: report.momentum_epochs,
+            phase2: report.phase2,
         },
     )
 }

@@ -31,11 +31,18 @@ fn number(x: f64) -> String {
         "0".into()
     } else if x.fract() == 0.0 && x.abs() < 1e15 {
         format!("{x:.0}")
-    } else if x.abs() >= 1e-3 && x.abs() < 1e6 {
-        let digits = (4 - x.abs().log10().floor() as i32).clamp(0, 8) as usize;
-        format!("{x:.digits$}")
     } else {
-        format!("{x:.4e}")
+        // The decade of x rounded to 5 digits, not of x: 0.99999953 is 1.0000, not 1.00000.
+        let scientific = format!("{x:.4e}");
+        let decade = (scientific.split_once('e'))
+            .and_then(|(_, e)| e.parse::<i32>().ok())
+            .unwrap_or(0);
+        if (-3..6).contains(&decade) {
+            let digits = (4 - decade).clamp(0, 8) as usize;
+            format!("{x:.digits$}")
+        } else {
+            scientific
+        }
     }
 }
 
@@ -433,6 +440,11 @@ mod tests {
         assert_eq!(number(-2.3592e-4), "-2.3592e-4");
         assert_eq!(number(1.23456789e7), "1.2346e7");
         assert_eq!(number(1.23e7), "12300000");
+        // Rounding that carries into the next decade keeps 5 significant digits.
+        assert_eq!(number(0.9999953529), "1.0000");
+        assert_eq!(number(-9.99996), "-10.000");
+        assert_eq!(number(999999.7), "1.0000e6");
+        assert_eq!(number(9.99996e-4), "0.0010000");
         let terms = Node::List(vec![
             Node::Record(vec![
                 ("name".into(), Node::Text("base.rz".into())),
