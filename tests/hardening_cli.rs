@@ -2011,3 +2011,54 @@ fn edge_inputs_of_the_sixtieth_hunt() {
         "beyond the bound of 720 deg (2 turns)",
     );
 }
+
+/// Noise-free simulated data (`simulate` without `--sigma-*`), the first test a user runs on
+/// a new robot: the model refined on it misses by rounding alone (about 1e-11 mm), which
+/// scaled the network's outputs below what a compensator file can store, so `train` printed
+/// its whole report and then refused to write (exit 1), even with no network at all. Now the
+/// file is written and its predictions hit the noise-free poses.
+#[test]
+fn noise_free_data_trains_and_writes_its_compensator() {
+    use common::FANUC;
+    let data = common::tmp("s61_exact.csv");
+    let data = data.to_str().unwrap();
+    let o = robocal(&[
+        "simulate",
+        "--robot",
+        FANUC,
+        "--deviations",
+        "datasets/deviations/table_6_1.toml",
+        "--count",
+        "60",
+        "--seed",
+        "3",
+        "--out",
+        data,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let fixed: [&[&str]; 2] = [
+        &["--members", "0"],
+        &[
+            "--form", "joint", "--network", "mlp", "--encoding", "gravity", "--members", "1",
+            "--hidden", "4", "--penalty", "1", "--max-epochs", "2",
+        ],
+    ];
+    for (k, extra) in fixed.iter().enumerate() {
+        let out = common::tmp(&format!("s61_exact_{k}.rcal"));
+        let out = out.to_str().unwrap();
+        let mut args = vec!["train", "--robot", FANUC, "--data", data, "--out", out];
+        args.extend_from_slice(&["--refine", "full", "--compliance", "off"]);
+        args.extend_from_slice(extra);
+        let o = robocal(&args);
+        assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
+        let o = robocal(&["evaluate", "--robot", FANUC, "--compensator", out, "--data", data]);
+        assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
+        let text = stdout(&o);
+        let rms: f64 = (text.lines())
+            .find(|l| l.starts_with("data") && l.contains("+net"))
+            .and_then(|l| l.split_whitespace().nth(3))
+            .and_then(|v| v.parse().ok())
+            .unwrap_or_else(|| panic!("{text}"));
+        assert!(rms < 1e-6, "{extra:?}: {rms} mm\n{text}");
+    }
+}

@@ -81,6 +81,15 @@ fn inputs(robot: &Robot, set: &MeasurementSet, encoding: Encoding) -> (Vec<Vec<f
     (xs, norm)
 }
 
+/// The least RMS position error (mm) the outputs are scaled by: a nanometre, below any
+/// measurement; a model that misses by less leaves nothing to learn.
+const POSITION_SCALE_FLOOR_MM: f64 = 1e-6;
+/// The least RMS orientation error (rad) the outputs are scaled by.
+const ROTATION_SCALE_FLOOR_RAD: f64 = 1e-9;
+/// The least joint correction (rad; mm for a prismatic joint) a joint-form output is scaled
+/// by.
+const JOINT_SCALE_FLOOR: f64 = 1e-9;
+
 /// Builds the training problem of `form` for `robot` on `set`.
 pub fn build(
     robot: &Robot,
@@ -119,6 +128,9 @@ pub fn build(
             set.source.display()
         )));
     }
+    // A model refined on noise-free data misses by rounding alone (1e-11 mm): scaled by
+    // that, the normalisation could not be stored (nor would the network learn anything).
+    let (s_p, s_r) = (s_p.max(POSITION_SCALE_FLOOR_MM), s_r.max(ROTATION_SCALE_FLOOR_RAD));
     let rows = if with_rotation { 6 } else { 3 };
     // W e_k, world frame.
     let weighted: Vec<Vec<f64>> = errors
@@ -182,7 +194,11 @@ pub fn build(
             let scale: Vec<f64> = (0..n)
                 .map(|j| {
                     let col: f64 = maps.iter().map(|a| a.column(j).norm_squared()).sum();
-                    if col > 0.0 { (total / col).sqrt() } else { 1.0 }
+                    if col > 0.0 {
+                        (total / col).sqrt().max(JOINT_SCALE_FLOOR)
+                    } else {
+                        1.0
+                    }
                 })
                 .collect();
             for a in maps.iter_mut() {
