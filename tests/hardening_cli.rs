@@ -2039,8 +2039,20 @@ fn noise_free_data_trains_and_writes_its_compensator() {
     let fixed: [&[&str]; 2] = [
         &["--members", "0"],
         &[
-            "--form", "joint", "--network", "mlp", "--encoding", "gravity", "--members", "1",
-            "--hidden", "4", "--penalty", "1", "--max-epochs", "2",
+            "--form",
+            "joint",
+            "--network",
+            "mlp",
+            "--encoding",
+            "gravity",
+            "--members",
+            "1",
+            "--hidden",
+            "4",
+            "--penalty",
+            "1",
+            "--max-epochs",
+            "2",
         ],
     ];
     for (k, extra) in fixed.iter().enumerate() {
@@ -2051,7 +2063,15 @@ fn noise_free_data_trains_and_writes_its_compensator() {
         args.extend_from_slice(extra);
         let o = robocal(&args);
         assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
-        let o = robocal(&["evaluate", "--robot", FANUC, "--compensator", out, "--data", data]);
+        let o = robocal(&[
+            "evaluate",
+            "--robot",
+            FANUC,
+            "--compensator",
+            out,
+            "--data",
+            data,
+        ]);
         assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
         let text = stdout(&o);
         let rms: f64 = (text.lines())

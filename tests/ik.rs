@@ -611,3 +611,78 @@ fn a_straight_wrist_keeps_the_seeds_split_of_joints_4_and_6() {
     }
     assert!(signs.contains(&1.0) && signs.contains(&-1.0), "{signs:?}");
 }
+
+/// A calibrated arm 3 mm longer than the nominal reaches poses beyond the nominal's reach,
+/// where the nominal closed form has no solution to start from: `ik` without a seed called
+/// them unreachable (a helper found 3 of 100 random poses of a calibrated KR 16 so). The
+/// closed form of the same pose moved toward the base starts the solve now (elbows 1-4 deg from
+/// stretched); a pose beyond the calibrated arm's reach too stays unreachable, and says why.
+#[test]
+fn a_longer_calibrated_arm_reaches_beyond_the_nominals_reach() {
+    use robocal::kinematics::{IkFailure, IkSolver, IkStart, RobotModel, SphericalWristIk};
+    // A DH arm whose elbow stretches within its ranges (the FANUC's does not); calibrated,
+    // its axes 2 and 3 are 1 mrad off parallel (no closed form) and its upper arm 3 mm longer.
+    let nominal = parse_robot(DH_SPHERICAL, Path::new("dh.toml")).unwrap();
+    let (a2, alpha2) = (
+        nominal.find_param("a2").unwrap(),
+        nominal.find_param("alpha2").unwrap(),
+    );
+    let real = (nominal.with_param(a2, nominal.param(a2) + 3.0))
+        .and_then(|r| r.with_param(alpha2, 1e-3))
+        .unwrap();
+    let closed = SphericalWristIk::new(&nominal).unwrap();
+    let start = IkStart::choose(&real, Some(&nominal)).unwrap();
+    assert!(matches!(start, IkStart::Nominal(_)));
+    let mut solver = IkSolver::new(RobotModel::new(&real), start, IkOptions::default());
+    let mut f = Frames::new(&real);
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut sols = Vec::new();
+    let mut beyond = 0;
+    for _ in 0..20 {
+        let mut q = random_q(&real, &mut rng);
+        // The elbow stretched: joint 3 where the wrist centre lies farthest from joint 2.
+        let (lo, hi) = (-PI, PI);
+        let spread = |q: &[f64], f: &mut Frames| {
+            frames(&real, q, f);
+            (f.joint[4].translation.vector - f.joint[1].translation.vector).norm()
+        };
+        let best = (0..=20_000)
+            .map(|k| lo + (hi - lo) * k as f64 / 20_000.0)
+            .max_by(|a, b| {
+                let (mut qa, mut qb) = (q.clone(), q.clone());
+                (qa[2], qb[2]) = (*a, *b);
+                spread(&qa, &mut f).total_cmp(&spread(&qb, &mut f))
+            })
+            .unwrap();
+        // 1-4 deg from stretched (at it the solution is singular): up to 2.9 mm beyond the
+        // nominal's reach.
+        let bend = rng.random_range(1.0_f64..4.0).to_radians();
+        q[2] = best + if rng.random::<bool>() { bend } else { -bend };
+        let target = tool_pose(&real, &q);
+        closed.solve(&target, &mut sols);
+        if !sols.is_empty() {
+            continue;
+        }
+        beyond += 1;
+        let got = solver.nearest(&target, None).unwrap().solution;
+        let p = tool_pose(&real, &got.q);
+        assert!((p.translation.vector - target.translation.vector).norm() < 1e-6);
+        assert!(angle_between(&p.rotation, &target.rotation) < 1e-9);
+        // 20 mm farther from the shoulder: beyond the calibrated arm's reach as well.
+        frames(&real, &q, &mut f);
+        let out = f.joint[4].translation.vector - f.joint[1].translation.vector;
+        let mut far = target;
+        far.translation.vector += out.normalize() * 20.0;
+        match solver.nearest(&far, None) {
+            Err(IkFailure::Unreachable(m)) => assert!(
+                m.contains("no solution") && m.contains("beyond") && m.contains("reach"),
+                "{m}"
+            ),
+            other => panic!("{other:?}"),
+        }
+    }
+    assert!(
+        beyond >= 5,
+        "{beyond} of 20 stretched poses beyond the nominal's reach"
+    );
+}

@@ -172,6 +172,14 @@ pub struct IkSolver<M: ToolModel> {
     reach: Reach,
 }
 
+/// Fractions of a target's distance from the reach's anchor by which a pose the nominal
+/// closed form cannot reach is moved toward (or away from) the anchor, in turn, to find
+/// starts ([`IkSolver::pulled_starts`]). A calibration changes an arm's length by millimetres
+/// in metres, about 1e-3, but a start moved that little lies at the nominal's stretched
+/// elbow, a singularity from which the solve cannot bend it back (it stalled there, 18 mm off,
+/// where a start moved by 1 % converges).
+const PULLS: [f64; 3] = [1e-2, 3e-2, 1e-1];
+
 /// How far beyond the model's [`Reach`] a target must lie to be refused before any solve: a
 /// compensator's correction (millimetres) moves the tool beyond its robot's bound by far less.
 pub const REACH_MARGIN: f64 = 1.1;
@@ -311,6 +319,21 @@ impl<M: ToolModel> IkSolver<M> {
                 .into_iter()
                 .map(|(_, _, _, q)| q.to_vec()),
         );
+        // A calibrated arm a little longer (or shorter) than the nominal reaches poses just
+        // beyond the nominal's reach: its closed form has no solution there, but does at the
+        // same pose moved a little toward (or away from) the base, the nearest it reaches.
+        let pulled = starts.is_empty() && matches!(self.start, IkStart::Nominal(_));
+        if pulled {
+            starts.extend(self.pulled_starts(target, reference));
+            if starts.is_empty() {
+                return Err(IkFailure::Unreachable(format!(
+                    "the closed form of the nominal model has no solution, for the pose nor for \
+                     it moved by up to {:.0} % of its distance toward or away from the base: it \
+                     lies beyond the nominal's reach by more than a calibration changes it",
+                    PULLS[PULLS.len() - 1] * 100.0
+                )));
+            }
+        }
         let mut failure = if starts.is_empty() {
             return Err(self.no_start());
         } else {
@@ -345,11 +368,39 @@ impl<M: ToolModel> IkSolver<M> {
                 Err(_) => {}
             }
         }
-        if sols.is_empty() {
-            Err(failure)
-        } else {
-            Ok(sols)
+        match failure {
+            _ if !sols.is_empty() => Ok(sols),
+            IkFailure::NotConverged(why) if pulled => Err(IkFailure::Unreachable(format!(
+                "the closed form of the nominal model has no solution (the pose is beyond its \
+                 reach), and solves from the poses nearest it that the nominal reaches (moved \
+                 by up to {:.0} % toward or away from the base) do not reach it on this model \
+                 either: {why}",
+                PULLS[PULLS.len() - 1] * 100.0
+            ))),
+            failure => Err(failure),
         }
+    }
+
+    /// The closed form's solutions (each in its copy nearest `reference`) of `target` moved
+    /// toward the reach's anchor, or away from it, by the first fraction of [`PULLS`] of its
+    /// distance at which there are any: starts for a model that reaches a little farther (or
+    /// nearer) than the closed form's.
+    fn pulled_starts(&mut self, target: &Pose, reference: &[f64]) -> Vec<Vec<f64>> {
+        let anchor = self.reach.anchor;
+        for pull in PULLS {
+            for sign in [-1.0, 1.0] {
+                let mut moved = *target;
+                let v = target.translation.vector - anchor;
+                moved.translation.vector = anchor + v * (1.0 + sign * pull);
+                let found: Vec<Vec<f64>> = (self.starts(&moved, reference, &[]).into_iter())
+                    .map(|(_, _, _, q)| q.to_vec())
+                    .collect();
+                if !found.is_empty() {
+                    return found;
+                }
+            }
+        }
+        Vec::new()
     }
 
     /// The solution within the limits nearest `seed` (or the middle of the ranges), by

@@ -130,7 +130,10 @@ pub fn build(
     }
     // A model refined on noise-free data misses by rounding alone (1e-11 mm): scaled by
     // that, the normalisation could not be stored (nor would the network learn anything).
-    let (s_p, s_r) = (s_p.max(POSITION_SCALE_FLOOR_MM), s_r.max(ROTATION_SCALE_FLOOR_RAD));
+    let (s_p, s_r) = (
+        s_p.max(POSITION_SCALE_FLOOR_MM),
+        s_r.max(ROTATION_SCALE_FLOOR_RAD),
+    );
     let rows = if with_rotation { 6 } else { 3 };
     // W e_k, world frame.
     let weighted: Vec<Vec<f64>> = errors
