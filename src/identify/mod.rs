@@ -1,6 +1,7 @@
 //! Parametric identification (thesis ch. 4): which parameters the data can identify, and
 //! their estimates by Levenberg-Marquardt, Gauss-Newton or Nelder-Mead.
 
+pub mod chained;
 pub mod identifiability;
 pub mod jacobian;
 pub mod nelder_mead;

@@ -102,6 +102,10 @@ pub struct Observations<'a> {
     pub measure: Measure,
     /// One observation per row, or per pair for relative and distance.
     pub items: Vec<Observation>,
+    /// For relative and distance: each row's position sigma (mm per coordinate, its own or
+    /// the set-level one), which the pairs that share the row share
+    /// ([`super::chained`]); empty for the other measures.
+    pub row_sigma_mm: Vec<Vector3<f64>>,
 }
 
 impl<'a> Observations<'a> {
@@ -195,10 +199,15 @@ impl<'a> Observations<'a> {
                 }
             }
         }
+        let row_sigma_mm = match measure {
+            Measure::Relative | Measure::Distance => (0..set.rows.len()).map(sp).collect(),
+            _ => Vec::new(),
+        };
         Ok(Observations {
             set,
             measure,
             items,
+            row_sigma_mm,
         })
     }
 

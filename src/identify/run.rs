@@ -9,9 +9,7 @@ use super::problem::{
 };
 use super::register::{Registration, check_position_scale, register};
 use super::select::{is_compliance, select};
-use super::solve::{
-    Method, Solution, SolveOptions, StopReason, covariance, covariance_from, solve_gradient,
-};
+use super::solve::{Method, Solution, SolveOptions, StopReason, covariance_of, solve_gradient};
 use super::unmodelled::Unmodelled;
 use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
@@ -393,10 +391,7 @@ fn drop_insignificant(
     let params = start.parameters();
     loop {
         // The solve's own normal equations at its solution, when it has them.
-        let (cov, s2) = match &solution.normal {
-            Some(ne) => covariance_from(&solution.robot, ne, obs.len(), &cols)?,
-            None => covariance(&solution.robot, obs, &cols)?,
-        };
+        let (cov, s2) = covariance_of(&solution.robot, obs, &cols, solution.normal.as_ref())?;
         let robot = &solution.robot;
         let dropped = drop_weakest(&params, &mut cols, ident, |k, c| {
             let id = params[c];
@@ -408,7 +403,7 @@ fn drop_insignificant(
         let id = params[c];
         let reset = solution.robot.with_param(id, start.param(id))?;
         if cols.is_empty() {
-            let (cov, s2) = covariance(&reset, obs, &cols)?;
+            let (cov, s2) = covariance_of(&reset, obs, &cols, None)?;
             solution.robot = reset;
             return Ok((solution, cols, cov, s2));
         }

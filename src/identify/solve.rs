@@ -488,9 +488,33 @@ fn lm_step(
     (None, false, false)
 }
 
+/// [`covariance`] (from the normal equations `ne` at `robot` over `cols` where the caller
+/// has them), and where pairs of rows share rows (chained relative or distance measures) the
+/// sandwich s^2 A^-1 (A + C) A^-1 with C their cross terms ([`super::chained`]): the
+/// covariance the identification reports.
+pub fn covariance_of(
+    robot: &Robot,
+    obs: &Observations,
+    cols: &[usize],
+    ne: Option<&Normal>,
+) -> Result<(DMatrix<f64>, f64)> {
+    let (cov, s2) = match ne {
+        Some(ne) => covariance_from(robot, ne, obs.len(), cols)?,
+        None => covariance(robot, obs, cols)?,
+    };
+    let Some(cross) = super::chained::shared_row_terms(robot, obs, cols) else {
+        return Ok((cov, s2));
+    };
+    // cov = s^2 A^-1 (factor 1 without redundancy): s^2 A^-1 C A^-1 = cov C cov / s^2.
+    let factor = if s2.is_finite() { s2 } else { 1.0 };
+    let sandwich = &cov + &cov * cross * &cov / factor;
+    Ok((sandwich, s2))
+}
+
 /// Covariance of the free parameters at `robot`: s^2 (J^T W J)^-1 with the a-posteriori
 /// variance factor s^2 = cost / (m - n) (1 when the sigmas are right). Returns the matrix
 /// (internal units) and s^2; an error when J^T W J is singular (rank loss at the solution).
+/// Residuals taken as independent: [`covariance_of`] is what identification reports.
 pub fn covariance(
     robot: &Robot,
     obs: &Observations,
