@@ -136,6 +136,67 @@ fn radians_in_a_degree_file_warn() {
     assert!(err.contains("are they radians"), "{err}");
 }
 
+/// A joint of +-400 deg holds radians up to 6.98: a radian file with a value beyond 6.3 in
+/// it was read as degrees without a word (a helper's finding on an ABB IRB 140). The
+/// warning now takes each joint's range in radians where it is wider than 6.3, for `import`
+/// (and `identify`) and for joint files (`fk`, `predict`); a degree file stays quiet.
+#[test]
+fn radians_of_a_joint_wider_than_a_turn_warn() {
+    let fanuc = std::fs::read_to_string(common::root().join(FANUC)).unwrap();
+    let last = fanuc.rfind("limits = [-180.0, 180.0]").unwrap();
+    let wide = format!(
+        "{}limits = [-400.0, 400.0]{}",
+        &fanuc[..last],
+        &fanuc[last + "limits = [-180.0, 180.0]".len()..]
+    );
+    let robot = tmp("wide_j6.toml");
+    std::fs::write(&robot, wide).unwrap();
+    let robot = robot.to_str().unwrap();
+    let radians =
+        "0.1,0.2,-0.3,1.5,-1.2,6.5\n0.2,0.1,-0.2,1.0,-1.0,-6.7\n0.3,0.3,0.1,-1.0,1.1,2.0\n";
+    let degrees = "10,20,-30,150,-12,350\n20,10,-20,100,-10,-370\n30,30,10,-100,11,200\n";
+    for (body, warns) in [(radians, true), (degrees, false)] {
+        let joints = tmp(&format!("wide_{warns}.csv"));
+        std::fs::write(&joints, format!("q1,q2,q3,q4,q5,q6\n{body}")).unwrap();
+        let out = tmp(&format!("wide_{warns}.out.csv"));
+        let o = robocal(&[
+            "fk",
+            "--robot",
+            robot,
+            "--joints",
+            joints.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(
+            stderr(&o).contains("one turn in radians"),
+            warns,
+            "{}",
+            stderr(&o)
+        );
+        let rows: String = body.lines().map(|l| format!("{l},1,2,3\n")).collect();
+        let data = tmp(&format!("wide_{warns}_data.csv"));
+        std::fs::write(&data, format!("q1,q2,q3,q4,q5,q6,x,y,z\n{rows}")).unwrap();
+        let out = tmp(&format!("wide_{warns}_data.out.csv"));
+        let o = robocal(&[
+            "import",
+            data.to_str().unwrap(),
+            "--robot",
+            robot,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(
+            stderr(&o).contains("are they radians"),
+            warns,
+            "{}",
+            stderr(&o)
+        );
+    }
+}
+
 #[test]
 fn skip_bad_rows_drops_and_lists_them() {
     let body =

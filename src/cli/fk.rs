@@ -29,9 +29,10 @@ pub struct FkArgs {
 pub(super) fn warn_if_radians(path: &std::path::Path, robot: &Robot, t: &JointTable) {
     if t.looks_like_radians(robot) {
         eprintln!(
-            "warning: {}: every joint angle lies within +-{:.2}, one turn in radians: the \
-             columns are read in degrees; if they hold radians, convert them (or import the \
-             file with a profile whose joint_unit is \"rad\")",
+            "warning: {}: every joint angle lies within +-{:.2}, one turn in radians (or its \
+             joint's range in radians, where that is wider): the columns are read in degrees; \
+             if they hold radians, convert them (or import the file with a profile whose \
+             joint_unit is \"rad\")",
             path.display(),
             std::f64::consts::TAU
         );

@@ -81,18 +81,25 @@ impl JointTable {
     }
 
     /// Whether the degree columns probably hold radians: every revolute angle lies within
-    /// one turn in radians (|q| <= 2 pi) and some exceed 1 (the joint unit of most
+    /// one turn in radians (|q| <= 2 pi), or within its joint's range in radians where that
+    /// is wider (a joint of +-400 deg), and some exceed 1 (the joint unit of most
     /// controllers' logs; read as degrees they give plausible but wrong poses).
     pub fn looks_like_radians(&self, robot: &Robot) -> bool {
-        let revolute: Vec<usize> = (0..robot.dof())
+        let revolute: Vec<(usize, f64)> = (0..robot.dof())
             .filter(|&j| robot.joints()[j].joint_type == JointType::Revolute)
+            .map(|j| {
+                let [lo, hi] = robot.joints()[j].limits_internal();
+                (j, lo.abs().max(hi.abs()).max(std::f64::consts::TAU))
+            })
             .collect();
         let mut max: Option<f64> = None;
+        let mut within = true;
         for q in &self.joints {
-            for &j in &revolute {
+            for &(j, bound) in &revolute {
                 max = Some(max.unwrap_or(0.0).max(q[j].abs()));
+                within &= q[j].abs() <= bound;
             }
         }
-        max.is_some_and(|m| m > 1.0 && m <= std::f64::consts::TAU)
+        within && max.is_some_and(|m| m > 1.0)
     }
 }

@@ -436,20 +436,26 @@ fn check_joints(
         AngleUnit::Deg => q.to_degrees().abs(),
         AngleUnit::Rad => q.abs(),
     };
-    let max_joint = rows
-        .iter()
-        .flat_map(|m| m.q.iter().zip(joints))
-        .filter(|(_, j)| j.joint_type == JointType::Revolute)
+    let revolute = || {
+        (rows.iter())
+            .flat_map(|m| m.q.iter().zip(joints))
+            .filter(|(_, j)| j.joint_type == JointType::Revolute)
+    };
+    let max_joint = revolute()
         .map(|(&q, _)| in_file_unit(q))
         .fold(0.0, f64::max);
-    if profile.joint_unit == AngleUnit::Deg
-        && rows.len() >= 3
-        && max_joint > 0.0
-        && max_joint <= 6.3
+    // Radians of a joint that turns more than a turn each way (+-400 deg) reach beyond 6.3:
+    // within its range in radians, the values still read as radians.
+    let within_radians = revolute().all(|(&q, j)| {
+        let range = j.limits.map_or(0.0, |[lo, hi]| lo.abs().max(hi.abs()));
+        in_file_unit(q) <= range.max(6.3)
+    });
+    if profile.joint_unit == AngleUnit::Deg && rows.len() >= 3 && max_joint > 0.0 && within_radians
     {
         report.warnings.push(
-            "every joint value is within +-6.3 although the file's joints are in degrees: \
-             are they radians? (set joint_unit = \"rad\" in a profile)"
+            "every joint value is within +-6.3 (or its joint's range in radians, where that \
+             is wider) although the file's joints are in degrees: are they radians? (set \
+             joint_unit = \"rad\" in a profile)"
                 .to_string(),
         );
     }
