@@ -139,27 +139,44 @@ fn noisy_estimates_agree_with_truth_within_reported_standard_deviations() {
 fn chained_pairs_report_honest_standard_deviations() {
     let nominal = fanuc();
     let truth = table_6_1(&nominal);
-    for measure in [Measure::Relative, Measure::Distance] {
+    // A short chain too (20 rows, 57 components for some 25 parameters): there the
+    // correlation takes a third of the degrees of freedom, and the variance factor, counted
+    // without them, came out about 0.65 with the sigmas right.
+    for (measure, rows) in [
+        (Measure::Relative, 60),
+        (Measure::Distance, 60),
+        (Measure::Relative, 20),
+    ] {
         let opts = Options {
             measure: Some(measure),
             ..Default::default()
         };
-        let mut z = Vec::new();
+        let (mut z, mut factors) = (Vec::new(), Vec::new());
         for seed in 1..=20 {
-            let (noisy, clean) = simulate(&truth, 60, 700 + seed, true, Observe::Position);
+            let (noisy, clean) = simulate(&truth, rows, 700 + seed, true, Observe::Position);
             let est = identify(&nominal, &noisy, &opts).unwrap();
             let exact = identify(&nominal, &clean, &opts).unwrap();
             for (p, q) in est.parameters.iter().zip(&exact.parameters) {
                 assert_eq!(p.name, q.name);
                 z.push((p.estimate - q.estimate) / p.std);
             }
+            factors.push(est.variance_factor);
         }
         let rms = (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
+        let factor = factors.iter().sum::<f64>() / factors.len() as f64;
         eprintln!(
-            "{measure:?}: RMS of {} standardised errors {rms:.3}",
+            "{measure:?}, {rows} rows: RMS of {} standardised errors {rms:.3}, mean variance \
+             factor {factor:.3}",
             z.len()
         );
-        assert!((0.85..1.15).contains(&rms), "{measure:?}: RMS {rms}");
+        assert!(
+            (0.85..1.15).contains(&rms),
+            "{measure:?}, {rows} rows: RMS {rms}"
+        );
+        assert!(
+            (0.85..1.15).contains(&factor),
+            "{measure:?}, {rows} rows: s^2 {factor}"
+        );
     }
 }
 

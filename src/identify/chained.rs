@@ -16,7 +16,11 @@
 //! the two displacements: a distance reads the error along its own direction), signed +
 //! where the row enters both pairs alike (first row of both, or second of both), - else.
 //! Rows' error beyond their sigmas (the unmodelled error, per pair) is taken to split
-//! between a pair's rows as their sigmas do.
+//! between a pair's rows as their sigmas do, and a distance's as if each row's sigma were
+//! the same along every axis (as its weight takes it): approximations, exact for equal
+//! isotropic sigmas. A distance from the `distance` column (an instrument's reading of the
+//! pair) shares nothing. The variance factor then counts the degrees of freedom the
+//! correlation takes ([`super::solve::covariance_of`]).
 
 use super::problem::{IdentifyWorkspace, Measure, Observations, residual};
 use crate::kinematics::tool_pose;
@@ -33,6 +37,11 @@ pub fn shared_row_terms(robot: &Robot, obs: &Observations, cols: &[usize]) -> Op
     // Each row's pairs, with the row's sign in the pair's residual (a - b: + first, - second).
     let mut of_row: Vec<Vec<(usize, f64)>> = vec![Vec::new(); obs.set.rows.len()];
     for (k, o) in obs.items.iter().enumerate() {
+        // A distance read off the `distance` column is the instrument's own reading (a
+        // ball bar's): its error belongs to the pair, not to the rows' positions.
+        if obs.measure == Measure::Distance && obs.set.rows[o.b.unwrap_or(o.a)].distance.is_some() {
+            continue;
+        }
         of_row[o.a].push((k, 1.0));
         if let Some(b) = o.b {
             of_row[b].push((k, -1.0));

@@ -172,6 +172,10 @@ pub struct IkSolver<M: ToolModel> {
     reach: Reach,
 }
 
+/// Largest joint change (rad, mm) a polish of a closed-form solution may make: the closed
+/// form near a singularity is off by the square root of the rounding (1e-8), never by this.
+const POLISH_STEP: f64 = 1e-3;
+
 /// Fractions of a target's distance from the reach's anchor by which a pose the nominal
 /// closed form cannot reach is moved toward (or away from) the anchor, in turn, to find
 /// starts ([`IkSolver::pulled_starts`]). A calibration changes an arm's length by millimetres
@@ -290,7 +294,18 @@ impl<M: ToolModel> IkSolver<M> {
             return closed;
         }
         match self.refine(target, q) {
-            Ok(sol) if sol.outside_limits.len() <= closed.outside_limits.len() => sol,
+            // The same solution, closer: not a whole turn away (the solve wraps a joint that
+            // ends a rounding beyond its limit) nor beyond a limit the closed form kept.
+            Ok(sol)
+                if sol
+                    .q
+                    .iter()
+                    .zip(q)
+                    .all(|(a, b)| (a - b).abs() < POLISH_STEP)
+                    && (sol.outside_limits.iter()).all(|j| closed.outside_limits.contains(j)) =>
+            {
+                sol
+            }
             _ => closed,
         }
     }
@@ -336,18 +351,21 @@ impl<M: ToolModel> IkSolver<M> {
         reference: &[f64],
     ) -> std::result::Result<Vec<IkSolution>, IkFailure> {
         let mut starts: Vec<Vec<f64>> = seed.map(<[f64]>::to_vec).into_iter().collect();
-        starts.extend(
-            self.starts(target, reference, &[])
-                .into_iter()
-                .map(|(_, _, _, q)| q.to_vec()),
-        );
+        let closed: Vec<Vec<f64>> = (self.starts(target, reference, &[]).into_iter())
+            .map(|(_, _, _, q)| q.to_vec())
+            .collect();
         // A calibrated arm a little longer (or shorter) than the nominal reaches poses just
         // beyond the nominal's reach: its closed form has no solution there, but does at the
         // same pose moved a little toward (or away from) the base, the nearest it reaches.
-        let pulled = starts.is_empty() && matches!(self.start, IkStart::Nominal(_));
+        let pulled = closed.is_empty() && matches!(self.start, IkStart::Nominal(_));
+        starts.extend(closed);
+        let mut moved = 0.0;
         if pulled {
-            starts.extend(self.pulled_starts(target, reference));
-            if starts.is_empty() {
+            let (pull, found) = self.pulled_starts(target, reference);
+            moved = pull;
+            let had_seed = !starts.is_empty();
+            starts.extend(found);
+            if !had_seed && starts.is_empty() {
                 return Err(IkFailure::Unreachable(format!(
                     "the closed form of the nominal model has no solution, for the pose nor for \
                      it moved by up to {:.0} % of its distance toward or away from the base: it \
@@ -392,13 +410,20 @@ impl<M: ToolModel> IkSolver<M> {
         }
         match failure {
             _ if !sols.is_empty() => Ok(sols),
-            IkFailure::NotConverged(why) if pulled => Err(IkFailure::Unreachable(format!(
-                "the closed form of the nominal model has no solution (the pose is beyond its \
-                 reach), and solves from the poses nearest it that the nominal reaches (moved \
-                 by up to {:.0} % toward or away from the base) do not reach it on this model \
-                 either: {why}",
-                PULLS[PULLS.len() - 1] * 100.0
-            ))),
+            IkFailure::NotConverged(why) if pulled && moved > 0.0 => {
+                Err(IkFailure::Unreachable(format!(
+                    "the closed form of the nominal model has no solution (the pose is beyond \
+                     its reach), and solves from the nearest poses it reaches (moved by {:.0} % \
+                     of the distance toward or away from the base){} do not reach it on this \
+                     model either: {why}",
+                    moved * 100.0,
+                    if seed.is_some() {
+                        " and from the seed"
+                    } else {
+                        ""
+                    },
+                )))
+            }
             failure => Err(failure),
         }
     }
@@ -407,7 +432,7 @@ impl<M: ToolModel> IkSolver<M> {
     /// toward the reach's anchor, or away from it, by the first fraction of [`PULLS`] of its
     /// distance at which there are any: starts for a model that reaches a little farther (or
     /// nearer) than the closed form's.
-    fn pulled_starts(&mut self, target: &Pose, reference: &[f64]) -> Vec<Vec<f64>> {
+    fn pulled_starts(&mut self, target: &Pose, reference: &[f64]) -> (f64, Vec<Vec<f64>>) {
         let anchor = self.reach.anchor;
         for pull in PULLS {
             for sign in [-1.0, 1.0] {
@@ -418,11 +443,11 @@ impl<M: ToolModel> IkSolver<M> {
                     .map(|(_, _, _, q)| q.to_vec())
                     .collect();
                 if !found.is_empty() {
-                    return found;
+                    return (pull, found);
                 }
             }
         }
-        Vec::new()
+        (0.0, Vec::new())
     }
 
     /// The solution within the limits nearest `seed` (or the middle of the ranges), by

@@ -100,6 +100,7 @@ impl Network {
 
 /// One complete choice of how to build a compensator.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(from = "SettingsRead")]
 pub struct Settings {
     /// The network kind.
     pub network: Network,
@@ -117,9 +118,12 @@ pub struct Settings {
     /// row ([`super::tuning::NETWORK_Z`]).
     pub members: usize,
     /// The RBF network's hyperparameter search start ([`super::rbf::STARTS`], counted from 0
-    /// here, from 1 in reports as on the command line); None: every start, the highest
-    /// likelihood kept output by output.
-    #[serde(with = "counted_from_one")]
+    /// here; reports write it from 1, as the command line counts it, as `rbf_search_start`);
+    /// None: every start, the highest likelihood kept output by output.
+    #[serde(
+        rename = "rbf_search_start",
+        serialize_with = "counted_from_one::serialize"
+    )]
     pub rbf_start: Option<usize>,
     /// Model parameters re-estimated on the training rows first (a selection as for
     /// `identify`), or None.
@@ -307,9 +311,43 @@ impl CompensatorOptions {
     }
 }
 
+/// [`Settings`] as reports hold it: the search start counted from 1 (`rbf_search_start`),
+/// or from 0 under its former name (`rbf_start`, the reports of earlier versions).
+#[derive(serde::Deserialize)]
+struct SettingsRead {
+    network: Network,
+    form: Form,
+    encoding: Encoding,
+    hidden: usize,
+    penalty: f64,
+    members: usize,
+    #[serde(default, deserialize_with = "counted_from_one::deserialize")]
+    rbf_search_start: Option<usize>,
+    #[serde(default)]
+    rbf_start: Option<usize>,
+    refine: Option<String>,
+    #[serde(default)]
+    mlp_share: Option<f64>,
+}
+
+impl From<SettingsRead> for Settings {
+    fn from(r: SettingsRead) -> Settings {
+        Settings {
+            network: r.network,
+            form: r.form,
+            encoding: r.encoding,
+            hidden: r.hidden,
+            penalty: r.penalty,
+            members: r.members,
+            rbf_start: r.rbf_search_start.or(r.rbf_start),
+            refine: r.refine,
+            mlp_share: r.mlp_share,
+        }
+    }
+}
+
 /// An index kept from 0 that reports write from 1, as `--rbf-start` and
-/// [`Settings::describe`] count it (a report of an earlier version, which wrote 0 for the
-/// first start, is refused rather than read one start off).
+/// [`Settings::describe`] count it.
 mod counted_from_one {
     use serde::{Deserialize, Deserializer, Serializer};
 
@@ -323,8 +361,7 @@ mod counted_from_one {
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<usize>, D::Error> {
         match Option::<usize>::deserialize(d)? {
             Some(0) => Err(serde::de::Error::custom(
-                "rbf_start counts from 1 (as --rbf-start does); 0 is a report of an earlier \
-                 version, which counted from 0",
+                "rbf_search_start counts from 1, as --rbf-start does",
             )),
             k => Ok(k.map(|k| k - 1)),
         }
@@ -350,19 +387,25 @@ mod tests {
         };
         assert!(s.describe().contains("rbf start 1"), "{}", s.describe());
         let json = serde_json::to_string(&s).unwrap();
-        assert!(json.contains("\"rbf_start\":1"), "{json}");
+        assert!(json.contains("\"rbf_search_start\":1"), "{json}");
         assert_eq!(serde_json::from_str::<Settings>(&json).unwrap(), s);
         let every = Settings {
             rbf_start: None,
             ..s.clone()
         };
         let json = serde_json::to_string(&every).unwrap();
-        assert!(json.contains("\"rbf_start\":null"), "{json}");
+        assert!(json.contains("\"rbf_search_start\":null"), "{json}");
         assert_eq!(serde_json::from_str::<Settings>(&json).unwrap(), every);
-        let old = json.replace("\"rbf_start\":null", "\"rbf_start\":0");
-        let e = serde_json::from_str::<Settings>(&old)
+        let zero = json.replace("\"rbf_search_start\":null", "\"rbf_search_start\":0");
+        let e = serde_json::from_str::<Settings>(&zero)
             .unwrap_err()
             .to_string();
         assert!(e.contains("counts from 1"), "{e}");
+        // An earlier version's report: the start counted from 0, under its former name.
+        for (old, start) in [("0", Some(0)), ("2", Some(2)), ("null", None)] {
+            let text = json.replace("\"rbf_search_start\":null", &format!("\"rbf_start\":{old}"));
+            let read = serde_json::from_str::<Settings>(&text).unwrap();
+            assert_eq!(read.rbf_start, start, "{text}");
+        }
     }
 }

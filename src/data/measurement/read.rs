@@ -459,7 +459,12 @@ fn check_joints(
                 .to_string(),
         );
     }
-    if profile.joint_unit == AngleUnit::Rad && max_joint > 7.0 {
+    // And the reverse: beyond 7 (or the joint's range in radians, where that is wider).
+    let beyond_radians = revolute().any(|(&q, j)| {
+        let range = j.limits.map_or(0.0, |[lo, hi]| lo.abs().max(hi.abs()));
+        in_file_unit(q) > range.max(7.0)
+    });
+    if profile.joint_unit == AngleUnit::Rad && beyond_radians {
         report.warnings.push(format!(
             "joint values reach {max_joint:.1} although the file's joints are in radians: are they degrees?"
         ));
