@@ -2058,10 +2058,9 @@ fn noise_free_data_trains_and_writes_its_compensator() {
     for (k, extra) in fixed.iter().enumerate() {
         let out = common::tmp(&format!("s61_exact_{k}.rcal"));
         let out = out.to_str().unwrap();
-        let mut args = vec!["train", "--robot", FANUC, "--data", data, "--out", out];
-        args.extend_from_slice(&["--refine", "full", "--compliance", "off"]);
+        let mut args = vec!["--refine", "full", "--compliance", "off"];
         args.extend_from_slice(extra);
-        let o = robocal(&args);
+        let o = common::train_fanuc(data, out, &args);
         assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
         let o = robocal(&[
             "evaluate",

@@ -23,7 +23,7 @@
 use super::model::CalibratedModel;
 use crate::data::Target;
 use crate::error::{Error, Result};
-use crate::geometry::rotation::rotation_vector;
+use crate::geometry::rotation::angle_between;
 use crate::kinematics::{
     Branch, IkFailure, IkOptions, IkSolution, IkSolver, IkStart, Pose, SphericalWristIk, ToolModel,
     another_arm, tool_pose,
@@ -447,7 +447,7 @@ impl<'a> FakeTargetSolver<'a> {
                 other[5] -= s * turn;
                 let p = self.ik.model().pose(&other);
                 let dp = (p.translation.vector - at.translation.vector).norm();
-                let dr = rotation_vector(&(p.rotation * at.rotation.inverse())).norm();
+                let dr = angle_between(&p.rotation, &at.rotation);
                 if dp > SPLIT_FREE_MM || dr > SPLIT_FREE_RAD {
                     return Err(Failure::BranchChanged(format!(
                         "the calibrated solution is at a wrist singularity of the nominal model \

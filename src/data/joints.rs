@@ -1,6 +1,7 @@
 //! Tables of joint vectors (`fk`, `predict`): columns q1..qN (deg; mm for prismatic joints),
 //! every other column carried into the output.
 
+use super::measurement::JointInfo;
 use super::table::Table;
 use super::{joint_columns, output_headers};
 use crate::error::{Error, Result};
@@ -85,12 +86,9 @@ impl JointTable {
     /// is wider (a joint of +-400 deg), and some exceed 1 (the joint unit of most
     /// controllers' logs; read as degrees they give plausible but wrong poses).
     pub fn looks_like_radians(&self, robot: &Robot) -> bool {
-        let revolute: Vec<(usize, f64)> = (0..robot.dof())
-            .filter(|&j| robot.joints()[j].joint_type == JointType::Revolute)
-            .map(|j| {
-                let [lo, hi] = robot.joints()[j].limits_internal();
-                (j, lo.abs().max(hi.abs()).max(std::f64::consts::TAU))
-            })
+        let revolute: Vec<(usize, f64)> = (JointInfo::of(robot).iter().enumerate())
+            .filter(|(_, j)| j.joint_type == JointType::Revolute)
+            .map(|(i, j)| (i, j.span().max(std::f64::consts::TAU)))
             .collect();
         let mut max: Option<f64> = None;
         let mut within = true;

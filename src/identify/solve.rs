@@ -488,27 +488,33 @@ fn lm_step(
     (None, false, false)
 }
 
-/// [`covariance`] (from the normal equations `ne` at `robot` over `cols` where the caller
-/// has them), and where pairs of rows share rows (chained relative or distance measures) the
-/// sandwich s^2 A^-1 (A + C) A^-1 with C their cross terms ([`super::chained`]) and the
-/// variance factor s^2 = cost / (m - n - tr(A^-1 C)): the covariance and variance factor the
-/// identification reports.
+/// The covariance of the free parameters at `robot` over `cols` ([`covariance_from`], from
+/// the normal equations `ne` where the caller has them), and where pairs of rows share rows
+/// (chained relative or distance measures) the sandwich s^2 A^-1 (A + C) A^-1 with C their
+/// cross terms ([`super::chained`]) and the variance factor s^2 = cost / (m - n -
+/// tr(A^-1 C)): the covariance and variance factor the identification reports.
 pub fn covariance_of(
     robot: &Robot,
     obs: &Observations,
     cols: &[usize],
     ne: Option<&Normal>,
 ) -> Result<(DMatrix<f64>, f64)> {
-    let (cov, s2) = match ne {
-        Some(ne) => covariance_from(robot, ne, obs.len(), cols)?,
-        None => covariance(robot, obs, cols)?,
+    let computed;
+    let ne = match ne {
+        Some(ne) => ne,
+        None => {
+            computed = normal_equations(robot, obs, cols, &mut IdentifyWorkspace::new(robot));
+            &computed
+        }
     };
+    let (cov, s2) = covariance_from(robot, ne, obs.len(), cols)?;
     let Some(cross) = super::chained::shared_row_terms(robot, obs, cols) else {
         return Ok((cov, s2));
     };
     // cov = s^2 A^-1 (factor 1 without redundancy): s^2 A^-1 C A^-1 = cov C cov / s^2.
     let factor = if s2.is_finite() { s2 } else { 1.0 };
-    let sandwich = &cov + &cov * &cross * &cov / factor;
+    let cov_cross = &cov * &cross;
+    let sandwich = &cov + &cov_cross * &cov / factor;
     if !s2.is_finite() {
         return Ok((sandwich, s2));
     }
@@ -516,7 +522,7 @@ pub fn covariance_of(
     // variance factor takes those degrees of freedom (on a chain of 16 rows the plain one
     // came out 0.6-0.7 with the sigmas right, a reviewer's simulation).
     let (m, n) = (obs.len() as f64, cols.len() as f64);
-    let shared = (&cov * &cross).trace() / s2;
+    let shared = cov_cross.trace() / s2;
     let dof = m - n - shared;
     if dof <= 0.0 {
         return Ok((sandwich, s2));
@@ -525,23 +531,12 @@ pub fn covariance_of(
     Ok((sandwich * (corrected / s2), corrected))
 }
 
-/// Covariance of the free parameters at `robot`: s^2 (J^T W J)^-1 with the a-posteriori
-/// variance factor s^2 = cost / (m - n) (1 when the sigmas are right). Returns the matrix
-/// (internal units) and s^2; an error when J^T W J is singular (rank loss at the solution).
-/// Residuals taken as independent: [`covariance_of`] is what identification reports.
-pub fn covariance(
-    robot: &Robot,
-    obs: &Observations,
-    cols: &[usize],
-) -> Result<(DMatrix<f64>, f64)> {
-    let mut ws = IdentifyWorkspace::new(robot);
-    let ne = normal_equations(robot, obs, cols, &mut ws);
-    covariance_from(robot, &ne, obs.len(), cols)
-}
-
-/// [`covariance`] from the normal equations `ne` at `robot` over `cols`, for `m` residual
-/// components.
-pub fn covariance_from(
+/// Covariance of the free parameters from the normal equations `ne` at `robot` over `cols`
+/// (`m` residual components), the residuals taken as independent: s^2 (J^T W J)^-1 with the
+/// a-posteriori variance factor s^2 = cost / (m - n) (1 when the sigmas are right). Returns
+/// the matrix (internal units) and s^2; an error when J^T W J is singular (rank loss at the
+/// solution).
+fn covariance_from(
     robot: &Robot,
     ne: &Normal,
     m: usize,

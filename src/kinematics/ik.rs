@@ -22,7 +22,7 @@ use super::ik_closed::{Branch, MAX_SOLUTIONS, SphericalWristIk};
 use super::ik_numeric::{IkOptions, IkSolution, IkTarget, IkWorkspace, ToolModel, solve_model};
 use super::{Pose, Reach};
 use crate::error::{Error, Result};
-use crate::geometry::rotation::rotation_vector;
+use crate::geometry::rotation::angle_between;
 use crate::model::Robot;
 pub use crate::model::joint_distance;
 
@@ -285,7 +285,7 @@ impl<M: ToolModel> IkSolver<M> {
             q: q.to_vec(),
             iterations: 0,
             position_error_mm: (target.translation.vector - p.translation.vector).norm(),
-            rotation_error_rad: rotation_vector(&(target.rotation * p.rotation.inverse())).norm(),
+            rotation_error_rad: angle_between(&target.rotation, &p.rotation),
             outside_limits: robot.joints_outside_limits(q),
         };
         if closed.position_error_mm <= self.opts.tol_position_mm
@@ -351,21 +351,16 @@ impl<M: ToolModel> IkSolver<M> {
         reference: &[f64],
     ) -> std::result::Result<Vec<IkSolution>, IkFailure> {
         let mut starts: Vec<Vec<f64>> = seed.map(<[f64]>::to_vec).into_iter().collect();
-        let closed: Vec<Vec<f64>> = (self.starts(target, reference, &[]).into_iter())
-            .map(|(_, _, _, q)| q.to_vec())
-            .collect();
+        let closed = self.start_joints(target, reference);
         // A calibrated arm a little longer (or shorter) than the nominal reaches poses just
         // beyond the nominal's reach: its closed form has no solution there, but does at the
         // same pose moved a little toward (or away from) the base, the nearest it reaches.
-        let pulled = closed.is_empty() && matches!(self.start, IkStart::Nominal(_));
+        // The pull that gave starts, if one did.
+        let no_closed = closed.is_empty();
         starts.extend(closed);
-        let mut moved = 0.0;
-        if pulled {
-            let (pull, found) = self.pulled_starts(target, reference);
-            moved = pull;
-            let had_seed = !starts.is_empty();
-            starts.extend(found);
-            if !had_seed && starts.is_empty() {
+        let pulled = if no_closed && matches!(self.start, IkStart::Nominal(_)) {
+            let found = self.pulled_starts(target, reference);
+            if found.is_none() && seed.is_none() {
                 return Err(IkFailure::Unreachable(format!(
                     "the closed form of the nominal model has no solution, for the pose nor for \
                      it moved by up to {:.0} % of its distance toward or away from the base: it \
@@ -373,7 +368,13 @@ impl<M: ToolModel> IkSolver<M> {
                     PULLS[PULLS.len() - 1] * 100.0
                 )));
             }
-        }
+            found.map(|(pull, joints)| {
+                starts.extend(joints);
+                pull
+            })
+        } else {
+            None
+        };
         let mut failure = if starts.is_empty() {
             return Err(self.no_start());
         } else {
@@ -408,46 +409,49 @@ impl<M: ToolModel> IkSolver<M> {
                 Err(_) => {}
             }
         }
-        match failure {
+        match (failure, pulled) {
             _ if !sols.is_empty() => Ok(sols),
-            IkFailure::NotConverged(why) if pulled && moved > 0.0 => {
-                Err(IkFailure::Unreachable(format!(
-                    "the closed form of the nominal model has no solution (the pose is beyond \
+            (IkFailure::NotConverged(why), Some(moved)) => Err(IkFailure::Unreachable(format!(
+                "the closed form of the nominal model has no solution (the pose is beyond \
                      its reach), and solves from the nearest poses it reaches (moved by {:.0} % \
                      of the distance toward or away from the base){} do not reach it on this \
                      model either: {why}",
-                    moved * 100.0,
-                    if seed.is_some() {
-                        " and from the seed"
-                    } else {
-                        ""
-                    },
-                )))
-            }
-            failure => Err(failure),
+                moved * 100.0,
+                if seed.is_some() {
+                    " and from the seed"
+                } else {
+                    ""
+                },
+            ))),
+            (failure, _) => Err(failure),
         }
+    }
+
+    /// The joints of every closed-form start of `target` ([`Self::starts`], any branch).
+    fn start_joints(&mut self, target: &Pose, reference: &[f64]) -> Vec<Vec<f64>> {
+        (self.starts(target, reference, &[]).into_iter())
+            .map(|(_, _, _, q)| q.to_vec())
+            .collect()
     }
 
     /// The closed form's solutions (each in its copy nearest `reference`) of `target` moved
     /// toward the reach's anchor, or away from it, by the first fraction of [`PULLS`] of its
-    /// distance at which there are any: starts for a model that reaches a little farther (or
-    /// nearer) than the closed form's.
-    fn pulled_starts(&mut self, target: &Pose, reference: &[f64]) -> (f64, Vec<Vec<f64>>) {
+    /// distance at which there are any, with that fraction: starts for a model that reaches
+    /// a little farther (or nearer) than the closed form's. None where no pull gives any.
+    fn pulled_starts(&mut self, target: &Pose, reference: &[f64]) -> Option<(f64, Vec<Vec<f64>>)> {
         let anchor = self.reach.anchor;
+        let v = target.translation.vector - anchor;
         for pull in PULLS {
             for sign in [-1.0, 1.0] {
                 let mut moved = *target;
-                let v = target.translation.vector - anchor;
                 moved.translation.vector = anchor + v * (1.0 + sign * pull);
-                let found: Vec<Vec<f64>> = (self.starts(&moved, reference, &[]).into_iter())
-                    .map(|(_, _, _, q)| q.to_vec())
-                    .collect();
+                let found = self.start_joints(&moved, reference);
                 if !found.is_empty() {
-                    return (pull, found);
+                    return Some((pull, found));
                 }
             }
         }
-        (0.0, Vec::new())
+        None
     }
 
     /// The solution within the limits nearest `seed` (or the middle of the ranges), by

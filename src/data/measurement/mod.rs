@@ -152,6 +152,12 @@ impl JointInfo {
             .collect()
     }
 
+    /// The largest magnitude of the joint's limits (rad or mm), or 0 where they are unknown:
+    /// a revolute joint of +-400 deg holds radians up to 6.98 (the units checks' span).
+    pub fn span(&self) -> f64 {
+        self.limits.map_or(0.0, |[lo, hi]| lo.abs().max(hi.abs()))
+    }
+
     /// N revolute joints without limits (for reading without a robot file).
     pub fn revolute(n: usize) -> Vec<JointInfo> {
         vec![

@@ -446,10 +446,7 @@ fn check_joints(
         .fold(0.0, f64::max);
     // Radians of a joint that turns more than a turn each way (+-400 deg) reach beyond 6.3:
     // within its range in radians, the values still read as radians.
-    let within_radians = revolute().all(|(&q, j)| {
-        let range = j.limits.map_or(0.0, |[lo, hi]| lo.abs().max(hi.abs()));
-        in_file_unit(q) <= range.max(6.3)
-    });
+    let within_radians = revolute().all(|(&q, j)| in_file_unit(q) <= j.span().max(6.3));
     if profile.joint_unit == AngleUnit::Deg && rows.len() >= 3 && max_joint > 0.0 && within_radians
     {
         report.warnings.push(
@@ -460,10 +457,7 @@ fn check_joints(
         );
     }
     // And the reverse: beyond 7 (or the joint's range in radians, where that is wider).
-    let beyond_radians = revolute().any(|(&q, j)| {
-        let range = j.limits.map_or(0.0, |[lo, hi]| lo.abs().max(hi.abs()));
-        in_file_unit(q) > range.max(7.0)
-    });
+    let beyond_radians = revolute().any(|(&q, j)| in_file_unit(q) > j.span().max(7.0));
     if profile.joint_unit == AngleUnit::Rad && beyond_radians {
         report.warnings.push(format!(
             "joint values reach {max_joint:.1} although the file's joints are in radians: are they degrees?"
