@@ -488,7 +488,7 @@ fn lm_step(
     (None, false, false)
 }
 
-/// The covariance of the free parameters at `robot` over `cols` ([`covariance_from`], from
+/// The covariance of the free parameters at `robot` over `cols` (s^2 (J^T W J)^-1, from
 /// the normal equations `ne` where the caller has them), and where pairs of rows share rows
 /// (chained relative or distance measures) the sandwich s^2 A^-1 (A + C) A^-1 with C their
 /// cross terms ([`super::chained`]) and the variance factor s^2 = cost / (m - n -
