@@ -343,3 +343,211 @@ fn a_nominal_model_without_closed_form_solves_from_the_seeds() {
         "{err}"
     );
 }
+
+/// A column of a CSV's rows as numbers.
+fn numbers(rows: &[Vec<String>], name: &str) -> Vec<f64> {
+    let c = col(rows, name);
+    rows[1..].iter().map(|r| r[c].parse().unwrap()).collect()
+}
+
+#[test]
+fn a_position_only_calibration_leaves_the_tools_rotation_unchecked_and_says_so() {
+    let file = |name: &str| tmp(&format!("unobserved_{name}"));
+    let path = |name: &str| file(name).to_str().unwrap().to_string();
+    let simulate = |measure: &str, count: &str, seed: &str, sigma: &str, out: &str| {
+        let o = robocal(&[
+            "simulate",
+            "--robot",
+            FANUC,
+            "--deviations",
+            "datasets/deviations/table_6_1.toml",
+            "--count",
+            count,
+            "--seed",
+            seed,
+            "--sigma-pos",
+            sigma,
+            "--measure",
+            measure,
+            "--true-robot",
+            &path("truth.toml"),
+            "--out",
+            &path(out),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    };
+    let identify = |start: &str, data: &str, params: &str, out: &str| {
+        let o = robocal(&[
+            "identify",
+            "--robot",
+            start,
+            "--data",
+            &path(data),
+            "--params",
+            params,
+            "--out",
+            &path(out),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stdout(&o)
+    };
+    // A tracker that measures positions only: the tool's rotation (Table 6.1 turns it by
+    // 2.5 mrad) has no effect on what it reads.
+    simulate("position", "40", "21", "0.02", "cal.csv");
+    let said = identify(FANUC, "cal.csv", "full", "pos.toml");
+    assert!(
+        said.contains("unobserved: tool.rz, tool.ry, tool.rx"),
+        "{said}"
+    );
+    let text = std::fs::read_to_string(file("pos.toml")).unwrap();
+    assert!(
+        text.contains("[calibration]")
+            && text.contains(r#"unobserved = ["tool.rz", "tool.ry", "tool.rx"]"#),
+        "{text}"
+    );
+
+    // Desired poses: the true robot's at five configurations, their joints the seeds.
+    simulate("pose", "5", "22", "0", "targets.csv");
+    let report = file("report.json");
+    let o = compensate(
+        &file("pos.toml"),
+        &file("targets.csv"),
+        &[
+            "--out",
+            &path("commands.csv"),
+            "--report",
+            report.to_str().unwrap(),
+        ],
+    );
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains(
+            "the orientation of 5 row(s) (lines 2, 3, 4, 5, 6) depends on tool.rz, \
+                      tool.ry, tool.rx of"
+        ),
+        "{err}"
+    );
+    assert!(!err.contains("the position of"), "{err}");
+    let r = common::json(&report);
+    assert_eq!(
+        r["unchecked"]["orientation_lines"],
+        serde_json::json!([2, 3, 4, 5, 6])
+    );
+    assert_eq!(r["unchecked"]["position_lines"], serde_json::json!([]));
+    // The warning is no formality: the solve says the orientation is met, the true robot
+    // at the commanded joints misses it by the tool's unseen rotation.
+    let rows = csv(&std::fs::read_to_string(file("commands.csv")).unwrap());
+    let mut worst_deg = 0.0f64;
+    for (i, row) in rows[1..].iter().enumerate() {
+        assert!(numbers(&rows, "residual_deg")[i] < 1e-6);
+        let q: Vec<&str> = (1..=6)
+            .map(|j| row[col(&rows, &format!("q{j}"))].as_str())
+            .collect();
+        let fk = robocal(&["fk", "--robot", &path("truth.toml"), "--q", &q.join(",")]);
+        let fk = csv(&stdout(&fk));
+        let angle = |rows: &[Vec<String>], r: usize| {
+            let v = |c: &str| rows[r][col(rows, c)].parse::<f64>().unwrap().to_radians();
+            nalgebra::Rotation3::from_euler_angles(v("rx"), v("ry"), v("rz"))
+        };
+        worst_deg = worst_deg.max(angle(&fk, 1).angle_to(&angle(&rows, i + 1)).to_degrees());
+    }
+    assert!(
+        worst_deg > 0.05,
+        "the true orientation misses by {worst_deg} deg"
+    );
+
+    // Position targets do not depend on it: no warning, no entry in the report.
+    let positions: String = std::fs::read_to_string(file("targets.csv"))
+        .unwrap()
+        .lines()
+        .map(|l| l.split(',').take(10).collect::<Vec<_>>().join(","))
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(file("positions.csv"), positions).unwrap();
+    let o = compensate(
+        &file("pos.toml"),
+        &file("positions.csv"),
+        &[
+            "--out",
+            &path("position_commands.csv"),
+            "--report",
+            report.to_str().unwrap(),
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("unchecked"), "{}", stderr(&o));
+    assert!(common::json(&report).get("unchecked").is_none());
+
+    // Pose data observe it: identified again from the marked model, the mark is gone; joint
+    // offsets alone do not, and keep it.
+    simulate("pose", "40", "23", "0.02", "pose_cal.csv");
+    identify(&path("pos.toml"), "pose_cal.csv", "full", "pose.toml");
+    assert!(
+        !std::fs::read_to_string(file("pose.toml"))
+            .unwrap()
+            .contains("unobserved")
+    );
+    identify(&path("pos.toml"), "pose_cal.csv", "offsets", "offsets.toml");
+    assert!(
+        std::fs::read_to_string(file("offsets.toml"))
+            .unwrap()
+            .contains(r#"unobserved = ["tool.rz", "tool.ry", "tool.rx"]"#)
+    );
+    let o = compensate(&file("pose.toml"), &file("targets.csv"), &[]);
+    assert!(
+        o.status.success() && !stderr(&o).contains("unchecked"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn a_far_seed_gets_the_configuration_a_controller_nearest_the_seed_runs() {
+    // A UR10 (no closed form robocal knows: its controller takes its analytic solution
+    // nearest the joints it is given) taught at `taught`, seeded 10-17 deg off every joint.
+    // The other configurations of that pose flip the elbow (q3 -> -q3, 79 deg away), the
+    // wrist (q5 -> -q5, 246 deg) or the shoulder (q1 by about half a turn): all farther from
+    // the seed than the taught joints (35.6 deg), so the controller runs those. A solve from
+    // the seed alone ran past them to (97.8, -114.2, 37.6, 60.4, 69.5, 86.0) and was
+    // accepted: its check solved from the same seed and met the same configuration.
+    let ur10_path = "datasets/robots/ur10.toml";
+    let ur10 = robocal::model::read_robot(ur10_path).unwrap();
+    let taught = [153.325, -106.462, 39.488, 48.899, 122.918, 70.177];
+    let seed = [140.628, -122.836, 21.980, 34.792, 112.083, 59.761];
+    let pose = robocal::kinematics::pose_to_file(&robocal::kinematics::tool_pose(
+        &ur10,
+        &taught.map(f64::to_radians),
+    ));
+    let cells: Vec<String> = pose
+        .iter()
+        .chain(&seed)
+        .map(|v| format!("{v:.12}"))
+        .collect();
+    let targets = tmp("ur10_far_seed.csv");
+    std::fs::write(
+        &targets,
+        format!("x,y,z,rz,ry,rx,q1,q2,q3,q4,q5,q6\n{}\n", cells.join(",")),
+    )
+    .unwrap();
+    let o = robocal(&[
+        "compensate",
+        "--nominal",
+        ur10_path,
+        "--robot",
+        ur10_path,
+        "--targets",
+        targets.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows = csv(&stdout(&o));
+    assert_eq!(rows[1][col(&rows, "status")], "ok");
+    for (j, want) in taught.iter().enumerate() {
+        let got: f64 = rows[1][col(&rows, &format!("q{}", j + 1))].parse().unwrap();
+        assert!(
+            (got - want).abs() < 1e-6,
+            "q{}: {got} against {want}",
+            j + 1
+        );
+    }
+}

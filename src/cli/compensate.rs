@@ -86,9 +86,9 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     let mut solver = FakeTargetSolver::new(&nominal, model)?;
     if let Some(why) = solver.without_closed_form() {
         eprintln!(
-            "note: {}: {why}: each target is solved numerically from its seed joints, and its \
-             command checked by solving the nominal model from the same seed, as a controller \
-             solving near the joints it is given does (empty branch column)",
+            "note: {}: {why}: each target is solved numerically from its seed joints, and the \
+             nominal model's solution of its command nearest the seed, which a controller \
+             given the seed runs, must be those joints (empty branch column)",
             a.nominal.display()
         );
     }
@@ -150,6 +150,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     let mut moved = Vec::new();
     let mut outside = Vec::new();
     let mut dws = robocal::neural::predict::PredictWorkspace::default();
+    let mut unchecked = super::unchecked::UncheckedRows::new(calibrated);
     for r in 0..t.rows.len() {
         bar.inc(1);
         let desired = tt.targets[r];
@@ -158,6 +159,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         match solver.solve(&desired, seed) {
             Ok(c) => {
                 row.extend(command_cells(&c, &nominal, with_orientation, d));
+                unchecked.add(calibrated, &c.q, t.lines[r], with_orientation);
                 if let Some(cm) = &comp {
                     let check = cm.domain_check(&c.q, &mut dws);
                     if !check.inside() {
@@ -186,6 +188,8 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         .emit(&headers, &out_rows, written.len())
         .context("writing the commands")?;
     super::predict::warn_outside(&a.targets, &outside, true);
+    let robot_path = a.compensator.as_ref().unwrap_or(&a.robot);
+    unchecked.warn(&a.targets, robot_path);
     let total = t.rows.len();
     let (mean, max) = mean_and_max(&shifts).unzip();
     let report = CompensateReport {
@@ -209,6 +213,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         lines_outside_domain: outside,
         note,
         frame_change: frame_change(&nominal, calibrated, &moved),
+        unchecked: unchecked.report(),
     };
     match (report.shift_mean_mm, report.shift_max_mm) {
         (Some(mean), Some(max)) => eprintln!(

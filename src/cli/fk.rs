@@ -84,8 +84,10 @@ pub fn run(a: FkArgs) -> Result<()> {
     };
     let mut out_rows = Vec::with_capacity(rows.len());
     let mut outside = Vec::new();
+    let mut unchecked = super::unchecked::UncheckedRows::new(&robot);
     for ((cells, q), line) in rows.into_iter().zip(&joints).zip(lines) {
         let qi = robot.joints_to_internal(q);
+        unchecked.add(&robot, &qi, line, true);
         if !robot.joints_outside_limits(&qi).is_empty() {
             outside.push(line);
         }
@@ -100,6 +102,7 @@ pub fn run(a: FkArgs) -> Result<()> {
     }
     let source = a.joints.as_deref().unwrap_or(Path::new("--q"));
     warn_beyond_limits(source, &outside);
+    unchecked.warn(source, &a.robot);
     a.output
         .emit(&headers, &out_rows, written_count)
         .with_context(|| "writing the FK output".to_string())

@@ -119,6 +119,7 @@ pub fn run(a: IkArgs) -> Result<bool> {
     let mut solver = IkSolver::new(RobotModel::new(&robot), start, IkOptions::default());
     let mut out_rows = Vec::new();
     let mut failed = Vec::new();
+    let mut unchecked = super::unchecked::UncheckedRows::new(&robot);
     for (k, (cells, target)) in rows.iter().zip(&targets).enumerate() {
         let seed = row_seeds[k].as_deref().or(global_seed.as_deref());
         let solved = if a.all {
@@ -128,6 +129,9 @@ pub fn run(a: IkArgs) -> Result<bool> {
         };
         match solved.map_err(|f| explain(&f)) {
             Ok(sols) => {
+                if let Some(q) = sols.first() {
+                    unchecked.add(&robot, q, lines[k].max(1), true);
+                }
                 for (s, q) in sols.iter().enumerate() {
                     let mut row = cells.clone();
                     row.push((s + 1).to_string());
@@ -162,6 +166,8 @@ pub fn run(a: IkArgs) -> Result<bool> {
             eprintln!("  {}:{line}: {why}", file.display());
         }
     }
+    let source = a.poses.as_deref().unwrap_or(Path::new("--pose"));
+    unchecked.warn(source, &a.robot);
     a.output.emit(&headers, &out_rows, written_count)?;
     Ok(!failed.is_empty())
 }

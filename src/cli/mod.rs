@@ -46,6 +46,7 @@ mod simulate;
 mod split;
 mod summary;
 mod train;
+mod unchecked;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::process::ExitCode;

@@ -64,8 +64,10 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     let mut out = Vec::with_capacity(rows.len());
     let mut outside = Vec::new();
     let mut beyond = Vec::new();
+    let mut unchecked = super::unchecked::UncheckedRows::new(&c.robot);
     for ((cells, q), line) in rows.into_iter().zip(&joints).zip(lines) {
         let q = c.robot.joints_to_internal(q);
+        unchecked.add(&c.robot, &q, line, true);
         if !c.robot.joints_outside_limits(&q).is_empty() {
             beyond.push(line);
         }
@@ -85,6 +87,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
     }
     super::fk::warn_beyond_limits(&a.joints, &beyond);
     warn_outside(&a.joints, &outside, true);
+    unchecked.warn(&a.joints, &a.compensator);
     a.output
         .emit(&headers, &out, written.len())
         .with_context(|| "writing the predictions".to_string())

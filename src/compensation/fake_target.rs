@@ -16,9 +16,11 @@
 //! controller has analytic solutions of its own, and picks the one nearest the joints it is
 //! given, as URScript's `get_inverse_kin(pose, qnear)`) no branch is reported. Each target
 //! then needs seed joints (the configuration it was taught in): q* is the calibrated model's
-//! solution from the seed (step 2), within the limits, and the nominal model's numerical
-//! solve of F from the same seed must return q* (step 3's check, the controller's view;
-//! [`Failure::ControllerDiffers`] otherwise).
+//! solution from the seed (step 2), within the limits, and the nominal model's solution of F
+//! nearest the seed must be q* (step 3's check, the controller's view; near the seed, the
+//! nominal's numerical solve from it; far from it, a search of the nominal's solutions, and
+//! q* moved to the configuration the controller would run: `solve_from_seed`;
+//! [`Failure::ControllerDiffers`] where they do not settle).
 
 use super::model::CalibratedModel;
 use crate::data::Target;
@@ -478,10 +480,20 @@ impl Command {
     }
 }
 
+/// Rounds in which [`solve_from_seed`] moves a far command to the configuration the
+/// controller would run; beyond them the target is a [`Failure::ControllerDiffers`].
+const SETTLE_ROUNDS: usize = 3;
+
 /// [`FakeTargetSolver::solve`] for a nominal model without a closed form: q* from the seed
-/// by `ik` (the calibrated model), and `controller` (the nominal model) solved for F =
-/// FK_nominal(q*) from the same seed must return q*, whole turns included: what a controller
-/// solving near the seed computes.
+/// by `ik` (the calibrated model). The controller takes the nominal model's solution of F =
+/// FK_nominal(q*) nearest the seed, whole turns included; it must be q*:
+/// - q* within [`SEED_FAR_RAD`] of the seed: `controller` (the nominal model) solved for F
+///   from the seed must return q* (no other solution lies that near);
+/// - farther, where the solve from the seed may have run past a nearer configuration: the
+///   nominal's solutions of F are searched ([`super::nearest`]); where the nearest is another
+///   configuration, q* is solved again from it (the calibrated solution of the configuration
+///   the controller would run, its turns nearest the seed), for up to [`SETTLE_ROUNDS`]
+///   rounds.
 fn solve_from_seed(
     ik: &mut IkSolver<CalibratedModel<'_>>,
     controller: &mut IkSolver<CalibratedModel<'_>>,
@@ -496,12 +508,57 @@ fn solve_from_seed(
         IkFailure::OutsideLimits(j) => Failure::OutsideLimits(j),
         e => Failure::NotConverged(e.to_string()),
     };
-    let sol = ik.nearest(&target, Some(seed)).map_err(failure)?.solution;
-    let outside = nominal.joints_outside_limits(&sol.q);
-    if !outside.is_empty() {
-        return Err(Failure::OutsideLimits(outside));
+    let mut sol = ik.nearest(&target, Some(seed)).map_err(failure)?.solution;
+    let mut apart = 0.0;
+    for _ in 0..=SETTLE_ROUNDS {
+        let outside = nominal.joints_outside_limits(&sol.q);
+        if !outside.is_empty() {
+            return Err(Failure::OutsideLimits(outside));
+        }
+        let fake = tool_pose(nominal, &sol.q);
+        if joint_distance(&sol.q, seed) <= SEED_FAR_RAD {
+            return near_seed_check(controller, target, fake, seed, sol);
+        }
+        let Some(run) = super::nearest::nearest_solution(controller, nominal, &fake, seed, &sol.q)
+        else {
+            return Err(Failure::ControllerDiffers(
+                "the nominal model solves the command within its limits from no start".into(),
+            ));
+        };
+        apart = joint_distance(&run, &sol.q);
+        if apart < SAME_JOINTS_RAD {
+            return Ok(Command::new(target, fake, None, sol));
+        }
+        // The controller would run `run`: the calibrated solution of that configuration.
+        let next = ik.from_start(&target, &run).map_err(failure)?;
+        if !next.outside_limits.is_empty() {
+            return Err(Failure::OutsideLimits(next.outside_limits));
+        }
+        let calibrated = ik.model().robot();
+        let Some(q) = super::nearest::turns_near(calibrated, &next.q, seed) else {
+            return Err(Failure::OutsideLimits(
+                calibrated.joints_outside_limits(&next.q),
+            ));
+        };
+        sol = IkSolution { q, ..next };
     }
-    let fake = tool_pose(nominal, &sol.q);
+    Err(Failure::ControllerDiffers(format!(
+        "the seed lies far from the command's joints, and a controller taking the nominal \
+         model's solution nearest the seed would run another configuration, {apart:.3e} \
+         (rad, mm) from the calibrated solution, through {SETTLE_ROUNDS} rounds: give seed \
+         joints nearer the taught configuration"
+    )))
+}
+
+/// The check of a command `sol` within [`SEED_FAR_RAD`] of its seed: `controller` (the
+/// nominal model) solved for `fake` from the seed returns `sol`.
+fn near_seed_check(
+    controller: &mut IkSolver<CalibratedModel<'_>>,
+    target: Pose,
+    fake: Pose,
+    seed: &[f64],
+    sol: IkSolution,
+) -> std::result::Result<Command, Failure> {
     match controller.nearest(&fake, Some(seed)) {
         Ok(back) => {
             let apart = joint_distance(&back.solution.q, &sol.q);

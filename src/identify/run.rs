@@ -506,6 +506,31 @@ fn held_fields(robot: &Robot, candidates: &[usize], slot: Slot) -> Option<String
     (!held.is_empty()).then(|| held.join(", "))
 }
 
+/// The parameters left unobserved after an identification of `candidates` (indices into
+/// `params`, the start model's) analysed as `ident`: the geometric ones the data found
+/// without effect, and
+/// those the start model marked that were not candidates (a candidate with an effect is
+/// observed, solved for or regrouped with one that is).
+fn unobserved(
+    start: &Robot,
+    params: &[ParamId],
+    candidates: &[usize],
+    ident: &Identifiability,
+) -> Vec<ParamId> {
+    let mut out: Vec<ParamId> = (start.unobserved().iter())
+        .filter(|p| !candidates.iter().any(|&c| params[c] == **p))
+        .copied()
+        .collect();
+    // A compliance without effect is one gravity cannot load (joint 1 of an upright arm):
+    // it is zero for every pose, so nothing depends on it.
+    out.extend(
+        (ident.dropped.iter())
+            .filter(|d| d.reason == DropReason::NoEffect && !is_compliance(&params[d.param]))
+            .map(|d| params[d.param]),
+    );
+    out
+}
+
 /// Identifies `nominal`'s selected parameters from `set`.
 pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result<Identified> {
     let measure = opts.measure.unwrap_or_else(|| Measure::default_for(set));
@@ -627,8 +652,21 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
     let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
     let (parameters, correlations) = parameter_reports(nominal, &solution.robot, &ids, &cov);
     let outliers = outliers(set, &obs, &solution.robot, opts.outlier_k);
+    let robot =
+        solution
+            .robot
+            .with_unobserved(&unobserved(nominal, &params, &candidates, &ident))?;
+    if !robot.unobserved().is_empty() {
+        let names: Vec<String> = robot.unobserved().iter().map(|p| p.name()).collect();
+        notes.push(format!(
+            "unobserved: {} (no effect on these measurements): they keep the start model's \
+             values, the model file marks them ([calibration] unobserved), and fk, ik, predict and \
+             compensate warn where a result depends on them",
+            names.join(", ")
+        ));
+    }
     Ok(Identified {
-        robot: solution.robot.clone(),
+        robot,
         measure,
         identifiability: ident,
         solution,

@@ -12,6 +12,7 @@ pub mod load;
 pub mod reach;
 pub mod same_arm;
 pub mod subproblems;
+pub mod unobserved;
 
 pub use fk::{Frames, frames, tool_pose};
 pub use ik::{IkFailure, IkSolver, IkStart, Solved, joint_distance};
@@ -22,5 +23,6 @@ pub use ik_numeric::{
 pub use jacobian::joint_jacobian;
 pub use reach::Reach;
 pub use same_arm::{GEOMETRY_GAP, another_arm, arm_distance_gap};
+pub use unobserved::{Unchecked, UnobservedProbe};
 
 pub use crate::geometry::{Pose, pose_from_file, pose_to_file};

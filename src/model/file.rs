@@ -20,7 +20,15 @@
 //! [tool]
 //! convention = "mdh"
 //! ...
+//!
+//! [calibration]             # written by `robocal identify`, when its data left some unseen
+//! unobserved = ["tool.rz", "tool.ry", "tool.rx"]
 //! ```
+//!
+//! `unobserved` lists the parameters the calibration's measurements did not observe (no
+//! effect on them: a position-only tracker does not see the tool's rotation); they keep the
+//! values the calibration started from, and results that depend on them are flagged
+//! ([`crate::kinematics::unobserved`]).
 //!
 //! A field the convention has but the file omits is 0 (the thesis's "-"); a field the
 //! convention does not have is an error. Writing uses the shortest decimal form that reads
@@ -76,6 +84,16 @@ struct RobotFile {
     tool: Option<Spanned<RowFile>>,
     mass: Option<Spanned<MassFile>>,
     compliance: Option<Spanned<ComplianceFile>>,
+    calibration: Option<Spanned<CalibrationFile>>,
+}
+
+/// The `[calibration]` table `robocal identify` writes: what its measurements did not
+/// observe.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CalibrationFile {
+    #[serde(default)]
+    unobserved: Vec<Spanned<String>>,
 }
 
 /// The `[compliance]` table ([`super::compliance`]).
@@ -207,8 +225,8 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
                 .map_err(|e| Error::input(rows.at(m.span(), "mass"), e.to_string()))?
         }
     };
-    match &file.compliance {
-        None => Ok(robot),
+    let robot = match &file.compliance {
+        None => robot,
         Some(c) => {
             let cf = c.get_ref();
             let n = robot.dof();
@@ -248,6 +266,31 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
                     _ => rows.at(c.span(), "compliance"),
                 };
                 Error::input(at, format!("[compliance]: {e}"))
+            })?
+        }
+    };
+    match &file.calibration {
+        None => Ok(robot),
+        Some(c) => {
+            let mut ids = Vec::new();
+            for name in &c.get_ref().unobserved {
+                let id = robot.find_param(name.get_ref()).ok_or_else(|| {
+                    Error::input(
+                        rows.at(name.span(), "unobserved"),
+                        format!(
+                            "[calibration]: unobserved names {:?}, which is not a parameter of \
+                             this model (names as `identify` prints them: a3, base.x, tool.rz)",
+                            name.get_ref()
+                        ),
+                    )
+                })?;
+                ids.push(id);
+            }
+            robot.with_unobserved(&ids).map_err(|e| {
+                Error::input(
+                    rows.at(c.span(), "unobserved"),
+                    format!("[calibration]: {e}"),
+                )
             })
         }
     }
@@ -620,6 +663,18 @@ pub fn robot_to_toml(robot: &Robot) -> String {
             let _ = writeln!(s, "]");
         }
     }
+    if !robot.unobserved().is_empty() {
+        let names: Vec<String> = (robot.unobserved().iter())
+            .map(|p| toml::Value::String(p.name()).to_string())
+            .collect();
+        let _ = writeln!(
+            s,
+            "\n[calibration]\n# Parameters the calibration's measurements did not observe (no effect on \
+             them): they keep\n# the values it started from, and what depends on them is \
+             unchecked.\nunobserved = [{}]",
+            names.join(", ")
+        );
+    }
     s
 }
 
@@ -706,5 +761,27 @@ mod tests {
         // No joints.
         let e = err_text("[base]\nconvention = \"mdh\"\n");
         assert!(e.contains("no joints"), "{e}");
+    }
+
+    #[test]
+    fn unobserved_parameters_round_trip_and_bad_names_are_located() {
+        let text = format!("{ONE_JOINT}\n[calibration]\nunobserved = [\"tool.rz\", \"a1\"]\n");
+        let r = parse(&text).unwrap();
+        let names: Vec<String> = r.unobserved().iter().map(|p| p.name()).collect();
+        // In parameter order, whatever the file's.
+        assert_eq!(names, ["a1", "tool.rz"]);
+        let back = parse(&robot_to_toml(&r)).unwrap();
+        assert_eq!(back, r);
+        assert!(robot_to_toml(&r).contains("unobserved = [\"a1\", \"tool.rz\"]"));
+        // An unmarked model writes no table.
+        assert!(!robot_to_toml(&parse(ONE_JOINT).unwrap()).contains("[calibration]"));
+        // A name the model does not have, on line 17.
+        let e = err_text(&text.replace("\"a1\"", "\"a7\""));
+        assert!(e.contains("r.toml:17") && e.contains("a7"), "{e}");
+        let e = err_text(&text.replace("unobserved", "unobserve"));
+        assert!(e.contains("unobserve"), "{e}");
+        // A parameter changed in code keeps its marks.
+        let id = r.find_param("a1").unwrap();
+        assert_eq!(r.with_param(id, 3.0).unwrap().unobserved(), r.unobserved());
     }
 }

@@ -164,6 +164,9 @@ pub struct Robot {
     masses: Option<MassProperties>,
     /// Joint compliances (none: rigid joints); only with mass properties.
     compliance: Option<Compliance>,
+    /// Parameters a calibration's measurements did not observe (no effect on them), in
+    /// [`Robot::parameters`] order: they keep the values the calibration started from.
+    unobserved: Vec<ParamId>,
     chain: Chain,
 }
 
@@ -175,6 +178,7 @@ impl PartialEq for Robot {
             && self.tool == other.tool
             && self.masses == other.masses
             && self.compliance == other.compliance
+            && self.unobserved == other.unobserved
     }
 }
 
@@ -242,6 +246,7 @@ impl Robot {
             tool,
             masses: None,
             compliance: None,
+            unobserved: Vec::new(),
             chain,
         })
     }
@@ -266,7 +271,8 @@ impl Robot {
         Ok(Robot {
             masses,
             ..self.clone()
-        })
+        }
+        .keeping_unobserved(&self.unobserved))
     }
 
     /// The mass properties, if the robot has them.
@@ -298,6 +304,37 @@ impl Robot {
     #[inline]
     pub fn compliance(&self) -> Option<&Compliance> {
         self.compliance.as_ref()
+    }
+
+    /// The parameters its calibration did not observe (no effect on the measurements), in
+    /// [`Robot::parameters`] order; they keep the values the calibration started from, and
+    /// what depends on them is unchecked ([`crate::kinematics::unobserved`]). Empty for a
+    /// model no calibration marked.
+    pub fn unobserved(&self) -> &[ParamId] {
+        &self.unobserved
+    }
+
+    /// A copy that marks `ids` as unobserved (replacing any marks); a parameter the robot
+    /// does not have is an error.
+    pub fn with_unobserved(&self, ids: &[ParamId]) -> Result<Robot> {
+        let params = self.parameters();
+        if let Some(id) = ids.iter().find(|id| !params.contains(id)) {
+            return Err(Error::Invalid(format!(
+                "unobserved parameter {}: the model has no such parameter",
+                id.name()
+            )));
+        }
+        Ok(self.clone().keeping_unobserved(ids))
+    }
+
+    /// This robot marking those of `ids` it has, in parameter order.
+    fn keeping_unobserved(mut self, ids: &[ParamId]) -> Robot {
+        if ids.is_empty() && self.unobserved.is_empty() {
+            return self;
+        }
+        let params = self.parameters();
+        self.unobserved = params.into_iter().filter(|p| ids.contains(p)).collect();
+        self
     }
 
     /// The same robot with rigid joints (its compliances removed, its masses kept).
@@ -530,9 +567,10 @@ impl Robot {
                 return Err(Error::Invalid(format!("no parameter {}", id.name())));
             }
         }
-        Robot::new(self.name.clone(), base, joints, tool)?
+        Ok(Robot::new(self.name.clone(), base, joints, tool)?
             .with_masses(self.masses.clone())?
-            .with_compliance(compliance)
+            .with_compliance(compliance)?
+            .keeping_unobserved(&self.unobserved))
     }
 
     /// A copy whose base or tool row is replaced by the 6-DOF transform with the same pose.
@@ -563,9 +601,13 @@ impl Robot {
         } else {
             (self.base.clone(), new)
         };
-        Robot::new(self.name.clone(), base, self.joints.clone(), tool)?
-            .with_masses(self.masses.clone())?
-            .with_compliance(self.compliance.clone())
+        // A re-expressed frame has other parameters: marks on the old ones have no meaning.
+        Ok(
+            Robot::new(self.name.clone(), base, self.joints.clone(), tool)?
+                .with_masses(self.masses.clone())?
+                .with_compliance(self.compliance.clone())?
+                .keeping_unobserved(&self.unobserved),
+        )
     }
 
     /// Whether `other` has the same number and types of joints (so joint vectors fit both).

@@ -46,6 +46,22 @@ pub struct CompensateReport {
     /// tracker): the change of frame the shifts above include.
     #[serde(default)]
     pub frame_change: Option<FrameChange>,
+    /// Solved targets whose commands depend on parameters the model's calibration did not
+    /// observe (none: left out of the file, and absent in reports written before it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unchecked: Option<Unchecked>,
+}
+
+/// Results that depend on parameters a calibration did not observe
+/// ([`crate::kinematics::unobserved`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Unchecked {
+    /// The model's unobserved parameters (`tool.rz`, ...).
+    pub unobserved: Vec<String>,
+    /// Lines whose position depends on one.
+    pub position_lines: Vec<usize>,
+    /// Lines whose orientation depends on one (pose targets only).
+    pub orientation_lines: Vec<usize>,
 }
 
 /// The calibrated model's base against the nominal's, and the shift of the commands from the

@@ -1,0 +1,87 @@
+//! Rows whose results depend on parameters the model's calibration did not observe
+//! ([`robocal::kinematics::unobserved`]), gathered while a command runs and warned about once.
+
+use robocal::kinematics::UnobservedProbe;
+use robocal::model::Robot;
+use robocal::reports::compensate::Unchecked;
+use std::path::Path;
+
+/// The rows (file lines) whose position or orientation depends on an unobserved parameter.
+pub struct UncheckedRows {
+    probe: UnobservedProbe,
+    names: Vec<String>,
+    position: Vec<usize>,
+    orientation: Vec<usize>,
+}
+
+impl UncheckedRows {
+    /// For results of `robot` (its unobserved parameters).
+    pub fn new(robot: &Robot) -> UncheckedRows {
+        UncheckedRows {
+            probe: UnobservedProbe::new(robot),
+            names: robot.unobserved().iter().map(|p| p.name()).collect(),
+            position: Vec::new(),
+            orientation: Vec::new(),
+        }
+    }
+
+    /// Checks the row at file `line` with joints `q` (rad or mm) of `robot` (the probe's);
+    /// `orientation`: whether the row's result includes an orientation that matters.
+    pub fn add(&mut self, robot: &Robot, q: &[f64], line: usize, orientation: bool) {
+        if self.probe.is_empty() {
+            return;
+        }
+        let u = self.probe.at(robot, q);
+        if u.position {
+            self.position.push(line);
+        }
+        if u.orientation && orientation {
+            self.orientation.push(line);
+        }
+    }
+
+    /// What the report records: None where no row depends on an unobserved parameter.
+    pub fn report(&self) -> Option<Unchecked> {
+        (!self.position.is_empty() || !self.orientation.is_empty()).then(|| Unchecked {
+            unobserved: self.names.clone(),
+            position_lines: self.position.clone(),
+            orientation_lines: self.orientation.clone(),
+        })
+    }
+
+    /// Warns (stderr) about the rows of `path` found (a flag such as `--q`: the one pose it
+    /// gave), naming `robot_path`'s unobserved parameters.
+    pub fn warn(&self, path: &Path, robot_path: &Path) {
+        // One pose given on the command line (`--q`, `--pose`) has no lines to list.
+        let single = path.to_str().is_some_and(|p| p.starts_with("--"));
+        let mut parts = Vec::new();
+        for (what, lines) in [
+            ("position", &self.position),
+            ("orientation", &self.orientation),
+        ] {
+            if lines.is_empty() {
+                continue;
+            }
+            parts.push(if single {
+                format!("the {what}")
+            } else {
+                format!(
+                    "the {what} of {} row(s) (lines {})",
+                    lines.len(),
+                    robocal::data::measurement::list_lines(lines)
+                )
+            });
+        }
+        if !parts.is_empty() {
+            eprintln!(
+                "warning: {}: {} {} on {} of {}, which its calibration did not observe \
+                 (no effect on its measurements; they keep the start model's values): unchecked",
+                path.display(),
+                parts.join(" and "),
+                if parts.len() > 1 { "depend" } else { "depends" },
+                self.names.join(", "),
+                robot_path.display()
+            );
+        }
+    }
+}

@@ -1,0 +1,109 @@
+//! The solution a controller without a closed form robocal knows (a UR arm) runs for a
+//! commanded pose: its own analytic solutions, the one nearest the joints it is given
+//! (URScript's `get_inverse_kin(pose, qnear)`).
+//!
+//! One numerical solve from the seed finds a solution, not the nearest: from a seed far from
+//! every solution it can run past a nearer configuration to another (an elbow or a wrist
+//! flipped). The solutions are searched here from the seed, from the solution in hand and from
+//! [`SPREAD`] starts spread over the joint ranges (a fixed low-discrepancy set, as
+//! `kinematics::same_arm` spreads its configurations); each revolute joint's whole turns are
+//! then taken nearest the seed within the limits, as a controller choosing near the seed
+//! takes them. A search, not a closed form: a solution no start reaches is not seen, so the
+//! search runs only where the seed leaves room for one (a command far from its seed).
+
+use super::model::CalibratedModel;
+use crate::kinematics::{IkSolver, Pose};
+use crate::model::{JointType, Robot, joint_distance};
+use std::f64::consts::TAU;
+
+/// Starts spread over the joint ranges, besides the seed and the solution in hand.
+pub const SPREAD: usize = 32;
+
+/// Joints (rad, mm) closer than this are one solution.
+const SAME: f64 = 1e-6;
+
+/// `q` with each revolute joint moved by whole turns to its copy nearest `seed` within the
+/// robot's limits (the limits widened by 1e-9 rad for rounding); None where a joint has no
+/// copy within them.
+pub fn turns_near(robot: &Robot, q: &[f64], seed: &[f64]) -> Option<Vec<f64>> {
+    (robot.joints().iter().zip(q).zip(seed))
+        .map(|((joint, &v), &s)| {
+            let [lo, hi] = joint.limits_internal();
+            let (lo, hi) = (lo - 1e-9, hi + 1e-9);
+            if joint.joint_type == JointType::Prismatic {
+                return (lo..=hi).contains(&v).then_some(v);
+            }
+            let near = v + TAU * ((s - v) / TAU).round();
+            // The nearest copy, else the nearest on either side that the limits hold.
+            [near, near - TAU, near + TAU]
+                .into_iter()
+                .filter(|c| (lo..=hi).contains(c))
+                .min_by(|a, b| (a - s).abs().total_cmp(&(b - s).abs()))
+        })
+        .collect()
+}
+
+/// Start `k` of [`SPREAD`]: joint j at the fraction ((k n + j) phi + 0.25) mod 1 of its range
+/// (phi the golden ratio's fractional part).
+fn spread_start(robot: &Robot, k: usize) -> Vec<f64> {
+    let n = robot.dof();
+    (robot.joints().iter().enumerate())
+        .map(|(j, joint)| {
+            let [lo, hi] = joint.limits_internal();
+            let t = ((k * n + j) as f64 * 0.618_033_988_749_895 + 0.25).fract();
+            lo + (hi - lo) * t
+        })
+        .collect()
+}
+
+/// The solution of `pose` (mm, in the frame of `solver`'s model, `robot`) nearest `seed`
+/// (rad, mm) that the search finds, its turns nearest the seed within the limits; `known` (a
+/// solution in hand) starts a solve too. None where no start converges within the limits.
+pub fn nearest_solution(
+    solver: &mut IkSolver<CalibratedModel<'_>>,
+    robot: &Robot,
+    pose: &Pose,
+    seed: &[f64],
+    known: &[f64],
+) -> Option<Vec<f64>> {
+    let starts = [seed.to_vec(), known.to_vec()]
+        .into_iter()
+        .chain((0..SPREAD).map(|k| spread_start(robot, k)));
+    let mut best: Option<(f64, Vec<f64>)> = None;
+    for start in starts {
+        let Ok(sol) = solver.from_start(pose, &start) else {
+            continue;
+        };
+        let Some(q) = turns_near(robot, &sol.q, seed) else {
+            continue;
+        };
+        let d = joint_distance(&q, seed);
+        if best.as_ref().is_none_or(|(b, _)| d < *b - SAME) {
+            best = Some((d, q));
+        }
+    }
+    best.map(|(_, q)| q)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::test_fanuc;
+
+    #[test]
+    fn turns_are_taken_nearest_the_seed_within_the_limits() {
+        // FANUC limits (deg): J1 +-150, J4 +-180, J6 +-180.
+        let r = test_fanuc();
+        let rad = |v: [f64; 6]| v.map(f64::to_radians);
+        let deg = |v: Vec<f64>| v.into_iter().map(f64::to_degrees).collect::<Vec<_>>();
+        let seed = rad([0.0, 0.0, 0.0, 170.0, 0.0, -170.0]);
+        let q = rad([360.0, 10.0, -20.0, -185.0, 30.0, 185.0]);
+        let got = deg(turns_near(&r, &q, &seed).unwrap());
+        let want = [0.0, 10.0, -20.0, 175.0, 30.0, -175.0];
+        for (g, w) in got.iter().zip(want) {
+            assert!((g - w).abs() < 1e-9, "{got:?}");
+        }
+        // Joint 1 at 200 deg has no copy within +-150.
+        assert!(turns_near(&r, &rad([200.0, 0.0, 0.0, 0.0, 0.0, 0.0]), &seed).is_none());
+    }
+}
