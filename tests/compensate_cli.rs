@@ -500,6 +500,28 @@ fn a_position_only_calibration_leaves_the_tools_rotation_unchecked_and_says_so()
         "{}",
         stderr(&o)
     );
+    // A refinement on position rows re-estimates a model that pose data identified: the tool's
+    // rotation was observed then, and the compensator's model is not marked.
+    let rcal = path("refined.rcal");
+    let o = robocal(&[
+        "train",
+        "--robot",
+        &path("pose.toml"),
+        "--data",
+        &path("cal.csv"),
+        "--members",
+        "0",
+        "--refine",
+        "full",
+        "--out",
+        &rcal,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        !std::fs::read_to_string(&rcal)
+            .unwrap()
+            .contains("unobserved")
+    );
 }
 
 #[test]

@@ -530,7 +530,16 @@ fn solve_from_seed(
             return Ok(Command::new(target, fake, None, sol));
         }
         // The controller would run `run`: the calibrated solution of that configuration.
-        let next = ik.from_start(&target, &run).map_err(failure)?;
+        // Near a singularity where two configurations lie a fraction of a degree apart, the
+        // solve from `run` can slide back to q*: a start as far beyond `run` then tries the
+        // configuration on its side.
+        let mut next = ik.from_start(&target, &run).map_err(failure)?;
+        if wrapped_distance(&next.q, &sol.q) < SAME_JOINTS_RAD {
+            let beyond: Vec<f64> = (run.iter().zip(&sol.q)).map(|(r, q)| 2.0 * r - q).collect();
+            if let Ok(other) = ik.from_start(&target, &beyond) {
+                next = other;
+            }
+        }
         if !next.outside_limits.is_empty() {
             return Err(Failure::OutsideLimits(next.outside_limits));
         }

@@ -5,7 +5,7 @@
 //! One numerical solve from the seed finds a solution, not the nearest: from a seed far from
 //! every solution it can run past a nearer configuration to another (an elbow or a wrist
 //! flipped). The solutions are searched here from the seed, from the solution in hand and from
-//! [`SPREAD`] starts spread over the joint ranges (a fixed low-discrepancy set, as
+//! [`SPREAD`] starts spread over the turn around the seed (a fixed low-discrepancy set, as
 //! `kinematics::same_arm` spreads its configurations); each revolute joint's whole turns are
 //! then taken nearest the seed within the limits, as a controller choosing near the seed
 //! takes them. A search, not a closed form: a solution no start reaches is not seen, so the
@@ -17,7 +17,7 @@ use crate::model::{JointType, Robot, joint_distance};
 use std::f64::consts::TAU;
 
 /// Starts spread over the joint ranges, besides the seed and the solution in hand.
-pub const SPREAD: usize = 32;
+pub const SPREAD: usize = 64;
 
 /// Joints (rad, mm) closer than this are one solution.
 const SAME: f64 = 1e-6;
@@ -43,15 +43,21 @@ pub fn turns_near(robot: &Robot, q: &[f64], seed: &[f64]) -> Option<Vec<f64>> {
         .collect()
 }
 
-/// Start `k` of [`SPREAD`]: joint j at the fraction ((k n + j) phi + 0.25) mod 1 of its range
-/// (phi the golden ratio's fractional part).
-fn spread_start(robot: &Robot, k: usize) -> Vec<f64> {
+/// Start `k` of [`SPREAD`]: revolute joint j at the fraction t = ((k n + j) phi + 0.25)
+/// mod 1 (phi the golden ratio's fractional part) of the turn centred on the seed (whole
+/// turns are taken nearest the seed afterwards, so one turn holds every configuration), a
+/// prismatic joint at t of its range.
+fn spread_start(robot: &Robot, seed: &[f64], k: usize) -> Vec<f64> {
     let n = robot.dof();
     (robot.joints().iter().enumerate())
         .map(|(j, joint)| {
-            let [lo, hi] = joint.limits_internal();
             let t = ((k * n + j) as f64 * 0.618_033_988_749_895 + 0.25).fract();
-            lo + (hi - lo) * t
+            if joint.joint_type == JointType::Prismatic {
+                let [lo, hi] = joint.limits_internal();
+                lo + (hi - lo) * t
+            } else {
+                seed[j] + TAU * (t - 0.5)
+            }
         })
         .collect()
 }
@@ -68,7 +74,7 @@ pub fn nearest_solution(
 ) -> Option<Vec<f64>> {
     let starts = [seed.to_vec(), known.to_vec()]
         .into_iter()
-        .chain((0..SPREAD).map(|k| spread_start(robot, k)));
+        .chain((0..SPREAD).map(|k| spread_start(robot, seed, k)));
     let mut best: Option<(f64, Vec<f64>)> = None;
     for start in starts {
         let Ok(sol) = solver.from_start(pose, &start) else {

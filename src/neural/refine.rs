@@ -4,6 +4,8 @@
 //! The re-estimation is an identification ([`crate::identify::identify`], started at the
 //! given model, no re-registration) and so runs the exact model with its exact Jacobian in
 //! every iteration; its identifiable subset comes from the rank analysis of the training rows.
+//! It keeps the model's unobserved marks ([`crate::model::Robot::unobserved`]) but those of
+//! parameters the rows observe, and adds none.
 //! Parameters and network are never estimated together: a network's constant output can
 //! mimic a joint offset or a base rotation, and a joint estimate would let them trade along
 //! that direction by any amount. Whether the refined model is kept is decided on held-out
@@ -78,5 +80,12 @@ pub fn refine(
     if let Some(note) = id.unmodelled.note("the training rows") {
         notes.push(format!("refinement: {note}"));
     }
-    Ok((id.robot, moved, notes))
+    // A refinement re-estimates a model identified already: what the training rows cannot see
+    // was observed then, or is marked already, so it adds no marks (it only lifts those of
+    // parameters the rows observe).
+    let kept: Vec<_> = (id.robot.unobserved().iter())
+        .filter(|p| model.unobserved().contains(p))
+        .copied()
+        .collect();
+    Ok((id.robot.with_unobserved(&kept)?, moved, notes))
 }
