@@ -3,7 +3,7 @@
 
 use robocal::kinematics::UnobservedProbe;
 use robocal::model::Robot;
-use robocal::reports::compensate::Unchecked;
+use robocal::reports::compensate::UncheckedLines;
 use std::path::Path;
 
 /// The rows (file lines) whose position or orientation depends on an unobserved parameter.
@@ -41,8 +41,8 @@ impl UncheckedRows {
     }
 
     /// What the report records: None where no row depends on an unobserved parameter.
-    pub fn report(&self) -> Option<Unchecked> {
-        (!self.position.is_empty() || !self.orientation.is_empty()).then(|| Unchecked {
+    pub fn report(&self) -> Option<UncheckedLines> {
+        (!self.position.is_empty() || !self.orientation.is_empty()).then(|| UncheckedLines {
             unobserved: self.names.clone(),
             position_lines: self.position.clone(),
             orientation_lines: self.orientation.clone(),

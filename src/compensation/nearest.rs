@@ -12,46 +12,34 @@
 //! search runs only where the seed leaves room for one (a command far from its seed).
 
 use super::model::CalibratedModel;
+use crate::kinematics::same_arm::spread;
 use crate::kinematics::{IkSolver, Pose};
 use crate::model::{JointType, Robot, joint_distance};
 use std::f64::consts::TAU;
 
-/// Starts spread over the joint ranges, besides the seed and the solution in hand.
+/// Starts spread over the turn around the seed, besides the seed and the solution in hand.
 pub const SPREAD: usize = 64;
 
 /// Joints (rad, mm) closer than this are one solution.
 const SAME: f64 = 1e-6;
 
 /// `q` with each revolute joint moved by whole turns to its copy nearest `seed` within the
-/// robot's limits (the limits widened by 1e-9 rad for rounding); None where a joint has no
-/// copy within them.
+/// robot's limits ([`crate::model::Joint::nearest_turn`]); None where a joint has no copy
+/// within them.
 pub fn turns_near(robot: &Robot, q: &[f64], seed: &[f64]) -> Option<Vec<f64>> {
     (robot.joints().iter().zip(q).zip(seed))
-        .map(|((joint, &v), &s)| {
-            let [lo, hi] = joint.limits_internal();
-            let (lo, hi) = (lo - 1e-9, hi + 1e-9);
-            if joint.joint_type == JointType::Prismatic {
-                return (lo..=hi).contains(&v).then_some(v);
-            }
-            let near = v + TAU * ((s - v) / TAU).round();
-            // The nearest copy, else the nearest on either side that the limits hold.
-            [near, near - TAU, near + TAU]
-                .into_iter()
-                .filter(|c| (lo..=hi).contains(c))
-                .min_by(|a, b| (a - s).abs().total_cmp(&(b - s).abs()))
-        })
+        .map(|((joint, &v), &s)| joint.nearest_turn(v, s))
         .collect()
 }
 
-/// Start `k` of [`SPREAD`]: revolute joint j at the fraction t = ((k n + j) phi + 0.25)
-/// mod 1 (phi the golden ratio's fractional part) of the turn centred on the seed (whole
-/// turns are taken nearest the seed afterwards, so one turn holds every configuration), a
-/// prismatic joint at t of its range.
+/// Start `k` of [`SPREAD`]: each revolute joint at its fraction of the turn centred on the
+/// seed ([`crate::kinematics::same_arm::spread`]; whole turns are taken nearest the seed
+/// afterwards, so one turn holds every configuration), a prismatic joint at it of its range.
 fn spread_start(robot: &Robot, seed: &[f64], k: usize) -> Vec<f64> {
     let n = robot.dof();
     (robot.joints().iter().enumerate())
         .map(|(j, joint)| {
-            let t = ((k * n + j) as f64 * 0.618_033_988_749_895 + 0.25).fract();
+            let t = spread(k, n, j);
             if joint.joint_type == JointType::Prismatic {
                 let [lo, hi] = joint.limits_internal();
                 lo + (hi - lo) * t

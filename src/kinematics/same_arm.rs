@@ -14,6 +14,13 @@ pub const GEOMETRY_GAP: f64 = 0.1;
 /// The configurations compared: sixteen spread over the reference's joint ranges.
 const CONFIGURATIONS: usize = 16;
 
+/// Joint `j` of configuration `k` (of robots with `n` joints) in a fixed low-discrepancy
+/// spread: the fraction ((k n + j) phi + 0.25) mod 1 of its range, phi the golden ratio's
+/// fractional part.
+pub fn spread(k: usize, n: usize, j: usize) -> f64 {
+    ((k * n + j) as f64 * 0.618_033_988_749_895 + 0.25).fract()
+}
+
 /// For the flange (the chain's last frame: after the last joint's row, before the tool) and
 /// for the tool, at [`CONFIGURATIONS`] configurations spread over `reference`'s joint ranges:
 /// the largest difference between the two models' distances from one configuration's point
@@ -26,9 +33,7 @@ fn point_gaps(reference: &Robot, other: &Robot) -> [(f64, f64); 2] {
         let q: Vec<f64> = (reference.joints().iter().enumerate())
             .map(|(j, joint)| {
                 let [lo, hi] = joint.limits_internal();
-                // A fixed low-discrepancy spread: the golden ratio's multiples mod 1.
-                let t = ((k * n + j) as f64 * 0.618_033_988_749_895 + 0.25).fract();
-                lo + (hi - lo) * t
+                lo + (hi - lo) * spread(k, n, j)
             })
             .collect();
         frames(reference, &q, &mut a);

@@ -78,6 +78,23 @@ impl Joint {
     pub fn limits_internal(&self) -> [f64; 2] {
         self.limits.map(|v| self.joint_type.to_internal(v))
     }
+
+    /// The value `v` (rad, mm) takes nearest `reference` within the limits (widened by 1e-9
+    /// for rounding): for a revolute joint the whole-turn copy v + 2 pi k, for a prismatic one
+    /// `v` itself; None where no copy lies within them.
+    pub fn nearest_turn(&self, v: f64, reference: f64) -> Option<f64> {
+        const TOL: f64 = 1e-9;
+        let [lo, hi] = self.limits_internal();
+        if self.joint_type == JointType::Prismatic {
+            return (lo - TOL..=hi + TOL).contains(&v).then_some(v);
+        }
+        let tau = std::f64::consts::TAU;
+        let (kmin, kmax) = (
+            ((lo - TOL - v) / tau).ceil(),
+            ((hi + TOL - v) / tau).floor(),
+        );
+        (kmin <= kmax).then(|| v + tau * ((reference - v) / tau).round().clamp(kmin, kmax))
+    }
 }
 
 /// Where a parameter sits in the chain.

@@ -49,13 +49,13 @@ pub struct CompensateReport {
     /// Solved targets whose commands depend on parameters the model's calibration did not
     /// observe (none: left out of the file, and absent in reports written before it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub unchecked: Option<Unchecked>,
+    pub unchecked: Option<UncheckedLines>,
 }
 
 /// Results that depend on parameters a calibration did not observe
 /// ([`crate::kinematics::unobserved`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Unchecked {
+pub struct UncheckedLines {
     /// The model's unobserved parameters (`tool.rz`, ...).
     pub unobserved: Vec<String>,
     /// Lines whose position depends on one.
