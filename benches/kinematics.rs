@@ -1,9 +1,10 @@
-//! Kinematics speed: FK of one configuration, closed-form IK (all solutions) of one pose,
-//! numerical IK of one pose on a calibrated-like model (no closed form).
+//! Kinematics speed: FK of one configuration, closed-form IK (all solutions) of one pose
+//! (FANUC; the UR10's 8 before copies), numerical IK of one pose on a calibrated-like model
+//! (no closed form).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use robocal::kinematics::{
-    IkOptions, IkTarget, IkWorkspace, SphericalWristIk, solve_numeric, tool_pose,
+    ClosedFormIk, IkOptions, IkTarget, IkWorkspace, solve_numeric, tool_pose,
 };
 use robocal::model::read_robot;
 use std::hint::black_box;
@@ -21,12 +22,29 @@ fn benches(c: &mut Criterion) {
         b.iter(|| tool_pose(black_box(&robot), black_box(&q)))
     });
 
-    let ik = SphericalWristIk::new(&robot).unwrap();
+    let ik = ClosedFormIk::new(&robot).unwrap();
     let mut sols = Vec::with_capacity(64);
     c.bench_function("ik_closed_form_all_solutions", |b| {
         b.iter(|| {
             ik.solve(black_box(&target), &mut sols);
             sols.len()
+        })
+    });
+
+    // The UR class: the UR10's 8 solutions of one pose, before copies (its +-360 deg limits
+    // give each 64).
+    let ur = read_robot(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/datasets/robots/ur10.toml"
+    ))
+    .unwrap();
+    let ur_ik = ClosedFormIk::new(&ur).unwrap();
+    let ur_target = tool_pose(&ur, &[0.3, -1.2, 1.1, -1.4, -1.0, 0.5]);
+    let mut ur_sols = Vec::with_capacity(8);
+    c.bench_function("ik_closed_form_ur10_eight_solutions", |b| {
+        b.iter(|| {
+            ur_ik.solve_branches(black_box(&ur_target), &mut ur_sols);
+            ur_sols.len()
         })
     });
 

@@ -96,19 +96,71 @@ fn ik_all_solutions_as_json() {
 }
 
 #[test]
-fn ik_without_closed_form_needs_a_seed_and_uses_it() {
+fn ik_of_a_ur_arm_is_closed_form_and_without_one_needs_a_seed() {
+    // The UR10 has a closed form (the UR class): without a seed, its solution nearest the
+    // middle of the ranges; with one, the configuration the pose came from, exactly.
     let ur = "datasets/robots/ur10.toml";
     let o = robocal(&["fk", "--robot", ur, "--q", "10,-80,70,-60,-80,20"]);
     let line = stdout(&o).lines().nth(1).unwrap().to_string();
     let pose: Vec<&str> = line.split(',').skip(6).collect();
     let pose = pose.join(",");
-    let o = robocal(&["ik", "--robot", ur, "--pose", &pose]);
-    assert!(!o.status.success());
-    assert!(stderr(&o).contains("seed"), "{}", stderr(&o));
+    let o = robocal(&["ik", "--robot", ur, "--pose", &pose, "--decimals", "9"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("note:"), "{}", stderr(&o));
+    // The elbow's other solution (q2 + q3 + q4 kept), nearer the middle (0) than the pose's.
+    assert!(
+        stdout(&o).contains(
+            ",1,10.000000000,-12.689233103,-70.000000000,12.689233103,-80.000000000,20.000000000,ok"
+        ),
+        "{}",
+        stdout(&o)
+    );
     let o = robocal(&[
         "ik",
         "--robot",
         ur,
+        "--pose",
+        &pose,
+        "--seed",
+        "12,-78,72,-61,-79,18",
+        "--decimals",
+        "9",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains(
+            ",1,10.000000000,-80.000000000,70.000000000,-60.000000000,-80.000000000,20.000000000,ok"
+        ),
+        "{}",
+        stdout(&o)
+    );
+    // Axis 3 tilted by 0.1 deg: no closed form, so the numerical solve needs a seed.
+    let text = std::fs::read_to_string(ur).unwrap();
+    let at = text.find("# elbow").unwrap();
+    let tilted = format!(
+        "{}{}",
+        &text[..at],
+        text[at..].replacen("alpha = 0.0", "alpha = 0.1", 1)
+    );
+    let tilted_path = tmp("ur10_tilted.toml");
+    std::fs::write(&tilted_path, tilted).unwrap();
+    let tilted = tilted_path.to_str().unwrap();
+    let o = robocal(&["fk", "--robot", tilted, "--q", "10,-80,70,-60,-80,20"]);
+    let line = stdout(&o).lines().nth(1).unwrap().to_string();
+    let pose: Vec<&str> = line.split(',').skip(6).collect();
+    let pose = pose.join(",");
+    let o = robocal(&["ik", "--robot", tilted, "--pose", &pose]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("no spherical wrist, nor is it of the UR class")
+            && stderr(&o).contains("seed"),
+        "{}",
+        stderr(&o)
+    );
+    let o = robocal(&[
+        "ik",
+        "--robot",
+        tilted,
         "--pose",
         &pose,
         "--seed",

@@ -242,9 +242,10 @@ fn bad_input_names_file_line_and_column() {
 }
 
 #[test]
-fn a_nominal_model_without_closed_form_solves_from_the_seeds() {
-    // A nominal robot without a closed form needs a seed for every target: the row is
-    // marked, the run exits with the code of failed targets (3).
+fn a_controller_solving_near_the_seed_needs_one_for_each_target() {
+    // A UR-class controller runs the solution nearest the joints it is given (no
+    // configuration flags): every target needs a seed; without one the row is marked, the
+    // run exits with the code of failed targets (3).
     let good = tmp("ur10_targets.csv");
     std::fs::write(&good, "x,y,z,rz,ry,rx\n2000,0,1500,90,0,90\n").unwrap();
     let out = tmp("ur10_commands.csv");
@@ -269,8 +270,9 @@ fn a_nominal_model_without_closed_form_solves_from_the_seeds() {
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(
-        err.contains("no closed-form inverse kinematics")
-            && err.contains(":2: no-seed: the nominal model has no closed form")
+        err.contains("a UR-class arm (axes 2, 3 and 4 parallel)")
+            && err
+                .contains(":2: no-seed: the controller runs the nominal model's solution nearest")
             && err.contains("(give q1..qN columns or --seed)"),
         "{err}"
     );

@@ -4,8 +4,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use robocal::geometry::rotation::angle_between;
 use robocal::kinematics::{
-    Frames, IkOptions, IkTarget, IkWorkspace, Pose, SphericalWristIk, frames, solve_numeric,
-    tool_pose,
+    ClosedFormIk, Frames, IkOptions, IkTarget, IkWorkspace, Pose, frames, solve_numeric, tool_pose,
 };
 use robocal::model::file::parse_robot;
 use robocal::model::{Robot, read_robot};
@@ -96,7 +95,7 @@ ry = 15.0
 "#;
 
 fn round_trip(robot: &Robot, samples: usize, seed: u64) -> usize {
-    let ik = SphericalWristIk::new(robot).unwrap();
+    let ik = ClosedFormIk::new(robot).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut sols = Vec::new();
     let mut total = 0;
@@ -144,7 +143,7 @@ fn closed_form_finds_all_eight_branches() {
     // Limits wide enough for every branch; one copy per joint (+-180 deg).
     let text = DH_SPHERICAL.replace("[-360, 360]", "[-180, 180]");
     let robot = parse_robot(&text, Path::new("dh.toml")).unwrap();
-    let ik = SphericalWristIk::new(&robot).unwrap();
+    let ik = ClosedFormIk::new(&robot).unwrap();
     let q = [0.3, -0.2, 0.4, 0.5, 0.7, -0.3];
     let mut sols = Vec::new();
     ik.solve_unlimited(&tool_pose(&robot, &q), &mut sols);
@@ -155,25 +154,148 @@ fn closed_form_finds_all_eight_branches() {
     }
 }
 
+/// A UR-class arm in modified DH (the UR10's geometry, other zeros and signs), placed on a
+/// turned base and carrying a tool off every axis, with +-360 deg limits.
+const MDH_UR_CLASS: &str = r#"
+name = "UR-class arm in modified DH"
+[base]
+convention = "transform"
+x = 250.0
+y = -40.0
+z = 30.0
+rz = 20.0
+ry = 5.0
+[[joint]]
+convention = "mdh"
+d = 127.3
+limits = [-360, 360]
+[[joint]]
+convention = "mdh"
+alpha = 90
+theta = 180
+limits = [-360, 360]
+[[joint]]
+convention = "mdh"
+a = 612
+limits = [-360, 360]
+[[joint]]
+convention = "mdh"
+a = 572.3
+d = 163.9
+theta = -90
+limits = [-360, 360]
+[[joint]]
+convention = "mdh"
+alpha = 90
+d = 115.7
+limits = [-360, 360]
+[[joint]]
+convention = "mdh"
+alpha = -90
+d = 92.2
+limits = [-360, 360]
+[tool]
+convention = "transform"
+x = 30.0
+y = 12.0
+z = 180.0
+rx = 20.0
+"#;
+
+#[test]
+fn closed_form_round_trip_ur_class_arms() {
+    // The UR10 as Universal Robots publish it (standard DH), and a UR-class arm in modified
+    // DH on a moved base with an offset tool: every solution reaches the pose, and the
+    // configuration the pose came from is among them.
+    let ur = robot_file("ur10.toml");
+    assert!(ClosedFormIk::new(&ur).unwrap().is_ur_class());
+    let total = round_trip(&ur, 10_000, 5);
+    // 8 branches, each with 2^6 copies within +-360 deg.
+    assert!(total > 10_000 * 8 * 32, "only {total} solutions");
+    let mdh = parse_robot(MDH_UR_CLASS, Path::new("mdh_ur.toml")).unwrap();
+    assert!(ClosedFormIk::new(&mdh).unwrap().is_ur_class());
+    let total = round_trip(&mdh, 10_000, 6);
+    assert!(total > 10_000 * 8 * 32, "only {total} solutions");
+}
+
+#[test]
+fn ur_closed_form_misses_no_solution_a_numerical_search_finds() {
+    // Independent of the closed form's algebra: numerical solves of the UR10 from 300 random
+    // starts per pose. Every converged solution is one of the closed form's (modulo whole
+    // turns), and every one of those, each on its own branch, is met by some start.
+    let robot = robot_file("ur10.toml");
+    let ik = ClosedFormIk::new(&robot).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let mut ws = IkWorkspace::new(&robot);
+    let opts = IkOptions::default();
+    let mut branches = Vec::new();
+    let mut eights = 0;
+    for _ in 0..10 {
+        let q = random_q(&robot, &mut rng);
+        let target = tool_pose(&robot, &q);
+        ik.solve_branches(&target, &mut branches);
+        // 8 where each shoulder's both wrist flips leave the elbow within the arm's reach;
+        // where one does not, two fewer (elbows come in pairs).
+        assert!(
+            matches!(branches.len(), 2 | 4 | 6 | 8),
+            "{q:?}: {branches:?}"
+        );
+        let mut names: Vec<String> = branches.iter().map(|(b, _)| b.to_string()).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), branches.len(), "{names:?}");
+        eights += usize::from(branches.len() == 8);
+        let mut met = vec![false; branches.len()];
+        let mut converged = 0;
+        for _ in 0..300 {
+            let start: Vec<f64> = (0..6).map(|_| rng.random_range(-PI..PI)).collect();
+            let Ok(sol) = solve_numeric(&robot, &IkTarget::Pose(target), &start, &opts, &mut ws)
+            else {
+                continue;
+            };
+            converged += 1;
+            let k = (branches.iter())
+                .position(|(_, b)| joint_gap(b, &sol.q) < 1e-6)
+                .unwrap_or_else(|| panic!("{:?} is not a closed-form solution", sol.q));
+            met[k] = true;
+        }
+        assert!(converged > 100, "{converged} of 300 converged");
+        assert!(
+            met.iter().all(|&m| m),
+            "closed-form solutions no start met: {met:?}"
+        );
+    }
+    assert!(eights >= 3, "only {eights} of 10 poses with 8 solutions");
+}
+
 #[test]
 fn closed_form_reports_unreachable_and_wrong_structure() {
     let robot = robot_file("fanuc_r2000ib_210f.toml");
-    let ik = SphericalWristIk::new(&robot).unwrap();
+    let ik = ClosedFormIk::new(&robot).unwrap();
     let mut far = tool_pose(&robot, &[0.0; 6]);
     far.translation.vector *= 10.0;
     let mut sols = Vec::new();
     ik.solve(&far, &mut sols);
     assert!(sols.is_empty());
-    // The UR10 has no spherical wrist.
-    let e = SphericalWristIk::new(&robot_file("ur10.toml"))
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("axes"), "{e}");
+    // The UR10 has no spherical wrist but is of the UR class; with axis 4 tilted by 1 mrad
+    // it is of neither.
+    let ur = robot_file("ur10.toml");
+    assert!(ClosedFormIk::new(&ur).unwrap().is_ur_class());
+    assert!(!ClosedFormIk::new(&robot).unwrap().is_ur_class());
+    let tilted = ur
+        .with_param(ur.find_param("alpha3").unwrap(), 1e-3)
+        .unwrap();
+    let e = ClosedFormIk::new(&tilted).unwrap_err().to_string();
+    assert!(
+        e.contains("no spherical wrist")
+            && e.contains("nor is it of the UR class: axis 4 is not parallel"),
+        "{e}"
+    );
     // A Hayati beta makes axes 2 and 3 non-parallel.
     let bent = robot
         .with_param(robot.find_param("beta3").unwrap(), 1e-3)
         .unwrap();
-    let e = SphericalWristIk::new(&bent).unwrap_err().to_string();
+    let e = ClosedFormIk::new(&bent).unwrap_err().to_string();
     assert!(e.contains("not parallel"), "{e}");
 }
 
@@ -228,10 +350,10 @@ fn numeric_ik_on_perturbed_fanuc_from_nominal_closed_form() {
     let nominal = robot_file("fanuc_r2000ib_210f.toml");
     let real = fanuc_table_6_1();
     assert!(
-        SphericalWristIk::new(&real).is_err(),
+        ClosedFormIk::new(&real).is_err(),
         "the perturbed model has no closed form"
     );
-    let ik = SphericalWristIk::new(&nominal).unwrap();
+    let ik = ClosedFormIk::new(&nominal).unwrap();
     let mut ws = IkWorkspace::new(&real);
     let opts = IkOptions::default();
     let mut rng = ChaCha8Rng::seed_from_u64(3);
@@ -331,7 +453,7 @@ fn ik_strategy_nearest_all_and_branch() {
     let real = fanuc_table_6_1();
     let start = IkStart::choose(&real, Some(&nominal)).unwrap();
     assert!(matches!(start, IkStart::Nominal(_)));
-    let closed = SphericalWristIk::new(&nominal).unwrap();
+    let closed = ClosedFormIk::new(&nominal).unwrap();
     let mut solver = IkSolver::new(RobotModel::new(&real), start, IkOptions::default());
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     let mut branches = Vec::new();
@@ -544,7 +666,7 @@ fn the_reach_bound_holds_and_refuses_far_targets() {
 #[test]
 fn a_straight_wrist_keeps_the_seeds_split_of_joints_4_and_6() {
     let robot = robot_file("fanuc_r2000ib_210f.toml");
-    let ik = SphericalWristIk::new(&robot).unwrap();
+    let ik = ClosedFormIk::new(&robot).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(60);
     let mut sols = Vec::new();
     let mut outside = 0;
@@ -596,7 +718,7 @@ fn a_straight_wrist_keeps_the_seeds_split_of_joints_4_and_6() {
     // A standard-DH wrist of +-360 deg ranges at q5 = 0 and 180 deg: axes 4 and 6 the same
     // way and opposite ways (q4 + q6, then q4 - q6 fixed); the seed comes back either way.
     let robot = parse_robot(DH_SPHERICAL, Path::new("dh.toml")).unwrap();
-    let ik = SphericalWristIk::new(&robot).unwrap();
+    let ik = ClosedFormIk::new(&robot).unwrap();
     let mut signs = Vec::new();
     for _ in 0..40 {
         let mut q = random_q(&robot, &mut rng);
@@ -619,7 +741,7 @@ fn a_straight_wrist_keeps_the_seeds_split_of_joints_4_and_6() {
 /// stretched); a pose beyond the calibrated arm's reach too stays unreachable, and says why.
 #[test]
 fn a_longer_calibrated_arm_reaches_beyond_the_nominals_reach() {
-    use robocal::kinematics::{IkFailure, IkSolver, IkStart, RobotModel, SphericalWristIk};
+    use robocal::kinematics::{ClosedFormIk, IkFailure, IkSolver, IkStart, RobotModel};
     // A DH arm whose elbow stretches within its ranges (the FANUC's does not); calibrated,
     // its axes 2 and 3 are 1 mrad off parallel (no closed form) and its upper arm 3 mm longer.
     let nominal = parse_robot(DH_SPHERICAL, Path::new("dh.toml")).unwrap();
@@ -630,7 +752,7 @@ fn a_longer_calibrated_arm_reaches_beyond_the_nominals_reach() {
     let real = (nominal.with_param(a2, nominal.param(a2) + 3.0))
         .and_then(|r| r.with_param(alpha2, 1e-3))
         .unwrap();
-    let closed = SphericalWristIk::new(&nominal).unwrap();
+    let closed = ClosedFormIk::new(&nominal).unwrap();
     let start = IkStart::choose(&real, Some(&nominal)).unwrap();
     assert!(matches!(start, IkStart::Nominal(_)));
     let mut solver = IkSolver::new(RobotModel::new(&real), start, IkOptions::default());

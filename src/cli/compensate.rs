@@ -15,8 +15,9 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct CompensateArgs {
-    /// The controller's nominal robot (TOML; mm, deg). Without a closed form (a UR arm)
-    /// every target needs seed joints and has no branch.
+    /// The controller's nominal robot (TOML; mm, deg). A UR-class arm (axes 2, 3 and 4
+    /// parallel), whose controller runs the solution nearest the joints it is given, or one
+    /// without a closed form: every target needs seed joints and has no branch.
     #[arg(long)]
     nominal: PathBuf,
     /// The calibrated robot (from `robocal identify`).
@@ -84,11 +85,11 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         None => CalibratedModel::identified(&robot),
     };
     let mut solver = FakeTargetSolver::new(&nominal, model)?;
-    if let Some(why) = solver.without_closed_form() {
+    if let Some(why) = solver.solves_near_seed() {
         eprintln!(
-            "note: {}: {why}: each target is solved numerically from its seed joints, and the \
-             nominal model's solution of its command nearest the seed, which a controller \
-             given the seed runs, must be those joints (empty branch column)",
+            "note: {}: {why}: each target is solved nearest its seed joints, and the nominal \
+             model's solution of its command nearest the seed, which a controller given the \
+             seed runs, must be those joints (empty branch column)",
             a.nominal.display()
         );
     }
@@ -327,9 +328,7 @@ fn failure_message(targets: &std::path::Path, failed: &[(usize, Failure)], total
     for (line, why) in failed.iter().take(20) {
         // Where this command's seed joints come from.
         let hint = match why {
-            Failure::NoSeed | Failure::NoSeedWithoutClosedForm => {
-                " (give q1..qN columns or --seed)"
-            }
+            Failure::NoSeed | Failure::NoSeedToSolveNear => " (give q1..qN columns or --seed)",
             _ => "",
         };
         msg.push_str(&format!("\n  {}:{line}: {why}{hint}", targets.display()));

@@ -12,14 +12,17 @@
 //!    seed's branch must return q* itself: that is what the controller will compute from F.
 //!    A target failing any step is a [`Failure`], never a command.
 //!
-//! For a controller model robocal has no closed form for (a UR arm: no spherical wrist; its
-//! controller has analytic solutions of its own, and picks the one nearest the joints it is
-//! given, as URScript's `get_inverse_kin(pose, qnear)`) no branch is reported. Each target
-//! then needs seed joints (the configuration it was taught in): q* is the calibrated model's
-//! solution from the seed (step 2), within the limits, and the nominal model's solution of F
-//! nearest the seed must be q* (step 3's check, the controller's view; near the seed, the
-//! nominal's numerical solve from it; far from it, a search of the nominal's solutions, and
-//! q* moved to the configuration the controller would run: `solve_from_seed`;
+//! A controller of the UR class (axes 2, 3 and 4 parallel; Universal Robots') takes no
+//! configuration flags: it runs its analytic solution nearest the joints it is given
+//! (URScript's `get_inverse_kin(pose, qnear)`), and no branch is reported. So does, here, a
+//! controller model robocal has no closed form for. Each target then needs seed joints (the
+//! configuration it was taught in): q* is the calibrated model's solution nearest the seed
+//! (step 2, from the seed and, for the UR class, from every nominal closed-form solution),
+//! within the limits, and the nominal model's solution of F nearest the seed must be q*
+//! (step 3's check, the controller's view: the nearest of the nominal closed form's
+//! solutions; without a closed form, near the seed the nominal's numerical solve from it, far
+//! from it a search of the nominal's solutions). Where it is another configuration, q* is
+//! moved to the one the controller would run (`solve_from_seed`;
 //! [`Failure::ControllerDiffers`] where they do not settle).
 
 use super::model::CalibratedModel;
@@ -27,7 +30,7 @@ use crate::data::Target;
 use crate::error::{Error, Result};
 use crate::geometry::rotation::angle_between;
 use crate::kinematics::{
-    Branch, IkFailure, IkOptions, IkSolution, IkSolver, IkStart, Pose, SphericalWristIk, ToolModel,
+    Branch, ClosedFormIk, IkFailure, IkOptions, IkSolution, IkSolver, IkStart, Pose, ToolModel,
     another_arm, tool_pose,
 };
 use crate::model::{Robot, joint_distance};
@@ -64,8 +67,9 @@ pub struct Command {
     pub q: Vec<f64>,
     /// The fake target FK_nominal(q) to give the controller (mm).
     pub fake: Pose,
-    /// The nominal closed form's branch of q (the seed's); None for a nominal model without
-    /// a closed form, whose controller solves near the seed joints instead.
+    /// The nominal closed form's branch of q (the seed's); None for a controller that
+    /// solves near the seed joints instead (the UR class, or a nominal model without a closed
+    /// form).
     pub branch: Option<Branch>,
     /// LM iterations.
     pub iterations: usize,
@@ -80,9 +84,10 @@ pub struct Command {
 pub enum Failure {
     /// A position-only target without seed joints (its orientation is undefined).
     NoSeed,
-    /// A target without seed joints for a nominal model without a closed form: nothing
-    /// starts the solve, and no branch says which configuration the controller keeps.
-    NoSeedWithoutClosedForm,
+    /// A target without seed joints for a controller that solves near the joints it is
+    /// given (the UR class, or a nominal model without a closed form): no branch says which
+    /// configuration it keeps.
+    NoSeedToSolveNear,
     /// Seed joints that do not fit the robot.
     BadSeed(String),
     /// Neither the nominal closed form nor a seed gives a start.
@@ -102,7 +107,7 @@ impl Failure {
     /// A short code for the status column.
     pub fn code(&self) -> &'static str {
         match self {
-            Failure::NoSeed | Failure::NoSeedWithoutClosedForm => "no-seed",
+            Failure::NoSeed | Failure::NoSeedToSolveNear => "no-seed",
             Failure::BadSeed(_) => "bad-seed",
             Failure::Unreachable(_) => "unreachable",
             Failure::NotConverged(_) => "not-converged",
@@ -120,10 +125,11 @@ impl std::fmt::Display for Failure {
                 f,
                 "no-seed: a position-only target needs seed joints for its orientation"
             ),
-            Failure::NoSeedWithoutClosedForm => write!(
+            Failure::NoSeedToSolveNear => write!(
                 f,
-                "no-seed: the nominal model has no closed form, so each target needs seed \
-                 joints (the configuration the controller solves near)"
+                "no-seed: the controller runs the nominal model's solution nearest the joints \
+                 it is given (no configuration flags), so each target needs seed joints (the \
+                 configuration it was taught in)"
             ),
             Failure::OutsideLimits(j) => write!(
                 f,
@@ -159,9 +165,10 @@ pub struct FakeTargetSolver<'a> {
 #[allow(clippy::large_enum_variant)]
 enum Controller<'a> {
     /// The nominal closed form, on the seed's branch.
-    ClosedForm(SphericalWristIk),
-    /// No closed form (`why`): the nominal model solved numerically from the seed.
-    Numerical {
+    ClosedForm(ClosedFormIk),
+    /// The solution nearest the seed (`why`: a UR-class arm, or no closed form): the
+    /// nominal model solved by `ik`, exactly by its closed form where it has one.
+    Nearest {
         why: String,
         ik: IkSolver<CalibratedModel<'a>>,
     },
@@ -182,9 +189,10 @@ fn wrapped_distance(a: &[f64], b: &[f64]) -> f64 {
 
 impl<'a> FakeTargetSolver<'a> {
     /// `nominal` is the controller's model; `model` the calibrated one. Both must have the
-    /// same joints. Without a nominal closed form every target needs seed joints.
+    /// same joints. For a controller solving near the seed (a UR-class nominal, or one
+    /// without a closed form) every target needs seed joints.
     pub fn new(nominal: &'a Robot, model: CalibratedModel<'a>) -> Result<Self> {
-        let closed = SphericalWristIk::new(nominal);
+        let closed = ClosedFormIk::new(nominal);
         if !model.robot().same_joints(nominal) {
             return Err(Error::Invalid(
                 "the calibrated model's joints differ from the nominal model's".into(),
@@ -204,9 +212,22 @@ impl<'a> FakeTargetSolver<'a> {
         let (start, controller) = match closed {
             // The starts in the calibrated model's world frame, the controller's view in the
             // nominal's.
-            Ok(c) => (
+            Ok(c) if !c.is_ur_class() => (
                 IkStart::Nominal(c.placed_as(nominal, model.robot())),
                 Controller::ClosedForm(c),
+            ),
+            Ok(c) => (
+                IkStart::Nominal(c.placed_as(nominal, model.robot())),
+                Controller::Nearest {
+                    why: "a UR-class arm (axes 2, 3 and 4 parallel), whose controller takes no \
+                          configuration flags"
+                        .into(),
+                    ik: IkSolver::new(
+                        CalibratedModel::identified(nominal),
+                        IkStart::Exact(c),
+                        IkOptions::default(),
+                    ),
+                },
             ),
             Err(e) => {
                 let why = e.to_string();
@@ -217,10 +238,7 @@ impl<'a> FakeTargetSolver<'a> {
                     IkStart::Seed(why.clone()),
                     IkOptions::default(),
                 );
-                (
-                    IkStart::Seed(why.clone()),
-                    Controller::Numerical { why, ik },
-                )
+                (IkStart::Seed(why.clone()), Controller::Nearest { why, ik })
             }
         };
         Ok(FakeTargetSolver {
@@ -231,12 +249,13 @@ impl<'a> FakeTargetSolver<'a> {
         })
     }
 
-    /// Why the nominal model has no closed form (every target then needs seed joints and
-    /// has no branch); None when it has one.
-    pub fn without_closed_form(&self) -> Option<&str> {
+    /// Why the controller solves near the seed joints (a UR-class arm, or a nominal model
+    /// without a closed form): every target then needs seed joints and has no branch; None
+    /// for a controller that keeps the seed's branch.
+    pub fn solves_near_seed(&self) -> Option<&str> {
         match &self.controller {
             Controller::ClosedForm(_) => None,
-            Controller::Numerical { why, .. } => Some(why),
+            Controller::Nearest { why, .. } => Some(why),
         }
     }
 
@@ -327,7 +346,7 @@ impl<'a> FakeTargetSolver<'a> {
                 Pose::from_parts(Translation3::from(*x), r)
             }
         };
-        if let Controller::Numerical { ik: controller, .. } = &mut self.controller {
+        if let Controller::Nearest { ik: controller, .. } = &mut self.controller {
             return solve_from_seed(&mut self.ik, controller, self.nominal, target, seed);
         }
         // A seed fixes the branch (the configuration the robot program was taught in); a seed
@@ -484,16 +503,18 @@ impl Command {
 /// controller would run; beyond them the target is a [`Failure::ControllerDiffers`].
 const SETTLE_ROUNDS: usize = 3;
 
-/// [`FakeTargetSolver::solve`] for a nominal model without a closed form: q* from the seed
+/// [`FakeTargetSolver::solve`] for a controller solving near the seed: q* nearest the seed
 /// by `ik` (the calibrated model). The controller takes the nominal model's solution of F =
 /// FK_nominal(q*) nearest the seed, whole turns included; it must be q*:
-/// - q* within [`SEED_FAR_RAD`] of the seed: `controller` (the nominal model) solved for F
-///   from the seed must return q* (no other solution lies that near);
-/// - farther, where the solve from the seed may have run past a nearer configuration: the
-///   nominal's solutions of F are searched ([`super::nearest`]); where the nearest is another
-///   configuration, q* is solved again from it (the calibrated solution of the configuration
-///   the controller would run, its turns nearest the seed), for up to [`SETTLE_ROUNDS`]
-///   rounds.
+/// - with a closed form (the UR class), `controller` gives exactly that solution;
+/// - without one, q* within [`SEED_FAR_RAD`] of the seed: `controller` (the nominal model)
+///   solved for F from the seed must return q* (no other solution lies that near); farther,
+///   where the solve from the seed may have run past a nearer configuration, the nominal's
+///   solutions of F are searched ([`super::nearest`]).
+///
+/// Where the controller's solution is another configuration, q* is solved again from it (the
+/// calibrated solution of the configuration the controller would run, its turns nearest the
+/// seed), for up to [`SETTLE_ROUNDS`] rounds.
 fn solve_from_seed(
     ik: &mut IkSolver<CalibratedModel<'_>>,
     controller: &mut IkSolver<CalibratedModel<'_>>,
@@ -501,14 +522,15 @@ fn solve_from_seed(
     target: Pose,
     seed: Option<&[f64]>,
 ) -> std::result::Result<Command, Failure> {
-    let seed = seed.ok_or(Failure::NoSeedWithoutClosedForm)?;
+    let seed = seed.ok_or(Failure::NoSeedToSolveNear)?;
     let failure = |e: IkFailure| match e {
         IkFailure::BadSeed(m) => Failure::BadSeed(m),
-        IkFailure::OutOfReach(m) => Failure::Unreachable(m),
+        IkFailure::OutOfReach(m) | IkFailure::Unreachable(m) => Failure::Unreachable(m),
         IkFailure::OutsideLimits(j) => Failure::OutsideLimits(j),
         e => Failure::NotConverged(e.to_string()),
     };
     let mut sol = ik.nearest(&target, Some(seed)).map_err(failure)?.solution;
+    let exact = controller.start().closed_form().is_some();
     let mut apart = 0.0;
     for _ in 0..=SETTLE_ROUNDS {
         let outside = nominal.joints_outside_limits(&sol.q);
@@ -516,14 +538,26 @@ fn solve_from_seed(
             return Err(Failure::OutsideLimits(outside));
         }
         let fake = tool_pose(nominal, &sol.q);
-        if joint_distance(&sol.q, seed) <= SEED_FAR_RAD {
+        let run = if exact {
+            match controller.nearest(&fake, Some(seed)) {
+                Ok(run) => run.solution.q,
+                Err(e) => {
+                    return Err(Failure::ControllerDiffers(format!(
+                        "the nominal model's closed form does not solve the command within its \
+                         limits: {e}"
+                    )));
+                }
+            }
+        } else if joint_distance(&sol.q, seed) <= SEED_FAR_RAD {
             return near_seed_check(controller, target, fake, seed, sol);
-        }
-        let Some(run) = super::nearest::nearest_solution(controller, nominal, &fake, seed, &sol.q)
-        else {
-            return Err(Failure::ControllerDiffers(
-                "the nominal model solves the command within its limits from no start".into(),
-            ));
+        } else {
+            let found = super::nearest::nearest_solution(controller, nominal, &fake, seed, &sol.q);
+            let Some(run) = found else {
+                return Err(Failure::ControllerDiffers(
+                    "the nominal model solves the command within its limits from no start".into(),
+                ));
+            };
+            run
         };
         apart = joint_distance(&run, &sol.q);
         if apart < SAME_JOINTS_RAD {
@@ -533,7 +567,18 @@ fn solve_from_seed(
         // Near a singularity where two configurations lie a fraction of a degree apart, the
         // solve from `run` can slide back to q*: a start as far beyond `run` then tries the
         // configuration on its side.
-        let mut next = ik.from_start(&target, &run).map_err(failure)?;
+        // Where it cannot, the controller would run a configuration in which the calibrated
+        // robot misses the target: that is what fails, not the solve.
+        let differs = |e: IkFailure| {
+            Failure::ControllerDiffers(format!(
+                "a controller taking the nominal model's solution nearest the seed would run \
+                 another configuration, {:.3e} (rad, mm) from the calibrated solution, in which \
+                 the calibrated model does not reach the target ({e}): give seed joints nearer \
+                 the taught configuration",
+                joint_distance(&run, &sol.q)
+            ))
+        };
+        let mut next = ik.from_start(&target, &run).map_err(differs)?;
         if wrapped_distance(&next.q, &sol.q) < SAME_JOINTS_RAD {
             let beyond: Vec<f64> = (run.iter().zip(&sol.q)).map(|(r, q)| 2.0 * r - q).collect();
             if let Ok(other) = ik.from_start(&target, &beyond) {

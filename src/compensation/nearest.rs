@@ -1,6 +1,7 @@
-//! The solution a controller without a closed form robocal knows (a UR arm) runs for a
-//! commanded pose: its own analytic solutions, the one nearest the joints it is given
-//! (URScript's `get_inverse_kin(pose, qnear)`).
+//! The solution a controller that solves near the joints it is given runs for a commanded
+//! pose, where robocal knows no closed form of its model (a UR-class model has one, and is
+//! solved exactly instead): the solution nearest those joints (as URScript's
+//! `get_inverse_kin(pose, qnear)`).
 //!
 //! One numerical solve from the seed finds a solution, not the nearest: from a seed far from
 //! every solution it can run past a nearer configuration to another (an elbow or a wrist

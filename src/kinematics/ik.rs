@@ -4,9 +4,9 @@
 //! 1. A model with a closed form of its own ([`IkStart::Exact`], thesis App. B) is solved by
 //!    it; no numerical solve.
 //! 2. Else the closed form of a nearby model (the nominal, [`IkStart::Nominal`], placed at the
-//!    model's base and tool: [`SphericalWristIk::placed_as`]) gives the starts: each of its
+//!    model's base and tool: [`ClosedFormIk::placed_as`]) gives the starts: each of its
 //!    solutions in the whole-turn copy nearest the reference joints
-//!    ([`SphericalWristIk::nearest_copy`]), copies within the limits first, then by
+//!    ([`ClosedFormIk::nearest_copy`]), copies within the limits first, then by
 //!    [`joint_distance`] to the reference. Numerical IK of the model ([`solve_model`]) refines
 //!    them.
 //! 3. The caller's seed joints start a numerical solve too, and the only one where no closed
@@ -18,7 +18,7 @@
 //! distinct one; [`IkSolver::from_nearest_start`] (target compensation) solves once from the
 //! nearest start on a given branch, the configuration the controller keeps.
 
-use super::ik_closed::{Branch, MAX_SOLUTIONS, SphericalWristIk};
+use super::ik_closed::{Branch, ClosedFormIk, MAX_SOLUTIONS};
 use super::ik_numeric::{IkOptions, IkSolution, IkTarget, IkWorkspace, ToolModel, solve_model};
 use super::{Pose, Reach};
 use crate::error::{Error, Result};
@@ -33,11 +33,11 @@ const SAME_SOLUTION: f64 = 1e-7;
 #[derive(Debug, Clone)]
 pub enum IkStart {
     /// The model's own closed form: exact solutions, no numerical solve.
-    Exact(SphericalWristIk),
+    Exact(ClosedFormIk),
     /// A rigid model's closed form starts numerical solves of the model: the nominal's
     /// (placed at the model's base and tool), or for a compliant robot its own without the
     /// compliances.
-    Nominal(SphericalWristIk),
+    Nominal(ClosedFormIk),
     /// Only the caller's seed starts the numerical solve; the text says why the model has no
     /// closed form.
     Seed(String),
@@ -49,9 +49,9 @@ impl IkStart {
     /// that has none or other joints); else the seed.
     pub fn choose(robot: &Robot, nominal: Option<&Robot>) -> Result<IkStart> {
         let own = if robot.is_compliant() {
-            SphericalWristIk::new(&robot.rigid()).map(IkStart::Nominal)
+            ClosedFormIk::new(&robot.rigid()).map(IkStart::Nominal)
         } else {
-            SphericalWristIk::new(robot).map(IkStart::Exact)
+            ClosedFormIk::new(robot).map(IkStart::Exact)
         };
         match own {
             Ok(start) => Ok(start),
@@ -64,7 +64,7 @@ impl IkStart {
                             robot.dof()
                         )));
                     }
-                    let ik = SphericalWristIk::new(nom).map_err(|e| {
+                    let ik = ClosedFormIk::new(nom).map_err(|e| {
                         Error::Invalid(format!("the nominal model has no closed form: {e}"))
                     })?;
                     Ok(IkStart::Nominal(ik.placed_as(nom, robot)))
@@ -75,7 +75,7 @@ impl IkStart {
     }
 
     /// The closed form that gives starts or solutions, if any.
-    pub fn closed_form(&self) -> Option<&SphericalWristIk> {
+    pub fn closed_form(&self) -> Option<&ClosedFormIk> {
         match self {
             IkStart::Exact(ik) | IkStart::Nominal(ik) => Some(ik),
             IkStart::Seed(_) => None,

@@ -1,11 +1,14 @@
-//! Closed-form inverse kinematics for 6R robots of the thesis robot's class (App. B): axes 2
-//! and 3 parallel, axes 4, 5 and 6 meeting in one point (a spherical wrist). Up to 8
-//! solutions: 2 for joint 1 x 2 elbows x 2 wrists.
+//! Closed-form inverse kinematics for 6R robots of two classes, up to 8 solutions each:
+//! - the thesis robot's (App. B): axes 2 and 3 parallel, axes 4, 5 and 6 meeting in one point
+//!   (a spherical wrist); 2 solutions for joint 1 x 2 elbows x 2 wrists;
+//! - the UR class (Universal Robots' arms): axes 2, 3 and 4 parallel, axis 5 meeting axes 4
+//!   and 6 ([`super::ik_parallel`]); 2 for joint 1 x 2 for joint 5 (wrist) x 2 elbows.
 //!
 //! Thesis App. B solves the FANUC's equations symbolically; here the same decoupling is done
 //! on the product-of-exponentials form T(q) = e1(q1) ... e6(q6) M, with the joint axes read
 //! from the model at q = 0. Each step is a Paden-Kahan subproblem, so the solver works for
-//! any convention (MDH, Hayati, DH) and any base and tool that give this structure:
+//! any convention (MDH, Hayati, DH) and any base and tool that give this structure. With a
+//! spherical wrist:
 //! 1. the wrist centre W = G W0 (G = T M^-1) depends on q1..q3 only;
 //! 2. q1: the arm plane (normal to axes 2 and 3) must hold W, `a cos q1 + b sin q1 = c`;
 //! 3. q3: subproblem 3, the distance from axis 2 to W fixes the elbow;
@@ -14,19 +17,19 @@
 
 use super::Pose;
 use super::fk::{Frames, frames};
-use super::subproblems::{cos_sin_equation, rotate_onto, rotate_to_distance, rotate_two_axes};
+use super::subproblems::{
+    STRUCTURE_TOL, closest_points, cos_sin_equation, rot, rotate_onto, rotate_to_distance,
+    rotate_two_axes, wrap,
+};
 use crate::error::{Error, Result};
 use crate::model::{JointType, Robot};
-use nalgebra::{Matrix3, Rotation3, Vector3};
+use nalgebra::Vector3;
 use std::f64::consts::PI;
 
 type V3 = Vector3<f64>;
 
-/// Tolerance (mm) for axes meeting in a point, and (unit-vector norm) for parallel axes.
-const STRUCTURE_TOL: f64 = 1e-7;
-
 /// Sine of the angle between axis 4 and axis 6 (as q5 turns it) below which the wrist counts
-/// as singular ([`SphericalWristIk::wrist_split_nearest`]). The closed form's q5 there is good
+/// as singular ([`ClosedFormIk::wrist_split_nearest`]). The closed form's q5 there is good
 /// to about the square root of the rounding (subproblem 2 takes a square root: 1e-8 rad), so
 /// the bound must lie above that; a solution within it is put on the singularity, which
 /// turns the tool by about this angle over the sine between axes 5 and 6 (1e-7 rad for a
@@ -45,7 +48,8 @@ pub struct Branch {
     pub shoulder: u8,
     /// Root of the joint-3 (elbow) subproblem, 0 or 1.
     pub elbow: u8,
-    /// Root of the joints 4-5 subproblem (wrist flip), 0 or 1.
+    /// Root of the joints 4-5 subproblem (wrist flip), 0 or 1; for the UR class, of joint
+    /// 5's equation (the sign of q5).
     pub wrist: u8,
 }
 
@@ -58,37 +62,34 @@ impl std::fmt::Display for Branch {
 
 /// A closed-form solver built once for a robot and reused for many poses.
 #[derive(Debug, Clone)]
-pub struct SphericalWristIk {
+pub struct ClosedFormIk {
     /// Joint axis directions at q = 0 (world, unit).
     w: [V3; 6],
     /// A point on each joint axis at q = 0 (world, mm).
     p: [V3; 6],
-    /// Wrist centre at q = 0 (mm).
-    w0: V3,
+    /// Which class the robot is of, with its points at q = 0.
+    structure: Structure,
     /// Inverse of the tool pose at q = 0.
     m_inv: Pose,
     /// Joint limits (rad).
     limits: [[f64; 2]; 6],
     /// The q5 (rad) at which axis 6 lies on axis 4 (first) and on its opposite (second),
-    /// where some q5 does: the wrist's singularities ([`SphericalWristIk::straight_wrist`]).
+    /// where some q5 does: a spherical wrist's singularities
+    /// ([`ClosedFormIk::straight_wrist`]; none for the UR class).
     straight: [Option<f64>; 2],
     /// |w5 x w6|: the radius of the cone axis 6 sweeps about axis 5, so that q5 off a
     /// singular value by e turns axis 6 off axis 4 by about e times this.
     cone: f64,
 }
 
-/// Closest points of two lines (point, unit direction); None when parallel.
-fn closest_points(p1: &V3, d1: &V3, p2: &V3, d2: &V3) -> Option<(V3, V3)> {
-    let r = p1 - p2;
-    let b = d1.dot(d2);
-    let denom = 1.0 - b * b;
-    if denom < 1e-12 {
-        return None;
-    }
-    let (d, e) = (d1.dot(&r), d2.dot(&r));
-    let s = (b * e - d) / denom;
-    let t = (e - b * d) / denom;
-    Some((p1 + d1 * s, p2 + d2 * t))
+/// The two classes of robot the closed form solves.
+#[derive(Debug, Clone, Copy)]
+enum Structure {
+    /// Axes 4, 5 and 6 meet in the wrist centre (mm, at q = 0).
+    SphericalWrist { centre: V3 },
+    /// Axes 2, 3 and 4 parallel; axis 5 meets axis 4 at `a` and axis 6 at `b` (mm, at
+    /// q = 0).
+    ParallelAxes { a: V3, b: V3 },
 }
 
 fn distance_to_line(x: &V3, p: &V3, d: &V3) -> f64 {
@@ -96,28 +97,7 @@ fn distance_to_line(x: &V3, p: &V3, d: &V3) -> f64 {
     (r - d * d.dot(&r)).norm()
 }
 
-/// Rotation by `angle` (rad) about the unit axis `w` (Rodrigues' formula).
-fn rot(w: &V3, angle: f64) -> Rotation3<f64> {
-    let (s, c) = libm::sincos(angle);
-    let k = w.cross_matrix();
-    Rotation3::from_matrix_unchecked(
-        Matrix3::identity() * c + w * w.transpose() * (1.0 - c) + k * s,
-    )
-}
-
-/// Wraps an angle to [-pi, pi). The solver's angles come from atan2 plus or minus acos, so
-/// a few steps of 2 pi suffice; this avoids `rem_euclid` (an fmod) on 48 values per pose.
-fn wrap(mut a: f64) -> f64 {
-    while a >= PI {
-        a -= 2.0 * PI;
-    }
-    while a < -PI {
-        a += 2.0 * PI;
-    }
-    a
-}
-
-impl SphericalWristIk {
+impl ClosedFormIk {
     /// Checks the robot's structure at q = 0 and prepares the solver.
     pub fn new(robot: &Robot) -> Result<Self> {
         if robot.dof() != 6 {
@@ -147,38 +127,34 @@ impl SphericalWristIk {
         if w[0].cross(&w[1]).norm() < 1e-6 {
             return Err(Error::NoClosedForm("axes 1 and 2 are parallel".into()));
         }
-        let (a, b) = closest_points(&p[3], &w[3], &p[4], &w[4])
-            .ok_or_else(|| Error::NoClosedForm("axes 4 and 5 are parallel".into()))?;
-        if (a - b).norm() > STRUCTURE_TOL {
-            return Err(Error::NoClosedForm(format!(
-                "axes 4 and 5 do not intersect (they pass {:.3e} mm apart): no spherical wrist",
-                (a - b).norm()
-            )));
-        }
-        let w0 = (a + b) * 0.5;
-        let off = distance_to_line(&w0, &p[5], &w[5]);
-        if off > STRUCTURE_TOL {
-            return Err(Error::NoClosedForm(format!(
-                "axis 6 misses the intersection of axes 4 and 5 by {off:.3e} mm: no spherical wrist"
-            )));
-        }
-        if w[4].cross(&w[5]).norm() < 1e-6 {
-            return Err(Error::NoClosedForm("axes 5 and 6 are parallel".into()));
-        }
+        let structure = match spherical_wrist(&w, &p) {
+            Ok(centre) => Structure::SphericalWrist { centre },
+            Err(spherical) => match super::ik_parallel::structure(&w, &p) {
+                Ok((a, b)) => Structure::ParallelAxes { a, b },
+                Err(parallel) => {
+                    return Err(Error::NoClosedForm(format!(
+                        "{spherical}, nor is it of the UR class: {parallel}"
+                    )));
+                }
+            },
+        };
         let mut limits = [[0.0; 2]; 6];
         for (l, j) in limits.iter_mut().zip(robot.joints()) {
             *l = j.limits_internal();
         }
         // Axis 6 meets +-axis 4 as q5 turns where both make the same angle with axis 5.
-        let straight = [1.0, -1.0].map(|s: f64| {
-            let target = w[3] * s;
-            ((w[4].dot(&w[5]) - w[4].dot(&target)).abs() < STRUCTURE_TOL)
-                .then(|| wrap(rotate_onto(&w[4], &w[5], &target)))
-        });
-        Ok(SphericalWristIk {
+        let straight = match structure {
+            Structure::SphericalWrist { .. } => [1.0, -1.0].map(|s: f64| {
+                let target = w[3] * s;
+                ((w[4].dot(&w[5]) - w[4].dot(&target)).abs() < STRUCTURE_TOL)
+                    .then(|| wrap(rotate_onto(&w[4], &w[5], &target)))
+            }),
+            Structure::ParallelAxes { .. } => [None, None],
+        };
+        Ok(ClosedFormIk {
             w,
             p,
-            w0,
+            structure,
             m_inv: f.tool.inverse(),
             limits,
             straight,
@@ -186,16 +162,30 @@ impl SphericalWristIk {
         })
     }
 
+    /// Whether the robot is of the UR class (axes 2, 3 and 4 parallel) rather than one with
+    /// a spherical wrist.
+    pub fn is_ur_class(&self) -> bool {
+        matches!(self.structure, Structure::ParallelAxes { .. })
+    }
+
     /// This solver for the arm moved in the world by `left` and carrying `right` beyond its
     /// tool: the closed form of the robot whose tool pose is left T(q) right (mm), T(q) this
     /// solver's. A pose carried along keeps its joint values and branches: the solver reads
     /// only the axes' geometry relative to the target.
-    pub fn moved(&self, left: &Pose, right: &Pose) -> SphericalWristIk {
+    pub fn moved(&self, left: &Pose, right: &Pose) -> ClosedFormIk {
         let point = |p: &V3| left.transform_point(&(*p).into()).coords;
-        SphericalWristIk {
+        ClosedFormIk {
             w: self.w.map(|w| left.rotation * w),
             p: self.p.map(|p| point(&p)),
-            w0: point(&self.w0),
+            structure: match self.structure {
+                Structure::SphericalWrist { centre } => Structure::SphericalWrist {
+                    centre: point(&centre),
+                },
+                Structure::ParallelAxes { a, b } => Structure::ParallelAxes {
+                    a: point(&a),
+                    b: point(&b),
+                },
+            },
             m_inv: (left * self.m_inv.inverse() * right).inverse(),
             limits: self.limits,
             straight: self.straight,
@@ -204,10 +194,10 @@ impl SphericalWristIk {
     }
 
     /// The closed form of `nominal` (this solver's robot) placed at `robot`'s base and tool
-    /// ([`SphericalWristIk::moved`]): starts for the numerical solves of `robot`, a
+    /// ([`ClosedFormIk::moved`]): starts for the numerical solves of `robot`, a
     /// calibration of `nominal`, in `robot`'s world frame, which a base registered to a
     /// tracker puts metres from the nominal's.
-    pub fn placed_as(&self, nominal: &Robot, robot: &Robot) -> SphericalWristIk {
+    pub fn placed_as(&self, nominal: &Robot, robot: &Robot) -> ClosedFormIk {
         let left = robot.base().transform() * nominal.base().transform().inverse();
         let right = nominal.tool().transform().inverse() * robot.tool().transform();
         self.moved(&left, &right)
@@ -217,30 +207,48 @@ impl SphericalWristIk {
     /// Up to 8; none when the pose is out of reach. At a singularity (wrist centre on axis 1,
     /// or q5 such that axes 4 and 6 align) one representative of the continuum is returned
     /// (at the wrist's, an arbitrary split of q4 + s q6: see
-    /// [`SphericalWristIk::wrist_split_nearest`]).
+    /// [`ClosedFormIk::wrist_split_nearest`]).
     pub fn solve_unlimited(&self, target: &Pose, out: &mut Vec<[f64; 6]>) {
         out.clear();
         self.each_solution(target, |_, q| out.push(q));
     }
 
-    /// As [`SphericalWristIk::solve_unlimited`], each solution with its [`Branch`].
+    /// As [`ClosedFormIk::solve_unlimited`], each solution with its [`Branch`].
     pub fn solve_branches(&self, target: &Pose, out: &mut Vec<(Branch, [f64; 6])>) {
         out.clear();
         self.each_solution(target, |b, q| out.push((b, q)));
     }
 
     fn each_solution(&self, target: &Pose, mut emit: impl FnMut(Branch, [f64; 6])) {
+        let g = target * self.m_inv;
+        match self.structure {
+            Structure::SphericalWrist { centre } => self.spherical(&g, &centre, emit),
+            Structure::ParallelAxes { a, b } => {
+                let branch = |[shoulder, elbow, wrist]: [u8; 3]| Branch {
+                    shoulder,
+                    elbow,
+                    wrist,
+                };
+                super::ik_parallel::each_solution(&self.w, &self.p, &a, &b, &g, |r, q| {
+                    emit(branch(r), q)
+                })
+            }
+        }
+    }
+
+    /// [`ClosedFormIk::each_solution`] of a spherical wrist of centre `w0` (mm, at q = 0) for
+    /// G = T M^-1.
+    fn spherical(&self, g: &Pose, w0: &V3, mut emit: impl FnMut(Branch, [f64; 6])) {
         let [w1, w2, w3, w4, w5, w6] = &self.w;
         let [p1, p2, p3, ..] = &self.p;
-        let g = target * self.m_inv;
-        let wc = g.rotation * self.w0 + g.translation.vector;
+        let wc = g.rotation * w0 + g.translation.vector;
 
         // q1: (Rot(w1, q1) w2) . (W - p1) = w2 . (W0 - p1).
         let v = wc - p1;
         let (w1u, w1v) = (w1.dot(w2), w1.dot(&v));
         let a = w2.dot(&v) - w1u * w1v;
         let b = w1.cross(w2).dot(&v);
-        let c = w2.dot(&(self.w0 - p1)) - w1u * w1v;
+        let c = w2.dot(&(w0 - p1)) - w1u * w1v;
         let q1s: &[f64] = &match cos_sin_equation(a, b, c) {
             Some(s) => s,
             None if a.hypot(b) < 1e-9 && c.abs() < 1e-9 => [0.0, 0.0],
@@ -251,13 +259,13 @@ impl SphericalWristIk {
             let r1 = rot(w1, q1);
             let wp = r1.inverse() * (wc - p1) + p1;
             let delta = (wp - p2).norm();
-            let Some(q3s) = rotate_to_distance(w3, &(self.w0 - p3), &(p2 - p3), delta) else {
+            let Some(q3s) = rotate_to_distance(w3, &(w0 - p3), &(p2 - p3), delta) else {
                 continue;
             };
             let dedup3 = (q3s[0] - q3s[1]).abs() < 1e-14;
             for (b3, &q3) in q3s[..if dedup3 { 1 } else { 2 }].iter().enumerate() {
                 let r3 = rot(w3, q3);
-                let elbow = r3 * (self.w0 - p3) + p3;
+                let elbow = r3 * (w0 - p3) + p3;
                 let q2 = rotate_onto(w2, &(elbow - p2), &(wp - p2));
                 let r123 = r1 * rot(w2, q2) * r3;
                 let rw = r123.inverse() * g.rotation;
@@ -285,14 +293,14 @@ impl SphericalWristIk {
     /// Every solution within the joint limits, including the copies shifted by multiples of
     /// 360 deg that the limits allow; solutions equal modulo 360 deg (within 1e-9 rad) are
     /// merged first, so the copies are distinct. At most [`MAX_SOLUTIONS`] are listed: false
-    /// when more exist (joint ranges of many turns; see [`SphericalWristIk::solve_nearest`]).
+    /// when more exist (joint ranges of many turns; see [`ClosedFormIk::solve_nearest`]).
     /// At a wrist singularity, the split of q4 + s q6 nearest the middle of the ranges.
     pub fn solve(&self, target: &Pose, out: &mut Vec<[f64; 6]>) -> bool {
         let mid = self.limits.map(|[lo, hi]| 0.5 * (lo + hi));
         self.solve_around(target, &mid, out)
     }
 
-    /// [`SphericalWristIk::solve`], a wrist singularity's split of q4 + s q6 the one nearest
+    /// [`ClosedFormIk::solve`], a wrist singularity's split of q4 + s q6 the one nearest
     /// `reference` (rad).
     pub fn solve_around(&self, target: &Pose, reference: &[f64], out: &mut Vec<[f64; 6]>) -> bool {
         let mut raw = Vec::with_capacity(8);
@@ -342,7 +350,7 @@ impl SphericalWristIk {
         }
     }
 
-    /// [`SphericalWristIk::wrist_split_nearest`] of a `q` at a straight wrist of sign `s`.
+    /// [`ClosedFormIk::wrist_split_nearest`] of a `q` at a straight wrist of sign `s`.
     fn split_nearest(&self, q: &[f64; 6], s: f64, reference: &[f64]) -> [f64; 6] {
         let d = wrap(q[3] + s * q[5] - (reference[3] + s * reference[5]));
         let singular = self.straight[usize::from(s < 0.0)].unwrap_or(q[4]);
@@ -353,7 +361,7 @@ impl SphericalWristIk {
         out
     }
 
-    /// s of [`SphericalWristIk::wrist_split_nearest`] (+1 or -1) where `q` is at a wrist
+    /// s of [`ClosedFormIk::wrist_split_nearest`] (+1 or -1) where `q` is at a wrist
     /// singularity (within [`WRIST_ALIGNED`]); None elsewhere.
     pub fn straight_wrist(&self, q: &[f64; 6]) -> Option<f64> {
         // No trigonometry: this runs for every closed-form solution.
@@ -371,12 +379,12 @@ impl SphericalWristIk {
     /// The copy of `q` (each joint shifted by whole turns) nearest `reference` (rad) joint by
     /// joint among the copies within the limits, and true; when some joint has no copy within
     /// its limits, the copy nearest `reference` and false. At a wrist singularity, q4 and q6
-    /// split first as [`SphericalWristIk::wrist_split_within_limits`] does.
+    /// split first as [`ClosedFormIk::wrist_split_within_limits`] does.
     pub fn nearest_copy(&self, q: &[f64; 6], reference: &[f64]) -> ([f64; 6], bool) {
         self.turn_copy(&self.wrist_split_within_limits(q, reference), reference)
     }
 
-    /// [`SphericalWristIk::wrist_split_nearest`] within joint 4's and joint 6's ranges: of
+    /// [`ClosedFormIk::wrist_split_nearest`] within joint 4's and joint 6's ranges: of
     /// the splits q4 + s q6 = t + 2 pi n whose q4 and q6 both lie within them (each line of the
     /// continuum through the ranges' box, from the point nearest `reference` along the line
     /// to the box), the one nearest `reference` (rad); the unconstrained split where no line
@@ -426,7 +434,7 @@ impl SphericalWristIk {
         out
     }
 
-    /// [`SphericalWristIk::nearest_copy`] of `q` as it is (whole turns only).
+    /// [`ClosedFormIk::nearest_copy`] of `q` as it is (whole turns only).
     fn turn_copy(&self, q: &[f64; 6], reference: &[f64]) -> ([f64; 6], bool) {
         let tau = 2.0 * PI;
         let mut cand = *q;
@@ -496,7 +504,31 @@ impl SphericalWristIk {
     }
 }
 
-/// Most solutions [`SphericalWristIk::solve`] lists for one pose.
+/// The wrist centre (mm, at q = 0) where axes 4, 5 and 6 (directions `w`, points `p` at
+/// q = 0) meet in one point; else why not.
+fn spherical_wrist(w: &[V3; 6], p: &[V3; 6]) -> std::result::Result<V3, String> {
+    let (a, b) = closest_points(&p[3], &w[3], &p[4], &w[4])
+        .ok_or_else(|| "axes 4 and 5 are parallel".to_string())?;
+    if (a - b).norm() > STRUCTURE_TOL {
+        return Err(format!(
+            "axes 4 and 5 do not intersect (they pass {:.3e} mm apart): no spherical wrist",
+            (a - b).norm()
+        ));
+    }
+    let w0 = (a + b) * 0.5;
+    let off = distance_to_line(&w0, &p[5], &w[5]);
+    if off > STRUCTURE_TOL {
+        return Err(format!(
+            "axis 6 misses the intersection of axes 4 and 5 by {off:.3e} mm: no spherical wrist"
+        ));
+    }
+    if w[4].cross(&w[5]).norm() < 1e-6 {
+        return Err("axes 5 and 6 are parallel".into());
+    }
+    Ok(w0)
+}
+
+/// Most solutions [`ClosedFormIk::solve`] lists for one pose.
 pub const MAX_SOLUTIONS: usize = 10_000;
 
 /// `raw` without solutions equal to an earlier one modulo 2 pi on every joint (1e-9 rad).

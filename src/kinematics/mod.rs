@@ -7,6 +7,7 @@ pub mod gravity;
 pub mod ik;
 pub mod ik_closed;
 pub mod ik_numeric;
+pub mod ik_parallel;
 pub mod jacobian;
 pub mod load;
 pub mod reach;
@@ -16,7 +17,7 @@ pub mod unobserved;
 
 pub use fk::{Frames, frames, tool_pose};
 pub use ik::{IkFailure, IkSolver, IkStart, Solved, joint_distance};
-pub use ik_closed::{Branch, SphericalWristIk};
+pub use ik_closed::{Branch, ClosedFormIk};
 pub use ik_numeric::{
     IkOptions, IkSolution, IkTarget, IkWorkspace, RobotModel, ToolModel, solve_model, solve_numeric,
 };

@@ -1,8 +1,11 @@
 //! Paden-Kahan subproblems (Murray, Li and Sastry, "A Mathematical Introduction to Robotic
-//! Manipulation", 1994, sec. 3.2). Vectors are taken relative to a point on the axis (or on
-//! both axes); axis directions are unit vectors; angles in rad.
+//! Manipulation", 1994, sec. 3.2), and the geometry the closed forms share (closest points of
+//! two lines, Rodrigues' rotation, angle wrapping, the tolerance of their structure checks).
+//! Vectors are taken relative to a point on the axis (or on both axes); axis directions are
+//! unit vectors; angles in rad, lengths in mm.
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Rotation3, Vector3};
+use std::f64::consts::PI;
 
 type V3 = Vector3<f64>;
 
@@ -90,6 +93,44 @@ pub fn cos_sin_equation(a: f64, b: f64, c: f64) -> Option<[f64; 2]> {
     let cos = clamp_tangent(c / r)?;
     let d = cos.acos();
     Some([phi - d, phi + d])
+}
+
+/// Tolerance (mm) for axes meeting in a point, and (unit-vector norm) for parallel axes.
+pub const STRUCTURE_TOL: f64 = 1e-7;
+
+/// Closest points of two lines (point, unit direction); None when parallel.
+pub fn closest_points(p1: &V3, d1: &V3, p2: &V3, d2: &V3) -> Option<(V3, V3)> {
+    let r = p1 - p2;
+    let b = d1.dot(d2);
+    let denom = 1.0 - b * b;
+    if denom < 1e-12 {
+        return None;
+    }
+    let (d, e) = (d1.dot(&r), d2.dot(&r));
+    let s = (b * e - d) / denom;
+    let t = (e - b * d) / denom;
+    Some((p1 + d1 * s, p2 + d2 * t))
+}
+
+/// Rotation by `angle` (rad) about the unit axis `w` (Rodrigues' formula).
+pub fn rot(w: &V3, angle: f64) -> Rotation3<f64> {
+    let (s, c) = libm::sincos(angle);
+    let k = w.cross_matrix();
+    Rotation3::from_matrix_unchecked(
+        Matrix3::identity() * c + w * w.transpose() * (1.0 - c) + k * s,
+    )
+}
+
+/// Wraps an angle to [-pi, pi). The solver's angles come from atan2 plus or minus acos, so
+/// a few steps of 2 pi suffice; this avoids `rem_euclid` (an fmod) on 48 values per pose.
+pub fn wrap(mut a: f64) -> f64 {
+    while a >= PI {
+        a -= 2.0 * PI;
+    }
+    while a < -PI {
+        a += 2.0 * PI;
+    }
+    a
 }
 
 #[cfg(test)]

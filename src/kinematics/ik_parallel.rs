@@ -1,0 +1,125 @@
+//! Closed-form inverse kinematics of the UR class (Universal Robots' arms and their like):
+//! axes 2, 3 and 4 parallel (direction n), axis 1 not parallel to them, axis 5 meeting axis
+//! 4 (at A) and axis 6 (at B), not parallel to n, and axis 6 not parallel to axis 5. Up to 8
+//! solutions: 2 for q1 x 2 for q5 (the wrist) x 2 elbows.
+//!
+//! On the product-of-exponentials form T(q) = e1(q1) ... e6(q6) M (axes read at q = 0; G =
+//! T M^-1 = e1 ... e6), a rotation about an axis parallel to n keeps every point's and every
+//! direction's component along n, which decouples the joints:
+//! 1. B lies on axes 5 and 6, so B(q) = G B0 = e1 e2 e3 e4 B0 and n . e1^-1 G B0 = n . B0:
+//!    `a cos q1 + b sin q1 = c`;
+//! 2. axis 6 points R_G w6 = R1 R234 R5 w6, so n . R5(q5) w6 = n . R1^T R_G w6: q5 from the
+//!    same equation (its two roots are the wrist's flip);
+//! 3. R6^T R5^T n = R_G^T R1 n: q6 by subproblem 1 (free where axis 6 lies along n, the
+//!    wrist singularity sin q5 = 0, where q6 = 0 is returned and q2..q4 take the rest);
+//! 4. A lies on axes 4 and 5, so e1^-1 G e6^-1 e5^-1 A0 = e2 e3 A0: subproblem 3 (the
+//!    distance from axis 2) gives q3, subproblem 1 q2;
+//! 5. R4 = (R1 R2 R3)^T R_G (R5 R6)^T: q4 by subproblem 1.
+
+use super::Pose;
+use super::subproblems::{
+    STRUCTURE_TOL, closest_points, cos_sin_equation, rot, rotate_onto, rotate_to_distance, wrap,
+};
+use nalgebra::Vector3;
+
+type V3 = Vector3<f64>;
+
+/// A and B (mm, at q = 0) where the axes (directions `w`, points `p` at q = 0) have the UR
+/// class's structure; else why not.
+pub(super) fn structure(w: &[V3; 6], p: &[V3; 6]) -> Result<(V3, V3), String> {
+    let n = &w[1];
+    if w[3].cross(n).norm() > STRUCTURE_TOL {
+        return Err("axis 4 is not parallel to axes 2 and 3".into());
+    }
+    if w[4].cross(n).norm() < 1e-6 {
+        return Err("axis 5 is parallel to axes 2, 3 and 4".into());
+    }
+    if w[5].cross(&w[4]).norm() < 1e-6 {
+        return Err("axes 5 and 6 are parallel".into());
+    }
+    let meet = |i: usize, j: usize| -> Result<V3, String> {
+        let (a, b) = closest_points(&p[i], &w[i], &p[j], &w[j])
+            .ok_or_else(|| format!("axes {} and {} are parallel", i + 1, j + 1))?;
+        if (a - b).norm() > STRUCTURE_TOL {
+            return Err(format!(
+                "axes {} and {} do not intersect (they pass {:.3e} mm apart)",
+                i + 1,
+                j + 1,
+                (a - b).norm()
+            ));
+        }
+        Ok((a + b) * 0.5)
+    };
+    Ok((meet(3, 4)?, meet(4, 5)?))
+}
+
+/// Every solution of G = T M^-1 (the target times the inverse of the tool pose at q = 0),
+/// wrapped to [-pi, pi), with its roots [q1's, q3's (elbow), q5's (wrist)], 0 or 1 each, for
+/// the axes `w`, `p` and the points `a0` (axes 4 and 5) and `b0` (axes 5 and 6) at q = 0
+/// (mm). None when the pose is out of reach.
+pub(super) fn each_solution(
+    w: &[V3; 6],
+    p: &[V3; 6],
+    a0: &V3,
+    b0: &V3,
+    g: &Pose,
+    mut emit: impl FnMut([u8; 3], [f64; 6]),
+) {
+    let [w1, n, w3, w4, w5, w6] = w;
+    let [p1, p2, p3, ..] = p;
+    let rg = g.rotation;
+    let b = rg * b0 + g.translation.vector;
+
+    // q1: (Rot(w1, q1) n) . (B - p1) = n . (B0 - p1).
+    let v = b - p1;
+    let (w1n, w1v) = (w1.dot(n), w1.dot(&v));
+    let a = n.dot(&v) - w1n * w1v;
+    let bb = w1.cross(n).dot(&v);
+    let c = n.dot(&(b0 - p1)) - w1n * w1v;
+    let q1s: &[f64] = &match cos_sin_equation(a, bb, c) {
+        Some(s) => s,
+        None if a.hypot(bb) < 1e-9 && c.abs() < 1e-9 => [0.0, 0.0],
+        None => return,
+    };
+    let distinct = |r: &[f64]| if (r[0] - r[1]).abs() < 1e-14 { 1 } else { 2 };
+    // Axis 6's part along axis 5, which q5 does not turn.
+    let w6_along = w5 * w5.dot(w6);
+    for (b1, &q1) in q1s[..distinct(q1s)].iter().enumerate() {
+        let r1 = rot(w1, q1);
+        // q5: n . Rot(w5, q5) w6 = n . R1^T R_G w6.
+        let d = n.dot(&(r1.inverse() * (rg * w6)));
+        let a5 = n.dot(&(w6 - w6_along));
+        let b5 = n.dot(&w5.cross(w6));
+        let Some(q5s) = cos_sin_equation(a5, b5, d - n.dot(&w6_along)) else {
+            continue;
+        };
+        for (bw, &q5) in q5s[..distinct(&q5s)].iter().enumerate() {
+            let r5 = rot(w5, q5);
+            // q6: Rot(w6, q6) m = R5^T n with m = R_G^T R1 n.
+            let m = rg.inverse() * (r1 * n);
+            let q6 = rotate_onto(w6, &m, &(r5.inverse() * n));
+            let r6 = rot(w6, q6);
+            // A = G e6^-1 e5^-1 A0 (B0 lies on axes 5 and 6), then e1^-1 A = e2 e3 A0.
+            let a_back = r6.inverse() * (r5.inverse() * (a0 - b0)) + b0;
+            let a_world = rg * a_back + g.translation.vector;
+            let ap = r1.inverse() * (a_world - p1) + p1;
+            let delta = (ap - p2).norm();
+            let Some(q3s) = rotate_to_distance(w3, &(a0 - p3), &(p2 - p3), delta) else {
+                continue;
+            };
+            for (b3, &q3) in q3s[..distinct(&q3s)].iter().enumerate() {
+                let r3 = rot(w3, q3);
+                let elbow = r3 * (a0 - p3) + p3;
+                let q2 = rotate_onto(n, &(elbow - p2), &(ap - p2));
+                let r4 = (r1 * rot(n, q2) * r3).inverse() * rg * (r5 * r6).inverse();
+                // Any direction off axis 4 fixes q4; axis 5's part across it is one.
+                let x = w5 - w4 * w4.dot(w5);
+                let q4 = rotate_onto(w4, &x, &(r4 * x));
+                emit(
+                    [b1 as u8, b3 as u8, bw as u8],
+                    [q1, q2, q3, q4, q5, q6].map(wrap),
+                );
+            }
+        }
+    }
+}
