@@ -599,6 +599,22 @@ fn far_seeded_ur10_commands_are_the_nominal_solution_nearest_the_seed() {
             );
         }
     }
+    // Taught at the wrist singularity (q5 = 0, q6 free), seeded with the taught joints: the
+    // command keeps them (before, 11 of 20 such rows failed and 6 moved 38-113 deg).
+    for _ in 0..20 {
+        let mut q: Vec<f64> = (0..6).map(|_| rng.random_range(-3.0..3.0)).collect();
+        q[4] = 0.0;
+        let Ok(cmd) = solver.solve(&Target::Pose(tool_pose(&robot, &q)), Some(&q)) else {
+            panic!("{q:?} at the wrist singularity has no command");
+        };
+        for (a, b) in cmd.q.iter().zip(&q) {
+            assert!(
+                (a - b).abs() < 1e-6,
+                "{q:?}: the command's joints {:?}",
+                cmd.q
+            );
+        }
+    }
     // Every one is solved (the solve from the seed alone, with the nominal's solutions
     // searched, left 18 unsolved); a few may fail by name near the elbow's or the shoulder's
     // singularity.

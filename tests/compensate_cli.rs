@@ -528,8 +528,8 @@ fn a_position_only_calibration_leaves_the_tools_rotation_unchecked_and_says_so()
 
 #[test]
 fn a_far_seed_gets_the_configuration_a_controller_nearest_the_seed_runs() {
-    // A UR10 (no closed form robocal knows: its controller takes its analytic solution
-    // nearest the joints it is given) taught at `taught`, seeded 10-17 deg off every joint.
+    // A UR10 (its controller takes its analytic solution nearest the joints it is given,
+    // no configuration flags) taught at `taught`, seeded 10-17 deg off every joint.
     // The other configurations of that pose flip the elbow (q3 -> -q3, 79 deg away), the
     // wrist (q5 -> -q5, 246 deg) or the shoulder (q1 by about half a turn): all farther from
     // the seed than the taught joints (35.6 deg), so the controller runs those. A solve from

@@ -269,6 +269,34 @@ fn ur_closed_form_misses_no_solution_a_numerical_search_finds() {
 }
 
 #[test]
+fn ur_wrist_singularity_keeps_the_seeds_q6_and_reaches_every_pose() {
+    // q5 = 0: axis 6 lies along axes 2-4, so q6 is free (q2..q4 take the rest where the
+    // elbow reaches). Every such pose has solutions that reproduce it, and the solution
+    // nearest a seed on the continuum is the seed itself. Before, q6 came from rounding
+    // noise: 7 of 100 such poses read unreachable, and the seed was not kept.
+    let robot = robot_file("ur10.toml");
+    let ik = ClosedFormIk::new(&robot).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(50);
+    let mut sols = Vec::new();
+    for k in 0..300 {
+        let mut q: Vec<f64> = (0..6).map(|_| rng.random_range(-PI..PI)).collect();
+        q[4] = if k % 2 == 0 { 0.0 } else { PI };
+        let target = tool_pose(&robot, &q);
+        ik.solve_unlimited(&target, &mut sols);
+        assert!(!sols.is_empty(), "{q:?}: no solution");
+        for s in &sols {
+            let (dp, dr) = pose_errors(&tool_pose(&robot, s), &target);
+            assert!(
+                dp < 1e-9 && dr < 1e-12,
+                "{q:?}: {s:?} misses by {dp} mm, {dr} rad"
+            );
+        }
+        let near = ik.solve_nearest(&target, &q).unwrap();
+        assert!(joint_gap(&near, &q) < 1e-9, "{q:?}: nearest {near:?}");
+    }
+}
+
+#[test]
 fn closed_form_reports_unreachable_and_wrong_structure() {
     let robot = robot_file("fanuc_r2000ib_210f.toml");
     let ik = ClosedFormIk::new(&robot).unwrap();

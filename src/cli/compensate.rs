@@ -28,9 +28,10 @@ pub struct CompensateArgs {
     compensator: Option<PathBuf>,
     /// Desired tool poses: CSV with x,y,z (mm) and rz,ry,rx (deg, R = Rz Ry Rx), or x,y,z
     /// only (the orientation is then the calibrated robot's at the seed joints). Optional
-    /// q1..qN (deg) seed each row (branch and turns; without a nominal closed form the start
-    /// of the solve, required; all empty: no seed) and are renamed seed_q1..seed_qN; other
-    /// columns are carried through.
+    /// q1..qN (deg) seed each row (branch and turns; for a controller solving near the seed,
+    /// a UR-class nominal or one without a closed form, the joints it solves near, required;
+    /// all empty: no seed) and are renamed seed_q1..seed_qN; other columns are carried
+    /// through.
     #[arg(long)]
     targets: PathBuf,
     /// Seed joints "j1,...,jN" (deg) for rows without their own (no q1..qN columns, or all

@@ -247,7 +247,7 @@ impl<M: ToolModel> IkSolver<M> {
         let Some(ik) = self.start.closed_form() else {
             return Vec::new();
         };
-        ik.solve_branches(target, &mut self.branches);
+        ik.solve_branches_near(target, reference, &mut self.branches);
         let mut starts: Vec<(bool, f64, Branch, [f64; 6])> = self
             .branches
             .iter()

@@ -206,20 +206,48 @@ impl ClosedFormIk {
     /// Every solution for `target` (tool pose, mm), wrapped to [-pi, pi), ignoring limits.
     /// Up to 8; none when the pose is out of reach. At a singularity (wrist centre on axis 1,
     /// or q5 such that axes 4 and 6 align) one representative of the continuum is returned
-    /// (at the wrist's, an arbitrary split of q4 + s q6: see
-    /// [`ClosedFormIk::wrist_split_nearest`]).
+    /// (at a spherical wrist's, an arbitrary split of q4 + s q6: see
+    /// [`ClosedFormIk::wrist_split_nearest`]; at a UR-class wrist's, where q6 is free, q6 the
+    /// middle of its range's where the elbow reaches, else the nearest that does:
+    /// [`ClosedFormIk::solve_unlimited_near`] takes a reference's instead).
     pub fn solve_unlimited(&self, target: &Pose, out: &mut Vec<[f64; 6]>) {
         out.clear();
-        self.each_solution(target, |_, q| out.push(q));
+        self.each_solution(target, None, |_, q| out.push(q));
+    }
+
+    /// [`ClosedFormIk::solve_unlimited`] at a UR-class wrist singularity with q6 that of
+    /// `reference` (rad) where the elbow reaches ([`super::ik_parallel`]); the same elsewhere.
+    pub fn solve_unlimited_near(&self, target: &Pose, reference: &[f64], out: &mut Vec<[f64; 6]>) {
+        out.clear();
+        self.each_solution(target, Some(reference), |_, q| out.push(q));
     }
 
     /// As [`ClosedFormIk::solve_unlimited`], each solution with its [`Branch`].
     pub fn solve_branches(&self, target: &Pose, out: &mut Vec<(Branch, [f64; 6])>) {
         out.clear();
-        self.each_solution(target, |b, q| out.push((b, q)));
+        self.each_solution(target, None, |b, q| out.push((b, q)));
     }
 
-    fn each_solution(&self, target: &Pose, mut emit: impl FnMut(Branch, [f64; 6])) {
+    /// [`ClosedFormIk::solve_branches`] with a UR-class wrist singularity's q6 that of
+    /// `reference` (rad) where the elbow reaches, as [`ClosedFormIk::solve_unlimited_near`].
+    pub fn solve_branches_near(
+        &self,
+        target: &Pose,
+        reference: &[f64],
+        out: &mut Vec<(Branch, [f64; 6])>,
+    ) {
+        out.clear();
+        self.each_solution(target, Some(reference), |b, q| out.push((b, q)));
+    }
+
+    /// Every solution; at a UR-class wrist singularity q6 is `reference`'s where it can be,
+    /// else the middle of joint 6's range's.
+    fn each_solution(
+        &self,
+        target: &Pose,
+        reference: Option<&[f64]>,
+        mut emit: impl FnMut(Branch, [f64; 6]),
+    ) {
         let g = target * self.m_inv;
         match self.structure {
             Structure::SphericalWrist { centre } => self.spherical(&g, &centre, emit),
@@ -229,7 +257,9 @@ impl ClosedFormIk {
                     elbow,
                     wrist,
                 };
-                super::ik_parallel::each_solution(&self.w, &self.p, &a, &b, &g, |r, q| {
+                let [lo, hi] = self.limits[5];
+                let hint = reference.map_or(0.5 * (lo + hi), |r| r[5]);
+                super::ik_parallel::each_solution(&self.w, &self.p, &a, &b, &g, hint, |r, q| {
                     emit(branch(r), q)
                 })
             }
@@ -304,7 +334,7 @@ impl ClosedFormIk {
     /// `reference` (rad).
     pub fn solve_around(&self, target: &Pose, reference: &[f64], out: &mut Vec<[f64; 6]>) -> bool {
         let mut raw = Vec::with_capacity(8);
-        self.solve_unlimited(target, &mut raw);
+        self.solve_unlimited_near(target, reference, &mut raw);
         for q in &mut raw {
             *q = self.wrist_split_within_limits(q, reference);
         }
@@ -321,7 +351,7 @@ impl ClosedFormIk {
     /// each joint's copy is chosen on its own, so ranges of many turns cost nothing.
     pub fn solve_nearest(&self, target: &Pose, reference: &[f64]) -> Option<[f64; 6]> {
         let mut raw = Vec::with_capacity(8);
-        self.solve_unlimited(target, &mut raw);
+        self.solve_unlimited_near(target, reference, &mut raw);
         let mut best: Option<(f64, [f64; 6])> = None;
         for q in &raw {
             let (cand, inside) = self.nearest_copy(q, reference);

@@ -10,8 +10,12 @@
 //!    `a cos q1 + b sin q1 = c`;
 //! 2. axis 6 points R_G w6 = R1 R234 R5 w6, so n . R5(q5) w6 = n . R1^T R_G w6: q5 from the
 //!    same equation (its two roots are the wrist's flip);
-//! 3. R6^T R5^T n = R_G^T R1 n: q6 by subproblem 1 (free where axis 6 lies along n, the
-//!    wrist singularity sin q5 = 0, where q6 = 0 is returned and q2..q4 take the rest);
+//! 3. R6^T R5^T n = R_G^T R1 n: q6 by subproblem 1. Where axis 6 lies along n (the wrist
+//!    singularity, sin q5 = 0, within [`WRIST_ALONG_N`]) q6 is free: turning it moves A on a
+//!    circle about axis 6 and q2..q4 take the rest, where the elbow reaches A. The q6 given
+//!    as the hint (a seed's, or the middle of its range) is taken where it does, else the
+//!    nearest that does on a 1 deg grid from it; q5 is put on the singularity, and the two
+//!    wrist flips are one solution (branch `wrist` 0);
 //! 4. A lies on axes 4 and 5, so e1^-1 G e6^-1 e5^-1 A0 = e2 e3 A0: subproblem 3 (the
 //!    distance from axis 2) gives q3, subproblem 1 q2;
 //! 5. R4 = (R1 R2 R3)^T R_G (R5 R6)^T: q4 by subproblem 1.
@@ -23,6 +27,14 @@ use super::subproblems::{
 use nalgebra::Vector3;
 
 type V3 = Vector3<f64>;
+
+/// Sine of the angle between axis 6 and axes 2-4 below which the wrist counts as singular
+/// (q6 free): q5 there comes from an arccosine near its end, good to about the square root of
+/// the rounding (1e-8 rad), so the bound lies above that.
+pub const WRIST_ALONG_N: f64 = 1e-7;
+
+/// Step (rad) of the search for a q6 at which the elbow reaches the wrist, at the singularity.
+const Q6_STEP: f64 = std::f64::consts::PI / 180.0;
 
 /// A and B (mm, at q = 0) where the axes (directions `w`, points `p` at q = 0) have the UR
 /// class's structure; else why not.
@@ -56,13 +68,15 @@ pub(super) fn structure(w: &[V3; 6], p: &[V3; 6]) -> Result<(V3, V3), String> {
 /// Every solution of G = T M^-1 (the target times the inverse of the tool pose at q = 0),
 /// wrapped to [-pi, pi), with its roots [q1's, q3's (elbow), q5's (wrist)], 0 or 1 each, for
 /// the axes `w`, `p` and the points `a0` (axes 4 and 5) and `b0` (axes 5 and 6) at q = 0
-/// (mm). None when the pose is out of reach.
+/// (mm). None when the pose is out of reach. At the wrist singularity, q6 is `q6_hint` (rad)
+/// where the elbow reaches, else the nearest q6 that does (module doc, step 3).
 pub(super) fn each_solution(
     w: &[V3; 6],
     p: &[V3; 6],
     a0: &V3,
     b0: &V3,
     g: &Pose,
+    q6_hint: f64,
     mut emit: impl FnMut([u8; 3], [f64; 6]),
 ) {
     let [w1, n, w3, w4, w5, w6] = w;
@@ -90,23 +104,52 @@ pub(super) fn each_solution(
         let d = n.dot(&(r1.inverse() * (rg * w6)));
         let a5 = n.dot(&(w6 - w6_along));
         let b5 = n.dot(&w5.cross(w6));
-        let Some(q5s) = cos_sin_equation(a5, b5, d - n.dot(&w6_along)) else {
-            continue;
-        };
-        for (bw, &q5) in q5s[..distinct(&q5s)].iter().enumerate() {
-            let r5 = rot(w5, q5);
-            // q6: Rot(w6, q6) m = R5^T n with m = R_G^T R1 n.
-            let m = rg.inverse() * (r1 * n);
-            let q6 = rotate_onto(w6, &m, &(r5.inverse() * n));
-            let r6 = rot(w6, q6);
-            // A = G e6^-1 e5^-1 A0 (B0 lies on axes 5 and 6), then e1^-1 A = e2 e3 A0.
-            let a_back = r6.inverse() * (r5.inverse() * (a0 - b0)) + b0;
-            let a_world = rg * a_back + g.translation.vector;
-            let ap = r1.inverse() * (a_world - p1) + p1;
-            let delta = (ap - p2).norm();
-            let Some(q3s) = rotate_to_distance(w3, &(a0 - p3), &(p2 - p3), delta) else {
+        let c5 = d - n.dot(&w6_along);
+        // m = R_G^T R1 n = R6^T R5^T n: across axis 6 it is the sine of the angle between
+        // axis 6 and n, so q6 is free where it vanishes (the wrist singularity). There the
+        // two roots of q5 meet at the top (or bottom) of a cos q5 + b sin q5, whose angle is
+        // exact where the arccosine of the roots keeps half the digits: q5 is put on it.
+        let m = rg.inverse() * (r1 * n);
+        let singular = (m - w6 * w6.dot(&m)).norm() < WRIST_ALONG_N;
+        let q5s = if singular {
+            let top = b5.atan2(a5);
+            let q5 = if c5 >= 0.0 {
+                top
+            } else {
+                top + std::f64::consts::PI
+            };
+            [q5, q5]
+        } else {
+            let Some(q5s) = cos_sin_equation(a5, b5, c5) else {
                 continue;
             };
+            q5s
+        };
+        let roots = if singular { 1 } else { distinct(&q5s) };
+        for (bw, &q5) in q5s[..roots].iter().enumerate() {
+            let r5 = rot(w5, q5);
+            // A = G e6^-1 e5^-1 A0 (B0 lies on axes 5 and 6), then e1^-1 A = e2 e3 A0: its
+            // point for q6, and the elbow's roots.
+            let elbow_for = |q6: f64| {
+                let back = rot(w6, q6).inverse() * (r5.inverse() * (a0 - b0)) + b0;
+                let ap = r1.inverse() * (rg * back + g.translation.vector - p1) + p1;
+                rotate_to_distance(w3, &(a0 - p3), &(p2 - p3), (ap - p2).norm())
+                    .map(|q3s| (ap, q3s))
+            };
+            // q6: Rot(w6, q6) m = R5^T n.
+            let found = if singular {
+                (0..=180).find_map(|k| {
+                    let tries = [q6_hint + k as f64 * Q6_STEP, q6_hint - k as f64 * Q6_STEP];
+                    (tries.into_iter()).find_map(|q6| elbow_for(q6).map(|e| (q6, e)))
+                })
+            } else {
+                let q6 = rotate_onto(w6, &m, &(r5.inverse() * n));
+                elbow_for(q6).map(|e| (q6, e))
+            };
+            let Some((q6, (ap, q3s))) = found else {
+                continue;
+            };
+            let r6 = rot(w6, q6);
             for (b3, &q3) in q3s[..distinct(&q3s)].iter().enumerate() {
                 let r3 = rot(w3, q3);
                 let elbow = r3 * (a0 - p3) + p3;
