@@ -425,6 +425,19 @@ fn compensated_jacobian_matches_central_differences() {
     }
 }
 
+/// The nominal UR10, its model identified (`full`) on Series B's README split, and the
+/// split's validation rows.
+fn series_b_identified() -> (Robot, Robot, MeasurementSet) {
+    let nominal = common::ur10::robot();
+    let (id, _, val) = common::ur10::series_b_split(&nominal);
+    let options = Options {
+        params: "full".into(),
+        ..Default::default()
+    };
+    let robot = identify(&nominal, &id, &options).unwrap().robot;
+    (nominal, robot, val)
+}
+
 /// A controller that runs the solution nearest the joints it is given (the UR10, of the UR
 /// class) on its real tracker data: the model identified on Series B's README split; each
 /// validation row's
@@ -434,18 +447,7 @@ fn compensated_jacobian_matches_central_differences() {
 /// the nominal pose there, and no branch is claimed.
 #[test]
 fn ur10_targets_are_solved_nearest_their_seeds() {
-    let nominal = common::ur10::robot();
-    let (id, _, val) = common::ur10::series_b_split(&nominal);
-    let robot = identify(
-        &nominal,
-        &id,
-        &Options {
-            params: "full".into(),
-            ..Default::default()
-        },
-    )
-    .unwrap()
-    .robot;
+    let (nominal, robot, val) = series_b_identified();
     let mut solver = FakeTargetSolver::new(&nominal, CalibratedModel::identified(&robot)).unwrap();
     assert!(
         solver
@@ -542,18 +544,7 @@ fn ur10_targets_are_solved_nearest_their_seeds() {
 #[test]
 fn far_seeded_ur10_commands_are_the_nominal_solution_nearest_the_seed() {
     use rand::{Rng, SeedableRng};
-    let nominal = common::ur10::robot();
-    let (id, _, _) = common::ur10::series_b_split(&nominal);
-    let robot = identify(
-        &nominal,
-        &id,
-        &Options {
-            params: "full".into(),
-            ..Default::default()
-        },
-    )
-    .unwrap()
-    .robot;
+    let (nominal, robot, _) = series_b_identified();
     let mut solver = FakeTargetSolver::new(&nominal, CalibratedModel::identified(&robot)).unwrap();
     let closed = ClosedFormIk::new(&nominal).unwrap();
     let limits: Vec<[f64; 2]> = nominal

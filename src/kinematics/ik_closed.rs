@@ -18,8 +18,8 @@
 use super::Pose;
 use super::fk::{Frames, frames};
 use super::subproblems::{
-    STRUCTURE_TOL, closest_points, cos_sin_equation, rot, rotate_onto, rotate_to_distance,
-    rotate_two_axes, wrap,
+    STRUCTURE_TOL, closest_points, rot, rotate_onto, rotate_to_distance, rotate_two_axes,
+    shoulder_angles, wrap,
 };
 use crate::error::{Error, Result};
 use crate::model::{JointType, Robot};
@@ -273,17 +273,10 @@ impl ClosedFormIk {
         let [p1, p2, p3, ..] = &self.p;
         let wc = g.rotation * w0 + g.translation.vector;
 
-        // q1: (Rot(w1, q1) w2) . (W - p1) = w2 . (W0 - p1).
-        let v = wc - p1;
-        let (w1u, w1v) = (w1.dot(w2), w1.dot(&v));
-        let a = w2.dot(&v) - w1u * w1v;
-        let b = w1.cross(w2).dot(&v);
-        let c = w2.dot(&(w0 - p1)) - w1u * w1v;
-        let q1s: &[f64] = &match cos_sin_equation(a, b, c) {
-            Some(s) => s,
-            None if a.hypot(b) < 1e-9 && c.abs() < 1e-9 => [0.0, 0.0],
-            None => return,
+        let Some(q1s) = shoulder_angles(w1, w2, p1, &wc, w0) else {
+            return;
         };
+        let q1s: &[f64] = &q1s;
         let dedup1 = (q1s[0] - q1s[1]).abs() < 1e-14;
         for (b1, &q1) in q1s[..if dedup1 { 1 } else { 2 }].iter().enumerate() {
             let r1 = rot(w1, q1);

@@ -22,7 +22,8 @@
 
 use super::Pose;
 use super::subproblems::{
-    STRUCTURE_TOL, closest_points, cos_sin_equation, rot, rotate_onto, rotate_to_distance, wrap,
+    STRUCTURE_TOL, closest_points, cos_sin_equation, rot, rotate_onto, rotate_to_distance,
+    shoulder_angles, wrap,
 };
 use nalgebra::Vector3;
 
@@ -84,17 +85,10 @@ pub(super) fn each_solution(
     let rg = g.rotation;
     let b = rg * b0 + g.translation.vector;
 
-    // q1: (Rot(w1, q1) n) . (B - p1) = n . (B0 - p1).
-    let v = b - p1;
-    let (w1n, w1v) = (w1.dot(n), w1.dot(&v));
-    let a = n.dot(&v) - w1n * w1v;
-    let bb = w1.cross(n).dot(&v);
-    let c = n.dot(&(b0 - p1)) - w1n * w1v;
-    let q1s: &[f64] = &match cos_sin_equation(a, bb, c) {
-        Some(s) => s,
-        None if a.hypot(bb) < 1e-9 && c.abs() < 1e-9 => [0.0, 0.0],
-        None => return,
+    let Some(q1s) = shoulder_angles(w1, n, p1, &b, b0) else {
+        return;
     };
+    let q1s: &[f64] = &q1s;
     let distinct = |r: &[f64]| if (r[0] - r[1]).abs() < 1e-14 { 1 } else { 2 };
     // Axis 6's part along axis 5, which q5 does not turn.
     let w6_along = w5 * w5.dot(w6);

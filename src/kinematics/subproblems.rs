@@ -95,6 +95,24 @@ pub fn cos_sin_equation(a: f64, b: f64, c: f64) -> Option<[f64; 2]> {
     Some([phi - d, phi + d])
 }
 
+/// The joint-1 angles (rad; two, equal when tangent) at which the arm's plane holds a point:
+/// `x` (mm, where the target puts it) turned back about axis 1 (direction `w1`, through `p1`)
+/// has the component along `n` (the arm's parallel axes) that `x0` (mm, the point at q = 0)
+/// has, (Rot(w1, q1) n) . (x - p1) = n . (x0 - p1). None when no angle does; [0, 0] where
+/// every angle does (the point on axis 1 with nothing to fix q1).
+pub fn shoulder_angles(w1: &V3, n: &V3, p1: &V3, x: &V3, x0: &V3) -> Option<[f64; 2]> {
+    let v = x - p1;
+    let (w1n, w1v) = (w1.dot(n), w1.dot(&v));
+    let a = n.dot(&v) - w1n * w1v;
+    let b = w1.cross(n).dot(&v);
+    let c = n.dot(&(x0 - p1)) - w1n * w1v;
+    match cos_sin_equation(a, b, c) {
+        Some(s) => Some(s),
+        None if a.hypot(b) < 1e-9 && c.abs() < 1e-9 => Some([0.0, 0.0]),
+        None => None,
+    }
+}
+
 /// Tolerance (mm) for axes meeting in a point, and (unit-vector norm) for parallel axes.
 pub const STRUCTURE_TOL: f64 = 1e-7;
 
