@@ -122,28 +122,30 @@ pub(super) fn each_solution(
         let roots = if singular { 1 } else { distinct(&q5s) };
         for (bw, &q5) in q5s[..roots].iter().enumerate() {
             let r5 = rot(w5, q5);
-            // A = G e6^-1 e5^-1 A0 (B0 lies on axes 5 and 6), then e1^-1 A = e2 e3 A0: its
-            // point for q6, and the elbow's roots.
+            // A = G e6^-1 e5^-1 A0 (B0 lies on axes 5 and 6), then e1^-1 A = e2 e3 A0: for
+            // q6, its rotation, A's point and the elbow's roots.
             let elbow_for = |q6: f64| {
-                let back = rot(w6, q6).inverse() * (r5.inverse() * (a0 - b0)) + b0;
+                let r6 = rot(w6, q6);
+                let back = r6.inverse() * (r5.inverse() * (a0 - b0)) + b0;
                 let ap = r1.inverse() * (rg * back + g.translation.vector - p1) + p1;
                 rotate_to_distance(w3, &(a0 - p3), &(p2 - p3), (ap - p2).norm())
-                    .map(|q3s| (ap, q3s))
+                    .map(|q3s| (q6, r6, ap, q3s))
             };
-            // q6: Rot(w6, q6) m = R5^T n.
+            // q6: Rot(w6, q6) m = R5^T n; at the singularity the hint, then 1, 2, ... steps
+            // either side of it.
             let found = if singular {
-                (0..=180).find_map(|k| {
-                    let tries = [q6_hint + k as f64 * Q6_STEP, q6_hint - k as f64 * Q6_STEP];
-                    (tries.into_iter()).find_map(|q6| elbow_for(q6).map(|e| (q6, e)))
+                elbow_for(q6_hint).or_else(|| {
+                    (1..=180).find_map(|k| {
+                        let step = k as f64 * Q6_STEP;
+                        elbow_for(q6_hint + step).or_else(|| elbow_for(q6_hint - step))
+                    })
                 })
             } else {
-                let q6 = rotate_onto(w6, &m, &(r5.inverse() * n));
-                elbow_for(q6).map(|e| (q6, e))
+                elbow_for(rotate_onto(w6, &m, &(r5.inverse() * n)))
             };
-            let Some((q6, (ap, q3s))) = found else {
+            let Some((q6, r6, ap, q3s)) = found else {
                 continue;
             };
-            let r6 = rot(w6, q6);
             for (b3, &q3) in q3s[..distinct(&q3s)].iter().enumerate() {
                 let r3 = rot(w3, q3);
                 let elbow = r3 * (a0 - p3) + p3;
