@@ -1,10 +1,12 @@
 //! Kinematics speed: FK of one configuration, closed-form IK (all solutions) of one pose
 //! (FANUC; the UR10's 8 before copies), numerical IK of one pose on a calibrated-like model
-//! (no closed form).
+//! (no closed form), and every solution of a calibrated UR10's pose next to a straight elbow
+//! (the `ik --all` strategy: starts carried from the nominal's closed form, then solved).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use robocal::kinematics::{
-    ClosedFormIk, IkOptions, IkTarget, IkWorkspace, solve_numeric, tool_pose,
+    ClosedFormIk, IkOptions, IkSolver, IkStart, IkTarget, IkWorkspace, RobotModel, solve_numeric,
+    tool_pose,
 };
 use robocal::model::read_robot;
 use std::hint::black_box;
@@ -46,6 +48,28 @@ fn benches(c: &mut Criterion) {
             ur_ik.solve_branches(black_box(&ur_target), &mut ur_sols);
             ur_sols.len()
         })
+    });
+
+    // A calibrated UR10 (links millimetres longer, axes a tenth of a degree off parallel):
+    // every solution of a pose with the elbow 3 deg from straight.
+    let param = |name: &str| ur.find_param(name).unwrap();
+    let calibrated = ur
+        .with_params(&[
+            (param("a2"), -614.97),
+            (param("a3"), -573.41),
+            (param("alpha2"), 0.1135_f64.to_radians()),
+            (param("theta3"), 0.1658_f64.to_radians()),
+            (param("alpha4"), 90.0973_f64.to_radians()),
+        ])
+        .unwrap();
+    let start = IkStart::choose(&calibrated, Some(&ur)).unwrap();
+    let mut solver = IkSolver::new(RobotModel::new(&calibrated), start, IkOptions::default());
+    let near_straight = tool_pose(&calibrated, &[0.3, -1.2, 0.05, -1.4, -1.0, 0.5]);
+    // 4: the other wrist flips do not reach the pose (numerical solves from 2000 random
+    // starts find the same 4).
+    assert_eq!(solver.all(&near_straight, None).unwrap().len(), 4);
+    c.bench_function("ik_calibrated_ur10_all_solutions", |b| {
+        b.iter(|| solver.all(black_box(&near_straight), None).unwrap().len())
     });
 
     // A bent model (Hayati beta3 = 1 mrad, a link 1 mm longer) has no closed form: refine the

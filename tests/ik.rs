@@ -892,3 +892,209 @@ fn closed_form_solutions_near_singularities_are_polished() {
         assert!(apart < 1e-9, "{apart:e} rad from the seed");
     }
 }
+
+/// A calibrated UR10: its nominal's DH table off by what an identification on tracker data
+/// finds (millimetres, a tenth of a degree), so no closed form of its own.
+const UR10_CALIBRATED: &str = r#"
+name = "UR10, calibrated"
+[base]
+convention = "transform"
+x = 2.2255
+y = -1.2867
+z = 3.1296
+rz = 0.2193
+ry = 0.0740
+rx = 0.1429
+[[joint]]
+convention = "dh"
+d = 127.3
+a = -2.8399
+alpha = 89.9784
+limits = [-360.0, 360.0]
+[[joint]]
+convention = "dh"
+theta = -0.0045
+d = 0.5440
+a = -614.9671
+alpha = 0.1135
+limits = [-360.0, 360.0]
+[[joint]]
+convention = "dh"
+theta = 0.1658
+a = -573.4083
+alpha = 0.0698
+limits = [-360.0, 360.0]
+[[joint]]
+convention = "dh"
+theta = -0.0691
+d = 163.941
+a = -1.3230
+alpha = 90.0973
+limits = [-360.0, 360.0]
+[[joint]]
+convention = "dh"
+theta = 0.1673
+d = 118.6177
+a = 2.2950
+alpha = -89.8583
+limits = [-360.0, 360.0]
+[[joint]]
+convention = "dh"
+d = 92.2
+limits = [-360.0, 360.0]
+[tool]
+convention = "transform"
+x = 1.7597
+y = 0.6367
+z = 0.1911
+rz = 0.1723
+ry = -0.1047
+rx = -0.2924
+"#;
+
+#[test]
+fn the_closed_forms_product_of_exponentials_is_the_robots_forward_kinematics() {
+    let mut rng = ChaCha8Rng::seed_from_u64(17);
+    let dh = parse_robot(DH_SPHERICAL, Path::new("dh.toml")).unwrap();
+    let calibrated = parse_robot(UR10_CALIBRATED, Path::new("ur10_cal.toml")).unwrap();
+    let nominal = robot_file("ur10.toml");
+    for robot in [robot_file("fanuc_r2000ib_210f.toml"), nominal.clone(), dh] {
+        let ik = ClosedFormIk::new(&robot).unwrap();
+        for _ in 0..200 {
+            let q = random_q(&robot, &mut rng);
+            let (dp, dr) = pose_errors(&ik.pose(&q), &tool_pose(&robot, &q));
+            assert!(
+                dp < 1e-9 && dr < 1e-12,
+                "{}: {dp} mm {dr} rad",
+                robot.name()
+            );
+        }
+    }
+    // Placed at the calibrated model's base and tool: the nominal's chain between them.
+    let placed = ClosedFormIk::new(&nominal)
+        .unwrap()
+        .placed_as(&nominal, &calibrated);
+    for _ in 0..200 {
+        let q = random_q(&nominal, &mut rng);
+        let own = tool_pose(&nominal, &q);
+        let want = calibrated.base().transform()
+            * nominal.base().transform().inverse()
+            * own
+            * nominal.tool().transform().inverse()
+            * calibrated.tool().transform();
+        let (dp, dr) = pose_errors(&placed.pose(&q), &want);
+        assert!(dp < 1e-9 && dr < 1e-12, "{dp} mm {dr} rad");
+    }
+}
+
+#[test]
+fn a_branchs_nearest_is_its_solution_where_it_reaches_and_the_stretched_arm_where_not() {
+    let robot = robot_file("ur10.toml");
+    let ik = ClosedFormIk::new(&robot).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(23);
+    let (mut strict, mut nearest) = (Vec::new(), Vec::new());
+    let mut beyond = 0;
+    for _ in 0..300 {
+        let mut q = random_q(&robot, &mut rng);
+        // Half the poses a little beyond the reach: the straight arm, lifted 1-20 mm.
+        let stretch = rng.random::<bool>();
+        if stretch {
+            q[2] = 0.0;
+        }
+        let mut target = tool_pose(&robot, &q);
+        if stretch {
+            let up = target.translation.vector
+                - tool_pose(&robot, &[q[0], 0.0, 0.0, 0.0, 0.0, 0.0])
+                    .translation
+                    .vector;
+            target.translation.vector += up.normalize() * rng.random_range(1.0..20.0);
+        }
+        ik.solve_branches(&target, &mut strict);
+        ik.solve_branches_nearest(&target, &q, &mut nearest);
+        for (b, s) in &strict {
+            let found = ik.solve_branch_nearest(&target, *b, &q).unwrap();
+            assert!(joint_gap(&found, s) < 1e-12, "{b}: {found:?} {s:?}");
+        }
+        if strict.is_empty() && !nearest.is_empty() {
+            beyond += 1;
+            // Every branch, each missing the pose by more than nothing, none by more than
+            // the lift (a stretched arm turned toward it).
+            let mut names: Vec<String> = nearest.iter().map(|(b, _)| b.to_string()).collect();
+            names.sort();
+            names.dedup();
+            assert_eq!(names.len(), 8, "{names:?}");
+            for (b, s) in &nearest {
+                let p = tool_pose(&robot, s);
+                let miss = (p.translation.vector - target.translation.vector).norm();
+                assert!(miss > 1e-6, "{b}: {miss} mm");
+            }
+        }
+    }
+    assert!(beyond >= 50, "{beyond} poses beyond the reach");
+}
+
+#[test]
+fn a_calibrated_ur10_keeps_every_solution_next_to_a_straight_elbow() {
+    use robocal::kinematics::{IkSolver, IkStart, RobotModel};
+    // Poses the calibrated UR10 reaches with its elbow within 0.2-15 deg of straight, where
+    // the nominal's two elbow solutions lie close together or do not exist (the calibrated
+    // arm is 4 mm longer). A numerical solve from the nominal's solutions crossed to the
+    // other elbow or stalled: a helper's 300 such poses lost 240 of the 1472 solutions a
+    // multistart found, 106 their own configuration, and 2 read unreachable.
+    let nominal = robot_file("ur10.toml");
+    let calibrated = parse_robot(UR10_CALIBRATED, Path::new("ur10_cal.toml")).unwrap();
+    let start = IkStart::choose(&calibrated, Some(&nominal)).unwrap();
+    assert!(matches!(start, IkStart::Nominal(_)));
+    let mut solver = IkSolver::new(RobotModel::new(&calibrated), start, IkOptions::default());
+    let mut ws = IkWorkspace::new(&calibrated);
+    let opts = IkOptions::default();
+    let mut rng = ChaCha8Rng::seed_from_u64(29);
+    let (mut own, mut met, mut found, mut missed) = (0, 0, 0, 0);
+    let poses = 200;
+    for k in 0..poses {
+        let mut q: Vec<f64> = (0..6).map(|_| rng.random_range(-PI..PI)).collect();
+        q[1] = rng.random_range(-170.0_f64..-10.0).to_radians();
+        let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
+        q[2] = sign * rng.random_range(0.2_f64..15.0).to_radians();
+        q[4] = sign * rng.random_range(15.0_f64..165.0).to_radians();
+        let target = tool_pose(&calibrated, &q);
+        let all = solver.all(&target, None).unwrap();
+        for s in &all {
+            let (dp, dr) = pose_errors(&tool_pose(&calibrated, s), &target);
+            assert!(dp < 1e-6 && dr < 1e-9, "{s:?}: {dp} mm {dr} rad");
+        }
+        own += usize::from(all.iter().any(|s| joint_gap(s, &q) < 1e-6));
+        // Independent of the closed forms: numerical solves from 60 random starts on every
+        // fourth pose; each converged one must be listed.
+        if k % 4 == 0 {
+            let mut seen: Vec<Vec<f64>> = Vec::new();
+            for _ in 0..60 {
+                let s: Vec<f64> = (0..6).map(|_| rng.random_range(-PI..PI)).collect();
+                if let Ok(sol) =
+                    solve_numeric(&calibrated, &IkTarget::Pose(target), &s, &opts, &mut ws)
+                    && !seen.iter().any(|o| joint_gap(o, &sol.q) < 1e-6)
+                {
+                    seen.push(sol.q);
+                }
+            }
+            found += seen.len();
+            met += seen.len();
+            for s in &seen {
+                if !all.iter().any(|a| joint_gap(a, s) < 1e-6) {
+                    missed += 1;
+                    met -= 1;
+                }
+            }
+        }
+    }
+    println!("own configuration {own} of {poses}; multistart solutions listed {met} of {found}");
+    assert!(
+        own >= poses - 2,
+        "{own} of {poses} poses list their own configuration"
+    );
+    assert!(
+        missed <= 2,
+        "{missed} of {found} multistart solutions not listed"
+    );
+    assert!(found >= 150, "{found} multistart solutions");
+}

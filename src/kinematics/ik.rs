@@ -7,10 +7,16 @@
 //!    model's base and tool: [`ClosedFormIk::placed_as`]) gives the starts: each of its
 //!    solutions in the whole-turn copy nearest the reference joints
 //!    ([`ClosedFormIk::nearest_copy`]), copies within the limits first, then by
-//!    [`joint_distance`] to the reference. Numerical IK of the model ([`solve_model`]) refines
-//!    them.
+//!    [`joint_distance`] to the reference, and each carried onto the model's solution on its
+//!    branch ([`IkSolver`]'s `tracked`: the nominal's closed form on the target corrected by
+//!    the model's difference from the nominal, to a fixed point). A branch the nominal does
+//!    not reach at the pose (the calibrated arm reaches millimetres farther) starts from its
+//!    nearest, carried the same way. Numerical IK of the model ([`solve_model`]) refines
+//!    them, each solution in its whole-turn copy nearest the reference.
 //! 3. The caller's seed joints start a numerical solve too, and the only one where no closed
-//!    form gives a start ([`IkStart::Seed`], or a pose out of the nominal's reach).
+//!    form gives a start ([`IkStart::Seed`], or a pose out of the nominal's reach on every
+//!    branch, where its solutions of the pose pulled a little toward the base start them
+//!    too).
 //!
 //! The reference is the seed when one is given, else the middle of the joint ranges.
 //! [`IkSolver::nearest`] (`robocal ik`) refines the seed and every start and returns the
@@ -20,6 +26,7 @@
 
 use super::ik_closed::{Branch, ClosedFormIk, MAX_SOLUTIONS};
 use super::ik_numeric::{IkOptions, IkSolution, IkTarget, IkWorkspace, ToolModel, solve_model};
+use super::subproblems::wrap;
 use super::{Pose, Reach};
 use crate::error::{Error, Result};
 use crate::geometry::rotation::angle_between;
@@ -183,6 +190,27 @@ const POLISH_STEP: f64 = 1e-3;
 /// elbow, a singularity from which the solve cannot bend it back (it stalled there, 18 mm off,
 /// where a start moved by 1 % converges).
 const PULLS: [f64; 3] = [1e-2, 3e-2, 1e-1];
+
+/// The closed form's branches: 2 shoulders x 2 elbows x 2 wrists.
+const BRANCHES: usize = 8;
+
+/// Iterations of [`IkSolver::tracked`] at most: it contracts by about a calibration's
+/// relative size (1e-3) each step, so a few settle it; near a singularity of the branch it
+/// slows, and a start it has not settled is used as the closed form gave it.
+const TRACK_ITERATIONS: usize = 50;
+
+/// How near the target (mm, rad) a settled [`IkSolver::tracked`] point must bring the tool
+/// to start a numerical solve. A settled step of 1e-9 rad leaves about 1e-6 mm at 1 m; a fixed
+/// point where the branch's nearest stood in for a solution misses by the gap. On a
+/// calibrated UR10, gaps of 0.02-0.4 mm next to a straight elbow led the solve to solutions a
+/// multistart found, and gaps of 6-230 mm (branches out of reach) to failed solves, which
+/// cost a numerical solve's every iteration each.
+const TRACK_REACHED_MM: f64 = 1.0;
+const TRACK_REACHED_RAD: f64 = 1e-3;
+
+/// Largest joint change (rad) of a settled [`IkSolver::tracked`] step: the numerical solve
+/// that follows converges from there in one or two iterations.
+const TRACK_STEP: f64 = 1e-9;
 
 /// How far beyond the model's [`Reach`] a target must lie to be refused before any solve: a
 /// compensator's correction (millimetres) moves the tool beyond its robot's bound by far less.
@@ -351,16 +379,29 @@ impl<M: ToolModel> IkSolver<M> {
         reference: &[f64],
     ) -> std::result::Result<Vec<IkSolution>, IkFailure> {
         let mut starts: Vec<Vec<f64>> = seed.map(<[f64]>::to_vec).into_iter().collect();
-        let closed = self.start_joints(target, reference);
+        let closed = self.starts(target, reference, &[]);
+        let present: Vec<Branch> = closed.iter().map(|(_, _, b, _)| *b).collect();
+        // Each branch's solution carried onto the model's, and the nominal's solution as it
+        // is: next to a singularity the model can have solutions the nominal has not (a
+        // calibrated UR10 four near one nominal elbow pair), which a solve from there can find.
+        for (_, _, b, q) in closed {
+            if let Some(t) = self.tracked(target, b, &q) {
+                starts.push(t.to_vec());
+            }
+            starts.push(q.to_vec());
+        }
         // A calibrated arm a little longer (or shorter) than the nominal reaches poses just
-        // beyond the nominal's reach: its closed form has no solution there, but does at the
-        // same pose moved a little toward (or away from) the base, the nearest it reaches.
-        // The pull that gave starts, if one did.
-        let no_closed = closed.is_empty();
-        starts.extend(closed);
-        let pulled = if no_closed && matches!(self.start, IkStart::Nominal(_)) {
+        // beyond the nominal's reach, on some branches or on all: those branches start at
+        // their nearest to the pose, carried onto the model's solution where there is one.
+        let beyond = self.beyond_starts(target, reference, &present);
+        let none_yet = beyond.is_empty();
+        starts.extend(beyond);
+        // Where no branch reaches the pose, the closed form's solutions of the same pose moved
+        // a little toward (or away from) the base start numerical solves too: the pull that
+        // gave them, if one did.
+        let pulled = if present.is_empty() && matches!(self.start, IkStart::Nominal(_)) {
             let found = self.pulled_starts(target, reference);
-            if found.is_none() && seed.is_none() {
+            if found.is_none() && none_yet && seed.is_none() {
                 return Err(IkFailure::Unreachable(format!(
                     "the closed form of the nominal model has no solution, for the pose nor for \
                      it moved by up to {:.0} % of its distance toward or away from the base: it \
@@ -385,7 +426,10 @@ impl<M: ToolModel> IkSolver<M> {
         // a solve that did not converge only where none converged.
         let mut nearest_outside = f64::INFINITY;
         for q0 in &starts {
-            match self.refine(target, q0) {
+            match self
+                .refine(target, q0)
+                .map(|sol| self.turns_near(sol, reference))
+            {
                 Ok(sol) if sol.outside_limits.is_empty() => {
                     let dup = sols.iter().any(|o| {
                         o.q.iter()
@@ -427,17 +471,108 @@ impl<M: ToolModel> IkSolver<M> {
         }
     }
 
-    /// The joints of every closed-form start of `target` ([`Self::starts`], any branch).
-    fn start_joints(&mut self, target: &Pose, reference: &[f64]) -> Vec<Vec<f64>> {
-        (self.starts(target, reference, &[]).into_iter())
-            .map(|(_, _, _, q)| q.to_vec())
+    /// `sol` with each joint in its whole-turn copy within the limits nearest `reference`
+    /// (the same pose; a solve from a start ends in whichever copy its steps reach), where
+    /// there is one ([`crate::model::Joint::nearest_turn`]).
+    fn turns_near(&self, mut sol: IkSolution, reference: &[f64]) -> IkSolution {
+        let robot = self.model.robot();
+        for ((v, joint), &r) in sol.q.iter_mut().zip(robot.joints()).zip(reference) {
+            if let Some(copy) = joint.nearest_turn(*v, r) {
+                *v = copy;
+            }
+        }
+        sol.outside_limits = robot.joints_outside_limits(&sol.q);
+        sol
+    }
+
+    /// The nominal closed form's solution `q` (rad) of `target` on `branch` (or its nearest)
+    /// carried onto the model's solution on that branch: the fixed point of
+    /// q <- N_b^-1(target E(q)^-1), with N_b^-1 the closed form's solution on the branch (its
+    /// nearest where the branch does not reach the pose: [`ClosedFormIk::solve_branch_nearest`])
+    /// and E(q) = N(q)^-1 T(q) the model's tool pose T relative to the nominal's N. At the
+    /// fixed point N(q) = target E(q)^-1, so T(q) = target. E is a calibration's few
+    /// millimetres and milliradians and varies slowly with q, so the iteration contracts by
+    /// about its relative size each step. A numerical solve from the nominal's solution
+    /// instead can cross to another branch's solution or stall between two where they lie
+    /// close together (an elbow near straight), and where the nominal's branch does not reach
+    /// the pose (at the edge of the reach, which the calibrated arm's extends by
+    /// millimetres) there is no solution of the nominal to start from. None for a model with
+    /// its own closed form (nothing to carry), where the branch has no nearest either, or
+    /// where the iteration does not settle within [`TRACK_ITERATIONS`]. The numerical solve
+    /// from its result checks it.
+    fn tracked(&mut self, target: &Pose, branch: Branch, q: &[f64; 6]) -> Option<[f64; 6]> {
+        let IkStart::Nominal(ik) = &self.start else {
+            return None;
+        };
+        let mut q = *q;
+        let mut last = f64::INFINITY;
+        let mut growing = 0;
+        for _ in 0..TRACK_ITERATIONS {
+            let relative = ik.pose(&q).inverse() * self.model.pose(&q);
+            let next = ik.solve_branch_nearest(&(target * relative.inverse()), branch, &q)?;
+            // The copy of each joint nearest the last, a straight wrist's split nearest its.
+            let next = ik.wrist_split_nearest(&next, &q);
+            let mut step = 0f64;
+            for (now, next) in q.iter_mut().zip(next) {
+                let d = wrap(next - *now);
+                *now += d;
+                step = step.max(d.abs());
+            }
+            if step <= TRACK_STEP {
+                // A fixed point where the branch's nearest stood in for a solution misses the
+                // pose by the gap: where that is a fraction of a millimetre (an elbow or
+                // shoulder next to straight, where the model's two solutions can lie on one
+                // side of the nominal's singularity) the numerical solve from it finds one,
+                // where it is more the branch does not reach the pose on this model either.
+                let reached = self.model.pose(&q);
+                let off = (target.translation.vector - reached.translation.vector).norm();
+                let turned = angle_between(&target.rotation, &reached.rotation);
+                return (off <= TRACK_REACHED_MM && turned <= TRACK_REACHED_RAD).then_some(q);
+            }
+            // An iteration that does not contract (a branch that leaves toward another
+            // solution, or none) is given up after a second step that does not shrink.
+            growing = if step >= last { growing + 1 } else { 0 };
+            if growing >= 2 {
+                return None;
+            }
+            last = step;
+        }
+        None
+    }
+
+    /// The starts of the branches the nominal's closed form does not reach at `target` (not
+    /// in `present`): each branch's nearest ([`ClosedFormIk::solve_branches_nearest`]) in the
+    /// copy nearest `reference`, carried onto the model's solution of `target` on that branch
+    /// ([`Self::tracked`]), where that settles.
+    fn beyond_starts(
+        &mut self,
+        target: &Pose,
+        reference: &[f64],
+        present: &[Branch],
+    ) -> Vec<Vec<f64>> {
+        let IkStart::Nominal(ik) = &self.start else {
+            return Vec::new();
+        };
+        if present.len() >= BRANCHES {
+            return Vec::new();
+        }
+        ik.solve_branches_nearest(target, reference, &mut self.branches);
+        let nearest: Vec<(Branch, [f64; 6])> = (self.branches.iter())
+            .filter(|(b, _)| !present.contains(b))
+            .map(|(b, q)| (*b, ik.nearest_copy(q, reference).0))
+            .collect();
+        (nearest.into_iter())
+            .filter_map(|(b, q)| self.tracked(target, b, &q))
+            .map(|q| q.to_vec())
             .collect()
     }
 
     /// The closed form's solutions (each in its copy nearest `reference`) of `target` moved
     /// toward the reach's anchor, or away from it, by the first fraction of [`PULLS`] of its
     /// distance at which there are any, with that fraction: starts for a model that reaches
-    /// a little farther (or nearer) than the closed form's. None where no pull gives any.
+    /// a little farther (or nearer) than the closed form's. Each is carried onto the model's
+    /// solution of `target` on its branch where [`Self::tracked`] settles, else taken as it
+    /// is. None where no pull gives any.
     fn pulled_starts(&mut self, target: &Pose, reference: &[f64]) -> Option<(f64, Vec<Vec<f64>>)> {
         let anchor = self.reach.anchor;
         let v = target.translation.vector - anchor;
@@ -445,9 +580,12 @@ impl<M: ToolModel> IkSolver<M> {
             for sign in [-1.0, 1.0] {
                 let mut moved = *target;
                 moved.translation.vector = anchor + v * (1.0 + sign * pull);
-                let found = self.start_joints(&moved, reference);
+                let found = self.starts(&moved, reference, &[]);
                 if !found.is_empty() {
-                    return Some((pull, found));
+                    let joints = (found.into_iter())
+                        .map(|(_, _, b, q)| self.tracked(target, b, &q).unwrap_or(q).to_vec())
+                        .collect();
+                    return Some((pull, joints));
                 }
             }
         }
@@ -504,7 +642,7 @@ impl<M: ToolModel> IkSolver<M> {
         self.check_reach(target)?;
         let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
         let (b, q0) = match self.starts(target, &reference, branches).first() {
-            Some((_, _, b, q)) => (Some(*b), q.to_vec()),
+            Some((_, _, b, q)) => (Some(*b), self.tracked(target, *b, q).unwrap_or(*q).to_vec()),
             None => match seed {
                 Some(s) if !branches.is_empty() => (None, s.to_vec()),
                 _ => return Err(self.no_start()),

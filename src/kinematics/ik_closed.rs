@@ -18,7 +18,7 @@
 use super::Pose;
 use super::fk::{Frames, frames};
 use super::subproblems::{
-    STRUCTURE_TOL, closest_points, rot, rotate_onto, rotate_to_distance, rotate_two_axes,
+    Beyond, STRUCTURE_TOL, closest_points, rot, rotate_onto, rotate_to_distance, rotate_two_axes,
     shoulder_angles, wrap,
 };
 use crate::error::{Error, Result};
@@ -212,20 +212,22 @@ impl ClosedFormIk {
     /// [`ClosedFormIk::solve_unlimited_near`] takes a reference's instead).
     pub fn solve_unlimited(&self, target: &Pose, out: &mut Vec<[f64; 6]>) {
         out.clear();
-        self.each_solution(target, None, |_, q| out.push(q));
+        self.each_solution(target, None, Beyond::Nothing, None, |_, q| out.push(q));
     }
 
     /// [`ClosedFormIk::solve_unlimited`] at a UR-class wrist singularity with q6 that of
     /// `reference` (rad) where the elbow reaches ([`super::ik_parallel`]); the same elsewhere.
     pub fn solve_unlimited_near(&self, target: &Pose, reference: &[f64], out: &mut Vec<[f64; 6]>) {
         out.clear();
-        self.each_solution(target, Some(reference), |_, q| out.push(q));
+        self.each_solution(target, Some(reference), Beyond::Nothing, None, |_, q| {
+            out.push(q)
+        });
     }
 
     /// As [`ClosedFormIk::solve_unlimited`], each solution with its [`Branch`].
     pub fn solve_branches(&self, target: &Pose, out: &mut Vec<(Branch, [f64; 6])>) {
         out.clear();
-        self.each_solution(target, None, |b, q| out.push((b, q)));
+        self.each_solution(target, None, Beyond::Nothing, None, |b, q| out.push((b, q)));
     }
 
     /// [`ClosedFormIk::solve_branches`] with a UR-class wrist singularity's q6 that of
@@ -237,7 +239,64 @@ impl ClosedFormIk {
         out: &mut Vec<(Branch, [f64; 6])>,
     ) {
         out.clear();
-        self.each_solution(target, Some(reference), |b, q| out.push((b, q)));
+        self.each_solution(target, Some(reference), Beyond::Nothing, None, |b, q| {
+            out.push((b, q))
+        });
+    }
+
+    /// The solution of `target` on `branch` (wrapped to [-pi, pi), ignoring limits), at a
+    /// singularity the representative [`ClosedFormIk::solve_branches_near`] gives for
+    /// `reference` (rad); where the branch does not reach the pose, its nearest
+    /// ([`Beyond::Nearest`]: each step without a root takes the tangent angle, a stretched
+    /// elbow, a tangent shoulder or wrist, and both branches of it keep their labels). None
+    /// only where a step has no nearest either (the point on axis 1, with nothing to fix q1).
+    pub fn solve_branch_nearest(
+        &self,
+        target: &Pose,
+        branch: Branch,
+        reference: &[f64],
+    ) -> Option<[f64; 6]> {
+        let mut found = None;
+        self.each_solution(
+            target,
+            Some(reference),
+            Beyond::Nearest,
+            Some(branch),
+            |b, q| {
+                if b == branch {
+                    found = Some(q);
+                }
+            },
+        );
+        found
+    }
+
+    /// [`ClosedFormIk::solve_branches_near`], and where a branch does not reach the pose its
+    /// nearest ([`ClosedFormIk::solve_branch_nearest`]): every branch the structure has, each
+    /// with whether it reaches the pose.
+    pub fn solve_branches_nearest(
+        &self,
+        target: &Pose,
+        reference: &[f64],
+        out: &mut Vec<(Branch, [f64; 6])>,
+    ) {
+        out.clear();
+        self.each_solution(target, Some(reference), Beyond::Nearest, None, |b, q| {
+            out.push((b, q))
+        });
+    }
+
+    /// The tool pose (mm) at joints `q` (rad) of the robot this solver was built for (moved
+    /// as it was moved): the product of exponentials e1(q1) ... e6(q6) M the solver inverts,
+    /// each e_i the turn by q_i about axis i (direction w_i through the point p_i). It equals
+    /// the robot's forward kinematics to rounding.
+    pub fn pose(&self, q: &[f64]) -> Pose {
+        let mut g = Pose::identity();
+        for ((w, p), &angle) in self.w.iter().zip(&self.p).zip(q) {
+            let r = rot(w, angle);
+            g *= Pose::from_parts((p - r * p).into(), r);
+        }
+        g * self.m_inv.inverse()
     }
 
     /// Every solution; at a UR-class wrist singularity q6 is `reference`'s where it can be,
@@ -246,11 +305,13 @@ impl ClosedFormIk {
         &self,
         target: &Pose,
         reference: Option<&[f64]>,
+        beyond: Beyond,
+        only: Option<Branch>,
         mut emit: impl FnMut(Branch, [f64; 6]),
     ) {
         let g = target * self.m_inv;
         match self.structure {
-            Structure::SphericalWrist { centre } => self.spherical(&g, &centre, emit),
+            Structure::SphericalWrist { centre } => self.spherical(&g, &centre, beyond, only, emit),
             Structure::ParallelAxes { a, b } => {
                 let branch = |[shoulder, elbow, wrist]: [u8; 3]| Branch {
                     shoulder,
@@ -259,45 +320,74 @@ impl ClosedFormIk {
                 };
                 let [lo, hi] = self.limits[5];
                 let hint = reference.map_or(0.5 * (lo + hi), |r| r[5]);
-                super::ik_parallel::each_solution(&self.w, &self.p, &a, &b, &g, hint, |r, q| {
-                    emit(branch(r), q)
-                })
+                super::ik_parallel::each_solution(
+                    &self.w,
+                    &self.p,
+                    [&a, &b],
+                    &g,
+                    hint,
+                    (beyond, only.map(|b| [b.shoulder, b.elbow, b.wrist])),
+                    |r, q| emit(branch(r), q),
+                )
             }
         }
     }
 
     /// [`ClosedFormIk::each_solution`] of a spherical wrist of centre `w0` (mm, at q = 0) for
-    /// G = T M^-1.
-    fn spherical(&self, g: &Pose, w0: &V3, mut emit: impl FnMut(Branch, [f64; 6])) {
+    /// G = T M^-1, beyond the reach as `beyond` says (with [`Beyond::Nearest`] equal roots
+    /// are emitted as two branches), of the branch `only` alone where given.
+    fn spherical(
+        &self,
+        g: &Pose,
+        w0: &V3,
+        beyond: Beyond,
+        only: Option<Branch>,
+        mut emit: impl FnMut(Branch, [f64; 6]),
+    ) {
+        let merge = beyond == Beyond::Nothing;
         let [w1, w2, w3, w4, w5, w6] = &self.w;
         let [p1, p2, p3, ..] = &self.p;
         let wc = g.rotation * w0 + g.translation.vector;
 
-        let Some(q1s) = shoulder_angles(w1, w2, p1, &wc, w0) else {
+        let Some(q1s) = shoulder_angles(w1, w2, p1, &wc, w0, beyond) else {
             return;
         };
         let q1s: &[f64] = &q1s;
-        let dedup1 = (q1s[0] - q1s[1]).abs() < 1e-14;
+        let dedup1 = merge && (q1s[0] - q1s[1]).abs() < 1e-14;
+        // Whether root `r` of step `k` (shoulder, elbow, wrist) is wanted.
+        let wanted = |k: usize, r: usize| {
+            only.is_none_or(|o| usize::from([o.shoulder, o.elbow, o.wrist][k]) == r)
+        };
         for (b1, &q1) in q1s[..if dedup1 { 1 } else { 2 }].iter().enumerate() {
+            if !wanted(0, b1) {
+                continue;
+            }
             let r1 = rot(w1, q1);
             let wp = r1.inverse() * (wc - p1) + p1;
             let delta = (wp - p2).norm();
-            let Some(q3s) = rotate_to_distance(w3, &(w0 - p3), &(p2 - p3), delta) else {
+            let Some(q3s) = rotate_to_distance(w3, &(w0 - p3), &(p2 - p3), delta, beyond) else {
                 continue;
             };
-            let dedup3 = (q3s[0] - q3s[1]).abs() < 1e-14;
+            let dedup3 = merge && (q3s[0] - q3s[1]).abs() < 1e-14;
             for (b3, &q3) in q3s[..if dedup3 { 1 } else { 2 }].iter().enumerate() {
+                if !wanted(1, b3) {
+                    continue;
+                }
                 let r3 = rot(w3, q3);
                 let elbow = r3 * (w0 - p3) + p3;
                 let q2 = rotate_onto(w2, &(elbow - p2), &(wp - p2));
                 let r123 = r1 * rot(w2, q2) * r3;
                 let rw = r123.inverse() * g.rotation;
-                let Some(wrists) = rotate_two_axes(w4, w5, w6, &(rw * w6)) else {
+                let Some(wrists) = rotate_two_axes(w4, w5, w6, &(rw * w6), beyond) else {
                     continue;
                 };
-                let dedupw = (wrists[0][0] - wrists[1][0]).abs() < 1e-14
+                let dedupw = merge
+                    && (wrists[0][0] - wrists[1][0]).abs() < 1e-14
                     && (wrists[0][1] - wrists[1][1]).abs() < 1e-14;
                 for (bw, &[q4, q5]) in wrists[..if dedupw { 1 } else { 2 }].iter().enumerate() {
+                    if !wanted(2, bw) {
+                        continue;
+                    }
                     // Any vector off axis 6 fixes q6; axis 5 is perpendicular to it here.
                     let x = w5 - w6 * w6.dot(w5);
                     let y = (rot(w4, q4) * rot(w5, q5)).inverse() * (rw * x);

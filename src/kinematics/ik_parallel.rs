@@ -22,7 +22,7 @@
 
 use super::Pose;
 use super::subproblems::{
-    STRUCTURE_TOL, closest_points, cos_sin_equation, rot, rotate_onto, rotate_to_distance,
+    Beyond, STRUCTURE_TOL, closest_points, cos_sin_equation, rot, rotate_onto, rotate_to_distance,
     shoulder_angles, wrap,
 };
 use nalgebra::Vector3;
@@ -68,31 +68,45 @@ pub(super) fn structure(w: &[V3; 6], p: &[V3; 6]) -> Result<(V3, V3), String> {
 
 /// Every solution of G = T M^-1 (the target times the inverse of the tool pose at q = 0),
 /// wrapped to [-pi, pi), with its roots [q1's, q3's (elbow), q5's (wrist)], 0 or 1 each, for
-/// the axes `w`, `p` and the points `a0` (axes 4 and 5) and `b0` (axes 5 and 6) at q = 0
-/// (mm). None when the pose is out of reach. At the wrist singularity, q6 is `q6_hint` (rad)
-/// where the elbow reaches, else the nearest q6 that does (module doc, step 3).
+/// the axes `w`, `p` and the points `[a0, b0]` (where axis 5 meets axes 4 and 6) at q = 0
+/// (mm). None when the pose is out of reach; with `beyond` [`Beyond::Nearest`], every root
+/// each step has, where it has none its nearest (two equal roots, both emitted). With `only`,
+/// the solution of those roots alone (the others are not computed). At the wrist
+/// singularity, q6 is `q6_hint` (rad) where the elbow reaches, else the nearest q6 that does
+/// (module doc, step 3).
 pub(super) fn each_solution(
     w: &[V3; 6],
     p: &[V3; 6],
-    a0: &V3,
-    b0: &V3,
+    [a0, b0]: [&V3; 2],
     g: &Pose,
     q6_hint: f64,
+    (beyond, only): (Beyond, Option<[u8; 3]>),
     mut emit: impl FnMut([u8; 3], [f64; 6]),
 ) {
+    // Whether root `r` of step `k` (shoulder, elbow, wrist) is wanted.
+    let wanted = |k: usize, r: usize| only.is_none_or(|o| usize::from(o[k]) == r);
     let [w1, n, w3, w4, w5, w6] = w;
     let [p1, p2, p3, ..] = p;
     let rg = g.rotation;
     let b = rg * b0 + g.translation.vector;
 
-    let Some(q1s) = shoulder_angles(w1, n, p1, &b, b0) else {
+    let Some(q1s) = shoulder_angles(w1, n, p1, &b, b0, beyond) else {
         return;
     };
     let q1s: &[f64] = &q1s;
-    let distinct = |r: &[f64]| if (r[0] - r[1]).abs() < 1e-14 { 1 } else { 2 };
+    let distinct = |r: &[f64]| {
+        if beyond == Beyond::Nothing && (r[0] - r[1]).abs() < 1e-14 {
+            1
+        } else {
+            2
+        }
+    };
     // Axis 6's part along axis 5, which q5 does not turn.
     let w6_along = w5 * w5.dot(w6);
     for (b1, &q1) in q1s[..distinct(q1s)].iter().enumerate() {
+        if !wanted(0, b1) {
+            continue;
+        }
         let r1 = rot(w1, q1);
         // q5: n . Rot(w5, q5) w6 = n . R1^T R_G w6.
         let d = n.dot(&(r1.inverse() * (rg * w6)));
@@ -114,13 +128,16 @@ pub(super) fn each_solution(
             };
             [q5, q5]
         } else {
-            let Some(q5s) = cos_sin_equation(a5, b5, c5) else {
+            let Some(q5s) = cos_sin_equation(a5, b5, c5, beyond) else {
                 continue;
             };
             q5s
         };
         let roots = if singular { 1 } else { distinct(&q5s) };
         for (bw, &q5) in q5s[..roots].iter().enumerate() {
+            if !wanted(2, bw) {
+                continue;
+            }
             let r5 = rot(w5, q5);
             // A = G e6^-1 e5^-1 A0 (B0 lies on axes 5 and 6), then e1^-1 A = e2 e3 A0: for
             // q6, its rotation, A's point and the elbow's roots.
@@ -128,7 +145,7 @@ pub(super) fn each_solution(
                 let r6 = rot(w6, q6);
                 let back = r6.inverse() * (r5.inverse() * (a0 - b0)) + b0;
                 let ap = r1.inverse() * (rg * back + g.translation.vector - p1) + p1;
-                rotate_to_distance(w3, &(a0 - p3), &(p2 - p3), (ap - p2).norm())
+                rotate_to_distance(w3, &(a0 - p3), &(p2 - p3), (ap - p2).norm(), beyond)
                     .map(|q3s| (q6, r6, ap, q3s))
             };
             // q6: Rot(w6, q6) m = R5^T n; at the singularity the hint, then 1, 2, ... steps
@@ -147,6 +164,9 @@ pub(super) fn each_solution(
                 continue;
             };
             for (b3, &q3) in q3s[..distinct(&q3s)].iter().enumerate() {
+                if !wanted(1, b3) {
+                    continue;
+                }
                 let r3 = rot(w3, q3);
                 let elbow = r3 * (a0 - p3) + p3;
                 let q2 = rotate_onto(n, &(elbow - p2), &(ap - p2));

@@ -13,6 +13,19 @@ type V3 = Vector3<f64>;
 /// solution rather than as no solution.
 const TANGENT_TOL: f64 = 1e-10;
 
+/// What a subproblem gives where the point lies out of its rotation's reach (its cosine
+/// beyond [-1, 1] by more than the rounding of a tangent).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Beyond {
+    /// No solution: the closed form's answer.
+    Nothing,
+    /// The nearest the rotation comes: the cosine taken as +-1, both roots the tangent
+    /// angle (a stretched or folded elbow, a tangent shoulder). Starts for a model that
+    /// reaches a little farther than the closed form's robot
+    /// ([`super::ik::IkSolver`]'s tracking of a branch).
+    Nearest,
+}
+
 fn project(w: &V3, v: &V3) -> V3 {
     v - w * w.dot(v)
 }
@@ -27,7 +40,8 @@ pub fn rotate_onto(w: &V3, u: &V3, v: &V3) -> f64 {
 
 /// Subproblem 3: the angles theta with |Rot(w, theta) u - v| = delta; none, or two (equal
 /// when tangent).
-pub fn rotate_to_distance(w: &V3, u: &V3, v: &V3, delta: f64) -> Option<[f64; 2]> {
+/// Beyond the reach as `beyond` says.
+pub fn rotate_to_distance(w: &V3, u: &V3, v: &V3, delta: f64, beyond: Beyond) -> Option<[f64; 2]> {
     let up = project(w, u);
     let vp = project(w, v);
     let along = w.dot(&(u - v));
@@ -38,14 +52,16 @@ pub fn rotate_to_distance(w: &V3, u: &V3, v: &V3, delta: f64) -> Option<[f64; 2]
     }
     let theta0 = w.dot(&up.cross(&vp)).atan2(up.dot(&vp));
     let cos = (nu * nu + nv * nv - delta2) / (2.0 * nu * nv);
-    let cos = clamp_tangent(cos)?;
+    let cos = clamp_tangent(cos, beyond)?;
     let phi = cos.acos();
     Some([theta0 - phi, theta0 + phi])
 }
 
 /// Subproblem 2: the angle pairs (t1, t2) with Rot(w1, t1) Rot(w2, t2) p = q for two
-/// intersecting, non-parallel axes; none, or two (equal when tangent).
-pub fn rotate_two_axes(w1: &V3, w2: &V3, p: &V3, q: &V3) -> Option<[[f64; 2]; 2]> {
+/// intersecting, non-parallel axes; none, or two (equal when tangent). Beyond the reach as
+/// `beyond` says (the nearest: the pair that brings p to the point of the two axes' plane
+/// nearest q).
+pub fn rotate_two_axes(w1: &V3, w2: &V3, p: &V3, q: &V3, beyond: Beyond) -> Option<[[f64; 2]; 2]> {
     let c12 = w1.dot(w2);
     let cross = w1.cross(w2);
     let s2 = cross.norm_squared();
@@ -58,7 +74,7 @@ pub fn rotate_two_axes(w1: &V3, w2: &V3, p: &V3, q: &V3) -> Option<[[f64; 2]; 2]
     let rest = p.norm_squared() - alpha * alpha - beta * beta - 2.0 * alpha * beta * c12;
     let gamma2 = rest / s2;
     let scale = p.norm_squared().max(f64::MIN_POSITIVE);
-    if gamma2 < -TANGENT_TOL * scale {
+    if gamma2 < -TANGENT_TOL * scale && beyond == Beyond::Nothing {
         return None;
     }
     let gamma = gamma2.max(0.0).sqrt();
@@ -72,25 +88,26 @@ pub fn rotate_two_axes(w1: &V3, w2: &V3, p: &V3, q: &V3) -> Option<[[f64; 2]; 2]
     Some(out)
 }
 
-fn clamp_tangent(cos: f64) -> Option<f64> {
+fn clamp_tangent(cos: f64, beyond: Beyond) -> Option<f64> {
     if cos.abs() <= 1.0 {
         Some(cos)
-    } else if cos.abs() <= 1.0 + TANGENT_TOL {
+    } else if cos.abs() <= 1.0 + TANGENT_TOL || (beyond == Beyond::Nearest && !cos.is_nan()) {
         Some(cos.signum())
     } else {
         None
     }
 }
 
-/// Solutions q of `a cos q + b sin q = c`: none, or two (equal when tangent).
-/// `None` also when a = b = 0 (then any q or none solves it).
-pub fn cos_sin_equation(a: f64, b: f64, c: f64) -> Option<[f64; 2]> {
+/// Solutions q of `a cos q + b sin q = c`: none, or two (equal when tangent); where |c|
+/// exceeds the left side's amplitude, as `beyond` says (the nearest: the q of its maximum or
+/// minimum). `None` also when a = b = 0 (then any q or none solves it).
+pub fn cos_sin_equation(a: f64, b: f64, c: f64, beyond: Beyond) -> Option<[f64; 2]> {
     let r = a.hypot(b);
     if r == 0.0 {
         return None;
     }
     let phi = b.atan2(a);
-    let cos = clamp_tangent(c / r)?;
+    let cos = clamp_tangent(c / r, beyond)?;
     let d = cos.acos();
     Some([phi - d, phi + d])
 }
@@ -99,14 +116,22 @@ pub fn cos_sin_equation(a: f64, b: f64, c: f64) -> Option<[f64; 2]> {
 /// `x` (mm, where the target puts it) turned back about axis 1 (direction `w1`, through `p1`)
 /// has the component along `n` (the arm's parallel axes) that `x0` (mm, the point at q = 0)
 /// has, (Rot(w1, q1) n) . (x - p1) = n . (x0 - p1). None when no angle does; [0, 0] where
-/// every angle does (the point on axis 1 with nothing to fix q1).
-pub fn shoulder_angles(w1: &V3, n: &V3, p1: &V3, x: &V3, x0: &V3) -> Option<[f64; 2]> {
+/// every angle does (the point on axis 1 with nothing to fix q1). Where no angle does, as
+/// `beyond` says.
+pub fn shoulder_angles(
+    w1: &V3,
+    n: &V3,
+    p1: &V3,
+    x: &V3,
+    x0: &V3,
+    beyond: Beyond,
+) -> Option<[f64; 2]> {
     let v = x - p1;
     let (w1n, w1v) = (w1.dot(n), w1.dot(&v));
     let a = n.dot(&v) - w1n * w1v;
     let b = w1.cross(n).dot(&v);
     let c = n.dot(&(x0 - p1)) - w1n * w1v;
-    match cos_sin_equation(a, b, c) {
+    match cos_sin_equation(a, b, c, beyond) {
         Some(s) => Some(s),
         None if a.hypot(b) < 1e-9 && c.abs() < 1e-9 => Some([0.0, 0.0]),
         None => None,
@@ -177,12 +202,23 @@ mod tests {
         let v = V3::new(-1.0, 3.0, -2.0);
         let truth = 0.9;
         let delta = (rot(&w, truth) * u - v).norm();
-        let sols = rotate_to_distance(&w, &u, &v, delta).unwrap();
+        let sols = rotate_to_distance(&w, &u, &v, delta, Beyond::Nothing).unwrap();
         for t in sols {
             assert!(((rot(&w, t) * u - v).norm() - delta).abs() < 1e-12);
         }
         assert!(sols.iter().any(|t| (t - truth).abs() < 1e-12));
-        assert!(rotate_to_distance(&w, &u, &v, 100.0).is_none());
+        assert!(rotate_to_distance(&w, &u, &v, 100.0, Beyond::Nothing).is_none());
+        // Beyond the reach, the nearest: the angle of the largest (or smallest) distance,
+        // both roots, found by sampling the circle.
+        for far in [100.0, 0.0] {
+            let [a, b] = rotate_to_distance(&w, &u, &v, far, Beyond::Nearest).unwrap();
+            assert!(wrap(a - b).abs() < 1e-12, "{a} {b}");
+            let d = |t: f64| ((rot(&w, t) * u - v).norm() - far).abs();
+            let best = (0..100_000)
+                .map(|k| d(k as f64 * 2.0 * PI / 100_000.0))
+                .fold(f64::INFINITY, f64::min);
+            assert!(d(a) <= best + 1e-9, "{far}: {} against {best}", d(a));
+        }
     }
 
     #[test]
@@ -192,7 +228,7 @@ mod tests {
         let p = V3::new(0.2, 1.0, -0.4);
         let (t1, t2) = (1.1, -0.6);
         let q = rot(&w1, t1) * rot(&w2, t2) * p;
-        let sols = rotate_two_axes(&w1, &w2, &p, &q).unwrap();
+        let sols = rotate_two_axes(&w1, &w2, &p, &q, Beyond::Nothing).unwrap();
         for [a, b] in sols {
             assert!((rot(&w1, a) * rot(&w2, b) * p - q).norm() < 1e-12);
         }
@@ -205,9 +241,15 @@ mod tests {
     #[test]
     fn cos_sin_equation_solutions_satisfy_it() {
         let (a, b, c) = (2.0, -1.0, 0.5);
-        for q in cos_sin_equation(a, b, c).unwrap() {
+        for q in cos_sin_equation(a, b, c, Beyond::Nothing).unwrap() {
             assert!((a * q.cos() + b * q.sin() - c).abs() < 1e-14);
         }
-        assert!(cos_sin_equation(1.0, 1.0, 2.0).is_none());
+        assert!(cos_sin_equation(1.0, 1.0, 2.0, Beyond::Nothing).is_none());
+        // Beyond: the maximum (pi / 4) or the minimum (-3 pi / 4) of cos q + sin q.
+        let [q, r] = cos_sin_equation(1.0, 1.0, 2.0, Beyond::Nearest).unwrap();
+        assert!((q - PI / 4.0).abs() < 1e-15 && q == r);
+        let [q, _] = cos_sin_equation(1.0, 1.0, -2.0, Beyond::Nearest).unwrap();
+        assert!((wrap(q) + 0.75 * PI).abs() < 1e-15);
+        assert!(cos_sin_equation(0.0, 0.0, 1.0, Beyond::Nearest).is_none());
     }
 }
