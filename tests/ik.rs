@@ -1098,3 +1098,25 @@ fn a_calibrated_ur10_keeps_every_solution_next_to_a_straight_elbow() {
     );
     assert!(found >= 150, "{found} multistart solutions");
 }
+
+#[test]
+fn a_solution_a_rounding_past_a_limit_of_180_deg_keeps_its_turn() {
+    // A helper's finding: a numerical solution on joint 6's limit of -180 deg that ended
+    // 1e-12 rad past it came back as +180 deg, a whole turn from the seed, and `compensate`
+    // commanded that wrist swing. Within the limits' rounding allowance (1e-9 rad, that of
+    // `joints_outside_limits`) it now stays; beyond it the copy within the limits is taken.
+    let robot = robot_file("fanuc_r2000ib_210f.toml");
+    let mut ws = IkWorkspace::new(&robot);
+    let opts = IkOptions::default();
+    let mut q = vec![0.3, 0.2, -0.4, 1.0, 0.8, -PI];
+    let target = tool_pose(&robot, &q);
+    q[5] = -PI - 1e-12;
+    let sol = solve_numeric(&robot, &IkTarget::Pose(target), &q, &opts, &mut ws).unwrap();
+    assert!((sol.q[5] + PI).abs() < 1e-9, "{}", sol.q[5]);
+    assert!(sol.outside_limits.is_empty());
+    // 0.3 rad past it: the copy a turn away, within the limits.
+    q[5] = -PI - 0.3;
+    let target = tool_pose(&robot, &q);
+    let sol = solve_numeric(&robot, &IkTarget::Pose(target), &q, &opts, &mut ws).unwrap();
+    assert!((sol.q[5] - (PI - 0.3)).abs() < 1e-9, "{}", sol.q[5]);
+}

@@ -570,9 +570,9 @@ impl<M: ToolModel> IkSolver<M> {
     /// The closed form's solutions (each in its copy nearest `reference`) of `target` moved
     /// toward the reach's anchor, or away from it, by the first fraction of [`PULLS`] of its
     /// distance at which there are any, with that fraction: starts for a model that reaches
-    /// a little farther (or nearer) than the closed form's. Each is carried onto the model's
-    /// solution of `target` on its branch where [`Self::tracked`] settles, else taken as it
-    /// is. None where no pull gives any.
+    /// a little farther (or nearer) than the closed form's. Each starts as it is, and carried
+    /// onto the model's solution of `target` on its branch where [`Self::tracked`] settles.
+    /// None where no pull gives any.
     fn pulled_starts(&mut self, target: &Pose, reference: &[f64]) -> Option<(f64, Vec<Vec<f64>>)> {
         let anchor = self.reach.anchor;
         let v = target.translation.vector - anchor;
@@ -582,9 +582,13 @@ impl<M: ToolModel> IkSolver<M> {
                 moved.translation.vector = anchor + v * (1.0 + sign * pull);
                 let found = self.starts(&moved, reference, &[]);
                 if !found.is_empty() {
-                    let joints = (found.into_iter())
-                        .map(|(_, _, b, q)| self.tracked(target, b, &q).unwrap_or(q).to_vec())
-                        .collect();
+                    let mut joints = Vec::new();
+                    for (_, _, b, q) in found {
+                        if let Some(t) = self.tracked(target, b, &q) {
+                            joints.push(t.to_vec());
+                        }
+                        joints.push(q.to_vec());
+                    }
                     return Some((pull, joints));
                 }
             }

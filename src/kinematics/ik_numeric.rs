@@ -335,7 +335,10 @@ fn finish(robot: &Robot, q: &[f64], iterations: usize, pos: f64, rot: f64) -> Ik
             continue;
         }
         let [lo, hi] = j.limits_internal();
-        if *v < lo || *v > hi {
+        // Within the limits' rounding allowance (that of `joints_outside_limits`) a joint
+        // stays: a solution on a limit of +-180 deg that ends 1e-12 rad past it is not the
+        // copy at the other end, a turn away from the seed (a helper's finding).
+        if *v < lo - 1e-9 || *v > hi + 1e-9 {
             // The copy nearest the middle of the range, if one fits.
             let mid = 0.5 * (lo + hi);
             let shifted = *v - ((*v - mid) / (2.0 * PI)).round() * 2.0 * PI;
