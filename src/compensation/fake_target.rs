@@ -589,7 +589,7 @@ fn solve_from_seed(
             return Err(Failure::OutsideLimits(next.outside_limits));
         }
         let calibrated = ik.model().robot();
-        let Some(q) = super::nearest::turns_near(calibrated, &next.q, seed) else {
+        let Some(q) = calibrated.turns_near(&next.q, seed) else {
             return Err(Failure::OutsideLimits(
                 calibrated.joints_outside_limits(&next.q),
             ));

@@ -8,8 +8,8 @@
 //! flipped). The solutions are searched here from the seed, from the solution in hand and from
 //! [`SPREAD`] starts spread over the turn around the seed (a fixed low-discrepancy set, as
 //! `kinematics::same_arm` spreads its configurations); each revolute joint's whole turns are
-//! then taken nearest the seed within the limits, as a controller choosing near the seed
-//! takes them. A search, not a closed form: a solution no start reaches is not seen, so the
+//! then taken nearest the seed within the limits ([`Robot::turns_near`]), as a controller
+//! choosing near the seed takes them. A search, not a closed form: a solution no start reaches is not seen, so the
 //! search runs only where the seed leaves room for one (a command far from its seed).
 
 use super::model::CalibratedModel;
@@ -23,15 +23,6 @@ pub const SPREAD: usize = 64;
 
 /// Joints (rad, mm) closer than this are one solution.
 const SAME: f64 = 1e-6;
-
-/// `q` with each revolute joint moved by whole turns to its copy nearest `seed` within the
-/// robot's limits ([`crate::model::Joint::nearest_turn`]); None where a joint has no copy
-/// within them.
-pub fn turns_near(robot: &Robot, q: &[f64], seed: &[f64]) -> Option<Vec<f64>> {
-    (robot.joints().iter().zip(q).zip(seed))
-        .map(|((joint, &v), &s)| joint.nearest_turn(v, s))
-        .collect()
-}
 
 /// Start `k` of [`SPREAD`]: each revolute joint at its fraction of the turn centred on the
 /// seed ([`crate::kinematics::same_arm::spread`]; whole turns are taken nearest the seed
@@ -69,7 +60,7 @@ pub fn nearest_solution(
         let Ok(sol) = solver.from_start(pose, &start) else {
             continue;
         };
-        let Some(q) = turns_near(robot, &sol.q, seed) else {
+        let Some(q) = robot.turns_near(&sol.q, seed) else {
             continue;
         };
         let d = joint_distance(&q, seed);
@@ -78,27 +69,4 @@ pub fn nearest_solution(
         }
     }
     best.map(|(_, q)| q)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::model::test_fanuc;
-
-    #[test]
-    fn turns_are_taken_nearest_the_seed_within_the_limits() {
-        // FANUC limits (deg): J1 +-150, J4 +-180, J6 +-180.
-        let r = test_fanuc();
-        let rad = |v: [f64; 6]| v.map(f64::to_radians);
-        let deg = |v: Vec<f64>| v.into_iter().map(f64::to_degrees).collect::<Vec<_>>();
-        let seed = rad([0.0, 0.0, 0.0, 170.0, 0.0, -170.0]);
-        let q = rad([360.0, 10.0, -20.0, -185.0, 30.0, 185.0]);
-        let got = deg(turns_near(&r, &q, &seed).unwrap());
-        let want = [0.0, 10.0, -20.0, 175.0, 30.0, -175.0];
-        for (g, w) in got.iter().zip(want) {
-            assert!((g - w).abs() < 1e-9, "{got:?}");
-        }
-        // Joint 1 at 200 deg has no copy within +-150.
-        assert!(turns_near(&r, &rad([200.0, 0.0, 0.0, 0.0, 0.0, 0.0]), &seed).is_none());
-    }
 }

@@ -381,15 +381,8 @@ impl<M: ToolModel> IkSolver<M> {
         let mut starts: Vec<Vec<f64>> = seed.map(<[f64]>::to_vec).into_iter().collect();
         let closed = self.starts(target, reference, &[]);
         let present: Vec<Branch> = closed.iter().map(|(_, _, b, _)| *b).collect();
-        // Each branch's solution carried onto the model's, and the nominal's solution as it
-        // is: next to a singularity the model can have solutions the nominal has not (a
-        // calibrated UR10 four near one nominal elbow pair), which a solve from there can find.
-        for (_, _, b, q) in closed {
-            if let Some(t) = self.tracked(target, b, &q) {
-                starts.push(t.to_vec());
-            }
-            starts.push(q.to_vec());
-        }
+        let carried = self.carried(target, closed);
+        starts.extend(carried);
         // A calibrated arm a little longer (or shorter) than the nominal reaches poses just
         // beyond the nominal's reach, on some branches or on all: those branches start at
         // their nearest to the pose, carried onto the model's solution where there is one.
@@ -426,10 +419,16 @@ impl<M: ToolModel> IkSolver<M> {
         // a solve that did not converge only where none converged.
         let mut nearest_outside = f64::INFINITY;
         for q0 in &starts {
-            match self
-                .refine(target, q0)
-                .map(|sol| self.turns_near(sol, reference))
-            {
+            let solved = self.refine(target, q0).map(|mut sol| {
+                // The solve ends in whichever whole-turn copy its steps reach.
+                let robot = self.model.robot();
+                if let Some(q) = robot.turns_near(&sol.q, reference) {
+                    sol.outside_limits = robot.joints_outside_limits(&q);
+                    sol.q = q;
+                }
+                sol
+            });
+            match solved {
                 Ok(sol) if sol.outside_limits.is_empty() => {
                     let dup = sols.iter().any(|o| {
                         o.q.iter()
@@ -471,18 +470,24 @@ impl<M: ToolModel> IkSolver<M> {
         }
     }
 
-    /// `sol` with each joint in its whole-turn copy within the limits nearest `reference`
-    /// (the same pose; a solve from a start ends in whichever copy its steps reach), where
-    /// there is one ([`crate::model::Joint::nearest_turn`]).
-    fn turns_near(&self, mut sol: IkSolution, reference: &[f64]) -> IkSolution {
-        let robot = self.model.robot();
-        for ((v, joint), &r) in sol.q.iter_mut().zip(robot.joints()).zip(reference) {
-            if let Some(copy) = joint.nearest_turn(*v, r) {
-                *v = copy;
+    /// The starts of the closed-form solutions `found` ([`Self::starts`]) for `target`: each
+    /// carried onto the model's solution on its branch where [`Self::tracked`] settles, and
+    /// each as it is (next to a singularity the model can have solutions the nominal has not,
+    /// a calibrated UR10 four near one nominal elbow pair, which a solve from there can find;
+    /// every start of the code before the carrying still runs).
+    fn carried(
+        &mut self,
+        target: &Pose,
+        found: Vec<(bool, f64, Branch, [f64; 6])>,
+    ) -> Vec<Vec<f64>> {
+        let mut joints = Vec::with_capacity(2 * found.len());
+        for (_, _, b, q) in found {
+            if let Some(t) = self.tracked(target, b, &q) {
+                joints.push(t.to_vec());
             }
+            joints.push(q.to_vec());
         }
-        sol.outside_limits = robot.joints_outside_limits(&sol.q);
-        sol
+        joints
     }
 
     /// The nominal closed form's solution `q` (rad) of `target` on `branch` (or its nearest)
@@ -582,14 +587,7 @@ impl<M: ToolModel> IkSolver<M> {
                 moved.translation.vector = anchor + v * (1.0 + sign * pull);
                 let found = self.starts(&moved, reference, &[]);
                 if !found.is_empty() {
-                    let mut joints = Vec::new();
-                    for (_, _, b, q) in found {
-                        if let Some(t) = self.tracked(target, b, &q) {
-                            joints.push(t.to_vec());
-                        }
-                        joints.push(q.to_vec());
-                    }
-                    return Some((pull, joints));
+                    return Some((pull, self.carried(target, found)));
                 }
             }
         }

@@ -18,8 +18,8 @@
 use super::Pose;
 use super::fk::{Frames, frames};
 use super::subproblems::{
-    Beyond, STRUCTURE_TOL, closest_points, rot, rotate_onto, rotate_to_distance, rotate_two_axes,
-    shoulder_angles, wrap,
+    Beyond, STRUCTURE_TOL, closest_points, root_wanted, rot, rotate_onto, rotate_to_distance,
+    rotate_two_axes, shoulder_angles, wrap,
 };
 use crate::error::{Error, Result};
 use crate::model::{JointType, Robot};
@@ -262,18 +262,14 @@ impl ClosedFormIk {
             Some(reference),
             Beyond::Nearest,
             Some(branch),
-            |b, q| {
-                if b == branch {
-                    found = Some(q);
-                }
-            },
+            |_, q| found = Some(q),
         );
         found
     }
 
     /// [`ClosedFormIk::solve_branches_near`], and where a branch does not reach the pose its
-    /// nearest ([`ClosedFormIk::solve_branch_nearest`]): every branch the structure has, each
-    /// with whether it reaches the pose.
+    /// nearest ([`ClosedFormIk::solve_branch_nearest`]): every branch the structure has (which
+    /// of them reach the pose, [`ClosedFormIk::solve_branches_near`] says).
     pub fn solve_branches_nearest(
         &self,
         target: &Pose,
@@ -310,6 +306,7 @@ impl ClosedFormIk {
         mut emit: impl FnMut(Branch, [f64; 6]),
     ) {
         let g = target * self.m_inv;
+        let only = only.map(|b| [b.shoulder, b.elbow, b.wrist]);
         match self.structure {
             Structure::SphericalWrist { centre } => self.spherical(&g, &centre, beyond, only, emit),
             Structure::ParallelAxes { a, b } => {
@@ -326,7 +323,7 @@ impl ClosedFormIk {
                     [&a, &b],
                     &g,
                     hint,
-                    (beyond, only.map(|b| [b.shoulder, b.elbow, b.wrist])),
+                    (beyond, only),
                     |r, q| emit(branch(r), q),
                 )
             }
@@ -335,13 +332,13 @@ impl ClosedFormIk {
 
     /// [`ClosedFormIk::each_solution`] of a spherical wrist of centre `w0` (mm, at q = 0) for
     /// G = T M^-1, beyond the reach as `beyond` says (with [`Beyond::Nearest`] equal roots
-    /// are emitted as two branches), of the branch `only` alone where given.
+    /// are emitted as two branches), of the roots `only` alone where given.
     fn spherical(
         &self,
         g: &Pose,
         w0: &V3,
         beyond: Beyond,
-        only: Option<Branch>,
+        only: Option<[u8; 3]>,
         mut emit: impl FnMut(Branch, [f64; 6]),
     ) {
         let merge = beyond == Beyond::Nothing;
@@ -354,12 +351,8 @@ impl ClosedFormIk {
         };
         let q1s: &[f64] = &q1s;
         let dedup1 = merge && (q1s[0] - q1s[1]).abs() < 1e-14;
-        // Whether root `r` of step `k` (shoulder, elbow, wrist) is wanted.
-        let wanted = |k: usize, r: usize| {
-            only.is_none_or(|o| usize::from([o.shoulder, o.elbow, o.wrist][k]) == r)
-        };
         for (b1, &q1) in q1s[..if dedup1 { 1 } else { 2 }].iter().enumerate() {
-            if !wanted(0, b1) {
+            if !root_wanted(only, 0, b1) {
                 continue;
             }
             let r1 = rot(w1, q1);
@@ -370,7 +363,7 @@ impl ClosedFormIk {
             };
             let dedup3 = merge && (q3s[0] - q3s[1]).abs() < 1e-14;
             for (b3, &q3) in q3s[..if dedup3 { 1 } else { 2 }].iter().enumerate() {
-                if !wanted(1, b3) {
+                if !root_wanted(only, 1, b3) {
                     continue;
                 }
                 let r3 = rot(w3, q3);
@@ -385,7 +378,7 @@ impl ClosedFormIk {
                     && (wrists[0][0] - wrists[1][0]).abs() < 1e-14
                     && (wrists[0][1] - wrists[1][1]).abs() < 1e-14;
                 for (bw, &[q4, q5]) in wrists[..if dedupw { 1 } else { 2 }].iter().enumerate() {
-                    if !wanted(2, bw) {
+                    if !root_wanted(only, 2, bw) {
                         continue;
                     }
                     // Any vector off axis 6 fixes q6; axis 5 is perpendicular to it here.

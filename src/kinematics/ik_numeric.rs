@@ -17,7 +17,7 @@ use super::fk::{Frames, frames};
 use super::jacobian::joint_jacobian;
 use crate::error::{Error, Result};
 use crate::geometry::rotation::rotation_vector;
-use crate::model::{JointType, Robot};
+use crate::model::{JointType, LIMIT_TOL, Robot};
 use nalgebra::{DMatrix, DVector, Matrix6xX, Vector3, Vector6};
 use std::f64::consts::PI;
 
@@ -335,14 +335,14 @@ fn finish(robot: &Robot, q: &[f64], iterations: usize, pos: f64, rot: f64) -> Ik
             continue;
         }
         let [lo, hi] = j.limits_internal();
-        // Within the limits' rounding allowance (that of `joints_outside_limits`) a joint
-        // stays: a solution on a limit of +-180 deg that ends 1e-12 rad past it is not the
-        // copy at the other end, a turn away from the seed (a helper's finding).
-        if *v < lo - 1e-9 || *v > hi + 1e-9 {
+        // Within the limits' rounding allowance a joint stays: a solution on a limit of
+        // +-180 deg that ends 1e-12 rad past it is not the copy at the other end, a turn away
+        // from the seed (a helper's finding).
+        if *v < lo - LIMIT_TOL || *v > hi + LIMIT_TOL {
             // The copy nearest the middle of the range, if one fits.
             let mid = 0.5 * (lo + hi);
             let shifted = *v - ((*v - mid) / (2.0 * PI)).round() * 2.0 * PI;
-            if shifted >= lo - 1e-9 && shifted <= hi + 1e-9 {
+            if shifted >= lo - LIMIT_TOL && shifted <= hi + LIMIT_TOL {
                 *v = shifted;
             }
         }

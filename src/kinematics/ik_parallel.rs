@@ -22,8 +22,8 @@
 
 use super::Pose;
 use super::subproblems::{
-    Beyond, STRUCTURE_TOL, closest_points, cos_sin_equation, rot, rotate_onto, rotate_to_distance,
-    shoulder_angles, wrap,
+    Beyond, STRUCTURE_TOL, closest_points, cos_sin_equation, root_wanted, rot, rotate_onto,
+    rotate_to_distance, shoulder_angles, wrap,
 };
 use nalgebra::Vector3;
 
@@ -83,8 +83,6 @@ pub(super) fn each_solution(
     (beyond, only): (Beyond, Option<[u8; 3]>),
     mut emit: impl FnMut([u8; 3], [f64; 6]),
 ) {
-    // Whether root `r` of step `k` (shoulder, elbow, wrist) is wanted.
-    let wanted = |k: usize, r: usize| only.is_none_or(|o| usize::from(o[k]) == r);
     let [w1, n, w3, w4, w5, w6] = w;
     let [p1, p2, p3, ..] = p;
     let rg = g.rotation;
@@ -104,7 +102,7 @@ pub(super) fn each_solution(
     // Axis 6's part along axis 5, which q5 does not turn.
     let w6_along = w5 * w5.dot(w6);
     for (b1, &q1) in q1s[..distinct(q1s)].iter().enumerate() {
-        if !wanted(0, b1) {
+        if !root_wanted(only, 0, b1) {
             continue;
         }
         let r1 = rot(w1, q1);
@@ -135,7 +133,7 @@ pub(super) fn each_solution(
         };
         let roots = if singular { 1 } else { distinct(&q5s) };
         for (bw, &q5) in q5s[..roots].iter().enumerate() {
-            if !wanted(2, bw) {
+            if !root_wanted(only, 2, bw) {
                 continue;
             }
             let r5 = rot(w5, q5);
@@ -164,7 +162,7 @@ pub(super) fn each_solution(
                 continue;
             };
             for (b3, &q3) in q3s[..distinct(&q3s)].iter().enumerate() {
-                if !wanted(1, b3) {
+                if !root_wanted(only, 1, b3) {
                     continue;
                 }
                 let r3 = rot(w3, q3);

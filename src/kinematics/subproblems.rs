@@ -138,6 +138,13 @@ pub fn shoulder_angles(
     }
 }
 
+/// Whether root `root` (0 or 1) of step `step` (0 shoulder, 1 elbow, 2 wrist) leads to the
+/// solution a closed form is asked for: `only` its roots [shoulder, elbow, wrist], None for
+/// every solution.
+pub fn root_wanted(only: Option<[u8; 3]>, step: usize, root: usize) -> bool {
+    only.is_none_or(|o| usize::from(o[step]) == root)
+}
+
 /// Tolerance (mm) for axes meeting in a point, and (unit-vector norm) for parallel axes.
 pub const STRUCTURE_TOL: f64 = 1e-7;
 

@@ -11,7 +11,7 @@ pub use compliance::Compliance;
 pub use file::{read_robot, robot_to_toml, write_robot};
 pub use mass::{BodyMass, MassProperties};
 pub use robot::{
-    Joint, JointType, MAX_ANGLE_DEG, MAX_JOINT_DEG, MAX_LENGTH_MM, ParamId, Robot, Slot,
+    Joint, JointType, LIMIT_TOL, MAX_ANGLE_DEG, MAX_JOINT_DEG, MAX_LENGTH_MM, ParamId, Robot, Slot,
     joint_distance,
 };
 pub use row::{Convention, Field, Row};

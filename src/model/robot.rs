@@ -73,17 +73,21 @@ pub struct Joint {
     pub limits: [f64; 2],
 }
 
+/// Rounding allowance (rad or mm) of the joint limits: a joint value this little past a
+/// limit counts as within it (a solve that ends on a limit can end a rounding beyond it).
+pub const LIMIT_TOL: f64 = 1e-9;
+
 impl Joint {
     /// Limits in internal units (rad or mm).
     pub fn limits_internal(&self) -> [f64; 2] {
         self.limits.map(|v| self.joint_type.to_internal(v))
     }
 
-    /// The value `v` (rad, mm) takes nearest `reference` within the limits (widened by 1e-9
-    /// for rounding): for a revolute joint the whole-turn copy v + 2 pi k, for a prismatic one
-    /// `v` itself; None where no copy lies within them.
+    /// The value `v` (rad, mm) takes nearest `reference` within the limits (widened by
+    /// [`LIMIT_TOL`]): for a revolute joint the whole-turn copy v + 2 pi k, for a prismatic
+    /// one `v` itself; None where no copy lies within them.
     pub fn nearest_turn(&self, v: f64, reference: f64) -> Option<f64> {
-        const TOL: f64 = 1e-9;
+        const TOL: f64 = LIMIT_TOL;
         let [lo, hi] = self.limits_internal();
         if self.joint_type == JointType::Prismatic {
             return (lo - TOL..=hi + TOL).contains(&v).then_some(v);
@@ -650,7 +654,7 @@ impl Robot {
     }
 
     /// Checks a joint vector (internal units) against the limits; returns the 0-based indices
-    /// of the joints outside, with a tolerance of 1e-9 (rad or mm).
+    /// of the joints outside, with a tolerance of [`LIMIT_TOL`] (rad or mm).
     pub fn joints_outside_limits(&self, q: &[f64]) -> Vec<usize> {
         self.joints
             .iter()
@@ -658,9 +662,19 @@ impl Robot {
             .enumerate()
             .filter(|(_, (j, v))| {
                 let [lo, hi] = j.limits_internal();
-                **v < lo - 1e-9 || **v > hi + 1e-9
+                **v < lo - LIMIT_TOL || **v > hi + LIMIT_TOL
             })
             .map(|(i, _)| i)
+            .collect()
+    }
+
+    /// `q` (rad, mm) with each revolute joint moved by whole turns to its copy nearest
+    /// `reference` within the limits ([`Joint::nearest_turn`]): the same pose, as a
+    /// controller choosing near the reference takes it. None where a joint has no copy within
+    /// them.
+    pub fn turns_near(&self, q: &[f64], reference: &[f64]) -> Option<Vec<f64>> {
+        (self.joints.iter().zip(q).zip(reference))
+            .map(|((joint, &v), &r)| joint.nearest_turn(v, r))
             .collect()
     }
 
@@ -807,4 +821,29 @@ pub fn joint_distance(a: &[f64], b: &[f64]) -> f64 {
         .map(|(x, y)| (x - y).powi(2))
         .sum::<f64>()
         .sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::model::test_fanuc;
+
+    #[test]
+    fn turns_are_taken_nearest_the_seed_within_the_limits() {
+        // FANUC limits (deg): J1 +-150, J4 +-180, J6 +-180.
+        let r = test_fanuc();
+        let rad = |v: [f64; 6]| v.map(f64::to_radians);
+        let deg = |v: Vec<f64>| v.into_iter().map(f64::to_degrees).collect::<Vec<_>>();
+        let seed = rad([0.0, 0.0, 0.0, 170.0, 0.0, -170.0]);
+        let q = rad([360.0, 10.0, -20.0, -185.0, 30.0, 185.0]);
+        let got = deg(r.turns_near(&q, &seed).unwrap());
+        let want = [0.0, 10.0, -20.0, 175.0, 30.0, -175.0];
+        for (g, w) in got.iter().zip(want) {
+            assert!((g - w).abs() < 1e-9, "{got:?}");
+        }
+        // Joint 1 at 200 deg has no copy within +-150.
+        assert!(
+            r.turns_near(&rad([200.0, 0.0, 0.0, 0.0, 0.0, 0.0]), &seed)
+                .is_none()
+        );
+    }
 }
