@@ -1120,3 +1120,267 @@ fn a_solution_a_rounding_past_a_limit_of_180_deg_keeps_its_turn() {
     let sol = solve_numeric(&robot, &IkTarget::Pose(target), &q, &opts, &mut ws).unwrap();
     assert!((sol.q[5] - (PI - 0.3)).abs() < 1e-9, "{}", sol.q[5]);
 }
+
+/// A UR10 with four times the deviations of [`UR10_CALIBRATED`] from the nominal (base, tool
+/// and every DH row), rounded to 6 significant digits.
+const UR10_FOUR_TIMES: &str = r#"
+name = "UR10, four times a calibration's deviations"
+[base]
+convention = "transform"
+x = 8.902
+y = -5.1468
+z = 12.5184
+rz = 0.8772
+ry = 0.296
+rx = 0.5716
+[[joint]]
+convention = "dh"
+d = 127.3
+a = -11.3596
+alpha = 89.9136
+limits = [-360.0, 360.0]
+[[joint]]
+convention = "dh"
+theta = -0.018
+d = 2.176
+a = -623.868
+alpha = 0.454
+limits = [-360.0, 360.0]
+[[joint]]
+convention = "dh"
+theta = 0.6632
+a = -576.733
+alpha = 0.2792
+limits = [-360.0, 360.0]
+[[joint]]
+convention = "dh"
+theta = -0.2764
+d = 163.941
+a = -5.292
+alpha = 90.3892
+limits = [-360.0, 360.0]
+[[joint]]
+convention = "dh"
+theta = 0.6692
+d = 127.371
+a = 9.18
+alpha = -89.4332
+limits = [-360.0, 360.0]
+[[joint]]
+convention = "dh"
+d = 92.2
+limits = [-360.0, 360.0]
+[tool]
+convention = "transform"
+x = 7.0388
+y = 2.5468
+z = 0.7644
+rz = 0.6892
+ry = -0.4188
+rx = -1.1696
+"#;
+
+#[test]
+fn poses_next_to_the_shoulder_singularity_that_no_branch_start_reaches_are_searched() {
+    use robocal::kinematics::{IkFailure, IkSolver, IkStart, RobotModel};
+    // Configurations of the UR10 above whose joint-5 frame lies within 3 mm of the shoulder's
+    // cylinder (distance d4 from the base axis), 20 of 3000 such where the nominal's
+    // closed-form starts (carried, nearest, pulled) all failed: 19 read unreachable, one
+    // not-converged. The search from spread starts solves every one.
+    let failed: [[f64; 6]; 20] = [
+        [
+            55.357044,
+            -109.37282,
+            26.398447,
+            -33.204477,
+            -53.700811,
+            -161.533086,
+        ],
+        [
+            29.995593,
+            -148.268434,
+            100.604421,
+            -29.576283,
+            175.08279,
+            -41.464307,
+        ],
+        [
+            -140.456889,
+            82.483117,
+            9.123086,
+            -43.785457,
+            -17.710462,
+            13.970138,
+        ],
+        [
+            -71.119786,
+            -109.017442,
+            27.551787,
+            -11.60549,
+            -22.811889,
+            -61.981384,
+        ],
+        [
+            53.753956, -91.816807, 5.524764, -91.220283, -34.937239, 20.591522,
+        ],
+        [
+            51.320734,
+            -148.247163,
+            99.301932,
+            -37.106277,
+            -149.466882,
+            109.003363,
+        ],
+        [
+            -43.909598,
+            -23.679805,
+            177.922766,
+            -140.739839,
+            -130.612197,
+            -55.217439,
+        ],
+        [
+            158.851278,
+            -87.004097,
+            5.200245,
+            -161.712492,
+            -39.39162,
+            107.995866,
+        ],
+        [
+            -14.829501,
+            -155.450718,
+            112.873463,
+            -41.771905,
+            -173.236565,
+            -61.96298,
+        ],
+        [
+            -26.234463,
+            -92.036014,
+            6.246828,
+            -115.710032,
+            -136.549907,
+            99.699062,
+        ],
+        [
+            149.664509,
+            -147.133772,
+            100.356604,
+            -71.6343,
+            -113.861581,
+            120.075051,
+        ],
+        [
+            28.346837,
+            -111.835084,
+            31.81732,
+            -24.352008,
+            -146.842191,
+            -128.866434,
+        ],
+        [
+            61.385149,
+            -110.098755,
+            35.79987,
+            55.115947,
+            -112.891246,
+            96.776399,
+        ],
+        [
+            52.879272,
+            -150.451825,
+            105.940526,
+            -20.587603,
+            -121.096754,
+            154.696854,
+        ],
+        [
+            14.503558,
+            -93.538946,
+            -0.291051,
+            -56.442522,
+            -140.399688,
+            -162.154994,
+        ],
+        [
+            -9.128391,
+            -3.922682,
+            160.77491,
+            -35.606421,
+            -179.241404,
+            -138.177571,
+        ],
+        [
+            -62.956047,
+            -111.040106,
+            44.640654,
+            -133.798567,
+            -167.081303,
+            72.968173,
+        ],
+        [
+            -122.487323,
+            -109.775855,
+            32.800359,
+            46.844307,
+            -90.295738,
+            125.070032,
+        ],
+        [
+            134.354794,
+            -101.370934,
+            12.435011,
+            39.373796,
+            -96.357058,
+            -173.011801,
+        ],
+        [
+            173.687865,
+            -100.014224,
+            15.003675,
+            44.986169,
+            -29.23956,
+            -169.981185,
+        ],
+    ];
+    let nominal = robot_file("ur10.toml");
+    let robot = parse_robot(UR10_FOUR_TIMES, Path::new("ur10_x4.toml")).unwrap();
+    let start = IkStart::choose(&robot, Some(&nominal)).unwrap();
+    let mut solver = IkSolver::new(RobotModel::new(&robot), start, IkOptions::default());
+    let mut own = 0;
+    for deg in failed {
+        let q: Vec<f64> = deg.iter().map(|d| d.to_radians()).collect();
+        let target = tool_pose(&robot, &q);
+        let all = solver
+            .all(&target, None)
+            .unwrap_or_else(|e| panic!("{deg:?}: {e}"));
+        for s in &all {
+            let (dp, dr) = pose_errors(&tool_pose(&robot, s), &target);
+            assert!(dp < 1e-6 && dr < 1e-9, "{deg:?}: {s:?}: {dp} mm {dr} rad");
+        }
+        own += usize::from(all.iter().any(|s| joint_gap(s, &q) < 1e-6));
+        // Seeded, the solution nearest the seed; the configuration itself as the seed is its
+        // own solution.
+        let nearest = solver.nearest(&target, Some(&q)).unwrap();
+        assert!(joint_gap(&nearest.solution.q, &q) < 1e-6, "{deg:?}");
+    }
+    // One of the 20 has another solution 4.8 deg from its own, which the search finds
+    // instead.
+    assert!(own >= 19, "{own} of 20 list their own configuration");
+    // A pose no start reaches (the tool on the nominal base's axis, 10 mm from this one's:
+    // the wrist's centre inside the shoulder's cylinder) is still unreachable, and says what
+    // was tried.
+    let mut target = tool_pose(&robot, &[0.0, -1.0, 1.0, 0.0, 1.0, 0.0]);
+    target.translation.vector.x = 0.0;
+    target.translation.vector.y = 0.0;
+    match solver.nearest(&target, None) {
+        Err(IkFailure::Unreachable(why)) => {
+            assert!(
+                why.contains("16 starts spread over the joints' turns"),
+                "{why}"
+            )
+        }
+        other => panic!("{other:?}"),
+    }
+}

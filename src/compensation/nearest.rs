@@ -6,41 +6,22 @@
 //! One numerical solve from the seed finds a solution, not the nearest: from a seed far from
 //! every solution it can run past a nearer configuration to another (an elbow or a wrist
 //! flipped). The solutions are searched here from the seed, from the solution in hand and from
-//! [`SPREAD`] starts spread over the turn around the seed (a fixed low-discrepancy set, as
-//! `kinematics::same_arm` spreads its configurations); each revolute joint's whole turns are
+//! [`SPREAD`] starts spread over the turn around the seed (a fixed low-discrepancy set,
+//! `kinematics::spread::around`); each revolute joint's whole turns are
 //! then taken nearest the seed within the limits ([`Robot::turns_near`]), as a controller
 //! choosing near the seed takes them. A search, not a closed form: a solution no start reaches is not seen, so the
 //! search runs only where the seed leaves room for one (a command far from its seed).
 
 use super::model::CalibratedModel;
-use crate::kinematics::same_arm::spread;
+use crate::kinematics::spread::around;
 use crate::kinematics::{IkSolver, Pose};
-use crate::model::{JointType, Robot, joint_distance};
-use std::f64::consts::TAU;
+use crate::model::{Robot, joint_distance};
 
 /// Starts spread over the turn around the seed, besides the seed and the solution in hand.
 pub const SPREAD: usize = 64;
 
 /// Joints (rad, mm) closer than this are one solution.
 const SAME: f64 = 1e-6;
-
-/// Start `k` of [`SPREAD`]: each revolute joint at its fraction of the turn centred on the
-/// seed ([`crate::kinematics::same_arm::spread`]; whole turns are taken nearest the seed
-/// afterwards, so one turn holds every configuration), a prismatic joint at it of its range.
-fn spread_start(robot: &Robot, seed: &[f64], k: usize) -> Vec<f64> {
-    let n = robot.dof();
-    (robot.joints().iter().enumerate())
-        .map(|(j, joint)| {
-            let t = spread(k, n, j);
-            if joint.joint_type == JointType::Prismatic {
-                let [lo, hi] = joint.limits_internal();
-                lo + (hi - lo) * t
-            } else {
-                seed[j] + TAU * (t - 0.5)
-            }
-        })
-        .collect()
-}
 
 /// The solution of `pose` (mm, in the frame of `solver`'s model, `robot`) nearest `seed`
 /// (rad, mm) that the search finds, its turns nearest the seed within the limits; `known` (a
@@ -54,7 +35,7 @@ pub fn nearest_solution(
 ) -> Option<Vec<f64>> {
     let starts = [seed.to_vec(), known.to_vec()]
         .into_iter()
-        .chain((0..SPREAD).map(|k| spread_start(robot, seed, k)));
+        .chain((0..SPREAD).map(|k| around(robot, seed, k)));
     let mut best: Option<(f64, Vec<f64>)> = None;
     for start in starts {
         let Ok(sol) = solver.from_start(pose, &start) else {

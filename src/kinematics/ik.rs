@@ -17,6 +17,10 @@
 //!    form gives a start ([`IkStart::Seed`], or a pose out of the nominal's reach on every
 //!    branch, where its solutions of the pose pulled a little toward the base start them
 //!    too).
+//! 4. Where a nominal's closed form gave the starts (or had none to give) and no solve from
+//!    them converged at all, starts spread over the joints' turns around the reference
+//!    ([`super::spread::around`]) are tried: next to a singularity a calibrated arm can have
+//!    solutions no branch's start leads to.
 //!
 //! The reference is the seed when one is given, else the middle of the joint ranges.
 //! [`IkSolver::nearest`] (`robocal ik`) refines the seed and every start and returns the
@@ -26,6 +30,7 @@
 
 use super::ik_closed::{Branch, ClosedFormIk, MAX_SOLUTIONS};
 use super::ik_numeric::{IkOptions, IkSolution, IkTarget, IkWorkspace, ToolModel, solve_model};
+use super::spread::around;
 use super::subproblems::wrap;
 use super::{Pose, Reach};
 use crate::error::{Error, Result};
@@ -190,6 +195,38 @@ const POLISH_STEP: f64 = 1e-3;
 /// elbow, a singularity from which the solve cannot bend it back (it stalled there, 18 mm off,
 /// where a start moved by 1 % converges).
 const PULLS: [f64; 3] = [1e-2, 3e-2, 1e-1];
+
+/// Starts of the last-resort search ([`IkSolver`]'s `refined`), spread over the turn around
+/// the reference ([`around`]): where no start a nominal's closed form gives converges at all.
+/// Next to a singularity a calibrated arm's solutions can lie where no branch's start leads
+/// (next to the shoulder singularity of a UR10 with four times a real calibration's
+/// deviations, 3 of 300 poses had no solution without it, and a random start solves about a
+/// third of such poses). Only failing poses pay for it; the search stops after
+/// [`SEARCH_FIRST`] starts where none of them converged, and each solve runs at most
+/// [`SEARCH_ITERATIONS`] iterations.
+const SEARCH_STARTS: usize = 64;
+
+/// The starts after which the search gives up where none converged: where a start converges
+/// one time in three (as next to the UR10's shoulder singularity), 16 all fail one time in
+/// 650; a pose no start reaches (beyond the shoulder's cylinder) costs 16 short solves, about
+/// 1 ms, instead of 64.
+const SEARCH_FIRST: usize = 16;
+
+/// Iterations of a search solve at most: from the spread starts, solves that converged took 8
+/// to 34 iterations but for 2 of 74 (72 and 74), on the UR10 with four times a calibration's
+/// deviations next to its shoulder singularity; a start that needs more is one of many.
+const SEARCH_ITERATIONS: usize = 40;
+
+/// The solutions a run of solves found, and the failure to report where there are none.
+struct Found {
+    /// Distinct solutions within the limits.
+    sols: Vec<IkSolution>,
+    /// The joint distance from the reference of the nearest solution outside the limits
+    /// (infinite where there is none).
+    nearest_outside: f64,
+    /// The failure where `sols` is empty.
+    failure: IkFailure,
+}
 
 /// The closed form's branches: 2 shoulders x 2 elbows x 2 wrists.
 const BRANCHES: usize = 8;
@@ -371,7 +408,10 @@ impl<M: ToolModel> IkSolver<M> {
     }
 
     /// Every distinct converged solution within the limits, one numerical solve from the
-    /// seed (when given) and from each closed-form start; the last failure when none.
+    /// seed (when given) and from each closed-form start; where a nominal's closed form gave
+    /// starts (or had none to give) and no solve converged at all, from [`SEARCH_STARTS`]
+    /// starts spread over the turn around the reference too (see [`SEARCH_STARTS`]). The
+    /// failure when none.
     fn refined(
         &mut self,
         target: &Pose,
@@ -389,19 +429,14 @@ impl<M: ToolModel> IkSolver<M> {
         let beyond = self.beyond_starts(target, reference, &present);
         let none_yet = beyond.is_empty();
         starts.extend(beyond);
+        let nominal = matches!(self.start, IkStart::Nominal(_));
         // Where no branch reaches the pose, the closed form's solutions of the same pose moved
         // a little toward (or away from) the base start numerical solves too: the pull that
         // gave them, if one did.
-        let pulled = if present.is_empty() && matches!(self.start, IkStart::Nominal(_)) {
+        let mut past_reach = false;
+        let pulled = if present.is_empty() && nominal {
             let found = self.pulled_starts(target, reference);
-            if found.is_none() && none_yet && seed.is_none() {
-                return Err(IkFailure::Unreachable(format!(
-                    "the closed form of the nominal model has no solution, for the pose nor for \
-                     it moved by up to {:.0} % of its distance toward or away from the base: it \
-                     lies beyond the nominal's reach by more than a calibration changes it",
-                    PULLS[PULLS.len() - 1] * 100.0
-                )));
-            }
+            past_reach = found.is_none() && none_yet && seed.is_none();
             found.map(|(pull, joints)| {
                 starts.extend(joints);
                 pull
@@ -409,56 +444,69 @@ impl<M: ToolModel> IkSolver<M> {
         } else {
             None
         };
-        let mut failure = if starts.is_empty() {
+        if starts.is_empty() && !nominal {
             return Err(self.no_start());
-        } else {
-            self.no_start()
+        }
+        let mut found = Found {
+            sols: Vec::new(),
+            nearest_outside: f64::INFINITY,
+            failure: self.no_start(),
         };
-        let mut sols: Vec<IkSolution> = Vec::new();
-        // Of the solutions outside the limits, the nearest the reference names the failure;
-        // a solve that did not converge only where none converged.
-        let mut nearest_outside = f64::INFINITY;
         for q0 in &starts {
-            let solved = self.refine(target, q0).map(|mut sol| {
-                // The solve ends in whichever whole-turn copy its steps reach.
-                let robot = self.model.robot();
-                if let Some(q) = robot.turns_near(&sol.q, reference) {
-                    sol.outside_limits = robot.joints_outside_limits(&q);
-                    sol.q = q;
+            self.solve_start(target, q0, reference, &mut found);
+        }
+        let searched = nominal && found.sols.is_empty() && found.nearest_outside.is_infinite();
+        if searched {
+            let failure = std::mem::replace(&mut found.failure, self.no_start());
+            let cap = self.opts.max_iterations.min(SEARCH_ITERATIONS);
+            let full = std::mem::replace(&mut self.opts.max_iterations, cap);
+            for k in 0..SEARCH_STARTS {
+                if k == SEARCH_FIRST && found.sols.is_empty() && found.nearest_outside.is_infinite()
+                {
+                    break;
                 }
-                sol
-            });
-            match solved {
-                Ok(sol) if sol.outside_limits.is_empty() => {
-                    let dup = sols.iter().any(|o| {
-                        o.q.iter()
-                            .zip(&sol.q)
-                            .all(|(a, b)| (a - b).abs() < SAME_SOLUTION)
-                    });
-                    if !dup {
-                        sols.push(sol);
-                    }
-                }
-                Ok(sol) => {
-                    let d = joint_distance(&sol.q, reference);
-                    if d < nearest_outside {
-                        nearest_outside = d;
-                        failure = IkFailure::OutsideLimits(sol.outside_limits);
-                    }
-                }
-                Err(e) if nearest_outside.is_infinite() => {
-                    failure = IkFailure::NotConverged(e.to_string())
-                }
-                Err(_) => {}
+                let q0 = around(self.model.robot(), reference, k);
+                self.solve_start(target, &q0, reference, &mut found);
+            }
+            self.opts.max_iterations = full;
+            // Where the search found only solutions outside the limits, the nearest names the
+            // failure; where nothing converged, the structured starts' failure stands.
+            if found.nearest_outside.is_infinite() {
+                found.failure = failure;
             }
         }
-        match (failure, pulled) {
-            _ if !sols.is_empty() => Ok(sols),
+        let search_note = if searched {
+            format!(
+                "; nor do solves from {} starts spread over the joints' turns around the {}",
+                if found.sols.is_empty() && found.nearest_outside.is_infinite() {
+                    SEARCH_FIRST
+                } else {
+                    SEARCH_STARTS
+                },
+                if seed.is_some() {
+                    "seed"
+                } else {
+                    "middle of the ranges"
+                }
+            )
+        } else {
+            String::new()
+        };
+        match (found.failure, pulled) {
+            _ if !found.sols.is_empty() => Ok(found.sols),
+            _ if past_reach && found.nearest_outside.is_infinite() => {
+                Err(IkFailure::Unreachable(format!(
+                    "the closed form of the nominal model has no solution, for the pose nor for \
+                     it moved by up to {:.0} % of its distance toward or away from the base: it \
+                     lies beyond the nominal's reach by more than a calibration changes it{search_note}",
+                    PULLS[PULLS.len() - 1] * 100.0
+                )))
+            }
             (IkFailure::NotConverged(why), Some(moved)) => Err(IkFailure::Unreachable(format!(
                 "the closed form of the nominal model has no solution (the pose is beyond \
                      its reach), and solves from the nearest poses it reaches (moved by {:.0} % \
                      of the distance toward or away from the base){} do not reach it on this \
-                     model either: {why}",
+                     model either: {why}{search_note}",
                 moved * 100.0,
                 if seed.is_some() {
                     " and from the seed"
@@ -466,7 +514,52 @@ impl<M: ToolModel> IkSolver<M> {
                     ""
                 },
             ))),
+            (IkFailure::NotConverged(why), None) => {
+                Err(IkFailure::NotConverged(format!("{why}{search_note}")))
+            }
+            (IkFailure::Unreachable(why), None) => {
+                Err(IkFailure::Unreachable(format!("{why}{search_note}")))
+            }
             (failure, _) => Err(failure),
+        }
+    }
+
+    /// One numerical solve of `target` from `q0`, its solution in the whole-turn copy nearest
+    /// `reference`, added to `found`: a new solution within the limits to its solutions, else
+    /// (the nearest `reference` of those outside the limits, or a solve that did not converge
+    /// where none has converged) as its failure.
+    fn solve_start(&mut self, target: &Pose, q0: &[f64], reference: &[f64], found: &mut Found) {
+        let solved = self.refine(target, q0).map(|mut sol| {
+            // The solve ends in whichever whole-turn copy its steps reach.
+            let robot = self.model.robot();
+            if let Some(q) = robot.turns_near(&sol.q, reference) {
+                sol.outside_limits = robot.joints_outside_limits(&q);
+                sol.q = q;
+            }
+            sol
+        });
+        match solved {
+            Ok(sol) if sol.outside_limits.is_empty() => {
+                let dup = found.sols.iter().any(|o| {
+                    o.q.iter()
+                        .zip(&sol.q)
+                        .all(|(a, b)| (a - b).abs() < SAME_SOLUTION)
+                });
+                if !dup {
+                    found.sols.push(sol);
+                }
+            }
+            Ok(sol) => {
+                let d = joint_distance(&sol.q, reference);
+                if d < found.nearest_outside {
+                    found.nearest_outside = d;
+                    found.failure = IkFailure::OutsideLimits(sol.outside_limits);
+                }
+            }
+            Err(e) if found.nearest_outside.is_infinite() => {
+                found.failure = IkFailure::NotConverged(e.to_string())
+            }
+            Err(_) => {}
         }
     }
 

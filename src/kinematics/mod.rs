@@ -12,6 +12,7 @@ pub mod jacobian;
 pub mod load;
 pub mod reach;
 pub mod same_arm;
+pub mod spread;
 pub mod subproblems;
 pub mod unobserved;
 

@@ -3,6 +3,7 @@
 //! `compensate` holds a calibrated model to its nominal with it, and `evaluate` and
 //! `compensate` a compensator's embedded model to the robot given.
 
+use super::spread::spread;
 use super::{Frames, frames};
 use crate::model::Robot;
 
@@ -13,13 +14,6 @@ pub const GEOMETRY_GAP: f64 = 0.1;
 
 /// The configurations compared: sixteen spread over the reference's joint ranges.
 const CONFIGURATIONS: usize = 16;
-
-/// Joint `j` of configuration `k` (of robots with `n` joints) in a fixed low-discrepancy
-/// spread: the fraction ((k n + j) phi + 0.25) mod 1 of its range, phi the golden ratio's
-/// fractional part.
-pub fn spread(k: usize, n: usize, j: usize) -> f64 {
-    ((k * n + j) as f64 * 0.618_033_988_749_895 + 0.25).fract()
-}
 
 /// For the flange (the chain's last frame: after the last joint's row, before the tool) and
 /// for the tool, at [`CONFIGURATIONS`] configurations spread over `reference`'s joint ranges:
