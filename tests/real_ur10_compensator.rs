@@ -729,7 +729,22 @@ fn series_a_pool_2000() {
 fn series_pools() {
     let ur = common::ur10::robot();
     let a = std::env::var("SERIES").is_ok_and(|s| s == "A");
-    let set = series(&ur, if a { SERIES_A } else { SERIES_B });
+    let mut set = series(&ur, if a { SERIES_A } else { SERIES_B });
+    // NOISE=s adds seeded Gaussian noise of s mm per coordinate to every measured position
+    // (a tracker farther away, or a worse one), before the split.
+    if let Ok(sigma) = std::env::var("NOISE") {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, Normal};
+        let normal = Normal::new(0.0, sigma.parse::<f64>().unwrap()).unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(77);
+        for row in &mut set.rows {
+            if let Some(p) = row.position.as_mut() {
+                for k in 0..3 {
+                    p[k] += normal.sample(&mut rng);
+                }
+            }
+        }
+    }
     let pool_n: f64 = std::env::var("POOL")
         .map(|v| v.parse().unwrap())
         .unwrap_or(500.0);
