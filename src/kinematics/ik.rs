@@ -200,17 +200,11 @@ const PULLS: [f64; 3] = [1e-2, 3e-2, 1e-1];
 /// the reference ([`around`]): where no start a nominal's closed form gives converges at all.
 /// Next to a singularity a calibrated arm's solutions can lie where no branch's start leads
 /// (next to the shoulder singularity of a UR10 with four times a real calibration's
-/// deviations, 3 of 300 poses had no solution without it, and a random start solves about a
-/// third of such poses). Only failing poses pay for it; the search stops after
-/// [`SEARCH_FIRST`] starts where none of them converged, and each solve runs at most
-/// [`SEARCH_ITERATIONS`] iterations.
-const SEARCH_STARTS: usize = 64;
-
-/// The starts after which the search gives up where none converged: where a start converges
-/// one time in three (as next to the UR10's shoulder singularity), 16 all fail one time in
-/// 650; a pose no start reaches (beyond the shoulder's cylinder) costs 16 short solves, about
-/// 1 ms, instead of 64.
-const SEARCH_FIRST: usize = 16;
+/// deviations, 20 of 3000 poses had no solution without it). Where a start converges one
+/// time in three (as there), 16 all fail one time in 650; only failing poses pay for it,
+/// each solve at most [`SEARCH_ITERATIONS`] iterations: a pose no start reaches (inside the
+/// shoulder's cylinder) costs 16 short solves, about 1 ms on a rigid model.
+const SEARCH_STARTS: usize = 16;
 
 /// Iterations of a search solve at most: from the spread starts, solves that converged took 8
 /// to 34 iterations but for 2 of 74 (72 and 74), on the UR10 with four times a calibration's
@@ -410,8 +404,7 @@ impl<M: ToolModel> IkSolver<M> {
     /// Every distinct converged solution within the limits, one numerical solve from the
     /// seed (when given) and from each closed-form start; where a nominal's closed form gave
     /// starts (or had none to give) and no solve converged at all, from [`SEARCH_STARTS`]
-    /// starts spread over the turn around the reference too (see [`SEARCH_STARTS`]). The
-    /// failure when none.
+    /// starts spread over the turn around the reference too. The failure when none.
     fn refined(
         &mut self,
         target: &Pose,
@@ -461,10 +454,6 @@ impl<M: ToolModel> IkSolver<M> {
             let cap = self.opts.max_iterations.min(SEARCH_ITERATIONS);
             let full = std::mem::replace(&mut self.opts.max_iterations, cap);
             for k in 0..SEARCH_STARTS {
-                if k == SEARCH_FIRST && found.sols.is_empty() && found.nearest_outside.is_infinite()
-                {
-                    break;
-                }
                 let q0 = around(self.model.robot(), reference, k);
                 self.solve_start(target, &q0, reference, &mut found);
             }
@@ -477,12 +466,8 @@ impl<M: ToolModel> IkSolver<M> {
         }
         let search_note = if searched {
             format!(
-                "; nor do solves from {} starts spread over the joints' turns around the {}",
-                if found.sols.is_empty() && found.nearest_outside.is_infinite() {
-                    SEARCH_FIRST
-                } else {
-                    SEARCH_STARTS
-                },
+                "; nor do solves from {SEARCH_STARTS} starts spread over the joints' turns \
+                 around the {}",
                 if seed.is_some() {
                     "seed"
                 } else {
@@ -497,8 +482,8 @@ impl<M: ToolModel> IkSolver<M> {
             _ if past_reach && found.nearest_outside.is_infinite() => {
                 Err(IkFailure::Unreachable(format!(
                     "the closed form of the nominal model has no solution, for the pose nor for \
-                     it moved by up to {:.0} % of its distance toward or away from the base: it \
-                     lies beyond the nominal's reach by more than a calibration changes it{search_note}",
+                     it moved by up to {:.0} % of its distance toward or away from the base{search_note}: \
+                     no configuration of this model found reaches it",
                     PULLS[PULLS.len() - 1] * 100.0
                 )))
             }
