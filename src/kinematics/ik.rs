@@ -17,10 +17,11 @@
 //!    form gives a start ([`IkStart::Seed`], or a pose out of the nominal's reach on every
 //!    branch, where its solutions of the pose pulled a little toward the base start them
 //!    too).
-//! 4. Where a nominal's closed form gave the starts (or had none to give) and no solve from
-//!    them converged at all, starts spread over the joints' turns around the reference
-//!    ([`super::spread::around`]) are tried: next to a singularity a calibrated arm can have
-//!    solutions no branch's start leads to.
+//! 4. Where a nominal's closed form gave the starts and no solve from them converged at all,
+//!    or no branch of the nominal reaches the pose (its starts are then only the pulled and
+//!    nearest ones), starts spread over the joints' turns around the reference
+//!    ([`super::spread::around`]) are tried too: next to a singularity a calibrated arm can
+//!    have solutions no branch's start leads to.
 //!
 //! The reference is the seed when one is given, else the middle of the joint ranges.
 //! [`IkSolver::nearest`] (`robocal ik`) refines the seed and every start and returns the
@@ -197,13 +198,15 @@ const POLISH_STEP: f64 = 1e-3;
 const PULLS: [f64; 3] = [1e-2, 3e-2, 1e-1];
 
 /// Starts of the last-resort search ([`IkSolver`]'s `refined`), spread over the turn around
-/// the reference ([`around`]): where no start a nominal's closed form gives converges at all.
-/// Next to a singularity a calibrated arm's solutions can lie where no branch's start leads
-/// (next to the shoulder singularity of a UR10 with four times a real calibration's
-/// deviations, 20 of 3000 poses had no solution without it). Where a start converges one
-/// time in three (as there), 16 all fail one time in 650; only failing poses pay for it,
-/// each solve at most [`SEARCH_ITERATIONS`] iterations: a pose no start reaches (inside the
-/// shoulder's cylinder) costs 16 short solves, about 1 ms on a rigid model.
+/// the reference ([`around`]): where no start a nominal's closed form gives converges at all,
+/// or where no branch of the nominal reaches the pose. Next to a singularity a calibrated
+/// arm's solutions can lie where no branch's start leads (next to the shoulder singularity
+/// of a UR10 with four times a real calibration's deviations, 20 of 3000 poses had no
+/// solution without it, and 172 did not list their own configuration; 130 with it). Where a
+/// start converges one time in three (as there), 16 all fail one time in 650. Only such
+/// poses pay for it, each solve at most [`SEARCH_ITERATIONS`] iterations: a pose no start
+/// reaches (inside the shoulder's cylinder) costs 16 short solves, about 1 ms on a rigid
+/// model.
 const SEARCH_STARTS: usize = 16;
 
 /// Iterations of a search solve at most: from the spread starts, solves that converged took 8
@@ -403,8 +406,9 @@ impl<M: ToolModel> IkSolver<M> {
 
     /// Every distinct converged solution within the limits, one numerical solve from the
     /// seed (when given) and from each closed-form start; where a nominal's closed form gave
-    /// starts (or had none to give) and no solve converged at all, from [`SEARCH_STARTS`]
-    /// starts spread over the turn around the reference too. The failure when none.
+    /// starts and no solve converged at all, or no branch of it reaches the pose, from
+    /// [`SEARCH_STARTS`] starts spread over the turn around the reference too. The failure
+    /// when none.
     fn refined(
         &mut self,
         target: &Pose,
@@ -448,8 +452,10 @@ impl<M: ToolModel> IkSolver<M> {
         for q0 in &starts {
             self.solve_start(target, q0, reference, &mut found);
         }
-        let searched = nominal && found.sols.is_empty() && found.nearest_outside.is_infinite();
+        let searched = nominal
+            && (present.is_empty() || found.sols.is_empty() && found.nearest_outside.is_infinite());
         if searched {
+            let outside = found.nearest_outside;
             let failure = std::mem::replace(&mut found.failure, self.no_start());
             let cap = self.opts.max_iterations.min(SEARCH_ITERATIONS);
             let full = std::mem::replace(&mut self.opts.max_iterations, cap);
@@ -458,9 +464,10 @@ impl<M: ToolModel> IkSolver<M> {
                 self.solve_start(target, &q0, reference, &mut found);
             }
             self.opts.max_iterations = full;
-            // Where the search found only solutions outside the limits, the nearest names the
-            // failure; where nothing converged, the structured starts' failure stands.
-            if found.nearest_outside.is_infinite() {
+            // Where the search found a solution outside the limits nearer the reference than
+            // any before, it names the failure; else the structured starts' failure stands
+            // (not a search solve's that did not converge).
+            if found.nearest_outside == outside {
                 found.failure = failure;
             }
         }
