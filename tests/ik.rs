@@ -1122,63 +1122,47 @@ fn a_solution_a_rounding_past_a_limit_of_180_deg_keeps_its_turn() {
 }
 
 /// A UR10 with four times the deviations of [`UR10_CALIBRATED`] from the nominal (base, tool
-/// and every DH row), rounded to 6 significant digits.
-const UR10_FOUR_TIMES: &str = r#"
-name = "UR10, four times a calibration's deviations"
-[base]
-convention = "transform"
-x = 8.902
-y = -5.1468
-z = 12.5184
-rz = 0.8772
-ry = 0.296
-rx = 0.5716
-[[joint]]
-convention = "dh"
-d = 127.3
-a = -11.3596
-alpha = 89.9136
-limits = [-360.0, 360.0]
-[[joint]]
-convention = "dh"
-theta = -0.018
-d = 2.176
-a = -623.868
-alpha = 0.454
-limits = [-360.0, 360.0]
-[[joint]]
-convention = "dh"
-theta = 0.6632
-a = -576.733
-alpha = 0.2792
-limits = [-360.0, 360.0]
-[[joint]]
-convention = "dh"
-theta = -0.2764
-d = 163.941
-a = -5.292
-alpha = 90.3892
-limits = [-360.0, 360.0]
-[[joint]]
-convention = "dh"
-theta = 0.6692
-d = 127.371
-a = 9.18
-alpha = -89.4332
-limits = [-360.0, 360.0]
-[[joint]]
-convention = "dh"
-d = 92.2
-limits = [-360.0, 360.0]
-[tool]
-convention = "transform"
-x = 7.0388
-y = 2.5468
-z = 0.7644
-rz = 0.6892
-ry = -0.4188
-rx = -1.1696
-"#;
+/// and every DH row: theta, d, a, alpha), as a robot file (mm, deg).
+fn ur10_four_times() -> String {
+    let nominal = [
+        [0.0, 127.3, 0.0, 90.0],
+        [0.0, 0.0, -612.0, 0.0],
+        [0.0, 0.0, -572.3, 0.0],
+        [0.0, 163.941, 0.0, 90.0],
+        [0.0, 115.7, 0.0, -90.0],
+        [0.0, 92.2, 0.0, 0.0],
+    ];
+    let calibrated = [
+        [0.0, 127.3, -2.8399, 89.9784],
+        [-0.0045, 0.5440, -614.9671, 0.1135],
+        [0.1658, 0.0, -573.4083, 0.0698],
+        [-0.0691, 163.941, -1.3230, 90.0973],
+        [0.1673, 118.6177, 2.2950, -89.8583],
+        [0.0, 92.2, 0.0, 0.0],
+    ];
+    let base = [2.2255, -1.2867, 3.1296, 0.2193, 0.0740, 0.1429];
+    let tool = [1.7597, 0.6367, 0.1911, 0.1723, -0.1047, -0.2924];
+    let frame = |name: &str, v: &[f64; 6]| {
+        let keys = ["x", "y", "z", "rz", "ry", "rx"];
+        let lines: Vec<String> = (keys.iter().zip(v))
+            .map(|(k, x)| format!("{k} = {}", 4.0 * x))
+            .collect();
+        format!(
+            "[{name}]\nconvention = \"transform\"\n{}\n",
+            lines.join("\n")
+        )
+    };
+    let mut file = format!("name = \"UR10 x4\"\n{}", frame("base", &base));
+    for (n, c) in nominal.iter().zip(&calibrated) {
+        let v: Vec<f64> = (0..4).map(|i| n[i] + 4.0 * (c[i] - n[i])).collect();
+        file += &format!(
+            "[[joint]]\nconvention = \"dh\"\ntheta = {}\nd = {}\na = {}\nalpha = {}\n\
+             limits = [-360.0, 360.0]\n",
+            v[0], v[1], v[2], v[3]
+        );
+    }
+    file + &frame("tool", &tool)
+}
 
 #[test]
 fn poses_next_to_the_shoulder_singularity_that_no_branch_start_reaches_are_searched() {
@@ -1345,7 +1329,7 @@ fn poses_next_to_the_shoulder_singularity_that_no_branch_start_reaches_are_searc
         ],
     ];
     let nominal = robot_file("ur10.toml");
-    let robot = parse_robot(UR10_FOUR_TIMES, Path::new("ur10_x4.toml")).unwrap();
+    let robot = parse_robot(&ur10_four_times(), Path::new("ur10_x4.toml")).unwrap();
     let start = IkStart::choose(&robot, Some(&nominal)).unwrap();
     let mut solver = IkSolver::new(RobotModel::new(&robot), start, IkOptions::default());
     let mut own = 0;
