@@ -829,6 +829,33 @@ fn series_pools() {
             .max_by(|a, b| a.position_mm.unwrap().total_cmp(&b.position_mm.unwrap()))
             .unwrap();
         println!("  worst validation row: line {}", worst.line);
+        if std::env::var("WORST").is_ok() {
+            let model_rows = row_errors(&val, Measure::Position, |q| {
+                robocal::kinematics::tool_pose(&model, q)
+            })
+            .unwrap();
+            let comp_rows = row_errors(&val, Measure::Position, |q| c.predict(q, &mut ws)).unwrap();
+            let mut idx: Vec<usize> = (0..comp_rows.len()).collect();
+            idx.sort_by(|&a, &b| {
+                comp_rows[b]
+                    .position_mm
+                    .unwrap()
+                    .total_cmp(&comp_rows[a].position_mm.unwrap())
+            });
+            for &i in idx.iter().take(8) {
+                let d = c.domain_check(&val.rows[i].q, &mut ws);
+                println!(
+                    "    line {} model {:.3} comp {:.3} nearest {:.3} radius {:.3} weight {:.2} joints out {:?}",
+                    comp_rows[i].line,
+                    model_rows[i].position_mm.unwrap(),
+                    comp_rows[i].position_mm.unwrap(),
+                    d.nearest,
+                    d.radius,
+                    d.weight,
+                    d.joints_outside
+                );
+            }
+        }
         // The max without the validation rows that carry another configuration's reading (of
         // a validation row or a pool row), as `train --validate` judges them.
         let shared = robocal::data::shared_readings::shared_readings_with(&model, &val, &pool);
