@@ -1385,6 +1385,42 @@ fn poses_next_to_the_shoulder_singularity_that_no_branch_start_reaches_are_searc
     let (dp, dr) = pose_errors(&tool_pose(&robot, &near), &target);
     assert!(dp < 1e-6 && dr < 1e-9, "{dp} mm {dr} rad");
     assert!(joint_gap(&near, &q) < 0.05_f64.to_radians(), "{near:?}");
+    // Configurations where two of the nominal's branches led to one solution of this arm
+    // (6 of 8, 3 of 4 and 7 of 8 solutions found), the configuration's own among those
+    // missed: the search around the middle of the ranges finds it.
+    for deg in [
+        [
+            -132.922919,
+            -10.963225,
+            -153.314474,
+            173.690497,
+            -3.321033,
+            127.750878,
+        ],
+        [
+            84.877474,
+            17.873491,
+            -167.653254,
+            -78.622757,
+            -19.747061,
+            8.255296,
+        ],
+        [
+            94.348935,
+            -108.526637,
+            -179.293806,
+            132.239566,
+            49.541716,
+            -106.026193,
+        ],
+    ] {
+        let q: Vec<f64> = deg.iter().map(|d: &f64| d.to_radians()).collect();
+        let all = solver.all(&tool_pose(&robot, &q), None).unwrap();
+        assert!(
+            all.iter().any(|s| joint_gap(s, &q) < 1e-6),
+            "{deg:?}: {all:?}"
+        );
+    }
     // A pose no start reaches (the tool on the nominal base's axis, 10 mm from this one's:
     // the wrist's centre inside the shoulder's cylinder) is still unreachable, and says what
     // was tried.

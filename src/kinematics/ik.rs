@@ -18,8 +18,9 @@
 //!    branch, where its solutions of the pose pulled a little toward the base start them
 //!    too).
 //! 4. Where a nominal's closed form gave the starts and no solve from them converged at all,
-//!    or no branch of the nominal reaches the pose (its starts are then only the pulled and
-//!    nearest ones), starts spread over the joints' turns around the reference
+//!    where no branch of the nominal reaches the pose (its starts are then only the pulled
+//!    and nearest ones), or where they found fewer distinct solutions than the nominal has
+//!    branches at the pose, starts spread over the joints' turns around the reference
 //!    ([`super::spread::around`]) are tried too: next to a singularity a calibrated arm can
 //!    have solutions no branch's start leads to.
 //!
@@ -199,12 +200,13 @@ const PULLS: [f64; 3] = [1e-2, 3e-2, 1e-1];
 
 /// Starts of the last-resort search ([`IkSolver`]'s `refined`), spread over the turn around
 /// the reference ([`around`]): where no start a nominal's closed form gives converges at all,
-/// or where no branch of the nominal reaches the pose. Next to a singularity a calibrated
-/// arm's solutions can lie where no branch's start leads (next to the shoulder singularity
-/// of a UR10 with four times a real calibration's deviations, 20 of 3000 poses had no
-/// solution without it, and 172 did not list their own configuration; 130 with it). Where a
-/// start converges one time in three (as there), 16 all fail one time in 650. Only such
-/// poses pay for it, each solve at most [`SEARCH_ITERATIONS`] iterations: a pose no start
+/// where no branch of the nominal reaches the pose, or where two branches' starts led to one
+/// solution. Next to a singularity a calibrated arm's solutions can lie where no branch's
+/// start leads (next to the shoulder singularity of a UR10 with four times a real
+/// calibration's deviations, 20 of 3000 poses had no solution without it, and 172 did not
+/// list their own configuration; 95 with it). Where a start converges one time in three (as
+/// there), 16 all fail one time in 650. Only such poses pay for it (1.7 % of random poses of
+/// a calibrated UR10), each solve at most [`SEARCH_ITERATIONS`] iterations: a pose no start
 /// reaches (inside the shoulder's cylinder) costs 16 short solves, about 1 ms on a rigid
 /// model.
 const SEARCH_STARTS: usize = 16;
@@ -223,6 +225,8 @@ struct Found {
     nearest_outside: f64,
     /// The failure where `sols` is empty.
     failure: IkFailure,
+    /// Distinct solutions outside the limits (joints, rad or mm).
+    outside: Vec<Vec<f64>>,
 }
 
 /// The closed form's branches: 2 shoulders x 2 elbows x 2 wrists.
@@ -406,7 +410,8 @@ impl<M: ToolModel> IkSolver<M> {
 
     /// Every distinct converged solution within the limits, one numerical solve from the
     /// seed (when given) and from each closed-form start; where a nominal's closed form gave
-    /// starts and no solve converged at all, or no branch of it reaches the pose, from
+    /// starts and no solve converged at all, where no branch of it reaches the pose, or where
+    /// the solves found fewer distinct solutions than it has branches there, from
     /// [`SEARCH_STARTS`] starts spread over the turn around the reference too. The failure
     /// when none.
     fn refined(
@@ -448,12 +453,19 @@ impl<M: ToolModel> IkSolver<M> {
             sols: Vec::new(),
             nearest_outside: f64::INFINITY,
             failure: self.no_start(),
+            outside: Vec::new(),
         };
         for q0 in &starts {
             self.solve_start(target, q0, reference, &mut found);
         }
+        // Fewer distinct solutions than the nominal has branches at the pose: two branches'
+        // starts led to one solution, as where a calibrated arm's solutions crowd next to a
+        // singularity.
+        let crowded = found.sols.len() + found.outside.len() < present.len();
         let searched = nominal
-            && (present.is_empty() || found.sols.is_empty() && found.nearest_outside.is_infinite());
+            && (crowded
+                || present.is_empty()
+                || found.sols.is_empty() && found.nearest_outside.is_infinite());
         if searched {
             let outside = found.nearest_outside;
             let failure = std::mem::replace(&mut found.failure, self.no_start());
@@ -542,6 +554,13 @@ impl<M: ToolModel> IkSolver<M> {
                 }
             }
             Ok(sol) => {
+                if !found.outside.iter().any(|o| {
+                    o.iter()
+                        .zip(&sol.q)
+                        .all(|(a, b)| (a - b).abs() < SAME_SOLUTION)
+                }) {
+                    found.outside.push(sol.q.clone());
+                }
                 let d = joint_distance(&sol.q, reference);
                 if d < found.nearest_outside {
                     found.nearest_outside = d;
