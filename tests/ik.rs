@@ -893,70 +893,69 @@ fn closed_form_solutions_near_singularities_are_polished() {
     }
 }
 
+/// The UR10's nominal DH rows (theta deg, d mm, a mm, alpha deg).
+const UR10_NOMINAL_ROWS: [[f64; 4]; 6] = [
+    [0.0, 127.3, 0.0, 90.0],
+    [0.0, 0.0, -612.0, 0.0],
+    [0.0, 0.0, -572.3, 0.0],
+    [0.0, 163.941, 0.0, 90.0],
+    [0.0, 115.7, 0.0, -90.0],
+    [0.0, 92.2, 0.0, 0.0],
+];
+
 /// A calibrated UR10: its nominal's DH table off by what an identification on tracker data
-/// finds (millimetres, a tenth of a degree), so no closed form of its own.
-const UR10_CALIBRATED: &str = r#"
-name = "UR10, calibrated"
-[base]
-convention = "transform"
-x = 2.2255
-y = -1.2867
-z = 3.1296
-rz = 0.2193
-ry = 0.0740
-rx = 0.1429
-[[joint]]
-convention = "dh"
-d = 127.3
-a = -2.8399
-alpha = 89.9784
-limits = [-360.0, 360.0]
-[[joint]]
-convention = "dh"
-theta = -0.0045
-d = 0.5440
-a = -614.9671
-alpha = 0.1135
-limits = [-360.0, 360.0]
-[[joint]]
-convention = "dh"
-theta = 0.1658
-a = -573.4083
-alpha = 0.0698
-limits = [-360.0, 360.0]
-[[joint]]
-convention = "dh"
-theta = -0.0691
-d = 163.941
-a = -1.3230
-alpha = 90.0973
-limits = [-360.0, 360.0]
-[[joint]]
-convention = "dh"
-theta = 0.1673
-d = 118.6177
-a = 2.2950
-alpha = -89.8583
-limits = [-360.0, 360.0]
-[[joint]]
-convention = "dh"
-d = 92.2
-limits = [-360.0, 360.0]
-[tool]
-convention = "transform"
-x = 1.7597
-y = 0.6367
-z = 0.1911
-rz = 0.1723
-ry = -0.1047
-rx = -0.2924
-"#;
+/// finds (millimetres, a tenth of a degree), so no closed form of its own: its rows (as
+/// [`UR10_NOMINAL_ROWS`]), base and tool (x, y, z mm, rz, ry, rx deg).
+const UR10_CALIBRATED_ROWS: [[f64; 4]; 6] = [
+    [0.0, 127.3, -2.8399, 89.9784],
+    [-0.0045, 0.5440, -614.9671, 0.1135],
+    [0.1658, 0.0, -573.4083, 0.0698],
+    [-0.0691, 163.941, -1.3230, 90.0973],
+    [0.1673, 118.6177, 2.2950, -89.8583],
+    [0.0, 92.2, 0.0, 0.0],
+];
+const UR10_CALIBRATED_BASE: [f64; 6] = [2.2255, -1.2867, 3.1296, 0.2193, 0.0740, 0.1429];
+const UR10_CALIBRATED_TOOL: [f64; 6] = [1.7597, 0.6367, 0.1911, 0.1723, -0.1047, -0.2924];
+
+/// A UR10 robot file (DH rows, joints within +-360 deg) of `rows`, `base` and `tool` (as
+/// [`UR10_CALIBRATED_ROWS`]); every number written in its shortest exact form.
+fn ur10_file(name: &str, rows: &[[f64; 4]; 6], base: &[f64; 6], tool: &[f64; 6]) -> String {
+    let frame = |name: &str, v: &[f64; 6]| {
+        let keys = ["x", "y", "z", "rz", "ry", "rx"];
+        let lines: Vec<String> = (keys.iter().zip(v))
+            .map(|(k, x)| format!("{k} = {x}"))
+            .collect();
+        format!(
+            "[{name}]\nconvention = \"transform\"\n{}\n",
+            lines.join("\n")
+        )
+    };
+    let mut file = format!("name = \"{name}\"\n{}", frame("base", base));
+    for [theta, d, a, alpha] in rows {
+        file += &format!(
+            "[[joint]]\nconvention = \"dh\"\ntheta = {theta}\nd = {d}\na = {a}\nalpha = {alpha}\n\
+             limits = [-360.0, 360.0]\n"
+        );
+    }
+    file + &frame("tool", tool)
+}
+
+/// [`UR10_CALIBRATED_ROWS`] with its base and tool as a robot.
+fn ur10_calibrated() -> Robot {
+    let file = ur10_file(
+        "UR10, calibrated",
+        &UR10_CALIBRATED_ROWS,
+        &UR10_CALIBRATED_BASE,
+        &UR10_CALIBRATED_TOOL,
+    );
+    parse_robot(&file, Path::new("ur10_cal.toml")).unwrap()
+}
 
 #[test]
 fn the_closed_forms_product_of_exponentials_is_the_robots_forward_kinematics() {
     let mut rng = ChaCha8Rng::seed_from_u64(17);
     let dh = parse_robot(DH_SPHERICAL, Path::new("dh.toml")).unwrap();
-    let calibrated = parse_robot(UR10_CALIBRATED, Path::new("ur10_cal.toml")).unwrap();
+    let calibrated = ur10_calibrated();
     let nominal = robot_file("ur10.toml");
     for robot in [robot_file("fanuc_r2000ib_210f.toml"), nominal.clone(), dh] {
         let ik = ClosedFormIk::new(&robot).unwrap();
@@ -1042,7 +1041,7 @@ fn a_calibrated_ur10_keeps_every_solution_next_to_a_straight_elbow() {
     // other elbow or stalled: a helper's 300 such poses lost 240 of the 1472 solutions a
     // multistart found, 106 their own configuration, and 2 read unreachable.
     let nominal = robot_file("ur10.toml");
-    let calibrated = parse_robot(UR10_CALIBRATED, Path::new("ur10_cal.toml")).unwrap();
+    let calibrated = ur10_calibrated();
     let start = IkStart::choose(&calibrated, Some(&nominal)).unwrap();
     assert!(matches!(start, IkStart::Nominal(_)));
     let mut solver = IkSolver::new(RobotModel::new(&calibrated), start, IkOptions::default());
@@ -1121,47 +1120,23 @@ fn a_solution_a_rounding_past_a_limit_of_180_deg_keeps_its_turn() {
     assert!((sol.q[5] - (PI - 0.3)).abs() < 1e-9, "{}", sol.q[5]);
 }
 
-/// A UR10 with four times the deviations of [`UR10_CALIBRATED`] from the nominal (base, tool
-/// and every DH row: theta, d, a, alpha), as a robot file (mm, deg).
-fn ur10_four_times() -> String {
-    let nominal = [
-        [0.0, 127.3, 0.0, 90.0],
-        [0.0, 0.0, -612.0, 0.0],
-        [0.0, 0.0, -572.3, 0.0],
-        [0.0, 163.941, 0.0, 90.0],
-        [0.0, 115.7, 0.0, -90.0],
-        [0.0, 92.2, 0.0, 0.0],
-    ];
-    let calibrated = [
-        [0.0, 127.3, -2.8399, 89.9784],
-        [-0.0045, 0.5440, -614.9671, 0.1135],
-        [0.1658, 0.0, -573.4083, 0.0698],
-        [-0.0691, 163.941, -1.3230, 90.0973],
-        [0.1673, 118.6177, 2.2950, -89.8583],
-        [0.0, 92.2, 0.0, 0.0],
-    ];
-    let base = [2.2255, -1.2867, 3.1296, 0.2193, 0.0740, 0.1429];
-    let tool = [1.7597, 0.6367, 0.1911, 0.1723, -0.1047, -0.2924];
-    let frame = |name: &str, v: &[f64; 6]| {
-        let keys = ["x", "y", "z", "rz", "ry", "rx"];
-        let lines: Vec<String> = (keys.iter().zip(v))
-            .map(|(k, x)| format!("{k} = {}", 4.0 * x))
-            .collect();
-        format!(
-            "[{name}]\nconvention = \"transform\"\n{}\n",
-            lines.join("\n")
-        )
-    };
-    let mut file = format!("name = \"UR10 x4\"\n{}", frame("base", &base));
-    for (n, c) in nominal.iter().zip(&calibrated) {
-        let v: Vec<f64> = (0..4).map(|i| n[i] + 4.0 * (c[i] - n[i])).collect();
-        file += &format!(
-            "[[joint]]\nconvention = \"dh\"\ntheta = {}\nd = {}\na = {}\nalpha = {}\n\
-             limits = [-360.0, 360.0]\n",
-            v[0], v[1], v[2], v[3]
-        );
+/// A UR10 with four times the deviations of [`UR10_CALIBRATED_ROWS`] (and its base and tool)
+/// from the nominal.
+fn ur10_four_times() -> Robot {
+    let mut rows = UR10_NOMINAL_ROWS;
+    for (row, c) in rows.iter_mut().zip(&UR10_CALIBRATED_ROWS) {
+        for (n, c) in row.iter_mut().zip(c) {
+            *n += 4.0 * (c - *n);
+        }
     }
-    file + &frame("tool", &tool)
+    let times_four = |v: &[f64; 6]| v.map(|x| 4.0 * x);
+    let file = ur10_file(
+        "UR10 x4",
+        &rows,
+        &times_four(&UR10_CALIBRATED_BASE),
+        &times_four(&UR10_CALIBRATED_TOOL),
+    );
+    parse_robot(&file, Path::new("ur10_x4.toml")).unwrap()
 }
 
 #[test]
@@ -1329,7 +1304,7 @@ fn poses_next_to_the_shoulder_singularity_that_no_branch_start_reaches_are_searc
         ],
     ];
     let nominal = robot_file("ur10.toml");
-    let robot = parse_robot(&ur10_four_times(), Path::new("ur10_x4.toml")).unwrap();
+    let robot = ur10_four_times();
     let start = IkStart::choose(&robot, Some(&nominal)).unwrap();
     let mut solver = IkSolver::new(RobotModel::new(&robot), start, IkOptions::default());
     let mut own = 0;

@@ -43,6 +43,12 @@ pub use crate::model::joint_distance;
 /// Two solutions closer than this in every joint (rad or mm) are one.
 const SAME_SOLUTION: f64 = 1e-7;
 
+/// Whether joints `a` and `b` (rad, mm) are one solution: within [`SAME_SOLUTION`] in every
+/// joint.
+fn same_solution(a: &[f64], b: &[f64]) -> bool {
+    a.iter().zip(b).all(|(x, y)| (x - y).abs() < SAME_SOLUTION)
+}
+
 /// Where the solves start.
 #[derive(Debug, Clone)]
 pub enum IkStart {
@@ -379,11 +385,25 @@ impl<M: ToolModel> IkSolver<M> {
     }
 
     fn refine(&mut self, target: &Pose, start: &[f64]) -> Result<IkSolution> {
+        self.refine_within(target, start, self.opts.max_iterations)
+    }
+
+    /// [`Self::refine`] in at most `iterations` iterations.
+    fn refine_within(
+        &mut self,
+        target: &Pose,
+        start: &[f64],
+        iterations: usize,
+    ) -> Result<IkSolution> {
+        let opts = IkOptions {
+            max_iterations: iterations.min(self.opts.max_iterations),
+            ..self.opts
+        };
         solve_model(
             &mut self.model,
             &IkTarget::Pose(*target),
             start,
-            &self.opts,
+            &opts,
             &mut self.ws,
         )
     }
@@ -457,8 +477,9 @@ impl<M: ToolModel> IkSolver<M> {
             failure: self.no_start(),
             outside: Vec::new(),
         };
+        let all = self.opts.max_iterations;
         for q0 in &starts {
-            self.solve_start(target, q0, reference, &mut found);
+            self.solve_start(target, q0, reference, all, &mut found);
         }
         // Fewer distinct solutions than the nominal has branches at the pose: two branches'
         // starts led to one solution, as where a calibrated arm's solutions crowd next to a
@@ -471,13 +492,10 @@ impl<M: ToolModel> IkSolver<M> {
         if searched {
             let outside = found.nearest_outside;
             let failure = std::mem::replace(&mut found.failure, self.no_start());
-            let cap = self.opts.max_iterations.min(SEARCH_ITERATIONS);
-            let full = std::mem::replace(&mut self.opts.max_iterations, cap);
             for k in 0..SEARCH_STARTS {
                 let q0 = around(self.model.robot(), reference, k);
-                self.solve_start(target, &q0, reference, &mut found);
+                self.solve_start(target, &q0, reference, SEARCH_ITERATIONS, &mut found);
             }
-            self.opts.max_iterations = full;
             // Where the search found a solution outside the limits nearer the reference than
             // any before, it names the failure; else the structured starts' failure stands
             // (not a search solve's that did not converge).
@@ -530,12 +548,19 @@ impl<M: ToolModel> IkSolver<M> {
         }
     }
 
-    /// One numerical solve of `target` from `q0`, its solution in the whole-turn copy nearest
-    /// `reference`, added to `found`: a new solution within the limits to its solutions, else
-    /// (the nearest `reference` of those outside the limits, or a solve that did not converge
-    /// where none has converged) as its failure.
-    fn solve_start(&mut self, target: &Pose, q0: &[f64], reference: &[f64], found: &mut Found) {
-        let solved = self.refine(target, q0).map(|mut sol| {
+    /// One numerical solve of `target` from `q0` (at most `iterations` iterations), its
+    /// solution in the whole-turn copy nearest `reference`, added to `found`: a new solution
+    /// within the limits to its solutions, else (the nearest `reference` of those outside the
+    /// limits, or a solve that did not converge where none has converged) as its failure.
+    fn solve_start(
+        &mut self,
+        target: &Pose,
+        q0: &[f64],
+        reference: &[f64],
+        iterations: usize,
+        found: &mut Found,
+    ) {
+        let solved = self.refine_within(target, q0, iterations).map(|mut sol| {
             // The solve ends in whichever whole-turn copy its steps reach.
             let robot = self.model.robot();
             if let Some(q) = robot.turns_near(&sol.q, reference) {
@@ -546,21 +571,12 @@ impl<M: ToolModel> IkSolver<M> {
         });
         match solved {
             Ok(sol) if sol.outside_limits.is_empty() => {
-                let dup = found.sols.iter().any(|o| {
-                    o.q.iter()
-                        .zip(&sol.q)
-                        .all(|(a, b)| (a - b).abs() < SAME_SOLUTION)
-                });
-                if !dup {
+                if !found.sols.iter().any(|o| same_solution(&o.q, &sol.q)) {
                     found.sols.push(sol);
                 }
             }
             Ok(sol) => {
-                if !found.outside.iter().any(|o| {
-                    o.iter()
-                        .zip(&sol.q)
-                        .all(|(a, b)| (a - b).abs() < SAME_SOLUTION)
-                }) {
+                if !found.outside.iter().any(|o| same_solution(o, &sol.q)) {
                     found.outside.push(sol.q.clone());
                 }
                 let d = joint_distance(&sol.q, reference);
