@@ -323,9 +323,9 @@ impl<'a> Batch<'a> {
             self.gy.mul_to(&w.w2, &mut self.gh);
             (self.gh.as_mut_slice(), self.z.as_slice())
         };
-        // As wide as the processor allows (AVX2 as well as the baseline's two values), the
+        // As wide as the processor allows (AVX-512, AVX2 or the baseline's two values), the
         // same operations: a pass over every sample and hidden unit per evaluation.
-        pulp::Arch::new().dispatch(
+        crate::neural::wide::dispatch(
             #[inline(always)]
             || {
                 for (g, h) in gh.iter_mut().zip(z) {

@@ -64,7 +64,7 @@ pub fn step_to(out: &mut [f64], x: &[f64], a: f64, d: &[f64]) {
         x.len() == out.len() && d.len() == out.len(),
         "step_to: slices of unequal lengths"
     );
-    pulp::Arch::new().dispatch(
+    crate::neural::wide::dispatch(
         #[inline(always)]
         || {
             for ((o, x), d) in out.iter_mut().zip(x).zip(d) {

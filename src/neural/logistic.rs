@@ -22,11 +22,12 @@ fn logistic_vectorised(z: f64) -> f64 {
 }
 
 /// `values[i] <- logistic(values[i] + bias)` for every i: one hidden unit over a batch (a loop
-/// the compiler vectorises, on our exponential, as wide as the processor allows: `pulp`
-/// compiles it for AVX2 too and picks at run time; the same operations in the same order,
-/// so the same bits as the baseline build's two values at a time).
+/// the compiler vectorises, on our exponential, as wide as the processor allows:
+/// [`super::wide`] compiles it for AVX-512 and AVX2 too and picks at run time; the same
+/// operations in the same order, so the same bits as the baseline build's two values at a
+/// time).
 pub fn logistic_in_place(values: &mut [f64], bias: f64) {
-    pulp::Arch::new().dispatch(
+    crate::neural::wide::dispatch(
         #[inline(always)]
         || {
             for v in values.iter_mut() {
@@ -40,7 +41,7 @@ pub fn logistic_in_place(values: &mut [f64], bias: f64) {
 /// hidden units of a batch stored a sample per column (`biases` one per unit), the bits of
 /// [`logistic_in_place`] on each unit.
 pub fn logistic_columns_in_place(values: &mut [f64], biases: &[f64]) {
-    pulp::Arch::new().dispatch(
+    crate::neural::wide::dispatch(
         #[inline(always)]
         || {
             for column in values.chunks_exact_mut(biases.len().max(1)) {

@@ -27,3 +27,4 @@ pub mod training;
 pub mod tuning;
 pub mod vectors;
 pub mod weights;
+pub mod wide;

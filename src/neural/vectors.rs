@@ -114,7 +114,7 @@ pub fn norm(a: &DVector<f64>) -> f64 {
 pub fn axpy(y: &mut DVector<f64>, a: f64, x: &DVector<f64>) {
     let (y, x) = (y.as_mut_slice(), x.as_slice());
     assert_eq!(y.len(), x.len(), "axpy: vectors of unequal lengths");
-    pulp::Arch::new().dispatch(
+    crate::neural::wide::dispatch(
         #[inline(always)]
         || {
             for (y, x) in y.iter_mut().zip(x) {

@@ -18,7 +18,8 @@
 //!
 //! Both run on [`exp_clamped`] (within 2 ulps of the C library's `exp`) with the cut-off as a
 //! select, straight-line code: over a slice ([`Covariance::responses_in_place`]: a kernel
-//! matrix's column, a prediction's units) the loop runs 4 wide where the processor has AVX2.
+//! matrix's column, a prediction's units) the loop runs 4 wide where the processor has AVX2,
+//! 8 where it has AVX-512 ([`crate::neural::wide`]).
 //! On the default `train` of 2000 Series A poses, the C library's `exp` there took 12 % of
 //! the samples; criterion measured 10.2 -> 9.3-9.4 s (two runs each, alternated), every
 //! figure of the README's Series B table the same to 4 decimals.
@@ -87,11 +88,11 @@ impl Covariance {
     }
 
     /// `q[i] <- scale k(q[i])` for every i: [`Covariance::response`] over a slice, in a loop
-    /// the compiler vectorises (`pulp` compiles it for AVX2 too and picks at run time; the
+    /// the compiler vectorises (compiled for AVX2 and AVX-512 too, picked at run time; the
     /// same operations, so the same bits as one value at a time).
     pub fn responses_in_place(self, q: &mut [f64], scale: f64) {
         fn run(q: &mut [f64], scale: f64, f: impl Fn(f64) -> (f64, f64)) {
-            pulp::Arch::new().dispatch(
+            crate::neural::wide::dispatch(
                 #[inline(always)]
                 || q.iter_mut().for_each(|v| *v = scale * f(*v).0),
             );
@@ -106,7 +107,7 @@ impl Covariance {
     /// over a slice, vectorised as [`Covariance::responses_in_place`].
     pub fn responses_and_width_factors_in_place(self, q: &mut [f64], g: &mut [f64]) {
         fn run(q: &mut [f64], g: &mut [f64], f: impl Fn(f64) -> (f64, f64)) {
-            pulp::Arch::new().dispatch(
+            crate::neural::wide::dispatch(
                 #[inline(always)]
                 || {
                     q.iter_mut()

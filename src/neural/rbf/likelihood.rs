@@ -38,15 +38,18 @@ pub(super) fn kernel(x: &[Vec<f64>], h: &Hyper, cov: Covariance) -> Mat<f64> {
     // The lower triangle only, column by column (contiguous, input after input as the
     // likelihood's sweep adds them): the factorisation reads no other.
     let mut k = Mat::<f64>::zeros(n, n);
-    pulp::Arch::new().dispatch(|| {
-        for j in 0..n {
-            let column = k.col_as_slice_mut(j);
-            column[j] = s2 + noise + 1e-8 * s2;
-            let below = &mut column[j + 1..];
-            pairs.column_squares(j, &w, below);
-            cov.responses_in_place(below, s2);
-        }
-    });
+    crate::neural::wide::dispatch(
+        #[inline(always)]
+        || {
+            for j in 0..n {
+                let column = k.col_as_slice_mut(j);
+                column[j] = s2 + noise + 1e-8 * s2;
+                let below = &mut column[j + 1..];
+                pairs.column_squares(j, &w, below);
+                cov.responses_in_place(below, s2);
+            }
+        },
+    );
     k
 }
 
@@ -165,7 +168,10 @@ impl Pairs {
     /// sum_c w_c (x_ic - x_jc)^2 of every pair into `q` (pair order: j, then i > j), each
     /// pair's terms added input after input.
     fn weighted_squares(&self, w: &[f64], q: &mut [f64]) {
-        pulp::Arch::new().dispatch(|| self.weighted_squares_in(w, q));
+        crate::neural::wide::dispatch(
+            #[inline(always)]
+            || self.weighted_squares_in(w, q),
+        );
     }
 
     #[inline(always)]
@@ -194,7 +200,10 @@ impl Pairs {
     /// sum over the pairs of p_ij (x_ic - x_jc)^2 for every input c into `total`, the pairs
     /// added in pair order.
     fn weighted_sums(&self, p: &[f64], total: &mut [f64]) {
-        pulp::Arch::new().dispatch(|| self.weighted_sums_in(p, total));
+        crate::neural::wide::dispatch(
+            #[inline(always)]
+            || self.weighted_sums_in(p, total),
+        );
     }
 
     #[inline(always)]
@@ -336,13 +345,16 @@ pub(super) fn neg_log_likelihood_in(
                 // product bit for bit).
                 let a = alpha.col_as_slice(0);
                 let (a_j, a_below) = (a[j], &a[j + 1..]);
-                pulp::Arch::new().dispatch(|| {
-                    for (pij, ((&kij, &eij), &a_i)) in
-                        p_j.iter_mut().zip(kinv_j.iter().zip(e_j).zip(a_below))
-                    {
-                        *pij = (a_i * a_j - of * kij) * s2 * eij;
-                    }
-                });
+                crate::neural::wide::dispatch(
+                    #[inline(always)]
+                    || {
+                        for (pij, ((&kij, &eij), &a_i)) in
+                            p_j.iter_mut().zip(kinv_j.iter().zip(e_j).zip(a_below))
+                        {
+                            *pij = (a_i * a_j - of * kij) * s2 * eij;
+                        }
+                    },
+                );
             } else {
                 for (t, (pij, (&kij, &eij))) in
                     p_j.iter_mut().zip(kinv_j.iter().zip(e_j)).enumerate()
