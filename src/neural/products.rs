@@ -23,9 +23,10 @@
 //! products ([`fast`] says which).
 //!
 //! Where the processor has AVX-512, [`abt`] runs the same chains eight entries to a register
-//! (`avx512`: tiles of 16 x 6, the rows past the last masked), so the same bits. On Case D's
-//! 150 poses the default `train` took 0.40-0.49 s with it (and the loops of
-//! [`super::wide`]) against 0.54-0.60 s before (the CLI, five and three runs, the same
+//! (`avx512`: tiles of 16 x 6, the rows past the last masked), so the same bits. With it
+//! (and the loops of [`super::wide`]) criterion's default `train` on Case D's 150 poses took
+//! 423 and 449 ms in two runs against 455 ms before, run between them; the CLI there
+//! 0.73-0.78 s of processor time against 0.83-0.98 s (eight runs each, two rounds; the same
 //! files written).
 
 use nalgebra::DMatrix;
@@ -100,6 +101,9 @@ fn abt_on(
         "abt: {m} x {n} entries with {ldo} rows beyond {} values",
         out.len()
     );
+    if m == 0 || n == 0 {
+        return;
+    }
     if k == 0 {
         for column in out.chunks_mut(ldo).take(n) {
             column[..m].fill(0.0);
@@ -165,10 +169,10 @@ fn store_part(c: &mut [f64], v: f64x4) {
     c[..n].copy_from_slice(&v[..n]);
 }
 
-/// The columns of C one tile computes: 2 x 6 accumulators in AVX2 registers, twelve chains in
-/// flight (with four columns, eight chains, the projected objective took 8 % longer: each
-/// chain waits on its last multiply-add). The dispatch in [`Abt`] instantiates tiles of 1 to
-/// 6 columns.
+/// The columns of C one tile computes: 2 x 6 accumulators in AVX2 (or AVX-512) registers,
+/// twelve registers of chains in flight (with four columns, eight, the projected objective
+/// took 8 % longer on AVX2: each chain waits on its last multiply-add). The dispatch in
+/// [`Abt`] (and in `avx512`) instantiates tiles of 1 to 6 columns.
 #[cfg(target_arch = "x86_64")]
 const COLUMNS: usize = 6;
 
@@ -375,10 +379,19 @@ mod tests {
             (12, 260, 6),
             (17, 40, 13),
             (150, 9, 32),
+            // AVX-512 tiles of 16 rows and 2, 5, 10, 11, 14 and 15; chains of exactly one and
+            // two blocks of 256.
+            (18, 256, 7),
+            (21, 512, 9),
+            (11, 40, 6),
+            (14, 30, 8),
+            (15, 257, 12),
+            (10, 255, 6),
         ];
         let mut checked = 0;
         for wide in [false, true] {
             if wide && !super::super::wide::avx512() {
+                eprintln!("the AVX-512 kernel is not tested: this processor lacks AVX-512 F");
                 continue;
             }
             for (m, k, n) in shapes {
@@ -400,12 +413,18 @@ mod tests {
                     2 * (n + 1) + m,
                     "{case}"
                 );
-                // A A^T from its lower triangle.
+                // A A^T from its lower triangle, into the top-left block of a larger matrix.
                 let mut want = DMatrix::from_element(m, m, f64::NAN);
                 a.mul_to(&a.transpose(), &mut want);
-                let mut got = DMatrix::from_element(m, m, f64::NAN);
-                abt_on(simd, wide, &a, &a, true, got.as_mut_slice(), m);
+                let mut big = DMatrix::from_element(m + 3, m, 5.0);
+                abt_on(simd, wide, &a, &a, true, big.as_mut_slice(), m + 3);
+                let got = big.view((0, 0), (m, m)).into_owned();
                 assert_eq!(bits(&got), bits(&want), "symmetric, {case}");
+                assert_eq!(
+                    big.iter().filter(|&&v| v == 5.0).count(),
+                    3 * m,
+                    "symmetric, {case}"
+                );
                 // Without chains, zero.
                 let empty = DMatrix::<f64>::zeros(m, 0);
                 let mut zero = DMatrix::from_element(m, m, f64::NAN);

@@ -7,9 +7,11 @@
 //!
 //! Bits: the compiler never reorders floating-point operations (no fast-math in Rust) and
 //! never fuses a product and a sum unless the source says `mul_add`, so a loop's values are
-//! those of its scalar source at every width. Only the loops whose lanes are explicit
-//! ([`super::vectors`]' dot products in nalgebra's order, [`super::fused`]) keep their own
-//! width; [`super::products`] has an AVX-512 kernel of its own.
+//! those of its scalar source at every width. The loops whose lanes are explicit keep their
+//! AVX2 registers: [`super::vectors`]' dot products in nalgebra's order (eight partial sums,
+//! a chain of additions no wider register shortens) and its element-wise blocks of four, and
+//! [`super::fused`]'s passes that end in such a dot product; [`super::products`] has an
+//! AVX-512 kernel of its own.
 
 /// Whether the processor (and the operating system) has AVX-512 F with AVX2 and FMA: checked
 /// once by the standard library, which caches it.

@@ -1,9 +1,10 @@
 //! [`super::abt`]'s kernel in AVX-512 registers (eight values each) where the processor has
 //! them: the same chains, one per entry, so the same bits as the AVX2 kernel and as
 //! nalgebra's product. Tiles of up to 16 rows (two registers) by [`super::COLUMNS`] columns,
-//! twelve chains in flight as in the AVX2 kernel; the rows of a tile past the matrix's last
+//! twelve registers of chains in flight as in the AVX2 kernel; the rows of a tile past the matrix's last
 //! are masked out of every load and store, so one kernel serves every remainder.
 
+use super::Block;
 use core::arch::x86_64::{
     __m512d, __mmask8, _mm512_add_pd, _mm512_fmadd_pd, _mm512_mask_storeu_pd,
     _mm512_maskz_loadu_pd, _mm512_set1_pd, _mm512_setzero_pd,
@@ -48,35 +49,24 @@ pub(super) unsafe fn abt(
                 // are asserted within the slices in `tile`.
                 unsafe {
                     match (width > 8, (end - c).min(super::COLUMNS)) {
-                        (true, 6) => t.tile::<2, 6>(r, width, c, out),
-                        (true, 5) => t.tile::<2, 5>(r, width, c, out),
-                        (true, 4) => t.tile::<2, 4>(r, width, c, out),
-                        (true, 3) => t.tile::<2, 3>(r, width, c, out),
-                        (true, 2) => t.tile::<2, 2>(r, width, c, out),
-                        (true, _) => t.tile::<2, 1>(r, width, c, out),
-                        (false, 6) => t.tile::<1, 6>(r, width, c, out),
-                        (false, 5) => t.tile::<1, 5>(r, width, c, out),
-                        (false, 4) => t.tile::<1, 4>(r, width, c, out),
-                        (false, 3) => t.tile::<1, 3>(r, width, c, out),
-                        (false, 2) => t.tile::<1, 2>(r, width, c, out),
-                        (false, _) => t.tile::<1, 1>(r, width, c, out),
+                        (true, 6) => t.tile16::<2, 6>(r, width, c, out),
+                        (true, 5) => t.tile16::<2, 5>(r, width, c, out),
+                        (true, 4) => t.tile16::<2, 4>(r, width, c, out),
+                        (true, 3) => t.tile16::<2, 3>(r, width, c, out),
+                        (true, 2) => t.tile16::<2, 2>(r, width, c, out),
+                        (true, _) => t.tile16::<2, 1>(r, width, c, out),
+                        (false, 6) => t.tile16::<1, 6>(r, width, c, out),
+                        (false, 5) => t.tile16::<1, 5>(r, width, c, out),
+                        (false, 4) => t.tile16::<1, 4>(r, width, c, out),
+                        (false, 3) => t.tile16::<1, 3>(r, width, c, out),
+                        (false, 2) => t.tile16::<1, 2>(r, width, c, out),
+                        (false, _) => t.tile16::<1, 1>(r, width, c, out),
                     }
                 }
             }
             r += width;
         }
     }
-}
-
-/// The product over one block of [`super::KC`] of the chains' indices (or fewer, the last).
-struct Block<'s> {
-    a: &'s [f64],
-    b: &'s [f64],
-    m: usize,
-    n: usize,
-    p: std::ops::Range<usize>,
-    first: bool,
-    ldo: usize,
 }
 
 /// The lanes of the rows v 8..v 8 + 7 of a tile of `width` rows that lie in it.
@@ -95,7 +85,7 @@ impl Block<'_> {
     /// The processor must have AVX-512 F.
     #[target_feature(enable = "avx512f,avx2,fma")]
     #[inline]
-    unsafe fn tile<const RV: usize, const NC: usize>(
+    unsafe fn tile16<const RV: usize, const NC: usize>(
         &self,
         r: usize,
         width: usize,
