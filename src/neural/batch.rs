@@ -145,7 +145,7 @@ impl<'a> Batch<'a> {
             debug_assert_eq!(w.hidden(), nh, "hidden: the batch's shape");
             abt(simd, &w.w1, &self.x, false, self.zt.as_mut_slice(), nh);
             super::logistic::logistic_columns_in_place(self.zt.as_mut_slice(), w.b1.as_slice());
-            self.zt.transpose_to(&mut self.z);
+            transpose_into(&self.zt, &mut self.z);
             return;
         }
         self.w1t.tr_copy_from(&w.w1);
@@ -465,9 +465,37 @@ fn gemm_tn(a: &DMatrix<f64>, b: &DMatrix<f64>, mut out: DMatrixViewMut<'_, f64>)
     }
 }
 
+/// `dst <- src^T` (shapes r x c and c x r), eight of `src`'s columns at a time: each pass
+/// reads eight whole columns and writes eight consecutive values of each of `dst`'s columns,
+/// where nalgebra's `transpose_to` walks `src` along its rows (a stride of r values per read).
+fn transpose_into(src: &DMatrix<f64>, dst: &mut DMatrix<f64>) {
+    let (r, c) = src.shape();
+    assert_eq!(dst.shape(), (c, r), "transpose_into: shapes");
+    let (s, d) = (src.as_slice(), dst.as_mut_slice());
+    for j0 in (0..c).step_by(8) {
+        let j1 = (j0 + 8).min(c);
+        for i in 0..r {
+            let row = &mut d[i * c + j0..i * c + j1];
+            for (v, j) in row.iter_mut().zip(j0..j1) {
+                *v = s[j * r + i];
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_blocked_transpose_is_nalgebras() {
+        for (r, c) in [(32, 150), (7, 13), (1, 9), (9, 1), (16, 16), (0, 5)] {
+            let src = DMatrix::from_fn(r, c, |i, j| (i * 1000 + j) as f64 + 0.5);
+            let mut got = DMatrix::from_element(c, r, f64::NAN);
+            transpose_into(&src, &mut got);
+            assert_eq!(got, src.transpose(), "{r} x {c}");
+        }
+    }
     use crate::neural::samples::objective;
 
     /// The batch's shortcuts give the bits of what they replace: A^T B without the copy those
