@@ -6,7 +6,7 @@
 //! stopping, progress) that minimiser crates do not offer.
 
 use super::fused::{Then, differences, step_to, update_dot};
-use super::vectors::{dot, dot_in, norm};
+use super::vectors::{amax, dot, dot_in, norm};
 use nalgebra::DVector;
 use std::collections::VecDeque;
 
@@ -54,7 +54,7 @@ pub fn minimize(
     // written again (no allocation once the memory is full).
     let mut spare: Option<(DVector<f64>, DVector<f64>)> = None;
     for iter in 1..=max_iter {
-        if g.amax() < min_grad {
+        if amax(&g) < min_grad {
             return (x, fx, LbfgsStop::MinGradient);
         }
         let mut slope = direction(&pairs, &g, &mut d, &mut alpha);

@@ -110,6 +110,43 @@ pub fn norm(a: &DVector<f64>) -> f64 {
     dot(a, a).sqrt()
 }
 
+/// max_i |a_i|: nalgebra's `a.amax()` (0 for an empty vector). Without NaN a maximum is
+/// exact, so the order of the comparisons does not change it: eight running maxima, a loop
+/// the compiler vectorises, where nalgebra's one chain of compare-and-selects was most of
+/// L-BFGS's own time outside its vector passes (its stopping test, once per iteration). With a
+/// NaN, nalgebra's order decides (its `a >= b` select keeps a NaN only from the last value
+/// and forgets what came before one): nalgebra's `amax` then.
+pub fn amax(a: &DVector<f64>) -> f64 {
+    let values = a.as_slice();
+    if values.is_empty() {
+        return 0.0;
+    }
+    let (top, nan) = crate::neural::wide::dispatch(
+        #[inline(always)]
+        || {
+            let (mut lanes, mut nan) = ([0.0f64; 8], [false; 8]);
+            let blocks = values.chunks_exact(8);
+            let (mut top, mut any) = (0.0f64, false);
+            for v in blocks.remainder() {
+                top = if v.abs() > top { v.abs() } else { top };
+                any |= v.is_nan();
+            }
+            for block in blocks {
+                for ((m, n), v) in lanes.iter_mut().zip(nan.iter_mut()).zip(block) {
+                    *m = if v.abs() > *m { v.abs() } else { *m };
+                    *n |= v.is_nan();
+                }
+            }
+            for (m, n) in lanes.into_iter().zip(nan) {
+                top = if m > top { m } else { top };
+                any |= n;
+            }
+            (top, any)
+        },
+    );
+    if nan { a.amax() } else { top }
+}
+
 /// y <- y + a x: nalgebra's `y.axpy(a, x, 1.0)` (whose a x 1 + 1 y has these bits).
 pub fn axpy(y: &mut DVector<f64>, a: f64, x: &DVector<f64>) {
     let (y, x) = (y.as_mut_slice(), x.as_slice());
@@ -235,6 +272,38 @@ pub(crate) mod tests {
             let m = (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
             m * 10f64.powi((seed % 13) as i32 - 6)
         }
+    }
+
+    /// The largest magnitude against nalgebra's `amax`, bit for bit: lengths around the
+    /// blocks of eight, the largest at every place, signed zeros, infinities and NaN
+    /// (passed over, or every value NaN).
+    #[test]
+    fn the_largest_magnitude_is_nalgebras() {
+        let mut next = values(0x9e37_79b9_7f4a_7c15);
+        let same = |v: &DVector<f64>| {
+            let (got, want) = (amax(v), v.amax());
+            assert!(
+                got.to_bits() == want.to_bits() || got.is_nan() && want.is_nan(),
+                "{v}: {got} against {want}"
+            );
+        };
+        for n in 0..27 {
+            let v = DVector::from_fn(n, |_, _| next());
+            same(&v);
+            for at in 0..n {
+                let mut w = v.clone();
+                w[at] = -1e3;
+                same(&w);
+                w[at] = f64::NAN;
+                same(&w);
+                w[at] = f64::NEG_INFINITY;
+                same(&w);
+            }
+        }
+        same(&DVector::from_element(11, f64::NAN));
+        same(&DVector::from_vec(vec![-0.0, 0.0, -0.0]));
+        assert_eq!(amax(&DVector::from_vec(vec![-0.0; 9])).to_bits(), 0);
+        assert_eq!(amax(&DVector::zeros(0)), 0.0);
     }
 
     #[test]
