@@ -823,25 +823,21 @@ fn series_pools() {
             }
         }
         let mut ws = PredictWorkspace::default();
-        let worst = row_errors(&val, Measure::Position, |q| c.predict(q, &mut ws))
-            .unwrap()
-            .into_iter()
-            .max_by(|a, b| a.position_mm.unwrap().total_cmp(&b.position_mm.unwrap()))
-            .unwrap();
-        println!("  worst validation row: line {}", worst.line);
+        let comp_rows = row_errors(&val, Measure::Position, |q| c.predict(q, &mut ws)).unwrap();
+        // Validation rows, largest compensated position error first.
+        let mut idx: Vec<usize> = (0..comp_rows.len()).collect();
+        idx.sort_by(|&a, &b| {
+            comp_rows[b]
+                .position_mm
+                .unwrap()
+                .total_cmp(&comp_rows[a].position_mm.unwrap())
+        });
+        println!("  worst validation row: line {}", comp_rows[idx[0]].line);
         if std::env::var("WORST").is_ok() {
             let model_rows = row_errors(&val, Measure::Position, |q| {
                 robocal::kinematics::tool_pose(&model, q)
             })
             .unwrap();
-            let comp_rows = row_errors(&val, Measure::Position, |q| c.predict(q, &mut ws)).unwrap();
-            let mut idx: Vec<usize> = (0..comp_rows.len()).collect();
-            idx.sort_by(|&a, &b| {
-                comp_rows[b]
-                    .position_mm
-                    .unwrap()
-                    .total_cmp(&comp_rows[a].position_mm.unwrap())
-            });
             for &i in idx.iter().take(8) {
                 let d = c.domain_check(&val.rows[i].q, &mut ws);
                 println!(

@@ -486,6 +486,7 @@ fn transpose_into(src: &DMatrix<f64>, dst: &mut DMatrix<f64>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::neural::samples::objective;
 
     #[test]
     fn the_blocked_transpose_is_nalgebras() {
@@ -496,7 +497,6 @@ mod tests {
             assert_eq!(got, src.transpose(), "{r} x {c}");
         }
     }
-    use crate::neural::samples::objective;
 
     /// The batch's shortcuts give the bits of what they replace: A^T B without the copy those
     /// of nalgebra's `gemm` on a transposed copy, into a view of a larger matrix as the

@@ -9,9 +9,9 @@
 //! (the kernel matrices and the held-out predictions of cross-validation). A loop over this
 //! one runs two values at once (SSE2, the default target): 3.6 ns per value against 5.1 ns
 //! for the library's, four where the processor has AVX2 and eight where it has AVX-512 (the
-//! callers dispatch through [`super::wide`]; the same operations, so the same bits). One value at a time the library's
-//! table-driven `exp` is faster (16 against 22 ns on a dependent chain), so the MLP's
-//! prediction keeps it; the RBF network's one-value response
+//! callers dispatch through [`super::wide`]; the same operations, so the same bits). One
+//! value at a time the library's table-driven `exp` is faster (16 against 22 ns on a
+//! dependent chain), so the MLP's prediction keeps it; the RBF network's one-value response
 //! ([`super::rbf::Covariance::response`], in its input Jacobian) takes this one, so that the
 //! Jacobian's outputs are prediction's bit for bit.
 //!

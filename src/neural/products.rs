@@ -40,9 +40,14 @@ pub const NALGEBRA_SMALL: usize = 5;
 /// tests would say so).
 const KC: usize = 256;
 
-/// The instruction set the kernel runs on (none off x86-64).
+/// The instruction sets the kernels run on (none off x86-64): AVX2 with FMA, and AVX-512 F
+/// where the processor has it too (the wider kernel then, the same bits).
 #[cfg(target_arch = "x86_64")]
-pub type Isa = pulp::x86::V3;
+#[derive(Clone, Copy, Debug)]
+pub struct Isa {
+    v3: pulp::x86::V3,
+    avx512: bool,
+}
 /// The instruction set the kernel runs on (none off x86-64).
 #[cfg(not(target_arch = "x86_64"))]
 #[derive(Clone, Copy, Debug)]
@@ -56,7 +61,10 @@ pub fn fast(dims: &[usize]) -> Option<Isa> {
         return None;
     }
     #[cfg(target_arch = "x86_64")]
-    return pulp::x86::V3::try_new();
+    return pulp::x86::V3::try_new().map(|v3| Isa {
+        v3,
+        avx512: super::wide::avx512(),
+    });
     #[cfg(not(target_arch = "x86_64"))]
     None
 }
@@ -69,19 +77,6 @@ pub fn fast(dims: &[usize]) -> Option<Isa> {
 /// zero.
 pub fn abt(
     simd: Isa,
-    a: &DMatrix<f64>,
-    b: &DMatrix<f64>,
-    symmetric: bool,
-    out: &mut [f64],
-    ldo: usize,
-) {
-    abt_on(simd, super::wide::avx512(), a, b, symmetric, out, ldo);
-}
-
-/// [`abt`] on the AVX-512 kernel (`wide`, where the processor has it) or the AVX2 one.
-fn abt_on(
-    simd: Isa,
-    wide: bool,
     a: &DMatrix<f64>,
     b: &DMatrix<f64>,
     symmetric: bool,
@@ -112,19 +107,17 @@ fn abt_on(
     }
     #[cfg(target_arch = "x86_64")]
     {
-        if wide {
-            assert!(
-                super::wide::avx512(),
-                "abt: AVX-512 asked of a processor without it"
-            );
-            // SAFETY: the processor has AVX-512 F (asserted); the slices hold A, B and C's
-            // entries (asserted above).
-            unsafe { avx512::abt(a.as_slice(), b.as_slice(), m, n, k, out, ldo, symmetric) };
+        let (a, b) = (a.as_slice(), b.as_slice());
+        if simd.avx512 {
+            // SAFETY: the processor has AVX-512 F (`fast` checked it); the slices hold A, B
+            // and C's entries (asserted above).
+            unsafe { avx512::abt(a, b, m, n, k, out, ldo, symmetric) };
         } else {
+            let simd = simd.v3;
             simd.vectorize(Abt {
                 simd,
-                a: a.as_slice(),
-                b: b.as_slice(),
+                a,
+                b,
                 m,
                 n,
                 k,
@@ -139,7 +132,7 @@ fn abt_on(
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        let _ = (wide, out, ldo, symmetric);
+        let _ = (out, ldo, symmetric);
         match simd {}
     }
 }
@@ -208,40 +201,65 @@ impl pulp::NullaryFnOnce for Abt<'_> {
             ldo,
             symmetric,
         } = self;
-        for p0 in (0..k).step_by(KC) {
-            let t = Block {
-                a,
-                b,
-                m,
-                n,
-                p: p0..(p0 + KC).min(k),
-                first: p0 == 0,
-                ldo,
-            };
-            let mut r = 0;
-            while r < m {
-                let width = if m - r >= 8 { 8 } else { (m - r).min(4) };
-                // A symmetric product's columns up to the block's last row (its lower
-                // triangle, and a few entries above it on the diagonal blocks).
-                let end = if symmetric { (r + width).min(n) } else { n };
-                for c in (0..end).step_by(COLUMNS) {
-                    match (width, (end - c).min(COLUMNS)) {
-                        (8, 6) => t.tile::<2, 6>(simd, r, width, c, out),
-                        (8, 5) => t.tile::<2, 5>(simd, r, width, c, out),
-                        (8, 4) => t.tile::<2, 4>(simd, r, width, c, out),
-                        (8, 3) => t.tile::<2, 3>(simd, r, width, c, out),
-                        (8, 2) => t.tile::<2, 2>(simd, r, width, c, out),
-                        (8, _) => t.tile::<2, 1>(simd, r, width, c, out),
-                        (_, 6) => t.tile::<1, 6>(simd, r, width, c, out),
-                        (_, 5) => t.tile::<1, 5>(simd, r, width, c, out),
-                        (_, 4) => t.tile::<1, 4>(simd, r, width, c, out),
-                        (_, 3) => t.tile::<1, 3>(simd, r, width, c, out),
-                        (_, 2) => t.tile::<1, 2>(simd, r, width, c, out),
-                        _ => t.tile::<1, 1>(simd, r, width, c, out),
-                    }
-                }
-                r += width;
+        tiles(
+            a,
+            b,
+            [m, n, k, ldo],
+            symmetric,
+            #[inline(always)]
+            |left| if left >= 8 { 8 } else { left.min(4) },
+            #[inline(always)]
+            |t, r, width, c, columns| match (width, columns) {
+                (8, 6) => t.tile::<2, 6>(simd, r, width, c, out),
+                (8, 5) => t.tile::<2, 5>(simd, r, width, c, out),
+                (8, 4) => t.tile::<2, 4>(simd, r, width, c, out),
+                (8, 3) => t.tile::<2, 3>(simd, r, width, c, out),
+                (8, 2) => t.tile::<2, 2>(simd, r, width, c, out),
+                (8, _) => t.tile::<2, 1>(simd, r, width, c, out),
+                (_, 6) => t.tile::<1, 6>(simd, r, width, c, out),
+                (_, 5) => t.tile::<1, 5>(simd, r, width, c, out),
+                (_, 4) => t.tile::<1, 4>(simd, r, width, c, out),
+                (_, 3) => t.tile::<1, 3>(simd, r, width, c, out),
+                (_, 2) => t.tile::<1, 2>(simd, r, width, c, out),
+                _ => t.tile::<1, 1>(simd, r, width, c, out),
+            },
+        );
+    }
+}
+
+/// Every tile of C = A B^T (A: m x k, B: n x k, C with `ldo` rows: `dims` [m, n, k, ldo]),
+/// for both kernels: over the chains' blocks of [`KC`] indices, the rows in tiles of
+/// `width(rows left)`, the columns in tiles of up to [`COLUMNS`] (a symmetric product's up to
+/// the tile's last row: its lower triangle and some entries above it on the diagonal),
+/// `tile(block, r, width, c, columns)` for each.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn tiles<'s>(
+    a: &'s [f64],
+    b: &'s [f64],
+    [m, n, k, ldo]: [usize; 4],
+    symmetric: bool,
+    width: impl Fn(usize) -> usize,
+    mut tile: impl FnMut(&Block<'s>, usize, usize, usize, usize),
+) {
+    for p0 in (0..k).step_by(KC) {
+        let t = Block {
+            a,
+            b,
+            m,
+            n,
+            p: p0..(p0 + KC).min(k),
+            first: p0 == 0,
+            ldo,
+        };
+        let mut r = 0;
+        while r < m {
+            let width = width(m - r);
+            let end = if symmetric { (r + width).min(n) } else { n };
+            for c in (0..end).step_by(COLUMNS) {
+                tile(&t, r, width, c, (end - c).min(COLUMNS));
             }
+            r += width;
         }
     }
 }
@@ -357,6 +375,29 @@ mod tests {
         })
     }
 
+    /// The AVX2 kernel on any processor that has it.
+    #[cfg(target_arch = "x86_64")]
+    fn avx2_only(simd: Isa) -> Isa {
+        Isa {
+            avx512: false,
+            ..simd
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    fn avx2_only(simd: Isa) -> Isa {
+        match simd {}
+    }
+
+    /// Whether `simd` runs the AVX-512 kernel.
+    #[cfg(target_arch = "x86_64")]
+    fn has_avx512(simd: Isa) -> bool {
+        simd.avx512
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    fn has_avx512(simd: Isa) -> bool {
+        match simd {}
+    }
+
     fn bits(x: &DMatrix<f64>) -> Vec<u64> {
         x.iter().map(|v| v.to_bits()).collect()
     }
@@ -389,14 +430,18 @@ mod tests {
             (10, 255, 6),
         ];
         let mut checked = 0;
+        if !super::super::wide::avx512() {
+            eprintln!("the AVX-512 kernel is not tested: this processor lacks AVX-512 F");
+        }
         for wide in [false, true] {
-            if wide && !super::super::wide::avx512() {
-                eprintln!("the AVX-512 kernel is not tested: this processor lacks AVX-512 F");
-                continue;
-            }
             for (m, k, n) in shapes {
                 let Some(simd) = fast(&[m, k, n]) else {
                     continue;
+                };
+                let simd = match (wide, has_avx512(simd)) {
+                    (false, _) => avx2_only(simd),
+                    (true, true) => simd,
+                    (true, false) => continue,
                 };
                 checked += 1;
                 let case = format!("{m} x {k} x {n}, AVX-512 {wide}");
@@ -404,7 +449,7 @@ mod tests {
                 let mut want = DMatrix::from_element(m, n, f64::NAN);
                 a.mul_to(&b.transpose(), &mut want);
                 let mut big = DMatrix::from_element(m + 2, n + 1, 5.0);
-                abt_on(simd, wide, &a, &b, false, big.as_mut_slice(), m + 2);
+                abt(simd, &a, &b, false, big.as_mut_slice(), m + 2);
                 let got = big.view((0, 0), (m, n)).into_owned();
                 assert_eq!(bits(&got), bits(&want), "{case}");
                 // Nothing outside the block written.
@@ -417,7 +462,7 @@ mod tests {
                 let mut want = DMatrix::from_element(m, m, f64::NAN);
                 a.mul_to(&a.transpose(), &mut want);
                 let mut big = DMatrix::from_element(m + 3, m, 5.0);
-                abt_on(simd, wide, &a, &a, true, big.as_mut_slice(), m + 3);
+                abt(simd, &a, &a, true, big.as_mut_slice(), m + 3);
                 let got = big.view((0, 0), (m, m)).into_owned();
                 assert_eq!(bits(&got), bits(&want), "symmetric, {case}");
                 assert_eq!(
@@ -428,7 +473,7 @@ mod tests {
                 // Without chains, zero.
                 let empty = DMatrix::<f64>::zeros(m, 0);
                 let mut zero = DMatrix::from_element(m, m, f64::NAN);
-                abt_on(simd, wide, &empty, &empty, true, zero.as_mut_slice(), m);
+                abt(simd, &empty, &empty, true, zero.as_mut_slice(), m);
                 assert!(zero.iter().all(|&v| v == 0.0), "{case}");
             }
         }

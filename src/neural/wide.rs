@@ -2,8 +2,8 @@
 //! for AVX2 through `pulp`'s dispatch (four), else the baseline build's (two).
 //!
 //! Why not `pulp`'s own AVX-512 level: it is behind a `pulp` feature, and features are shared
-//! with `faer`, whose matrix kernels would then take other blocks and give other bits (the
-//! RBF network's factorisations). Here only our loops widen.
+//! with `faer`, whose own dispatch (the RBF network's factorisations) would then see that
+//! level too and could take other kernels, so other bits. Here only our loops widen.
 //!
 //! Bits: the compiler never reorders floating-point operations (no fast-math in Rust) and
 //! never fuses a product and a sum unless the source says `mul_add`, so a loop's values are

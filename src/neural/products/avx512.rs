@@ -1,8 +1,9 @@
 //! [`super::abt`]'s kernel in AVX-512 registers (eight values each) where the processor has
 //! them: the same chains, one per entry, so the same bits as the AVX2 kernel and as
 //! nalgebra's product. Tiles of up to 16 rows (two registers) by [`super::COLUMNS`] columns,
-//! twelve registers of chains in flight as in the AVX2 kernel; the rows of a tile past the matrix's last
-//! are masked out of every load and store, so one kernel serves every remainder.
+//! twelve registers of chains in flight as in the AVX2 kernel, walked as the AVX2 kernel's
+//! ([`super::tiles`]); the rows of a tile past the matrix's last are masked out of every load
+//! and store, so one kernel serves every remainder.
 
 use super::Block;
 use core::arch::x86_64::{
@@ -28,45 +29,35 @@ pub(super) unsafe fn abt(
     ldo: usize,
     symmetric: bool,
 ) {
-    for p0 in (0..k).step_by(super::KC) {
-        let t = Block {
-            a,
-            b,
-            m,
-            n,
-            p: p0..(p0 + super::KC).min(k),
-            first: p0 == 0,
-            ldo,
-        };
-        let mut r = 0;
-        while r < m {
-            let width = (m - r).min(16);
-            // A symmetric product's columns up to the block's last row (its lower triangle,
-            // and some entries above it on the diagonal blocks).
-            let end = if symmetric { (r + width).min(n) } else { n };
-            for c in (0..end).step_by(super::COLUMNS) {
-                // SAFETY: AVX-512 F (this function's contract); the tile's reads and writes
-                // are asserted within the slices in `tile`.
-                unsafe {
-                    match (width > 8, (end - c).min(super::COLUMNS)) {
-                        (true, 6) => t.tile16::<2, 6>(r, width, c, out),
-                        (true, 5) => t.tile16::<2, 5>(r, width, c, out),
-                        (true, 4) => t.tile16::<2, 4>(r, width, c, out),
-                        (true, 3) => t.tile16::<2, 3>(r, width, c, out),
-                        (true, 2) => t.tile16::<2, 2>(r, width, c, out),
-                        (true, _) => t.tile16::<2, 1>(r, width, c, out),
-                        (false, 6) => t.tile16::<1, 6>(r, width, c, out),
-                        (false, 5) => t.tile16::<1, 5>(r, width, c, out),
-                        (false, 4) => t.tile16::<1, 4>(r, width, c, out),
-                        (false, 3) => t.tile16::<1, 3>(r, width, c, out),
-                        (false, 2) => t.tile16::<1, 2>(r, width, c, out),
-                        (false, _) => t.tile16::<1, 1>(r, width, c, out),
-                    }
+    super::tiles(
+        a,
+        b,
+        [m, n, k, ldo],
+        symmetric,
+        #[inline(always)]
+        |left| left.min(16),
+        #[inline(always)]
+        |t, r, width, c, columns| {
+            // SAFETY: AVX-512 F (this function's contract); the tile's reads and writes are
+            // asserted within the slices in `tile16`.
+            unsafe {
+                match (width > 8, columns) {
+                    (true, 6) => t.tile16::<2, 6>(r, width, c, out),
+                    (true, 5) => t.tile16::<2, 5>(r, width, c, out),
+                    (true, 4) => t.tile16::<2, 4>(r, width, c, out),
+                    (true, 3) => t.tile16::<2, 3>(r, width, c, out),
+                    (true, 2) => t.tile16::<2, 2>(r, width, c, out),
+                    (true, _) => t.tile16::<2, 1>(r, width, c, out),
+                    (false, 6) => t.tile16::<1, 6>(r, width, c, out),
+                    (false, 5) => t.tile16::<1, 5>(r, width, c, out),
+                    (false, 4) => t.tile16::<1, 4>(r, width, c, out),
+                    (false, 3) => t.tile16::<1, 3>(r, width, c, out),
+                    (false, 2) => t.tile16::<1, 2>(r, width, c, out),
+                    (false, _) => t.tile16::<1, 1>(r, width, c, out),
                 }
             }
-            r += width;
-        }
-    }
+        },
+    );
 }
 
 /// The lanes of the rows v 8..v 8 + 7 of a tile of `width` rows that lie in it.
