@@ -1412,3 +1412,217 @@ fn poses_next_to_the_shoulder_singularity_that_no_branch_start_reaches_are_searc
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn a_pose_whose_solutions_found_all_leave_the_limits_is_searched_within_them() {
+    use robocal::kinematics::{IkSolver, IkStart, RobotModel};
+    // The UR10 above with narrowed limits (deg): the elbow within [0, 160], so next to a
+    // straight elbow the arm's configuration lies a degree or two inside a limit while the
+    // nominal's starts of both elbows lead to the solution just outside it. Of 20,000
+    // configurations drawn within the limits, these 23 read outside-limits without a solve
+    // started within the limits (19 with the spread search alone; 4 with it and without the
+    // solutions moved within the limits).
+    let limits = [
+        [-30.0, 200.0],
+        [-100.0, 0.0],
+        [0.0, 160.0],
+        [-200.0, 0.0],
+        [20.0, 160.0],
+        [-30.0, 30.0],
+    ];
+    let configurations: [[f64; 6]; 23] = [
+        [
+            92.705297, -92.857498, 1.728497, -15.802377, 25.882807, -21.053302,
+        ],
+        [
+            170.828131, -99.194111, 11.749245, -2.617501, 32.772781, 24.484945,
+        ],
+        [
+            114.216058,
+            -83.491944,
+            0.956090,
+            -155.884291,
+            53.027952,
+            -23.326895,
+        ],
+        [
+            118.433300,
+            -71.887670,
+            1.504033,
+            -191.210788,
+            39.640008,
+            -7.651087,
+        ],
+        [
+            192.069316,
+            -22.649753,
+            0.129522,
+            -193.134469,
+            61.712178,
+            -27.260205,
+        ],
+        [
+            160.157915,
+            -96.181598,
+            0.376456,
+            -125.018757,
+            155.008601,
+            -8.757681,
+        ],
+        [
+            126.238217,
+            -88.805210,
+            1.196366,
+            -177.934882,
+            132.225181,
+            -21.742642,
+        ],
+        [
+            13.882380,
+            -45.321518,
+            0.792095,
+            -167.174724,
+            141.662135,
+            23.032627,
+        ],
+        [
+            142.999541,
+            -7.131367,
+            0.445457,
+            -192.637183,
+            145.020652,
+            22.485104,
+        ],
+        [
+            123.310706,
+            -57.350089,
+            1.239195,
+            -153.194951,
+            26.547796,
+            -13.944801,
+        ],
+        [
+            175.942717,
+            -69.368465,
+            1.102660,
+            -198.649993,
+            77.126668,
+            8.229377,
+        ],
+        [
+            69.545133,
+            -60.864662,
+            0.530334,
+            -195.407076,
+            145.198313,
+            17.015070,
+        ],
+        [
+            29.425419,
+            -80.976924,
+            1.962427,
+            -195.742911,
+            60.613053,
+            -22.199127,
+        ],
+        [
+            116.164165, -89.778236, 1.989725, -7.125017, 37.151421, 5.437504,
+        ],
+        [
+            185.097214,
+            -94.729978,
+            0.353049,
+            -153.215207,
+            144.918585,
+            0.946544,
+        ],
+        [
+            131.556573,
+            -83.010159,
+            1.596885,
+            -154.586981,
+            56.737713,
+            -6.969439,
+        ],
+        [
+            -2.366098, -99.523478, 13.468199, -41.722423, 45.664227, -28.324590,
+        ],
+        [
+            152.374959,
+            -64.004130,
+            0.566843,
+            -198.001272,
+            134.014601,
+            -20.591568,
+        ],
+        [
+            15.373255, -99.252259, 9.672145, -7.102891, 48.526743, 24.238195,
+        ],
+        [
+            116.296219,
+            -92.273904,
+            17.276305,
+            -189.503011,
+            83.727614,
+            -19.577260,
+        ],
+        [
+            144.864832,
+            -3.377662,
+            0.032893,
+            -191.719137,
+            135.177349,
+            -1.507761,
+        ],
+        [
+            62.273589, -93.809970, 3.746638, -2.710474, 39.957627, 18.089953,
+        ],
+        [
+            66.594233, -82.653964, 1.337219, -5.800475, 20.549667, -14.629932,
+        ],
+    ];
+    let nominal = robot_file("ur10.toml");
+    let mut rows = UR10_NOMINAL_ROWS;
+    for (row, c) in rows.iter_mut().zip(&UR10_CALIBRATED_ROWS) {
+        for (n, c) in row.iter_mut().zip(c) {
+            *n += 4.0 * (c - *n);
+        }
+    }
+    let times_four = |v: &[f64; 6]| v.map(|x| 4.0 * x);
+    let mut file = ur10_file(
+        "UR10 x4, narrowed limits",
+        &rows,
+        &times_four(&UR10_CALIBRATED_BASE),
+        &times_four(&UR10_CALIBRATED_TOOL),
+    );
+    for [lo, hi] in limits {
+        file = file.replacen(
+            "limits = [-360.0, 360.0]",
+            &format!("limits = [{lo:?}, {hi:?}]"),
+            1,
+        );
+    }
+    let robot = parse_robot(&file, Path::new("ur10_x4_limited.toml")).unwrap();
+    let start = IkStart::choose(&robot, Some(&nominal)).unwrap();
+    let mut solver = IkSolver::new(RobotModel::new(&robot), start, IkOptions::default());
+    let mut own = 0;
+    for deg in configurations {
+        let q: Vec<f64> = deg.iter().map(|d| d.to_radians()).collect();
+        assert!(robot.joints_outside_limits(&q).is_empty(), "{deg:?}");
+        let target = tool_pose(&robot, &q);
+        let near = solver
+            .nearest(&target, None)
+            .unwrap_or_else(|e| panic!("{deg:?}: {e}"))
+            .solution;
+        let (dp, dr) = pose_errors(&tool_pose(&robot, &near.q), &target);
+        assert!(dp < 1e-6 && dr < 1e-9, "{deg:?}: {dp} mm {dr} rad");
+        assert!(robot.joints_outside_limits(&near.q).is_empty(), "{deg:?}");
+        own += usize::from(joint_gap(&near.q, &q) < 1e-6);
+        let all = solver
+            .all(&target, None)
+            .unwrap_or_else(|e| panic!("{deg:?}: {e}"));
+        assert!(all.iter().any(|s| joint_gap(s, &q) < 1e-6), "{deg:?}");
+    }
+    // The solution nearest the middle of the ranges is each configuration itself.
+    assert_eq!(own, configurations.len());
+}

@@ -678,6 +678,29 @@ impl Robot {
             .collect()
     }
 
+    /// `q` (rad, mm) with each joint outside its limits moved inside: a revolute joint first
+    /// to its whole-turn copy nearest the range's middle, then any joint still outside to
+    /// `inset` times its range inside the limit it passed (`inset` in [0, 0.5]; a joint
+    /// within the limits is kept as it is). A start for a solve that should end within the
+    /// limits, made from a solution that leaves them.
+    pub fn moved_within_limits(&self, q: &[f64], inset: f64) -> Vec<f64> {
+        (self.joints.iter().zip(q))
+            .map(|(j, &v)| {
+                let [lo, hi] = j.limits_internal();
+                if (lo - LIMIT_TOL..=hi + LIMIT_TOL).contains(&v) {
+                    return v;
+                }
+                let tau = std::f64::consts::TAU;
+                let v = match j.joint_type {
+                    JointType::Revolute => v + tau * ((0.5 * (lo + hi) - v) / tau).round(),
+                    JointType::Prismatic => v,
+                };
+                let m = inset.clamp(0.0, 0.5) * (hi - lo);
+                v.clamp(lo + m, hi - m)
+            })
+            .collect()
+    }
+
     /// Converts a joint vector from file units (deg/mm) to internal units (rad/mm).
     pub fn joints_to_internal(&self, q: &[f64]) -> Vec<f64> {
         self.joints
@@ -844,6 +867,29 @@ mod tests {
         assert!(
             r.turns_near(&rad([200.0, 0.0, 0.0, 0.0, 0.0, 0.0]), &seed)
                 .is_none()
+        );
+    }
+
+    #[test]
+    fn joints_outside_the_limits_are_moved_inside_them() {
+        // FANUC limits (deg): J1 +-150, J2 [-50, 70], J3 +-60, J4 +-180. Joint 1 at 200 deg
+        // has no copy within its limits: its copy nearest the range's middle (-160) goes 1 %
+        // of the range (3 deg) inside the limit it passed; joint 2 at 80 likewise (1.2 deg
+        // inside 70); joint 3 on its limit and the others within theirs are kept; joint 4 at
+        // 190 deg is its copy -170 within the limits.
+        let r = test_fanuc();
+        let rad = |v: [f64; 6]| v.map(f64::to_radians);
+        let q = rad([200.0, 80.0, -60.0, 190.0, 0.5, 0.0]);
+        let got: Vec<f64> = (r.moved_within_limits(&q, 0.01).into_iter())
+            .map(f64::to_degrees)
+            .collect();
+        let want = [-147.0, 68.8, -60.0, -170.0, 0.5, 0.0];
+        for (g, w) in got.iter().zip(want) {
+            assert!((g - w).abs() < 1e-9, "{got:?}");
+        }
+        assert!(
+            r.joints_outside_limits(&got.iter().map(|d| d.to_radians()).collect::<Vec<_>>())
+                .is_empty()
         );
     }
 }
