@@ -1626,3 +1626,38 @@ fn a_pose_whose_solutions_found_all_leave_the_limits_is_searched_within_them() {
     // The solution nearest the middle of the ranges is each configuration itself.
     assert_eq!(own, configurations.len());
 }
+
+#[test]
+fn a_straight_elbows_two_roots_are_listed_once() {
+    // At a straight elbow (UR10, q3 = 0) the closed form's two elbow roots are one
+    // configuration, but it takes the elbow angle from an arccosine next to 1, so they came
+    // out about 5e-8 rad apart and `--all` listed 142 such pairs in 300 poses. Every listed
+    // solution reaches the pose, the configuration itself is among them, and no two lie within
+    // 1e-5 rad of each other (modulo whole turns).
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/ur10.toml"),
+    )
+    .unwrap()
+    .replace("limits = [-360.0, 360.0]", "limits = [-180.0, 180.0]");
+    let robot = parse_robot(&text, Path::new("ur10_180.toml")).unwrap();
+    let ik = ClosedFormIk::new(&robot).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let mut sols = Vec::new();
+    let mut listed = 0;
+    for _ in 0..100 {
+        let mut q = random_q(&robot, &mut rng);
+        q[2] = 0.0;
+        let target = tool_pose(&robot, &q);
+        assert!(ik.solve(&target, &mut sols));
+        assert!(sols.iter().any(|s| joint_gap(s, &q) < 1e-6), "{q:?}");
+        for (i, s) in sols.iter().enumerate() {
+            let (dp, dr) = pose_errors(&tool_pose(&robot, s), &target);
+            assert!(dp < 1e-6 && dr < 1e-9, "{s:?}: {dp} mm {dr} rad");
+            for o in &sols[..i] {
+                assert!(joint_gap(s, o) > 1e-5, "{q:?}: {s:?} and {o:?}");
+            }
+        }
+        listed += sols.len();
+    }
+    println!("{listed} solutions");
+}

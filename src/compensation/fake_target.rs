@@ -33,7 +33,7 @@ use crate::kinematics::{
     Branch, ClosedFormIk, IkFailure, IkOptions, IkSolution, IkSolver, IkStart, Pose, ToolModel,
     another_arm, tool_pose,
 };
-use crate::model::{Robot, joint_distance};
+use crate::model::{JointType, Robot, joint_distance};
 use nalgebra::Translation3;
 use std::f64::consts::PI;
 
@@ -185,6 +185,22 @@ fn wrapped_distance(a: &[f64], b: &[f64]) -> f64 {
         })
         .sum::<f64>()
         .sqrt()
+}
+
+/// How far joints `a` and `b` (rad, mm) of `robot` lie apart, for a message: the largest
+/// difference in file units (deg, mm) and its joint, e.g. "up to 12.3 deg (joint 4)".
+fn joints_apart(robot: &Robot, a: &[f64], b: &[f64]) -> String {
+    let (j, d) = (robot.joints().iter().zip(a.iter().zip(b)).enumerate())
+        .map(|(j, (joint, (x, y)))| (j, joint.joint_type.to_file((x - y).abs())))
+        .fold(
+            (0, 0.0),
+            |best, this| if this.1 > best.1 { this } else { best },
+        );
+    let unit = match robot.joints().get(j).map(|joint| joint.joint_type) {
+        Some(JointType::Prismatic) => "mm",
+        _ => "deg",
+    };
+    format!("up to {d:.4} {unit} (joint {})", j + 1)
 }
 
 impl<'a> FakeTargetSolver<'a> {
@@ -531,7 +547,7 @@ fn solve_from_seed(
     };
     let mut sol = ik.nearest(&target, Some(seed)).map_err(failure)?.solution;
     let exact = controller.start().closed_form().is_some();
-    let mut apart = 0.0;
+    let mut apart = String::new();
     for _ in 0..=SETTLE_ROUNDS {
         let outside = nominal.joints_outside_limits(&sol.q);
         if !outside.is_empty() {
@@ -559,10 +575,10 @@ fn solve_from_seed(
             };
             run
         };
-        apart = joint_distance(&run, &sol.q);
-        if apart < SAME_JOINTS_RAD {
+        if joint_distance(&run, &sol.q) < SAME_JOINTS_RAD {
             return Ok(Command::new(target, fake, None, sol));
         }
+        apart = joints_apart(nominal, &run, &sol.q);
         // The controller would run `run`: the calibrated solution of that configuration.
         // Near a singularity where two configurations lie a fraction of a degree apart, the
         // solve from `run` can slide back to q*: a start as far beyond `run` then tries the
@@ -572,10 +588,10 @@ fn solve_from_seed(
         let differs = |e: IkFailure| {
             Failure::ControllerDiffers(format!(
                 "a controller taking the nominal model's solution nearest the seed would run \
-                 another configuration, {:.3e} (rad, mm) from the calibrated solution, in which \
+                 another configuration, its joints {} from the calibrated solution's, in which \
                  the calibrated model does not reach the target ({e}): give seed joints nearer \
                  the taught configuration",
-                joint_distance(&run, &sol.q)
+                joints_apart(nominal, &run, &sol.q)
             ))
         };
         let mut next = ik.from_start(&target, &run).map_err(differs)?;
@@ -598,8 +614,8 @@ fn solve_from_seed(
     }
     Err(Failure::ControllerDiffers(format!(
         "the seed lies far from the command's joints, and a controller taking the nominal \
-         model's solution nearest the seed would run another configuration, {apart:.3e} \
-         (rad, mm) from the calibrated solution, through {SETTLE_ROUNDS} rounds: give seed \
+         model's solution nearest the seed would run another configuration, its joints \
+         {apart} from the calibrated solution's, through {SETTLE_ROUNDS} rounds: give seed \
          joints nearer the taught configuration"
     )))
 }
@@ -615,12 +631,12 @@ fn near_seed_check(
 ) -> std::result::Result<Command, Failure> {
     match controller.nearest(&fake, Some(seed)) {
         Ok(back) => {
-            let apart = joint_distance(&back.solution.q, &sol.q);
-            if apart >= SAME_JOINTS_RAD {
+            if joint_distance(&back.solution.q, &sol.q) >= SAME_JOINTS_RAD {
+                let apart = joints_apart(controller.model().robot(), &back.solution.q, &sol.q);
                 return Err(Failure::ControllerDiffers(format!(
-                    "the nominal model solves the command from the seed at joints {apart:.3e} \
-                     (rad, mm) from the calibrated solution: a controller solving near the \
-                     seed would take those"
+                    "the nominal model solves the command from the seed at joints {apart} \
+                     from the calibrated solution's: a controller solving near the seed would \
+                     take those"
                 )));
             }
         }
@@ -631,4 +647,21 @@ fn near_seed_check(
         }
     }
     Ok(Command::new(target, fake, None, sol))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::joints_apart;
+    use crate::model::test_fanuc;
+
+    #[test]
+    fn joints_apart_names_the_largest_difference_in_degrees() {
+        let r = test_fanuc();
+        let a = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6];
+        let mut b = a;
+        b[1] -= 0.01;
+        b[3] += 1.0;
+        assert_eq!(joints_apart(&r, &a, &b), "up to 57.2958 deg (joint 4)");
+        assert_eq!(joints_apart(&r, &a, &a), "up to 0.0000 deg (joint 1)");
+    }
 }
