@@ -1632,32 +1632,137 @@ fn a_straight_elbows_two_roots_are_listed_once() {
     // At a straight elbow (UR10, q3 = 0) the closed form's two elbow roots are one
     // configuration, but it takes the elbow angle from an arccosine next to 1, so they came
     // out about 5e-8 rad apart and `--all` listed 142 such pairs in 300 poses. Every listed
-    // solution reaches the pose, the configuration itself is among them, and no two lie within
-    // 1e-5 rad of each other (modulo whole turns).
-    let text = std::fs::read_to_string(
+    // solution reaches the pose, the configuration itself is among them, no two lie within
+    // 1e-5 rad of each other, and every whole-turn copy the limits allow is listed: with
+    // limits of +-180 deg; with the elbow's upper limit at the straight elbow (a reviewer's
+    // case: merging the roots before taking their copies dropped the one within the limits,
+    // 22 of 200 poses had no solution); and with +-360 deg (it dropped the copies at +360).
+    let nominal = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/ur10.toml"),
     )
-    .unwrap()
-    .replace("limits = [-360.0, 360.0]", "limits = [-180.0, 180.0]");
-    let robot = parse_robot(&text, Path::new("ur10_180.toml")).unwrap();
-    let ik = ClosedFormIk::new(&robot).unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(3);
-    let mut sols = Vec::new();
-    let mut listed = 0;
-    for _ in 0..100 {
-        let mut q = random_q(&robot, &mut rng);
-        q[2] = 0.0;
-        let target = tool_pose(&robot, &q);
-        assert!(ik.solve(&target, &mut sols));
-        assert!(sols.iter().any(|s| joint_gap(s, &q) < 1e-6), "{q:?}");
-        for (i, s) in sols.iter().enumerate() {
-            let (dp, dr) = pose_errors(&tool_pose(&robot, s), &target);
-            assert!(dp < 1e-6 && dr < 1e-9, "{s:?}: {dp} mm {dr} rad");
-            for o in &sols[..i] {
-                assert!(joint_gap(s, o) > 1e-5, "{q:?}: {s:?} and {o:?}");
+    .unwrap();
+    let half_turn = nominal.replace("limits = [-360.0, 360.0]", "limits = [-180.0, 180.0]");
+    let elbow_at_limit = (half_turn.replacen("limits = [-180.0, 180.0]", "LIMITS", 2))
+        .replacen("limits = [-180.0, 180.0]", "limits = [-160.0, 0.0]", 1)
+        .replace("LIMITS", "limits = [-180.0, 180.0]");
+    let limits = |text: &str| {
+        let robot = parse_robot(text, Path::new("ur10_q3.toml")).unwrap();
+        robot.joints().iter().map(|j| j.limits).collect::<Vec<_>>()
+    };
+    assert_eq!(
+        limits(&elbow_at_limit)[1..3],
+        [[-180.0, 180.0], [-160.0, 0.0]]
+    );
+    let mut listed = Vec::new();
+    for text in [&half_turn, &elbow_at_limit, &nominal] {
+        let robot = parse_robot(text, Path::new("ur10_q3.toml")).unwrap();
+        let ik = ClosedFormIk::new(&robot).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut sols = Vec::new();
+        let mut count = 0;
+        for _ in 0..100 {
+            let mut q: Vec<f64> = (0..6)
+                .map(|_| rng.random_range(-170.0_f64..170.0).to_radians())
+                .collect();
+            q[2] = 0.0;
+            let target = tool_pose(&robot, &q);
+            assert!(ik.solve(&target, &mut sols));
+            let apart = |a: &[f64], b: &[f64]| {
+                (a.iter().zip(b))
+                    .map(|(x, y)| (x - y).abs())
+                    .fold(0.0, f64::max)
+            };
+            assert!(sols.iter().any(|s| apart(s, &q) < 1e-6), "{q:?}");
+            for (i, s) in sols.iter().enumerate() {
+                let (dp, dr) = pose_errors(&tool_pose(&robot, s), &target);
+                assert!(dp < 1e-6 && dr < 1e-9, "{s:?}: {dp} mm {dr} rad");
+                assert!(robot.joints_outside_limits(s).is_empty(), "{s:?}");
+                for o in &sols[..i] {
+                    assert!(apart(s, o) > 1e-5, "{q:?}: {s:?} and {o:?}");
+                }
+                // Each copy a whole turn away on one joint that the limits allow is listed.
+                for j in 0..6 {
+                    for turn in [-2.0 * PI, 2.0 * PI] {
+                        let mut c = *s;
+                        c[j] += turn;
+                        if robot.joints_outside_limits(&c).is_empty() {
+                            assert!(sols.iter().any(|o| apart(o, &c) < 1e-6), "{c:?}");
+                        }
+                    }
+                }
             }
+            count += sols.len();
         }
-        listed += sols.len();
+        listed.push(count);
     }
-    println!("{listed} solutions");
+    println!("solutions listed: {listed:?}");
+}
+
+#[test]
+fn solutions_across_a_calibrated_elbows_fold_are_listed() {
+    use robocal::kinematics::fold::across_fold;
+    use robocal::kinematics::{IkSolver, IkStart, RobotModel};
+    // Within a degree of a straight elbow the calibrated UR10's two elbow solutions lie on
+    // either side of its fold, which is off the nominal's, so the nominal's starts of both
+    // elbows can lead to one of them. The reflection of each solution across the fold
+    // (det J linear along J's nearest-singular direction) starts a solve that finds the other.
+    let nominal = robot_file("ur10.toml");
+    let calibrated = ur10_calibrated();
+    let start = IkStart::choose(&calibrated, Some(&nominal)).unwrap();
+    let mut solver = IkSolver::new(RobotModel::new(&calibrated), start, IkOptions::default());
+    let mut rng = ChaCha8Rng::seed_from_u64(41);
+    let poses = 300;
+    let mut own = 0;
+    for _ in 0..poses {
+        let mut q: Vec<f64> = (0..6).map(|_| rng.random_range(-PI..PI)).collect();
+        q[2] = rng.random_range(-1.0_f64..1.0).to_radians();
+        let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
+        q[4] = sign * rng.random_range(15.0_f64..165.0).to_radians();
+        let target = tool_pose(&calibrated, &q);
+        let all = solver.all(&target, None).unwrap();
+        for s in &all {
+            let (dp, dr) = pose_errors(&tool_pose(&calibrated, s), &target);
+            assert!(dp < 1e-6 && dr < 1e-9, "{s:?}: {dp} mm {dr} rad");
+        }
+        own += usize::from(all.iter().any(|s| joint_gap(s, &q) < 1e-6));
+    }
+    println!("own configuration listed on {own} of {poses} poses");
+    assert!(own >= poses - 3, "{own} of {poses}");
+    // The reflection itself: from a configuration 0.3 deg on one side of a straight elbow,
+    // it lands nearer the pose's other solution than the configuration is (an independent
+    // solve from that start confirms the other solution).
+    let mut model = RobotModel::new(&calibrated);
+    let mut jac = nalgebra::Matrix6xX::zeros(6);
+    let q = [0.4, -1.2, 0.3_f64.to_radians(), -0.5, 1.1, 0.2];
+    let reflected = across_fold(&mut model, &q, 1000.0, &mut jac).unwrap();
+    let target = tool_pose(&calibrated, &q);
+    let mut ws = IkWorkspace::new(&calibrated);
+    let other = solve_numeric(
+        &calibrated,
+        &IkTarget::Pose(target),
+        &reflected,
+        &IkOptions::default(),
+        &mut ws,
+    )
+    .unwrap()
+    .q;
+    let gap = joint_gap(&other, &q);
+    assert!(
+        gap > 1e-3,
+        "the solve went back to the configuration: {other:?}"
+    );
+    assert!(
+        joint_gap(&reflected, &other) < 0.2 * gap,
+        "{reflected:?} {other:?}"
+    );
+    // Far from any fold, none.
+    assert!(
+        across_fold(
+            &mut model,
+            &[0.4, -1.2, 1.5, -0.5, 1.1, 0.2],
+            1000.0,
+            &mut jac
+        )
+        .is_none()
+    );
 }

@@ -200,7 +200,12 @@ fn joints_apart(robot: &Robot, a: &[f64], b: &[f64]) -> String {
         Some(JointType::Prismatic) => "mm",
         _ => "deg",
     };
-    format!("up to {d:.4} {unit} (joint {})", j + 1)
+    // Fixed decimals would print a gap of 1e-6 rad, which the checks tell apart, as 0.0000.
+    if d >= 0.01 {
+        format!("up to {d:.4} {unit} (joint {})", j + 1)
+    } else {
+        format!("up to {d:.3e} {unit} (joint {})", j + 1)
+    }
 }
 
 impl<'a> FakeTargetSolver<'a> {
@@ -662,6 +667,8 @@ mod tests {
         b[1] -= 0.01;
         b[3] += 1.0;
         assert_eq!(joints_apart(&r, &a, &b), "up to 57.2958 deg (joint 4)");
-        assert_eq!(joints_apart(&r, &a, &a), "up to 0.0000 deg (joint 1)");
+        b = a;
+        b[5] += 2e-6;
+        assert_eq!(joints_apart(&r, &a, &b), "up to 1.146e-4 deg (joint 6)");
     }
 }

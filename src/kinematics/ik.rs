@@ -17,9 +17,13 @@
 //!    form gives a start ([`IkStart::Seed`], or a pose out of the nominal's reach on every
 //!    branch, where its solutions of the pose pulled a little toward the base start them
 //!    too).
-//! 4. Where every solution the solves found leaves the limits, each moved within them
+//! 4. Each solution found within [`super::fold::FOLD_NEAR_RAD`] of a fold of the model (a
+//!    straight elbow, the shoulder's cylinder) starts a solve from its reflection across the
+//!    fold ([`across_fold`]): the pose's other solution there, which the nominal's starts
+//!    of a calibrated arm, whose fold lies off the nominal's, may not lead to.
+//! 5. Where every solution the solves found leaves the limits, each moved within them
 //!    ([`Robot::moved_within_limits`]) starts a solve too.
-//! 5. Where a nominal's closed form gave the starts and no solve from them converged within
+//! 6. Where a nominal's closed form gave the starts and no solve from them converged within
 //!    the limits, where no branch of the nominal reaches the pose (its starts are then only
 //!    the pulled and nearest ones), or where they found fewer distinct solutions than the
 //!    nominal has branches at the pose, starts spread over the joints' turns around the
@@ -32,6 +36,7 @@
 //! distinct one; [`IkSolver::from_nearest_start`] (target compensation) solves once from the
 //! nearest start on a given branch, the configuration the controller keeps.
 
+use super::fold::across_fold;
 use super::ik_closed::{Branch, ClosedFormIk, MAX_SOLUTIONS};
 use super::ik_numeric::{IkOptions, IkSolution, IkTarget, IkWorkspace, ToolModel, solve_model};
 use super::spread::around;
@@ -41,6 +46,7 @@ use crate::error::{Error, Result};
 use crate::geometry::rotation::angle_between;
 use crate::model::Robot;
 pub use crate::model::joint_distance;
+use nalgebra::Matrix6xX;
 
 /// Two solutions closer than this in every joint (rad or mm) are one.
 const SAME_SOLUTION: f64 = 1e-7;
@@ -192,6 +198,8 @@ pub struct IkSolver<M: ToolModel> {
     copies: Vec<[f64; 6]>,
     mid: Vec<f64>,
     reach: Reach,
+    /// Scratch of [`across_fold`] (6 x N).
+    jac: Matrix6xX<f64>,
 }
 
 /// Largest joint change (rad, mm) a polish of a closed-form solution may make: the closed
@@ -282,6 +290,7 @@ impl<M: ToolModel> IkSolver<M> {
         let ws = IkWorkspace::new(robot);
         let mid = robot.mid_joints();
         let reach = Reach::of(robot);
+        let jac = Matrix6xX::zeros(robot.dof());
         IkSolver {
             model,
             start,
@@ -291,6 +300,7 @@ impl<M: ToolModel> IkSolver<M> {
             copies: Vec::new(),
             mid,
             reach,
+            jac,
         }
     }
 
@@ -444,7 +454,8 @@ impl<M: ToolModel> IkSolver<M> {
     }
 
     /// Every distinct converged solution within the limits, one numerical solve from the
-    /// seed (when given) and from each closed-form start; where every solution found leaves
+    /// seed (when given) and from each closed-form start, and from each solution's reflection
+    /// across a fold near it ([`across_fold`]); where every solution found leaves
     /// the limits, from each moved within them ([`LIMIT_INSET`]); where a nominal's closed
     /// form gave starts and none converged within the limits, where no branch of it reaches
     /// the pose, or where the solves found fewer distinct solutions than it has branches
@@ -494,6 +505,16 @@ impl<M: ToolModel> IkSolver<M> {
         let all = self.opts.max_iterations;
         for q0 in &starts {
             self.solve_start(target, q0, reference, all, &mut found);
+        }
+        // Next to a fold (a straight elbow, the shoulder's cylinder) the pose's other solution
+        // there lies across it, where the nominal's starts may not lead: each solution's
+        // reflection across a fold within reach starts a solve.
+        let mut solved: Vec<Vec<f64>> = found.sols.iter().map(|s| s.q.clone()).collect();
+        solved.extend(found.outside.iter().cloned());
+        for q in solved {
+            if let Some(q0) = self.reflected(&q) {
+                self.solve_start(target, &q0, reference, SEARCH_ITERATIONS, &mut found);
+            }
         }
         // Every solution found leaves the limits: each moved within them starts a solve (next
         // to a singularity the arm's solution within the limits can lie a degree from one
@@ -611,6 +632,12 @@ impl<M: ToolModel> IkSolver<M> {
             }
             Err(_) => {}
         }
+    }
+
+    /// Solution `q` reflected across a fold of the model within [`super::fold::FOLD_NEAR_RAD`]
+    /// ([`across_fold`]), if any.
+    fn reflected(&mut self, q: &[f64]) -> Option<Vec<f64>> {
+        across_fold(&mut self.model, q, self.opts.length_scale_mm, &mut self.jac)
     }
 
     /// The starts of the closed-form solutions `found` ([`Self::starts`]) for `target`: each

@@ -397,9 +397,10 @@ impl ClosedFormIk {
     }
 
     /// Every solution within the joint limits, including the copies shifted by multiples of
-    /// 360 deg that the limits allow; solutions equal modulo 360 deg (within [`SAME_ROOT_RAD`])
-    /// are merged first, so the copies are distinct. At most [`MAX_SOLUTIONS`] are listed: false
-    /// when more exist (joint ranges of many turns; see [`ClosedFormIk::solve_nearest`]).
+    /// 360 deg that the limits allow; solutions equal modulo 360 deg (within 1e-9 rad) are
+    /// merged first, and a copy within [`SAME_ROOT_RAD`] of one already listed is dropped, so
+    /// the copies are distinct. At most [`MAX_SOLUTIONS`] are listed: false when more exist
+    /// (joint ranges of many turns; see [`ClosedFormIk::solve_nearest`]).
     /// At a wrist singularity, the split of q4 + s q6 nearest the middle of the ranges.
     pub fn solve(&self, target: &Pose, out: &mut Vec<[f64; 6]>) -> bool {
         let mid = self.limits.map(|[lo, hi]| 0.5 * (lo + hi));
@@ -415,9 +416,28 @@ impl ClosedFormIk {
             *q = self.wrist_split_within_limits(q, reference);
         }
         out.clear();
-        for q in distinct_mod_turn(&raw) {
-            if !self.push_copies(&q, out) {
+        let roots = distinct_mod_turn(&raw);
+        for (i, q) in roots.iter().enumerate() {
+            let listed = out.len();
+            if !self.push_copies(q, out) {
                 return false;
+            }
+            // A straight elbow's two roots, split by rounding: the copies of the second that
+            // the first's already list go, the rest stay (where a limit lies at the straight
+            // elbow, only one root's copies may be within it).
+            if roots[..i]
+                .iter()
+                .any(|o| same_mod_turn(o, q, SAME_ROOT_RAD))
+            {
+                let copies = out.split_off(listed);
+                for c in copies {
+                    let seen = out[..listed]
+                        .iter()
+                        .any(|o| (o.iter().zip(&c)).all(|(x, y)| (x - y).abs() < SAME_ROOT_RAD));
+                    if !seen {
+                        out.push(c);
+                    }
+                }
             }
         }
         true
@@ -637,25 +657,24 @@ fn spherical_wrist(w: &[V3; 6], p: &[V3; 6]) -> std::result::Result<V3, String> 
 /// Most solutions [`ClosedFormIk::solve`] lists for one pose.
 pub const MAX_SOLUTIONS: usize = 10_000;
 
-/// Two closed-form solutions within this of each other modulo 2 pi on every joint (rad) are
-/// one. At a straight elbow the two elbow roots are one configuration, but the closed form
-/// takes the elbow angle from an arccosine next to 1, so rounding leaves them about 5e-8 rad
-/// apart (UR10, q3 = 0: 142 such pairs in 300 poses were listed twice at 1e-9); no encoder
-/// tells apart configurations 1e-6 rad apart.
+/// Two closed-form solutions within this of each other on every joint (rad) are one. At a
+/// straight elbow the two elbow roots are one configuration, but the closed form takes the
+/// elbow angle from an arccosine next to 1, so rounding leaves them about 5e-8 rad apart
+/// (UR10, q3 = 0: 142 such pairs in 300 poses were listed twice); no encoder tells apart
+/// configurations 1e-6 rad apart.
 const SAME_ROOT_RAD: f64 = 1e-6;
 
-/// `raw` without solutions equal to an earlier one modulo 2 pi on every joint (within
-/// [`SAME_ROOT_RAD`]).
-fn distinct_mod_turn(raw: &[[f64; 6]]) -> Vec<[f64; 6]> {
+/// Whether `a` and `b` (rad) are within `tol` of each other modulo 2 pi on every joint.
+fn same_mod_turn(a: &[f64; 6], b: &[f64; 6], tol: f64) -> bool {
     let tau = 2.0 * PI;
-    let same = |a: &[f64; 6], b: &[f64; 6]| {
-        a.iter()
-            .zip(b)
-            .all(|(x, y)| ((x - y + PI).rem_euclid(tau) - PI).abs() < SAME_ROOT_RAD)
-    };
+    (a.iter().zip(b)).all(|(x, y)| ((x - y + PI).rem_euclid(tau) - PI).abs() < tol)
+}
+
+/// `raw` without solutions equal to an earlier one modulo 2 pi on every joint (1e-9 rad).
+fn distinct_mod_turn(raw: &[[f64; 6]]) -> Vec<[f64; 6]> {
     let mut out: Vec<[f64; 6]> = Vec::with_capacity(raw.len());
     for q in raw {
-        if !out.iter().any(|o| same(o, q)) {
+        if !out.iter().any(|o| same_mod_turn(o, q, 1e-9)) {
             out.push(*q);
         }
     }

@@ -3,6 +3,7 @@
 //! Joint vectors are in internal units: rad for revolute joints, mm for prismatic ones.
 
 pub mod fk;
+pub mod fold;
 pub mod gravity;
 pub mod ik;
 pub mod ik_closed;

@@ -678,10 +678,10 @@ impl Robot {
             .collect()
     }
 
-    /// `q` (rad, mm) with each joint outside its limits moved inside: a revolute joint first
-    /// to its whole-turn copy nearest the range's middle, then any joint still outside to
-    /// `inset` times its range inside the limit it passed (`inset` in [0, 0.5]; a joint
-    /// within the limits is kept as it is). A start for a solve that should end within the
+    /// `q` (rad, mm) with each joint outside its limits moved inside: a revolute joint to its
+    /// whole-turn copy nearest the range's middle, and then (any joint) held at least
+    /// `inset` times its range inside the limits (`inset` clamped to [0, 0.5]); a joint
+    /// within the limits is kept as it is. A start for a solve that should end within the
     /// limits, made from a solution that leaves them.
     pub fn moved_within_limits(&self, q: &[f64], inset: f64) -> Vec<f64> {
         (self.joints.iter().zip(q))
