@@ -11,6 +11,10 @@ use robocal::model::{Robot, read_robot};
 use std::f64::consts::PI;
 use std::path::Path;
 
+mod common;
+
+use common::ur10::{ur10_calibrated, ur10_four_times, ur10_four_times_file};
+
 fn robot_file(name: &str) -> Robot {
     read_robot(
         Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -893,64 +897,6 @@ fn closed_form_solutions_near_singularities_are_polished() {
     }
 }
 
-/// The UR10's nominal DH rows (theta deg, d mm, a mm, alpha deg).
-const UR10_NOMINAL_ROWS: [[f64; 4]; 6] = [
-    [0.0, 127.3, 0.0, 90.0],
-    [0.0, 0.0, -612.0, 0.0],
-    [0.0, 0.0, -572.3, 0.0],
-    [0.0, 163.941, 0.0, 90.0],
-    [0.0, 115.7, 0.0, -90.0],
-    [0.0, 92.2, 0.0, 0.0],
-];
-
-/// A calibrated UR10: its nominal's DH table off by what an identification on tracker data
-/// finds (millimetres, a tenth of a degree), so no closed form of its own: its rows (as
-/// [`UR10_NOMINAL_ROWS`]), base and tool (x, y, z mm, rz, ry, rx deg).
-const UR10_CALIBRATED_ROWS: [[f64; 4]; 6] = [
-    [0.0, 127.3, -2.8399, 89.9784],
-    [-0.0045, 0.5440, -614.9671, 0.1135],
-    [0.1658, 0.0, -573.4083, 0.0698],
-    [-0.0691, 163.941, -1.3230, 90.0973],
-    [0.1673, 118.6177, 2.2950, -89.8583],
-    [0.0, 92.2, 0.0, 0.0],
-];
-const UR10_CALIBRATED_BASE: [f64; 6] = [2.2255, -1.2867, 3.1296, 0.2193, 0.0740, 0.1429];
-const UR10_CALIBRATED_TOOL: [f64; 6] = [1.7597, 0.6367, 0.1911, 0.1723, -0.1047, -0.2924];
-
-/// A UR10 robot file (DH rows, joints within +-360 deg) of `rows`, `base` and `tool` (as
-/// [`UR10_CALIBRATED_ROWS`]); every number written in its shortest exact form.
-fn ur10_file(name: &str, rows: &[[f64; 4]; 6], base: &[f64; 6], tool: &[f64; 6]) -> String {
-    let frame = |name: &str, v: &[f64; 6]| {
-        let keys = ["x", "y", "z", "rz", "ry", "rx"];
-        let lines: Vec<String> = (keys.iter().zip(v))
-            .map(|(k, x)| format!("{k} = {x}"))
-            .collect();
-        format!(
-            "[{name}]\nconvention = \"transform\"\n{}\n",
-            lines.join("\n")
-        )
-    };
-    let mut file = format!("name = \"{name}\"\n{}", frame("base", base));
-    for [theta, d, a, alpha] in rows {
-        file += &format!(
-            "[[joint]]\nconvention = \"dh\"\ntheta = {theta}\nd = {d}\na = {a}\nalpha = {alpha}\n\
-             limits = [-360.0, 360.0]\n"
-        );
-    }
-    file + &frame("tool", tool)
-}
-
-/// [`UR10_CALIBRATED_ROWS`] with its base and tool as a robot.
-fn ur10_calibrated() -> Robot {
-    let file = ur10_file(
-        "UR10, calibrated",
-        &UR10_CALIBRATED_ROWS,
-        &UR10_CALIBRATED_BASE,
-        &UR10_CALIBRATED_TOOL,
-    );
-    parse_robot(&file, Path::new("ur10_cal.toml")).unwrap()
-}
-
 #[test]
 fn the_closed_forms_product_of_exponentials_is_the_robots_forward_kinematics() {
     let mut rng = ChaCha8Rng::seed_from_u64(17);
@@ -1118,25 +1064,6 @@ fn a_solution_a_rounding_past_a_limit_of_180_deg_keeps_its_turn() {
     let target = tool_pose(&robot, &q);
     let sol = solve_numeric(&robot, &IkTarget::Pose(target), &q, &opts, &mut ws).unwrap();
     assert!((sol.q[5] - (PI - 0.3)).abs() < 1e-9, "{}", sol.q[5]);
-}
-
-/// A UR10 with four times the deviations of [`UR10_CALIBRATED_ROWS`] (and its base and tool)
-/// from the nominal.
-fn ur10_four_times() -> Robot {
-    let mut rows = UR10_NOMINAL_ROWS;
-    for (row, c) in rows.iter_mut().zip(&UR10_CALIBRATED_ROWS) {
-        for (n, c) in row.iter_mut().zip(c) {
-            *n += 4.0 * (c - *n);
-        }
-    }
-    let times_four = |v: &[f64; 6]| v.map(|x| 4.0 * x);
-    let file = ur10_file(
-        "UR10 x4",
-        &rows,
-        &times_four(&UR10_CALIBRATED_BASE),
-        &times_four(&UR10_CALIBRATED_TOOL),
-    );
-    parse_robot(&file, Path::new("ur10_x4.toml")).unwrap()
 }
 
 #[test]
@@ -1582,19 +1509,7 @@ fn a_pose_whose_solutions_found_all_leave_the_limits_is_searched_within_them() {
         ],
     ];
     let nominal = robot_file("ur10.toml");
-    let mut rows = UR10_NOMINAL_ROWS;
-    for (row, c) in rows.iter_mut().zip(&UR10_CALIBRATED_ROWS) {
-        for (n, c) in row.iter_mut().zip(c) {
-            *n += 4.0 * (c - *n);
-        }
-    }
-    let times_four = |v: &[f64; 6]| v.map(|x| 4.0 * x);
-    let mut file = ur10_file(
-        "UR10 x4, narrowed limits",
-        &rows,
-        &times_four(&UR10_CALIBRATED_BASE),
-        &times_four(&UR10_CALIBRATED_TOOL),
-    );
+    let mut file = ur10_four_times_file();
     for [lo, hi] in limits {
         file = file.replacen(
             "limits = [-360.0, 360.0]",
@@ -1696,6 +1611,34 @@ fn a_straight_elbows_two_roots_are_listed_once() {
         listed.push(count);
     }
     println!("solutions listed: {listed:?}");
+    // Ranges of three turns on joints 1, 2, 4 and 6: about 9000 copies of the pose's
+    // solutions, within the 10,000 listed at most. The second root's copies, counted before
+    // their duplicates went, took 3 of 20 such poses past it (a reviewer's case: too many).
+    let many = (half_turn.replace("limits = [-180.0, 180.0]", "limits = [-1080.0, 1080.0]"))
+        .replacen("limits = [-1080.0, 1080.0]", "A", 2)
+        .replacen("limits = [-1080.0, 1080.0]", "limits = [-180.0, 180.0]", 1)
+        .replacen("limits = [-1080.0, 1080.0]", "B", 1)
+        .replacen("limits = [-1080.0, 1080.0]", "limits = [-180.0, 180.0]", 1)
+        .replace("A", "limits = [-1080.0, 1080.0]")
+        .replace("B", "limits = [-1080.0, 1080.0]");
+    assert_eq!(
+        limits(&many).iter().map(|l| l[1]).collect::<Vec<_>>(),
+        [1080.0, 1080.0, 180.0, 1080.0, 180.0, 1080.0]
+    );
+    let robot = parse_robot(&many, Path::new("ur10_turns.toml")).unwrap();
+    let ik = ClosedFormIk::new(&robot).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut sols = Vec::new();
+    let mut most = 0;
+    for _ in 0..20 {
+        let mut q: Vec<f64> = (0..6)
+            .map(|_| rng.random_range(-170.0_f64..170.0).to_radians())
+            .collect();
+        q[2] = 0.0;
+        assert!(ik.solve(&tool_pose(&robot, &q), &mut sols), "{q:?}");
+        most = most.max(sols.len());
+    }
+    assert!(most > 8000, "{most}");
 }
 
 #[test]

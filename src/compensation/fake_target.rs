@@ -22,8 +22,9 @@
 //! (step 3's check, the controller's view: the nearest of the nominal closed form's
 //! solutions; without a closed form, near the seed the nominal's numerical solve from it, far
 //! from it a search of the nominal's solutions). Where it is another configuration, q* is
-//! moved to the one the controller would run (`solve_from_seed`;
-//! [`Failure::ControllerDiffers`] where they do not settle).
+//! moved to the one the controller would run (`solve_from_seed`); where they do not settle,
+//! the next nearest calibrated solutions are checked the same way, and where none passes the
+//! target is a [`Failure::ControllerDiffers`].
 
 use super::model::CalibratedModel;
 use crate::data::Target;
@@ -550,7 +551,42 @@ fn solve_from_seed(
         IkFailure::OutsideLimits(j) => Failure::OutsideLimits(j),
         e => Failure::NotConverged(e.to_string()),
     };
-    let mut sol = ik.nearest(&target, Some(seed)).map_err(failure)?.solution;
+    let nearest = ik.nearest(&target, Some(seed)).map_err(failure)?.solution;
+    let first = nearest.q.clone();
+    let failed = match settle(ik, controller, nominal, target, seed, nearest) {
+        Ok(command) => return Ok(command),
+        Err(failed) => failed,
+    };
+    // The nearest calibrated solution is not one a controller given the seed runs (next to a
+    // fold the calibrated arm's and the nominal's solutions can lie on either side of it, and
+    // the solve from the controller's slides back): the next nearest may be, as long as the
+    // same check holds for it.
+    if let Ok(mut others) = ik.ranked(&target, Some(seed)) {
+        others.retain(|o| joint_distance(&o.q, &first) >= SAME_JOINTS_RAD);
+        for other in others.into_iter().take(OTHER_SOLUTIONS) {
+            if let Ok(command) = settle(ik, controller, nominal, target, seed, other) {
+                return Ok(command);
+            }
+        }
+    }
+    Err(failed)
+}
+
+/// Calibrated solutions, after the nearest the seed, that [`solve_from_seed`] tries, nearest
+/// first, where the nearest's command is not one the controller runs.
+const OTHER_SOLUTIONS: usize = 3;
+
+/// [`solve_from_seed`]'s check of calibrated solution `sol` of `target`: its command, where a
+/// controller given `seed` runs `sol`, or after [`SETTLE_ROUNDS`] rounds of moving `sol` to
+/// the configuration the controller would run, the failure.
+fn settle(
+    ik: &mut IkSolver<CalibratedModel<'_>>,
+    controller: &mut IkSolver<CalibratedModel<'_>>,
+    nominal: &Robot,
+    target: Pose,
+    seed: &[f64],
+    mut sol: IkSolution,
+) -> std::result::Result<Command, Failure> {
     let exact = controller.start().closed_form().is_some();
     let mut apart = String::new();
     for _ in 0..=SETTLE_ROUNDS {

@@ -48,8 +48,13 @@ use crate::model::Robot;
 pub use crate::model::joint_distance;
 use nalgebra::Matrix6xX;
 
-/// Two solutions closer than this in every joint (rad or mm) are one.
-const SAME_SOLUTION: f64 = 1e-7;
+/// Two solutions closer than this in every joint (rad or mm) are one. Next to a fold a solve
+/// that reaches the pose to 1e-9 mm can still end up to about 1e-6 rad along the direction
+/// in which the pose barely moves (the error is quadratic there), so one configuration solved
+/// from several starts came back as several solutions at 1e-7 (a reviewer: up to 8 rows for a
+/// UR10 pose on its calibrated elbow's fold); no encoder tells apart configurations 1e-6 rad
+/// apart (the closed form's [`super::ik_closed`] roots are merged at the same distance).
+const SAME_SOLUTION: f64 = 1e-6;
 
 /// Whether joints `a` and `b` (rad, mm) are one solution: within [`SAME_SOLUTION`] in every
 /// joint.
@@ -796,6 +801,38 @@ impl<M: ToolModel> IkSolver<M> {
             solution: best,
             branch: None,
         })
+    }
+
+    /// Every distinct solution within the limits, nearest `seed` (or the middle of the
+    /// ranges) first, by [`joint_distance`]: the candidates of [`Self::nearest`] in its order
+    /// (for an exact closed form, each solution in its whole-turn copy nearest the reference).
+    pub fn ranked(
+        &mut self,
+        target: &Pose,
+        seed: Option<&[f64]>,
+    ) -> std::result::Result<Vec<IkSolution>, IkFailure> {
+        self.check_seed(seed)?;
+        self.check_reach(target)?;
+        let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
+        if let IkStart::Exact(_) = self.start {
+            let starts = self.starts(target, &reference, &[]);
+            let inside: Vec<[f64; 6]> = (starts.iter())
+                .filter(|(outside, ..)| !outside)
+                .map(|(.., q)| *q)
+                .collect();
+            return match starts.first() {
+                Some((false, ..)) => Ok(inside.iter().map(|q| self.polished(target, q)).collect()),
+                Some((true, _, _, q)) => Err(IkFailure::OutsideLimits(
+                    self.model.robot().joints_outside_limits(q),
+                )),
+                None => Err(out_of_reach()),
+            };
+        }
+        let mut sols = self.refined(target, seed, &reference)?;
+        sols.sort_by(|a, b| {
+            joint_distance(&a.q, &reference).total_cmp(&joint_distance(&b.q, &reference))
+        });
+        Ok(sols)
     }
 
     /// One solve from the closed-form start nearest `seed` (or the middle of the ranges) on

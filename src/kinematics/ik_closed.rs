@@ -417,27 +417,32 @@ impl ClosedFormIk {
         }
         out.clear();
         let roots = distinct_mod_turn(&raw);
+        let mut twin = Vec::new();
         for (i, q) in roots.iter().enumerate() {
-            let listed = out.len();
-            if !self.push_copies(q, out) {
-                return false;
-            }
             // A straight elbow's two roots, split by rounding: the copies of the second that
             // the first's already list go, the rest stay (where a limit lies at the straight
-            // elbow, only one root's copies may be within it).
+            // elbow, only one root's copies may be within it). Its copies count against
+            // MAX_SOLUTIONS only once the duplicates are gone.
             if roots[..i]
                 .iter()
                 .any(|o| same_mod_turn(o, q, SAME_ROOT_RAD))
             {
-                let copies = out.split_off(listed);
-                for c in copies {
-                    let seen = out[..listed]
-                        .iter()
-                        .any(|o| (o.iter().zip(&c)).all(|(x, y)| (x - y).abs() < SAME_ROOT_RAD));
+                twin.clear();
+                if !self.push_copies(q, &mut twin) {
+                    return false;
+                }
+                for c in &twin {
+                    let seen = (out.iter())
+                        .any(|o| (o.iter().zip(c)).all(|(x, y)| (x - y).abs() < SAME_ROOT_RAD));
                     if !seen {
-                        out.push(c);
+                        out.push(*c);
                     }
                 }
+                if out.len() > MAX_SOLUTIONS {
+                    return false;
+                }
+            } else if !self.push_copies(q, out) {
+                return false;
             }
         }
         true
