@@ -541,20 +541,47 @@ fn ur10_targets_are_solved_nearest_their_seeds() {
 /// are the nominal's solution of the command nearest the seed (each of the closed form's
 /// solutions moved by whole turns nearest the seed within the limits, here), with the model
 /// identified on Series B's README split (its base in the tracker's frame, metres away).
+/// The joints a UR-class controller runs for `fake` given `seed` (rad): the nominal closed
+/// form's solution nearest the seed, each joint's whole turn within the limits nearest the
+/// seed's.
+fn controller_choice(
+    closed: &ClosedFormIk,
+    nominal: &Robot,
+    fake: &Pose,
+    seed: &[f64],
+) -> [f64; 6] {
+    let limits: Vec<[f64; 2]> = (nominal.joints().iter())
+        .map(|j| j.limits_internal())
+        .collect();
+    let tau = std::f64::consts::TAU;
+    let mut sols = Vec::new();
+    closed.solve_unlimited(fake, &mut sols);
+    (sols.iter())
+        .filter_map(|s| {
+            let mut c = [0.0; 6];
+            for j in 0..6 {
+                let [lo, hi] = limits[j];
+                c[j] = (-3..=3)
+                    .map(|k| s[j] + k as f64 * tau)
+                    .filter(|v| (lo..=hi).contains(v))
+                    .min_by(|a, b| (a - seed[j]).abs().total_cmp(&(b - seed[j]).abs()))?;
+            }
+            let d: f64 = c.iter().zip(seed).map(|(a, b)| (a - b).powi(2)).sum();
+            Some((d, c))
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .unwrap()
+        .1
+}
+
 #[test]
 fn far_seeded_ur10_commands_are_the_nominal_solution_nearest_the_seed() {
     use rand::{Rng, SeedableRng};
     let (nominal, robot, _) = series_b_identified();
     let mut solver = FakeTargetSolver::new(&nominal, CalibratedModel::identified(&robot)).unwrap();
     let closed = ClosedFormIk::new(&nominal).unwrap();
-    let limits: Vec<[f64; 2]> = nominal
-        .joints()
-        .iter()
-        .map(|j| j.limits_internal())
-        .collect();
-    let tau = std::f64::consts::TAU;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(40);
-    let (mut solved, mut sols) = (0, Vec::new());
+    let mut solved = 0;
     for row in 0..300 {
         let q: Vec<f64> = (0..6).map(|_| rng.random_range(-3.0..3.0)).collect();
         let seed: Vec<f64> = q
@@ -565,23 +592,7 @@ fn far_seeded_ur10_commands_are_the_nominal_solution_nearest_the_seed() {
             continue;
         };
         solved += 1;
-        closed.solve_unlimited(&cmd.fake, &mut sols);
-        let nearest = (sols.iter())
-            .filter_map(|s| {
-                let mut c = [0.0; 6];
-                for j in 0..6 {
-                    let [lo, hi] = limits[j];
-                    c[j] = (-3..=3)
-                        .map(|k| s[j] + k as f64 * tau)
-                        .filter(|v| (lo..=hi).contains(v))
-                        .min_by(|a, b| (a - seed[j]).abs().total_cmp(&(b - seed[j]).abs()))?;
-                }
-                let d: f64 = c.iter().zip(&seed).map(|(a, b)| (a - b).powi(2)).sum();
-                Some((d, c))
-            })
-            .min_by(|a, b| a.0.total_cmp(&b.0))
-            .unwrap()
-            .1;
+        let nearest = controller_choice(&closed, &nominal, &cmd.fake, &seed);
         for (a, b) in nearest.iter().zip(&cmd.q) {
             assert!(
                 (a - b).abs() < 1e-6,
@@ -875,21 +886,8 @@ fn a_target_whose_nearest_command_the_controller_would_not_run_takes_the_next() 
         let reached = tool_pose(&robot, &cmd.q);
         assert!((reached.translation.vector - target.translation.vector).norm() < 1e-6);
         // ... and they are the nominal's solution of the command nearest the seed, which the
-        // controller runs (every solution of the closed form, in its turn nearest the seed).
-        let mut sols = Vec::new();
-        closed.solve_unlimited(&cmd.fake, &mut sols);
-        let tau = std::f64::consts::TAU;
-        let nearest = (sols.iter())
-            .map(|s| {
-                let c: Vec<f64> = (s.iter().zip(&seed))
-                    .map(|(v, r)| v + tau * ((r - v) / tau).round())
-                    .collect();
-                let d: f64 = c.iter().zip(&seed).map(|(a, b)| (a - b).powi(2)).sum();
-                (d, c)
-            })
-            .min_by(|a, b| a.0.total_cmp(&b.0))
-            .unwrap()
-            .1;
+        // controller runs.
+        let nearest = controller_choice(&closed, &nominal, &cmd.fake, &seed);
         for (a, b) in nearest.iter().zip(&cmd.q) {
             assert!(
                 (a - b).abs() < 1e-6,

@@ -1542,6 +1542,15 @@ fn a_pose_whose_solutions_found_all_leave_the_limits_is_searched_within_them() {
     assert_eq!(own, configurations.len());
 }
 
+/// Joints (rad) within +-170 deg, the elbow (q3) straight.
+fn straight_elbow(rng: &mut ChaCha8Rng) -> Vec<f64> {
+    let mut q: Vec<f64> = (0..6)
+        .map(|_| rng.random_range(-170.0_f64..170.0).to_radians())
+        .collect();
+    q[2] = 0.0;
+    q
+}
+
 #[test]
 fn a_straight_elbows_two_roots_are_listed_once() {
     // At a straight elbow (UR10, q3 = 0) the closed form's two elbow roots are one
@@ -1576,10 +1585,7 @@ fn a_straight_elbows_two_roots_are_listed_once() {
         let mut sols = Vec::new();
         let mut count = 0;
         for _ in 0..100 {
-            let mut q: Vec<f64> = (0..6)
-                .map(|_| rng.random_range(-170.0_f64..170.0).to_radians())
-                .collect();
-            q[2] = 0.0;
+            let q = straight_elbow(&mut rng);
             let target = tool_pose(&robot, &q);
             assert!(ik.solve(&target, &mut sols));
             let apart = |a: &[f64], b: &[f64]| {
@@ -1631,10 +1637,7 @@ fn a_straight_elbows_two_roots_are_listed_once() {
     let mut sols = Vec::new();
     let mut most = 0;
     for _ in 0..20 {
-        let mut q: Vec<f64> = (0..6)
-            .map(|_| rng.random_range(-170.0_f64..170.0).to_radians())
-            .collect();
-        q[2] = 0.0;
+        let q = straight_elbow(&mut rng);
         assert!(ik.solve(&tool_pose(&robot, &q), &mut sols), "{q:?}");
         most = most.max(sols.len());
     }
