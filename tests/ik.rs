@@ -978,6 +978,22 @@ fn a_branchs_nearest_is_its_solution_where_it_reaches_and_the_stretched_arm_wher
     assert!(beyond >= 50, "{beyond} poses beyond the reach");
 }
 
+/// Every solution `solver` lists for the pose of `robot` at `q` (rad), each checked to reach
+/// it.
+fn every_solution(
+    solver: &mut robocal::kinematics::IkSolver<robocal::kinematics::RobotModel>,
+    robot: &Robot,
+    q: &[f64],
+) -> Vec<Vec<f64>> {
+    let target = tool_pose(robot, q);
+    let all = solver.all(&target, None).unwrap();
+    for s in &all {
+        let (dp, dr) = pose_errors(&tool_pose(robot, s), &target);
+        assert!(dp < 1e-6 && dr < 1e-9, "{s:?}: {dp} mm {dr} rad");
+    }
+    all
+}
+
 #[test]
 fn a_calibrated_ur10_keeps_every_solution_next_to_a_straight_elbow() {
     use robocal::kinematics::{IkSolver, IkStart, RobotModel};
@@ -1003,11 +1019,7 @@ fn a_calibrated_ur10_keeps_every_solution_next_to_a_straight_elbow() {
         q[2] = sign * rng.random_range(0.2_f64..15.0).to_radians();
         q[4] = sign * rng.random_range(15.0_f64..165.0).to_radians();
         let target = tool_pose(&calibrated, &q);
-        let all = solver.all(&target, None).unwrap();
-        for s in &all {
-            let (dp, dr) = pose_errors(&tool_pose(&calibrated, s), &target);
-            assert!(dp < 1e-6 && dr < 1e-9, "{s:?}: {dp} mm {dr} rad");
-        }
+        let all = every_solution(&mut solver, &calibrated, &q);
         own += usize::from(all.iter().any(|s| joint_gap(s, &q) < 1e-6));
         // Independent of the closed forms: numerical solves from 60 random starts on every
         // fourth pose; each converged one must be listed.
@@ -1664,12 +1676,7 @@ fn solutions_across_a_calibrated_elbows_fold_are_listed() {
         q[2] = rng.random_range(-1.0_f64..1.0).to_radians();
         let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
         q[4] = sign * rng.random_range(15.0_f64..165.0).to_radians();
-        let target = tool_pose(&calibrated, &q);
-        let all = solver.all(&target, None).unwrap();
-        for s in &all {
-            let (dp, dr) = pose_errors(&tool_pose(&calibrated, s), &target);
-            assert!(dp < 1e-6 && dr < 1e-9, "{s:?}: {dp} mm {dr} rad");
-        }
+        let all = every_solution(&mut solver, &calibrated, &q);
         own += usize::from(all.iter().any(|s| joint_gap(s, &q) < 1e-6));
     }
     println!("own configuration listed on {own} of {poses} poses");
