@@ -896,4 +896,33 @@ fn a_target_whose_nearest_command_the_controller_would_not_run_takes_the_next() 
             );
         }
     }
+    // Only the same configuration across a fold is taken: where the next solution the
+    // controller would run is another configuration (here a shoulder flip 287 deg from the
+    // seed, a reviewer's case, seeded 2.6 deg from the target's nearest solution), the row
+    // stays a failure that asks for seed joints nearer the taught configuration.
+    let robot = ur10_calibrated();
+    let mut solver = FakeTargetSolver::new(&nominal, CalibratedModel::identified(&robot)).unwrap();
+    let seed: Vec<f64> = [
+        -14.595563312,
+        9.742260180,
+        0.930633017,
+        128.323769558,
+        82.570085157,
+        15.039351833,
+    ]
+    .iter()
+    .map(|d: &f64| d.to_radians())
+    .collect();
+    let target = pose_from_file([
+        -1032.0585903520664,
+        90.33496148556011,
+        -68.40876484736911,
+        -122.04515763814665,
+        6.723936852933697,
+        -131.8827692338515,
+    ]);
+    match solver.solve(&Target::Pose(target), Some(&seed)) {
+        Err(Failure::ControllerDiffers(why)) => assert!(why.contains("nearer the taught"), "{why}"),
+        other => panic!("{other:?}"),
+    }
 }

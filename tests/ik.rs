@@ -1719,3 +1719,36 @@ fn solutions_across_a_calibrated_elbows_fold_are_listed() {
         .is_none()
     );
 }
+
+#[test]
+fn ranked_lists_every_solution_nearest_the_seed_first() {
+    use robocal::kinematics::{IkSolver, IkStart, RobotModel, joint_distance};
+    // An exact closed form (the FANUC nominal) and a calibrated UR10 solved from the nominal's
+    // starts: the same solutions as `all`, ordered by distance from the seed, the first the
+    // one `nearest` returns.
+    let fanuc = robot_file("fanuc_r2000ib_210f.toml");
+    let nominal = robot_file("ur10.toml");
+    let calibrated = ur10_calibrated();
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    for (robot, with) in [(&fanuc, None), (&calibrated, Some(&nominal))] {
+        let start = IkStart::choose(robot, with).unwrap();
+        let mut solver = IkSolver::new(RobotModel::new(robot), start, IkOptions::default());
+        for _ in 0..20 {
+            let q = random_q(robot, &mut rng);
+            let seed: Vec<f64> = q.iter().map(|v| v + rng.random_range(-0.5..0.5)).collect();
+            let target = tool_pose(robot, &q);
+            let ranked = solver.ranked(&target, Some(&seed)).unwrap();
+            let all = solver.all(&target, Some(&seed)).unwrap();
+            assert_eq!(ranked.len(), all.len());
+            for s in &all {
+                let listed =
+                    (ranked.iter()).any(|r| (r.q.iter().zip(s)).all(|(a, b)| (a - b).abs() < 1e-9));
+                assert!(listed, "{s:?}");
+            }
+            let d: Vec<f64> = ranked.iter().map(|r| joint_distance(&r.q, &seed)).collect();
+            assert!(d.windows(2).all(|w| w[0] <= w[1]), "{d:?}");
+            let nearest = solver.nearest(&target, Some(&seed)).unwrap().solution.q;
+            assert!(joint_distance(&nearest, &ranked[0].q) < 1e-9);
+        }
+    }
+}

@@ -562,7 +562,10 @@ fn solve_from_seed(
     // the solve from the controller's slides back): the next nearest may be, as long as the
     // same check holds for it.
     if let Ok(mut others) = ik.ranked(&target, Some(seed)) {
-        others.retain(|o| joint_distance(&o.q, &first) >= SAME_JOINTS_RAD);
+        others.retain(|o| {
+            let apart = joint_distance(&o.q, &first);
+            (SAME_JOINTS_RAD..=TWIN_RAD).contains(&apart)
+        });
         for other in others.into_iter().take(OTHER_SOLUTIONS) {
             if let Ok(command) = settle(ik, controller, nominal, target, seed, other) {
                 return Ok(command);
@@ -575,6 +578,15 @@ fn solve_from_seed(
 /// Calibrated solutions, after the nearest the seed, that [`solve_from_seed`] tries, nearest
 /// first, where the nearest's command is not one the controller runs.
 const OTHER_SOLUTIONS: usize = 3;
+
+/// Largest joint distance (rad, from the solution nearest the seed) of the other solutions
+/// [`solve_from_seed`] tries: those across a fold of it ([`crate::kinematics::fold`], whose
+/// reflections reach twice [`crate::kinematics::fold::FOLD_NEAR_RAD`]), the same configuration
+/// on the other side of a straight elbow or the shoulder's cylinder. A solution farther is
+/// another configuration (a reviewer's: without the bound, a shoulder flip 287 deg from a seed
+/// 2.6 deg from its target's nearest solution was written as the command): the row then
+/// stays `controller-differs`, asking for seed joints nearer the taught configuration.
+const TWIN_RAD: f64 = 2.0 * crate::kinematics::fold::FOLD_NEAR_RAD;
 
 /// [`solve_from_seed`]'s check of calibrated solution `sol` of `target`: its command, where a
 /// controller given `seed` runs `sol`, or after [`SETTLE_ROUNDS`] rounds of moving `sol` to

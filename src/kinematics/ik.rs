@@ -511,6 +511,12 @@ impl<M: ToolModel> IkSolver<M> {
         for q0 in &starts {
             self.solve_start(target, q0, reference, all, &mut found);
         }
+        // Fewer distinct solutions than the nominal has branches at the pose: two branches'
+        // starts led to one solution, as where a calibrated arm's solutions crowd next to a
+        // singularity. Counted before the reflections' and the moved starts' solutions, which
+        // need not be those the search would find (counted after, a UR10 with four times a
+        // calibration's deviations lost 2 solutions of a pose next to its shoulder).
+        let crowded = found.sols.len() + found.outside.len() < present.len();
         // Next to a fold (a straight elbow, the shoulder's cylinder) the pose's other solution
         // there lies across it, where the nominal's starts may not lead: each solution's
         // reflection across a fold within reach starts a solve.
@@ -531,10 +537,6 @@ impl<M: ToolModel> IkSolver<M> {
                 self.solve_start(target, &q0, reference, all, &mut found);
             }
         }
-        // Fewer distinct solutions than the nominal has branches at the pose: two branches'
-        // starts led to one solution, as where a calibrated arm's solutions crowd next to a
-        // singularity.
-        let crowded = found.sols.len() + found.outside.len() < present.len();
         let searched = nominal && (crowded || present.is_empty() || found.sols.is_empty());
         if searched {
             let outside = found.nearest_outside;
@@ -804,8 +806,8 @@ impl<M: ToolModel> IkSolver<M> {
     }
 
     /// Every distinct solution within the limits, nearest `seed` (or the middle of the
-    /// ranges) first, by [`joint_distance`]: the candidates of [`Self::nearest`] in its order
-    /// (for an exact closed form, each solution in its whole-turn copy nearest the reference).
+    /// ranges) first, by [`joint_distance`]: for an exact closed form every whole-turn copy
+    /// the limits allow (as [`Self::all`]), else the candidates of [`Self::nearest`].
     pub fn ranked(
         &mut self,
         target: &Pose,
@@ -814,19 +816,25 @@ impl<M: ToolModel> IkSolver<M> {
         self.check_seed(seed)?;
         self.check_reach(target)?;
         let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
-        if let IkStart::Exact(_) = self.start {
-            let starts = self.starts(target, &reference, &[]);
-            let inside: Vec<[f64; 6]> = (starts.iter())
-                .filter(|(outside, ..)| !outside)
-                .map(|(.., q)| *q)
-                .collect();
-            return match starts.first() {
-                Some((false, ..)) => Ok(inside.iter().map(|q| self.polished(target, q)).collect()),
-                Some((true, _, _, q)) => Err(IkFailure::OutsideLimits(
-                    self.model.robot().joints_outside_limits(q),
-                )),
-                None => Err(out_of_reach()),
-            };
+        if let IkStart::Exact(ik) = &self.start {
+            // Every whole-turn copy within the limits, as `all` lists them.
+            if !ik.solve_around(target, &reference, &mut self.copies) {
+                return Err(IkFailure::TooMany);
+            }
+            if self.copies.is_empty() {
+                return Err(self
+                    .nearest(target, seed)
+                    .err()
+                    .unwrap_or_else(out_of_reach));
+            }
+            let copies = std::mem::take(&mut self.copies);
+            let mut sols: Vec<IkSolution> =
+                (copies.iter()).map(|q| self.polished(target, q)).collect();
+            self.copies = copies;
+            sols.sort_by(|a, b| {
+                joint_distance(&a.q, &reference).total_cmp(&joint_distance(&b.q, &reference))
+            });
+            return Ok(sols);
         }
         let mut sols = self.refined(target, seed, &reference)?;
         sols.sort_by(|a, b| {

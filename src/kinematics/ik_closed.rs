@@ -398,7 +398,7 @@ impl ClosedFormIk {
 
     /// Every solution within the joint limits, including the copies shifted by multiples of
     /// 360 deg that the limits allow; solutions equal modulo 360 deg (within 1e-9 rad) are
-    /// merged first, and a copy within [`SAME_ROOT_RAD`] of one already listed is dropped, so
+    /// merged first, and a copy within 1e-6 rad of one already listed is dropped, so
     /// the copies are distinct. At most [`MAX_SOLUTIONS`] are listed: false when more exist
     /// (joint ranges of many turns; see [`ClosedFormIk::solve_nearest`]).
     /// At a wrist singularity, the split of q4 + s q6 nearest the middle of the ranges.
