@@ -816,31 +816,42 @@ impl<M: ToolModel> IkSolver<M> {
         self.check_seed(seed)?;
         self.check_reach(target)?;
         let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
-        if let IkStart::Exact(ik) = &self.start {
-            // Every whole-turn copy within the limits, as `all` lists them.
-            if !ik.solve_around(target, &reference, &mut self.copies) {
-                return Err(IkFailure::TooMany);
-            }
-            if self.copies.is_empty() {
-                return Err(self
-                    .nearest(target, seed)
-                    .err()
-                    .unwrap_or_else(out_of_reach));
-            }
-            let copies = std::mem::take(&mut self.copies);
-            let mut sols: Vec<IkSolution> =
-                (copies.iter()).map(|q| self.polished(target, q)).collect();
-            self.copies = copies;
-            sols.sort_by(|a, b| {
-                joint_distance(&a.q, &reference).total_cmp(&joint_distance(&b.q, &reference))
-            });
-            return Ok(sols);
-        }
-        let mut sols = self.refined(target, seed, &reference)?;
+        let mut sols = match self.start {
+            IkStart::Exact(_) => self.exact_copies(target, &reference)?,
+            _ => self.refined(target, seed, &reference)?,
+        };
         sols.sort_by(|a, b| {
             joint_distance(&a.q, &reference).total_cmp(&joint_distance(&b.q, &reference))
         });
         Ok(sols)
+    }
+
+    /// An exact closed form's every whole-turn copy within the limits of its solutions of
+    /// `target` (a straight wrist split nearest `reference`), polished; the failure when none
+    /// (the nearest start's joints outside the limits, or none at all).
+    fn exact_copies(
+        &mut self,
+        target: &Pose,
+        reference: &[f64],
+    ) -> std::result::Result<Vec<IkSolution>, IkFailure> {
+        let IkStart::Exact(ik) = &self.start else {
+            return Err(self.no_start());
+        };
+        if !ik.solve_around(target, reference, &mut self.copies) {
+            return Err(IkFailure::TooMany);
+        }
+        if self.copies.is_empty() {
+            return Err(match self.starts(target, reference, &[]).first() {
+                Some((_, _, _, q)) => {
+                    IkFailure::OutsideLimits(self.model.robot().joints_outside_limits(q))
+                }
+                None => out_of_reach(),
+            });
+        }
+        let copies = std::mem::take(&mut self.copies);
+        let polished = (copies.iter()).map(|q| self.polished(target, q)).collect();
+        self.copies = copies;
+        Ok(polished)
     }
 
     /// One solve from the closed-form start nearest `seed` (or the middle of the ranges) on
@@ -904,26 +915,10 @@ impl<M: ToolModel> IkSolver<M> {
     ) -> std::result::Result<Vec<Vec<f64>>, IkFailure> {
         self.check_seed(seed)?;
         self.check_reach(target)?;
-        if let IkStart::Exact(ik) = &self.start {
-            let reference = seed.unwrap_or(&self.mid);
-            if !ik.solve_around(target, reference, &mut self.copies) {
-                return Err(IkFailure::TooMany);
-            }
-            if self.copies.is_empty() {
-                let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
-                return Err(match self.starts(target, &reference, &[]).first() {
-                    Some((_, _, _, q)) => {
-                        IkFailure::OutsideLimits(self.model.robot().joints_outside_limits(q))
-                    }
-                    None => out_of_reach(),
-                });
-            }
-            let copies = std::mem::take(&mut self.copies);
-            let polished = (copies.iter())
-                .map(|q| self.polished(target, q).q)
-                .collect();
-            self.copies = copies;
-            return Ok(polished);
+        if let IkStart::Exact(_) = self.start {
+            let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
+            let copies = self.exact_copies(target, &reference)?;
+            return Ok(copies.into_iter().map(|s| s.q).collect());
         }
         let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
         Ok(self
