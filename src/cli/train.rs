@@ -64,7 +64,7 @@ fn print_selection(sel: &Selection) {
         .filter_map(|c| c.settings.refine.as_ref().map(|r| r.len()))
         .fold(10, usize::max);
     say!(
-        "  {:>5} {:<7} {:<5} {:<6} {:>6} {:>7} {:>7} {:>5} {:<w$} {:>11} {:>15}",
+        "  {:>5} {:<7} {:<5} {:<7} {:>6} {:>7} {:>7} {:>5} {:<w$} {:>11} {:>15}",
         "stage",
         "network",
         "form",
@@ -87,7 +87,7 @@ fn print_selection(sel: &Selection) {
         "model alone",
         sel.model.position_rms_mm,
         rot(&sel.model),
-        m = 58 + w - 10
+        m = 59 + w - 10
     );
     for (i, c) in sel.candidates.iter().enumerate() {
         let s = &c.settings;
@@ -108,7 +108,9 @@ fn print_selection(sel: &Selection) {
             (None, None) => "failed".to_string(),
         };
         let network = s.network_label();
-        let mlp = s.network != Network::Rbf;
+        // The model alone (no members) trains no MLP: its size and penalty are the best
+        // MLPs' it was held against, not its own.
+        let mlp = s.has_mlp();
         let dash = |show: bool, v: String| if show { v } else { "-".into() };
         // The MLPs' share of a blend (chosen by cross-validation unless fixed).
         let share = match (s.network, s.mlp_share) {
@@ -116,15 +118,15 @@ fn print_selection(sel: &Selection) {
             _ => "-".into(),
         };
         say!(
-            "{} {:>5} {:<7} {:<5} {:<6} {:>6} {:>7} {:>7} {:>5} {:<w$} {score}",
+            "{} {:>5} {:<7} {:<5} {:<7} {:>6} {:>7} {:>7} {:>5} {:<w$} {score}",
             if i == sel.chosen { "*" } else { " " },
             c.stage,
             network,
-            s.form.name(),
-            s.encoding.name(),
+            dash(s.has_network(), s.form.name().into()),
+            dash(s.has_network(), s.encoding.name().into()),
             dash(mlp, s.hidden.to_string()),
             dash(mlp, s.penalty.to_string()),
-            dash(mlp, s.members.to_string()),
+            dash(s.network != Network::Rbf, s.members.to_string()),
             share,
             s.refine.as_deref().unwrap_or("-"),
         );

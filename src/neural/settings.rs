@@ -100,7 +100,7 @@ impl Network {
 
 /// One complete choice of how to build a compensator.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(from = "SettingsRead")]
+#[serde(from = "SettingsRead", into = "SettingsWrite")]
 pub struct Settings {
     /// The network kind.
     pub network: Network,
@@ -120,10 +120,6 @@ pub struct Settings {
     /// The RBF network's hyperparameter search start ([`super::rbf::STARTS`], counted from 0
     /// here; reports write it from 1, as the command line counts it, as `rbf_search_start`);
     /// None: every start, the highest likelihood kept output by output.
-    #[serde(
-        rename = "rbf_search_start",
-        serialize_with = "counted_from_one::serialize"
-    )]
     pub rbf_start: Option<usize>,
     /// Model parameters re-estimated on the training rows first (a selection as for
     /// `identify`), or None.
@@ -131,7 +127,6 @@ pub struct Settings {
     /// A mixed network's MLP share s (0 < s < 1, see [`super::compensator::Compensator`]);
     /// None: chosen by cross-validation among [`super::tuning::SHARES`] ([`MIX_SHARE`] in a
     /// fit of its own). Unused by the other networks.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mlp_share: Option<f64>,
 }
 
@@ -172,8 +167,11 @@ impl Settings {
     }
 
     /// The network and its RBF search start, counted from 1 as in [`Settings::describe`]:
-    /// `mlp`, `rbf 2`, `mix 1`.
+    /// `mlp`, `rbf 2`, `mix 1`; `none` for the model alone.
     pub fn network_label(&self) -> String {
+        if !self.has_network() {
+            return "none".into();
+        }
         match (self.network, self.rbf_start) {
             (Network::Mlp, _) => "mlp".into(),
             (n, Some(k)) => format!("{} {}", n.name(), k + 1),
@@ -184,6 +182,15 @@ impl Settings {
     /// Whether these settings carry a network at all.
     pub fn has_network(&self) -> bool {
         self.members > 0 || self.network == Network::Mix
+    }
+
+    /// Whether these settings train MLPs (`hidden` and `penalty` mean something).
+    pub fn has_mlp(&self) -> bool {
+        match self.network {
+            Network::Mlp => self.members > 0,
+            Network::Rbf => false,
+            Network::Mix => true,
+        }
     }
 
     /// Whether these settings carry an RBF network.
@@ -311,14 +318,56 @@ impl CompensatorOptions {
     }
 }
 
+/// [`Settings`] as reports write it: the search start counted from 1 (`rbf_search_start`);
+/// the MLPs' `hidden` and `penalty` only where MLPs are trained (not for the RBF network
+/// alone or the model alone, where they would read as a network of 0 units or an unused
+/// penalty).
+#[derive(serde::Serialize)]
+struct SettingsWrite {
+    network: Network,
+    form: Form,
+    encoding: Encoding,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    hidden: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    penalty: Option<f64>,
+    members: usize,
+    #[serde(serialize_with = "counted_from_one::serialize")]
+    rbf_search_start: Option<usize>,
+    refine: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mlp_share: Option<f64>,
+}
+
+impl From<Settings> for SettingsWrite {
+    fn from(s: Settings) -> SettingsWrite {
+        let mlp = s.has_mlp();
+        SettingsWrite {
+            network: s.network,
+            form: s.form,
+            encoding: s.encoding,
+            hidden: mlp.then_some(s.hidden),
+            penalty: mlp.then_some(s.penalty),
+            members: s.members,
+            rbf_search_start: s.rbf_start,
+            refine: s.refine,
+            mlp_share: s.mlp_share,
+        }
+    }
+}
+
 /// [`Settings`] as reports hold it: the search start counted from 1 (`rbf_search_start`),
-/// or from 0 under its former name (`rbf_start`, the reports of earlier versions).
+/// or from 0 under its former name (`rbf_start`, the reports of earlier versions); no
+/// `hidden` or `penalty` where no MLP is trained (0 then, as the search sets them for the RBF
+/// network alone).
 #[derive(serde::Deserialize)]
 struct SettingsRead {
     network: Network,
     form: Form,
     encoding: Encoding,
+    #[serde(default)]
     hidden: usize,
+    #[serde(default)]
     penalty: f64,
     members: usize,
     #[serde(default, deserialize_with = "counted_from_one::deserialize")]
@@ -407,5 +456,73 @@ mod tests {
             let read = serde_json::from_str::<Settings>(&text).unwrap();
             assert_eq!(read.rbf_start, start, "{text}");
         }
+    }
+
+    #[test]
+    fn reports_give_the_mlp_size_and_penalty_only_where_mlps_are_trained() {
+        let mlp = Settings {
+            network: Network::Mlp,
+            form: Form::Pose,
+            encoding: Encoding::Gravity,
+            hidden: 64,
+            penalty: 1.0,
+            members: 4,
+            rbf_start: None,
+            refine: None,
+            mlp_share: None,
+        };
+        let json = serde_json::to_string(&mlp).unwrap();
+        assert!(
+            json.contains("\"hidden\":64") && json.contains("\"penalty\":1.0"),
+            "{json}"
+        );
+        assert_eq!(serde_json::from_str::<Settings>(&json).unwrap(), mlp);
+        // The RBF network alone, as the search sets it up (no units, no penalty).
+        let rbf = Settings {
+            network: Network::Rbf,
+            hidden: 0,
+            penalty: 0.0,
+            members: 1,
+            rbf_start: Some(0),
+            ..mlp.clone()
+        };
+        let json = serde_json::to_string(&rbf).unwrap();
+        assert!(
+            !json.contains("hidden") && !json.contains("penalty"),
+            "{json}"
+        );
+        assert_eq!(serde_json::from_str::<Settings>(&json).unwrap(), rbf);
+        // The model alone, held against the best MLPs (their size kept in memory).
+        let alone = Settings {
+            members: 0,
+            ..mlp.clone()
+        };
+        let json = serde_json::to_string(&alone).unwrap();
+        assert!(
+            !json.contains("hidden") && !json.contains("penalty"),
+            "{json}"
+        );
+        assert!(json.contains("\"members\":0"), "{json}");
+        assert_eq!(alone.network_label(), "none");
+        assert_eq!(rbf.network_label(), "rbf 1");
+        assert_eq!(
+            serde_json::from_str::<Settings>(&json).unwrap().describe(),
+            alone.describe()
+        );
+        // A blend trains MLPs.
+        let mix = Settings {
+            network: Network::Mix,
+            mlp_share: Some(0.1),
+            members: 2,
+            ..mlp.clone()
+        };
+        let json = serde_json::to_string(&mix).unwrap();
+        assert!(
+            json.contains("\"hidden\":64") && json.contains("\"mlp_share\":0.1"),
+            "{json}"
+        );
+        // An earlier version's report of the RBF network alone, with its zeros.
+        let old = r#"{"network":"rbf","form":"pose","encoding":"gravity","hidden":0,"penalty":0.0,"members":1,"rbf_search_start":1,"refine":null}"#;
+        assert_eq!(serde_json::from_str::<Settings>(old).unwrap(), rbf);
     }
 }
