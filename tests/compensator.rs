@@ -652,14 +652,18 @@ fn default_selection_races_candidates() {
 /// only (proxies: errors on those folds, never chosen), and the best proxy's refinement (the
 /// compliances cross-validation adds on its own held to their margin) is tried with the blend
 /// on every fold. The report's JSON marks the proxies. On Case D, `full` identified, the best
-/// network is the blend, refined; it is more than 2 % below the refined model alone in
-/// cross-validation but not significantly row by row (its paired z above -2.5), so the
-/// default is the refined model alone (the case-d main job's choice; the blend was worse
-/// against the truth, 0.0134 against 0.0099 mm).
+/// scored network is the blend, refined; it is more than 2 % below the refined model alone
+/// in cross-validation but not significantly row by row (its paired z above -2.5), and its
+/// refinement is not significantly better than the blend unrefined either (stage 4's
+/// refinement test), so the blend unrefined is held against the model alone, and the
+/// default is the refined model alone (the case-d main job's choice; the refined blend was
+/// worse against the truth, 0.0134 against 0.0099 mm).
 #[test]
 fn a_blends_refinements_are_judged_by_proxies_on_the_race_folds() {
     use robocal::neural::compensator::Network;
-    use robocal::neural::tuning::{COMPLIANCE_MARGIN, NETWORK_MARGIN, NETWORK_Z};
+    use robocal::neural::tuning::{
+        COMPLIANCE_MARGIN, NETWORK_MARGIN, NETWORK_Z, REFINEMENT_MARGIN, REFINEMENT_Z,
+    };
     let (model, train) = case_d_identified("full");
     let (_, report) =
         Compensator::train(&model, &train, &CompensatorOptions::default(), &|_, _| {}).unwrap();
@@ -671,33 +675,53 @@ fn a_blends_refinements_are_judged_by_proxies_on_the_race_folds() {
     assert_eq!(chosen.settings.members, 0, "{chosen:?}");
     assert_eq!(chosen.stage, 5, "{chosen:?}");
     assert_eq!(chosen.settings.refine.as_deref(), Some("full"));
-    // The network held against it is the best scored one, the blend refined.
-    let network = &sel.candidates[test.network];
+    // The best scored network is the blend refined; stage 4 held it against the blend as
+    // stage 3 chose it (refinement test), and the one it kept was held against the model
+    // alone.
     let best = sel
         .candidates
         .iter()
         .filter_map(|c| c.score.as_ref().filter(|_| c.settings.has_network()))
         .map(|s| s.position_rms_mm)
         .fold(f64::INFINITY, f64::min);
-    assert_eq!(rms(network), best, "{network:?}");
+    let top = (0..sel.candidates.len())
+        .find(|&i| sel.candidates[i].score.as_ref().map(|s| s.position_rms_mm) == Some(best))
+        .unwrap();
+    let refined = &sel.candidates[top];
+    assert_eq!(refined.settings.network, Network::Mix, "{refined:?}");
+    assert_eq!(refined.settings.refine.as_deref(), Some("full"));
+    let stage4 = sel
+        .refinement_tests
+        .iter()
+        .find(|t| t.network == top)
+        .expect("stage 4 tested the refinement");
+    assert_eq!(sel.candidates[stage4.alone].stage, 3, "{stage4:?}");
+    assert_eq!(sel.candidates[stage4.alone].settings.refine, None);
+    let kept4 = stage4.ratio * (1.0 + REFINEMENT_MARGIN) <= 1.0 && stage4.z <= -REFINEMENT_Z;
+    assert_eq!(stage4.kept, kept4, "{stage4:?}");
+    assert_eq!(test.network, if kept4 { top } else { stage4.alone });
+    let network = &sel.candidates[test.network];
     assert_eq!(network.settings.network, Network::Mix, "{network:?}");
-    assert_eq!(network.settings.refine.as_deref(), Some("full"));
     // Neither carries the compliances' margin: the ratio is the table's.
     assert!(
         (test.ratio - rms(network) / rms(chosen)).abs() < 1e-12,
         "{test:?}"
     );
-    assert!(test.ratio * (1.0 + NETWORK_MARGIN) <= 1.0, "{test:?}");
-    assert!(test.z > -NETWORK_Z && test.z < 0.0, "{test:?}");
+    // Not by the margin, or not significantly row by row (the refined blend was 2 % or
+    // more ahead but not significantly; the blend stage 4 kept is neither).
+    assert!(
+        test.ratio * (1.0 + NETWORK_MARGIN) > 1.0 || (test.z > -NETWORK_Z && test.z < 0.0),
+        "{test:?}"
+    );
     assert_eq!(test.rows, train.rows.len());
     assert!(
-        sel.notes
-            .iter()
-            .any(|n| n.contains("not significant row by row")),
+        sel.notes.iter().any(
+            |n| n.contains("not significant row by row") || n.contains("not 2 % or more below")
+        ),
         "{:?}",
         sel.notes
     );
-    let chosen = network;
+    let chosen = refined;
     let proxies: Vec<_> = sel.candidates.iter().filter(|c| c.proxy).collect();
     // `full` at least (the blend's own refinement, none, was raced as a candidate in stage 3).
     assert!(!proxies.is_empty(), "{sel:?}");

@@ -415,8 +415,17 @@ fn left_jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
 }
 
 impl Compensator {
-    /// Where `q` (rad, mm) stands against the training domain.
+    /// Where `q` (rad, mm) stands against the training domain; inside everywhere for a
+    /// compensator without a network (the model alone: nothing extrapolates, nothing fades).
     pub fn domain_check(&self, q: &[f64], ws: &mut PredictWorkspace) -> DomainCheck {
+        if self.members.is_empty() && self.rbf.is_none() {
+            return DomainCheck {
+                joints_outside: Vec::new(),
+                nearest: 0.0,
+                radius: self.domain.radius,
+                weight: 1.0,
+            };
+        }
         let x = ws.normalised_inputs(self, q);
         self.domain.check(q, x)
     }

@@ -105,6 +105,15 @@ pub struct Selection {
     /// without one against the model alone.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rbf_network_test: Option<NetworkTest>,
+    /// Tests of a refinement cross-validation ranked first (stage 4 among the networks,
+    /// stage 5 among the models alone) against the best candidate without it, in the form of
+    /// [`NetworkTest`] (`network` the refined candidate, `alone` the one without the
+    /// refinement): kept where lower by
+    /// [`REFINEMENT_MARGIN`](super::tuning::REFINEMENT_MARGIN) and significantly lower row by
+    /// row ([`REFINEMENT_Z`](super::tuning::REFINEMENT_Z)). Empty where no refinement ranked
+    /// first (and in reports written before it).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub refinement_tests: Vec<NetworkTest>,
 }
 
 /// The network chosen after stages 1-4 of [`super::tuning`] against the best model alone (as

@@ -9,6 +9,7 @@ use super::rank::{
 use super::space::Space;
 use super::{
     COMPLIANCE_MARGIN, ENSEMBLE_PROBE, ENSEMBLE_TIE, NETWORK_MARGIN, NETWORK_Z, PENALTY_STEP,
+    REFINEMENT_MARGIN, REFINEMENT_Z,
 };
 use crate::error::{Error, Result};
 use crate::evaluate::RowError;
@@ -35,6 +36,9 @@ pub(super) struct Search<'r, 'a, 'c> {
     /// Why the test on rows no hyperparameter search saw could not be run, where it could not
     /// (the candidates' figures then decided).
     pub(super) unseen_error: Option<String>,
+    /// Stages 4 and 5's tests of a refinement that cross-validation ranked first against the
+    /// best candidate without it ([`Search::refinement_test_of`]), in order.
+    pub(super) refinement_tests: Vec<NetworkTest>,
     /// The MLPs' choice of stages 1-3 (the ensemble's tie rule applied), before the RBF
     /// network's candidates.
     mlp_chosen: Option<usize>,
@@ -65,6 +69,7 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             chosen_rows: None,
             rbf_network_test: None,
             unseen_error: None,
+            refinement_tests: Vec::new(),
             mlp_chosen: None,
         }
     }
@@ -288,12 +293,37 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
                 self.judged(candidates, i)
             }
         };
-        self.chosen = better_by(
+        let best = better_by(
             &self.candidates,
             self.chosen,
             first..self.candidates.len(),
             eligible,
         );
+        self.chosen = self.refinement_test_of(best, leader);
+    }
+
+    /// Candidate `refined` (ranked first, its model refined) against `base` (the best
+    /// candidate without that refinement), both judged as every candidate is: the refinement
+    /// is kept where lower by [`REFINEMENT_MARGIN`] and significantly lower row by row
+    /// ([`REFINEMENT_Z`]); the candidate kept. A refinement re-estimates parameters on the
+    /// training rows that act everywhere, and cross-validation of a few rows (or of rows
+    /// from one region) ranks a refinement first by chance: on 30 rows of the real UR10,
+    /// `full` 3.5 % ahead in cross-validation (28 parameters) raised the error on 495
+    /// held-out rows from 0.4557 to 0.8379 mm RMS, and on an exact model measured with noise
+    /// 0.14 % ahead it moved the model 0.011 mm from the truth.
+    fn refinement_test_of(&mut self, refined: usize, base: usize) -> usize {
+        let c = &self.candidates;
+        if refined == base
+            || c[refined].settings.refine == c[base].settings.refine
+            || c[refined].settings.refine.is_none()
+            || !self.judged(c, base).is_finite()
+        {
+            return refined;
+        }
+        let (test, _) = self.test_of(refined, base, REFINEMENT_MARGIN, REFINEMENT_Z);
+        let kept = test.kept;
+        self.refinement_tests.push(test);
+        if kept { refined } else { base }
     }
 
     /// The refinements of candidate settings `w` to try: each of the space's, or for a blend
@@ -404,7 +434,18 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
         if new.is_empty() {
             return;
         }
-        let best_alone = better_by(&self.candidates, first, new, |c, i| self.judged(c, i));
+        let best_alone = better_by(&self.candidates, first, new.clone(), |c, i| {
+            self.judged(c, i)
+        });
+        // The model as given, where it is a candidate: a refined model alone must beat it as
+        // a refinement must.
+        let best_alone = match new
+            .clone()
+            .find(|&i| self.candidates[i].settings.refine.is_none())
+        {
+            Some(given) => self.refinement_test_of(best_alone, given),
+            None => best_alone,
+        };
         if !self.candidates[self.chosen].settings.has_network() {
             if self.judged(&self.candidates, best_alone)
                 < self.judged(&self.candidates, self.chosen)
@@ -461,6 +502,19 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
         net: usize,
         alone: usize,
     ) -> (NetworkTest, Option<Vec<Vec<RowError>>>) {
+        self.test_of(net, alone, NETWORK_MARGIN, NETWORK_Z)
+    }
+
+    /// Candidate `net` against candidate `alone` on every held-out row, both judged as every
+    /// candidate is: kept where lower by `margin` (relative) and with a paired z of `-z` or
+    /// lower ([`Search::network_test_of`]'s test, with its margin and level as given).
+    fn test_of(
+        &self,
+        net: usize,
+        alone: usize,
+        margin: f64,
+        level: f64,
+    ) -> (NetworkTest, Option<Vec<Vec<RowError>>>) {
         let ratio = self.judged(&self.candidates, net) / self.judged(&self.candidates, alone);
         // Each fold's held-out errors: the rows that gave the candidate's score (its fits
         // are cached), checked against it.
@@ -479,9 +533,9 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
         };
         // Where the rows cannot be had again as they were scored (not expected: every fit
         // is cached), the margin alone decides, as it did before the test.
-        let significant = paired.is_none_or(|(z, _)| z <= -NETWORK_Z);
+        let significant = paired.is_none_or(|(z, _)| z <= -level);
         let (z, rows) = paired.unwrap_or((f64::NAN, 0));
-        let kept = ratio * (1.0 + NETWORK_MARGIN) <= 1.0 && significant;
+        let kept = ratio * (1.0 + margin) <= 1.0 && significant;
         let test = NetworkTest {
             network: net,
             alone,
