@@ -1416,6 +1416,32 @@ fn edge_inputs_of_the_twenty_fifth_session() {
         .status()
         .unwrap();
     assert_eq!(status.code(), Some(141), "{status:?}");
+    // Standard output on a full device: the error named and code 1, not a panic (101); the
+    // output file is written whole.
+    #[cfg(target_os = "linux")]
+    {
+        let out3 = common::tmp("s25_identified3.toml");
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let o = identify(out3.to_str().unwrap(), &[])
+            .stdout(full)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("error: writing the summary to standard output")
+                && !stderr(&o).contains("panicked"),
+            "{}",
+            stderr(&o)
+        );
+        assert!(
+            std::fs::read_to_string(&out3)
+                .unwrap()
+                .starts_with("# robocal robot model")
+        );
+    }
     // Without it, the summary stays on standard output.
     let out2 = common::tmp("s25_identified2.toml");
     let o = identify(out2.to_str().unwrap(), &[]).output().unwrap();

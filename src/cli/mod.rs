@@ -13,15 +13,48 @@ fn summary_on_stderr() -> bool {
 }
 
 /// `println!` for a command's summary lines: to standard output, or to standard error where an
-/// output file is standard output ([`SUMMARY_ON_STDERR`]).
+/// output file is standard output ([`SUMMARY_ON_STDERR`]); a line that cannot be written is
+/// kept as the command's failure ([`SUMMARY_LOST`]), not a panic.
 macro_rules! say {
     ($($arg:tt)*) => {
-        if $crate::cli::summary_on_stderr() {
-            eprintln!($($arg)*)
-        } else {
-            println!($($arg)*)
-        }
+        $crate::cli::say_line(format_args!($($arg)*))
     };
+}
+
+/// The first failure to write a summary line to standard output ([`say!`]): a full device, a
+/// closed pipe. The command goes on (its output files are whole and written as usual) and
+/// ends with it ([`summary_failure`]) rather than with a panic halfway.
+static SUMMARY_LOST: std::sync::Mutex<Option<std::io::Error>> = std::sync::Mutex::new(None);
+
+/// One summary line ([`say!`]).
+fn say_line(args: std::fmt::Arguments) {
+    if summary_on_stderr() {
+        eprintln!("{args}");
+        return;
+    }
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = writeln!(out, "{args}").and_then(|()| out.flush()) {
+        let mut lost = SUMMARY_LOST.lock().unwrap_or_else(|p| p.into_inner());
+        lost.get_or_insert(e);
+    }
+}
+
+/// How a command whose summary could not be written ends: quietly with the shell's code for
+/// a closed pipe (128 + 13, as `robocal ... | head`), else with the error and code 1.
+fn summary_failure() -> Option<ExitCode> {
+    let lost = SUMMARY_LOST
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .take()?;
+    if lost.kind() == std::io::ErrorKind::BrokenPipe {
+        return Some(ExitCode::from(141));
+    }
+    eprintln!(
+        "error: writing the summary to standard output: {lost} (the output files, if any, were \
+         written whole)"
+    );
+    Some(ExitCode::from(1))
 }
 
 mod bounds;
@@ -153,7 +186,7 @@ pub fn main() -> ExitCode {
         Command::CaseD(a) => case_d::run_case_d(a),
     });
     match result {
-        Ok(()) => code,
+        Ok(()) => summary_failure().unwrap_or(code),
         Err(e) => {
             eprintln!("error: {}", capped(&format!("{e:#}")));
             let n = robocal::io::discarded_outputs();

@@ -33,6 +33,32 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
         .flatten()
         .filter_map(|(f, p)| resolved(p).map(|r| (*f, *p, r)))
         .collect();
+    // A `--plot` folder's pictures and list (names the command chooses) must not land on an
+    // input or another output: refused where such a file lies in the folder under a name
+    // they could take.
+    for (pf, dir) in outputs.iter().flatten().filter(|(f, _)| *f == "--plot") {
+        let Some(dir_r) = resolved(dir) else { continue };
+        let clash = inputs
+            .iter()
+            .flatten()
+            .chain(outputs.iter().flatten().filter(|(f, _)| *f != "--plot"))
+            .find(|(_, p)| {
+                let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
+                let lower = name.to_ascii_lowercase();
+                let picture = lower.ends_with(".png") || lower.ends_with(".svg");
+                (picture || name == PLOT_LIST)
+                    && resolved(p).and_then(|r| r.parent().map(Path::to_path_buf))
+                        == Some(dir_r.clone())
+            });
+        if let Some((f, p)) = clash {
+            bail!(
+                "{f} {} lies in the {pf} folder {} under a name its pictures may take (*.png, \
+                 *.svg, {PLOT_LIST}): choose another folder or file name",
+                p.display(),
+                dir.display()
+            );
+        }
+    }
     let mut seen: Vec<(&str, &Path, PathBuf)> = Vec::new();
     for (flag, path) in outputs.iter().flatten() {
         if robocal::io::is_standard_output(path) {
@@ -94,6 +120,9 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
     }
     Ok(())
 }
+
+/// The list of pictures a `--plot` folder holds (read by `robocal report`).
+const PLOT_LIST: &str = robocal::plot::MANIFEST;
 
 /// A required path for [`guard`]'s lists.
 pub fn req<'a>(flag: &'a str, p: &'a Path) -> Named<'a> {
@@ -160,6 +189,30 @@ mod tests {
         let report = plots.join("r.json");
         assert!(guard(&[], &[req("--plot", &plots), req("--report", &report)]).is_ok());
         assert!(guard(&[], &[req("--report", &report)]).is_err());
+        // A data file, an output or a report in the `--plot` folder under a picture's or
+        // the list's name would be overwritten by them: refused (another name is fine).
+        let svg = plots.join("evaluate_position.svg");
+        std::fs::create_dir_all(&plots).unwrap();
+        std::fs::write(&svg, "x\n").unwrap();
+        let e = guard(&[req("--data", &svg)], &[req("--plot", &plots)])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--data") && e.contains("--plot"), "{e}");
+        let png = plots.join("identify_calibration_position.PNG");
+        let e = guard(&[], &[req("--out", &png), req("--plot", &plots)])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--out") && e.contains("pictures"), "{e}");
+        let list = plots.join("figures.json");
+        assert!(guard(&[], &[req("--report", &list), req("--plot", &plots)]).is_err());
+        assert!(guard(&[], &[req("--report", &list)]).is_ok());
+        assert!(
+            guard(
+                &[req("--data", &svg)],
+                &[req("--plot", &dir.path().join("b"))]
+            )
+            .is_ok()
+        );
         // A device takes every output given it.
         #[cfg(unix)]
         {

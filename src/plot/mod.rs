@@ -104,9 +104,12 @@ pub fn save(
     Ok(fig)
 }
 
+/// The file name of a pictures folder's manifest.
+pub const MANIFEST: &str = "figures.json";
+
 /// The manifest of a folder's pictures.
 pub fn manifest_path(dir: &Path) -> PathBuf {
-    dir.join("figures.json")
+    dir.join(MANIFEST)
 }
 
 /// Reads `dir/figures.json`; an absent file is an empty list.
