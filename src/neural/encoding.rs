@@ -5,7 +5,8 @@ use crate::kinematics::{Frames, frames};
 use crate::model::{JointType, Robot};
 use nalgebra::Vector3;
 
-/// How joints become network inputs (then standardised to mean 0, deviation 1).
+/// How joints become network inputs (then standardised to mean 0, deviation 1, each
+/// deviation at least its floor: [`Encoding::scale_floors`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Encoding {
@@ -51,6 +52,24 @@ impl Encoding {
             (Encoding::SinCos | Encoding::Gravity, JointType::Revolute) => 2,
             _ => 1,
         }
+    }
+
+    /// The least deviation each feature is standardised by ([`SCALE_FLOOR`] for a sine, a
+    /// cosine, a gravity component or a revolute joint's angle in rad; [`SCALE_FLOOR_MM`]
+    /// for a prismatic joint's value in mm), in the order of [`Encoding::features`].
+    pub fn scale_floors(self, robot: &Robot) -> Vec<f64> {
+        let mut out = Vec::with_capacity(self.len(robot));
+        for j in robot.joints() {
+            let floor = match j.joint_type {
+                JointType::Revolute => SCALE_FLOOR,
+                _ => SCALE_FLOOR_MM,
+            };
+            out.extend(std::iter::repeat_n(floor, self.per_joint(j.joint_type)));
+        }
+        if self == Encoding::Gravity {
+            out.extend(std::iter::repeat_n(SCALE_FLOOR, 3 * robot.dof()));
+        }
+        out
     }
 
     /// The raw features of `q` (rad, mm) into `out` (cleared first); `ws` is an FK workspace
@@ -119,6 +138,20 @@ impl Encoding {
     }
 }
 
+/// The least deviation (a unit vector's component, a sine or cosine, or rad) a revolute
+/// joint's features are standardised by: what a turn of about 3 deg moves them. A feature
+/// the training rows hold nearly still carries what the data do not vary, and standardised
+/// to deviation 1 a step off their manifold becomes many deviations: on Series B the
+/// flange's x axis stays level within 0.04 deg (gravity's x in the flange frame varies by
+/// 7.7e-4), so 1 deg of q6 moved that input by 11 deviations, the RBF network's output fell
+/// by half, and the training domain put the configuration outside (its correction faded to
+/// nothing 0.4 deg away). Traces of a calibration's axis tilts (gravity along a tilted
+/// parallel axis, 1e-4) were inflated the same way.
+pub const SCALE_FLOOR: f64 = 0.05;
+
+/// The least deviation (mm) a prismatic joint's value is standardised by.
+pub const SCALE_FLOOR_MM: f64 = 1.0;
+
 /// The direction of gravity in the world frame: -z of the robot's base row.
 fn gravity(robot: &Robot) -> Vector3<f64> {
     -robot
@@ -134,6 +167,22 @@ fn gravity(robot: &Robot) -> Vector3<f64> {
 mod tests {
     use super::*;
     use crate::model::read_robot;
+
+    #[test]
+    fn every_feature_has_its_scale_floor() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let robot = read_robot(root.join("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
+        for e in Encoding::ALL {
+            let floors = e.scale_floors(&robot);
+            assert_eq!(floors.len(), e.len(&robot), "{e:?}");
+            assert!(floors.iter().all(|&f| f == SCALE_FLOOR), "{e:?}");
+        }
+        // A feature that varies less than its floor is scaled by the floor; one that varies
+        // more keeps its deviation; a constant one keeps 1.
+        let rows = [vec![0.0, 1e-3, 5.0], vec![1.0, -1e-3, 5.0]];
+        let a = crate::neural::weights::Affine::standardise(&rows).floored(&[0.05; 3]);
+        assert_eq!(a.scale, vec![0.5, 0.05, 1.0]);
+    }
 
     #[test]
     fn derivatives_match_central_differences() {

@@ -71,7 +71,7 @@ fn inputs(robot: &Robot, set: &MeasurementSet, encoding: Encoding) -> (Vec<Vec<f
             feat
         })
         .collect();
-    let norm = Affine::standardise(&xs);
+    let norm = Affine::standardise(&xs).floored(&encoding.scale_floors(robot));
     let mut scaled = Vec::new();
     for x in xs.iter_mut() {
         scaled.resize(x.len(), 0.0);

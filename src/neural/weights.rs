@@ -257,6 +257,15 @@ impl Affine {
         Affine { offset, scale }
     }
 
+    /// Each scale raised to at least its `floor` (a feature that varies less is scaled as if
+    /// it varied that much; see [`crate::neural::encoding::SCALE_FLOOR`]).
+    pub fn floored(mut self, floor: &[f64]) -> Affine {
+        for (s, f) in self.scale.iter_mut().zip(floor) {
+            *s = s.max(*f);
+        }
+        self
+    }
+
     /// Scale only (offset 0).
     pub fn scaling(scale: Vec<f64>) -> Affine {
         Affine {
