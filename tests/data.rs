@@ -453,3 +453,36 @@ fn rotation_vectors_and_quaternions_are_read_as_their_rotations() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A profile that names a column the defaults already read (`x = "q1"` beside the default
+/// joint columns) is refused, naming the column and both fields: read, the column gave its
+/// number to both and the real `x` was carried as an extra column.
+#[test]
+fn one_column_is_not_read_as_two_fields() {
+    let fanuc = robot("fanuc_r2000ib_210f.toml");
+    let dir = std::env::temp_dir().join(format!("robocal_twice_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("d.csv");
+    std::fs::write(&csv, "q1,q2,q3,q4,q5,q6,x,y,z\n10,0,0,0,0,0,1500,2,3\n").unwrap();
+    let read = |profile: &str| {
+        let p = dir.join("p.toml");
+        std::fs::write(&p, profile).unwrap();
+        Profile::read(&p)
+            .and_then(|pr| read_measurements(&csv, &fanuc, &pr, &ReadOptions::default()))
+            .map(|(set, _)| set)
+            .map_err(|e| e.to_string())
+    };
+    for (profile, field) in [
+        ("[columns]\nx = \"q1\"\n", "position"),
+        ("[columns]\nid = \"q3\"\n", "id"),
+    ] {
+        let e = read(profile).unwrap_err();
+        assert!(
+            e.contains("p.toml") && e.contains("`q") && e.contains("joints") && e.contains(field),
+            "{e}"
+        );
+    }
+    // Its own columns are read as before.
+    let set = read("[columns]\nx = \"x\"\n").unwrap();
+    assert_eq!(set.rows[0].position.unwrap().x, 1500.0);
+}

@@ -1714,6 +1714,40 @@ fn edge_inputs_of_the_twenty_fifth_session() {
             ),
         );
     }
+    // Flags the chosen network cannot use are refused, not dropped: the RBF network's with
+    // the joint form, the MLPs' training with the RBF network, validation failures without a
+    // held-out fraction (each gave a file byte-identical to the run without it).
+    for (flags, says) in [
+        (
+            &["--form", "joint", "--rbf-kernel", "squared-exponential"][..],
+            "--rbf-kernel sets up the RBF network, which acts on the pose residual",
+        ),
+        (
+            &["--form", "joint", "--rbf-units", "50"],
+            "--rbf-units sets up the RBF network",
+        ),
+        (
+            &["--network", "rbf", "--max-epochs", "3"],
+            "--network rbf is solved, not trained by epochs",
+        ),
+        (&["--network", "rbf", "--phase2", "lm"], "not with --phase2"),
+        (
+            &["--max-fail", "1"],
+            "--max-fail counts the failures on a held-out fraction",
+        ),
+    ] {
+        let mut args = vec![
+            "train",
+            "--robot",
+            FANUC,
+            "--data",
+            "datasets/case_d/training.csv",
+            "--out",
+            "never.rcal",
+        ];
+        args.extend_from_slice(flags);
+        refused(&args, says);
+    }
     // `plan-study --plot` on a file: refused before the study runs.
     let afile = file("s25_afile", "not a folder\n");
     refused(

@@ -61,6 +61,24 @@ fn a_plan_is_written_within_its_constraints_and_evaluate_predicts_it_the_same() 
         .unwrap();
     assert!(planned < random, "{planned} vs {random}");
     assert!(r["value"].as_f64().unwrap() >= r["greedy_value"].as_f64().unwrap());
+    // Tagged as every report, `robocal report` reads it (it refused it before: no `kind`).
+    assert_eq!(r["kind"], "plan");
+    let run = tmp("plan_run");
+    std::fs::create_dir_all(&run).unwrap();
+    std::fs::copy(&report, run.join("plan.json")).unwrap();
+    let html = tmp("plan_run.html");
+    let o = robocal(&[
+        "report",
+        run.to_str().unwrap(),
+        "--out",
+        html.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(
+        page.contains("plan") && page.contains("not_identifiable"),
+        "report page"
+    );
     // The same prediction for the written file: same cloud (seed and constraints), same
     // units, through the file.
     let back = tmp("plan_eval.json");

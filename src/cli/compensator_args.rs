@@ -286,6 +286,30 @@ impl CompensatorArgs {
                 robocal::neural::settings::Network::from(n).name()
             );
         }
+        // An RBF network acts on the pose form: its flags with `--form joint` would be
+        // dropped without a word.
+        if self.form == Some(Form::Joint) {
+            let rbf = [
+                ("--rbf-start", self.rbf_start.is_some()),
+                ("--rbf-kernel", self.rbf_kernel.is_some()),
+                ("--rbf-units", self.rbf_units.is_some()),
+                ("--rbf-search-rows", self.rbf_search_rows.is_some()),
+                ("--rbf-search-blocks", self.rbf_search_blocks.is_some()),
+            ];
+            if let Some((flag, _)) = rbf.iter().find(|(_, given)| *given) {
+                bail!(
+                    "{flag} sets up the RBF network, which acts on the pose residual: not with \
+                     --form joint"
+                );
+            }
+        }
+        // Validation failures are counted on the held-out fraction only.
+        if self.was_given("max_fail") && self.validation_fraction == 0.0 {
+            bail!(
+                "--max-fail counts the failures on a held-out fraction of the rows: give \
+                 --validation-fraction too"
+            );
+        }
         if self.rbf_start.is_some() && self.network == Some(Network::Mlp) {
             bail!("--rbf-start sets up the RBF network: not with --network mlp");
         }
@@ -340,6 +364,25 @@ impl CompensatorArgs {
             }
             if self.members.is_some_and(|m| m > 1) {
                 bail!("--network rbf: --members takes 1 (the RBF network is deterministic)");
+            }
+            // The RBF network is solved, not trained by epochs: the MLPs' training flags
+            // would be dropped without a word.
+            let training = [
+                ("--max-epochs", self.max_epochs.is_some()),
+                ("--momentum-epochs", self.was_given("momentum_epochs")),
+                ("--phase2", self.was_given("phase2")),
+                ("--goal", self.was_given("goal")),
+                ("--max-fail", self.was_given("max_fail")),
+                (
+                    "--validation-fraction",
+                    self.was_given("validation_fraction"),
+                ),
+            ];
+            if let Some((flag, _)) = training.iter().find(|(_, given)| *given) {
+                bail!(
+                    "--network rbf is solved, not trained by epochs (its weights by Cholesky, its \
+                     widths by maximum likelihood): not with {flag}"
+                );
             }
         }
         Ok(CompensatorOptions {

@@ -2,7 +2,7 @@
 
 use super::choices::{Criterion, Measure};
 use super::data_args::SigmaArgs;
-use super::output::{emit, num, parse_list, writing};
+use super::output::{emit, num, parse_list};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use robocal::data::JointTable;
@@ -79,27 +79,6 @@ pub struct PlanArgs {
     /// Everything the plan found, as JSON.
     #[arg(long)]
     report: Option<PathBuf>,
-}
-
-#[derive(serde::Serialize)]
-struct Report<'a> {
-    robot: String,
-    params: &'a str,
-    measure: &'a str,
-    criterion: &'a str,
-    sigma_position_mm: f64,
-    sigma_rotation_mrad: f64,
-    candidate_units: usize,
-    refused: pool::Refused,
-    identifiable: Vec<String>,
-    not_identifiable: Vec<String>,
-    units: usize,
-    rows: Vec<Vec<f64>>,
-    value: Option<f64>,
-    greedy_value: Option<f64>,
-    exchanges: Option<usize>,
-    prediction: &'a Prediction,
-    random_prediction: Option<Prediction>,
 }
 
 fn constraints(a: &PlanArgs) -> Result<Constraints> {
@@ -579,11 +558,11 @@ pub fn run(a: PlanArgs) -> Result<()> {
         say!("wrote {} ({} rows)", out.display(), rows.len());
     }
     if let Some(path) = &a.report {
-        let report = Report {
+        let report = robocal::reports::PlanReport {
             robot: a.robot.display().to_string(),
-            params: &a.params,
-            measure: measure.name(),
-            criterion: criterion.name(),
+            params: a.params.clone(),
+            measure: measure.name().into(),
+            criterion: criterion.name().into(),
             sigma_position_mm: sigmas.position_mm,
             sigma_rotation_mrad: sigmas.rotation_rad * 1e3,
             candidate_units: candidates.units.len(),
@@ -595,12 +574,11 @@ pub fn run(a: PlanArgs) -> Result<()> {
             value: chosen.as_ref().map(|c| c.value),
             greedy_value: chosen.as_ref().map(|c| c.greedy_value),
             exchanges: chosen.as_ref().map(|c| c.exchanges),
-            prediction: &prediction,
+            prediction: prediction.clone(),
             random_prediction,
         };
-        let mut bytes = serde_json::to_vec_pretty(&report)?;
-        bytes.push(b'\n');
-        writing(robocal::io::write_atomic(path, &bytes), path)?;
+        // Tagged as every report is (`kind`), so that `robocal report` reads it.
+        super::summary::write_report(path, &robocal::reports::Report::Plan(report))?;
     }
     Ok(())
 }

@@ -379,6 +379,8 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     let mut accuracy = Vec::new();
     let mut clean = Vec::new();
     let mut val_worst = None;
+    // The validation rows outside the compensator's training domain, by line.
+    let mut val_outside: Vec<usize> = Vec::new();
     // The training rows' readings logged with other joints were judged in training, under the
     // robot file's model, among themselves; the validation rows' are judged here against
     // their own and the training rows, as `evaluate --check-against` the training file judges
@@ -448,6 +450,10 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         }
         if name == "validation" {
             val_worst = worst_rows(&before_rows, Some(&after_rows))?;
+            val_outside = (s.rows.iter().zip(&inside))
+                .filter(|(_, inside)| !**inside)
+                .map(|(r, _)| r.line)
+                .collect();
         }
         let (before, after) = (summarize(&before_rows), summarize(&after_rows));
         // Fitted to these rows, a compensator that misses them by more than its model has
@@ -485,17 +491,10 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     if let (Some(w), Some(v)) = (&report.validation_worst_rows, &val) {
         super::summary::print_worst("validation", "the model", Measure::default_for(v), w);
     }
-    for r in &report.accuracy {
-        if let Some(outside) = r.rows_outside_domain
-            && outside > 0
-            && r.data == "validation"
-        {
-            eprintln!(
-                "warning: {outside} {} row(s) lie outside the compensator's training domain",
-                r.data
-            );
-        }
+    if let Some(path) = &a.validate {
+        super::predict::warn_outside(path, &val_outside, false);
     }
+    report.validation_lines_outside_domain = val_outside;
     super::output::writing(c.save(&a.out), &a.out)?;
     say!("wrote {}", a.out.display());
     if let Some(dir) = &a.plot {

@@ -333,6 +333,19 @@ impl Table {
     pub fn number(&self, row: usize, col: usize) -> Result<f64> {
         let cell = &self.rows[row][col];
         let parsed = if self.decimal_comma {
+            // A point in a file of decimal commas is a thousands separator (`1.234,5`) or a
+            // file of other conventions: read as a decimal point, `1.234` would be 1.234,
+            // not 1234.
+            if cell.contains('.') {
+                return Err(Error::input(
+                    self.location(row, col),
+                    format!(
+                        "`{}` has a decimal point, but the profile says the file writes decimal \
+                         commas (`decimal_comma = true`)",
+                        shown(cell)
+                    ),
+                ));
+            }
             cell.replace(',', ".").parse::<f64>()
         } else {
             cell.parse::<f64>()
@@ -426,6 +439,19 @@ mod tests {
         .unwrap();
         assert_eq!(t.number(0, 0).unwrap(), 1.5);
         assert_eq!(t.number(0, 1).unwrap(), -22.5);
+        // A point there is not a decimal point: refused where it stands.
+        let t = Table::parse(
+            "a;b
+1,5;1.234
+"
+            .as_bytes(),
+            Path::new("e.csv"),
+            b';',
+            true,
+        )
+        .unwrap();
+        let e = t.number(0, 1).unwrap_err().to_string();
+        assert!(e.contains("e.csv:2") && e.contains("decimal point"), "{e}");
     }
 
     #[test]

@@ -42,7 +42,7 @@ pub enum Refusal {
 }
 
 /// How many configurations each constraint refused.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Refused {
     /// Beyond the joint limits less the margin.
     pub limits: usize,

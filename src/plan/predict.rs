@@ -22,7 +22,7 @@ use rand_distr::{Distribution, StandardNormal};
 const SAMPLES: usize = 64;
 
 /// One parameter's predicted standard deviation.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ParamStd {
     /// Its name (`a2`, `theta3`, `base.x`, ...).
     pub name: String,
@@ -33,7 +33,7 @@ pub struct ParamStd {
 }
 
 /// What a set of units predicts.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Prediction {
     /// Units measured.
     pub units: usize,

@@ -13,12 +13,14 @@ pub mod compensate;
 pub mod html;
 pub mod identify;
 mod node;
+pub mod plan;
 pub mod studies;
 pub mod train;
 
 pub use compensate::{CompensateReport, TargetFailure};
 pub use identify::{Correlation, DroppedParam, EvaluateReport, IdentifyReport, Regroup};
 pub use node::Node;
+pub use plan::PlanReport;
 pub use studies::{CaseDReport, ReproduceCase, ReproduceFigure, ReproduceReport, SeedFigure};
 pub use train::TrainReport;
 
@@ -72,6 +74,8 @@ pub enum Report {
     CaseD(CaseDReport),
     /// `robocal reproduce`.
     Reproduce(ReproduceReport),
+    /// `robocal plan`.
+    Plan(PlanReport),
 }
 
 impl Report {
@@ -83,7 +87,7 @@ impl Report {
             Report::Evaluate(r) => r.accuracy.clone(),
             Report::Compensate(_) => Vec::new(),
             Report::CaseD(r) => r.accuracy(),
-            Report::Reproduce(_) => Vec::new(),
+            Report::Reproduce(_) | Report::Plan(_) => Vec::new(),
         }
     }
 
@@ -96,6 +100,7 @@ impl Report {
             Report::Compensate(_) => "compensate",
             Report::CaseD(_) => "case-d",
             Report::Reproduce(_) => "reproduce",
+            Report::Plan(_) => "plan",
         }
     }
 

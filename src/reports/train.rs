@@ -60,6 +60,11 @@ pub struct TrainReport {
     /// reports written before it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub validation_worst_rows: Option<crate::evaluate::WorstRows>,
+    /// Lines of the validation rows outside the compensator's training domain (as
+    /// `evaluate`'s `lines_outside_domain`); empty when there are none (then left out of the
+    /// file, and in reports written before it).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub validation_lines_outside_domain: Vec<usize>,
 }
 
 impl TrainReport {
@@ -95,6 +100,7 @@ impl TrainReport {
             training: report,
             validation_shared_readings: Vec::new(),
             validation_worst_rows: None,
+            validation_lines_outside_domain: Vec::new(),
         }
     }
 }

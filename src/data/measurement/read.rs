@@ -186,15 +186,42 @@ impl Columns {
             t.column(&cols.set),
             t.column(&cols.pair),
         );
-        let mut used: Vec<usize> = joints.clone();
-        for g in [position, angles, sigma_position, sigma_angles]
-            .into_iter()
-            .flatten()
-        {
-            used.extend(g);
+        // Every column the measurements are read from, with the field that reads it: one
+        // column read as two fields (a profile's `x = "q1"` beside the default joints) would
+        // give both its numbers.
+        let mut fields: Vec<(usize, &str)> = joints.iter().map(|&c| (c, "joints")).collect();
+        for (g, name) in [
+            (position, "position"),
+            (angles, "orientation"),
+            (sigma_position, "position sigma"),
+            (sigma_angles, "orientation sigma"),
+        ] {
+            fields.extend(g.into_iter().flatten().map(|c| (c, name)));
         }
-        used.extend(quaternion.into_iter().flatten());
-        used.extend([distance, id, set, pair].into_iter().flatten());
+        fields.extend(quaternion.into_iter().flatten().map(|c| (c, "orientation")));
+        for (c, name) in [
+            (distance, "distance"),
+            (id, "id"),
+            (set, "set"),
+            (pair, "pair"),
+        ] {
+            fields.extend(c.map(|c| (c, name)));
+        }
+        for (k, &(c, name)) in fields.iter().enumerate() {
+            if let Some(&(_, first)) = fields[..k].iter().find(|(d, _)| *d == c) {
+                let at = profile.path.as_deref().unwrap_or(&t.path);
+                return Err(Error::input(
+                    Location::file(at),
+                    format!(
+                        "column `{}` of {} would be read as {first} and as {name}: give each \
+                         field its own column in the profile",
+                        t.headers[c],
+                        t.path.display()
+                    ),
+                ));
+            }
+        }
+        let used: Vec<usize> = fields.iter().map(|&(c, _)| c).collect();
         let extra = (0..t.headers.len()).filter(|i| !used.contains(i)).collect();
         Ok(Columns {
             joints,
