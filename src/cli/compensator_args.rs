@@ -187,6 +187,33 @@ impl CompensatorArgs {
         self.given.iter().any(|g| g == id)
     }
 
+    /// The MLPs' training flags and whether each was given (flags with a default count when
+    /// given at it).
+    fn training_flags(&self) -> [(&'static str, bool); 6] {
+        [
+            ("--max-epochs", self.max_epochs.is_some()),
+            ("--momentum-epochs", self.was_given("momentum_epochs")),
+            ("--phase2", self.was_given("phase2")),
+            ("--goal", self.was_given("goal")),
+            ("--max-fail", self.was_given("max_fail")),
+            (
+                "--validation-fraction",
+                self.was_given("validation_fraction"),
+            ),
+        ]
+    }
+
+    /// The RBF network's flags and whether each was given.
+    fn rbf_flags(&self) -> [(&'static str, bool); 5] {
+        [
+            ("--rbf-start", self.rbf_start.is_some()),
+            ("--rbf-kernel", self.rbf_kernel.is_some()),
+            ("--rbf-search-rows", self.rbf_search_rows.is_some()),
+            ("--rbf-search-blocks", self.rbf_search_blocks.is_some()),
+            ("--rbf-units", self.rbf_units.is_some()),
+        ]
+    }
+
     /// The library options; out-of-range values are refused with the flag's name.
     pub fn options(
         &self,
@@ -216,22 +243,11 @@ impl CompensatorArgs {
                 ("--encoding", self.encoding.is_some()),
                 ("--hidden", self.hidden.is_some()),
                 ("--penalty", self.penalty.is_some()),
-                ("--max-epochs", self.max_epochs.is_some()),
-                ("--momentum-epochs", self.was_given("momentum_epochs")),
-                ("--phase2", self.was_given("phase2")),
-                ("--goal", self.was_given("goal")),
-                ("--max-fail", self.was_given("max_fail")),
-                (
-                    "--validation-fraction",
-                    self.was_given("validation_fraction"),
-                ),
-                ("--rbf-start", self.rbf_start.is_some()),
-                ("--rbf-kernel", self.rbf_kernel.is_some()),
-                ("--rbf-search-rows", self.rbf_search_rows.is_some()),
-                ("--rbf-search-blocks", self.rbf_search_blocks.is_some()),
-                ("--rbf-units", self.rbf_units.is_some()),
-            ];
-            if let Some((flag, _)) = shaping.iter().find(|(_, given)| *given) {
+            ]
+            .into_iter()
+            .chain(self.training_flags())
+            .chain(self.rbf_flags());
+            if let Some((flag, _)) = shaping.into_iter().find(|(_, given)| *given) {
                 bail!("--members 0 keeps the model alone, no network: not with {flag}");
             }
         }
@@ -288,26 +304,12 @@ impl CompensatorArgs {
         }
         // An RBF network acts on the pose form: its flags with `--form joint` would be
         // dropped without a word.
-        if self.form == Some(Form::Joint) {
-            let rbf = [
-                ("--rbf-start", self.rbf_start.is_some()),
-                ("--rbf-kernel", self.rbf_kernel.is_some()),
-                ("--rbf-units", self.rbf_units.is_some()),
-                ("--rbf-search-rows", self.rbf_search_rows.is_some()),
-                ("--rbf-search-blocks", self.rbf_search_blocks.is_some()),
-            ];
-            if let Some((flag, _)) = rbf.iter().find(|(_, given)| *given) {
-                bail!(
-                    "{flag} sets up the RBF network, which acts on the pose residual: not with \
-                     --form joint"
-                );
-            }
-        }
-        // Validation failures are counted on the held-out fraction only.
-        if self.was_given("max_fail") && self.validation_fraction == 0.0 {
+        if self.form == Some(Form::Joint)
+            && let Some((flag, _)) = self.rbf_flags().into_iter().find(|(_, given)| *given)
+        {
             bail!(
-                "--max-fail counts the failures on a held-out fraction of the rows: give \
-                 --validation-fraction too"
+                "{flag} sets up the RBF network, which acts on the pose residual: not with \
+                 --form joint"
             );
         }
         if self.rbf_start.is_some() && self.network == Some(Network::Mlp) {
@@ -367,18 +369,7 @@ impl CompensatorArgs {
             }
             // The RBF network is solved, not trained by epochs: the MLPs' training flags
             // would be dropped without a word.
-            let training = [
-                ("--max-epochs", self.max_epochs.is_some()),
-                ("--momentum-epochs", self.was_given("momentum_epochs")),
-                ("--phase2", self.was_given("phase2")),
-                ("--goal", self.was_given("goal")),
-                ("--max-fail", self.was_given("max_fail")),
-                (
-                    "--validation-fraction",
-                    self.was_given("validation_fraction"),
-                ),
-            ];
-            if let Some((flag, _)) = training.iter().find(|(_, given)| *given) {
+            if let Some((flag, _)) = self.training_flags().into_iter().find(|(_, given)| *given) {
                 bail!(
                     "--network rbf is solved, not trained by epochs (its weights by Cholesky, its \
                      widths by maximum likelihood): not with {flag}"

@@ -38,19 +38,31 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
     // they could take.
     for (pf, dir) in outputs.iter().flatten().filter(|(f, _)| *f == "--plot") {
         let Some(dir_r) = resolved(dir) else { continue };
-        let clash = inputs
-            .iter()
-            .flatten()
-            .chain(outputs.iter().flatten().filter(|(f, _)| *f != "--plot"))
-            .find(|(_, p)| {
-                let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
-                let lower = name.to_ascii_lowercase();
-                let picture = lower.ends_with(".png") || lower.ends_with(".svg");
-                (picture || name == PLOT_LIST)
-                    && resolved(p).and_then(|r| r.parent().map(Path::to_path_buf))
-                        == Some(dir_r.clone())
-            });
-        if let Some((f, p)) = clash {
+        // Where each file lands, through its links (a link elsewhere to a picture's name in
+        // the folder clashes; a link in the folder to a file elsewhere does not).
+        let lands = |p: &Path, output: bool| {
+            let target = if output {
+                robocal::io::output_file(p)?
+            } else {
+                p.to_path_buf()
+            };
+            resolved(&target)
+        };
+        let ins = inputs.iter().flatten().map(|&(f, p)| (f, p, false));
+        let outs = (outputs.iter().flatten())
+            .filter(|(f, _)| *f != "--plot")
+            .map(|&(f, p)| (f, p, true));
+        let clash = ins.chain(outs).find(|&(_, p, output)| {
+            let Some(r) = lands(p, output) else {
+                return false;
+            };
+            let name = (r.file_name().and_then(|n| n.to_str()))
+                .unwrap_or("")
+                .to_ascii_lowercase();
+            let picture = name.ends_with(".png") || name.ends_with(".svg");
+            (picture || name == PLOT_LIST) && r.parent() == Some(dir_r.as_path())
+        });
+        if let Some((f, p, _)) = clash {
             bail!(
                 "{f} {} lies in the {pf} folder {} under a name its pictures may take (*.png, \
                  *.svg, {PLOT_LIST}): choose another folder or file name",
@@ -213,6 +225,16 @@ mod tests {
             )
             .is_ok()
         );
+        // Through links: an input whose link lies elsewhere, an output linked into the folder.
+        #[cfg(unix)]
+        {
+            let link = dir.path().join("data_link.csv");
+            std::os::unix::fs::symlink(&svg, &link).unwrap();
+            assert!(guard(&[req("--data", &link)], &[req("--plot", &plots)]).is_err());
+            let out = dir.path().join("rep.json");
+            std::os::unix::fs::symlink(plots.join("FIGURES.JSON"), &out).unwrap();
+            assert!(guard(&[], &[req("--report", &out), req("--plot", &plots)]).is_err());
+        }
         // A device takes every output given it.
         #[cfg(unix)]
         {

@@ -177,6 +177,31 @@ mod tests {
             assert_eq!(floors.len(), e.len(&robot), "{e:?}");
             assert!(floors.iter().all(|&f| f == SCALE_FLOOR), "{e:?}");
         }
+        // A prismatic joint's value (mm) has its own floor, in its place among the joints.
+        let frame =
+            "convention = \"transform\"\nx = 0.0\ny = 0.0\nz = 0.0\nrz = 0.0\nry = 0.0\nrx = 0.0\n";
+        let joint = |kind: &str, lim: (f64, f64)| {
+            format!(
+                "\n[[joint]]\nconvention = \"dh\"\ntype = \"{kind}\"\nd = 100.0\na = 300.0\n\
+                 alpha = 0.0\nlimits = [{:?}, {:?}]\n",
+                lim.0, lim.1
+            )
+        };
+        let text = format!(
+            "name = \"rpr\"\n[base]\n{frame}{}{}{}\n[tool]\n{frame}",
+            joint("revolute", (-90.0, 90.0)),
+            joint("prismatic", (0.0, 200.0)),
+            joint("revolute", (-90.0, 90.0))
+        );
+        let rpr = crate::model::file::parse_robot(&text, std::path::Path::new("rpr.toml")).unwrap();
+        let mm = SCALE_FLOOR_MM;
+        let f = SCALE_FLOOR;
+        assert_eq!(Encoding::Angles.scale_floors(&rpr), vec![f, mm, f]);
+        assert_eq!(Encoding::SinCos.scale_floors(&rpr), vec![f, f, mm, f, f]);
+        let g = Encoding::Gravity.scale_floors(&rpr);
+        assert_eq!(g[..5], [f, f, mm, f, f]);
+        assert_eq!(g.len(), 5 + 9);
+        assert!(g[5..].iter().all(|&v| v == f));
         // A feature that varies less than its floor is scaled by the floor; one that varies
         // more keeps its deviation; a constant one keeps 1.
         let rows = [vec![0.0, 1e-3, 5.0], vec![1.0, -1e-3, 5.0]];
