@@ -281,6 +281,17 @@ fn a_refinement_on_a_few_rows_must_win_significantly() {
         test.ratio * (1.0 + REFINEMENT_MARGIN) > 1.0 || test.z > -REFINEMENT_Z,
         "{test:?}"
     );
+    // Its figures are the candidates' (`full` names no compliance: no margin of its own),
+    // row by row over every training row.
+    let rms = |i: usize| sel.candidates[i].score.as_ref().unwrap().position_rms_mm;
+    assert!(
+        (test.ratio - rms(test.network) / rms(test.alone)).abs() < 1e-12,
+        "{test:?}"
+    );
+    assert!(
+        test.z.is_finite() && test.rows == few.rows.len(),
+        "{test:?}"
+    );
     assert!(
         sel.notes
             .iter()

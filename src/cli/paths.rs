@@ -40,22 +40,11 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
         let Some(dir_r) = resolved(dir) else { continue };
         // Where each file lands, through its links (a link elsewhere to a picture's name in
         // the folder clashes; a link in the folder to a file elsewhere does not).
-        let lands = |p: &Path, output: bool| {
-            let target = if output {
-                robocal::io::output_file(p)?
-            } else {
-                p.to_path_buf()
-            };
-            resolved(&target)
-        };
-        let ins = inputs.iter().flatten().map(|&(f, p)| (f, p, false));
-        let outs = (outputs.iter().flatten())
+        let outs: Vec<(&str, &Path, PathBuf)> = (outputs.iter().flatten())
             .filter(|(f, _)| *f != "--plot")
-            .map(|&(f, p)| (f, p, true));
-        let clash = ins.chain(outs).find(|&(_, p, output)| {
-            let Some(r) = lands(p, output) else {
-                return false;
-            };
+            .filter_map(|&(f, p)| Some((f, p, resolved(&robocal::io::output_file(p)?)?)))
+            .collect();
+        let clash = ins.iter().chain(&outs).find(|(_, _, r)| {
             let name = (r.file_name().and_then(|n| n.to_str()))
                 .unwrap_or("")
                 .to_ascii_lowercase();

@@ -450,6 +450,25 @@ fn stages_1_to_3(
     Ok(())
 }
 
+/// A ratio of cross-validated errors as the notes give it: `12.5 % below` or `3.0 % above`.
+fn below_or_above(ratio: f64) -> String {
+    let below = (1.0 - ratio) * 100.0;
+    if below >= 0.0 {
+        format!("{below:.1} % below")
+    } else {
+        format!("{:.1} % above", -below)
+    }
+}
+
+/// A test's row-by-row figures as the notes give them.
+fn paired_rows(t: &NetworkTest) -> String {
+    if t.rows > 0 {
+        format!("paired z {:.1} over {} held-out rows", t.z, t.rows)
+    } else {
+        "no row-by-row test (the held-out rows could not be recomputed as scored)".into()
+    }
+}
+
 /// The note of a refinement's test ([`REFINEMENT_MARGIN`], [`REFINEMENT_Z`]): the refined
 /// candidate and what it was held against (each as [`Settings::describe`] says it), the
 /// figures as judged and the verdict.
@@ -458,17 +477,8 @@ fn refinement_test_note(t: &NetworkTest, candidates: &[Candidate]) -> String {
         &candidates[t.network].settings,
         &candidates[t.alone].settings,
     );
-    let change = (1.0 - t.ratio) * 100.0;
-    let by = if change >= 0.0 {
-        format!("{change:.1} % below")
-    } else {
-        format!("{:.1} % above", -change)
-    };
-    let rows = if t.rows > 0 {
-        format!("paired z {:.1} over {} held-out rows", t.z, t.rows)
-    } else {
-        "no row-by-row test".into()
-    };
+    let by = below_or_above(t.ratio);
+    let rows = paired_rows(t);
     let verdict = if t.kept {
         "the refinement is kept".to_string()
     } else {
@@ -490,23 +500,12 @@ fn refinement_test_note(t: &NetworkTest, candidates: &[Candidate]) -> String {
 /// it is not kept.
 fn network_note(t: &NetworkTest, candidates: &[Candidate], network: &str, then: &str) -> String {
     let alone = &candidates[t.alone].settings;
-    let by = |ratio: f64| {
-        let below = (1.0 - ratio) * 100.0;
-        if below >= 0.0 {
-            format!("{below:.1} % below")
-        } else {
-            format!("{:.1} % above", -below)
-        }
-    };
+    let by = below_or_above;
     let model = match &alone.refine {
         Some(r) => format!("refine {r}"),
         None => "as given".into(),
     };
-    let rows = if t.rows > 0 {
-        format!("paired z {:.1} over {} held-out rows", t.z, t.rows)
-    } else {
-        "no row-by-row test (the held-out rows could not be recomputed as scored)".into()
-    };
+    let rows = paired_rows(t);
     let mut test = format!(
         "{network}'s cross-validated error is {} the best model alone's ({model}), {rows}",
         by(t.ratio)
