@@ -1033,3 +1033,66 @@ fn a_reading_logged_with_other_joints_is_named_and_left_out_of_the_clean_rows() 
     assert!(said.contains("data clean"), "{said}");
     assert_eq!(e["accuracy"].as_array().unwrap().len(), 2);
 }
+
+/// A network the flags fix is kept, but where the model alone cross-validates better the
+/// user is warned with the figures (the report holds the warning); left open, `train` keeps
+/// the model alone and says nothing of the kind.
+#[test]
+fn a_fixed_network_worse_than_the_model_alone_is_kept_with_a_warning() {
+    let report = common::tmp("s46_fixed_net.json");
+    let out = common::tmp("s46_fixed_net.rcal");
+    let args = |extra: &[&str]| {
+        let mut v = vec![
+            "train",
+            "--robot",
+            "datasets/case_b_sim/true_robot.toml",
+            "--data",
+            "datasets/case_b_sim/calibration.csv",
+            "--out",
+            out.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+        ];
+        v.extend_from_slice(extra);
+        robocal(&v)
+    };
+    // The true robot leaves only the tracker's noise: 64 units without a penalty fit it.
+    let o = args(&[
+        "--form",
+        "joint",
+        "--hidden",
+        "64",
+        "--penalty",
+        "0",
+        "--members",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let warning = "the compensator keeps the network as --members fixes it, but the model alone \
+                   would be more accurate";
+    assert!(stderr(&o).contains(warning), "{}", stderr(&o));
+    assert!(stdout(&o).contains("settings: joint/angles/64 penalty 0 x1"));
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let sel = &r["training"]["selection"];
+    let test = &sel["fixed_network_test"];
+    assert!(test["ratio"].as_f64().unwrap() > 1.0, "{test}");
+    assert!(sel["warnings"][0].as_str().unwrap().contains(warning));
+    // The ratio is the candidates' own figures.
+    let cv = |i: &serde_json::Value| {
+        sel["candidates"][i.as_u64().unwrap() as usize]["score"]["position_rms_mm"]
+            .as_f64()
+            .unwrap()
+    };
+    let ratio = cv(&test["network"]) / cv(&test["alone"]);
+    assert!((ratio - test["ratio"].as_f64().unwrap()).abs() < 1e-12);
+    // Left open, the network is dropped: no warning.
+    let o = args(&["--form", "joint", "--hidden", "64", "--penalty", "0"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains(warning), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("settings: model alone"),
+        "{}",
+        stdout(&o)
+    );
+}

@@ -489,8 +489,14 @@ fn a_failed_run_leaves_no_output_behind() {
     for (args, outputs) in cases {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         refused_saying(&args, &[&long, "File name too long (os error 36)"]);
-        let err = stderr(&robocal(&args));
+        let o = robocal(&args);
+        let err = stderr(&o);
         assert!(!err.contains(".tmp"), "{args:?}: {err}");
+        // No line says an output was written: none was.
+        let said = format!("{}{err}", stdout(&o));
+        for claim in ["wrote ", " into ", "pictures in"] {
+            assert!(!said.contains(claim), "{args:?} said {claim:?}: {said}");
+        }
         assert_eq!(err.matches("os error").count(), 1, "{args:?}: {err}");
         let error_lines: String = err.lines().filter(|l| l.starts_with("error:")).collect();
         assert_eq!(error_lines.matches(&long).count(), 1, "{args:?}: {err}");
@@ -1416,6 +1422,22 @@ fn edge_inputs_of_the_twenty_fifth_session() {
         .status()
         .unwrap();
     assert_eq!(status.code(), Some(141), "{status:?}");
+    // The same for a command whose data is standard output (fk's rows, no summary), with
+    // standard error kept: quiet, as a pipe's writer ends.
+    for into_stdout in [&[][..], &["--out", "/dev/stdout"][..]] {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let mut args = vec!["fk", "--robot", UR10, "--q", "1,2,3,4,5,6"];
+        args.extend(into_stdout);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_robocal"))
+            .args(&args)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .stdout(writer)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(141), "{args:?}: {}", stderr(&o));
+        assert_eq!(stderr(&o), "", "{args:?}");
+    }
     // Standard output on a full device: the error named and code 1, not a panic (101); the
     // output file is written whole.
     #[cfg(target_os = "linux")]
@@ -2124,4 +2146,107 @@ fn noise_free_data_trains_and_writes_its_compensator() {
             .unwrap_or_else(|| panic!("{text}"));
         assert!(rms < 1e-6, "{extra:?}: {rms} mm\n{text}");
     }
+}
+
+#[test]
+fn an_output_inside_a_plot_folder_not_there_yet_is_written() {
+    let run = common::tmp("s46_new_run");
+    let _ = std::fs::remove_dir_all(&run);
+    let out = run.join("cal.toml");
+    let args = |extra: &[&str]| {
+        let mut v = vec![
+            "identify".to_string(),
+            "--robot".into(),
+            "datasets/case_b_sim/true_robot.toml".into(),
+            "--data".into(),
+            "datasets/case_b_sim/calibration.csv".into(),
+            "--out".into(),
+            out.to_str().unwrap().into(),
+            "--plot".into(),
+            run.to_str().unwrap().into(),
+        ];
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v
+    };
+    // A later failure (a validation file that is not there) leaves no folder behind.
+    let failing = args(&["--validate", "datasets/case_b_sim/no_such_file.csv"]);
+    let failing: Vec<&str> = failing.iter().map(String::as_str).collect();
+    refused(&failing, "no_such_file.csv");
+    assert!(!run.exists(), "a failed run left {}", run.display());
+    let ok = args(&[]);
+    let ok: Vec<&str> = ok.iter().map(String::as_str).collect();
+    let o = robocal(&ok);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        std::fs::read_to_string(&out)
+            .unwrap()
+            .starts_with("# robocal robot model")
+    );
+    assert!(run.join("figures.json").is_file());
+    // The output named as an existing input in that folder is refused as such.
+    let clash = args(&[]);
+    let mut clash: Vec<&str> = clash.iter().map(String::as_str).collect();
+    let same = out.to_str().unwrap().to_string();
+    clash[4] = &same;
+    refused(&clash, "is the same file as an input");
+}
+
+#[test]
+fn ik_refuses_a_nominal_model_of_another_arm() {
+    // As `compensate` does: the UR10 is no calibration of the FANUC, used or not.
+    refused(
+        &[
+            "ik",
+            "--robot",
+            "datasets/case_a/true_robot.toml",
+            "--nominal",
+            UR10,
+            "--pose",
+            "1500,0,2000,0,90,0",
+        ],
+        "ur10.toml: the robot is not a calibration of the nominal model",
+    );
+    // Its own nominal is accepted.
+    let o = robocal(&[
+        "ik",
+        "--robot",
+        "datasets/case_a/true_robot.toml",
+        "--nominal",
+        "datasets/robots/fanuc_r2000ib_210f.toml",
+        "--pose",
+        "1500,0,2000,0,90,0",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains(",ok"), "{}", stdout(&o));
+}
+
+#[test]
+fn pasted_rows_are_named_and_are_no_repeats() {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/case_a/calibration.csv"),
+    )
+    .unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    // Lines 5 and 7 pasted at the end (lines 22 and 23).
+    let pasted = format!("{}\n{}\n{}\n", text.trim_end(), lines[4], lines[6]);
+    let data = common::tmp("s46_pasted.csv");
+    std::fs::write(&data, pasted).unwrap();
+    let o = robocal(&[
+        "evaluate",
+        "--robot",
+        "datasets/case_a/true_robot.toml",
+        "--data",
+        data.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(
+            "2 row(s) copy an earlier row to the last digit, joints and measurement (line 22 \
+             of line 5, line 23 of line 7)"
+        ),
+        "{}",
+        stderr(&o)
+    );
+    // Not counted as repeated configurations (a pure error of 0 mm).
+    assert!(!stdout(&o).contains("repeats:"), "{}", stdout(&o));
 }

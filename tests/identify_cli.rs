@@ -428,3 +428,57 @@ fn pair_measures_label_their_columns_as_length_errors() {
         assert!(!out.contains("largest data position"), "{out}");
     }
 }
+
+/// Noise-free data leave only rounding (residuals near 1e-12 mm): no row is an outlier.
+/// Before the outlier test had a floor, this case named line 26 at 3.2 robust sigmas of
+/// rounding.
+#[test]
+fn noise_free_data_have_no_outlier() {
+    let deviations = tmp("s46_dev_ur.toml");
+    std::fs::write(
+        &deviations,
+        "\"base.x\" = 1.0\n\"base.rz\" = 2.0\na1 = 0.5\nalpha1 = 1.2\nd1 = 0.8\ntheta1 = -1.0\n\
+         alpha2 = -0.7\nd2 = 0.6\ntheta2 = 1.5\nbeta3 = 0.9\na3 = 0.7\nalpha3 = 0.4\n\
+         theta3 = -2.0\nbeta4 = -0.6\na4 = -0.5\ntheta4 = 1.1\nalpha5 = 0.8\na5 = 0.3\n\
+         d5 = -0.4\ntheta5 = 0.9\nalpha6 = -1.1\na6 = 0.4\nd6 = 0.5\ntheta6 = 2.0\n\
+         \"tool.z\" = 0.3\n",
+    )
+    .unwrap();
+    let data = tmp("s46_ur_noise_free.csv");
+    let robot = "datasets/robots/ur10_mdh_hayati.toml";
+    for (seed, expect_line) in [("4", 26), ("2", 40)] {
+        let o = robocal(&[
+            "simulate",
+            "--robot",
+            robot,
+            "--deviations",
+            deviations.to_str().unwrap(),
+            "--count",
+            "60",
+            "--seed",
+            seed,
+            "--sigma-pos",
+            "0",
+            "--sigma-rot",
+            "0",
+            "--out",
+            data.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let o = robocal(&[
+            "identify",
+            "--robot",
+            robot,
+            "--data",
+            data.to_str().unwrap(),
+            "--out",
+            tmp("s46_ur_noise_free.toml").to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let out = stdout(&o);
+        assert!(
+            out.contains("outliers (> 3 robust sigmas): none"),
+            "seed {seed} (line {expect_line} before the floor): {out}"
+        );
+    }
+}

@@ -167,7 +167,7 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
     }
     if let Some(dir) = &a.plot {
         let figs = plot(dir, &a.datasets, &rows)?;
-        say!("\nplots: {figs} pictures in {}", dir.display());
+        told_after!("\nplots: {figs} pictures in {}", dir.display());
     }
     if let Some(p) = &a.report {
         write_report(p, &Report::CaseD(report))?;

@@ -230,7 +230,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             });
         }
         let figs = error_figures(dir, "evaluate", "evaluation data", &set, &runs)?;
-        say!("plots: {} pictures in {}", figs.len(), dir.display());
+        told_after!("plots: {} pictures in {}", figs.len(), dir.display());
     }
     if let Some(path) = &a.report {
         write_report(path, &Report::Evaluate(report))?;

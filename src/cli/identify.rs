@@ -158,7 +158,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     }
     // Printed when the files were read; in the report with the rest.
     report.warnings.splice(0..0, read_warnings);
-    say!("wrote {}", a.out.display());
+    told_after!("wrote {}", a.out.display());
     if let Some(dir) = &a.plot {
         let mut figs = 0;
         let sets = [
@@ -188,7 +188,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
             )?
             .len();
         }
-        say!("plots: {figs} pictures in {}", dir.display());
+        told_after!("plots: {figs} pictures in {}", dir.display());
     }
     if let Some(path) = &a.report {
         write_report(path, &Report::Identify(report))?;

@@ -65,7 +65,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
     } else {
         what
     };
-    eprintln!(
+    told_after_on_stderr!(
         "imported {} {what} ({} joint{}: {}) into {}",
         set.rows.len(),
         joints.len(),

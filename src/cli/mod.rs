@@ -21,6 +21,50 @@ macro_rules! say {
     };
 }
 
+/// A summary line that says an output was written ("wrote X", "plots: N pictures in D"): held
+/// until every output is in place ([`robocal::io::all_or_nothing`]) and printed then, so that
+/// a later error, which discards every output, does not follow a "wrote" that is no longer
+/// true. In order, after the command's other lines.
+macro_rules! told_after {
+    ($($arg:tt)*) => {
+        $crate::cli::hold_line(false, format!($($arg)*))
+    };
+}
+
+/// [`told_after!`] for a line of standard error (the commands whose standard output can be
+/// their data: split, simulate, import).
+macro_rules! told_after_on_stderr {
+    ($($arg:tt)*) => {
+        $crate::cli::hold_line(true, format!($($arg)*))
+    };
+}
+
+/// The lines of [`told_after!`]: whether each goes to standard error, and its text.
+static HELD: std::sync::Mutex<Vec<(bool, String)>> = std::sync::Mutex::new(Vec::new());
+
+/// Holds one line until the outputs are in place ([`told_after!`]).
+fn hold_line(stderr: bool, line: String) {
+    HELD.lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .push((stderr, line));
+}
+
+/// Prints the held lines ([`told_after!`]), in order; where the command failed they are
+/// dropped (the error says what was kept).
+fn print_held(printed: bool) {
+    let held = std::mem::take(&mut *HELD.lock().unwrap_or_else(|p| p.into_inner()));
+    if !printed {
+        return;
+    }
+    for (stderr, line) in held {
+        if stderr {
+            eprintln!("{line}");
+        } else {
+            say_line(format_args!("{line}"));
+        }
+    }
+}
+
 /// The first failure to write a summary line to standard output ([`say!`]): a full device, a
 /// closed pipe. The command goes on (its output files are whole and written as usual) and
 /// ends with it ([`summary_failure`]) rather than with a panic halfway.
@@ -185,8 +229,12 @@ pub fn main() -> ExitCode {
         Command::Report(a) => report::run(a),
         Command::CaseD(a) => case_d::run_case_d(a),
     });
+    print_held(result.is_ok());
     match result {
         Ok(()) => summary_failure().unwrap_or(code),
+        // `robocal fk ... | head`: the reader has what it wanted; ended as a closed pipe
+        // ends a summary line ([`summary_failure`]), quietly with 128 + SIGPIPE.
+        Err(e) if closed_pipe(&e) => ExitCode::from(141),
         Err(e) => {
             eprintln!("error: {}", capped(&format!("{e:#}")));
             let n = robocal::io::discarded_outputs();
@@ -211,6 +259,20 @@ pub fn main() -> ExitCode {
             ExitCode::from(1)
         }
     }
+}
+
+/// Whether `e` is a write into a pipe its reader closed (an [`std::io::Error`] of kind
+/// `BrokenPipe` anywhere in its chain, also as the library's [`robocal::error::Error::Io`]).
+fn closed_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        let io = c.downcast_ref::<std::io::Error>().or_else(|| {
+            match c.downcast_ref::<robocal::error::Error>() {
+                Some(robocal::error::Error::Io { cause, .. }) => Some(cause),
+                _ => None,
+            }
+        });
+        io.is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 /// `robocal ... | head` closes our stdout early; Rust's `println!` then panics (and

@@ -33,6 +33,14 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
         .flatten()
         .filter_map(|(f, p)| resolved(p).map(|r| (*f, *p, r)))
         .collect();
+    // A `--plot` folder not there yet is made now (and removed again, empty, if the command
+    // fails): an output file put in it then resolves and is checked as any other, and its
+    // folder is there when it is written. An existing file is refused below.
+    for (_, dir) in outputs.iter().flatten().filter(|(f, _)| *f == "--plot") {
+        if !dir.exists() && !dir.is_symlink() {
+            robocal::io::create_dir_all(dir)?;
+        }
+    }
     // A `--plot` folder's pictures and list (names the command chooses) must not land on an
     // input or another output: refused where such a file lies in the folder under a name
     // they could take.
@@ -189,6 +197,9 @@ mod tests {
         let plots = dir.path().join("run");
         let report = plots.join("r.json");
         assert!(guard(&[], &[req("--plot", &plots), req("--report", &report)]).is_ok());
+        // guard made the folder (outside a command, nothing removes it): without it, the
+        // report's folder is missing.
+        std::fs::remove_dir(&plots).unwrap();
         assert!(guard(&[], &[req("--report", &report)]).is_err());
         // A data file, an output or a report in the `--plot` folder under a picture's or
         // the list's name would be overwritten by them: refused (another name is fine).

@@ -555,7 +555,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
             })
             .collect();
         emit(&headers, &cells, headers.len(), false, Some(out))?;
-        say!("wrote {} ({} rows)", out.display(), rows.len());
+        told_after!("wrote {} ({} rows)", out.display(), rows.len());
     }
     if let Some(path) = &a.report {
         let report = robocal::reports::PlanReport {

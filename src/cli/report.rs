@@ -28,6 +28,6 @@ pub fn run(a: ReportArgs) -> Result<()> {
     guard(&inputs, &[req("--out", &a.out)])?;
     let html = robocal::reports::html::render(&a.run_dir)?;
     super::output::writing(robocal::io::write_atomic(&a.out, html.as_bytes()), &a.out)?;
-    say!("wrote {} ({} kB)", a.out.display(), html.len() / 1024);
+    told_after!("wrote {} ({} kB)", a.out.display(), html.len() / 1024);
     Ok(())
 }

@@ -134,13 +134,13 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     }
     if count > 0 {
         let mean = sum / count as f64;
-        eprintln!(
+        told_after_on_stderr!(
             "simulated {} configurations into {}; nominal model vs truth: mean {mean:.4} mm, max {max:.4} mm",
             a.count,
             a.out.display()
         );
     } else {
-        eprintln!(
+        told_after_on_stderr!(
             "simulated {} configurations into {}",
             a.count,
             a.out.display()

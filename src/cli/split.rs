@@ -67,7 +67,7 @@ pub fn run(a: SplitArgs) -> Result<()> {
     } else {
         String::new()
     };
-    eprintln!(
+    told_after_on_stderr!(
         "split {} rows{kept}: {} into {}, {} into {}",
         set.rows.len(),
         x.rows.len(),

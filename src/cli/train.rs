@@ -346,6 +346,9 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     for n in report.notes.iter().chain(&a.sigma.unused(&set)) {
         say!("note: {n}");
     }
+    for w in report.selection.iter().flat_map(|s| &s.warnings) {
+        eprintln!("warning: {w}");
+    }
     // The rows cross-validation saw: the training rows but those left out for carrying
     // another configuration's reading.
     let trained;
@@ -496,9 +499,9 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     }
     report.validation_lines_outside_domain = val_outside;
     super::output::writing(c.save(&a.out), &a.out)?;
-    say!("wrote {}", a.out.display());
+    told_after!("wrote {}", a.out.display());
     if let Some(dir) = &a.plot {
-        say!("plots: {figs} pictures in {}", dir.display());
+        told_after!("plots: {figs} pictures in {}", dir.display());
     }
     if let Some(p) = &a.report {
         write_report(p, &Report::Train(report))?;

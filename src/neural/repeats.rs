@@ -12,6 +12,7 @@
 
 use crate::data::MeasurementSet;
 use crate::data::configuration::same_configuration;
+use crate::data::measurement::copies::copied_rows;
 use crate::kinematics::tool_pose;
 use crate::model::Robot;
 use nalgebra::Vector3;
@@ -89,7 +90,7 @@ pub fn group_count(groups: &[usize]) -> usize {
 pub struct Repeats {
     /// Configurations measured more than once (rows with a measured position).
     pub configurations: usize,
-    /// Rows in them.
+    /// Rows in them (a pasted copy of a row, [`copied_rows`], is none).
     pub rows: usize,
     /// Pure error (mm): sqrt(sum_g sum_i |e_i - ebar_g|^2 / sum_g (n_g - 1)), e_i the
     /// position residual of row i (measured minus model), ebar_g its configuration's mean and
@@ -116,8 +117,13 @@ impl Repeats {
         for g in &groups {
             sizes[*g] += 1;
         }
+        // A pasted copy of a row ([`copied_rows`]) is no second reading of its pose.
+        let mut copy = vec![false; set.rows.len()];
+        for (_, c) in copied_rows(&set.rows) {
+            copy[c] = true;
+        }
         for (i, m) in set.rows.iter().enumerate() {
-            if sizes[groups[i]] < 2 {
+            if sizes[groups[i]] < 2 || copy[i] {
                 continue;
             }
             if let Some(p) = m.position {
@@ -260,10 +266,14 @@ mod tests {
         assert!((r.median_spread_mm - 0.35).abs() < 1e-9);
         assert!((r.max_spread_mm - 0.5).abs() < 1e-9);
         assert_eq!(r.max_spread_lines, [2, 4]);
-        // A row pasted twice: no spread, and the lines are still its two.
+        // A row pasted twice is no repeat: alone, nothing to report; beside real repeats, it
+        // leaves every figure as it was (counted, it would add a zero residual and a degree
+        // of freedom).
         let twice = MeasurementSet::from_rows(vec![row(c, [0.0; 3], 3), row(c, [0.0; 3], 9)]);
-        let r = Repeats::of(&robot, &twice).unwrap();
-        assert_eq!((r.max_spread_mm, r.max_spread_lines), (0.0, [3, 9]));
+        assert!(Repeats::of(&robot, &twice).is_none());
+        let mut pasted = set.clone();
+        pasted.rows.push(row(b, [1.0, 0.0, 0.0], 8));
+        assert_eq!(Repeats::of(&robot, &pasted).unwrap(), r);
         // Without a repeat there is nothing to report.
         assert!(
             Repeats::of(

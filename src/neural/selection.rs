@@ -114,6 +114,14 @@ pub struct Selection {
     /// first (and in reports written before it).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub refinement_tests: Vec<NetworkTest>,
+    /// Where the options fix the network (`--members`): the network chosen against the best
+    /// model alone, as [`Selection::network_test`] but kept whatever it says.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fixed_network_test: Option<NetworkTest>,
+    /// What the user must know before using the compensator: a fixed network that the
+    /// model alone beats in cross-validation.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// The network chosen after stages 1-4 of [`super::tuning`] against the best model alone (as

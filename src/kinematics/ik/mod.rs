@@ -69,7 +69,26 @@ impl IkStart {
     /// The model's own closed form when it has one; for a compliant robot, the closed form
     /// of its rigid self as the start of numerical solves; else `nominal`'s (an error when
     /// that has none or other joints); else the seed.
+    ///
+    /// A `nominal` that is not an arm of the robot's (other joints, or geometry beyond what
+    /// a calibration moves: [`super::same_arm::another_arm`]) is refused whether or not it is
+    /// needed: its starts would lead the solves to another arm's solutions.
     pub fn choose(robot: &Robot, nominal: Option<&Robot>) -> Result<IkStart> {
+        if let Some(nom) = nominal {
+            if !nom.same_joints(robot) {
+                return Err(Error::Invalid(format!(
+                    "the nominal model's joints differ from the robot's in number or type ({} and {} joints)",
+                    nom.dof(),
+                    robot.dof()
+                )));
+            }
+            if let Some(gap) = super::same_arm::another_arm(nom, robot) {
+                return Err(Error::Invalid(format!(
+                    "the robot is not a calibration of the nominal model: {gap}: give this \
+                     robot's nominal model"
+                )));
+            }
+        }
         let own = if robot.is_compliant() {
             ClosedFormIk::new(&robot.rigid()).map(IkStart::Nominal)
         } else {
@@ -79,13 +98,6 @@ impl IkStart {
             Ok(start) => Ok(start),
             Err(why) => match nominal {
                 Some(nom) => {
-                    if !nom.same_joints(robot) {
-                        return Err(Error::Invalid(format!(
-                            "the nominal model's joints differ from the robot's in number or type ({} and {} joints)",
-                            nom.dof(),
-                            robot.dof()
-                        )));
-                    }
                     let ik = ClosedFormIk::new(nom).map_err(|e| {
                         Error::Invalid(format!("the nominal model has no closed form: {e}"))
                     })?;

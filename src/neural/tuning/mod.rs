@@ -292,9 +292,7 @@ pub fn select_settings(
     if space.refines.len() > 1 {
         search.refinement();
     }
-    if opts.members.is_none() {
-        search.model_alone();
-    }
+    search.model_alone(opts.members.is_some());
     let Search {
         candidates,
         chosen,
@@ -303,6 +301,7 @@ pub fn select_settings(
         rbf_network_test,
         unseen_error,
         refinement_tests,
+        fixed_network_test,
         ..
     } = search;
     let mut winner = candidates[chosen].settings.clone();
@@ -357,6 +356,21 @@ pub fn select_settings(
             NETWORK_MARGIN * 100.0
         ));
     }
+    // A network the options fix is kept; where the model alone did better on the rows it did
+    // not see, the user is warned, with the figures.
+    let mut warnings = Vec::new();
+    if let Some(t) = fixed_network_test.as_ref().filter(|t| t.ratio >= 1.0) {
+        let model = (candidates[t.alone].settings.refine.as_ref())
+            .map_or("as given".to_string(), |r| format!("refine {r}"));
+        warnings.push(format!(
+            "the network's cross-validated error is {} the model alone's ({model}), {}: the \
+             compensator keeps the network as --members fixes it, but the model alone would \
+             be more accurate on rows it did not see (leave --members open and train drops a \
+             network that does not help)",
+            below_or_above(t.ratio),
+            paired_rows(t)
+        ));
+    }
     // Where a refinement's test rejected it, its note says why; "did not lower the
     // cross-validated error" would contradict it.
     let rejected = refinement_tests.iter().any(|t| !t.kept);
@@ -404,6 +418,8 @@ pub fn select_settings(
             network_test,
             rbf_network_test,
             refinement_tests,
+            fixed_network_test,
+            warnings,
         }),
     ))
 }

@@ -42,6 +42,8 @@ pub(super) struct Search<'r, 'a, 'c> {
     /// The MLPs' choice of stages 1-3 (the ensemble's tie rule applied), before the RBF
     /// network's candidates.
     mlp_chosen: Option<usize>,
+    /// Stage 5's test of a network the options fix (`--members`), kept whatever it says.
+    pub(super) fixed_network_test: Option<NetworkTest>,
 }
 
 /// What stages 1-3 found: the state the later stages go on from, in a search of their own
@@ -71,6 +73,7 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             unseen_error: None,
             refinement_tests: Vec::new(),
             mlp_chosen: None,
+            fixed_network_test: None,
         }
     }
 
@@ -426,7 +429,13 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
     /// row with a paired z of [`NETWORK_Z`] or more, to be kept; one with an RBF network, on
     /// held-out rows no hyperparameter search saw as well ([`Search::unseen_test`], which
     /// searches and fits again where the folds must search their own).
-    pub(super) fn model_alone(&mut self) {
+    ///
+    /// With the network `fixed` (`--members` given) the network chosen is kept, and only
+    /// held against the model alone ([`Search::fixed_network_test`]), for the user to know.
+    pub(super) fn model_alone(&mut self, fixed: bool) {
+        if fixed && !self.candidates[self.chosen].settings.has_network() {
+            return;
+        }
         let alone = model_alone_of(&self.candidates[self.chosen].settings);
         let first = self.candidates.len();
         self.evaluate(5, vary(&alone, &self.space.refines, |s, r| s.refine = r));
@@ -459,6 +468,10 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             return;
         }
         let (mut test, mut rows) = self.network_test_of(self.chosen, best_alone);
+        if fixed {
+            self.fixed_network_test = Some(test);
+            return;
+        }
         // A network with an RBF network that passed on the candidates' figures: its
         // hyperparameters saw the rows the folds hold out, so it is judged again on rows no
         // search saw. Where it fails there, the best network without one (whose figures never
