@@ -1069,7 +1069,7 @@ fn a_fixed_network_worse_than_the_model_alone_is_kept_with_a_warning() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let warning = "the compensator keeps the network as --members fixes it, but the model alone \
-                   would be more accurate";
+                   is more accurate";
     assert!(stderr(&o).contains(warning), "{}", stderr(&o));
     assert!(stdout(&o).contains("settings: joint/angles/64 penalty 0 x1"));
     let r: serde_json::Value =

@@ -1438,6 +1438,26 @@ fn edge_inputs_of_the_twenty_fifth_session() {
         assert_eq!(o.status.code(), Some(141), "{args:?}: {}", stderr(&o));
         assert_eq!(stderr(&o), "", "{args:?}");
     }
+    // A file written before the closed pipe is told of (and is whole).
+    let kept = common::tmp("s46_kept_before_pipe.toml");
+    let _ = std::fs::remove_file(&kept);
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let o = identify(kept.to_str().unwrap(), &["--report", "/dev/stdout"])
+        .stdout(writer)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(141), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("note: 1 output(s) had been written, complete, before its pipe's"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(
+        std::fs::read_to_string(&kept)
+            .unwrap()
+            .starts_with("# robocal robot model")
+    );
     // Standard output on a full device: the error named and code 1, not a panic (101); the
     // output file is written whole.
     #[cfg(target_os = "linux")]
@@ -2183,6 +2203,27 @@ fn an_output_inside_a_plot_folder_not_there_yet_is_written() {
             .starts_with("# robocal robot model")
     );
     assert!(run.join("figures.json").is_file());
+    // An output in a subfolder of a new --plot folder is refused before the work, and the
+    // folder made for the check is removed.
+    let fresh = common::tmp("s46_fresh_run");
+    let _ = std::fs::remove_dir_all(&fresh);
+    let deep = fresh.join("sub/cal.toml");
+    let mut deeper = ok.clone();
+    let (deep_s, fresh_s) = (deep.to_str().unwrap(), fresh.to_str().unwrap());
+    deeper[6] = deep_s;
+    deeper[8] = fresh_s;
+    refused(&deeper, "does not exist");
+    assert!(!fresh.exists(), "the refused run left {}", fresh.display());
+    // A --plot link to nothing is refused before the work.
+    #[cfg(unix)]
+    {
+        let link = common::tmp("s46_dangling_plot");
+        let _ = std::fs::remove_file(&link);
+        std::os::unix::fs::symlink(common::tmp("s46_no_such_target"), &link).unwrap();
+        let mut dangling = ok.clone();
+        dangling[8] = link.to_str().unwrap();
+        refused(&dangling, "is a link to nothing");
+    }
     // The output named as an existing input in that folder is refused as such.
     let clash = args(&[]);
     let mut clash: Vec<&str> = clash.iter().map(String::as_str).collect();
@@ -2241,8 +2282,8 @@ fn pasted_rows_are_named_and_are_no_repeats() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains(
-            "2 row(s) copy an earlier row to the last digit, joints and measurement (line 22 \
-             of line 5, line 23 of line 7)"
+            "2 row(s) repeat an earlier row to the last digit, joints and reading (line 22 \
+             repeats line 5, line 23 repeats line 7)"
         ),
         "{}",
         stderr(&o)

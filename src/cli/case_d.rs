@@ -156,6 +156,12 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
             if let Some(settings) = &r.settings {
                 say!("  {}, {}: {settings}", s.set.folder(), r.label);
             }
+            // What `train` would warn of (a network fixed by --members that the model alone
+            // beats), said with the row it concerns.
+            let selection = r.training.as_ref().and_then(|t| t.selection.as_ref());
+            for w in selection.iter().flat_map(|sel| &sel.warnings) {
+                eprintln!("warning: {}, {}: {w}", s.set.folder(), r.label);
+            }
         }
     }
     say!(

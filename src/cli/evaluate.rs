@@ -162,6 +162,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         check_against: a.check_against.as_ref().map(|p| p.display().to_string()),
         worst_rows: worst_rows(&model_rows, net_rows.as_deref())?,
     };
+    super::summary::print_copies(&set);
     if let Some(r) = &report.repeats {
         print_repeats(r);
     }

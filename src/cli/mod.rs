@@ -232,17 +232,25 @@ pub fn main() -> ExitCode {
     print_held(result.is_ok());
     match result {
         Ok(()) => summary_failure().unwrap_or(code),
-        // `robocal fk ... | head`: the reader has what it wanted; ended as a closed pipe
-        // ends a summary line ([`summary_failure`]), quietly with 128 + SIGPIPE.
-        Err(e) if closed_pipe(&e) => ExitCode::from(141),
         Err(e) => {
-            eprintln!("error: {}", capped(&format!("{e:#}")));
+            // `robocal fk ... | head`: the reader has what it wanted; ended as a closed pipe
+            // ends a summary line ([`summary_failure`]), quietly with 128 + SIGPIPE, but for
+            // the files written before it.
+            let closed = closed_pipe(&e);
+            if !closed {
+                eprintln!("error: {}", capped(&format!("{e:#}")));
+            }
             let n = robocal::io::discarded_outputs();
             let kept = robocal::io::kept_outputs();
             if !kept.is_empty() {
                 let names: Vec<String> = kept.iter().map(|p| p.display().to_string()).collect();
+                let when = if closed {
+                    "before its pipe's reader closed"
+                } else {
+                    "before it failed"
+                };
                 eprintln!(
-                    "note: {} output(s) had been written, complete, before it failed: {}{}",
+                    "note: {} output(s) had been written, complete, {when}: {}{}",
                     kept.len(),
                     capped(&names.join(", ")),
                     if n > 0 {
@@ -256,7 +264,7 @@ pub fn main() -> ExitCode {
                     "note: no output file was written ({n} prepared before the error were discarded)"
                 );
             }
-            ExitCode::from(1)
+            ExitCode::from(if closed { 141 } else { 1 })
         }
     }
 }
@@ -290,6 +298,9 @@ fn quiet_on_closed_stdout() {
         let printing =
             msg.contains("failed printing to stdout") || msg.contains("failed printing to stderr");
         if printing && msg.contains("Broken pipe") {
+            // Exiting skips the transaction's own clean-up: its temporary files and the
+            // folders it made go first.
+            robocal::io::abandon();
             std::process::exit(141);
         }
         default(info);

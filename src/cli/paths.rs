@@ -36,8 +36,14 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
     // A `--plot` folder not there yet is made now (and removed again, empty, if the command
     // fails): an output file put in it then resolves and is checked as any other, and its
     // folder is there when it is written. An existing file is refused below.
-    for (_, dir) in outputs.iter().flatten().filter(|(f, _)| *f == "--plot") {
-        if !dir.exists() && !dir.is_symlink() {
+    for (flag, dir) in outputs.iter().flatten().filter(|(f, _)| *f == "--plot") {
+        if dir.is_symlink() && !dir.exists() {
+            bail!(
+                "{flag} {} is a link to nothing: give a folder, or link it to one",
+                dir.display()
+            );
+        }
+        if !dir.exists() {
             robocal::io::create_dir_all(dir)?;
         }
     }
@@ -84,19 +90,12 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
         if !folder && path.is_dir() {
             bail!("{flag} {} is a folder: give a file path", path.display());
         }
-        // Found now, not after the work: the file is written into an existing folder, or
-        // into the `--plot` folder the command makes.
-        let made = |parent: &Path| {
-            outputs
-                .iter()
-                .flatten()
-                .any(|(f, p)| *f == "--plot" && parent.starts_with(p))
-        };
+        // Found now, not after the work: the file is written into an existing folder (a
+        // `--plot` folder is made above).
         if !folder
             && let Some(parent) = path.parent()
             && !parent.as_os_str().is_empty()
             && !parent.is_dir()
-            && !made(parent)
         {
             bail!(
                 "{flag} {}: the folder {} does not exist",

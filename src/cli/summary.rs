@@ -47,6 +47,14 @@ pub fn print_stats(rows: &[Accuracy], measure: robocal::identify::Measure) {
     }
 }
 
+/// Warns of rows of `set` that copy an earlier row to the last digit (as `identify` does):
+/// `evaluate` and `train` count them as rows of their own, and leave them out of the repeats.
+pub fn print_copies(set: &MeasurementSet) {
+    if let Some(w) = robocal::identify::plausibility::copied_warning(set) {
+        eprintln!("warning: {w}");
+    }
+}
+
 /// Prints the line on the data's repeated configurations (`train` and `evaluate` alike):
 /// how far the model's residuals of one configuration differ, and the pure error no
 /// compensator can remove.

@@ -336,6 +336,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         a.data.display(),
         a.robot.display()
     );
+    super::summary::print_copies(&set);
     if let Some(r) = &report.repeats {
         super::summary::print_repeats(r);
     }

@@ -343,6 +343,23 @@ pub fn create_dir_all(dir: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Ends this thread's open transaction without its outputs, for a process about to exit
+/// without unwinding (a closed pipe met in a panic hook): its temporary files are deleted and
+/// the folders it made removed when empty, as a failed [`all_or_nothing`] does. Nothing where
+/// no transaction is open (or its state is in use).
+pub fn abandon() {
+    let _ = OPEN.try_with(|open| {
+        if let Ok(mut open) = open.try_borrow_mut()
+            && let Some(t) = open.take()
+        {
+            drop(t.writes);
+            for d in &t.dirs {
+                let _ = std::fs::remove_dir(d);
+            }
+        }
+    });
+}
+
 /// Runs `f` as one transaction: every [`write_atomic`] inside it is renamed into place only
 /// when `f` succeeds, so a command's outputs appear together or not at all. On failure the
 /// temporary files are deleted and the folders [`create_dir_all`] made are removed when empty.

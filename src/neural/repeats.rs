@@ -12,7 +12,7 @@
 
 use crate::data::MeasurementSet;
 use crate::data::configuration::same_configuration;
-use crate::data::measurement::copies::copied_rows;
+use crate::data::measurement::copied_rows;
 use crate::kinematics::tool_pose;
 use crate::model::Robot;
 use nalgebra::Vector3;
@@ -119,7 +119,7 @@ impl Repeats {
         }
         // A pasted copy of a row ([`copied_rows`]) is no second reading of its pose.
         let mut copy = vec![false; set.rows.len()];
-        for (_, c) in copied_rows(&set.rows) {
+        for (c, _) in copied_rows(set) {
             copy[c] = true;
         }
         for (i, m) in set.rows.iter().enumerate() {

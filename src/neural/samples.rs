@@ -28,6 +28,13 @@ pub struct Samples {
     pub maps: Option<Vec<DMatrix<f64>>>,
     /// Group of each sample; empty: every sample its own group.
     pub groups: Vec<usize>,
+    /// Each input's resolution (normalised units, at most 1): the least change of it the
+    /// encoding tells apart, its scale floor ([`Encoding::scale_floors`], about a 3 deg turn)
+    /// over its scale. The RBF network's widths are held at or above it
+    /// ([`crate::neural::rbf::WIDTH_FLOOR_SD`]). Empty: no bound.
+    ///
+    /// [`Encoding::scale_floors`]: crate::neural::encoding::Encoding::scale_floors
+    pub resolution: Vec<f64>,
 }
 
 impl Samples {
@@ -61,6 +68,7 @@ impl Samples {
                 .as_ref()
                 .map(|m| idx.iter().map(|&i| m[i].clone()).collect()),
             groups: idx.iter().map(|&i| self.group(i)).collect(),
+            resolution: self.resolution.clone(),
         }
     }
 

@@ -147,6 +147,10 @@ pub fn build(
         })
         .collect();
     let (x, input_norm) = inputs(robot, set, encoding);
+    let resolution: Vec<f64> = (encoding.scale_floors(robot).iter())
+        .zip(&input_norm.scale)
+        .map(|(floor, scale)| (floor / scale).min(1.0))
+        .collect();
     let groups = super::repeats::configuration_groups(set);
     let (samples, output_norm) = match form {
         Form::Pose => {
@@ -178,6 +182,7 @@ pub fn build(
                     b,
                     maps: None,
                     groups,
+                    resolution,
                 },
                 norm,
             )
@@ -217,6 +222,7 @@ pub fn build(
                     b: weighted,
                     maps: Some(maps),
                     groups,
+                    resolution,
                 },
                 norm,
             )

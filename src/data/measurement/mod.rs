@@ -5,7 +5,6 @@
 //! used (full pose, position, orientation, relative position, distance) is chosen by the
 //! consumer; [`pairs`](super::pairs) groups rows for relative and distance use.
 
-pub mod copies;
 mod read;
 mod write;
 

@@ -566,21 +566,6 @@ pub fn parse_measurements(
         return Err(Error::input(Location::file(&t.path), "no measurement rows"));
     }
     check_joints(t, &rows, joints, profile, opts, &mut report)?;
-    let copies = super::copies::copied_rows(&rows);
-    if !copies.is_empty() {
-        let named: Vec<String> = (copies.iter().take(10))
-            .map(|&(o, c)| format!("line {} of line {}", rows[c].line, rows[o].line))
-            .collect();
-        report.warnings.push(format!(
-            "{} row(s) copy an earlier row to the last digit, joints and measurement ({}{}): \
-             pasted lines, not repeat measurements (a tracker never reads a point twice to \
-             the last digit); each weighs its pose again in identification and training, \
-             and none counts as a repeat",
-            copies.len(),
-            named.join(", "),
-            if copies.len() > 10 { ", ..." } else { "" }
-        ));
-    }
     // Orientation angles (or a rotation vector) in degrees that all stay within a turn's
     // radians: a UR controller's rotation vector, say, in rad.
     if let Some(i) = c.angles

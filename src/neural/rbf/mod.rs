@@ -53,8 +53,8 @@ use likelihood::kernel;
 pub use likelihood::{PRIOR_SD, Pairs, neg_log_likelihood};
 use nalgebra::DVector;
 pub use search::{
-    HYPER_ITERATIONS, STALL_NATS, STARTS, Search, search, search_best, search_best_without,
-    search_from, search_start_without, search_without,
+    HYPER_ITERATIONS, STALL_NATS, STARTS, Search, WIDTH_FLOOR_SD, search, search_best,
+    search_best_without, search_from, search_start_without, search_without,
 };
 
 /// One output's Gaussian process (or, in files of version 3 and 4, every output's).

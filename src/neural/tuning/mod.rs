@@ -356,20 +356,31 @@ pub fn select_settings(
             NETWORK_MARGIN * 100.0
         ));
     }
-    // A network the options fix is kept; where the model alone did better on the rows it did
-    // not see, the user is warned, with the figures.
+    // A network the options fix is kept. Where the model alone is significantly better on
+    // the rows it did not see (the network test's level, the other way round), the user is
+    // warned; where the network is only not significantly better, told.
     let mut warnings = Vec::new();
-    if let Some(t) = fixed_network_test.as_ref().filter(|t| t.ratio >= 1.0) {
+    if let Some(t) = fixed_network_test.as_ref().filter(|t| !t.kept) {
         let model = (candidates[t.alone].settings.refine.as_ref())
             .map_or("as given".to_string(), |r| format!("refine {r}"));
-        warnings.push(format!(
-            "the network's cross-validated error is {} the model alone's ({model}), {}: the \
-             compensator keeps the network as --members fixes it, but the model alone would \
-             be more accurate on rows it did not see (leave --members open and train drops a \
-             network that does not help)",
+        let figures = format!(
+            "the network's cross-validated error is {} the model alone's ({model}), {}",
             below_or_above(t.ratio),
             paired_rows(t)
-        ));
+        );
+        if t.ratio > 1.0 && (t.z >= NETWORK_Z || t.z.is_nan()) {
+            warnings.push(format!(
+                "{figures}: the compensator keeps the network as --members fixes it, but the \
+                 model alone is more accurate on rows it did not see (leave --members open and \
+                 train drops a network that does not help)"
+            ));
+        } else {
+            notes.push(format!(
+                "{figures}: not {:.0} % or more below with a paired z of -{NETWORK_Z} or lower, \
+                 which a network left open must reach; kept as --members fixes it",
+                NETWORK_MARGIN * 100.0
+            ));
+        }
     }
     // Where a refinement's test rejected it, its note says why; "did not lower the
     // cross-validated error" would contradict it.

@@ -448,6 +448,7 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
         });
         // The model as given, where it is a candidate: a refined model alone must beat it as
         // a refinement must.
+        let tests = self.refinement_tests.len();
         let best_alone = match new
             .clone()
             .find(|&i| self.candidates[i].settings.refine.is_none())
@@ -455,6 +456,11 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             Some(given) => self.refinement_test_of(best_alone, given),
             None => best_alone,
         };
+        // With the network fixed no model alone is chosen: its refinement's test is no
+        // choice to tell of.
+        if fixed {
+            self.refinement_tests.truncate(tests);
+        }
         if !self.candidates[self.chosen].settings.has_network() {
             if self.judged(&self.candidates, best_alone)
                 < self.judged(&self.candidates, self.chosen)
