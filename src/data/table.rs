@@ -211,6 +211,8 @@ impl Table {
                 "empty file: a header row is needed",
             ));
         }
+        // A set, not a scan of the names before: a header of 200,000 columns took 92 s.
+        let mut seen = std::collections::HashSet::with_capacity(headers.len());
         for (i, h) in headers.iter().enumerate() {
             if h.is_empty() {
                 let last = i + 1 == headers.len();
@@ -223,7 +225,7 @@ impl Table {
                     },
                 ));
             }
-            if headers[..i].contains(h) {
+            if !seen.insert(h.as_str()) {
                 return Err(Error::input(
                     Location::at(path, 1, h.clone()),
                     "duplicate column name in the header",
