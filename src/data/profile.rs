@@ -255,6 +255,19 @@ impl Profile {
                     format!("`{d}` is not one ASCII character"),
                 ));
             }
+            // A byte a number or a quoted cell holds would cut them apart (`1.5` at `.`,
+            // `-2` at `-`), and a line break ends the row.
+            let c = b[0] as char;
+            if c.is_ascii_alphanumeric() || "\"'.+-\r\n".contains(c) {
+                return Err(bad(
+                    "delimiter",
+                    format!(
+                        "`{}` cannot separate fields: numbers, quotes or line breaks hold it \
+                         (use `,`, `;`, a tab `\\t` or `|`)",
+                        d.escape_default()
+                    ),
+                ));
+            }
             p.delimiter = b[0];
         }
         p.decimal_comma = f.decimal_comma.unwrap_or(false);
@@ -444,5 +457,14 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("delimiter"), "{e}");
+        // A delimiter a number, a quote or a line break holds is refused; a tab is not.
+        for d in ["\\\"", "'", "7", "e", ".", "-", "+", "\\n"] {
+            let e = Profile::parse(&format!("delimiter = \"{d}\"\n"), Path::new("p.toml"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("cannot separate fields"), "{d}: {e}");
+        }
+        let tab = Profile::parse("delimiter = \"\\t\"\n", Path::new("p.toml")).unwrap();
+        assert_eq!(tab.delimiter, b'\t');
     }
 }
