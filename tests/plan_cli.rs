@@ -336,29 +336,47 @@ fn candidates_that_identify_less_than_a_spread_are_said_to_be_optimistic() {
     );
 }
 
-/// A position plan predicts no orientation: the tool's rotation keeps its nominal value.
+/// A position plan predicts no orientation (the tool's rotation keeps its nominal value), an
+/// orientation plan no position, neither on the screen nor in the report; a pose plan both.
 #[test]
-fn a_position_plan_predicts_no_orientation() {
-    let out = tmp("plan_position_only.csv");
-    let o = robocal(&[
-        "plan",
-        "--robot",
-        FANUC,
-        "--count",
-        "20",
-        "--measure",
-        "position",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let said = stdout(&o);
-    let line = said
-        .lines()
-        .find(|l| l.starts_with("predicted error of 20 units"))
-        .unwrap_or_else(|| panic!("{said}"));
-    assert!(
-        line.contains("orientation not predicted") && !line.contains(" deg"),
-        "{line}"
-    );
+fn a_plan_predicts_only_what_its_measure_sees() {
+    let out = tmp("plan_measure_sees.csv");
+    let report = tmp("plan_measure_sees.json");
+    for (measure, position, orientation) in [
+        ("position", true, false),
+        ("orientation", false, true),
+        ("pose", true, true),
+    ] {
+        let o = robocal(&[
+            "plan",
+            "--robot",
+            FANUC,
+            "--count",
+            "20",
+            "--measure",
+            measure,
+            "--out",
+            out.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let said = stdout(&o);
+        let line = said
+            .lines()
+            .find(|l| l.starts_with("predicted error of 20 units"))
+            .unwrap_or_else(|| panic!("{said}"));
+        assert_eq!(line.contains(" mm,"), position, "{line}");
+        assert_eq!(line.contains(" deg,"), orientation, "{line}");
+        assert_eq!(line.contains("position not predicted"), !position, "{line}");
+        assert_eq!(
+            line.contains("orientation not predicted"),
+            !orientation,
+            "{line}"
+        );
+        let r = json(&report);
+        let p = &r["prediction"];
+        assert_eq!(p.get("position_mm").is_some(), position, "{p}");
+        assert_eq!(p.get("orientation_deg").is_some(), orientation, "{p}");
+    }
 }

@@ -208,27 +208,30 @@ fn evaluated_list(
     Ok((pool, lines))
 }
 
-/// Prints a prediction; the orientation only where the measure sees it (`pose`): without
-/// it the tool's rotation keeps its nominal value, whose error no prediction holds (a review
-/// measured 0.005 deg predicted against 0.33 deg realised from a position plan).
+/// Prints a prediction: what the measure sees ([`Prediction`]'s position and orientation,
+/// each where its measure sees it), and what it does not said so.
 fn print_prediction(label: &str, p: &Prediction, measure: robocal::identify::Measure) {
-    let orientation = if measure == robocal::identify::Measure::Pose {
-        format!(
-            "orientation mean {:.4} deg, p95 {:.4} deg",
-            p.orientation_deg.mean, p.orientation_deg.p95
-        )
-    } else {
-        format!(
-            "orientation not predicted (a {} measure leaves the tool's rotation at its \
-             nominal value)",
-            measure.name()
-        )
-    };
-    say!(
-        "{label}: position mean {:.4} mm, p95 {:.4} mm; {orientation}",
-        p.position_mm.mean,
-        p.position_mm.p95,
+    let name = measure.name();
+    let a = if name.starts_with('o') { "an" } else { "a" };
+    let position = p.position_mm.map_or_else(
+        || {
+            format!(
+                "position not predicted ({a} {name} measure leaves the base's and the tool's \
+                 positions at their nominal values)"
+            )
+        },
+        |s| format!("position mean {:.4} mm, p95 {:.4} mm", s.mean, s.p95),
     );
+    let orientation = p.orientation_deg.map_or_else(
+        || {
+            format!(
+                "orientation not predicted ({a} {name} measure leaves the tool's rotation at \
+                 its nominal value)"
+            )
+        },
+        |s| format!("orientation mean {:.4} deg, p95 {:.4} deg", s.mean, s.p95),
+    );
+    say!("{label}: {position}; {orientation}");
 }
 
 /// Configurations the pose measure's identifiability is checked on (a rank analysis of the
@@ -313,6 +316,12 @@ pub fn run(a: PlanArgs) -> Result<()> {
     }
     let robot = read_robot(&a.robot)?;
     let measure: robocal::identify::Measure = a.measure.into();
+    if a.target_mm.is_some() && measure == robocal::identify::Measure::Orientation {
+        bail!(
+            "--target-mm sets a mean position error, which an orientation measure does not \
+             predict (its positions keep their nominal values): give --count"
+        );
+    }
     let criterion: robocal::plan::Criterion = a.criterion.into();
     let per = per_unit(measure);
     let limits = constraints(&a)?;

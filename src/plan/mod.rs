@@ -24,6 +24,12 @@ pub use predict::{Prediction, predict};
 
 use crate::error::{Error, Result};
 
+/// A prediction's mean position error (mm); infinite where it predicts none (an orientation
+/// measure), which meets no target.
+fn position_mean(p: &Prediction) -> f64 {
+    p.position_mm.map_or(f64::INFINITY, |s| s.mean)
+}
+
 /// The smallest plan whose predicted mean position error is at most `target_mm`, by
 /// doubling from the fewest units that give more equations than parameters and then
 /// bisecting (the predicted error of planned units falls with their number); a plan that
@@ -45,14 +51,14 @@ pub fn smallest_meeting(
     }
     let all: Vec<usize> = (0..units).collect();
     match predict(design, &all, seed) {
-        Some(p) if p.position_mm.mean <= target_mm => {}
+        Some(p) if position_mean(&p) <= target_mm => {}
         p => {
             return Err(Error::Invalid(format!(
                 "the whole pool ({units} units) predicts {} mean position error, above the \
                  target {target_mm} mm: lower the noise, widen the region or change the measure",
                 p.map_or("no bounded".to_string(), |p| format!(
                     "{:.4} mm",
-                    p.position_mm.mean
+                    position_mean(&p)
                 ))
             )));
         }
@@ -61,7 +67,7 @@ pub fn smallest_meeting(
     let attempt = |n: usize| -> Result<Option<(Chosen, Prediction)>> {
         let chosen = choose(design, n, criterion, &[])?;
         Ok(predict(design, &chosen.units, seed)
-            .filter(|p| p.position_mm.mean <= target_mm)
+            .filter(|p| position_mean(p) <= target_mm)
             .map(|p| (chosen, p)))
     };
     // Doubling: lo misses (or is below the first), hi meets.

@@ -280,7 +280,9 @@ pub fn run(case: &Case, setup: &Setup, progress: &mut dyn FnMut(usize)) -> Resul
                 .realised
                 .push(realise(&chosen.units, &mut noise(false, series.units))?);
             series.predicted.push(
-                predict(&design, &chosen.units, seed).map_or(f64::NAN, |p| p.position_mm.mean),
+                predict(&design, &chosen.units, seed)
+                    .and_then(|p| p.position_mm)
+                    .map_or(f64::NAN, |s| s.mean),
             );
         }
         for series in out.random.iter_mut() {
@@ -288,9 +290,11 @@ pub fn run(case: &Case, setup: &Setup, progress: &mut dyn FnMut(usize)) -> Resul
             series
                 .realised
                 .push(realise(&units, &mut noise(true, series.units))?);
-            series
-                .predicted
-                .push(predict(&design, &units, seed).map_or(f64::NAN, |p| p.position_mm.mean));
+            series.predicted.push(
+                predict(&design, &units, seed)
+                    .and_then(|p| p.position_mm)
+                    .map_or(f64::NAN, |s| s.mean),
+            );
         }
         progress(seed as usize + 1);
     }
