@@ -65,8 +65,17 @@ fn planning(c: &mut Bench) {
             .unwrap();
             let chosen = choose(&design, 30, Criterion::D, &[]).unwrap();
             let random: Vec<usize> = (0..30).collect();
-            let planned = predict(&design, &chosen.units, 0).unwrap().position_mm.mean;
-            planned + predict(&design, &random, 0).unwrap().position_mm.mean
+            let planned = predict(&design, &chosen.units, 0)
+                .unwrap()
+                .position_mm
+                .unwrap()
+                .mean;
+            planned
+                + predict(&design, &random, 0)
+                    .unwrap()
+                    .position_mm
+                    .unwrap()
+                    .mean
         })
     });
 }
