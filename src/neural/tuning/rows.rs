@@ -89,7 +89,7 @@ pub(super) fn share_sums(
 pub const OUTLIER_SCALE_FLOOR: f64 = 1e-6;
 
 /// The rows of `set` whose held-out errors `held` (mm, deg per row) lie beyond `k` robust
-/// sigmas (1.4826 x the median, at least [`OUTLIER_SCALE_FLOOR`]) of their column; none for
+/// sigmas (1.4826 x the median, at least 1e-6, `OUTLIER_SCALE_FLOOR`) of their column; none for
 /// an infinite or NaN `k`.
 pub fn outliers_of(set: &MeasurementSet, held: &[(f64, Option<f64>)], k: f64) -> Vec<Outlier> {
     if !k.is_finite() {
