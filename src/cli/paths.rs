@@ -33,10 +33,11 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
         .flatten()
         .filter_map(|(f, p)| resolved(p).map(|r| (*f, *p, r)))
         .collect();
+    let plots = || outputs.iter().flatten().filter(|(f, _)| *f == "--plot");
     // A `--plot` folder not there yet is made now (and removed again, empty, if the command
     // fails): an output file put in it then resolves and is checked as any other, and its
     // folder is there when it is written. An existing file is refused below.
-    for (flag, dir) in outputs.iter().flatten().filter(|(f, _)| *f == "--plot") {
+    for (flag, dir) in plots() {
         if dir.is_symlink() && !dir.exists() {
             bail!(
                 "{flag} {} is a link to nothing: give a folder, or link it to one",
@@ -47,17 +48,17 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
             robocal::io::create_dir_all(dir)?;
         }
     }
+    // Where each output file lands, through its links (a link elsewhere to a picture's name
+    // in a `--plot` folder clashes; a link in the folder to a file elsewhere does not).
+    let outs: Vec<(&str, &Path, PathBuf)> = (outputs.iter().flatten())
+        .filter(|(f, _)| *f != "--plot")
+        .filter_map(|&(f, p)| Some((f, p, resolved(&robocal::io::output_file(p)?)?)))
+        .collect();
     // A `--plot` folder's pictures and list (names the command chooses) must not land on an
     // input or another output: refused where such a file lies in the folder under a name
     // they could take.
-    for (pf, dir) in outputs.iter().flatten().filter(|(f, _)| *f == "--plot") {
+    for (pf, dir) in plots() {
         let Some(dir_r) = resolved(dir) else { continue };
-        // Where each file lands, through its links (a link elsewhere to a picture's name in
-        // the folder clashes; a link in the folder to a file elsewhere does not).
-        let outs: Vec<(&str, &Path, PathBuf)> = (outputs.iter().flatten())
-            .filter(|(f, _)| *f != "--plot")
-            .filter_map(|&(f, p)| Some((f, p, resolved(&robocal::io::output_file(p)?)?)))
-            .collect();
         let clash = ins.iter().chain(&outs).find(|(_, _, r)| {
             let name = (r.file_name().and_then(|n| n.to_str()))
                 .unwrap_or("")

@@ -456,26 +456,22 @@ pub fn run(a: PlanArgs) -> Result<()> {
             .filter(|d| !spread_drops.contains(&d.param))
             .map(|d| names[d.param].name())
             .collect();
-        let (what, then) = if a.evaluate.is_some() {
-            ("list", "not comparable with a planned list's")
+        let (what, verb, then) = if a.evaluate.is_some() {
+            ("list", "identifies", "not comparable with a planned list's")
         } else {
             (
                 "candidates",
+                "identify",
                 "a plan from them leaves them at their nominal values too (give candidates \
                  that move every joint, or a --region as narrow as the candidates, over which \
                  the validation cloud is drawn)",
             )
         };
         eprintln!(
-            "warning: {}: the {what} {} {} of the {} parameters that {} configurations \
+            "warning: {}: the {what} {verb} {} of the {} parameters that {} configurations \
              spread over the region identify; {} ({}) keep their nominal values, and the \
              prediction below leaves their errors out: it is optimistic, {then}",
             list.display(),
-            if what == "list" {
-                "identifies"
-            } else {
-                "identify"
-            },
             design.p(),
             spread.p(),
             a.pool,
@@ -614,7 +610,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
             value: chosen.as_ref().map(|c| c.value),
             greedy_value: chosen.as_ref().map(|c| c.greedy_value),
             exchanges: chosen.as_ref().map(|c| c.exchanges),
-            prediction: prediction.clone(),
+            prediction,
             random_prediction,
         };
         // Tagged as every report is (`kind`), so that `robocal report` reads it.

@@ -322,20 +322,15 @@ fn parameter_reports(
     (parameters, correlations)
 }
 
-/// The least robust sigma the outlier test takes, in the measurements' own sigmas: a fit
-/// that leaves only rounding (noise-free simulated data, residuals near 1e-11 sigmas) has
-/// no outlier, and 3 robust sigmas of rounding would name one.
-pub const OUTLIER_SCALE_FLOOR: f64 = 1e-6;
-
-/// Rows whose residual lies beyond `k` robust sigmas (1.4826 x the median, at least
-/// [`OUTLIER_SCALE_FLOOR`]), on the residuals unweighted by a robust loss.
+/// Rows whose residual lies beyond `k` robust sigmas ([`crate::stats::robust_sigma`], in
+/// the measurements' own sigmas), on the residuals unweighted by a robust loss.
 fn outliers(set: &MeasurementSet, obs: &Observations, robot: &Robot, k: f64) -> Vec<Outlier> {
     let mut plain = obs.clone();
     for o in plain.items.iter_mut() {
         o.weight = 1.0;
     }
     let e = normalized_residuals(robot, &plain);
-    let scale = (1.4826 * median(&e)).max(OUTLIER_SCALE_FLOOR);
+    let scale = crate::stats::robust_sigma(&e);
     plain
         .items
         .iter()

@@ -181,6 +181,17 @@ struct Transaction {
     dirs: Vec<PathBuf>,
 }
 
+impl Transaction {
+    /// Deletes the staged temporary files and removes the folders made, when empty.
+    fn discard(self) {
+        drop(self.writes);
+        // Deepest first: a folder's own subfolders go before it.
+        for d in &self.dirs {
+            let _ = std::fs::remove_dir(d);
+        }
+    }
+}
+
 thread_local! {
     static OPEN: RefCell<Option<Transaction>> = const { RefCell::new(None) };
     static DISCARDED: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
@@ -352,10 +363,7 @@ pub fn abandon() {
         if let Ok(mut open) = open.try_borrow_mut()
             && let Some(t) = open.take()
         {
-            drop(t.writes);
-            for d in &t.dirs {
-                let _ = std::fs::remove_dir(d);
-            }
+            t.discard();
         }
     });
 }
@@ -404,11 +412,7 @@ pub fn all_or_nothing<T, E: From<Error>>(
             Ok(v)
         }
         Err(e) => {
-            drop(t.writes);
-            // Deepest first: a folder's own subfolders go before it.
-            for d in &t.dirs {
-                let _ = std::fs::remove_dir(d);
-            }
+            t.discard();
             Err(e)
         }
     }

@@ -59,8 +59,14 @@ pub fn model_error(
     Some((dp, dr))
 }
 
-/// The standardised network inputs of every row, and the standardisation fitted on them.
-fn inputs(robot: &Robot, set: &MeasurementSet, encoding: Encoding) -> (Vec<Vec<f64>>, Affine) {
+/// The standardised network inputs of every row, the standardisation fitted on them (each
+/// scale at least its floor, [`Encoding::scale_floors`]), and each input's resolution in
+/// standardised units (its floor over its scale, [`Samples::resolution`]).
+fn inputs(
+    robot: &Robot,
+    set: &MeasurementSet,
+    encoding: Encoding,
+) -> (Vec<Vec<f64>>, Affine, Vec<f64>) {
     let mut ws = Frames::new(robot);
     let mut xs: Vec<Vec<f64>> = set
         .rows
@@ -71,14 +77,18 @@ fn inputs(robot: &Robot, set: &MeasurementSet, encoding: Encoding) -> (Vec<Vec<f
             feat
         })
         .collect();
-    let norm = Affine::standardise(&xs).floored(&encoding.scale_floors(robot));
+    let floors = encoding.scale_floors(robot);
+    let norm = Affine::standardise(&xs).floored(&floors);
+    let resolution = (floors.iter().zip(&norm.scale))
+        .map(|(floor, scale)| (floor / scale).min(1.0))
+        .collect();
     let mut scaled = Vec::new();
     for x in xs.iter_mut() {
         scaled.resize(x.len(), 0.0);
         norm.apply(x, &mut scaled);
         x.copy_from_slice(&scaled);
     }
-    (xs, norm)
+    (xs, norm, resolution)
 }
 
 /// The least RMS position error (mm) the outputs are scaled by: a nanometre, below any
@@ -146,11 +156,7 @@ pub fn build(
             v
         })
         .collect();
-    let (x, input_norm) = inputs(robot, set, encoding);
-    let resolution: Vec<f64> = (encoding.scale_floors(robot).iter())
-        .zip(&input_norm.scale)
-        .map(|(floor, scale)| (floor / scale).min(1.0))
-        .collect();
+    let (x, input_norm, resolution) = inputs(robot, set, encoding);
     let groups = super::repeats::configuration_groups(set);
     let (samples, output_norm) = match form {
         Form::Pose => {

@@ -11,7 +11,8 @@ pub struct PlanReport {
     pub robot: String,
     /// The parameter selection planned (as for `identify --params`).
     pub params: String,
-    /// What each unit measures: `pose` or `position`.
+    /// What each unit measures: `pose`, `position`, `orientation`, `relative` or
+    /// `distance`.
     pub measure: String,
     /// The design criterion.
     pub criterion: String,

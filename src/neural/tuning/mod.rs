@@ -361,8 +361,7 @@ pub fn select_settings(
     // warned; where the network is only not significantly better, told.
     let mut warnings = Vec::new();
     if let Some(t) = fixed_network_test.as_ref().filter(|t| !t.kept) {
-        let model = (candidates[t.alone].settings.refine.as_ref())
-            .map_or("as given".to_string(), |r| format!("refine {r}"));
+        let model = alone_model(&candidates[t.alone].settings);
         let figures = format!(
             "the network's cross-validated error is {} the model alone's ({model}), {}",
             below_or_above(t.ratio),
@@ -487,6 +486,14 @@ fn below_or_above(ratio: f64) -> String {
     }
 }
 
+/// The model of a model alone's settings as the notes name it: `refine full` or `as given`.
+fn alone_model(alone: &Settings) -> String {
+    alone
+        .refine
+        .as_ref()
+        .map_or("as given".to_string(), |r| format!("refine {r}"))
+}
+
 /// A test's row-by-row figures as the notes give them.
 fn paired_rows(t: &NetworkTest) -> String {
     if t.rows > 0 {
@@ -526,12 +533,8 @@ fn refinement_test_note(t: &NetworkTest, candidates: &[Candidate]) -> String {
 /// the search's, which `t` indexes): `network` names the network, `then` what follows where
 /// it is not kept.
 fn network_note(t: &NetworkTest, candidates: &[Candidate], network: &str, then: &str) -> String {
-    let alone = &candidates[t.alone].settings;
     let by = below_or_above;
-    let model = match &alone.refine {
-        Some(r) => format!("refine {r}"),
-        None => "as given".into(),
-    };
+    let model = alone_model(&candidates[t.alone].settings);
     let rows = paired_rows(t);
     let mut test = format!(
         "{network}'s cross-validated error is {} the best model alone's ({model}), {rows}",

@@ -83,21 +83,13 @@ pub(super) fn share_sums(
         .collect()
 }
 
-/// The least robust sigma of [`outliers_of`] (mm, or deg): held-out errors of rounding
-/// (noise-free simulated data, errors near 1e-12 mm) have no outlier, and 3 robust sigmas of
-/// rounding would name one, and leave it out of the final fit.
-pub const OUTLIER_SCALE_FLOOR: f64 = 1e-6;
-
 /// The rows of `set` whose held-out errors `held` (mm, deg per row) lie beyond `k` robust
-/// sigmas (1.4826 x the median, at least 1e-6, `OUTLIER_SCALE_FLOOR`) of their column; none for
-/// an infinite or NaN `k`.
+/// sigmas ([`crate::stats::robust_sigma`]) of their column; none for an infinite or NaN `k`.
 pub fn outliers_of(set: &MeasurementSet, held: &[(f64, Option<f64>)], k: f64) -> Vec<Outlier> {
     if !k.is_finite() {
         return Vec::new();
     }
-    let scale = |v: Vec<f64>| {
-        (!v.is_empty()).then(|| (1.4826 * crate::stats::median(&v)).max(OUTLIER_SCALE_FLOOR))
-    };
+    let scale = |v: Vec<f64>| (!v.is_empty()).then(|| crate::stats::robust_sigma(&v));
     let pos = scale(held.iter().map(|h| h.0).collect()).unwrap_or(0.0);
     let rot = scale(held.iter().filter_map(|h| h.1).collect()).unwrap_or(0.0);
     let sigmas = |e: f64, s: f64| if s > 0.0 { e / s } else { 0.0 };

@@ -315,18 +315,24 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
     /// held-out rows from 0.4557 to 0.8379 mm RMS, and on an exact model measured with noise
     /// 0.14 % ahead it moved the model 0.011 mm from the truth.
     fn refinement_test_of(&mut self, refined: usize, base: usize) -> usize {
+        let (kept, test) = self.refinement_choice(refined, base);
+        self.refinement_tests.extend(test);
+        kept
+    }
+
+    /// [`Search::refinement_test_of`]'s choice and its test (none where there was nothing to
+    /// test), without recording the test.
+    fn refinement_choice(&self, refined: usize, base: usize) -> (usize, Option<NetworkTest>) {
         let c = &self.candidates;
         if refined == base
             || c[refined].settings.refine == c[base].settings.refine
             || c[refined].settings.refine.is_none()
             || !self.judged(c, base).is_finite()
         {
-            return refined;
+            return (refined, None);
         }
         let (test, _) = self.test_of(refined, base, REFINEMENT_MARGIN, REFINEMENT_Z);
-        let kept = test.kept;
-        self.refinement_tests.push(test);
-        if kept { refined } else { base }
+        (if test.kept { refined } else { base }, Some(test))
     }
 
     /// The refinements of candidate settings `w` to try: each of the space's, or for a blend
@@ -448,19 +454,16 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
         });
         // The model as given, where it is a candidate: a refined model alone must beat it as
         // a refinement must.
-        let tests = self.refinement_tests.len();
+        // With the network fixed no model alone is chosen: its refinement's test is no
+        // choice to tell of, and is not recorded.
         let best_alone = match new
             .clone()
             .find(|&i| self.candidates[i].settings.refine.is_none())
         {
+            Some(given) if fixed => self.refinement_choice(best_alone, given).0,
             Some(given) => self.refinement_test_of(best_alone, given),
             None => best_alone,
         };
-        // With the network fixed no model alone is chosen: its refinement's test is no
-        // choice to tell of.
-        if fixed {
-            self.refinement_tests.truncate(tests);
-        }
         if !self.candidates[self.chosen].settings.has_network() {
             if self.judged(&self.candidates, best_alone)
                 < self.judged(&self.candidates, self.chosen)
