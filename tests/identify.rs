@@ -751,3 +751,30 @@ fn positions_in_metres_or_inches_are_refused_and_a_moved_frame_is_not() {
         "{moved} vs {here}"
     );
 }
+
+/// Data of one arm fitted from another arm's file (a reviewer's ABB file on KUKA data:
+/// lengths moved by hundreds of millimetres, 0.049 mm RMS, no warning): the model fits, but
+/// it is not a calibration of its start, and `identify` says so; the same data from the
+/// right file do not get it (nor do broken data, which a warning of its own names: the
+/// three warnings of `a_model_that_misses_by_metres_or_does_worse_on_validation_is_flagged`).
+#[test]
+fn a_fit_that_turns_the_start_into_another_arm_is_warned_of() {
+    let nominal = fanuc();
+    let (set, _) = simulate(&table_6_1(&nominal), 40, 31, true, Observe::Pose);
+    let other = |name: &str, by: f64, r: &Robot| {
+        let id = r.find_param(name).unwrap();
+        r.with_param(id, r.param(id) + by).unwrap()
+    };
+    let start = other("d4", -420.0, &other("a3", 450.0, &nominal));
+    let another = "fits its data but is not a calibration of the start model";
+    let id = identify(&start, &set, &Options::default()).unwrap();
+    assert!(
+        id.warnings.iter().any(|w| w.contains(another)),
+        "{:?}",
+        id.warnings
+    );
+    let fit = evaluate_model(&id.robot, &set, Measure::Pose).unwrap();
+    assert!(fit.position_mm.unwrap().rms < 0.1, "{:?}", fit.position_mm);
+    let id = identify(&nominal, &set, &Options::default()).unwrap();
+    assert!(id.warnings.is_empty(), "{:?}", id.warnings);
+}

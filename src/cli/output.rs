@@ -123,7 +123,10 @@ pub fn json_cell(cell: &str) -> serde_json::Value {
 /// x y z rz ry rx; renamed `input_...` where the output has its own, seeds `seed_q1..`):
 /// the other carried columns (ids, labels) are text, kept as written (`007` is not 7).
 fn read_as_number(header: &str) -> bool {
-    let name = header.strip_prefix("input_").unwrap_or(header);
+    let mut name = header;
+    while let Some(inner) = name.strip_prefix("input_") {
+        name = inner;
+    }
     let name = name.strip_prefix("seed_").unwrap_or(name);
     robocal::data::POSE_COLUMNS.contains(&name)
         || name

@@ -102,7 +102,8 @@ pub fn warn_outside(path: &Path, lines: &[usize], column: bool) {
     if !lines.is_empty() {
         eprintln!(
             "warning: {}: {} row(s) outside the compensator's training domain (lines {}): \
-             the network extrapolates there, its correction fades{}",
+             the network extrapolates there (its correction fades with the distance from \
+             the training configurations, not for a joint beyond its training range alone){}",
             path.display(),
             lines.len(),
             robocal::data::measurement::list_lines(lines),

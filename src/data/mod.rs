@@ -21,20 +21,22 @@ pub use targets::{Target, TargetTable};
 use crate::error::{Error, Location, Result};
 
 /// The header of an output that carries table `t`'s columns (`carried`, renamed or not) and
-/// adds `written`: a carried column whose name is written is kept as `input_<name>`; a name
-/// that would still appear twice is refused (the CSV would be ambiguous and JSON would keep
-/// only one of them).
+/// adds `written`: a carried column whose name is written is kept as `input_<name>`
+/// (`input_input_<name>` where the input has an `input_<name>` too, as `import` names an
+/// export's own column, and so on); a name that would still appear twice is refused (the
+/// CSV would be ambiguous and JSON would keep only one of them).
 pub fn output_headers(t: &Table, carried: Vec<String>, written: &[String]) -> Result<Vec<String>> {
-    let mut headers: Vec<String> = carried
-        .into_iter()
-        .map(|h| {
-            if written.contains(&h) {
-                format!("input_{h}")
-            } else {
-                h
+    let mut headers: Vec<String> = Vec::with_capacity(carried.len() + written.len());
+    for h in &carried {
+        let mut name = h.clone();
+        if written.contains(&name) {
+            name = format!("input_{name}");
+            while carried.contains(&name) || written.contains(&name) || headers.contains(&name) {
+                name = format!("input_{name}");
             }
-        })
-        .collect();
+        }
+        headers.push(name);
+    }
     headers.extend(written.iter().cloned());
     for (i, h) in headers.iter().enumerate() {
         if headers[..i].contains(h) {

@@ -67,7 +67,8 @@ fn line_ends(bytes: &[u8]) -> Vec<usize> {
 
 impl Table {
     /// Reads a comma-separated file with one header row. Every row must have as many cells
-    /// as the header, each UTF-8 text; header names must be unique; blank lines are skipped.
+    /// as the header, each UTF-8 text; header names must be unique; blank lines, and rows
+    /// whose every cell is empty, are skipped.
     /// Lines end with a line feed, a carriage return and line feed, or a carriage return alone.
     pub fn read(path: impl AsRef<Path>) -> Result<Table> {
         let t = Table::read_keeping_malformed(path)?;
@@ -243,7 +244,9 @@ impl Table {
                 .iter()
                 .map(|c| std::str::from_utf8(c).map(str::trim))
                 .collect();
-            if let [Ok("")] = cells[..] {
+            // A row of delimiters alone (`;;;;`, which spreadsheets leave after the data)
+            // holds no more than a blank line.
+            if cells.iter().all(|c| matches!(c, Ok(""))) {
                 continue;
             }
             if let Some(c) = cells.iter().position(|c| c.is_err()) {
@@ -507,6 +510,19 @@ mod tests {
         assert_eq!(t.rows.len(), 2);
         assert_eq!(t.lines, vec![2, 4]);
         assert_eq!(t.number(1, 1).unwrap(), 2.0);
+    }
+
+    #[test]
+    fn rows_of_empty_cells_are_skipped_as_blank_lines() {
+        // A spreadsheet's trailing rows of delimiters, with and without spaces, and one of
+        // another length; a row with one cell filled is data (and its empty cells errors).
+        let t = parse("id,q1,q2\na,1,2\n,,\n , ,\nb,3,4\n,\n,,,\n").unwrap();
+        assert_eq!(t.lines, vec![2, 5]);
+        assert!(t.malformed.is_empty());
+        let t = parse("id,q1,q2\na,1,2\n,,5\n").unwrap();
+        assert_eq!(t.lines, vec![2, 3]);
+        let e = t.number(1, 1).unwrap_err().to_string();
+        assert!(e.contains("d.csv:3"), "{e}");
     }
 
     #[test]

@@ -10,7 +10,7 @@ use super::Measure;
 use super::problem::{Observations, residuals};
 use crate::data::MeasurementSet;
 use crate::data::measurement::{copied_rows, row_name};
-use crate::model::Robot;
+use crate::model::{ParamId, Robot};
 
 /// Position RMS (mm, per row or pair) on the calibration rows beyond which an identified
 /// model is flagged: ten times what a nominal model of an industrial robot misses by.
@@ -38,6 +38,68 @@ pub fn misfit(robot: &Robot, obs: &Observations) -> [Option<f64>; 2] {
         (!part.is_empty()).then(|| (sum / rs.len().max(1) as f64).sqrt())
     };
     [rms(pos), rms(rot)]
+}
+
+/// Distance (deg) from ry = +-90 deg within which a 6-DOF row's Z-Y-X angles are near their
+/// gimbal lock: there rz and rx turn about axes less than this apart, so only rz - rx
+/// (rz + rx at -90 deg) is well determined, and a rotation of the frame by a fraction of a
+/// milliradian moves the two by tens of degrees.
+pub const GIMBAL_LOCK_DEG: f64 = 2.0;
+
+/// Notes on the identified 6-DOF base and tool rows of `robot` whose rotation was solved for
+/// (`ids`) and whose ry lies within [`GIMBAL_LOCK_DEG`] of +-90 deg: their rz and rx, and
+/// those angles' standard deviations, describe the frame through a nearly singular map (a
+/// wall- or ceiling-mounted base, a tool along the flange's x), so the file's rz and rx may
+/// lie far from the start's with the frame itself close to it.
+pub fn gimbal_notes(robot: &Robot, ids: &[ParamId]) -> Vec<String> {
+    use crate::model::{Convention, Field, Slot};
+    [
+        (Slot::Base, "base", robot.base()),
+        (Slot::Tool, "tool", robot.tool()),
+    ]
+    .into_iter()
+    .filter(|(slot, _, row)| {
+        row.convention() == Convention::Transform
+            && ids
+                .iter()
+                .any(|p| p.slot == *slot && matches!(p.field, Field::Rz | Field::Rx))
+    })
+    .filter_map(|(_, name, row)| {
+        let ry = row.file_value(Field::Ry)?;
+        let off = 90.0 - ry.abs();
+        (off.abs() < GIMBAL_LOCK_DEG).then(|| {
+            let (sum, sign) = if ry > 0.0 {
+                ("rz - rx", "+")
+            } else {
+                ("rz + rx", "-")
+            };
+            format!(
+                "{name}: ry = {ry:.4} deg lies {:.4} deg from {sign}90 deg, the gimbal lock \
+                     of Z-Y-X angles: there {name}.rz and {name}.rx turn the frame about nearly \
+                     the same axis, so only {sum} is well determined, and a rotation of the \
+                     frame by a fraction of a milliradian moves the two by tens of degrees; \
+                     compare frames (poses), not these angles, with another calibration's",
+                off.abs()
+            )
+        })
+    })
+    .collect()
+}
+
+/// The warning for an identified model that is not a calibration of its start `start` (its
+/// distances between flange or tool positions at the same joints differ by more than a
+/// tenth of the arm, [`crate::kinematics::another_arm`]): where it fits its data (`identify`
+/// asks only then, [`warning`] being silent), the robot file describes another robot than
+/// the data's, whose fit moved lengths by hundreds of millimetres. `compensate` refuses such
+/// a pair.
+pub fn another_arm_warning(start: &Robot, identified: &Robot) -> Option<String> {
+    crate::kinematics::another_arm(start, identified).map(|gap| {
+        format!(
+            "the identified model fits its data but is not a calibration of the start model: \
+             {gap}: the robot file describes another robot than the data's (`compensate` \
+             refuses such a pair)"
+        )
+    })
 }
 
 /// The warning for a model that misses its calibration rows `obs` by more than
@@ -114,4 +176,47 @@ pub fn copied_warning(set: &MeasurementSet) -> Option<String> {
         shown.join(", "),
         if copied.len() > 5 { ", ..." } else { "" }
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Slot, test_fanuc};
+
+    fn with(robot: &Robot, name: &str, value: f64) -> Robot {
+        let id = robot.find_param(name).unwrap();
+        robot.with_param(id, value).unwrap()
+    }
+
+    #[test]
+    fn a_frame_near_its_gimbal_lock_is_noted() {
+        let robot = test_fanuc().with_frame_as_transform(Slot::Base).unwrap();
+        let ids = |r: &Robot| vec![r.find_param("base.rz").unwrap()];
+        let wall = with(&robot, "base.ry", 89.94f64.to_radians());
+        let notes = gimbal_notes(&wall, &ids(&wall));
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert!(notes[0].starts_with("base: ry = 89.9400 deg lies 0.0600 deg from +90"));
+        assert!(notes[0].contains("only rz - rx"), "{}", notes[0]);
+        let ceiling = with(&robot, "base.ry", (-91.5f64).to_radians());
+        let notes = gimbal_notes(&ceiling, &ids(&ceiling));
+        assert!(
+            notes.len() == 1 && notes[0].contains("only rz + rx"),
+            "{notes:?}"
+        );
+        // 2.5 deg away, or the angles not solved for: nothing to say.
+        let tilted = with(&robot, "base.ry", 87.5f64.to_radians());
+        assert!(gimbal_notes(&tilted, &ids(&tilted)).is_empty());
+        assert!(gimbal_notes(&wall, &[wall.find_param("base.x").unwrap()]).is_empty());
+    }
+
+    #[test]
+    fn a_model_of_another_arm_is_warned_of() {
+        let robot = test_fanuc();
+        let a3 = robot.param(robot.find_param("a3").unwrap());
+        let calibrated = with(&with(&robot, "a3", a3 + 2.0), "d4", -1281.0);
+        assert_eq!(another_arm_warning(&robot, &calibrated), None);
+        let other = with(&robot, "a3", a3 + 500.0);
+        let w = another_arm_warning(&robot, &other).expect("a warning");
+        assert!(w.contains("not a calibration of the start model"), "{w}");
+    }
 }

@@ -641,15 +641,24 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
 
     let (solution, cols, cov, s2) =
         drop_insignificant(nominal, solution, &mut obs, cols, opts, &mut ident)?;
-    warnings.extend(super::plausibility::warning(
+    let misfit = super::plausibility::warning(
         &solution.robot,
         &obs,
         registration.is_some(),
         tool_held.is_none(),
         opts.robust.is_some(),
-    ));
+    );
+    // A model that does not describe its data says so already; one that does, but as
+    // another arm, was started from another robot's file.
+    let another = misfit
+        .is_none()
+        .then(|| super::plausibility::another_arm_warning(nominal, &solution.robot))
+        .flatten();
+    warnings.extend(misfit);
     warnings.extend(super::plausibility::copied_warning(set));
+    warnings.extend(another);
     let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
+    notes.extend(super::plausibility::gimbal_notes(&solution.robot, &ids));
     let (parameters, correlations) = parameter_reports(nominal, &solution.robot, &ids, &cov);
     let outliers = outliers(set, &obs, &solution.robot, opts.outlier_k);
     let robot =

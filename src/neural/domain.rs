@@ -4,8 +4,10 @@
 //! A configuration is inside when every joint lies within the range the training rows
 //! covered and its distance to the nearest training configuration, measured in the network's
 //! normalised input space, is at most the domain's radius: the distance that 99 % of the
-//! training configurations are within of their own nearest (distinct) neighbour (a single
-//! isolated training row would make the largest such distance meaningless).
+//! training configurations are within of their nearest other configuration (a single
+//! isolated training row would make the largest such distance meaningless). Rows within
+//! [`super::repeats::SAME_CONFIGURATION`] of each other in every joint are one configuration
+//! ([`super::repeats::joint_groups`]), as in cross-validation.
 //!
 //! Beyond the radius the network is not trusted: its correction is scaled by the weight
 //! w = 2 - d / radius, falling from 1 at the radius to 0 at twice the radius (d the distance to
@@ -25,7 +27,8 @@ pub struct Domain {
     /// The distinct training configurations as normalised network inputs.
     pub inputs: Vec<Vec<f64>>,
     /// Largest trusted distance to the nearest training configuration (normalised input
-    /// units): the 99th percentile of the nearest-neighbour distances (module doc).
+    /// units): the 99th percentile of the distances from each training configuration to the
+    /// nearest other one (module doc).
     pub radius: f64,
 }
 
@@ -79,10 +82,14 @@ impl Domain {
         let n = robot.dof();
         let mut joint_min = vec![f64::INFINITY; n];
         let mut joint_max = vec![f64::NEG_INFINITY; n];
-        let mut inputs: Vec<Vec<f64>> = Vec::with_capacity(qs.len());
+        // Rows of one configuration (a repeat logs joints a few encoder counts apart) are one
+        // point: their gap of nearly nothing would shrink the radius to nothing wherever
+        // most configurations were measured twice, and switch the network off between them.
+        let groups = super::repeats::joint_groups(qs);
+        let mut points: Vec<(Vec<f64>, usize)> = Vec::with_capacity(qs.len());
         let mut feat = Vec::new();
         let mut ws = crate::kinematics::Frames::new(robot);
-        for q in qs {
+        for (q, &group) in qs.iter().zip(&groups) {
             for j in 0..n {
                 joint_min[j] = joint_min[j].min(q[j]);
                 joint_max[j] = joint_max[j].max(q[j]);
@@ -90,29 +97,29 @@ impl Domain {
             encoding.features(robot, q, &mut ws, &mut feat);
             let mut x = vec![0.0; feat.len()];
             norm.apply(&feat, &mut x);
-            inputs.push(x);
+            points.push((x, group));
         }
-        inputs.sort_by(|a, b| {
-            a.iter()
-                .zip(b)
+        points.sort_by(|a, b| {
+            a.0.iter()
+                .zip(&b.0)
                 .fold(std::cmp::Ordering::Equal, |o, (x, y)| {
                     o.then(x.total_cmp(y))
                 })
         });
-        inputs.dedup();
-        let mut gaps: Vec<f64> = inputs
-            .iter()
-            .enumerate()
-            .map(|(i, a)| {
-                inputs
-                    .iter()
-                    .enumerate()
-                    .filter(|(k, _)| *k != i)
-                    .map(|(_, b)| distance2(a, b))
-                    .fold(f64::INFINITY, f64::min)
-            })
-            .filter(|d| d.is_finite())
-            .collect();
+        points.dedup_by(|a, b| a.0 == b.0);
+        // Each configuration's gap: the least distance from one of its rows to another
+        // configuration's.
+        let mut gaps = vec![f64::INFINITY; super::repeats::group_count(&groups)];
+        for (a, group) in &points {
+            let nearest = points
+                .iter()
+                .filter(|(_, other)| other != group)
+                .map(|(b, _)| distance2(a, b))
+                .fold(f64::INFINITY, f64::min);
+            gaps[*group] = gaps[*group].min(nearest);
+        }
+        gaps.retain(|d| d.is_finite());
+        let inputs: Vec<Vec<f64>> = points.into_iter().map(|(x, _)| x).collect();
         gaps.sort_by(f64::total_cmp);
         let radius = match gaps.len() {
             0 => 0.0,
@@ -126,10 +133,21 @@ impl Domain {
         }
     }
 
-    /// Where `q` (rad, mm) stands; `x` is its normalised network input.
-    pub fn check(&self, q: &[f64], x: &[f64]) -> DomainCheck {
+    /// Where `q` (rad, mm) stands; `x` is its normalised network input. A joint for which
+    /// `periodic(j)` holds (the inputs see it modulo whole turns,
+    /// [`Encoding::is_periodic`]) is within its training range when a whole turn of it is.
+    pub fn check(&self, q: &[f64], x: &[f64], periodic: impl Fn(usize) -> bool) -> DomainCheck {
+        let turn = 2.0 * std::f64::consts::PI;
         let joints_outside = (0..q.len())
-            .filter(|&j| q[j] < self.joint_min[j] || q[j] > self.joint_max[j])
+            .filter(|&j| {
+                let (lo, hi) = (self.joint_min[j], self.joint_max[j]);
+                if periodic(j) {
+                    // The turn of q[j] at or above lo, nearest it.
+                    hi - lo < turn && lo + (q[j] - lo).rem_euclid(turn) > hi
+                } else {
+                    q[j] < lo || q[j] > hi
+                }
+            })
             .collect();
         let (_, nearest, weight) = self.trust(x);
         DomainCheck {
@@ -211,6 +229,61 @@ impl Domain {
 mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn repeated_configurations_keep_the_radius_of_the_distinct_ones() {
+        let robot = crate::model::test_fanuc();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let qs: Vec<Vec<f64>> = (0..200)
+            .map(|_| (0..6).map(|_| rng.random_range(-1.0..1.0)).collect())
+            .collect();
+        let norm = Affine {
+            offset: vec![0.0; 12],
+            scale: vec![1.0; 12],
+        };
+        let once: Vec<&[f64]> = qs.iter().map(Vec::as_slice).collect();
+        let alone = Domain::fit(&robot, Encoding::SinCos, &norm, &once);
+        // Every configuration measured again, its joints logged 2e-6 rad apart (encoder
+        // counts): the same configurations, so the same radius; gaps between a row and its
+        // repeat made it about 4e-6.
+        let repeats: Vec<Vec<f64>> = qs
+            .iter()
+            .map(|q| q.iter().map(|v| v + 2e-6).collect())
+            .collect();
+        let twice: Vec<&[f64]> = qs.iter().chain(&repeats).map(Vec::as_slice).collect();
+        let both = Domain::fit(&robot, Encoding::SinCos, &norm, &twice);
+        assert!(alone.radius > 0.1, "{}", alone.radius);
+        assert!(
+            (both.radius - alone.radius).abs() < 1e-4 * alone.radius,
+            "{} against {}",
+            both.radius,
+            alone.radius
+        );
+        assert_eq!(both.inputs.len(), 400);
+    }
+
+    #[test]
+    fn a_periodic_joint_is_inside_its_range_a_whole_turn_away() {
+        let d = Domain {
+            joint_min: vec![-1.0, -4.0],
+            joint_max: vec![1.0, 3.0],
+            inputs: vec![vec![0.0]],
+            radius: 1.0,
+        };
+        let turn = 2.0 * std::f64::consts::PI;
+        let outside =
+            |q: [f64; 2], periodic: bool| d.check(&q, &[0.0], |_| periodic).joints_outside;
+        for q0 in [0.5, 0.5 + turn, 0.5 - 2.0 * turn, 1.0 + turn, -1.0 - turn] {
+            assert!(outside([q0, 0.0], true).is_empty(), "{q0}");
+        }
+        assert_eq!(outside([0.5 + turn, 0.0], false), vec![0]);
+        for q0 in [1.5, 1.5 + turn, -1.5 - turn, -2.0] {
+            assert_eq!(outside([q0, 0.0], true), vec![0], "{q0}");
+        }
+        // A range of more than a turn holds every angle.
+        assert!(outside([0.0, 20.0], true).is_empty());
+        assert_eq!(outside([0.0, 20.0], false), vec![1]);
+    }
 
     #[test]
     fn the_fast_search_gives_the_exact_weight() {

@@ -47,6 +47,12 @@ impl Encoding {
         }
     }
 
+    /// Whether the features see a joint of type `t` only modulo whole turns (q and q + 2 pi
+    /// give the same inputs): a revolute joint under `SinCos` or `Gravity`.
+    pub fn is_periodic(self, t: JointType) -> bool {
+        t == JointType::Revolute && self != Encoding::Angles
+    }
+
     fn per_joint(self, t: JointType) -> usize {
         match (self, t) {
             (Encoding::SinCos | Encoding::Gravity, JointType::Revolute) => 2,

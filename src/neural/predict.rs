@@ -427,7 +427,12 @@ impl Compensator {
             };
         }
         let x = ws.normalised_inputs(self, q);
-        self.domain.check(q, x)
+        let joints = self.robot.joints();
+        self.domain.check(q, x, |j| {
+            joints
+                .get(j)
+                .is_some_and(|joint| self.encoding.is_periodic(joint.joint_type))
+        })
     }
 }
 

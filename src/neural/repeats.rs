@@ -25,27 +25,32 @@ pub use crate::data::configuration::SAME_CONFIGURATION;
 /// chain: a path sampled every 0.5 deg is many configurations, not one. Ids count from 0 in
 /// the order of each group's first row in the file.
 pub fn configuration_groups(set: &MeasurementSet) -> Vec<usize> {
-    let rows = &set.rows;
-    let n = rows.len();
+    let qs: Vec<&[f64]> = set.rows.iter().map(|m| m.q.as_slice()).collect();
+    joint_groups(&qs)
+}
+
+/// [`configuration_groups`] of bare joint vectors (rad, mm), in their order.
+pub fn joint_groups(qs: &[&[f64]]) -> Vec<usize> {
+    let n = qs.len();
     // Sweep the rows in the order of the joint whose values spread widest (a joint held
     // still would make every pair a candidate): only rows within the tolerance in that joint
     // can be the same configuration.
-    let dof = rows.iter().map(|m| m.q.len()).min().unwrap_or(0);
+    let dof = qs.iter().map(|q| q.len()).min().unwrap_or(0);
     let spread = |k: usize| {
-        let (lo, hi) = rows
+        let (lo, hi) = qs
             .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), m| {
-                (lo.min(m.q[k]), hi.max(m.q[k]))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
+                (lo.min(q[k]), hi.max(q[k]))
             });
         hi - lo
     };
     let key = (0..dof)
         .max_by(|&a, &b| spread(a).total_cmp(&spread(b)))
         .unwrap_or(0);
-    let at = |i: usize| rows[i].q.get(key).copied().unwrap_or(0.0);
+    let at = |i: usize| qs[i].get(key).copied().unwrap_or(0.0);
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| at(a).total_cmp(&at(b)));
-    let close = |i: usize, j: usize| same_configuration(&rows[i].q, &rows[j].q);
+    let close = |i: usize, j: usize| same_configuration(qs[i], qs[j]);
     // Each group's first row in the sweep, in the sweep's order (so their keys ascend and
     // those too far below the current row leave from the front).
     let mut leaders: Vec<usize> = Vec::new();
