@@ -598,7 +598,8 @@ fn exact_ik_tells_out_of_reach_from_outside_the_limits() {
             );
             assert_eq!(
                 e.to_string(),
-                "the nearest solution leaves the limits of joint 1"
+                "every solution leaves the limits; the one nearest the seed (or, without one, the middle \
+             of the ranges) leaves those of joint 1"
             );
         }
     }
@@ -622,7 +623,8 @@ fn exact_ik_tells_out_of_reach_from_outside_the_limits() {
         let e = solver.nearest(&turned, seed).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "the nearest solution leaves the limits of joint 1"
+            "every solution leaves the limits; the one nearest the seed (or, without one, the middle \
+             of the ranges) leaves those of joint 1"
         );
     }
 }

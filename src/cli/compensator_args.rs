@@ -2,7 +2,7 @@
 //! cross-validation on the training rows.
 
 use super::choices::{Form, Network};
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::{Args, ValueEnum};
 use robocal::neural::compensator::{CompensatorOptions, Refine};
 use robocal::neural::encoding::Encoding;
@@ -70,11 +70,11 @@ pub struct CompensatorArgs {
     #[arg(long, value_enum)]
     pub encoding: Option<EncodingArg>,
     /// Hidden sigmoid units (1 to 256). Default: chosen by cross-validation among 16, 32, 64.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub hidden: Option<usize>,
     /// L2 weight penalty lambda (>= 0; one squared weight against one squared unit-scale
     /// residual). Default: chosen by cross-validation (0.1, 1, 10, then a factor 3 around the best).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub penalty: Option<f64>,
     /// Networks in the ensemble (0 to 50; the prediction is their mean; 0: the model alone,
     /// not with --network, --form, --encoding, --hidden, --penalty, the training flags
@@ -82,7 +82,7 @@ pub struct CompensatorArgs {
     /// or --rbf-*).
     /// Default: 1 or 4, or none where no network lowers the error by 2 % or more and
     /// significantly row by row, by cross-validation.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub members: Option<usize>,
     /// Model parameters re-estimated on the training rows before the network is trained
     /// (exact identification): `auto`, `none`, or a selection as for identify (`offsets`,
@@ -99,36 +99,36 @@ pub struct CompensatorArgs {
     #[arg(long, value_enum, default_value = "auto")]
     pub compliance: ComplianceArg,
     /// Cross-validation folds (2 to 20). Default: 5, or 4 from 1500 distinct configurations.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub folds: Option<usize>,
     /// Seed of the folds, the initial weights and the held-out validation parts.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
     pub seed: u64,
     /// Phase-1 (gradient descent with momentum 0.9, learning rate 0.01) epochs (at most
     /// 100000).
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 50)]
     pub momentum_epochs: usize,
     /// Phase-2 epoch limit (at most 100000; L-BFGS: ten iterations an epoch). Default: from
     /// the row count (50 epochs on 2000 rows, 60 on up to 1333).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub max_epochs: Option<usize>,
     /// Phase-2 method.
     #[arg(long, value_enum, default_value_t = Phase2Arg::Auto)]
     pub phase2: Phase2Arg,
     /// Performance goal: mean squared normalised residual (>= 0).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
     pub goal: f64,
     /// Validation failures in a row before stopping (1 to 1000).
-    #[arg(long, default_value_t = 6)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 6)]
     pub max_fail: usize,
     /// Part of each network's training rows held out for the thesis's validation-failure
     /// stopping rule (0 to 0.5; 0: none, the penalty regularises and every row trains).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
     pub validation_fraction: f64,
     /// Training rows whose cross-validated error exceeds this many robust sigmas (1.4826 x
     /// the median) are listed as outliers (at least 2; `inf` lists none). Needs
     /// cross-validation: with every choice fixed, no row is listed.
-    #[arg(long, default_value_t = robocal::neural::tuning::OUTLIER_K)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = robocal::neural::tuning::OUTLIER_K)]
     pub outlier_k: f64,
     /// Keep the listed outliers in the final fit, and the rows that carry another
     /// configuration's reading in cross-validation and the fit (default: leave them out; a
@@ -146,14 +146,14 @@ pub struct CompensatorArgs {
     /// cost grows with the cube of the rows: on 2000 real UR10 poses, one block of 1000 rows
     /// instead of 500 lowered the held-out RMS by 5.5 % and took the default `train` from 4.5
     /// s to 11-15 s (squared-exponential kernel).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub rbf_search_rows: Option<usize>,
     /// Units the RBF network carries at most, 2 to 10000 (default 3000): on a larger training
     /// set they are centred on a seeded choice of its rows, one per arm configuration first,
     /// and the other rows train the MLPs only. Its fit's memory grows with the square of the
     /// units (72 MB per output at 3000, 800 MB at 10000; an output per core at once) and its
     /// time with the cube.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub rbf_units: Option<usize>,
     /// Disjoint blocks of those rows the likelihood search sees at most on a larger training
     /// set, their log likelihoods added, 1 to 8 (default 1; a last block of fewer rows only
@@ -173,7 +173,7 @@ pub struct CompensatorArgs {
     pub drop_outliers: bool,
     /// The MLPs' share of a mixed network's correction, strictly between 0 and 1 (the RBF
     /// network has the rest). Default: chosen by cross-validation among 0.05, 0.1, ..., 0.95.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub mlp_share: Option<f64>,
     /// The ids of the flags given on the command line (set after parsing, [`super::main`]):
     /// a flag with a default cannot otherwise be told from its default.
@@ -223,17 +223,17 @@ impl CompensatorArgs {
         if let Some(h) = self.hidden
             && !(1..=256).contains(&h)
         {
-            bail!("--hidden {h}: give 1 to 256 hidden units");
+            usage!("--hidden {h}: give 1 to 256 hidden units");
         }
         if let Some(p) = self.penalty
             && !(p.is_finite() && p >= 0.0)
         {
-            bail!("--penalty {p}: give a finite penalty >= 0");
+            usage!("--penalty {p}: give a finite penalty >= 0");
         }
         if let Some(m) = self.members
             && m > 50
         {
-            bail!("--members {m}: give 0 to 50 networks");
+            usage!("--members {m}: give 0 to 50 networks");
         }
         if self.members == Some(0) {
             // The model alone: a flag that shapes a network would be dropped without a word.
@@ -248,31 +248,31 @@ impl CompensatorArgs {
             .chain(self.training_flags())
             .chain(self.rbf_flags());
             if let Some((flag, _)) = shaping.into_iter().find(|(_, given)| *given) {
-                bail!("--members 0 keeps the model alone, no network: not with {flag}");
+                usage!("--members 0 keeps the model alone, no network: not with {flag}");
             }
         }
         if let Some(k) = self.folds
             && !(2..=20).contains(&k)
         {
-            bail!("--folds {k}: give 2 to 20 folds");
+            usage!("--folds {k}: give 2 to 20 folds");
         }
         if self.momentum_epochs > 100_000 || self.max_epochs.is_some_and(|m| m > 100_000) {
-            bail!("--momentum-epochs and --max-epochs take at most 100000");
+            usage!("--momentum-epochs and --max-epochs take at most 100000");
         }
         if !(self.goal.is_finite() && self.goal >= 0.0) {
-            bail!("--goal {}: give a finite goal >= 0", self.goal);
+            usage!("--goal {}: give a finite goal >= 0", self.goal);
         }
         if !(1..=1000).contains(&self.max_fail) {
-            bail!("--max-fail {}: give 1 to 1000", self.max_fail);
+            usage!("--max-fail {}: give 1 to 1000", self.max_fail);
         }
         if !(0.0..=0.5).contains(&self.validation_fraction) {
-            bail!(
+            usage!(
                 "--validation-fraction {}: give a fraction from 0 to 0.5",
                 self.validation_fraction
             );
         }
         if self.outlier_k.is_nan() || self.outlier_k < 2.0 {
-            bail!(
+            usage!(
                 "--outlier-k {}: give a cut of at least 2 robust sigmas (inf keeps every row)",
                 self.outlier_k
             );
@@ -288,7 +288,7 @@ impl CompensatorArgs {
             ComplianceArg::Off => Some(false),
         };
         if refine == Refine::Off && compliance == Some(true) {
-            bail!("--compliance on refines the compliances: not with --refine none");
+            usage!("--compliance on refines the compliances: not with --refine none");
         }
         // The group by name here; named compliances (`c2`) against the robot in `train`.
         if compliance == Some(false) && self.refine.split(',').any(|s| s.trim() == "compliance") {
@@ -297,7 +297,7 @@ impl CompensatorArgs {
         if let Some(n @ (Network::Rbf | Network::Mix)) = self.network
             && self.form == Some(Form::Joint)
         {
-            bail!(
+            usage!(
                 "--network {} acts on the pose residual: use --form pose (or leave it out)",
                 robocal::neural::settings::Network::from(n).name()
             );
@@ -307,24 +307,24 @@ impl CompensatorArgs {
         if self.form == Some(Form::Joint)
             && let Some((flag, _)) = self.rbf_flags().into_iter().find(|(_, given)| *given)
         {
-            bail!(
+            usage!(
                 "{flag} sets up the RBF network, which acts on the pose residual: not with \
                  --form joint"
             );
         }
         if self.rbf_start.is_some() && self.network == Some(Network::Mlp) {
-            bail!("--rbf-start sets up the RBF network: not with --network mlp");
+            usage!("--rbf-start sets up the RBF network: not with --network mlp");
         }
         if self.rbf_kernel.is_some() && self.network == Some(Network::Mlp) {
-            bail!("--rbf-kernel sets up the RBF network: not with --network mlp");
+            usage!("--rbf-kernel sets up the RBF network: not with --network mlp");
         }
         let units = self.rbf_units.unwrap_or(MAX_UNITS);
         if let Some(u) = self.rbf_units {
             if !(2..=10_000).contains(&u) {
-                bail!("--rbf-units {u}: give 2 to 10000 units");
+                usage!("--rbf-units {u}: give 2 to 10000 units");
             }
             if self.network == Some(Network::Mlp) {
-                bail!("--rbf-units sets up the RBF network: not with --network mlp");
+                usage!("--rbf-units sets up the RBF network: not with --network mlp");
             }
         }
         // The search's cost is cubic in its rows, at every one of its steps: no more than the
@@ -332,17 +332,17 @@ impl CompensatorArgs {
         let search_max = units.min(3000);
         if let Some(rows) = self.rbf_search_rows {
             if !(2..=search_max).contains(&rows) {
-                bail!(
+                usage!(
                     "--rbf-search-rows {rows}: give 2 to {search_max} rows (at most the units, \
                      --rbf-units, and 3000)"
                 );
             }
             if self.network == Some(Network::Mlp) {
-                bail!("--rbf-search-rows sets up the RBF network: not with --network mlp");
+                usage!("--rbf-search-rows sets up the RBF network: not with --network mlp");
             }
         }
         if self.rbf_search_blocks.is_some() && self.network == Some(Network::Mlp) {
-            bail!("--rbf-search-blocks sets up the RBF network: not with --network mlp");
+            usage!("--rbf-search-blocks sets up the RBF network: not with --network mlp");
         }
         if let Some(share) = self.mlp_share {
             robocal::neural::settings::check_share(share)
@@ -351,7 +351,7 @@ impl CompensatorArgs {
                 || self.members == Some(0)
                 || self.form == Some(Form::Joint)
             {
-                bail!(
+                usage!(
                     "--mlp-share blends MLPs with an RBF network (pose form): not without both, \
                      nor with --form joint"
                 );
@@ -359,18 +359,18 @@ impl CompensatorArgs {
         }
         if self.network == Some(Network::Rbf) {
             if self.hidden.is_some() || self.penalty.is_some() {
-                bail!(
+                usage!(
                     "--hidden and --penalty set up an MLP; an RBF network has one unit per \
                      training row (up to --rbf-units) and fits its own noise level"
                 );
             }
             if self.members.is_some_and(|m| m > 1) {
-                bail!("--network rbf: --members takes 1 (the RBF network is deterministic)");
+                usage!("--network rbf: --members takes 1 (the RBF network is deterministic)");
             }
             // The RBF network is solved, not trained by epochs: the MLPs' training flags
             // would be dropped without a word.
             if let Some((flag, _)) = self.training_flags().into_iter().find(|(_, given)| *given) {
-                bail!(
+                usage!(
                     "--network rbf is solved, not trained by epochs (its weights by Cholesky, its \
                      widths by maximum likelihood): not with {flag}"
                 );
@@ -417,6 +417,7 @@ impl CompensatorArgs {
             outlier_k: self.outlier_k,
             drop_outliers: !self.keep_outliers,
             budget: self.max_epochs.is_none(),
+            test_fixed: true,
         })
     }
 }

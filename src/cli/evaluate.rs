@@ -92,7 +92,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         robocal::identify::register::check_position_scale(&robot, &set)?;
     }
     if a.check_against.is_some() && !matches!(m, Measure::Pose | Measure::Position) {
-        anyhow::bail!(
+        usage!(
             "--check-against compares the readings of single rows (measure pose or position), \
              not measure {}",
             m.name()

@@ -39,6 +39,26 @@ macro_rules! told_after_on_stderr {
     };
 }
 
+/// A flag's value refused after parsing (out of its range, or against another flag): a usage
+/// error, which ends the command with code 2 as clap's own do ([`Usage`]).
+macro_rules! usage {
+    ($($arg:tt)*) => {
+        return Err(anyhow::Error::new($crate::cli::Usage(format!($($arg)*))))
+    };
+}
+
+/// A usage error found after parsing ([`usage!`]): exit code 2, as clap's.
+#[derive(Debug)]
+pub struct Usage(pub String);
+
+impl std::fmt::Display for Usage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Usage {}
+
 /// The lines of [`told_after!`]: whether each goes to standard error, and its text.
 static HELD: std::sync::Mutex<Vec<(bool, String)>> = std::sync::Mutex::new(Vec::new());
 
@@ -264,7 +284,12 @@ pub fn main() -> ExitCode {
                     "note: no output file was written ({n} prepared before the error were discarded)"
                 );
             }
-            ExitCode::from(if closed { 141 } else { 1 })
+            let usage = e.chain().any(|c| c.is::<Usage>());
+            ExitCode::from(match (closed, usage) {
+                (true, _) => 141,
+                (false, true) => 2,
+                (false, false) => 1,
+            })
         }
     }
 }

@@ -83,10 +83,10 @@ pub struct PlanArgs {
 
 fn constraints(a: &PlanArgs) -> Result<Constraints> {
     if !(0.0..=90.0).contains(&a.margin_deg) {
-        bail!("--margin-deg {}: give 0 to 90", a.margin_deg);
+        usage!("--margin-deg {}: give 0 to 90", a.margin_deg);
     }
     if a.floor_mm.is_some_and(|f| !f.is_finite()) {
-        bail!("--floor-mm must be a number");
+        usage!("--floor-mm must be a number");
     }
     let forbidden = match &a.forbid {
         Some(s) => {
@@ -96,7 +96,7 @@ fn constraints(a: &PlanArgs) -> Result<Constraints> {
                 nalgebra::Vector3::new(v[3], v[4], v[5]),
             );
             if (0..3).any(|i| lo[i] > hi[i]) {
-                bail!("--forbid {s}: give the box's minimum corner first, then its maximum");
+                usage!("--forbid {s}: give the box's minimum corner first, then its maximum");
             }
             Some((lo, hi))
         }
@@ -309,15 +309,15 @@ pub fn run(a: PlanArgs) -> Result<()> {
         ],
     )?;
     if !(1..=MAX_POOL).contains(&a.pool) {
-        bail!("--pool {}: give 1 to {MAX_POOL}", a.pool);
+        usage!("--pool {}: give 1 to {MAX_POOL}", a.pool);
     }
     if !(1..=100_000).contains(&a.validation) {
-        bail!("--validation {}: give 1 to 100000", a.validation);
+        usage!("--validation {}: give 1 to 100000", a.validation);
     }
     let robot = read_robot(&a.robot)?;
     let measure: robocal::identify::Measure = a.measure.into();
     if a.target_mm.is_some() && measure == robocal::identify::Measure::Orientation {
-        bail!(
+        usage!(
             "--target-mm sets a mean position error, which an orientation measure does not \
              predict (its positions keep their nominal values): give --count"
         );
@@ -508,7 +508,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
             let c = choose(&design, n, criterion, &[])?;
             (c.units.clone(), Some(c))
         }
-        (None, None, None) => bail!("give --count, --target-mm or --evaluate"),
+        (None, None, None) => usage!("give --count, --target-mm or --evaluate"),
     };
     let prediction = predict(&design, &units, a.seed).with_context(|| {
         format!(

@@ -2,7 +2,7 @@
 //! seeds (the README's "Plan your measurements" table and picture).
 
 use super::choices::Criterion;
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
 use robocal::identify::Measure;
 use robocal::plot::charts::{Curve, Curves};
@@ -52,10 +52,10 @@ pub fn run_study(a: PlanStudyArgs) -> Result<()> {
     // The picture folder checked before the study's minutes, not after.
     super::paths::guard(&[], &[super::paths::opt("--plot", a.plot.as_ref())])?;
     if !(1..=200).contains(&a.seeds) {
-        bail!("--seeds {}: give 1 to 200", a.seeds);
+        usage!("--seeds {}: give 1 to 200", a.seeds);
     }
     if !(100..=20_000).contains(&a.pool) {
-        bail!("--pool {}: give 100 to 20000", a.pool);
+        usage!("--pool {}: give 100 to 20000", a.pool);
     }
     let cases = [
         (Case::table_6_1(&a.datasets)?, "pose", Measure::Pose),

@@ -41,7 +41,7 @@ pub fn run(a: SplitArgs) -> Result<()> {
         &[req("--out-a", &a.out_a), req("--out-b", &a.out_b)],
     )?;
     if !(0.0..=1.0).contains(&a.fraction) {
-        bail!("--fraction must be within 0..1");
+        usage!("--fraction must be within 0..1");
     }
     let profile = a.data.profile()?;
     let n = counted_joints(&a.input, a.robot.as_ref(), &profile)?;

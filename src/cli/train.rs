@@ -350,6 +350,15 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     for w in report.selection.iter().flat_map(|s| &s.warnings) {
         eprintln!("warning: {w}");
     }
+    if (!c.members.is_empty() || c.rbf.is_some()) && c.domain.radius == 0.0 {
+        eprintln!(
+            "warning: the training rows hold one configuration (every joint within {} rad of \
+             one another's): the training domain's radius is 0, so the network corrects \
+             nothing away from that configuration; measure configurations spread over the \
+             workspace",
+            robocal::neural::repeats::SAME_CONFIGURATION
+        );
+    }
     // The rows cross-validation saw: the training rows but those left out for carrying
     // another configuration's reading.
     let trained;

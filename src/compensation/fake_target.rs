@@ -808,7 +808,20 @@ fn near_seed_check(
         let next = ik
             .from_start(&target, &back)
             .ok()
-            .filter(|next| round < SETTLE_ROUNDS && next.outside_limits.is_empty());
+            .filter(|_| round < SETTLE_ROUNDS);
+        if let Some(next) = &next {
+            // The calibrated model's limits and the controller's, as `settle` holds them.
+            let mut outside = next.outside_limits.clone();
+            for j in nominal.joints_outside_limits(&next.q) {
+                if !outside.contains(&j) {
+                    outside.push(j);
+                }
+            }
+            if !outside.is_empty() {
+                outside.sort_unstable();
+                return Err(Failure::OutsideLimits(outside));
+            }
+        }
         let Some(next) = next else {
             let apart = joints_apart(nominal, &back, &sol.q);
             let (dp, dr) = miss(ik.model(), &target, &back);

@@ -322,6 +322,33 @@ fn parameter_reports(
     (parameters, correlations)
 }
 
+/// |Correlation| from which two identified parameters are nearly aliases of each other: the
+/// data determine one combination of the two, and each alone only through the last digits of
+/// the residuals (a condition number below [`CONDITION_WARNING`] can hide such a pair when
+/// the rest is well determined).
+pub const ALIASED_CORRELATION: f64 = 0.999;
+
+/// The warning for `correlations` (name, name, r) at or beyond [`ALIASED_CORRELATION`]; None
+/// where there is none.
+fn aliased_warning(correlations: &[(String, String, f64)]) -> Option<String> {
+    let pairs: Vec<String> = correlations
+        .iter()
+        .filter(|(_, _, r)| r.abs() >= ALIASED_CORRELATION)
+        .map(|(a, b, r)| format!("{a}/{b} {r:+.4}"))
+        .collect();
+    (!pairs.is_empty()).then(|| {
+        format!(
+            "nearly aliased parameters (|correlation| >= {ALIASED_CORRELATION}): {}: the data \
+             determine a combination of each pair, not each one, so their estimates can lie far \
+             from the robot's own values (in opposite directions) while the model fits; read \
+             their standard deviations. Causes: a measure that cannot see them (positions of a \
+             point on the last joint's axis hide the wrist's orientation: measure poses, or a \
+             point off that axis), or a 6-DOF frame at the gimbal lock of its angles",
+            pairs.join(", ")
+        )
+    })
+}
+
 /// Rows whose residual lies beyond `k` robust sigmas ([`crate::stats::robust_sigma`], in
 /// the measurements' own sigmas), on the residuals unweighted by a robust loss.
 fn outliers(set: &MeasurementSet, obs: &Observations, robot: &Robot, k: f64) -> Vec<Outlier> {
@@ -660,6 +687,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
     let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
     notes.extend(super::plausibility::gimbal_notes(&solution.robot, &ids));
     let (parameters, correlations) = parameter_reports(nominal, &solution.robot, &ids, &cov);
+    warnings.extend(aliased_warning(&correlations));
     let outliers = outliers(set, &obs, &solution.robot, opts.outlier_k);
     let robot =
         solution
@@ -694,6 +722,17 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn only_nearly_aliased_pairs_are_warned_of() {
+        let pair = |r: f64| ("theta5".to_string(), "a5".to_string(), r);
+        assert_eq!(aliased_warning(&[pair(0.95), pair(-0.9989)]), None);
+        let w = aliased_warning(&[pair(0.95), pair(0.99961), pair(-0.9991)]).unwrap();
+        assert!(
+            w.contains("theta5/a5 +0.9996, theta5/a5 -0.9991:") && !w.contains("+0.9500"),
+            "{w}"
+        );
+    }
 
     #[test]
     fn inverse_diagonal_is_the_inverses() {

@@ -16,6 +16,7 @@
 use super::encoding::Encoding;
 use super::weights::Affine;
 use crate::model::Robot;
+use std::f64::consts::PI;
 
 /// The training domain (joints in rad or mm; distances in normalised input units).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -85,7 +86,25 @@ impl Domain {
         // Rows of one configuration (a repeat logs joints a few encoder counts apart) are one
         // point: their gap of nearly nothing would shrink the radius to nothing wherever
         // most configurations were measured twice, and switch the network off between them.
-        let groups = super::repeats::joint_groups(qs);
+        // A revolute joint the inputs see modulo whole turns is grouped on its angle wrapped
+        // to [-pi, pi): q and q + 2 pi are one input, so one configuration.
+        let wrapped: Vec<Vec<f64>> = qs
+            .iter()
+            .map(|q| {
+                q.iter()
+                    .zip(robot.joints())
+                    .map(|(&v, joint)| {
+                        if encoding.is_periodic(joint.joint_type) {
+                            (v + PI).rem_euclid(2.0 * PI) - PI
+                        } else {
+                            v
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let wrapped: Vec<&[f64]> = wrapped.iter().map(Vec::as_slice).collect();
+        let groups = super::repeats::joint_groups(&wrapped);
         let mut points: Vec<(Vec<f64>, usize)> = Vec::with_capacity(qs.len());
         let mut feat = Vec::new();
         let mut ws = crate::kinematics::Frames::new(robot);
@@ -137,7 +156,7 @@ impl Domain {
     /// `periodic(j)` holds (the inputs see it modulo whole turns,
     /// [`Encoding::is_periodic`]) is within its training range when a whole turn of it is.
     pub fn check(&self, q: &[f64], x: &[f64], periodic: impl Fn(usize) -> bool) -> DomainCheck {
-        let turn = 2.0 * std::f64::consts::PI;
+        let turn = 2.0 * PI;
         let joints_outside = (0..q.len())
             .filter(|&j| {
                 let (lo, hi) = (self.joint_min[j], self.joint_max[j]);
@@ -260,6 +279,24 @@ mod tests {
             alone.radius
         );
         assert_eq!(both.inputs.len(), 400);
+        // Repeats a whole turn away in a joint the inputs see modulo turns: one input, so one
+        // configuration (their gap of rounding, 1e-15, made the radius nothing).
+        let turned: Vec<Vec<f64>> = qs
+            .iter()
+            .map(|q| {
+                let mut q = q.clone();
+                q[5] += 2.0 * PI;
+                q
+            })
+            .collect();
+        let twice: Vec<&[f64]> = qs.iter().chain(&turned).map(Vec::as_slice).collect();
+        let both = Domain::fit(&robot, Encoding::SinCos, &norm, &twice);
+        assert!(
+            (both.radius - alone.radius).abs() < 1e-4 * alone.radius,
+            "{} against {}",
+            both.radius,
+            alone.radius
+        );
     }
 
     #[test]
@@ -270,7 +307,7 @@ mod tests {
             inputs: vec![vec![0.0]],
             radius: 1.0,
         };
-        let turn = 2.0 * std::f64::consts::PI;
+        let turn = 2.0 * PI;
         let outside =
             |q: [f64; 2], periodic: bool| d.check(&q, &[0.0], |_| periodic).joints_outside;
         for q0 in [0.5, 0.5 + turn, 0.5 - 2.0 * turn, 1.0 + turn, -1.0 - turn] {

@@ -2,7 +2,8 @@
 //! the network is trained on what the refined model still misses.
 //!
 //! The re-estimation is an identification ([`crate::identify::identify`], started at the
-//! given model, no re-registration) and so runs the exact model with its exact Jacobian in
+//! given model, no re-registration unless the model misses the rows by more than
+//! [`crate::evaluate::MISPLACED_MEDIAN_MM`]) and so runs the exact model with its exact Jacobian in
 //! every iteration; its identifiable subset comes from the rank analysis of the training rows.
 //! It keeps the model's unobserved marks ([`crate::model::Robot::unobserved`]) but those of
 //! parameters the rows observe, and adds none.
@@ -48,13 +49,18 @@ pub fn refine(
     spec: &str,
     sigmas: Sigmas,
 ) -> Result<(Robot, Vec<RefinedParam>, Vec<String>)> {
+    // A model far off the rows (a nominal file, not registered to the tracker's frame:
+    // `train` warns of it) is registered first, as `identify` does, where the selection holds
+    // the whole base: started metres away, `full,compliance` on Series B ran its
+    // compliances to 30 mm of validation error and the compensator to 54 mm.
+    let misplaced = crate::evaluate::misplaced_median(model, set);
     let id = identify(
         model,
         set,
         &Options {
             params: spec.into(),
             sigmas,
-            register: false,
+            register: misplaced.is_some(),
             rank_tolerance: RANK_TOLERANCE,
             ..Default::default()
         },
@@ -76,6 +82,13 @@ pub fn refine(
         .iter()
         .map(|w| format!("refinement: {w}"))
         .collect();
+    if let (Some((median, _)), Some(r)) = (misplaced, &id.registration) {
+        notes.push(format!(
+            "refinement: the model misses the training rows' positions by {median:.1} mm \
+             (median): their frame was registered first (RMS {:.4} mm), as `identify` does",
+            r.rms_mm
+        ));
+    }
     // The weights the refined values and their sigmas come from, as `identify` reports them.
     if let Some(note) = id.unmodelled.note("the training rows") {
         notes.push(format!("refinement: {note}"));

@@ -269,6 +269,13 @@ pub struct CompensatorOptions {
     /// Phase-2 epoch limits from the row count ([`super::tuning::CV_WORK`] for candidates,
     /// [`super::tuning::FIT_WORK`] for the final fit) instead of `train.max_epochs`.
     pub budget: bool,
+    /// With every choice fixed and a network to train: cross-validate it all the same, and
+    /// hold it against the model alone ([`super::selection::Selection::fixed_network_test`]),
+    /// so that a fixed network that does worse than the model is told of. The compensator is
+    /// the fixed one either way (no row is listed as an outlier, no search's
+    /// hyperparameters are handed on). Default true; [`CompensatorOptions::fixed`] (a fit
+    /// of settings already chosen) sets it false.
+    pub test_fixed: bool,
 }
 
 impl Default for CompensatorOptions {
@@ -290,6 +297,7 @@ impl Default for CompensatorOptions {
             outlier_k: OUTLIER_K,
             drop_outliers: true,
             budget: true,
+            test_fixed: true,
         }
     }
 }
@@ -313,6 +321,7 @@ impl CompensatorOptions {
             compliance: Some(false),
             train,
             budget: false,
+            test_fixed: false,
             ..Default::default()
         }
     }

@@ -51,7 +51,8 @@ impl std::fmt::Display for IkFailure {
             IkFailure::NotConverged(m) => write!(f, "{m}"),
             IkFailure::OutsideLimits(j) => write!(
                 f,
-                "the nearest solution leaves the limits of joint{} {}",
+                "every solution leaves the limits; the one nearest the seed (or, without one, \
+                 the middle of the ranges) leaves those of joint{} {}",
                 if j.len() == 1 { "" } else { "s" },
                 j.iter()
                     .map(|j| (j + 1).to_string())

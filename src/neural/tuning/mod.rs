@@ -192,19 +192,23 @@ pub fn select_settings(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<(Settings, Option<Selection>)> {
     let mut space = Space::of(robot, opts)?;
-    if !space.open {
-        // Nothing to choose (a fixed mix, its share given, keeps, output by output, the start
-        // of highest likelihood).
+    // Nothing to choose (a fixed mix, its share given, keeps, output by output, the start of
+    // highest likelihood): the settings are the options'. A network among them is still
+    // cross-validated against the model alone where asked (`test_fixed`), for the user to
+    // know; those figures choose nothing.
+    let fixed = (!space.open).then(|| {
         let network = opts.network.unwrap_or(Network::Mlp);
         let mlp_share = opts.mlp_share.filter(|_| network == Network::Mix);
-        return Ok((
-            Settings {
-                network,
-                mlp_share,
-                ..space.base
-            },
-            None,
-        ));
+        Settings {
+            network,
+            mlp_share,
+            ..space.base.clone()
+        }
+    });
+    if let Some(settings) = &fixed
+        && !(opts.test_fixed && settings.has_network())
+    {
+        return Ok((settings.clone(), None));
     }
     // Fewer folds train candidates on a smaller part of the set; where the held-out error
     // still falls steeply with more rows (real tracker data), 3 folds chose penalties ten
@@ -215,6 +219,11 @@ pub fn select_settings(
     let want = opts.folds.unwrap_or(if distinct >= MANY { 4 } else { 5 });
     let fold_of = folds(&groups, want.max(2), opts.train.seed);
     let k = fold_of.iter().max().map_or(0, |m| m + 1);
+    // Settings fixed as a whole need no folds: with fewer than 2 (one configuration) their
+    // test is not to be had.
+    if let Some(settings) = fixed.as_ref().filter(|_| k < 2) {
+        return Ok((settings.clone(), None));
+    }
     if k < 2 || want < 2 {
         return Err(Error::Invalid(format!(
             "choosing the settings by cross-validation needs at least 2 folds of distinct \
@@ -413,6 +422,12 @@ pub fn select_settings(
             }
         }
         outliers_of(set, &held, opts.outlier_k)
+    };
+    // With every choice fixed the search only informs: the fit is the options' settings,
+    // on every row, its RBF network searching its own hyperparameters.
+    let (winner, outliers, rbf_hyper) = match fixed {
+        Some(settings) => (settings, Vec::new(), None),
+        None => (winner, outliers, rbf_hyper),
     };
     Ok((
         winner,
