@@ -20,11 +20,12 @@ pub enum ComplianceArg {
     Off,
 }
 
-/// The error for a `--refine` selection that names compliances with `--compliance off`.
+/// The error for a `--refine` selection that names compliances with `--compliance off`: a
+/// usage error (exit 2).
 pub fn compliance_conflict(spec: &str) -> anyhow::Error {
-    anyhow::anyhow!(
+    anyhow::Error::new(super::Usage(format!(
         "--refine {spec} names compliances and --compliance off leaves them out: give one"
-    )
+    )))
 }
 
 /// Input encodings on the command line.
@@ -128,7 +129,7 @@ pub struct CompensatorArgs {
     /// Training rows whose cross-validated error exceeds this many robust sigmas (1.4826 x
     /// the median) are listed as outliers (at least 2; `inf` lists none). Needs
     /// cross-validation: with every choice fixed, no row is listed.
-    #[arg(long, allow_negative_numbers = true, default_value_t = robocal::neural::tuning::OUTLIER_K)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = robocal::neural::tuning::OUTLIER_K)]
     pub outlier_k: f64,
     /// Keep the listed outliers in the final fit, and the rows that carry another
     /// configuration's reading in cross-validation and the fit (default: leave them out; a
@@ -345,8 +346,9 @@ impl CompensatorArgs {
             usage!("--rbf-search-blocks sets up the RBF network: not with --network mlp");
         }
         if let Some(share) = self.mlp_share {
-            robocal::neural::settings::check_share(share)
-                .map_err(|e| anyhow::anyhow!("--mlp-share {share}: {e}"))?;
+            if let Err(e) = robocal::neural::settings::check_share(share) {
+                usage!("--mlp-share {share}: {e}");
+            }
             if matches!(self.network, Some(Network::Mlp | Network::Rbf))
                 || self.members == Some(0)
                 || self.form == Some(Form::Joint)

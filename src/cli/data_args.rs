@@ -57,11 +57,11 @@ impl DataArgs {
 pub struct SigmaArgs {
     /// Position sigma (mm, 1e-6 to 1000) for rows without sx,sy,sz (default 0.033, the
     /// thesis's tracker); `plan` takes it for every unit.
-    #[arg(long, value_parser = super::bounds::sigma)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::bounds::sigma)]
     pub sigma_pos: Option<f64>,
     /// Orientation sigma (mrad, 1e-6 to 1000) for rows without srx,sry,srz (default
     /// 0.174); `plan` takes it for every unit.
-    #[arg(long, value_parser = super::bounds::sigma)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::bounds::sigma)]
     pub sigma_rot: Option<f64>,
 }
 

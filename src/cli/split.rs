@@ -17,7 +17,7 @@ pub struct SplitArgs {
     robot: Option<PathBuf>,
     /// Fraction of rows for the first output (rows that share a pair label stay together: the
     /// first output may then hold one row more).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 0.5)]
     fraction: f64,
     /// Seed of the random split (the same seed gives the same parts).
     #[arg(long)]

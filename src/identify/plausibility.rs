@@ -90,14 +90,16 @@ pub fn gimbal_notes(robot: &Robot, ids: &[ParamId]) -> Vec<String> {
 /// distances between flange or tool positions at the same joints differ by more than a
 /// tenth of the arm, [`crate::kinematics::another_arm`]): where it fits its data (`identify`
 /// asks only then, [`warning`] being silent), the robot file describes another robot than
-/// the data's, whose fit moved lengths by hundreds of millimetres. `compensate` refuses such
-/// a pair.
+/// the data's, whose fit moved lengths by hundreds of millimetres, or rows that cannot tell
+/// the parameters apart let the fit move them by as much. `compensate` refuses such a model.
 pub fn another_arm_warning(start: &Robot, identified: &Robot) -> Option<String> {
     crate::kinematics::another_arm(start, identified).map(|gap| {
         format!(
             "the identified model fits its data but is not a calibration of the start model: \
-             {gap}: the robot file describes another robot than the data's (`compensate` \
-             refuses such a pair)"
+             {gap}: the robot file describes another robot than the data's, or the rows \
+             cannot tell the parameters apart (too few or too close together: see the nearly \
+             aliased pairs and the condition number) and the fit moved them along what they \
+             do not see (`compensate` refuses such a model)"
         )
     })
 }

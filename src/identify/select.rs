@@ -56,7 +56,18 @@ pub fn priority(robot: &Robot, id: &ParamId) -> u8 {
 pub fn select(robot: &Robot, spec: &str) -> Result<Vec<usize>> {
     let params = robot.parameters();
     let mut chosen = vec![false; params.len()];
-    for item in spec.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+    if spec.trim().is_empty() {
+        return Err(Error::Invalid(
+            "an empty parameter selection: give one, e.g. `offsets` or `full`".into(),
+        ));
+    }
+    for item in spec.split(',').map(str::trim) {
+        if item.is_empty() {
+            return Err(Error::Invalid(format!(
+                "the parameter selection `{spec}` has an empty entry (two commas in a row, or \
+                 one at an end)"
+            )));
+        }
         let pick = |f: &dyn Fn(&ParamId) -> bool, chosen: &mut Vec<bool>| {
             for (k, id) in params.iter().enumerate() {
                 if f(id) {
@@ -107,6 +118,19 @@ mod tests {
     use super::*;
 
     use crate::model::test_fanuc as fanuc;
+
+    #[test]
+    fn empty_entries_are_refused() {
+        let r = fanuc();
+        for spec in ["full,,tool", "full,", ",offsets", " , ", ""] {
+            let e = select(&r, spec).unwrap_err().to_string();
+            assert!(e.contains("empty"), "{spec:?}: {e}");
+        }
+        assert_eq!(
+            select(&r, " full , tool ").unwrap(),
+            select(&r, "full,tool").unwrap()
+        );
+    }
 
     #[test]
     fn groups_names_and_priority() {

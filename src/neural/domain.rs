@@ -72,6 +72,24 @@ impl DomainCheck {
     }
 }
 
+/// An angle (rad) in the middle of the widest gap between `angles` on the circle: cut there,
+/// the circle leaves every cluster of them whole. 0 for no angles.
+fn widest_gap_cut(angles: impl Iterator<Item = f64>) -> f64 {
+    let mut a: Vec<f64> = angles.map(|v| v.rem_euclid(2.0 * PI)).collect();
+    a.sort_by(f64::total_cmp);
+    let (Some(&first), Some(&last)) = (a.first(), a.last()) else {
+        return 0.0;
+    };
+    // The gap from the last angle round to the first, then those between neighbours.
+    let mut best = (first + 2.0 * PI - last, last);
+    for w in a.windows(2) {
+        if w[1] - w[0] > best.0 {
+            best = (w[1] - w[0], w[0]);
+        }
+    }
+    best.1 + best.0 / 2.0
+}
+
 fn distance2(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
 }
@@ -86,19 +104,25 @@ impl Domain {
         // Rows of one configuration (a repeat logs joints a few encoder counts apart) are one
         // point: their gap of nearly nothing would shrink the radius to nothing wherever
         // most configurations were measured twice, and switch the network off between them.
-        // A revolute joint the inputs see modulo whole turns is grouped on its angle wrapped
-        // to [-pi, pi): q and q + 2 pi are one input, so one configuration.
+        // A revolute joint the inputs see modulo whole turns is grouped on its angle taken
+        // modulo 2 pi from a cut in the widest gap between its training values on the circle:
+        // q and q + 2 pi are one input, so one configuration, and no two repeats lie across
+        // the cut (at +-pi, a wrist logged at 179.9999 and -179.9999 deg would).
+        let cuts: Vec<Option<f64>> = (robot.joints().iter().enumerate())
+            .map(|(j, joint)| {
+                encoding
+                    .is_periodic(joint.joint_type)
+                    .then(|| widest_gap_cut(qs.iter().map(|q| q[j])))
+            })
+            .collect();
         let wrapped: Vec<Vec<f64>> = qs
             .iter()
             .map(|q| {
                 q.iter()
-                    .zip(robot.joints())
-                    .map(|(&v, joint)| {
-                        if encoding.is_periodic(joint.joint_type) {
-                            (v + PI).rem_euclid(2.0 * PI) - PI
-                        } else {
-                            v
-                        }
+                    .zip(&cuts)
+                    .map(|(&v, cut)| match cut {
+                        Some(c) => c + (v - c).rem_euclid(2.0 * PI),
+                        None => v,
                     })
                     .collect()
             })
@@ -297,6 +321,40 @@ mod tests {
             both.radius,
             alone.radius
         );
+        // Repeats on either side of +-180 deg (a wrist logged at 179.9999999 and
+        // -179.9999999 deg): one configuration too, whatever side of the seam.
+        let seam = |q: &Vec<f64>, s: f64| {
+            let mut q = q.clone();
+            q[5] = s * (PI - 2e-9);
+            q
+        };
+        let (a, b): (Vec<Vec<f64>>, Vec<Vec<f64>>) =
+            qs.iter().map(|q| (seam(q, 1.0), seam(q, -1.0))).unzip();
+        let once: Vec<&[f64]> = a.iter().map(Vec::as_slice).collect();
+        let alone = Domain::fit(&robot, Encoding::SinCos, &norm, &once);
+        let twice: Vec<&[f64]> = a.iter().chain(&b).map(Vec::as_slice).collect();
+        let both = Domain::fit(&robot, Encoding::SinCos, &norm, &twice);
+        assert!(alone.radius > 0.1, "{}", alone.radius);
+        assert!(
+            (both.radius - alone.radius).abs() < 1e-4 * alone.radius,
+            "{} against {}",
+            both.radius,
+            alone.radius
+        );
+    }
+
+    #[test]
+    fn the_cut_lies_in_the_widest_gap() {
+        let cut = |v: &[f64]| widest_gap_cut(v.iter().copied());
+        // Values around +-pi: the widest gap is around 0.
+        let c = cut(&[3.1, -3.1, 3.0, -3.0]);
+        assert!(
+            (c - 0.0).abs() < 1e-12 || (c - 2.0 * PI).abs() < 1e-12,
+            "{c}"
+        );
+        // Values around 0: the cut lies opposite, at pi.
+        assert!((cut(&[-0.5, 0.5, 0.1]) - PI).abs() < 1e-12);
+        assert_eq!(cut(&[]), 0.0);
     }
 
     #[test]

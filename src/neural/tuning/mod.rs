@@ -191,7 +191,7 @@ pub fn select_settings(
     opts: &CompensatorOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<(Settings, Option<Selection>)> {
-    let mut space = Space::of(robot, opts)?;
+    let space = Space::of(robot, opts)?;
     // Nothing to choose (a fixed mix, its share given, keeps, output by output, the start of
     // highest likelihood): the settings are the options'. A network among them is still
     // cross-validated against the model alone where asked (`test_fixed`), for the user to
@@ -205,11 +205,31 @@ pub fn select_settings(
             ..space.base.clone()
         }
     });
-    if let Some(settings) = &fixed
-        && !(opts.test_fixed && settings.has_network())
-    {
-        return Ok((settings.clone(), None));
+    match fixed {
+        Some(settings) if !(opts.test_fixed && settings.has_network()) => Ok((settings, None)),
+        // The test informs only: where it cannot be had (fewer than 2 folds, a fold too small
+        // to fit), the fixed fit stands without it, as it did before the test.
+        Some(settings) => Ok(
+            match cross_validate(robot, set, opts, progress, space, Some(settings.clone())) {
+                Ok(tested) => tested,
+                Err(_) => (settings, None),
+            },
+        ),
+        None => cross_validate(robot, set, opts, progress, space, None),
     }
+}
+
+/// [`select_settings`] where cross-validation runs: the choice among what `space` leaves
+/// open, or, with `fixed` settings, their test against the model alone (the settings stay
+/// `fixed`, no outlier is listed, no hyperparameters are handed on).
+fn cross_validate(
+    robot: &Robot,
+    set: &MeasurementSet,
+    opts: &CompensatorOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    mut space: Space,
+    fixed: Option<Settings>,
+) -> Result<(Settings, Option<Selection>)> {
     // Fewer folds train candidates on a smaller part of the set; where the held-out error
     // still falls steeply with more rows (real tracker data), 3 folds chose penalties ten
     // times too large. From MANY configurations on, candidate fits sit at their iteration
@@ -219,11 +239,6 @@ pub fn select_settings(
     let want = opts.folds.unwrap_or(if distinct >= MANY { 4 } else { 5 });
     let fold_of = folds(&groups, want.max(2), opts.train.seed);
     let k = fold_of.iter().max().map_or(0, |m| m + 1);
-    // Settings fixed as a whole need no folds: with fewer than 2 (one configuration) their
-    // test is not to be had.
-    if let Some(settings) = fixed.as_ref().filter(|_| k < 2) {
-        return Ok((settings.clone(), None));
-    }
     if k < 2 || want < 2 {
         return Err(Error::Invalid(format!(
             "choosing the settings by cross-validation needs at least 2 folds of distinct \
@@ -409,7 +424,9 @@ pub fn select_settings(
     };
     // The chosen candidate's held-out error on every row (a refined model alone included:
     // a mis-measured row pulls the refinement too).
-    let outliers = {
+    let outliers = if fixed.is_some() {
+        Vec::new()
+    } else {
         let mut held = vec![(f64::NAN, None); set.rows.len()];
         // Stage 5 has them where it held a network against the model alone.
         let per_fold = match chosen_rows {
@@ -425,9 +442,9 @@ pub fn select_settings(
     };
     // With every choice fixed the search only informs: the fit is the options' settings,
     // on every row, its RBF network searching its own hyperparameters.
-    let (winner, outliers, rbf_hyper) = match fixed {
-        Some(settings) => (settings, Vec::new(), None),
-        None => (winner, outliers, rbf_hyper),
+    let (winner, rbf_hyper) = match fixed {
+        Some(settings) => (settings, None),
+        None => (winner, rbf_hyper),
     };
     Ok((
         winner,
