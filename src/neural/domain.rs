@@ -284,63 +284,41 @@ mod tests {
             offset: vec![0.0; 12],
             scale: vec![1.0; 12],
         };
-        let once: Vec<&[f64]> = qs.iter().map(Vec::as_slice).collect();
-        let alone = Domain::fit(&robot, Encoding::SinCos, &norm, &once);
-        // Every configuration measured again, its joints logged 2e-6 rad apart (encoder
-        // counts): the same configurations, so the same radius; gaps between a row and its
-        // repeat made it about 4e-6.
-        let repeats: Vec<Vec<f64>> = qs
-            .iter()
-            .map(|q| q.iter().map(|v| v + 2e-6).collect())
-            .collect();
-        let twice: Vec<&[f64]> = qs.iter().chain(&repeats).map(Vec::as_slice).collect();
-        let both = Domain::fit(&robot, Encoding::SinCos, &norm, &twice);
-        assert!(alone.radius > 0.1, "{}", alone.radius);
-        assert!(
-            (both.radius - alone.radius).abs() < 1e-4 * alone.radius,
-            "{} against {}",
-            both.radius,
-            alone.radius
-        );
-        assert_eq!(both.inputs.len(), 400);
-        // Repeats a whole turn away in a joint the inputs see modulo turns: one input, so one
-        // configuration (their gap of rounding, 1e-15, made the radius nothing).
-        let turned: Vec<Vec<f64>> = qs
-            .iter()
-            .map(|q| {
-                let mut q = q.clone();
-                q[5] += 2.0 * PI;
-                q
-            })
-            .collect();
-        let twice: Vec<&[f64]> = qs.iter().chain(&turned).map(Vec::as_slice).collect();
-        let both = Domain::fit(&robot, Encoding::SinCos, &norm, &twice);
-        assert!(
-            (both.radius - alone.radius).abs() < 1e-4 * alone.radius,
-            "{} against {}",
-            both.radius,
-            alone.radius
-        );
-        // Repeats on either side of +-180 deg (a wrist logged at 179.9999999 and
-        // -179.9999999 deg): one configuration too, whatever side of the seam.
-        let seam = |q: &Vec<f64>, s: f64| {
-            let mut q = q.clone();
-            q[5] = s * (PI - 2e-9);
-            q
+        let fit = |rows: &[&Vec<f64>]| {
+            let rows: Vec<&[f64]> = rows.iter().map(|q| q.as_slice()).collect();
+            Domain::fit(&robot, Encoding::SinCos, &norm, &rows)
         };
-        let (a, b): (Vec<Vec<f64>>, Vec<Vec<f64>>) =
-            qs.iter().map(|q| (seam(q, 1.0), seam(q, -1.0))).unzip();
-        let once: Vec<&[f64]> = a.iter().map(Vec::as_slice).collect();
-        let alone = Domain::fit(&robot, Encoding::SinCos, &norm, &once);
-        let twice: Vec<&[f64]> = a.iter().chain(&b).map(Vec::as_slice).collect();
-        let both = Domain::fit(&robot, Encoding::SinCos, &norm, &twice);
-        assert!(alone.radius > 0.1, "{}", alone.radius);
-        assert!(
-            (both.radius - alone.radius).abs() < 1e-4 * alone.radius,
-            "{} against {}",
-            both.radius,
-            alone.radius
-        );
+        // `first` measured again as `again`: the same configurations, so the same radius.
+        let same_radius = |first: &[Vec<f64>], again: &[Vec<f64>]| {
+            let alone = fit(&first.iter().collect::<Vec<_>>());
+            let both = fit(&first.iter().chain(again).collect::<Vec<_>>());
+            assert!(alone.radius > 0.1, "{}", alone.radius);
+            assert!(
+                (both.radius - alone.radius).abs() < 1e-4 * alone.radius,
+                "{} against {}",
+                both.radius,
+                alone.radius
+            );
+            both
+        };
+        let moved = |rows: &[Vec<f64>], by: &dyn Fn(&mut Vec<f64>)| -> Vec<Vec<f64>> {
+            (rows.iter().cloned())
+                .map(|mut q| {
+                    by(&mut q);
+                    q
+                })
+                .collect()
+        };
+        // Joints logged 2e-6 rad apart (encoder counts): gaps between a row and its repeat
+        // made the radius about 4e-6.
+        let again = moved(&qs, &|q| q.iter_mut().for_each(|v| *v += 2e-6));
+        assert_eq!(same_radius(&qs, &again).inputs.len(), 400);
+        // A whole turn away in a joint the inputs see modulo turns: one input (their gap of
+        // rounding, 1e-15, made the radius nothing).
+        same_radius(&qs, &moved(&qs, &|q| q[5] += 2.0 * PI));
+        // Either side of +-180 deg (a wrist logged at 179.9999999 and -179.9999999 deg).
+        let seam = moved(&qs, &|q| q[5] = PI - 2e-9);
+        same_radius(&seam, &moved(&seam, &|q| q[5] = -q[5]));
     }
 
     #[test]
