@@ -908,6 +908,15 @@ fn a_network_fixed_in_every_choice_is_still_held_against_the_model_alone() {
     };
     let (_, report) = Compensator::train(&model, &few, &alone, &|_, _| {}).unwrap();
     assert!(report.selection.is_none());
+    // Four rows fit one network but no fold's: the fit stands, untested, and says so.
+    let four = subset(&train, |i| i < 4);
+    let (_, report) = Compensator::train(&model, &four, &tested, &|_, _| {}).unwrap();
+    assert!(report.selection.is_none());
+    assert!(
+        (report.notes.iter()).any(|n| n.contains("could not be held against the model alone")),
+        "{:?}",
+        report.notes
+    );
 }
 
 /// A mis-measured training row (3 mm off in x) is listed as an outlier of the

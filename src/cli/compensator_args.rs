@@ -129,7 +129,7 @@ pub struct CompensatorArgs {
     /// Training rows whose cross-validated error exceeds this many robust sigmas (1.4826 x
     /// the median) are listed as outliers (at least 2; `inf` lists none). Needs
     /// cross-validation: with every choice fixed, no row is listed.
-    #[arg(long, allow_hyphen_values = true, default_value_t = robocal::neural::tuning::OUTLIER_K)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = robocal::neural::tuning::OUTLIER_K)]
     pub outlier_k: f64,
     /// Keep the listed outliers in the final fit, and the rows that carry another
     /// configuration's reading in cross-validation and the fit (default: leave them out; a

@@ -52,7 +52,7 @@ pub struct IdentifyArgs {
     max_iterations: usize,
     /// Rows beyond this many robust sigmas are reported as outliers (1 to 1e6, or inf for
     /// none).
-    #[arg(long, allow_hyphen_values = true, default_value_t = 3.0, value_parser = super::bounds::outlier_k)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 3.0, value_parser = super::bounds::outlier_k)]
     outlier_k: f64,
     /// Calibrated robot file to write.
     #[arg(long)]

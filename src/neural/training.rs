@@ -49,7 +49,7 @@ impl Compensator {
         } else {
             set
         };
-        let (settings, mut selection) = select_settings(robot, set, opts, progress)?;
+        let (settings, mut selection, untested) = select_settings(robot, set, opts, progress)?;
         let selection_seconds = started.elapsed().as_secs_f64();
         // Rows cross-validation listed as outliers stay out of the final fit when asked.
         let left_out: Vec<usize> = match &selection {
@@ -104,6 +104,7 @@ impl Compensator {
         if !shared.is_empty() {
             report.notes.push(shared_note(&shared, drop_shared));
         }
+        report.notes.extend(untested);
         if let Some(s) = &mut selection {
             // Outliers were found among the rows that trained; name them in the rows given.
             for o in &mut s.outliers {

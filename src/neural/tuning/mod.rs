@@ -184,13 +184,13 @@ pub const REFINEMENT_MARGIN: f64 = 0.02;
 pub const REFINEMENT_Z: f64 = 2.5;
 
 /// The settings to fit: `opts`'s fixed choices, the rest chosen by cross-validation on `set`
-/// (None when nothing was left to choose).
+/// (None when nothing was left to choose), and notes on a test that could not be had.
 pub fn select_settings(
     robot: &Robot,
     set: &MeasurementSet,
     opts: &CompensatorOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<(Settings, Option<Selection>)> {
+) -> Result<(Settings, Option<Selection>, Vec<String>)> {
     let space = Space::of(robot, opts)?;
     // Nothing to choose (a fixed mix, its share given, keeps, output by output, the start of
     // highest likelihood): the settings are the options'. A network among them is still
@@ -206,16 +206,26 @@ pub fn select_settings(
         }
     });
     match fixed {
-        Some(settings) if !(opts.test_fixed && settings.has_network()) => Ok((settings, None)),
+        Some(settings) if !(opts.test_fixed && settings.has_network()) => {
+            Ok((settings, None, Vec::new()))
+        }
         // The test informs only: where it cannot be had (fewer than 2 folds, a fold too small
-        // to fit), the fixed fit stands without it, as it did before the test.
+        // to fit), the fixed fit stands without it, as it did before the test, and says so.
         Some(settings) => Ok(
             match cross_validate(robot, set, opts, progress, space, Some(settings.clone())) {
-                Ok(tested) => tested,
-                Err(_) => (settings, None),
+                Ok((settings, selection)) => (settings, selection, Vec::new()),
+                Err(e) => (
+                    settings,
+                    None,
+                    vec![format!(
+                        "the fixed network could not be held against the model alone by \
+                         cross-validation ({e}): it is fitted as fixed, untested"
+                    )],
+                ),
             },
         ),
-        None => cross_validate(robot, set, opts, progress, space, None),
+        None => cross_validate(robot, set, opts, progress, space, None)
+            .map(|(settings, selection)| (settings, selection, Vec::new())),
     }
 }
 
