@@ -323,11 +323,22 @@ fn impossible_targets_are_failures_not_commands() {
     assert!(solver.solve(&Target::Pose(target), Some(&inside)).is_ok());
 }
 
+/// `settings` fitted as they are, each network for 20 epochs: a quick compensator whose
+/// network matters, for tests of how it is used.
+fn quick_fixed(settings: &robocal::neural::compensator::Settings) -> CompensatorOptions {
+    CompensatorOptions::fixed(
+        settings,
+        robocal::neural::train::TrainOptions {
+            max_epochs: 20,
+            ..Default::default()
+        },
+    )
+}
+
 #[test]
 fn compensated_jacobian_matches_central_differences() {
     use robocal::kinematics::ToolModel;
     use robocal::neural::compensator::Form;
-    use robocal::neural::train::TrainOptions;
     let s = load(
         "nongeometric_robot",
         Some("nongeometric/fanuc_compliance_gear.toml"),
@@ -359,13 +370,7 @@ fn compensated_jacobian_matches_central_differences() {
             refine: None,
             mlp_share: None,
         };
-        let opts = CompensatorOptions::fixed(
-            &settings,
-            TrainOptions {
-                max_epochs: 20,
-                ..Default::default()
-            },
-        );
+        let opts = quick_fixed(&settings);
         let (comp, _) = Compensator::train(&s.nominal, training, &opts, &|_, _| {}).unwrap();
         let mut model = CalibratedModel::compensated(&comp);
         let mut rigid = robocal::kinematics::Frames::new(&comp.robot);
@@ -1008,7 +1013,6 @@ fn a_compensator_with_angle_inputs_is_reached_at_its_commands() {
     use robocal::kinematics::ToolModel;
     use robocal::neural::compensator::{Form, Network, Settings};
     use robocal::neural::encoding::Encoding;
-    use robocal::neural::train::TrainOptions;
     let s = load(
         "nongeometric_robot",
         Some("nongeometric/fanuc_compliance_gear.toml"),
@@ -1024,13 +1028,7 @@ fn a_compensator_with_angle_inputs_is_reached_at_its_commands() {
         refine: None,
         mlp_share: None,
     };
-    let opts = CompensatorOptions::fixed(
-        &settings,
-        TrainOptions {
-            max_epochs: 20,
-            ..Default::default()
-        },
-    );
+    let opts = quick_fixed(&settings);
     let calibrated = identified(&s);
     let (comp, _) = Compensator::train(&calibrated, &s.training, &opts, &|_, _| {}).unwrap();
     let mut model = CalibratedModel::compensated(&comp);

@@ -350,7 +350,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     for w in report.selection.iter().flat_map(|s| &s.warnings) {
         eprintln!("warning: {w}");
     }
-    if (!c.members.is_empty() || c.rbf.is_some()) && c.domain.radius == 0.0 {
+    if c.has_network() && c.domain.radius == 0.0 {
         eprintln!(
             "warning: the training rows hold one configuration (every joint within {} rad of \
              one another's): the training domain's radius is 0, so the network corrects \

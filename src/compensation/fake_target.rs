@@ -182,21 +182,23 @@ enum Controller<'a> {
     },
 }
 
-/// A solve's remaining position (mm) and rotation (rad) errors.
-trait Residuals {
-    fn residuals(&self) -> (f64, f64);
+/// Whether a miss of `dp` mm and `dr` rad lands on the target, for a solve that left
+/// `residual` (mm, rad): within [`LANDS_MM`] and [`LANDS_RAD`], or twice the residual.
+fn lands((dp, dr): (f64, f64), residual: (f64, f64)) -> bool {
+    dp <= LANDS_MM.max(2.0 * residual.0) && dr <= LANDS_RAD.max(2.0 * residual.1)
 }
 
-impl Residuals for IkSolution {
-    fn residuals(&self) -> (f64, f64) {
-        (self.position_error_mm, self.rotation_error_rad)
+/// The joints (0-based) of `sol` beyond the calibrated model's limits (as the solve found
+/// them) or the controller's (`nominal`'s; usually the same), in order.
+fn outside_either(sol: &IkSolution, nominal: &Robot) -> Vec<usize> {
+    let mut outside = sol.outside_limits.clone();
+    for j in nominal.joints_outside_limits(&sol.q) {
+        if !outside.contains(&j) {
+            outside.push(j);
+        }
     }
-}
-
-impl Residuals for Command {
-    fn residuals(&self) -> (f64, f64) {
-        (self.position_residual_mm, self.rotation_residual_rad)
-    }
+    outside.sort_unstable();
+    outside
 }
 
 /// How far (mm, rad) `model` at joints `q` lies from `target`.
@@ -229,9 +231,7 @@ fn runs(
         return None;
     }
     let (dp, dr) = miss(ik.model(), target, run);
-    (dp <= LANDS_MM.max(2.0 * sol.position_error_mm)
-        && dr <= LANDS_RAD.max(2.0 * sol.rotation_error_rad))
-    .then(|| IkSolution {
+    lands((dp, dr), (sol.position_error_mm, sol.rotation_error_rad)).then(|| IkSolution {
         q: run.to_vec(),
         position_error_mm: dp,
         rotation_error_rad: dr,
@@ -392,7 +392,8 @@ impl<'a> FakeTargetSolver<'a> {
         // lets the seed start another solve.
         let out = self.solve_seeded(desired, seed).and_then(|command| {
             if matches!(self.controller, Controller::Nearest { .. }) {
-                self.landed(&command.desired, &command.q, &command)?;
+                let residual = (command.position_residual_mm, command.rotation_residual_rad);
+                self.landed(&command.desired, &command.q, residual)?;
             }
             Ok(command)
         });
@@ -424,19 +425,18 @@ impl<'a> FakeTargetSolver<'a> {
 
     /// Whether the calibrated model at joints `q` reaches `target` (a position target's
     /// pose with the seed's orientation, as solved) within [`LANDS_MM`] and [`LANDS_RAD`] (or
-    /// twice `solved`'s residuals). The solve's residual is that of the joints it converged
-    /// to; a joint moved by a whole turn after it (into the limits, or to the turn nearest
-    /// the seed) reaches the same pose for a model and a compensator whose inputs are
-    /// periodic, but not for one whose inputs are the angles themselves.
+    /// twice the solve's `residual`, mm and rad). The solve's residual is that of the joints
+    /// it converged to; a joint moved by a whole turn after it (into the limits, or to the
+    /// turn nearest the seed) reaches the same pose for a model and a compensator whose
+    /// inputs are periodic, but not for one whose inputs are the angles themselves.
     fn landed(
         &mut self,
         target: &Pose,
         q: &[f64],
-        solved: &impl Residuals,
+        residual: (f64, f64),
     ) -> std::result::Result<(), Failure> {
         let (dp, dr) = miss(self.ik.model(), target, q);
-        let (p, r) = solved.residuals();
-        if dp <= LANDS_MM.max(2.0 * p) && dr <= LANDS_RAD.max(2.0 * r) {
+        if lands((dp, dr), residual) {
             return Ok(());
         }
         Err(Failure::NotConverged(format!(
@@ -545,14 +545,7 @@ impl<'a> FakeTargetSolver<'a> {
         sol: IkSolution,
         allowed: &[Branch],
     ) -> std::result::Result<Command, Failure> {
-        // The calibrated model's limits and the controller's (usually the same).
-        let mut outside = sol.outside_limits.clone();
-        for j in self.nominal.joints_outside_limits(&sol.q) {
-            if !outside.contains(&j) {
-                outside.push(j);
-            }
-        }
-        outside.sort_unstable();
+        let outside = outside_either(&sol, self.nominal);
         if !outside.is_empty() {
             return Err(Failure::OutsideLimits(outside));
         }
@@ -603,7 +596,11 @@ impl<'a> FakeTargetSolver<'a> {
                 }
             }
         }
-        self.landed(&target, &sol.q, &sol)?;
+        self.landed(
+            &target,
+            &sol.q,
+            (sol.position_error_mm, sol.rotation_error_rad),
+        )?;
         let fake = tool_pose(self.nominal, &sol.q);
         Ok(Command::new(target, fake, Some(branch), sol))
     }
@@ -811,14 +808,8 @@ fn near_seed_check(
             .filter(|_| round < SETTLE_ROUNDS);
         if let Some(next) = &next {
             // The calibrated model's limits and the controller's, as `settle` holds them.
-            let mut outside = next.outside_limits.clone();
-            for j in nominal.joints_outside_limits(&next.q) {
-                if !outside.contains(&j) {
-                    outside.push(j);
-                }
-            }
+            let outside = outside_either(next, nominal);
             if !outside.is_empty() {
-                outside.sort_unstable();
                 return Err(Failure::OutsideLimits(outside));
             }
         }

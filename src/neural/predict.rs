@@ -415,10 +415,16 @@ fn left_jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
 }
 
 impl Compensator {
+    /// Whether a network (MLPs, an RBF network, or both) corrects the model: false for the
+    /// model alone.
+    pub fn has_network(&self) -> bool {
+        !self.members.is_empty() || self.rbf.is_some()
+    }
+
     /// Where `q` (rad, mm) stands against the training domain; inside everywhere for a
     /// compensator without a network (the model alone: nothing extrapolates, nothing fades).
     pub fn domain_check(&self, q: &[f64], ws: &mut PredictWorkspace) -> DomainCheck {
-        if self.members.is_empty() && self.rbf.is_none() {
+        if !self.has_network() {
             return DomainCheck {
                 joints_outside: Vec::new(),
                 nearest: 0.0,
