@@ -338,3 +338,33 @@ fn simulate_streams_the_rows_the_library_returns() {
         );
     }
 }
+
+/// A profile given as a pipe (`--profile /dev/stdin`, `<(...)`) can be read once only: it is
+/// read once for the whole command (a second read found it empty and took the file for
+/// canonical CSV).
+#[test]
+fn a_profile_from_a_pipe_is_read_once() {
+    use std::io::Write;
+    let input = tmp("piped_profile.csv");
+    std::fs::write(&input, "q1;q2;q3;q4;q5;q6;x;y;z\n0;0;0;0;0;0;1,5;2;3\n").unwrap();
+    let out = tmp("piped_profile.out.csv");
+    let _ = std::fs::remove_file(&out);
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_robocal"))
+        .args(["import", input.to_str().unwrap(), "--robot", FANUC])
+        .args(["--profile", "/dev/stdin", "--out", out.to_str().unwrap()])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    stdin
+        .write_all(b"delimiter = \";\"\ndecimal_comma = true\n")
+        .unwrap();
+    drop(stdin);
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let written = std::fs::read_to_string(&out).unwrap();
+    assert!(written.contains(",1.5,2,3"), "{written}");
+}

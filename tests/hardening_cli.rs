@@ -181,7 +181,8 @@ fn outputs_never_overwrite_an_input_or_each_other() {
     for args in &cases {
         let o = robocal(args);
         let err = stderr(&o);
-        assert!(!o.status.success(), "{args:?} succeeded");
+        // Two flags at odds: a usage error.
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
         assert!(
             err.contains("refusing to overwrite an input") || err.contains("name the same file"),
             "{args:?}: {err}"
@@ -890,8 +891,25 @@ fn edge_inputs_of_train_and_evaluate() {
     assert!(!std::path::Path::new(out).exists());
     failed(
         &["--refine", "fulll"],
-        "the refinement `fulll`: unknown parameter or group",
+        "--refine `fulll`: unknown parameter or group",
     );
+    // A selection that names nothing of the robot is a flag's value refused: exit 2.
+    assert_eq!(train(&["--refine", "fulll"]).status.code(), Some(2));
+    for args in [
+        &["identify", "--robot", FANUC, "--data", TRAIN, "--out", out][..],
+        &["plan", "--robot", FANUC, "--count", "40", "--out", out],
+    ] {
+        for params in ["zzz", "", "full,,tool"] {
+            let o = robocal(&[args, &["--params", params]].concat());
+            assert_eq!(
+                o.status.code(),
+                Some(2),
+                "{args:?} {params}: {}",
+                stderr(&o)
+            );
+            assert!(stderr(&o).contains(&format!("--params `{params}`: ")));
+        }
+    }
     let report = common::tmp("edge_members0.json");
     let o = train(&[
         "--members",
@@ -906,6 +924,18 @@ fn edge_inputs_of_train_and_evaluate() {
     assert_eq!(s["members"], 0, "{s}");
     assert_ne!(s["network"], "rbf", "{s}");
     assert_ne!(s["network"], "mix", "{s}");
+    // With the refinement open, one candidate per refinement: the model alone has no form,
+    // inputs, size or penalty to choose (each network setting was a candidate of one figure).
+    let o = train(&["--members", "0", "--report", report.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let sel = &common::json(&report)["training"]["selection"];
+    let refinements: Vec<&serde_json::Value> = (sel["candidates"].as_array().unwrap().iter())
+        .map(|c| &c["settings"]["refine"])
+        .collect();
+    let mut distinct = refinements.clone();
+    distinct.dedup();
+    assert!(refinements.len() >= 2, "{refinements:?}");
+    assert_eq!(distinct, refinements);
 
     // q7 for a 6-joint robot: another robot's file.
     let seven = common::tmp("edge_q7.csv");
@@ -1977,6 +2007,19 @@ fn edge_inputs_of_the_sixtieth_hunt() {
             err.contains("leave out the 1 pair(s) across"),
             "{name}: {err}"
         );
+        // A measure of single rows loses no pair: no word of pairs.
+        let o = robocal(&[
+            "evaluate",
+            "--robot",
+            FANUC,
+            "--data",
+            &data,
+            "--skip-bad-rows",
+        ]);
+        let err = stderr(&o);
+        assert!(o.status.success(), "{name}: {err}");
+        assert!(err.contains("dropped 1 bad row(s) (lines 10)"), "{err}");
+        assert!(!err.contains("pair(s) across"), "{name}: {err}");
     }
 
     // `split` keeps the rows of a pair label in one part, and says so.
@@ -2085,6 +2128,27 @@ fn edge_inputs_of_the_sixtieth_hunt() {
         "{err}"
     );
     assert!(!err.contains("frame"), "{err}");
+    // A distance written on a pair's first row was dropped unread: refused, naming the line.
+    let mut lines: Vec<String> = std::fs::read_to_string(&distances)
+        .unwrap()
+        .lines()
+        .map(str::to_string)
+        .collect();
+    lines[3].push_str("1234.5");
+    let misplaced = file("s60_distances_first.csv", &(lines.join("\n") + "\n"));
+    for command in ["identify", "evaluate"] {
+        let toml = common::tmp("s60_distances_first.toml");
+        let mut args = vec![command, "--robot", FANUC, "--data", &misplaced];
+        args.extend(["--measure", "distance"]);
+        if command == "identify" {
+            args.extend(["--params", "offsets", "--out", toml.to_str().unwrap()]);
+        }
+        refused(
+            &args,
+            "s60_distances_first.csv: line 4: a distance on the first row of pair `p1`: a \
+             pair's distance is read from its second row (line 5)",
+        );
+    }
 
     // Bounds say their unit.
     let huge = file("s60_huge.csv", "q1,q2,q3,q4,q5,q6\n0,1e30,0,0,0,0\n");
@@ -2096,6 +2160,16 @@ fn edge_inputs_of_the_sixtieth_hunt() {
         &["ik", "--robot", FANUC, "--pose", "2000,0,1000,0,0,1e9"],
         "beyond the bound of 720 deg (2 turns)",
     );
+    // A flag's list of values: out of bounds, too short or not numbers are usage errors.
+    for (pose, says) in [
+        ("2000,0,1000,0,0,1e9", "beyond the bound"),
+        ("1,2,3", "--pose: 3 values given, 6 expected"),
+        ("1,2,3,x,5,6", "--pose: value 4 `x` is not a finite number"),
+    ] {
+        let o = robocal(&["ik", "--robot", FANUC, "--pose", pose]);
+        assert_eq!(o.status.code(), Some(2), "{pose}: {}", stderr(&o));
+        assert!(stderr(&o).contains(says), "{pose}: {}", stderr(&o));
+    }
 }
 
 /// Noise-free simulated data (`simulate` without `--sigma-*`), the first test a user runs on

@@ -196,7 +196,8 @@ fn identify_errors_exit_nonzero() {
         "--out",
         tmp("y.toml").to_str().unwrap(),
     ]);
-    assert_eq!(o.status.code(), Some(1));
+    // A selection naming nothing of the robot: a flag's value refused.
+    assert_eq!(o.status.code(), Some(2));
     assert!(!tmp("y.toml").exists());
 }
 

@@ -99,11 +99,15 @@ fn compensator_round_trips_through_text_and_bytes() {
     let text = c.to_file_text().unwrap();
     let from_text = Compensator::from_text(&text).unwrap();
     let from_bytes = Compensator::from_bytes(text.as_bytes()).unwrap();
+    // A byte-order mark before the JSON (a Windows editor's save) is no part of it, as for
+    // every other input file.
+    let with_bom = Compensator::from_text(&format!("\u{feff}{text}")).unwrap();
     let mut ws = PredictWorkspace::default();
     for m in training.rows.iter().take(10) {
         let p: Pose = c.predict(&m.q, &mut ws);
         assert_eq!(from_text.predict(&m.q, &mut ws), p);
         assert_eq!(from_bytes.predict(&m.q, &mut ws), p);
+        assert_eq!(with_bom.predict(&m.q, &mut ws), p);
     }
     let err = Compensator::from_bytes(&[0xff, 0xfe])
         .unwrap_err()

@@ -277,6 +277,24 @@ fn report_embeds_only_files_inside_the_run_folder() {
         assert!(stderr(&o).contains(want), "{png}: {}", stderr(&o));
         assert!(!out.exists());
     }
+    // A picture the list names, whatever its name, is an input: not overwritten by --out.
+    std::fs::write(run.join("figures.json"), list("page.html")).unwrap();
+    std::fs::write(run.join("page.html"), "a picture").unwrap();
+    let inside = run.join("page.html");
+    let o = robocal(&[
+        "report",
+        run.to_str().unwrap(),
+        "--out",
+        inside.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("refusing to overwrite an input"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(std::fs::read_to_string(&inside).unwrap(), "a picture");
+    std::fs::remove_file(&inside).unwrap();
     std::fs::remove_file(run.join("figures.json")).unwrap();
     std::os::unix::fs::symlink("/dev/zero", run.join("zero.json")).unwrap();
     let o = page();

@@ -56,7 +56,8 @@ pub struct CompensatorArgs {
     /// helps), `rbf` (one unit per training row, at most --rbf-units, widths and weights of
     /// one Gaussian process's posterior mean per output; pose form only; its cost grows with
     /// the cube of the units) or
-    /// `mix` (the MLPs' mean and an RBF network averaged; pose form only). Default: chosen by
+    /// `mix` (the MLPs' mean and an RBF network blended, the MLPs' share chosen by
+    /// cross-validation unless --mlp-share fixes it; pose form only). Default: chosen by
     /// cross-validation. Without --members,
     /// cross-validation may still keep the model alone where no network is both 2 % better
     /// and significantly better row by row.

@@ -18,11 +18,19 @@ pub struct DataArgs {
     /// Drop rows that do not parse (listed on stderr) instead of stopping.
     #[arg(long)]
     pub skip_bad_rows: bool,
+    /// The profile once read: a profile given as a pipe (`<(...)`, /dev/stdin) can be read
+    /// only once, and every measurement file of a command is read under it.
+    #[arg(skip)]
+    loaded: std::sync::OnceLock<Profile>,
 }
 
 impl DataArgs {
     pub fn profile(&self) -> Result<Profile> {
-        Ok(Profile::read_or_default(self.profile.as_deref())?)
+        if let Some(p) = self.loaded.get() {
+            return Ok(p.clone());
+        }
+        let p = Profile::read_or_default(self.profile.as_deref())?;
+        Ok(self.loaded.get_or_init(|| p).clone())
     }
 
     pub fn options(&self) -> ReadOptions {
@@ -56,11 +64,12 @@ impl DataArgs {
 #[derive(Args, Debug, Clone)]
 pub struct SigmaArgs {
     /// Position sigma (mm, 1e-6 to 1000) for rows without sx,sy,sz (default 0.033, the
-    /// thesis's tracker); `plan` takes it for every unit.
+    /// thesis's tracker); `plan` takes it for every measurement it plans (it reads no sigma
+    /// columns).
     #[arg(long, allow_negative_numbers = true, value_parser = super::bounds::sigma)]
     pub sigma_pos: Option<f64>,
     /// Orientation sigma (mrad, 1e-6 to 1000) for rows without srx,sry,srz (default
-    /// 0.174); `plan` takes it for every unit.
+    /// 0.174); `plan` takes it for every measurement it plans (it reads no sigma columns).
     #[arg(long, allow_negative_numbers = true, value_parser = super::bounds::sigma)]
     pub sigma_rot: Option<f64>,
 }

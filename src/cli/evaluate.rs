@@ -87,6 +87,11 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     // What `identify` asks of the rows for this measure (an orientation in every row, pairs,
     // ...): a measure the file cannot give is refused, not reported as empty columns.
     robocal::identify::problem::Observations::new(&set, m, Default::default())?;
+    if matches!(m, Measure::Relative | Measure::Distance)
+        && let Some(w) = robocal::data::pairs::broken_pairs_warning(&set)
+    {
+        eprintln!("warning: {w}");
+    }
     // Positions in metres or inches, refused as `identify` refuses them.
     if matches!(m, Measure::Pose | Measure::Position) {
         robocal::identify::register::check_position_scale(&robot, &set)?;

@@ -70,7 +70,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         robot: nominal,
         data: cal,
         validation: val,
-        read_warnings,
+        mut read_warnings,
     } = open_fit(
         &a.robot,
         &a.data,
@@ -80,6 +80,10 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         a.report.as_ref(),
         a.plot.as_ref(),
     )?;
+    // A selection that names no parameter of this robot is a flag's value refused.
+    if let Err(e) = robocal::identify::select::select(&nominal, &a.params) {
+        usage!("--params `{}`: {e}", a.params);
+    }
     let opts = Options {
         params: a.params.clone(),
         measure: a.measure.map(Into::into),
@@ -97,6 +101,14 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     // The validation rows in metres or inches, refused (before the solve) as the calibration
     // rows are.
     let measure = opts.measure.unwrap_or_else(|| Measured::default_for(&cal));
+    if matches!(measure, Measured::Relative | Measured::Distance) {
+        for set in std::iter::once(&cal).chain(&val) {
+            if let Some(w) = robocal::data::pairs::broken_pairs_warning(set) {
+                eprintln!("warning: {w}");
+                read_warnings.push(w);
+            }
+        }
+    }
     if let (Some(v), Measured::Pose | Measured::Position) = (&val, measure) {
         check_position_scale(&nominal, v)?;
     }

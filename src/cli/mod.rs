@@ -177,7 +177,8 @@ enum Command {
     Evaluate(evaluate::EvaluateArgs),
     /// Reproduces the thesis's case studies A-D (identification) beside the thesis's figures.
     Reproduce(reproduce::ReproduceArgs),
-    /// Trains a neural compensator (a model and an MLP in series) on measurements.
+    /// Trains a neural compensator (the model and a network in series: MLPs, an RBF network
+    /// or both) on measurements.
     Train(train::TrainArgs),
     /// Compensated tool poses for joint configurations.
     Predict(predict::PredictArgs),

@@ -1,6 +1,6 @@
 //! Shared pieces of command output: numbers, parsing of lists, CSV or JSON to a file or stdout.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
 
@@ -65,12 +65,12 @@ pub fn parse_list(s: &str, what: &str, expected: usize) -> Result<Vec<f64>> {
             let t = t.trim();
             match t.parse::<f64>() {
                 Ok(v) if v.is_finite() => Ok(v),
-                _ => bail!("{what}: value {} `{t}` is not a finite number", i + 1),
+                _ => usage!("{what}: value {} `{t}` is not a finite number", i + 1),
             }
         })
         .collect::<Result<_>>()?;
     if vals.len() != expected {
-        bail!("{what}: {} values given, {expected} expected", vals.len());
+        usage!("{what}: {} values given, {expected} expected", vals.len());
     }
     Ok(vals)
 }
@@ -82,7 +82,7 @@ pub fn joints_arg(robot: &robocal::model::Robot, s: &str, what: &str) -> Result<
     for (i, (v, j)) in q.iter().zip(robot.joints()).enumerate() {
         let max = robocal::data::joints::joint_bound(j.joint_type);
         if v.abs() > max {
-            bail!(
+            usage!(
                 "{what}: value {} ({v:e}) is beyond the bound of {}",
                 i + 1,
                 robocal::data::joints::joint_bound_text(j.joint_type)
@@ -99,7 +99,7 @@ pub fn pose_arg(s: &str, what: &str) -> Result<Vec<f64>> {
     for (i, x) in v.iter().enumerate() {
         let max = robocal::data::targets::pose_bound(i);
         if x.abs() > max {
-            bail!(
+            usage!(
                 "{what}: value {} ({x:e}) is beyond the bound of {}",
                 i + 1,
                 robocal::data::targets::pose_bound_text(i)

@@ -110,8 +110,9 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
         let Some(r) = robocal::io::output_file(path).and_then(|p| resolved(&p)) else {
             continue;
         };
+        // Two flags at odds: a usage error (exit 2).
         if let Some((f, p, _)) = ins.iter().find(|(_, _, i)| *i == r) {
-            bail!(
+            usage!(
                 "{flag} {} is the same file as an input ({f} {}): refusing to overwrite an input; \
                  choose another output path",
                 path.display(),
@@ -119,7 +120,7 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
             );
         }
         if let Some((f, p, _)) = seen.iter().find(|(_, _, o)| *o == r) {
-            bail!(
+            usage!(
                 "{flag} {} and {f} {} name the same file: each output needs its own path",
                 path.display(),
                 p.display()

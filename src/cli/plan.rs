@@ -315,6 +315,10 @@ pub fn run(a: PlanArgs) -> Result<()> {
         usage!("--validation {}: give 1 to 100000", a.validation);
     }
     let robot = read_robot(&a.robot)?;
+    // A selection that names no parameter of this robot is a flag's value refused.
+    if let Err(e) = robocal::identify::select::select(&robot, &a.params) {
+        usage!("--params `{}`: {e}", a.params);
+    }
     let measure: robocal::identify::Measure = a.measure.into();
     if a.target_mm.is_some() && measure == robocal::identify::Measure::Orientation {
         usage!(

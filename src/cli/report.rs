@@ -24,7 +24,16 @@ pub fn run(a: ReportArgs) -> Result<()> {
                 .is_some_and(|e| e == "json" || e == "png" || e == "svg")
         })
         .collect();
-    let inputs: Vec<_> = read.iter().map(|p| req("run folder", p)).collect();
+    // And every picture its figure list names, whatever its name (a list the page cannot
+    // read is refused by the page).
+    let listed: Vec<PathBuf> = (robocal::plot::read_manifest(&a.run_dir).unwrap_or_default())
+        .iter()
+        .flat_map(|f| [&f.png, &f.svg])
+        .map(|name| a.run_dir.join(name))
+        .collect();
+    let inputs: Vec<_> = (read.iter().chain(&listed))
+        .map(|p| req("run folder", p))
+        .collect();
     guard(&inputs, &[req("--out", &a.out)])?;
     let html = robocal::reports::html::render(&a.run_dir)?;
     super::output::writing(robocal::io::write_atomic(&a.out, html.as_bytes()), &a.out)?;

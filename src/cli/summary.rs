@@ -60,10 +60,11 @@ pub fn print_copies(set: &MeasurementSet) {
 /// compensator can remove.
 pub fn print_repeats(r: &Repeats) {
     say!(
-        "repeats: {} configurations measured more than once ({} rows); the model's position \
+        "repeats: {} configuration{} measured more than once ({} rows); the model's position \
          residuals of one configuration differ by {:.4} mm (median), at most {:.4} mm (lines \
          {} and {}); pure error {:.4} mm RMS, which no compensator can remove",
         r.configurations,
+        if r.configurations == 1 { "" } else { "s" },
         r.rows,
         r.median_spread_mm,
         r.max_spread_mm,

@@ -180,7 +180,7 @@ fn print_fit(
     ),
 ) {
     let rows = searched.rows.len();
-    let groups = configuration_groups(searched);
+    let groups = configuration_groups(&c.robot, searched);
     let configurations = group_count(&groups);
     if !report.refined.is_empty() {
         say!(
@@ -316,6 +316,12 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     }
     let terminal = std::io::stderr().is_terminal();
     let opts = a.build.options(a.sigma.sigmas(), terminal)?;
+    // A selection that names no parameter of this robot is a flag's value refused.
+    if let Refine::Params(spec) = &opts.refine
+        && let Err(e) = names_compliance(&robot, spec)
+    {
+        usage!("--refine `{spec}`: {e}");
+    }
     if let (Refine::Params(spec), Some(false)) = (&opts.refine, opts.compliance)
         && names_compliance(&robot, spec).unwrap_or(false)
     {
@@ -353,7 +359,8 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     if c.has_network() && c.domain.radius == 0.0 {
         eprintln!(
             "warning: the training rows hold one configuration (every joint within {} rad of \
-             one another's): the training domain's radius is 0, so the network corrects \
+             one another's, or a whole turn from it): the training domain's radius is 0, so the \
+             network corrects \
              nothing away from that configuration; measure configurations spread over the \
              workspace",
             robocal::neural::repeats::SAME_CONFIGURATION
@@ -374,11 +381,11 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
                 &set
             },
             opts.train.rbf_draw(),
-            if opts.drop_outliers {
-                report.selection.as_ref().map_or(0, |s| s.outliers.len())
-            } else {
-                0
-            },
+            report
+                .selection
+                .as_ref()
+                .filter(|s| s.outliers_left_out)
+                .map_or(0, |s| s.outliers.len()),
         ),
     );
     let mut figs = 0;

@@ -43,6 +43,20 @@ pub fn pairs(set: &MeasurementSet) -> Result<Vec<Pair>> {
     Ok(kept)
 }
 
+/// The warning for a relative or distance measure on `set` whose consecutive pairing lost
+/// pairs across dropped rows (bad rows skipped); None where no pair was lost or a `pair`
+/// column labels the pairs.
+pub fn broken_pairs_warning(set: &MeasurementSet) -> Option<String> {
+    (!set.chain_breaks.is_empty() && set.rows.iter().all(|m| m.pair.is_none())).then(|| {
+        format!(
+            "{}: the relative and distance measures, which pair consecutive rows in a file \
+             without a pair column, leave out the {} pair(s) across the dropped row(s)",
+            set.source.display(),
+            set.chain_breaks.len()
+        )
+    })
+}
+
 /// The pairs of rows with `pair` labels `labels` (None: no label) on file lines `lines` of
 /// `source` (for messages), by the rule of [`pairs`]: consecutive rows where no row has a
 /// label, else the two rows of each label.

@@ -174,6 +174,18 @@ impl<'a> Observations<'a> {
                     let inv = if measure == Measure::Relative {
                         [1.0 / s.x, 1.0 / s.y, 1.0 / s.z, 1.0, 1.0, 1.0]
                     } else {
+                        // A labelled pair's distance is read from its second row: one on its
+                        // first row would be dropped unread.
+                        if set.rows[a].pair.is_some() && set.rows[a].distance.is_some() {
+                            return Err(Error::Invalid(format!(
+                                "{}: line {}: a distance on the first row of pair `{}`: a \
+                                 pair's distance is read from its second row (line {})",
+                                set.source.display(),
+                                set.rows[a].line,
+                                set.rows[a].pair.as_deref().unwrap_or(""),
+                                set.rows[b].line
+                            )));
+                        }
                         if crate::data::pairs::distance(set, Pair { a, b }).is_none() {
                             return Err(Error::Invalid(format!(
                                 "{}: line {}: pair has no distance (a `distance` column on its second row, or positions)",

@@ -186,19 +186,28 @@ fn complete_frames(robot: &Robot, chosen: &[usize]) -> Result<(Robot, Vec<String
 }
 
 /// The selection `chosen` (indices into `nominal`'s parameters) in the `completed` model:
-/// a base or tool row converted to a transform contributes all its fields.
+/// a base or tool row converted to a transform contributes all its fields; the other slot's
+/// chosen parameters stay as chosen.
 fn selection_in(nominal: &Robot, completed: &Robot, chosen: Vec<usize>) -> Result<Vec<usize>> {
     if completed.parameters() == nominal.parameters() {
         return Ok(chosen);
     }
     let old = nominal.parameters();
-    let names: Vec<String> = chosen.iter().map(|&c| old[c].name()).collect();
-    let mut spec: Vec<String> = names
-        .into_iter()
-        .filter(|n| !n.starts_with("base.") && !n.starts_with("tool."))
+    let mut spec: Vec<String> = (chosen.iter())
+        .filter(|&&c| !matches!(old[c].slot, Slot::Base | Slot::Tool))
+        .map(|&c| old[c].name())
         .collect();
     for (slot, word) in [(Slot::Base, "base"), (Slot::Tool, "tool")] {
-        if chosen.iter().any(|&c| old[c].slot == slot) {
+        let names = |r: &Robot| -> Vec<String> {
+            (r.parameters().iter())
+                .filter(|p| p.slot == slot)
+                .map(|p| p.name())
+                .collect()
+        };
+        let in_slot = chosen.iter().filter(|&&c| old[c].slot == slot);
+        if names(nominal) == names(completed) {
+            spec.extend(in_slot.map(|&c| old[c].name()));
+        } else if in_slot.count() > 0 {
             spec.push(word.into());
         }
     }
@@ -722,6 +731,44 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_row_made_a_transform_leaves_the_other_rows_selection_as_chosen() {
+        let fanuc = crate::model::read_robot(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("datasets/robots/fanuc_r2000ib_210f.toml"),
+        )
+        .unwrap();
+        let names = |params: &str| -> Vec<String> {
+            let (completed, chosen, _) = candidates(&fanuc, params).unwrap();
+            let all = completed.parameters();
+            chosen.iter().map(|&c| all[c].name()).collect()
+        };
+        let tool = [
+            "tool.x", "tool.y", "tool.z", "tool.rz", "tool.ry", "tool.rx",
+        ];
+        // The tool row (mdh) fully selected becomes a transform; the base keeps theta alone.
+        let got = names("base.theta,tool");
+        let mut want: Vec<String> = tool.iter().map(|s| s.to_string()).collect();
+        want.push("base.theta".into());
+        let (mut got_sorted, mut want_sorted) = (got.clone(), want);
+        got_sorted.sort();
+        want_sorted.sort();
+        assert_eq!(got_sorted, want_sorted, "{got:?}");
+        // And the other way round, with a joint's parameter beside them.
+        let got = names("base,tool.d,theta2");
+        assert_eq!(
+            got.iter().filter(|n| n.starts_with("tool.")).count(),
+            1,
+            "{got:?}"
+        );
+        assert!(got.contains(&"tool.d".to_string()) && got.contains(&"theta2".to_string()));
+        assert_eq!(
+            got.iter().filter(|n| n.starts_with("base.")).count(),
+            6,
+            "{got:?}"
+        );
+    }
 
     #[test]
     fn only_nearly_aliased_pairs_are_warned_of() {

@@ -72,24 +72,6 @@ impl DomainCheck {
     }
 }
 
-/// An angle (rad) in the middle of the widest gap between `angles` on the circle: cut there,
-/// the circle leaves every cluster of them whole. 0 for no angles.
-fn widest_gap_cut(angles: impl Iterator<Item = f64>) -> f64 {
-    let mut a: Vec<f64> = angles.map(|v| v.rem_euclid(2.0 * PI)).collect();
-    a.sort_by(f64::total_cmp);
-    let (Some(&first), Some(&last)) = (a.first(), a.last()) else {
-        return 0.0;
-    };
-    // The gap from the last angle round to the first, then those between neighbours.
-    let mut best = (first + 2.0 * PI - last, last);
-    for w in a.windows(2) {
-        if w[1] - w[0] > best.0 {
-            best = (w[1] - w[0], w[0]);
-        }
-    }
-    best.1 + best.0 / 2.0
-}
-
 fn distance2(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
 }
@@ -104,31 +86,12 @@ impl Domain {
         // Rows of one configuration (a repeat logs joints a few encoder counts apart) are one
         // point: their gap of nearly nothing would shrink the radius to nothing wherever
         // most configurations were measured twice, and switch the network off between them.
-        // A revolute joint the inputs see modulo whole turns is grouped on its angle taken
-        // modulo 2 pi from a cut in the widest gap between its training values on the circle:
-        // q and q + 2 pi are one input, so one configuration, and no two repeats lie across
-        // the cut (at +-pi, a wrist logged at 179.9999 and -179.9999 deg would).
-        let cuts: Vec<Option<f64>> = (robot.joints().iter().enumerate())
-            .map(|(j, joint)| {
-                encoding
-                    .is_periodic(joint.joint_type)
-                    .then(|| widest_gap_cut(qs.iter().map(|q| q[j])))
-            })
-            .collect();
-        let wrapped: Vec<Vec<f64>> = qs
-            .iter()
-            .map(|q| {
-                q.iter()
-                    .zip(&cuts)
-                    .map(|(&v, cut)| match cut {
-                        Some(c) => c + (v - c).rem_euclid(2.0 * PI),
-                        None => v,
-                    })
-                    .collect()
-            })
-            .collect();
-        let wrapped: Vec<&[f64]> = wrapped.iter().map(Vec::as_slice).collect();
-        let groups = super::repeats::joint_groups(&wrapped);
+        // A revolute joint the inputs see modulo whole turns is grouped modulo whole turns:
+        // q and q + 2 pi are one input, so one configuration.
+        let joints = robot.joints();
+        let periodic =
+            |j: usize| (joints.get(j)).is_some_and(|joint| encoding.is_periodic(joint.joint_type));
+        let groups = super::repeats::turn_groups(qs, periodic);
         let mut points: Vec<(Vec<f64>, usize)> = Vec::with_capacity(qs.len());
         let mut feat = Vec::new();
         let mut ws = crate::kinematics::Frames::new(robot);
@@ -160,6 +123,22 @@ impl Domain {
                 .map(|(b, _)| distance2(a, b))
                 .fold(f64::INFINITY, f64::min);
             gaps[*group] = gaps[*group].min(nearest);
+        }
+        // Such a joint's range is the arc of the circle its training values cover, from the
+        // widest gap between them: its raw values, a whole turn apart or either side of
+        // +-180 deg, would span a turn or more and leave no angle outside. Put the whole
+        // turn nearest the raw values.
+        for j in (0..n).filter(|&j| periodic(j)) {
+            let cut = super::repeats::widest_gap_cut(qs.iter().map(|q| q[j]));
+            let (lo, hi) = (qs.iter().map(|q| super::repeats::from_cut(q[j], cut)))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                });
+            // (Raw values that span no more than the arc are its own bounds, kept exact.)
+            if lo.is_finite() && joint_max[j] - joint_min[j] > hi - lo + 1e-9 {
+                let turns = ((joint_min[j] - lo) / (2.0 * PI)).round() * 2.0 * PI;
+                (joint_min[j], joint_max[j]) = (lo + turns, hi + turns);
+            }
         }
         gaps.retain(|d| d.is_finite());
         let inputs: Vec<Vec<f64>> = points.into_iter().map(|(x, _)| x).collect();
@@ -322,17 +301,55 @@ mod tests {
     }
 
     #[test]
-    fn the_cut_lies_in_the_widest_gap() {
-        let cut = |v: &[f64]| widest_gap_cut(v.iter().copied());
-        // Values around +-pi: the widest gap is around 0.
-        let c = cut(&[3.1, -3.1, 3.0, -3.0]);
-        assert!(
-            (c - 0.0).abs() < 1e-12 || (c - 2.0 * PI).abs() < 1e-12,
-            "{c}"
+    fn a_periodic_joints_range_is_the_arc_its_values_cover() {
+        let robot = crate::model::test_fanuc();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        // Joint 1 within [-0.5, 0.5] rad, joint 6 within 0.2 rad of +-pi.
+        let mut qs: Vec<Vec<f64>> = (0..60)
+            .map(|k| {
+                let mut q: Vec<f64> = (0..6).map(|_| rng.random_range(-1.0..1.0)).collect();
+                q[0] = -0.5 + k as f64 / 59.0;
+                q[5] = PI - 0.2 + 0.4 * rng.random_range(0.0..1.0);
+                q
+            })
+            .collect();
+        // A few of them logged a whole turn away, as a wrist or base may be.
+        for k in 0..5 {
+            let mut q = qs[k].clone();
+            q[0] += 2.0 * PI;
+            qs.push(q);
+        }
+        let rows: Vec<&[f64]> = qs.iter().map(Vec::as_slice).collect();
+        let fit = |e: Encoding| {
+            let inputs = if e == Encoding::Angles { 6 } else { 12 };
+            let norm = Affine {
+                offset: vec![0.0; inputs],
+                scale: vec![1.0; inputs],
+            };
+            (Domain::fit(&robot, e, &norm, &rows), vec![0.0; inputs])
+        };
+        let (d, x) = fit(Encoding::SinCos);
+        assert!((d.joint_min[0] + 0.5).abs() < 1e-12 && (d.joint_max[0] - 0.5).abs() < 1e-12);
+        let (lo, hi) = (d.joint_min[5], d.joint_max[5]);
+        assert!(hi - lo < 0.4 + 1e-12 && lo <= PI && hi >= PI, "{lo} {hi}");
+        let outside = |d: &Domain, x: &[f64], q: [f64; 6], periodic: bool| {
+            d.check(&q, x, |_| periodic).joints_outside
+        };
+        // Beyond joint 1's arc, and joint 6 half a turn from its data: flagged (raw, the
+        // ranges spanned a turn and more and flagged nothing).
+        assert_eq!(
+            outside(&d, &x, [1.0, 0.0, 0.0, 0.0, 0.0, PI], true),
+            vec![0]
         );
-        // Values around 0: the cut lies opposite, at pi.
-        assert!((cut(&[-0.5, 0.5, 0.1]) - PI).abs() < 1e-12);
-        assert_eq!(cut(&[]), 0.0);
+        assert_eq!(
+            outside(&d, &x, [0.0, 0.0, 0.0, 0.0, 0.0, 0.0], true),
+            vec![5]
+        );
+        assert!(outside(&d, &x, [0.2 - 2.0 * PI, 0.0, 0.0, 0.0, 0.0, -PI], true).is_empty());
+        // Inputs that see the angle itself keep the raw range.
+        let (a, x) = fit(Encoding::Angles);
+        assert!((a.joint_max[0] - (-0.5 + 4.0 / 59.0 + 2.0 * PI)).abs() < 1e-12);
+        assert!(outside(&a, &x, [1.0, 0.0, 0.0, 0.0, 0.0, PI], false).is_empty());
     }
 
     #[test]

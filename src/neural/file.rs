@@ -175,8 +175,8 @@ impl Compensator {
     /// Parses a compensator file's text; `path` names it in errors.
     pub fn from_file_text(text: &str, path: &Path) -> Result<Compensator> {
         let bad = |m: String| Error::input(Location::file(path), m);
-        let mut v: Value =
-            serde_json::from_str(text).map_err(|e| bad(format!("not a compensator file: {e}")))?;
+        let mut v: Value = serde_json::from_str(crate::io::without_bom(text))
+            .map_err(|e| bad(format!("not a compensator file: {e}")))?;
         if v["format"] != FORMAT {
             return Err(bad("not a robocal compensator file".into()));
         }

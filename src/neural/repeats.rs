@@ -14,8 +14,9 @@ use crate::data::MeasurementSet;
 use crate::data::configuration::same_configuration;
 use crate::data::measurement::copied_rows;
 use crate::kinematics::tool_pose;
-use crate::model::Robot;
+use crate::model::{JointType, Robot};
 use nalgebra::Vector3;
+use std::f64::consts::PI;
 
 pub use crate::data::configuration::SAME_CONFIGURATION;
 
@@ -24,13 +25,102 @@ pub use crate::data::configuration::SAME_CONFIGURATION;
 /// [`SAME_CONFIGURATION`] (rad or mm) of its own; otherwise it starts a group. Groups do not
 /// chain: a path sampled every 0.5 deg is many configurations, not one. Ids count from 0 in
 /// the order of each group's first row in the file.
-pub fn configuration_groups(set: &MeasurementSet) -> Vec<usize> {
+///
+/// A revolute joint of `robot` is compared modulo whole turns ([`turn_groups`]): q and
+/// q + 2 pi put the arm in one pose, and a wrist logged at 179.9999 and -179.9999 deg is one
+/// configuration, so a fold never predicts a row from such a twin.
+pub fn configuration_groups(robot: &Robot, set: &MeasurementSet) -> Vec<usize> {
     let qs: Vec<&[f64]> = set.rows.iter().map(|m| m.q.as_slice()).collect();
-    joint_groups(&qs)
+    let joints = robot.joints();
+    turn_groups(&qs, |j| {
+        joints
+            .get(j)
+            .is_some_and(|joint| joint.joint_type == JointType::Revolute)
+    })
+}
+
+/// An angle (rad) in the middle of the widest gap between `angles` on the circle: cut there,
+/// the circle leaves every cluster of them whole. 0 for no angles.
+pub fn widest_gap_cut(angles: impl Iterator<Item = f64>) -> f64 {
+    let (cut, _) = widest_gap(angles);
+    cut
+}
+
+/// [`widest_gap_cut`] and the width of that gap (rad; 2 pi for fewer than two angles).
+fn widest_gap(angles: impl Iterator<Item = f64>) -> (f64, f64) {
+    let mut a: Vec<f64> = angles.map(|v| v.rem_euclid(2.0 * PI)).collect();
+    a.sort_by(f64::total_cmp);
+    let (Some(&first), Some(&last)) = (a.first(), a.last()) else {
+        return (0.0, 2.0 * PI);
+    };
+    // The gap from the last angle round to the first, then those between neighbours.
+    let mut best = (first + 2.0 * PI - last, last);
+    for w in a.windows(2) {
+        if w[1] - w[0] > best.0 {
+            best = (w[1] - w[0], w[0]);
+        }
+    }
+    (best.1 + best.0 / 2.0, best.0)
+}
+
+/// Angle `v` (rad) a whole number of turns into [cut, cut + 2 pi).
+pub fn from_cut(v: f64, cut: f64) -> f64 {
+    cut + (v - cut).rem_euclid(2.0 * PI)
+}
+
+/// [`joint_groups`] with every joint for which `periodic(j)` holds compared modulo whole
+/// turns: q and q + 2 pi are one value, and so are 179.9999 and -179.9999 deg. Where no two
+/// rows are a whole turn apart, the groups are those of [`joint_groups`] on the raw values
+/// (each such joint is taken from a cut in the widest gap between its values on the circle;
+/// one whose values leave no gap of [`SAME_CONFIGURATION`] round the whole circle, where a
+/// repeat could lie across the cut, does not order the sweep unless every joint is such).
+pub fn turn_groups(qs: &[&[f64]], periodic: impl Fn(usize) -> bool) -> Vec<usize> {
+    let dof = qs.iter().map(|q| q.len()).min().unwrap_or(0);
+    let gaps: Vec<Option<(f64, f64)>> = (0..dof)
+        .map(|j| periodic(j).then(|| widest_gap(qs.iter().map(|q| q[j]))))
+        .collect();
+    let cuts: Vec<Option<f64>> = gaps.iter().map(|g| g.map(|(cut, _)| cut)).collect();
+    let dense = |j: usize| gaps[j].is_some_and(|(_, gap)| gap < SAME_CONFIGURATION);
+    let key_joint = |j: usize| !dense(j) || (0..dof).all(dense);
+    let wrapped: Vec<Vec<f64>> = qs
+        .iter()
+        .map(|q| {
+            q.iter()
+                .enumerate()
+                .map(|(j, &v)| match cuts.get(j).copied().flatten() {
+                    Some(c) => from_cut(v, c),
+                    None => v,
+                })
+                .collect()
+        })
+        .collect();
+    let wrapped: Vec<&[f64]> = wrapped.iter().map(Vec::as_slice).collect();
+    sweep_groups(&wrapped, key_joint, |a, b| {
+        a.len() == b.len()
+            && (a.iter().zip(b).enumerate()).all(|(j, (x, y))| {
+                let d = (x - y).abs();
+                let d = match cuts.get(j).copied().flatten() {
+                    Some(_) => d.min(2.0 * PI - d),
+                    None => d,
+                };
+                d < SAME_CONFIGURATION
+            })
+    })
 }
 
 /// [`configuration_groups`] of bare joint vectors (rad, mm), in their order.
 pub fn joint_groups(qs: &[&[f64]]) -> Vec<usize> {
+    sweep_groups(qs, |_| true, same_configuration)
+}
+
+/// The groups of [`configuration_groups`] under `close` (true only for vectors within
+/// [`SAME_CONFIGURATION`] in every joint), the sweep ordered by a joint for which `key_joint`
+/// holds.
+fn sweep_groups(
+    qs: &[&[f64]],
+    key_joint: impl Fn(usize) -> bool,
+    close: impl Fn(&[f64], &[f64]) -> bool,
+) -> Vec<usize> {
     let n = qs.len();
     // Sweep the rows in the order of the joint whose values spread widest (a joint held
     // still would make every pair a candidate): only rows within the tolerance in that joint
@@ -45,12 +135,13 @@ pub fn joint_groups(qs: &[&[f64]]) -> Vec<usize> {
         hi - lo
     };
     let key = (0..dof)
+        .filter(|&j| key_joint(j))
         .max_by(|&a, &b| spread(a).total_cmp(&spread(b)))
         .unwrap_or(0);
     let at = |i: usize| qs[i].get(key).copied().unwrap_or(0.0);
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| at(a).total_cmp(&at(b)));
-    let close = |i: usize, j: usize| same_configuration(qs[i], qs[j]);
+    let close = |i: usize, j: usize| close(qs[i], qs[j]);
     // Each group's first row in the sweep, in the sweep's order (so their keys ascend and
     // those too far below the current row leave from the front).
     let mut leaders: Vec<usize> = Vec::new();
@@ -115,7 +206,7 @@ impl Repeats {
     /// The repeats of `set` under `model`; None when no configuration has two rows with
     /// positions.
     pub fn of(model: &Robot, set: &MeasurementSet) -> Option<Repeats> {
-        let groups = configuration_groups(set);
+        let groups = configuration_groups(model, set);
         let count = group_count(&groups);
         let mut members: Vec<Vec<(usize, Vector3<f64>)>> = vec![Vec::new(); count];
         let mut sizes = vec![0usize; count];
@@ -187,6 +278,102 @@ mod tests {
         MeasurementSet::from_rows(qs.iter().map(|q| Measurement::new(q.to_vec())).collect())
     }
 
+    fn rows(set: &MeasurementSet) -> Vec<&[f64]> {
+        set.rows.iter().map(|m| m.q.as_slice()).collect()
+    }
+
+    #[test]
+    fn a_revolute_joint_is_one_configuration_a_whole_turn_away_a_prismatic_one_is_not() {
+        let robot = crate::model::Robot::from_toml(
+            r#"
+[[joint]]
+convention = "dh"
+d = 100.0
+alpha = 90.0
+limits = [-360, 360]
+[[joint]]
+convention = "dh"
+alpha = -90.0
+type = "prismatic"
+limits = [-1000, 1000]
+[[joint]]
+convention = "dh"
+a = 300.0
+limits = [-360, 360]
+"#,
+        )
+        .unwrap();
+        let turn = 2.0 * PI;
+        let set3 = |qs: &[[f64; 3]]| {
+            MeasurementSet::from_rows(qs.iter().map(|q| Measurement::new(q.to_vec())).collect())
+        };
+        let a = [0.3, 5.0, -1.0];
+        let twins = set3(&[
+            a,
+            [0.3 + turn, 5.0, -1.0],        // joint 1 a turn on
+            [0.3, 5.0, -1.0 - turn + 4e-3], // joint 3 a turn back, with encoder noise
+            [0.3, 5.0 + turn, -1.0],        // the prismatic joint 2 pi mm on: elsewhere
+            [PI - 1e-9, 5.0, 1.0],          // either side of +-180 deg
+            [-PI + 1e-9, 5.0, 1.0],
+        ]);
+        assert_eq!(configuration_groups(&robot, &twins), vec![0, 0, 0, 1, 2, 2]);
+        // On raw values, as without the turns, every row but the seam's is its own.
+        assert_eq!(joint_groups(&rows(&twins)), vec![0, 1, 2, 3, 4, 5]);
+        // Rows no whole turn apart group as on raw values, whatever the cut.
+        let spread: Vec<[f64; 6]> = (0..40)
+            .map(|k| {
+                let t = -3.1 + k as f64 * 0.155;
+                [t, 0.5 * t, -t, 0.0, 1.0, t + 1e-3 * (k % 2) as f64]
+            })
+            .collect();
+        let ur10 = crate::model::read_robot(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/ur10.toml"),
+        )
+        .unwrap();
+        let s = set(&spread);
+        assert_eq!(configuration_groups(&ur10, &s), joint_groups(&rows(&s)));
+        // A wrist logged every 0.5 deg round the whole circle, its widest gap (0.55 deg,
+        // within the tolerance) between two rows of one configuration: the cut lies between
+        // them, and they stay one configuration.
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let mut wrist: Vec<f64> = (0..=200).map(|k| k as f64 * 0.5).collect();
+        wrist.extend((0..=518).map(|k| 100.55 + k as f64 * 0.5));
+        let dense: Vec<[f64; 6]> = (wrist.iter())
+            .map(|&w| {
+                let mut q = [0.0; 6];
+                q[..5]
+                    .iter_mut()
+                    .for_each(|v| *v = rng.random_range(-3.0..3.0));
+                q[5] = w.to_radians();
+                q
+            })
+            .collect();
+        let mut dense = dense;
+        let (a, b) = (200, 201);
+        let a_joints = dense[a];
+        dense[b][..5].copy_from_slice(&a_joints[..5]);
+        let s = set(&dense);
+        let g = configuration_groups(&ur10, &s);
+        assert_eq!(g[a], g[b]);
+        assert_eq!(group_count(&g), dense.len() - 1);
+        assert_eq!(g, joint_groups(&rows(&s)));
+    }
+
+    #[test]
+    fn the_cut_lies_in_the_widest_gap() {
+        let cut = |v: &[f64]| widest_gap_cut(v.iter().copied());
+        // Values around +-pi: the widest gap is around 0.
+        let c = cut(&[3.1, -3.1, 3.0, -3.0]);
+        assert!(
+            (c - 0.0).abs() < 1e-12 || (c - 2.0 * PI).abs() < 1e-12,
+            "{c}"
+        );
+        // Values around 0: the cut lies opposite, at pi.
+        assert!((cut(&[-0.5, 0.5, 0.1]) - PI).abs() < 1e-12);
+        assert_eq!(cut(&[]), 0.0);
+    }
+
     #[test]
     fn repeats_within_the_tolerance_are_one_configuration_and_groups_do_not_chain() {
         let a = [0.1, -1.2, 0.8, 0.3, 1.0, -0.5];
@@ -201,7 +388,7 @@ mod tests {
         d[0] -= 0.9e-2; // 1.8e-2 from b, within the tolerance of c only: a group of its own
         let other = [-2.0, 0.4, -0.3, 1.1, -1.0, 2.0];
         let s = set(&[a, b, other, a_again, d, c, other]);
-        let g = configuration_groups(&s);
+        let g = joint_groups(&rows(&s));
         assert_eq!(g, vec![0, 1, 2, 0, 3, 1, 2]);
         assert_eq!(group_count(&g), 4);
         // A path sampled every 0.5 deg (8.7e-3 rad) is not one configuration: each group
@@ -209,7 +396,7 @@ mod tests {
         let path: Vec<[f64; 6]> = (0..120)
             .map(|k| [-0.5 + k as f64 * 8.7e-3, -1.0, 0.5, 0.0, 1.0, 0.0])
             .collect();
-        let g = configuration_groups(&set(&path));
+        let g = joint_groups(&rows(&set(&path)));
         assert!(group_count(&g) >= 60, "{}", group_count(&g));
         for (i, gi) in g.iter().enumerate() {
             for (j, gj) in g.iter().enumerate() {
@@ -229,7 +416,7 @@ mod tests {
         }
         qs.push([0.5 + 5e-3, 1.0 + 5e-3, 0.0, 0.0, 0.0, 0.0]); // row 10 again
         qs.push([0.6, 1.0, 0.0, 0.0, 0.0, 0.0]); // close to row 10 in joint 2 only
-        let g = configuration_groups(&set(&qs));
+        let g = joint_groups(&rows(&set(&qs)));
         assert_eq!(g[20], g[10]);
         assert_ne!(g[21], g[10]);
         assert_eq!(group_count(&g), 21);

@@ -83,8 +83,11 @@ pub struct Selection {
     /// dropped, outliers found).
     pub notes: Vec<String>,
     /// Training rows beyond `outlier_k` robust sigmas of the chosen candidate's held-out
-    /// errors (the final fit leaves them out when the options say so).
+    /// errors (the final fit leaves them out when the options say so, they are few enough
+    /// to be mis-measured rows, and the fit without them is sound: `outliers_left_out`).
     pub outliers: Vec<Outlier>,
+    /// Whether the final fit left `outliers` out.
+    pub outliers_left_out: bool,
     /// The cut, robust sigmas (infinite: no row is left out).
     #[serde(with = "crate::io::json_number")]
     pub outlier_k: f64,

@@ -157,7 +157,7 @@ pub fn build(
         })
         .collect();
     let (x, input_norm, resolution) = inputs(robot, set, encoding);
-    let groups = super::repeats::configuration_groups(set);
+    let groups = super::repeats::configuration_groups(robot, set);
     let (samples, output_norm) = match form {
         Form::Pose => {
             let rb = base_rotation(robot).transpose();

@@ -538,13 +538,8 @@ pub fn parse_measurements(
         })
         .map(|(k, _)| k + 1)
         .collect();
-    if !chain_breaks.is_empty() && rows.iter().all(|m| m.pair.is_none()) {
-        report.warnings.push(format!(
-            "the relative and distance measures, which pair consecutive rows in a file without \
-             a pair column, leave out the {} pair(s) across the dropped row(s)",
-            chain_breaks.len()
-        ));
-    }
+    // What the breaks cost is said where a measure pairs rows
+    // ([`crate::data::pairs::broken_pairs_warning`]), not for every measure.
     report.skipped = bad;
     if rows.is_empty() && !report.skipped.is_empty() {
         let shown: Vec<&str> = (report.skipped.iter().take(3))

@@ -244,7 +244,7 @@ fn cross_validate(
     // still falls steeply with more rows (real tracker data), 3 folds chose penalties ten
     // times too large. From MANY configurations on, candidate fits sit at their iteration
     // floor and the cost grows with the folds: 4 there.
-    let groups = super::repeats::configuration_groups(set);
+    let groups = super::repeats::configuration_groups(robot, set);
     let distinct = super::repeats::group_count(&groups);
     let want = opts.folds.unwrap_or(if distinct >= MANY { 4 } else { 5 });
     let fold_of = folds(&groups, want.max(2), opts.train.seed);
@@ -465,6 +465,7 @@ fn cross_validate(
             chosen,
             notes,
             outliers,
+            outliers_left_out: false,
             outlier_k: opts.outlier_k,
             rbf_hyper,
             network_test,
@@ -656,19 +657,12 @@ fn same_model(a: &Result<Robot>, b: &Result<Robot>) -> bool {
 }
 
 /// The note on training rows beyond `k` robust sigmas of the cross-validated error, named in
-/// the rows given to training; `dropped`: left out of the final fit.
-pub fn outlier_note(outliers: &[Outlier], k: f64, dropped: bool) -> String {
+/// the rows given to training, and what became of them (`fate`).
+pub fn outlier_note(outliers: &[Outlier], k: f64, fate: &str) -> String {
     let rows: Vec<String> = outliers.iter().map(|o| row_name(o.line, o.row)).collect();
     format!(
-        "{} training row(s) beyond {k} robust sigmas of the cross-validated error ({}): {}",
+        "{} training row(s) beyond {k} robust sigmas of the cross-validated error ({}): {fate}",
         outliers.len(),
         rows.join(", "),
-        if dropped {
-            "left out of the final fit (a mis-measured row, or a sharp feature of the robot \
-             one sample cannot tell; check them, or ask for them to be kept)"
-        } else {
-            "kept (a mis-measured row, or a sharp feature of the robot; check them, or \
-             ask for them to be dropped from the final fit)"
-        }
     )
 }

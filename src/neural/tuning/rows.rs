@@ -137,7 +137,8 @@ mod tests {
             extra_columns: Vec::new(),
             chain_breaks: Vec::new(),
         };
-        let groups = crate::neural::repeats::configuration_groups(&set);
+        let qs: Vec<&[f64]> = set.rows.iter().map(|m| m.q.as_slice()).collect();
+        let groups = crate::neural::repeats::joint_groups(&qs);
         let f = folds(&groups, 5, 7);
         assert_eq!(f.len(), 50);
         for i in 0..50 {

@@ -90,19 +90,20 @@ impl Space {
                 "an RBF network acts on the pose residual: it has no joint form".into(),
             ));
         }
-        let forms: Vec<Form> = match opts.form {
+        let mut forms: Vec<Form> = match opts.form {
             Some(f) => vec![f],
             None if rbf_only || mix_only => vec![Form::Pose],
             None => Form::ALL.to_vec(),
         };
-        let encodings: Vec<Encoding> = opts.encoding.map_or(Encoding::ALL.to_vec(), |e| vec![e]);
+        let mut encodings: Vec<Encoding> =
+            opts.encoding.map_or(Encoding::ALL.to_vec(), |e| vec![e]);
         let fixed = |v: Option<usize>, all: &[usize]| v.map_or(all.to_vec(), |h| vec![h]);
-        let hiddens: Vec<usize> = if rbf_only {
+        let mut hiddens: Vec<usize> = if rbf_only {
             vec![0]
         } else {
             fixed(opts.hidden, &HIDDEN)
         };
-        let penalties: Vec<f64> = match opts.penalty {
+        let mut penalties: Vec<f64> = match opts.penalty {
             _ if rbf_only => vec![0.0],
             Some(p) => vec![p],
             None => PENALTIES.to_vec(),
@@ -132,6 +133,14 @@ impl Space {
                 mlp_share: None,
             }
         };
+        if opts.members == Some(0) {
+            // The model alone has no network whose form, inputs, size or penalty could
+            // differ: one candidate per refinement, not one per network setting.
+            forms = vec![base.form];
+            encodings = vec![base.encoding];
+            hiddens = vec![base.hidden];
+            penalties = vec![base.penalty];
+        }
         // The smooth start only, unless one is asked for: each start costs a search per
         // output, and with a kernel per output the smooth start's cross-validated error was
         // the lowest or within 0.8 % of it on the Series B pools tried (500 rows, seeds 0-2:

@@ -169,7 +169,8 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             let w = self.candidates[self.best()].settings.clone();
             self.evaluate(2, vary(&w, &space.hiddens, |s, h| s.hidden = h));
             let w = self.candidates[self.best()].settings.clone();
-            if self.opts.penalty.is_none() {
+            // (Not where the penalty is fixed, by its flag or by the model alone's having none.)
+            if space.penalties.len() > 1 {
                 let step = [w.penalty / PENALTY_STEP, w.penalty * PENALTY_STEP].map(significant3);
                 self.evaluate(2, vary(&w, &step, |s, p| s.penalty = p));
             }
