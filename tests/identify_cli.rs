@@ -559,3 +559,48 @@ fn a_model_that_misses_validation_rows_far_beyond_its_own_is_flagged() {
     let (rms, warned, err) = run(&b, &spread, &rest);
     assert!(rms < 2.0 && !warned, "{rms} mm: {err}");
 }
+
+/// A frame the registration puts beyond a robot file's bounds (a tool 100 m long, its noisy
+/// rows registered a few microns beyond) is said as the registration's, naming the rows'
+/// file and the way round it; it was "invalid robot model: tool: z = ..." with no file.
+#[test]
+fn a_registration_beyond_the_bounds_names_the_file() {
+    let text = std::fs::read_to_string(common::root().join("datasets/robots/ur10.toml")).unwrap();
+    // The tool's z, the last line that reads exactly `z = 0.0`.
+    let tool = text.rfind("\nz = 0.0").unwrap() + 1;
+    let far = tmp("far_tool.toml");
+    let edited = format!("{}z = -1e5{}", &text[..tool], &text[tool + 7..]);
+    std::fs::write(&far, edited).unwrap();
+    let (far, data) = (far.to_str().unwrap(), tmp("far_tool.csv"));
+    let data = data.to_str().unwrap();
+    let o = robocal(&[
+        "simulate",
+        "--robot",
+        far,
+        "--count",
+        "20",
+        "--seed",
+        "1",
+        "--sigma-pos",
+        "0.01",
+        "--sigma-rot",
+        "0.01",
+        "--out",
+        data,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = tmp("far_tool_id.toml");
+    let identify = |extra: &[&str]| {
+        let args = ["identify", "--robot", far, "--data", data, "--out"];
+        robocal(&[&args[..], &[out.to_str().unwrap()], extra].concat())
+    };
+    let o = identify(&[]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("far_tool.csv: the registration of the base (and tool)")
+            && err.contains("--no-register"),
+        "{err}"
+    );
+    assert!(identify(&["--no-register"]).status.success());
+}

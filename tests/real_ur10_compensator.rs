@@ -280,58 +280,46 @@ fn a_forced_refinement_registers_a_model_far_off_the_rows() {
     );
 }
 
-/// Rows cross-validation lists as outliers are left out of the final fit only where they are
-/// few (mis-measured rows are rare) and the fit without them still holds the training rows
-/// to cross-validation's error. A reviewer's 150 Series B rows under the nominal UR10, 3.7 m
-/// off the tracker's frame, with an RBF network on the angles: 29 rows (19 %) were left out,
-/// and the compensator missed its own training rows by 898 mm RMS (the network's correction
-/// fades away from the rows it has seen) against a cross-validated 5.19 mm, exit 0 and no
-/// warning. With a cut that leaves out 5 % or fewer, the fit without them is checked.
+/// Rows cross-validation lists as outliers and the final fit leaves out stay in the training
+/// domain: cross-validation judged the network at them, predicting them from their
+/// neighbours. A reviewer's 150 Series B rows under the nominal UR10, 3.7 m off the
+/// tracker's frame, with an RBF network on the angles: 29 rows (19 %) were left out, and
+/// out of the domain the network's correction faded to nothing there, so the compensator
+/// missed its own training rows by 898 mm RMS against a cross-validated 5.19 mm, exit 0 and
+/// no warning. Many rows far out are now also said to be a heavy tail.
 #[test]
-fn outliers_are_left_out_only_when_few_and_the_fit_stays_sound() {
+fn outliers_left_out_stay_in_the_training_domain() {
     use robocal::neural::compensator::{Network, Refine};
     let ur = common::ur10::robot();
     let (rows, _) = split(&series(&ur, SERIES_B), 0.1, 3);
-    let opts = |k: f64| CompensatorOptions {
+    let opts = CompensatorOptions {
         network: Some(Network::Rbf),
         form: Some(Form::Pose),
         encoding: Some(Encoding::Angles),
         refine: Refine::Off,
-        outlier_k: k,
         ..Default::default()
     };
-    let mut warned = 0;
-    for k in [5.0, 105.0, 110.0, 120.0] {
-        let (c, report) = Compensator::train(&ur, &rows, &opts(k), &|_, _| {}).unwrap();
-        let s = report.selection.as_ref().unwrap();
-        let cv = s.candidates[s.chosen]
-            .score
-            .as_ref()
-            .unwrap()
-            .position_rms_mm;
-        let rms = position_rms(&c, &rows);
-        assert!(
-            rms <= cv,
-            "k {k}: {rms} mm on the training rows, {cv} cross-validated"
-        );
-        assert!(!s.outliers.is_empty() && !s.outliers_left_out, "k {k}");
-        let share = s.outliers.len() as f64 / rows.rows.len() as f64;
-        if share > 0.05 {
-            assert!(
-                report.notes.iter().any(|n| n.contains("heavy-tailed")),
-                "k {k}"
-            );
-        } else {
-            warned += s
-                .warnings
-                .iter()
-                .filter(|w| w.contains("fitted again"))
-                .count();
-        }
-    }
+    let (c, report) = Compensator::train(&ur, &rows, &opts, &|_, _| {}).unwrap();
+    let s = report.selection.as_ref().unwrap();
+    let cv = s.candidates[s.chosen]
+        .score
+        .as_ref()
+        .unwrap()
+        .position_rms_mm;
+    let rms = position_rms(&c, &rows);
     assert!(
-        warned >= 1,
-        "no cut left 5 % or fewer out with an unsound fit"
+        s.outliers_left_out && s.outliers.len() > 15,
+        "{:?}",
+        s.outliers.len()
+    );
+    assert!(
+        rms < 2.0 * cv,
+        "{rms} mm on the training rows, {cv} cross-validated"
+    );
+    assert!(
+        report.notes.iter().any(|n| n.contains("heavy-tailed")),
+        "{:?}",
+        report.notes
     );
 }
 

@@ -67,7 +67,7 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
             (picture || name == PLOT_LIST) && r.parent() == Some(dir_r.as_path())
         });
         if let Some((f, p, _)) = clash {
-            bail!(
+            usage!(
                 "{f} {} lies in the {pf} folder {} under a name its pictures may take (*.png, \
                  *.svg, {PLOT_LIST}): choose another folder or file name",
                 p.display(),

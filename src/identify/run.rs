@@ -603,7 +603,18 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
                         "the tool is not registered with the base: a registration sets every tool parameter and {held} are not selected"
                     ));
                 }
-                let (r, reg) = register(nominal, set, tool_free && tool_held.is_none())?;
+                // A frame the registration puts beyond a robot file's bounds is said as the
+                // registration's, with the rows' file (`--no-register` starts from the file).
+                let (r, reg) = register(nominal, set, tool_free && tool_held.is_none())
+                    .map_err(|e| match e {
+                        Error::Model(m) => Error::Invalid(format!(
+                            "{}: the registration of the base (and tool) to the measured \
+                             positions gives a frame beyond a robot file's bounds ({m}); \
+                             --no-register starts the solve from the robot file's frame",
+                            set.source.display()
+                        )),
+                        e => e,
+                    })?;
                 start = r;
                 registration = Some(reg);
             }

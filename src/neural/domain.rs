@@ -33,6 +33,15 @@ pub struct Domain {
     pub radius: f64,
 }
 
+/// How much wider than the raw range's own gap (rad, 90 deg) the widest gap between a
+/// periodic joint's training values on the circle must be for the range to be the arc they
+/// cover from it ([`Domain::fit`]).
+pub const WRAP_GAP: f64 = PI / 2.0;
+
+/// Relative tolerance of a joint's training range (of the value, at least 1 rad or mm): a
+/// training row is inside its own range whatever the rounding of a turn or an arc's bound.
+pub const RANGE_TOL: f64 = 1e-12;
+
 /// Where one configuration stands against a domain.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DomainCheck {
@@ -124,18 +133,23 @@ impl Domain {
                 .fold(f64::INFINITY, f64::min);
             gaps[*group] = gaps[*group].min(nearest);
         }
-        // Such a joint's range is the arc of the circle its training values cover, from the
-        // widest gap between them: its raw values, a whole turn apart or either side of
-        // +-180 deg, would span a turn or more and leave no angle outside. Put the whole
-        // turn nearest the raw values.
+        // Such a joint's raw range misleads where its values lie a whole turn apart or either
+        // side of +-180 deg: it spans (nearly) a turn and leaves no angle outside. Where the
+        // widest gap between the values on the circle is wider than the raw range's own gap
+        // by [`WRAP_GAP`] or more, the range is the arc the values cover from that gap (the
+        // whole turn of it nearest the raw values); elsewhere, the raw range (a gap between
+        // values inside it is the distance's to judge, not the range's).
         for j in (0..n).filter(|&j| periodic(j)) {
-            let cut = super::repeats::widest_gap_cut(qs.iter().map(|q| q[j]));
+            let (cut, gap) = super::repeats::widest_gap(qs.iter().map(|q| q[j]));
+            let own_gap = (2.0 * PI - (joint_max[j] - joint_min[j])).max(0.0);
+            if gap - own_gap < WRAP_GAP {
+                continue;
+            }
             let (lo, hi) = (qs.iter().map(|q| super::repeats::from_cut(q[j], cut)))
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
                     (lo.min(v), hi.max(v))
                 });
-            // (Raw values that span no more than the arc are its own bounds, kept exact.)
-            if lo.is_finite() && joint_max[j] - joint_min[j] > hi - lo + 1e-9 {
+            if lo.is_finite() {
                 let turns = ((joint_min[j] - lo) / (2.0 * PI)).round() * 2.0 * PI;
                 (joint_min[j], joint_max[j]) = (lo + turns, hi + turns);
             }
@@ -160,14 +174,18 @@ impl Domain {
     /// [`Encoding::is_periodic`]) is within its training range when a whole turn of it is.
     pub fn check(&self, q: &[f64], x: &[f64], periodic: impl Fn(usize) -> bool) -> DomainCheck {
         let turn = 2.0 * PI;
+        // A training value read back is inside to the last bits: the turn taken off it, or
+        // its arc's bounds, round.
+        let tol = |v: f64| RANGE_TOL * v.abs().max(1.0);
         let joints_outside = (0..q.len())
             .filter(|&j| {
                 let (lo, hi) = (self.joint_min[j], self.joint_max[j]);
                 if periodic(j) {
-                    // The turn of q[j] at or above lo, nearest it.
-                    hi - lo < turn && lo + (q[j] - lo).rem_euclid(turn) > hi
+                    // The turn of q[j] at or above lo (less the tolerance), nearest it.
+                    let from = lo - tol(lo);
+                    hi - lo < turn && from + (q[j] - from).rem_euclid(turn) > hi + tol(hi)
                 } else {
-                    q[j] < lo || q[j] > hi
+                    q[j] < lo - tol(lo) || q[j] > hi + tol(hi)
                 }
             })
             .collect();
@@ -346,8 +364,57 @@ mod tests {
             vec![5]
         );
         assert!(outside(&d, &x, [0.2 - 2.0 * PI, 0.0, 0.0, 0.0, 0.0, -PI], true).is_empty());
+        // Every training row is inside its own ranges, to the last bit (its turn taken off
+        // and the arc's bounds round: Series B's q5 from -2.53341 to 0.0881769 rad flagged
+        // the rows at its top, lo + (hi - lo) being hi + 1.1e-16).
+        for q in &qs {
+            assert!(d.check(q, &x, |_| true).joints_outside.is_empty(), "{q:?}");
+        }
+        let b = Domain {
+            joint_min: vec![-2.53341],
+            joint_max: vec![0.0881769],
+            inputs: vec![vec![0.0]],
+            radius: 1.0,
+        };
+        assert!(
+            b.check(&[0.0881769], &[0.0], |_| true)
+                .joints_outside
+                .is_empty()
+        );
+        assert_eq!(
+            b.check(&[0.0881770], &[0.0], |_| true).joints_outside,
+            vec![0]
+        );
+        // Values over the whole circle with a hole of 18 deg inside: the raw range, the hole
+        // the distance's to judge (the arc without the hole flagged 16 more of the shipped
+        // non-geometric robot's test rows).
+        let round: Vec<Vec<f64>> = (0..100)
+            .filter(|k| !(40..45).contains(k))
+            .map(|k| {
+                let mut q = qs[k % qs.len()].clone();
+                q[0] = -PI + 0.01 + k as f64 * (2.0 * PI - 0.02) / 99.0;
+                q
+            })
+            .collect();
+        let rows: Vec<&[f64]> = round.iter().map(Vec::as_slice).collect();
+        let norm = Affine {
+            offset: vec![0.0; 12],
+            scale: vec![1.0; 12],
+        };
+        let r = Domain::fit(&robot, Encoding::SinCos, &norm, &rows);
+        assert_eq!(
+            (r.joint_min[0], r.joint_max[0]),
+            (round[0][0], round[94][0])
+        );
+        let hole = -PI + 0.01 + 42.0 * (2.0 * PI - 0.02) / 99.0;
+        let mut q = round[0].clone();
+        q[0] = hole;
+        assert!(r.check(&q, &x, |_| true).joints_outside.is_empty());
         // Inputs that see the angle itself keep the raw range.
         let (a, x) = fit(Encoding::Angles);
+        for q in &qs {
+            assert!(a.check(q, &x, |_| false).joints_outside.is_empty(), "{q:?}");
+        }
         assert!((a.joint_max[0] - (-0.5 + 4.0 / 59.0 + 2.0 * PI)).abs() < 1e-12);
         assert!(outside(&a, &x, [1.0, 0.0, 0.0, 0.0, 0.0, PI], false).is_empty());
     }
