@@ -933,6 +933,21 @@ fn edge_inputs_of_train_and_evaluate() {
     assert_eq!(s["members"], 0, "{s}");
     assert_ne!(s["network"], "rbf", "{s}");
     assert_ne!(s["network"], "mix", "{s}");
+    // Its `+net` figures are the model's: said where it is used.
+    let o = robocal(&[
+        "evaluate",
+        "--robot",
+        FANUC,
+        "--data",
+        TRAIN,
+        "--compensator",
+        out,
+    ]);
+    assert!(
+        stdout(&o).contains("note: the compensator has no network"),
+        "{}",
+        stdout(&o)
+    );
     // With the refinement open, one candidate per refinement: the model alone has no form,
     // inputs, size or penalty to choose (each network setting was a candidate of one figure).
     let o = train(&["--members", "0", "--report", report.to_str().unwrap()]);
@@ -2158,6 +2173,25 @@ fn edge_inputs_of_the_sixtieth_hunt() {
              pair's distance is read from its second row (line 5)",
         );
     }
+    // Without a pair column, consecutive rows pair up: the first row's distance is of none.
+    let consecutive: Vec<String> = (lines.iter())
+        .map(|l| l.split_once(',').unwrap().1.to_string())
+        .collect();
+    let mut consecutive = consecutive;
+    consecutive[1].push_str("777");
+    let consecutive = file("s60_consecutive.csv", &(consecutive.join("\n") + "\n"));
+    refused(
+        &[
+            "evaluate",
+            "--robot",
+            FANUC,
+            "--data",
+            &consecutive,
+            "--measure",
+            "distance",
+        ],
+        "s60_consecutive.csv: line 2: a distance on the first row: consecutive rows pair up",
+    );
 
     // Bounds say their unit.
     let huge = file("s60_huge.csv", "q1,q2,q3,q4,q5,q6\n0,1e30,0,0,0,0\n");

@@ -18,14 +18,23 @@ pub fn load_compensator(
     robot: &Robot,
 ) -> Result<(Compensator, Option<String>)> {
     let c = Compensator::load_for(path, robot)?;
-    let note = c.runs_another_model(robot).then(|| {
-        format!(
+    let mut notes = Vec::new();
+    if c.runs_another_model(robot) {
+        notes.push(format!(
             "note: the compensator runs in series with its own model (embedded: the model it \
              was trained with, or that model refined in training), not with {}",
             robot_path.display()
-        )
-    });
-    Ok((c, note))
+        ));
+    }
+    // Its figures are labelled as a network's (`+net`): say that none is there.
+    if !c.has_network() {
+        notes.push(
+            "note: the compensator has no network (training kept its model alone): it \
+             corrects by its embedded model only"
+                .to_string(),
+        );
+    }
+    Ok((c, (!notes.is_empty()).then(|| notes.join("\n"))))
 }
 
 #[derive(Args)]

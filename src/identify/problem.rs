@@ -168,6 +168,21 @@ impl<'a> Observations<'a> {
                 if measure == Measure::Relative {
                     need(set.has_position(), "a position")?;
                 }
+                // Consecutive rows pair up (1, 2), (2, 3), ...: the first row's distance is
+                // of no pair, and would be dropped unread (a 0 there is taken as a blank).
+                if measure == Measure::Distance
+                    && set.rows.iter().all(|m| m.pair.is_none())
+                    && let Some(first) = set.rows.first()
+                    && first.distance.is_some_and(|d| d != 0.0)
+                {
+                    return Err(Error::Invalid(format!(
+                        "{}: line {}: a distance on the first row: consecutive rows pair up \
+                         (1, 2), (2, 3), ..., each distance on the pair's second row, so the \
+                         first row's is of no pair (give a pair column, or leave it empty)",
+                        set.source.display(),
+                        first.line
+                    )));
+                }
                 for Pair { a, b } in pairs(set)? {
                     let s =
                         (sp(a).component_mul(&sp(a)) + sp(b).component_mul(&sp(b))).map(f64::sqrt);

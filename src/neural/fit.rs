@@ -174,9 +174,7 @@ pub(crate) fn fit_with(
         }
     }
     let qs: Vec<&[f64]> = if with_domain {
-        (set.rows.iter().map(|m| m.q.as_slice()))
-            .chain(train_opts.domain_also.iter().map(Vec::as_slice))
-            .collect()
+        set.rows.iter().map(|m| m.q.as_slice()).collect()
     } else {
         Vec::new()
     };

@@ -70,9 +70,10 @@ pub fn from_cut(v: f64, cut: f64) -> f64 {
 
 /// [`joint_groups`] with every joint for which `periodic(j)` holds compared modulo whole
 /// turns: q and q + 2 pi are one value, and so are 179.9999 and -179.9999 deg. The groups
-/// are those of [`joint_groups`] on the raw values, with the groups of every two rows that
-/// are one configuration only modulo turns (twins) joined: where no two rows are, they are
-/// the raw values' groups exactly. Twins are found on each such joint taken from a cut in
+/// are those of [`joint_groups`] on the raw values, a group joined whole to another where its
+/// first row is one configuration with the other's only modulo turns (twins; a group joins
+/// one other, and one that others joined joins none, so that groups do not chain): where no
+/// two rows are twins, they are the raw values' groups exactly. Twins are found on each such joint taken from a cut in
 /// the widest gap between its values on the circle (a joint whose values leave no gap of
 /// [`SAME_CONFIGURATION`] round the whole circle, where twins could lie across the cut, does
 /// not order that search unless every joint is such).
@@ -122,6 +123,13 @@ pub fn turn_groups(qs: &[&[f64]], periodic: impl Fn(usize) -> bool) -> Vec<usize
         g
     }
     let mut joined = false;
+    // Each raw group's first row in the file (its id counts in that order).
+    let mut first = vec![usize::MAX; root.len()];
+    for (i, &g) in raw.iter().enumerate() {
+        if first[g] == usize::MAX {
+            first[g] = i;
+        }
+    }
     let key = sweep_key(&wrapped, key_joint);
     let at = |i: usize| wrapped[i].get(key).copied().unwrap_or(0.0);
     let mut order: Vec<usize> = (0..qs.len()).collect();
@@ -132,9 +140,16 @@ pub fn turn_groups(qs: &[&[f64]], periodic: impl Fn(usize) -> bool) -> Vec<usize
                 break;
             }
             if modulo_turns(wrapped[i], wrapped[j]) && !same_configuration(qs[i], qs[j]) {
+                // Groups do not chain: a group joins another only whole and once, and only
+                // where its first row is the other's first row's twin.
                 let (a, b) = (find(&mut root, raw[i]), find(&mut root, raw[j]));
-                if a != b {
-                    root[a.max(b)] = a.min(b);
+                let (keep, join) = (a.min(b), a.max(b));
+                if a != b
+                    && root[join] == join
+                    && !(0..root.len()).any(|g| g != join && root[g] == join)
+                    && modulo_turns(wrapped[first[keep]], wrapped[first[join]])
+                {
+                    root[join] = keep;
                     joined = true;
                 }
             }
@@ -410,6 +425,16 @@ limits = [-360, 360]
         // order): no two rows a turn apart, so the raw values' groups exactly (a reviewer's
         // rows: joint 1 at 0, -0.5, -1 deg, joint 6 at 177.6 or -177.6 deg).
         let deg = |q: [f64; 6]| q.map(f64::to_radians);
+        // Twins do not chain groups: 0 and 360.5 deg are one configuration, 360.5 and 1 deg
+        // too, but 0 and 1 deg are not (a reviewer's rows, all three joined before).
+        let three = set(&[
+            deg([10.0, -90.0, 90.0, 0.0, 90.0, 0.0]),
+            deg([10.0, -90.0, 90.0, 0.0, 90.0, 360.5]),
+            deg([10.0, -90.0, 90.0, 0.0, 90.0, 1.0]),
+        ]);
+        let g = configuration_groups(&ur10, &three);
+        assert_eq!(group_count(&g), 2, "{g:?}");
+        assert_ne!(g[0], g[2]);
         let chain = set(&[
             deg([0.0, -90.0, 90.0, 0.0, 90.0, 177.6]),
             deg([-0.5, -90.0, 90.0, 0.0, 90.0, 177.6]),

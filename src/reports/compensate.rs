@@ -40,7 +40,8 @@ pub struct CompensateReport {
     pub failures: Vec<TargetFailure>,
     /// Lines of the solved targets outside the compensator's training domain.
     pub lines_outside_domain: Vec<usize>,
-    /// A note on the model the compensator runs with, if it is not the robot file's.
+    /// Notes on the compensator, one per line: the model it runs with, if it is not the
+    /// robot file's; that it has no network, if so.
     pub note: Option<String>,
     /// Where the calibrated base lies far from the nominal's (a base registered to a
     /// tracker): the change of frame the shifts above include.

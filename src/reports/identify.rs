@@ -253,7 +253,8 @@ pub struct EvaluateReport {
     pub accuracy: Vec<Accuracy>,
     /// Lines of the rows outside the compensator's training domain.
     pub lines_outside_domain: Vec<usize>,
-    /// A note on the model the compensator runs with, if it is not the robot file's.
+    /// Notes on the compensator, one per line: the model it runs with, if it is not the
+    /// robot file's; that it has no network, if so.
     pub note: Option<String>,
     /// The data's configurations measured more than once, under the robot file's model: how
     /// far their position residuals differ (mm), the floor of any compensator, and the two

@@ -114,9 +114,6 @@ pub struct TrainOptions {
     /// [`Compensator::train`](crate::neural::compensator::Compensator::train) sets it (and
     /// `rbf_hyper`, `rbf_whole_groups`) for its final fit, whatever the caller gave.
     pub rbf_left_out: Vec<usize>,
-    /// Joints (rad, mm) of rows left out of the fit that the training domain counts all the
-    /// same ([`crate::neural::domain::Domain`]): cross-validation judged the network at them.
-    pub domain_also: Vec<Vec<f64>>,
     /// The larger set's configuration group of each of its rows (its
     /// [`Samples::groups`](crate::neural::samples::Samples::groups)), so that the search draws that
     /// set's one row per configuration ([`crate::neural::rbf::LeftOut`]); empty: this set's groups,
@@ -170,7 +167,6 @@ impl Default for TrainOptions {
             start: None,
             rbf_hyper: RbfHyper::Search,
             rbf_left_out: Vec::new(),
-            domain_also: Vec::new(),
             rbf_whole_groups: Vec::new(),
             rbf_search_rows: crate::neural::rbf::HYPER_ROWS,
             rbf_search_blocks: crate::neural::rbf::HYPER_BLOCKS,

@@ -396,9 +396,11 @@ fn cross_validate(
     let mut warnings = Vec::new();
     if let Some(t) = fixed_network_test.as_ref().filter(|t| !t.kept) {
         let model = alone_model(&candidates[t.alone].settings);
+        let (raw, judged) = raw_ratio(t, &candidates);
         let figures = format!(
-            "the network's cross-validated error is {} the model alone's ({model}), {}",
-            below_or_above(t.ratio),
+            "the network's cross-validated error is {} the model alone's ({model}{}), {}",
+            below_or_above(raw),
+            judged(t.ratio, "; ", true),
             paired_rows(t)
         );
         if t.ratio > 1.0 && (t.z >= NETWORK_Z || t.z.is_nan()) {
@@ -575,27 +577,44 @@ fn refinement_test_note(t: &NetworkTest, candidates: &[Candidate]) -> String {
 /// The note on stage 5's test `t` of a network against the best model alone (`candidates`:
 /// the search's, which `t` indexes): `network` names the network, `then` what follows where
 /// it is not kept.
+/// The errors' own ratio of test `t` (network over model alone) and a function that gives a
+/// ratio as judged (`judged`, each candidate's RMS times its refinement's margin,
+/// [`COMPLIANCE_MARGIN`]) as a clause after `lead` where the margins make it differ: the
+/// errors' own ratio comes first, so that it and the paired z (of the errors) speak of the
+/// same figures.
+fn raw_ratio(
+    t: &NetworkTest,
+    candidates: &[Candidate],
+) -> (f64, impl Fn(f64, &str, bool) -> String) {
+    let raw = rank::cv_rms(candidates, t.network) / rank::cv_rms(candidates, t.alone);
+    let differs = (raw - t.ratio).abs() > 1e-12 * raw;
+    let clause = move |judged: f64, lead: &str, margin: bool| {
+        if !differs {
+            return String::new();
+        }
+        let close = if lead.contains('(') { ")" } else { "" };
+        let why = if margin {
+            format!(
+                ", with the compliance refinement's {:.0} % margin",
+                COMPLIANCE_MARGIN * 100.0
+            )
+        } else {
+            String::new()
+        };
+        format!("{lead}{} as judged{why}{close}", below_or_above(judged))
+    };
+    (raw, clause)
+}
+
 fn network_note(t: &NetworkTest, candidates: &[Candidate], network: &str, then: &str) -> String {
     let by = below_or_above;
     let model = alone_model(&candidates[t.alone].settings);
     let rows = paired_rows(t);
-    // The ratio as judged carries the margin a compliance refinement added on its own must
-    // win by ([`COMPLIANCE_MARGIN`]); where that moved it, the errors' own ratio comes first,
-    // so that it and the paired z (of the errors) speak of the same figures.
-    let raw = rank::cv_rms(candidates, t.network) / rank::cv_rms(candidates, t.alone);
-    let judged = if (raw - t.ratio).abs() > 1e-12 * raw {
-        format!(
-            "; {} as judged, with the compliance refinement's {:.0} % margin",
-            by(t.ratio),
-            COMPLIANCE_MARGIN * 100.0
-        )
-    } else {
-        String::new()
-    };
+    let (raw, judged) = raw_ratio(t, candidates);
     let mut test = format!(
-        "{network}'s cross-validated error is {} the best model alone's ({model}{judged}), \
-         {rows}",
-        by(raw)
+        "{network}'s cross-validated error is {} the best model alone's ({model}{}), {rows}",
+        by(raw),
+        judged(t.ratio, "; ", true)
     );
     // The figures that decide: those on rows no hyperparameter search saw, where they ran.
     if let Some(u) = &t.unseen {
@@ -603,17 +622,19 @@ fn network_note(t: &NetworkTest, candidates: &[Candidate], network: &str, then: 
         test.push_str(&if u.by == Unseen::Folds {
             format!(
                 "searched on each fold's training rows alone (no search seeing the rows it is \
-                 judged on), {}, paired z {:.1} over {} held-out rows",
-                by(u.ratio),
+                 judged on), {}{}, paired z {:.1} over {} held-out rows",
+                by(u.ratio * raw / t.ratio),
+                judged(u.ratio, " (", false),
                 u.z,
                 u.rows
             )
         } else {
             format!(
-                "on the {} held-out rows of configurations that search did not draw, {}, \
+                "on the {} held-out rows of configurations that search did not draw, {}{}, \
                  paired z {:.1}",
                 u.rows,
-                by(u.ratio),
+                by(u.ratio * raw / t.ratio),
+                judged(u.ratio, " (", false),
                 u.z
             )
         });
