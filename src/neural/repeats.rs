@@ -69,22 +69,30 @@ pub fn from_cut(v: f64, cut: f64) -> f64 {
 }
 
 /// [`joint_groups`] with every joint for which `periodic(j)` holds compared modulo whole
-/// turns: q and q + 2 pi are one value, and so are 179.9999 and -179.9999 deg. The groups
-/// are those of [`joint_groups`] on the raw values, a group joined whole to another where its
-/// first row is one configuration with the other's only modulo turns (twins; a group joins
-/// one other, and one that others joined joins none, so that groups do not chain): where no
-/// two rows are twins, they are the raw values' groups exactly. Twins are found on each such joint taken from a cut in
-/// the widest gap between its values on the circle (a joint whose values leave no gap of
-/// [`SAME_CONFIGURATION`] round the whole circle, where twins could lie across the cut, does
-/// not order that search unless every joint is such).
+/// turns: q and q + 2 pi are one value, and so are 179.9999 and -179.9999 deg. The raw values'
+/// groups are grouped again, each by its first row in the sweep (its leader), the same way
+/// with the joints compared modulo turns: a group joins the first group whose leader is within
+/// [`SAME_CONFIGURATION`] of its own leader modulo turns (so every row lies within twice the
+/// tolerance of its group's first leader: groups do not chain). Raw leaders are never within
+/// the tolerance of each other on raw values, so where no two rows are one configuration only
+/// modulo turns, the groups are the raw values' exactly. The second sweep runs on each such
+/// joint taken from a cut in the widest gap between its values on the circle (a joint whose
+/// values leave no gap of [`SAME_CONFIGURATION`] round the whole circle, where leaders could
+/// lie across the cut, does not order it unless every joint is such).
 pub fn turn_groups(qs: &[&[f64]], periodic: impl Fn(usize) -> bool) -> Vec<usize> {
-    let raw = joint_groups(qs);
+    let raw_key = sweep_key(qs, |_| true);
+    let all: Vec<usize> = (0..qs.len()).collect();
+    let leader = sweep(
+        &all,
+        |i| qs[i][raw_key],
+        |i, j| same_configuration(qs[i], qs[j]),
+    );
     let dof = qs.iter().map(|q| q.len()).min().unwrap_or(0);
     let gaps: Vec<Option<(f64, f64)>> = (0..dof)
         .map(|j| periodic(j).then(|| widest_gap(qs.iter().map(|q| q[j]))))
         .collect();
-    if gaps.iter().all(Option::is_none) {
-        return raw;
+    if qs.is_empty() || gaps.iter().all(Option::is_none) {
+        return ids_in_file_order(&leader);
     }
     let cuts: Vec<Option<f64>> = gaps.iter().map(|g| g.map(|(cut, _)| cut)).collect();
     let dense = |j: usize| gaps[j].is_some_and(|(_, gap)| gap < SAME_CONFIGURATION);
@@ -113,87 +121,60 @@ pub fn turn_groups(qs: &[&[f64]], periodic: impl Fn(usize) -> bool) -> Vec<usize
                 d < SAME_CONFIGURATION
             })
     };
-    // Join the raw groups of twins (a union-find over the raw groups' ids).
-    let mut root: Vec<usize> = (0..group_count(&raw)).collect();
-    fn find(root: &mut [usize], mut g: usize) -> usize {
-        while root[g] != g {
-            root[g] = root[root[g]];
-            g = root[g];
-        }
-        g
-    }
-    let mut joined = false;
-    // Each raw group's first row in the file (its id counts in that order).
-    let mut first = vec![usize::MAX; root.len()];
-    for (i, &g) in raw.iter().enumerate() {
-        if first[g] == usize::MAX {
-            first[g] = i;
-        }
-    }
     let key = sweep_key(&wrapped, key_joint);
-    let at = |i: usize| wrapped[i].get(key).copied().unwrap_or(0.0);
-    let mut order: Vec<usize> = (0..qs.len()).collect();
-    order.sort_by(|&a, &b| at(a).total_cmp(&at(b)));
-    for (k, &i) in order.iter().enumerate() {
-        for &j in order[..k].iter().rev() {
-            if at(i) - at(j) >= SAME_CONFIGURATION {
-                break;
-            }
-            if modulo_turns(wrapped[i], wrapped[j]) && !same_configuration(qs[i], qs[j]) {
-                // Groups do not chain: a group joins another only whole and once, and only
-                // where its first row is the other's first row's twin.
-                let (a, b) = (find(&mut root, raw[i]), find(&mut root, raw[j]));
-                let (keep, join) = (a.min(b), a.max(b));
-                if a != b
-                    && root[join] == join
-                    && !(0..root.len()).any(|g| g != join && root[g] == join)
-                    && modulo_turns(wrapped[first[keep]], wrapped[first[join]])
-                {
-                    root[join] = keep;
-                    joined = true;
-                }
-            }
-        }
+    let mut leaders: Vec<usize> = leader.clone();
+    leaders.sort_unstable();
+    leaders.dedup();
+    let joined = sweep(
+        &leaders,
+        |i| wrapped[i][key],
+        |i, j| modulo_turns(wrapped[i], wrapped[j]),
+    );
+    // Each raw leader's group leader, then each row's.
+    let mut of = vec![usize::MAX; qs.len()];
+    for (&l, &g) in leaders.iter().zip(&joined) {
+        of[l] = g;
     }
-    if !joined {
-        return raw;
-    }
-    // Ids in the order of each joined group's first row in the file.
-    let mut id = vec![usize::MAX; root.len()];
-    let mut next = 0;
-    (0..qs.len())
-        .map(|i| {
-            let r = find(&mut root, raw[i]);
-            if id[r] == usize::MAX {
-                id[r] = next;
-                next += 1;
-            }
-            id[r]
-        })
-        .collect()
+    let rows: Vec<usize> = leader.iter().map(|&l| of[l]).collect();
+    ids_in_file_order(&rows)
 }
 
 /// [`configuration_groups`] of bare joint vectors (rad, mm), in their order.
 pub fn joint_groups(qs: &[&[f64]]) -> Vec<usize> {
-    let n = qs.len();
     // Sweep the rows in the order of the joint whose values spread widest (a joint held
     // still would make every pair a candidate): only rows within the tolerance in that joint
     // can be the same configuration.
     let key = sweep_key(qs, |_| true);
-    let at = |i: usize| qs[i].get(key).copied().unwrap_or(0.0);
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&a, &b| at(a).total_cmp(&at(b)));
-    let close = |i: usize, j: usize| same_configuration(qs[i], qs[j]);
+    let all: Vec<usize> = (0..qs.len()).collect();
+    let leader = sweep(
+        &all,
+        |i| qs[i][key],
+        |i, j| same_configuration(qs[i], qs[j]),
+    );
+    ids_in_file_order(&leader)
+}
+
+/// The leader of each of `rows` (row indices): sweeping them in the order of `at`, a row joins
+/// the first leader (in that order) within [`SAME_CONFIGURATION`] of it in `at` for which
+/// `close(leader, row)` holds; otherwise it leads a group of its own. Leaders do not chain.
+fn sweep(
+    rows: &[usize],
+    at: impl Fn(usize) -> f64,
+    close: impl Fn(usize, usize) -> bool,
+) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..rows.len()).collect();
+    order.sort_by(|&a, &b| at(rows[a]).total_cmp(&at(rows[b])));
     // Each group's first row in the sweep, in the sweep's order (so their keys ascend and
     // those too far below the current row leave from the front).
     let mut leaders: Vec<usize> = Vec::new();
     let mut open = 0;
-    let mut leader = vec![0; n];
-    for &i in &order {
+    let mut leader = vec![0; rows.len()];
+    for &k in &order {
+        let i = rows[k];
         while open < leaders.len() && at(i) - at(leaders[open]) >= SAME_CONFIGURATION {
             open += 1;
         }
-        leader[i] = match leaders[open..].iter().find(|&&l| close(l, i)) {
+        leader[k] = match leaders[open..].iter().find(|&&l| close(l, i)) {
             Some(&l) => l,
             None => {
                 leaders.push(i);
@@ -201,17 +182,18 @@ pub fn joint_groups(qs: &[&[f64]]) -> Vec<usize> {
             }
         };
     }
-    // Ids in the order of each group's first row in the file.
-    let mut id = vec![usize::MAX; n];
-    let mut next = 0;
-    (0..n)
-        .map(|i| {
-            let l = leader[i];
-            if id[l] == usize::MAX {
-                id[l] = next;
-                next += 1;
-            }
-            id[l]
+    leader
+}
+
+/// Group ids (from 0, in the order of each group's first row in the file) of rows given
+/// their groups' leader rows.
+fn ids_in_file_order(leader: &[usize]) -> Vec<usize> {
+    let mut id = std::collections::HashMap::new();
+    leader
+        .iter()
+        .map(|l| {
+            let next = id.len();
+            *id.entry(*l).or_insert(next)
         })
         .collect()
 }
@@ -435,6 +417,29 @@ limits = [-360, 360]
         let g = configuration_groups(&ur10, &three);
         assert_eq!(group_count(&g), 2, "{g:?}");
         assert_ne!(g[0], g[2]);
+        // Three rows, each two of them twins: one configuration in every order (a group
+        // joined by another could join no third).
+        let rows3 = [
+            deg([10.2, -80.0, 70.0, -60.0, 80.0, 0.0]),
+            deg([10.0, -80.0, 70.0, -60.0, 80.0, 360.0]),
+            deg([10.1, -80.0, 70.0, -60.0, 80.0, -360.0]),
+        ];
+        for order in [[0, 1, 2], [1, 0, 2], [2, 1, 0], [1, 2, 0]] {
+            let g = configuration_groups(&ur10, &set(&order.map(|k| rows3[k])));
+            assert_eq!(group_count(&g), 1, "{order:?}: {g:?}");
+        }
+        // A twin of a group's leader's neighbour joins it, whichever row of the group comes
+        // first in the file (its first row is not its leader).
+        let group = [
+            deg([10.0, -80.0, 70.0, -60.0, 79.5, 0.1]),
+            deg([10.0, -80.0, 70.0, -60.0, 80.0, 0.0]),
+            deg([10.0, -80.0, 70.0, -60.0, 80.5, 0.2]),
+            deg([10.0, -80.0, 70.0, -60.0, 80.5, 360.2]),
+        ];
+        for order in [[0, 1, 2, 3], [1, 0, 2, 3], [3, 2, 1, 0]] {
+            let g = configuration_groups(&ur10, &set(&order.map(|k| group[k])));
+            assert_eq!(group_count(&g), 1, "{order:?}: {g:?}");
+        }
         let chain = set(&[
             deg([0.0, -90.0, 90.0, 0.0, 90.0, 177.6]),
             deg([-0.5, -90.0, 90.0, 0.0, 90.0, 177.6]),
