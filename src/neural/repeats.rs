@@ -80,13 +80,7 @@ pub fn from_cut(v: f64, cut: f64) -> f64 {
 /// values leave no gap of [`SAME_CONFIGURATION`] round the whole circle, where leaders could
 /// lie across the cut, does not order it unless every joint is such).
 pub fn turn_groups(qs: &[&[f64]], periodic: impl Fn(usize) -> bool) -> Vec<usize> {
-    let raw_key = sweep_key(qs, |_| true);
-    let all: Vec<usize> = (0..qs.len()).collect();
-    let leader = sweep(
-        &all,
-        |i| qs[i][raw_key],
-        |i, j| same_configuration(qs[i], qs[j]),
-    );
+    let leader = raw_leaders(qs);
     let dof = qs.iter().map(|q| q.len()).min().unwrap_or(0);
     let gaps: Vec<Option<(f64, f64)>> = (0..dof)
         .map(|j| periodic(j).then(|| widest_gap(qs.iter().map(|q| q[j]))))
@@ -141,17 +135,21 @@ pub fn turn_groups(qs: &[&[f64]], periodic: impl Fn(usize) -> bool) -> Vec<usize
 
 /// [`configuration_groups`] of bare joint vectors (rad, mm), in their order.
 pub fn joint_groups(qs: &[&[f64]]) -> Vec<usize> {
+    ids_in_file_order(&raw_leaders(qs))
+}
+
+/// Each row's group leader on the raw values ([`joint_groups`]).
+fn raw_leaders(qs: &[&[f64]]) -> Vec<usize> {
     // Sweep the rows in the order of the joint whose values spread widest (a joint held
     // still would make every pair a candidate): only rows within the tolerance in that joint
     // can be the same configuration.
     let key = sweep_key(qs, |_| true);
     let all: Vec<usize> = (0..qs.len()).collect();
-    let leader = sweep(
+    sweep(
         &all,
         |i| qs[i][key],
         |i, j| same_configuration(qs[i], qs[j]),
-    );
-    ids_in_file_order(&leader)
+    )
 }
 
 /// The leader of each of `rows` (row indices): sweeping them in the order of `at`, a row joins
