@@ -29,10 +29,9 @@ fn position_rms(c: &Compensator, set: &MeasurementSet) -> Result<f64> {
     let rows = crate::evaluate::row_errors(set, crate::identify::Measure::Position, |q| {
         c.predict(q, &mut ws)
     })?;
-    let squares: Vec<f64> = (rows.iter().filter_map(|r| r.position_mm))
-        .map(|e| e * e)
-        .collect();
-    Ok((squares.iter().sum::<f64>() / squares.len().max(1) as f64).sqrt())
+    Ok(crate::evaluate::summarize(&rows)
+        .position_mm
+        .map_or(0.0, |p| p.rms))
 }
 
 impl Compensator {
@@ -152,14 +151,8 @@ impl Compensator {
             }
             s.outliers_left_out = !train.rbf_left_out.is_empty();
             if !s.outliers.is_empty() {
-                let fate = if s.outliers_left_out {
-                    "left out of the final fit (a mis-measured row, or a sharp feature of the \
-                     robot one sample cannot tell; check them, or ask for them to be kept)"
-                } else {
-                    "kept (a mis-measured row, or a sharp feature of the robot; check them, or \
-                     ask for them to be dropped from the final fit)"
-                };
-                s.notes.push(outlier_note(&s.outliers, s.outlier_k, fate));
+                s.notes
+                    .push(outlier_note(&s.outliers, s.outlier_k, s.outliers_left_out));
             }
             // Mis-measured rows are rare; many rows far out are a heavy tail of the held-out
             // error (one gross row bends its neighbours' predictions too, so a few more rows

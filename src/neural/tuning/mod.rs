@@ -400,7 +400,7 @@ fn cross_validate(
         let figures = format!(
             "the network's cross-validated error is {} the model alone's ({model}{}), {}",
             below_or_above(raw),
-            judged(t.ratio, "; ", true),
+            with_margin(judged(t.ratio)),
             paired_rows(t)
         );
         if t.ratio > 1.0 && (t.z >= NETWORK_Z || t.z.is_nan()) {
@@ -578,32 +578,26 @@ fn refinement_test_note(t: &NetworkTest, candidates: &[Candidate]) -> String {
 /// the search's, which `t` indexes): `network` names the network, `then` what follows where
 /// it is not kept.
 /// The errors' own ratio of test `t` (network over model alone) and a function that gives a
-/// ratio as judged (`judged`, each candidate's RMS times its refinement's margin,
-/// [`COMPLIANCE_MARGIN`]) as a clause after `lead` where the margins make it differ: the
-/// errors' own ratio comes first, so that it and the paired z (of the errors) speak of the
+/// ratio as judged (each candidate's RMS times its refinement's margin, [`COMPLIANCE_MARGIN`])
+/// as "X % below as judged", None where the margins leave it the same: the errors' own ratio
+/// comes first, so that it and the paired z (of the errors) speak of the
 /// same figures.
-fn raw_ratio(
-    t: &NetworkTest,
-    candidates: &[Candidate],
-) -> (f64, impl Fn(f64, &str, bool) -> String) {
+fn raw_ratio(t: &NetworkTest, candidates: &[Candidate]) -> (f64, impl Fn(f64) -> Option<String>) {
     let raw = rank::cv_rms(candidates, t.network) / rank::cv_rms(candidates, t.alone);
     let differs = (raw - t.ratio).abs() > 1e-12 * raw;
-    let clause = move |judged: f64, lead: &str, margin: bool| {
-        if !differs {
-            return String::new();
-        }
-        let close = if lead.contains('(') { ")" } else { "" };
-        let why = if margin {
-            format!(
-                ", with the compliance refinement's {:.0} % margin",
-                COMPLIANCE_MARGIN * 100.0
-            )
-        } else {
-            String::new()
-        };
-        format!("{lead}{} as judged{why}{close}", below_or_above(judged))
-    };
-    (raw, clause)
+    (raw, move |judged: f64| {
+        differs.then(|| format!("{} as judged", below_or_above(judged)))
+    })
+}
+
+/// `judged` (from [`raw_ratio`]) as the clause after a model alone's name.
+fn with_margin(judged: Option<String>) -> String {
+    judged.map_or(String::new(), |j| {
+        format!(
+            "; {j}, with the compliance refinement's {:.0} % margin",
+            COMPLIANCE_MARGIN * 100.0
+        )
+    })
 }
 
 fn network_note(t: &NetworkTest, candidates: &[Candidate], network: &str, then: &str) -> String {
@@ -614,7 +608,7 @@ fn network_note(t: &NetworkTest, candidates: &[Candidate], network: &str, then: 
     let mut test = format!(
         "{network}'s cross-validated error is {} the best model alone's ({model}{}), {rows}",
         by(raw),
-        judged(t.ratio, "; ", true)
+        with_margin(judged(t.ratio))
     );
     // The figures that decide: those on rows no hyperparameter search saw, where they ran.
     if let Some(u) = &t.unseen {
@@ -624,7 +618,7 @@ fn network_note(t: &NetworkTest, candidates: &[Candidate], network: &str, then: 
                 "searched on each fold's training rows alone (no search seeing the rows it is \
                  judged on), {}{}, paired z {:.1} over {} held-out rows",
                 by(u.ratio * raw / t.ratio),
-                judged(u.ratio, " (", false),
+                judged(u.ratio).map_or(String::new(), |j| format!(" ({j})")),
                 u.z,
                 u.rows
             )
@@ -634,7 +628,7 @@ fn network_note(t: &NetworkTest, candidates: &[Candidate], network: &str, then: 
                  paired z {:.1}",
                 u.rows,
                 by(u.ratio * raw / t.ratio),
-                judged(u.ratio, " (", false),
+                judged(u.ratio).map_or(String::new(), |j| format!(" ({j})")),
                 u.z
             )
         });
@@ -692,13 +686,20 @@ fn same_model(a: &Result<Robot>, b: &Result<Robot>) -> bool {
 }
 
 /// The note on training rows beyond `k` robust sigmas of the cross-validated error, named in
-/// the rows given to training, and what became of them (`fate`).
-pub fn outlier_note(outliers: &[Outlier], k: f64, fate: &str) -> String {
+/// the rows given to training; `dropped`: left out of the final fit.
+pub fn outlier_note(outliers: &[Outlier], k: f64, dropped: bool) -> String {
     let rows: Vec<String> = outliers.iter().map(|o| row_name(o.line, o.row)).collect();
     format!(
-        "{} training row(s) beyond {k} robust sigmas of the cross-validated error ({}): {fate}",
+        "{} training row(s) beyond {k} robust sigmas of the cross-validated error ({}): {}",
         outliers.len(),
         rows.join(", "),
+        if dropped {
+            "left out of the final fit (a mis-measured row, or a sharp feature of the robot \
+             one sample cannot tell; check them, or ask for them to be kept)"
+        } else {
+            "kept (a mis-measured row, or a sharp feature of the robot; check them, or \
+             ask for them to be dropped from the final fit)"
+        }
     )
 }
 
