@@ -550,14 +550,19 @@ fn covariance_from(
     };
     // Scale to unit diagonal before inverting: mm and rad columns differ by orders.
     let d: Vec<f64> = (0..n).map(|i| ne.a[(i, i)].sqrt()).collect();
-    if d.iter().any(|v| *v == 0.0 || !v.is_finite()) {
-        return Err(Error::NotConverged(
-            "rank loss at the solution: a parameter has no effect".into(),
-        ));
+    let params = robot.parameters();
+    let without_effect: Vec<String> = (cols.iter().zip(&d))
+        .filter(|(_, v)| **v == 0.0 || !v.is_finite())
+        .map(|(&c, _)| params[c].name())
+        .collect();
+    if !without_effect.is_empty() {
+        return Err(Error::NotConverged(format!(
+            "rank loss at the solution: no effect of {}",
+            without_effect.join(", ")
+        )));
     }
     let scaled = DMatrix::from_fn(n, n, |i, j| ne.a[(i, j)] / (d[i] * d[j]));
     let inv = scaled.cholesky().ok_or_else(|| {
-        let params = robot.parameters();
         Error::NotConverged(format!(
             "rank loss at the solution: J^T W J is singular for {}",
             cols.iter()
@@ -571,4 +576,56 @@ fn covariance_from(
         inv[(i, j)] / (d[i] * d[j]) * if s2.is_finite() { s2 } else { 1.0 }
     });
     Ok((cov, s2))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{DMatrix, DVector};
+
+    fn ur10() -> Robot {
+        crate::model::read_robot(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/ur10.toml"),
+        )
+        .unwrap()
+    }
+
+    /// The covariance's refusal names the parameters the rows do not move (a zero column of
+    /// J), or all of them when the columns are dependent.
+    #[test]
+    fn rank_loss_at_the_solution_names_the_parameters() {
+        let robot = ur10();
+        let names: Vec<String> = robot.parameters().iter().map(|p| p.name()).collect();
+        let normal = |a: DMatrix<f64>| Normal {
+            g: DVector::zeros(a.nrows()),
+            a,
+            cost: 1.0,
+        };
+        let err = covariance_from(
+            &robot,
+            &normal(DMatrix::from_diagonal(&DVector::from_vec(vec![
+                1.0, 0.0, 2.0,
+            ]))),
+            20,
+            &[0, 1, 2],
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains(&format!("no effect of {}", names[1])), "{err}");
+        assert!(
+            !err.contains(&names[0]) && !err.contains(&names[2]),
+            "{err}"
+        );
+        let dependent = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
+        let err = covariance_from(&robot, &normal(dependent), 20, &[3, 4])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains(&format!("singular for {}, {}", names[3], names[4])),
+            "{err}"
+        );
+        let (cov, s2) =
+            covariance_from(&robot, &normal(DMatrix::identity(2, 2)), 12, &[0, 1]).unwrap();
+        assert!((s2 - 0.1).abs() < 1e-15 && (cov[(0, 0)] - 0.1).abs() < 1e-15);
+    }
 }

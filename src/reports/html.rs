@@ -52,7 +52,8 @@ fn cell(v: &Node) -> String {
     match v {
         Node::Null => "none".into(),
         Node::Number(x) => number(*x),
-        Node::Text(s) => esc(s),
+        // A note of several lines (another model; no network) keeps its lines apart.
+        Node::Text(s) => esc(s).replace('\n', "<br>"),
         Node::Bool(b) => if *b { "yes" } else { "no" }.into(),
         Node::List(a) if a.is_empty() => "none".into(),
         Node::List(a) => {
@@ -433,6 +434,7 @@ mod tests {
         assert_eq!(cell(&Node::Null), "none");
         assert_eq!(cell(&Node::List(Vec::new())), "none");
         assert_eq!(cell(&Node::Text("inf".into())), "inf");
+        assert_eq!(cell(&Node::Text("a < b\nc".into())), "a &lt; b<br>c");
         assert_eq!(number(-2.5105e-14), "0");
         assert_eq!(number(30.0), "30");
         assert_eq!(number(0.45381234), "0.45381");

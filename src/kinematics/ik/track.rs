@@ -71,9 +71,10 @@ impl<M: ToolModel> IkSolver<M> {
     /// close together (an elbow near straight), and where the nominal's branch does not reach
     /// the pose (at the edge of the reach, which the calibrated arm's extends by
     /// millimetres) there is no solution of the nominal to start from. None for a model with
-    /// its own closed form (nothing to carry), where the branch has no nearest either, or
-    /// where the iteration does not settle within [`TRACK_ITERATIONS`]. The numerical solve
-    /// from its result checks it.
+    /// its own closed form (nothing to carry), where the branch has no nearest either, where
+    /// the iteration does not settle within [`TRACK_ITERATIONS`], or where it stops
+    /// contracting away from the pose ([`Self::near_target`]). The numerical solve from its
+    /// result checks it.
     pub(super) fn tracked(
         &mut self,
         target: &Pose,
@@ -103,20 +104,30 @@ impl<M: ToolModel> IkSolver<M> {
                 // shoulder next to straight, where the model's two solutions can lie on one
                 // side of the nominal's singularity) the numerical solve from it finds one,
                 // where it is more the branch does not reach the pose on this model either.
-                let reached = self.model.pose(&q);
-                let off = (target.translation.vector - reached.translation.vector).norm();
-                let turned = angle_between(&target.rotation, &reached.rotation);
-                return (off <= TRACK_REACHED_MM && turned <= TRACK_REACHED_RAD).then_some(q);
+                return self.near_target(target, &q).then_some(q);
             }
             // An iteration that does not contract (a branch that leaves toward another
-            // solution, or none) is given up after a second step that does not shrink.
+            // solution, or none) is given up after a second step that does not shrink, but
+            // where it wanders within reach of the pose (the nominal's stretched elbow, where
+            // its nearest on the branch jumps by 1e-7 rad from step to step; a calibrated
+            // UR10's pose at q3 = 0, the model's fold 0.03 deg away, lost its configuration
+            // and its wrist flip in 24 of 100 poses) it is a start as a settled one.
             growing = if step >= last { growing + 1 } else { 0 };
             if growing >= 2 {
-                return None;
+                return self.near_target(target, &q).then_some(q);
             }
             last = step;
         }
         None
+    }
+
+    /// Whether the model's tool at `q` (rad) is within [`TRACK_REACHED_MM`] and
+    /// [`TRACK_REACHED_RAD`] of `target`: near enough for a numerical solve to start.
+    fn near_target(&mut self, target: &Pose, q: &[f64; 6]) -> bool {
+        let reached = self.model.pose(q);
+        let off = (target.translation.vector - reached.translation.vector).norm();
+        let turned = angle_between(&target.rotation, &reached.rotation);
+        off <= TRACK_REACHED_MM && turned <= TRACK_REACHED_RAD
     }
 
     /// The starts of the branches the nominal's closed form does not reach at `target` (not
