@@ -583,3 +583,71 @@ fn a_far_seed_gets_the_configuration_a_controller_nearest_the_seed_runs() {
         );
     }
 }
+
+#[test]
+fn the_robot_files_joint_limits_hold_with_a_compensator() {
+    // Limits are the cell's: a robot file narrowed after training (joint 1 within +-100 deg)
+    // holds the solutions, not the limits embedded in the compensator's model (+-150). A
+    // target taught at joint 1 = 120 deg had been solved there.
+    let model = identified();
+    let rcal = tmp("limits.rcal");
+    let mut args = vec![
+        "train",
+        "--robot",
+        model.to_str().unwrap(),
+        "--data",
+        "datasets/case_d/training.csv",
+        "--out",
+        rcal.to_str().unwrap(),
+    ];
+    args.extend_from_slice(common::CHEAP_TRAIN);
+    let o = robocal(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let narrow = tmp("limits_narrow.toml");
+    let text = std::fs::read_to_string(&model).unwrap();
+    assert!(text.contains("limits = [-150.0, 150.0]"));
+    std::fs::write(
+        &narrow,
+        text.replacen("limits = [-150.0, 150.0]", "limits = [-100.0, 100.0]", 1),
+    )
+    .unwrap();
+    let targets = tmp("limits_targets.csv");
+    let joints = tmp("limits_joints.csv");
+    std::fs::write(
+        &joints,
+        "q1,q2,q3,q4,q5,q6\n120,10,0,0,-30,0\n50,10,0,0,-30,0\n",
+    )
+    .unwrap();
+    let o = robocal(&[
+        "fk",
+        "--robot",
+        model.to_str().unwrap(),
+        "--joints",
+        joints.to_str().unwrap(),
+        "--out",
+        targets.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let status = |robot: &std::path::Path| {
+        let o = compensate(robot, &targets, &["--compensator", rcal.to_str().unwrap()]);
+        let rows = csv(&stdout(&o));
+        let s = col(&rows, "status");
+        (
+            rows[1..].iter().map(|r| r[s].clone()).collect::<Vec<_>>(),
+            stderr(&o),
+        )
+    };
+    let (wide, said) = status(&model);
+    assert_eq!(wide, ["ok", "ok"], "{said}");
+    assert!(!said.contains("joint limits"), "{said}");
+    let (narrowed, said) = status(&narrow);
+    assert!(narrowed[0].starts_with("outside-limits"), "{narrowed:?}");
+    assert_eq!(narrowed[1], "ok");
+    assert!(
+        said.contains(&format!(
+            "the joint limits of {} hold, not those the compensator was trained with (joint(s) 1)",
+            narrow.display()
+        )),
+        "{said}"
+    );
+}

@@ -17,8 +17,24 @@ pub fn load_compensator(
     robot_path: &Path,
     robot: &Robot,
 ) -> Result<(Compensator, Option<String>)> {
-    let c = Compensator::load_for(path, robot)?;
+    let mut c = Compensator::load_for(path, robot)?;
     let mut notes = Vec::new();
+    // Joint limits are the cell's: the robot file given holds, not the file the compensator
+    // was trained with (its embedded model's), so that a narrowed range is obeyed.
+    let (limited, changed) = c.robot.with_limits_of(robot)?;
+    if !changed.is_empty() {
+        notes.push(format!(
+            "note: the joint limits of {} hold, not those the compensator was trained with \
+             (joint(s) {})",
+            robot_path.display(),
+            changed
+                .iter()
+                .map(usize::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+        c.robot = limited;
+    }
     if c.runs_another_model(robot) {
         notes.push(format!(
             "note: the compensator runs in series with its own model (embedded: the model it \

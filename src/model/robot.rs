@@ -641,6 +641,29 @@ impl Robot {
                 .all(|(a, b)| a.joint_type == b.joint_type)
     }
 
+    /// This robot with `other`'s joint limits (deg, mm), and the 1-based numbers of the joints
+    /// whose limits that changes: the limits are the cell's (a robot file's), not a
+    /// calibration's, so a model embedded elsewhere (a compensator's) takes those of the file
+    /// given with it. An error when the joints differ in number or type.
+    pub fn with_limits_of(&self, other: &Robot) -> Result<(Robot, Vec<usize>)> {
+        if !self.same_joints(other) {
+            return Err(Error::Model(format!(
+                "joint limits of a robot with other joints ({} and {})",
+                self.dof(),
+                other.dof()
+            )));
+        }
+        let mut robot = self.clone();
+        let mut changed = Vec::new();
+        for (i, (j, o)) in robot.joints.iter_mut().zip(other.joints()).enumerate() {
+            if j.limits != o.limits {
+                j.limits = o.limits;
+                changed.push(i + 1);
+            }
+        }
+        Ok((robot, changed))
+    }
+
     /// The middle of every joint's range (rad or mm): the reference for choosing among IK
     /// solutions when no seed is given.
     pub fn mid_joints(&self) -> Vec<f64> {
@@ -868,6 +891,24 @@ mod tests {
             r.turns_near(&rad([200.0, 0.0, 0.0, 0.0, 0.0, 0.0]), &seed)
                 .is_none()
         );
+    }
+
+    #[test]
+    fn limits_come_from_another_file_and_nothing_else_does() {
+        let r = test_fanuc();
+        let mut narrow = r.clone();
+        narrow.joints[0].limits = [-100.0, 100.0];
+        narrow.joints[4].limits = [-10.0, 10.0];
+        let moved = r.with_param(r.parameters()[3], 0.25).unwrap();
+        let (got, changed) = moved.with_limits_of(&narrow).unwrap();
+        assert_eq!(changed, vec![1, 5]);
+        assert_eq!(got.joints()[0].limits, [-100.0, 100.0]);
+        assert_eq!(got.joints()[4].limits, [-10.0, 10.0]);
+        assert_eq!(got.joints()[1].limits, r.joints()[1].limits);
+        // The geometry is the robot's own.
+        assert_eq!(got.param(r.parameters()[3]), 0.25);
+        assert_eq!(got.joints()[0].row, moved.joints()[0].row);
+        assert!(moved.with_limits_of(&moved).unwrap().1.is_empty());
     }
 
     #[test]
