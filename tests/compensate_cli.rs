@@ -651,3 +651,88 @@ fn the_robot_files_joint_limits_hold_with_a_compensator() {
         "{said}"
     );
 }
+
+#[test]
+fn rounded_commands_report_what_the_robot_then_reaches() {
+    // --decimals 2 rounds the command to 0.01 mm and 0.01 deg, which the residual columns
+    // (the unrounded command's) do not show: the controller's joints for the rounded pose
+    // differ, and the calibrated robot's error differs with them (a reviewer's target above
+    // the shoulder, its wrist centre next to joint 1's axis: joint 1 2.15 deg off, 0.32 mm). Each row's written_miss must be what an independent path
+    // gives: the nominal's closed-form `ik` of the written command on the solution's
+    // branch, then `fk` of the calibrated model there, against the target.
+    let model = identified();
+    let truth = std::fs::read_to_string("datasets/case_d/test_truth.csv").unwrap();
+    let targets = tmp("rounded_targets.csv");
+    std::fs::write(
+        &targets,
+        truth.lines().take(21).collect::<Vec<_>>().join("\n"),
+    )
+    .unwrap();
+    let out = tmp("rounded_commands.csv");
+    let o = compensate(
+        &model,
+        &targets,
+        &["--decimals", "2", "--out", out.to_str().unwrap()],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let said = stderr(&o);
+    assert!(said.contains("as written (2 decimals)"), "{said}");
+    let rows = csv(&std::fs::read_to_string(&out).unwrap());
+    let at = |name: &str| col(&rows, name);
+    let value = |r: &Vec<String>, name: &str| r[at(name)].parse::<f64>().unwrap();
+    let mut worst: f64 = 0.0;
+    for r in &rows[1..] {
+        let cmd: Vec<String> = ["x", "y", "z", "rz", "ry", "rx"]
+            .iter()
+            .map(|c| r[at(&format!("cmd_{c}"))].clone())
+            .collect();
+        let seed: Vec<String> = (1..=6).map(|j| r[at(&format!("q{j}"))].clone()).collect();
+        let ik = robocal(&[
+            "ik",
+            "--robot",
+            FANUC,
+            "--pose",
+            &cmd.join(","),
+            "--seed",
+            &seed.join(","),
+        ]);
+        assert!(ik.status.success(), "{}", stderr(&ik));
+        let ik = csv(&stdout(&ik));
+        let q: Vec<String> = (1..=6)
+            .map(|j| ik[1][col(&ik, &format!("q{j}"))].clone())
+            .collect();
+        let fk = robocal(&[
+            "fk",
+            "--robot",
+            model.to_str().unwrap(),
+            "--q",
+            &q.join(","),
+        ]);
+        assert!(fk.status.success(), "{}", stderr(&fk));
+        let fk = csv(&stdout(&fk));
+        let reached: Vec<f64> = ["x", "y", "z"]
+            .iter()
+            .map(|c| fk[1][col(&fk, c)].parse().unwrap())
+            .collect();
+        let want = [value(r, "x"), value(r, "y"), value(r, "z")];
+        let miss = (0..3)
+            .map(|k| (reached[k] - want[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let written = value(r, "written_miss_mm");
+        assert!((miss - written).abs() < 1e-6, "{miss} {written}");
+        assert!(value(r, "residual_mm") < 1e-6);
+        worst = worst.max(miss);
+    }
+    // Rounding to 0.01 mm and 0.01 deg costs micrometres here (tenths of a millimetre next
+    // to a singularity, where the controller's joints move far): the figure is not float
+    // noise.
+    assert!(worst > 1e-3, "{worst}");
+    assert!(
+        said.contains(&format!("within {worst:.4} mm")),
+        "{said} {worst}"
+    );
+    // Without --decimals the columns are not written.
+    let o = compensate(&model, &targets, &[]);
+    assert!(!stdout(&o).contains("written_miss"));
+}

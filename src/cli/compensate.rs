@@ -6,9 +6,9 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use robocal::compensation::{CalibratedModel, Command, Failure, FakeTargetSolver};
 use robocal::data::{POSE_COLUMNS, TargetTable, joint_columns};
-use robocal::kinematics::pose_to_file;
+use robocal::kinematics::{pose_from_file, pose_to_file};
 use robocal::model::{Robot, read_robot};
-use robocal::reports::compensate::{FrameChange, TargetFailure};
+use robocal::reports::compensate::{FrameChange, TargetFailure, WrittenMiss};
 use robocal::reports::{CompensateReport, Report};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -133,7 +133,8 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         );
     }
     let with_orientation = tt.with_orientation;
-    let written = written_columns(n, with_orientation, comp.is_some());
+    let d = a.output.decimals;
+    let written = written_columns(n, with_orientation, comp.is_some(), d.is_some());
     let headers = tt.output_headers(&written)?;
     let t = &tt.table;
 
@@ -142,7 +143,6 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     } else {
         indicatif::ProgressBar::hidden()
     };
-    let d = a.output.decimals;
     let mut out_rows = Vec::with_capacity(t.rows.len());
     let mut failed = Vec::new();
     let mut shifts = Vec::new();
@@ -153,6 +153,8 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     let mut outside = Vec::new();
     let mut dws = robocal::neural::predict::PredictWorkspace::default();
     let mut unchecked = super::unchecked::UncheckedRows::new(calibrated);
+    // With --decimals: the miss (mm, deg) of each command as written, and its line.
+    let mut as_written: Vec<(f64, f64, usize)> = Vec::new();
     for r in 0..t.rows.len() {
         bar.inc(1);
         let desired = tt.targets[r];
@@ -169,6 +171,18 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
                     }
                     row.push(check.describe());
                 }
+                if d.is_some() {
+                    // The command's cells as written, read back: the pose the controller gets.
+                    let cells = pose_to_file(&c.fake).map(|v| num(v, d).parse().unwrap_or(v));
+                    match solver.miss_as_written(&c, &pose_from_file(cells)) {
+                        Some((mm, rad)) => {
+                            row.push(num(mm, Some(9)));
+                            row.push(num(rad.to_degrees(), Some(9)));
+                            as_written.push((mm, rad.to_degrees(), t.lines[r]));
+                        }
+                        None => row.extend([String::new(), String::new()]),
+                    }
+                }
                 shifts.push((c.fake.translation.vector - c.desired.translation.vector).norm());
                 let carried = to_nominal * c.desired;
                 moved.push((c.fake.translation.vector - carried.translation.vector).norm());
@@ -179,6 +193,9 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
                 row.push(why.to_string());
                 if comp.is_some() {
                     row.push(String::new());
+                }
+                if d.is_some() {
+                    row.extend([String::new(), String::new()]);
                 }
                 failed.push((t.lines[r], why));
             }
@@ -215,6 +232,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         lines_outside_domain: outside,
         note,
         frame_change: frame_change(&nominal, calibrated, &moved),
+        written_miss: d.and_then(|decimals| written_miss(decimals, &as_written)),
         unchecked: unchecked.report(),
     };
     match (report.shift_mean_mm, report.shift_max_mm) {
@@ -228,6 +246,17 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
                 .map_or(String::new(), across_frames)
         ),
         _ => eprintln!("compensate: 0 of {total} targets solved"),
+    }
+    if let Some(w) = &report.written_miss {
+        eprintln!(
+            "compensate: as written ({} decimals), the commands reach the targets within \
+             {} mm (line {}) and {} deg; the residual columns are the unrounded commands', \
+             the written_miss columns each row's",
+            w.decimals,
+            short(w.max_mm),
+            w.max_line,
+            short(w.max_deg)
+        );
     }
     if let Some(p) = &a.report {
         super::summary::write_report(p, &Report::Compensate(report))?;
@@ -264,6 +293,27 @@ fn across_frames(f: &FrameChange) -> String {
     )
 }
 
+/// The largest misses (mm, deg) of the commands as written, rounded to `decimals`, from each
+/// row's (mm, deg, line); None where no command was checked.
+fn written_miss(decimals: usize, rows: &[(f64, f64, usize)]) -> Option<WrittenMiss> {
+    let worst = rows.iter().max_by(|a, b| a.0.total_cmp(&b.0))?;
+    Some(WrittenMiss {
+        decimals,
+        max_mm: worst.0,
+        max_line: worst.2,
+        max_deg: rows.iter().map(|r| r.1).fold(0.0, f64::max),
+    })
+}
+
+/// A small figure (mm, deg) to 4 decimals, or to 2 significant digits below 1e-3.
+fn short(v: f64) -> String {
+    if v >= 1e-3 || v == 0.0 {
+        format!("{v:.4}")
+    } else {
+        format!("{v:.1e}")
+    }
+}
+
 /// The mean and the largest of the shifts `v` (mm); None for none.
 fn mean_and_max(v: &[f64]) -> Option<(f64, f64)> {
     (!v.is_empty()).then(|| {
@@ -281,9 +331,9 @@ const FRAME_CHANGE_MM: f64 = 100.0;
 const FRAME_CHANGE_DEG: f64 = 5.0;
 
 /// The columns compensate writes after the target file's: for position targets the
-/// orientation used, the branch, the joints, the command, the residuals and the status, and
-/// with a compensator the domain.
-fn written_columns(n: usize, with_orientation: bool, domain: bool) -> Vec<String> {
+/// orientation used, the branch, the joints, the command, the residuals and the status, with
+/// a compensator the domain, and with `--decimals` the miss of the command as written.
+fn written_columns(n: usize, with_orientation: bool, domain: bool, rounded: bool) -> Vec<String> {
     let mut written: Vec<String> = Vec::new();
     if !with_orientation {
         written.extend(POSE_COLUMNS[3..].iter().map(|s| s.to_string()));
@@ -295,8 +345,15 @@ fn written_columns(n: usize, with_orientation: bool, domain: bool) -> Vec<String
     if domain {
         written.push(super::predict::DOMAIN_COLUMN.into());
     }
+    if rounded {
+        written.extend(WRITTEN_MISS.map(String::from));
+    }
     written
 }
+
+/// With `--decimals`, the columns of the calibrated robot's miss of the target when the
+/// controller is given the command as written, rounded ([`FakeTargetSolver::miss_as_written`]).
+const WRITTEN_MISS: [&str; 2] = ["written_miss_mm", "written_miss_deg"];
 
 /// The cells of a solved target, in [`written_columns`]' order (without the domain).
 fn command_cells(

@@ -47,10 +47,30 @@ pub struct CompensateReport {
     /// tracker): the change of frame the shifts above include.
     #[serde(default)]
     pub frame_change: Option<FrameChange>,
+    /// With `--decimals`: the largest miss of a target (mm, and deg) by the calibrated robot
+    /// given the command as written, rounded, and the line of the largest position miss
+    /// (none without `--decimals`, and in reports written before it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub written_miss: Option<WrittenMiss>,
     /// Solved targets whose commands depend on parameters the model's calibration did not
     /// observe (none: left out of the file, and absent in reports written before it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unchecked: Option<UncheckedLines>,
+}
+
+/// How far rounding the commands to the output's decimals moves what the robot reaches.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WrittenMiss {
+    /// Decimals the commands were written with.
+    pub decimals: usize,
+    /// Largest position miss of a target (mm).
+    #[serde(with = "crate::io::json_number")]
+    pub max_mm: f64,
+    /// Line of the target with the largest position miss.
+    pub max_line: usize,
+    /// Largest orientation miss of a target (deg).
+    #[serde(with = "crate::io::json_number")]
+    pub max_deg: f64,
 }
 
 /// Results that depend on parameters a calibration did not observe
