@@ -139,7 +139,8 @@ fn radians_in_a_degree_file_warn() {
 /// A joint of +-400 deg holds radians up to 6.98: a radian file with a value beyond 6.3 in
 /// it was read as degrees without a word (a helper's finding on an ABB IRB 140). The
 /// warning now takes each joint's range in radians where it is wider than 6.3, for `import`
-/// (and `identify`) and for joint files (`fk`, `predict`); a degree file stays quiet.
+/// (and `identify`), for joint files (`fk`, `predict`) and for the seed columns of target
+/// files (`ik`, `compensate`); a degree file stays quiet.
 #[test]
 fn radians_of_a_joint_wider_than_a_turn_warn() {
     let fanuc = std::fs::read_to_string(common::root().join(FANUC)).unwrap();
@@ -194,6 +195,39 @@ fn radians_of_a_joint_wider_than_a_turn_warn() {
             "{}",
             stderr(&o)
         );
+        // Seed columns of a target file, for `ik` and `compensate` (a seed read as degrees
+        // picks another configuration, or none within the limits).
+        let rows: String = body
+            .lines()
+            .map(|l| format!("1842,0,1652,0,90,0,{l}\n"))
+            .collect();
+        let targets = tmp(&format!("wide_{warns}_targets.csv"));
+        std::fs::write(
+            &targets,
+            format!("x,y,z,rz,ry,rx,q1,q2,q3,q4,q5,q6\n{rows}"),
+        )
+        .unwrap();
+        let t = targets.to_str().unwrap();
+        for args in [
+            vec!["ik", "--robot", robot, "--poses", t],
+            vec![
+                "compensate",
+                "--nominal",
+                FANUC,
+                "--robot",
+                robot,
+                "--targets",
+                t,
+            ],
+        ] {
+            let o = robocal(&args);
+            assert_eq!(
+                stderr(&o).contains("every seed joint angle lies within +-6.28"),
+                warns,
+                "{args:?}: {}",
+                stderr(&o)
+            );
+        }
     }
 }
 

@@ -100,6 +100,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     };
 
     let tt = TargetTable::read(&a.targets, &nominal, true)?;
+    super::fk::warn_if_radian_seeds(&a.targets, &robot, &tt);
     // The limits every solution is held to: the calibrated model's.
     let calibrated = comp.as_ref().map_or(&robot, |c| &c.robot);
     let picks = "still pick the branch and the turns (and, for a position-only target, the \

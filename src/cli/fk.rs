@@ -3,7 +3,7 @@
 use super::output::{OutputArgs, joints_arg, num};
 use anyhow::{Context, Result};
 use clap::Args;
-use robocal::data::{JointTable, POSE_COLUMNS, joint_columns};
+use robocal::data::{JointTable, POSE_COLUMNS, TargetTable, joint_columns};
 use robocal::kinematics::{pose_to_file, tool_pose};
 use robocal::model::{Robot, read_robot};
 use std::path::{Path, PathBuf};
@@ -28,15 +28,27 @@ pub struct FkArgs {
 /// ([`JointTable::looks_like_radians`]).
 pub(super) fn warn_if_radians(path: &std::path::Path, robot: &Robot, t: &JointTable) {
     if t.looks_like_radians(robot) {
-        eprintln!(
-            "warning: {}: every joint angle lies within +-{:.2}, one turn in radians (or its \
-             joint's range in radians, where that is wider): the columns are read in degrees; \
-             if they hold radians, convert them (or import the file with a profile whose \
-             joint_unit is \"rad\")",
-            path.display(),
-            std::f64::consts::TAU
-        );
+        warn_radians(path, "every joint angle", "the columns are read");
     }
+}
+
+/// Warns that the seed columns of target file `path` probably hold radians (as
+/// [`warn_if_radians`]): a seed read as degrees picks another branch, or none within the
+/// limits, and the target fails or is solved in another configuration.
+pub(super) fn warn_if_radian_seeds(path: &std::path::Path, robot: &Robot, t: &TargetTable) {
+    if t.seeds_look_like_radians(robot) {
+        warn_radians(path, "every seed joint angle", "the seed columns are read");
+    }
+}
+
+fn warn_radians(path: &std::path::Path, what: &str, read: &str) {
+    eprintln!(
+        "warning: {}: {what} lies within +-{:.2}, one turn in radians (or its joint's range in \
+         radians, where that is wider): {read} in degrees; if they hold radians, convert them \
+         (or import the file with a profile whose joint_unit is \"rad\")",
+        path.display(),
+        std::f64::consts::TAU
+    );
 }
 
 /// Warns that the rows at file `lines` of `path` hold joints beyond the robot's limits.

@@ -102,6 +102,7 @@ pub fn run(a: IkArgs) -> Result<bool> {
         }
         (None, Some(path)) => {
             let t = TargetTable::read(path, &robot, false)?;
+            super::fk::warn_if_radian_seeds(path, &robot, &t);
             let headers = t.output_headers(&written)?;
             let targets = t
                 .targets

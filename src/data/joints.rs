@@ -81,23 +81,28 @@ impl JointTable {
         output_headers(&self.table, self.table.headers.clone(), written)
     }
 
-    /// Whether the degree columns probably hold radians: every revolute angle lies within
-    /// one turn in radians (|q| <= 2 pi), or within its joint's range in radians where that
-    /// is wider (a joint of +-400 deg), and some exceed 1 (the joint unit of most
-    /// controllers' logs; read as degrees they give plausible but wrong poses).
+    /// Whether the degree columns probably hold radians ([`look_like_radians`]).
     pub fn looks_like_radians(&self, robot: &Robot) -> bool {
-        let revolute: Vec<(usize, f64)> = (JointInfo::of(robot).iter().enumerate())
-            .filter(|(_, j)| j.joint_type == JointType::Revolute)
-            .map(|(i, j)| (i, j.span().max(std::f64::consts::TAU)))
-            .collect();
-        let mut max: Option<f64> = None;
-        let mut within = true;
-        for q in &self.joints {
-            for &(j, bound) in &revolute {
-                max = Some(max.unwrap_or(0.0).max(q[j].abs()));
-                within &= q[j].abs() <= bound;
-            }
-        }
-        within && max.is_some_and(|m| m > 1.0)
+        look_like_radians(robot, self.joints.iter().map(Vec::as_slice))
     }
+}
+
+/// Whether joint vectors read as degrees (`rows`, file units: deg, mm) probably hold radians:
+/// every revolute angle lies within one turn in radians (|q| <= 2 pi), or within its joint's
+/// range in radians where that is wider (a joint of +-400 deg), and some exceed 1 (the joint
+/// unit of most controllers' logs; read as degrees they give plausible but wrong poses).
+pub fn look_like_radians<'a>(robot: &Robot, rows: impl Iterator<Item = &'a [f64]>) -> bool {
+    let revolute: Vec<(usize, f64)> = (JointInfo::of(robot).iter().enumerate())
+        .filter(|(_, j)| j.joint_type == JointType::Revolute)
+        .map(|(i, j)| (i, j.span().max(std::f64::consts::TAU)))
+        .collect();
+    let mut max: Option<f64> = None;
+    let mut within = true;
+    for q in rows {
+        for &(j, bound) in &revolute {
+            max = Some(max.unwrap_or(0.0).max(q[j].abs()));
+            within &= q[j].abs() <= bound;
+        }
+    }
+    within && max.is_some_and(|m| m > 1.0)
 }

@@ -138,6 +138,15 @@ impl TargetTable {
         })
     }
 
+    /// Whether the seed columns (read as degrees) probably hold radians
+    /// ([`super::joints::look_like_radians`]); false without seeds.
+    pub fn seeds_look_like_radians(&self, robot: &Robot) -> bool {
+        let file: Vec<Vec<f64>> = (self.seeds.iter().flatten())
+            .map(|s| robot.joints_to_file(s))
+            .collect();
+        super::joints::look_like_radians(robot, file.iter().map(Vec::as_slice))
+    }
+
     /// The output's header: the carried columns (seed columns renamed seed_q1..seed_qN),
     /// then `written` (see [`output_headers`]).
     pub fn output_headers(&self, written: &[String]) -> Result<Vec<String>> {
