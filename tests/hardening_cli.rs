@@ -948,6 +948,44 @@ fn edge_inputs_of_train_and_evaluate() {
         "{}",
         stdout(&o)
     );
+    // Nothing fades without a network, but its model was fitted on the training rows alone:
+    // a joint beyond their range is flagged (it had read `inside` everywhere), a training
+    // row's joints are inside.
+    let joints = common::tmp("edge_members0_joints.csv");
+    std::fs::write(
+        &joints,
+        "q1,q2,q3,q4,q5,q6\n-140,60,50,170,-100,170\n1.9022778380686718,3.542739285032641,\
+         -6.459545294772138,-1.40035520242784,58.8112273934262,6.525600706485945\n",
+    )
+    .unwrap();
+    let o = robocal(&[
+        "predict",
+        "--compensator",
+        out,
+        "--joints",
+        joints.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows: Vec<String> = stdout(&o).lines().map(str::to_string).collect();
+    assert!(
+        rows[1].ends_with(
+            ",q1 outside the training range; q2 outside the training range; \
+             q3 outside the training range; q4 outside the training range; q5 outside the \
+             training range; q6 outside the training range"
+        ),
+        "{}",
+        rows[1]
+    );
+    assert!(rows[2].ends_with(",inside"), "{}", rows[2]);
+    assert!(
+        stderr(&o).contains(
+            "1 row(s) outside the compensator's training domain (lines 2): a \
+             joint lies beyond the training rows' range, the only rows the compensator's model \
+             (the model alone"
+        ),
+        "{}",
+        stderr(&o)
+    );
     // With the refinement open, one candidate per refinement: the model alone has no form,
     // inputs, size or penalty to choose (each network setting was a candidate of one figure).
     let o = train(&["--members", "0", "--report", report.to_str().unwrap()]);

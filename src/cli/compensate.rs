@@ -207,7 +207,8 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     a.output
         .emit(&headers, &out_rows, written.len())
         .context("writing the commands")?;
-    super::predict::warn_outside(&a.targets, &outside, true);
+    let network = comp.as_ref().is_some_and(|c| c.has_network());
+    super::predict::warn_outside(&a.targets, &outside, true, network);
     let robot_path = a.compensator.as_ref().unwrap_or(&a.robot);
     unchecked.warn(&a.targets, robot_path);
     let total = t.rows.len();

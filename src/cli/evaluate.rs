@@ -223,7 +223,12 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     if let Some(note) = &report.note {
         say!("{note}");
     }
-    warn_outside(&a.data, &outside, false);
+    warn_outside(
+        &a.data,
+        &outside,
+        false,
+        comp.as_ref().is_some_and(|c| c.has_network()),
+    );
     if let Some(dir) = &a.plot {
         let mut runs = vec![ErrorRun {
             label: "model",

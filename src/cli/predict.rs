@@ -111,7 +111,7 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
         out.push(row);
     }
     super::fk::warn_beyond_limits(&a.joints, &beyond);
-    warn_outside(&a.joints, &outside, true);
+    warn_outside(&a.joints, &outside, true, c.has_network());
     unchecked.warn(&a.joints, &a.compensator);
     a.output
         .emit(&headers, &out, written.len())
@@ -122,13 +122,19 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
 pub const DOMAIN_COLUMN: &str = "domain";
 
 /// Warns (stderr) about rows outside a compensator's training domain, by line; `column`: the
-/// output has the domain column.
-pub fn warn_outside(path: &Path, lines: &[usize], column: bool) {
+/// output has the domain column; `network`: the compensator has one (else the model alone).
+pub fn warn_outside(path: &Path, lines: &[usize], column: bool, network: bool) {
     if !lines.is_empty() {
+        let why = if network {
+            "the network extrapolates there (its correction fades with the distance from the \
+             training configurations, not for a joint beyond its training range alone)"
+        } else {
+            "a joint lies beyond the training rows' range, the only rows the compensator's \
+             model (the model alone, refined in training where asked) was fitted on"
+        };
         eprintln!(
             "warning: {}: {} row(s) outside the compensator's training domain (lines {}): \
-             the network extrapolates there (its correction fades with the distance from \
-             the training configurations, not for a joint beyond its training range alone){}",
+             {why}{}",
             path.display(),
             lines.len(),
             robocal::data::measurement::list_lines(lines),

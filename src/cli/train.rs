@@ -512,7 +512,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         super::summary::print_worst("validation", "the model", Measure::default_for(v), w);
     }
     if let Some(path) = &a.validate {
-        super::predict::warn_outside(path, &val_outside, false);
+        super::predict::warn_outside(path, &val_outside, false, c.has_network());
     }
     report.validation_lines_outside_domain = val_outside;
     super::output::writing(c.save(&a.out), &a.out)?;

@@ -173,11 +173,23 @@ impl Domain {
     /// `periodic(j)` holds (the inputs see it modulo whole turns,
     /// [`Encoding::is_periodic`]) is within its training range when a whole turn of it is.
     pub fn check(&self, q: &[f64], x: &[f64], periodic: impl Fn(usize) -> bool) -> DomainCheck {
+        let (_, nearest, weight) = self.trust(x);
+        DomainCheck {
+            joints_outside: self.joints_outside(q, periodic),
+            nearest,
+            radius: self.radius,
+            weight,
+        }
+    }
+
+    /// The joints (0-based) of `q` (rad, mm) outside their training range, a joint for
+    /// which `periodic(j)` holds modulo whole turns (as [`Domain::check`]).
+    pub fn joints_outside(&self, q: &[f64], periodic: impl Fn(usize) -> bool) -> Vec<usize> {
         let turn = 2.0 * PI;
         // A training value read back is inside to the last bits: the turn taken off it, or
         // its arc's bounds, round.
         let tol = |v: f64| RANGE_TOL * v.abs().max(1.0);
-        let joints_outside = (0..q.len())
+        (0..q.len())
             .filter(|&j| {
                 let (lo, hi) = (self.joint_min[j], self.joint_max[j]);
                 if periodic(j) {
@@ -188,14 +200,7 @@ impl Domain {
                     q[j] < lo - tol(lo) || q[j] > hi + tol(hi)
                 }
             })
-            .collect();
-        let (_, nearest, weight) = self.trust(x);
-        DomainCheck {
-            joints_outside,
-            nearest,
-            radius: self.radius,
-            weight,
-        }
+            .collect()
     }
 
     /// The correction's weight at `x` as [`Domain::trust`] gives it, found fast: inside the
