@@ -948,9 +948,14 @@ fn edge_inputs_of_train_and_evaluate() {
         "{}",
         stdout(&o)
     );
-    // Nothing fades without a network, but its model was fitted on the training rows alone:
-    // a joint beyond their range is flagged (it had read `inside` everywhere), a training
-    // row's joints are inside.
+    // Nothing fades without a network, but a model refined in training was fitted on the
+    // training rows alone: a joint beyond their range is flagged (it had read `inside`
+    // everywhere), a training row's joints are inside. Not refined (above), it fitted
+    // nothing: only a joint beyond the robot's limits would be.
+    let refined = common::tmp("edge_members0_refined.rcal");
+    let refined = refined.to_str().unwrap();
+    let o = common::train_fanuc(TRAIN, refined, &["--members", "0", "--refine", "full"]);
+    assert!(o.status.success(), "{}", stderr(&o));
     let joints = common::tmp("edge_members0_joints.csv");
     std::fs::write(
         &joints,
@@ -958,14 +963,24 @@ fn edge_inputs_of_train_and_evaluate() {
          -6.459545294772138,-1.40035520242784,58.8112273934262,6.525600706485945\n",
     )
     .unwrap();
-    let o = robocal(&[
-        "predict",
-        "--compensator",
-        out,
-        "--joints",
-        joints.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let predict = |rcal: &str| {
+        let o = robocal(&[
+            "predict",
+            "--compensator",
+            rcal,
+            "--joints",
+            joints.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        o
+    };
+    let o = predict(out);
+    assert!(
+        stdout(&o).lines().skip(1).all(|r| r.ends_with(",inside")),
+        "{}",
+        stdout(&o)
+    );
+    let o = predict(refined);
     let rows: Vec<String> = stdout(&o).lines().map(str::to_string).collect();
     assert!(
         rows[1].ends_with(

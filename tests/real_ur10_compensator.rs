@@ -396,8 +396,9 @@ fn a_refinement_on_a_few_rows_must_win_significantly() {
         rms <= 1.02 * model_rms,
         "{rms} against the model's {model_rms}"
     );
-    // The model alone has no network to extrapolate: no row is outside its domain (before,
-    // 20 of the 495 were flagged, their correction said to fade).
+    // The model alone, not refined, has no network to extrapolate and fitted nothing on the
+    // rows: no row is outside its domain, the robot's limits (before, 20 of the 495 were
+    // flagged, their correction said to fade).
     let mut ws = PredictWorkspace::default();
     assert!(c.members.is_empty() && c.rbf.is_none());
     assert!(

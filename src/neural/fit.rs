@@ -71,7 +71,12 @@ impl Compensator {
             None => (model.clone(), Vec::new(), Vec::new()),
         };
         let started = std::time::Instant::now();
-        let (c, networks) = fit_with(&robot, set, settings, train_opts, true, true, Vec::new())?;
+        let (mut c, networks) =
+            fit_with(&robot, set, settings, train_opts, true, true, Vec::new())?;
+        if settings.refine.is_none() && !c.has_network() {
+            // Nothing was fitted on the rows: the model as given, whose domain is the robot's.
+            c.domain = c.domain.widened_to_limits(&robot);
+        }
         let rbf_centred_on = c
             .rbf
             .as_ref()

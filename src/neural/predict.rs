@@ -422,11 +422,12 @@ impl Compensator {
     }
 
     /// Where `q` (rad, mm) stands against the training domain. For a compensator without a
-    /// network (the model alone) nothing fades, but its model, where training refined it, was
-    /// fitted on the training rows alone: a joint beyond their range is flagged all the same
-    /// (a reviewer's FANUC refined on rows with joint 1 within +-10 deg did worse than the
-    /// model identified over the whole range on 25 of 100 targets beyond it, by up to 0.32
-    /// mm, every one `inside`).
+    /// network (the model alone) nothing fades, but a model refined in training was fitted
+    /// on the training rows alone: a joint beyond their range is flagged all the same (a
+    /// reviewer's FANUC refined on rows with joint 1 within +-10 deg did worse than the model
+    /// identified over the whole range on 25 of 100 targets beyond it, by up to 0.32 mm,
+    /// every one `inside`). The model alone not refined fitted nothing: its domain is the
+    /// robot's joint limits ([`Domain::widened_to_limits`]).
     pub fn domain_check(&self, q: &[f64], ws: &mut PredictWorkspace) -> DomainCheck {
         let joints = self.robot.joints();
         let periodic = |j: usize| {
