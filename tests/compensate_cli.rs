@@ -736,3 +736,54 @@ fn rounded_commands_report_what_the_robot_then_reaches() {
     let o = compensate(&model, &targets, &[]);
     assert!(!stdout(&o).contains("written_miss"));
 }
+
+#[test]
+fn a_nominal_tool_other_than_the_calibrated_ones_is_said() {
+    // A nominal file whose TCP lies 300 mm farther than the calibrated model's (a TCP updated
+    // in one file only): the commands are poses of the nominal's tool, metres from what the
+    // user may mean, and nothing said so. Its note names the gap (up to twice the offset
+    // across the configurations); the nominal itself gets none.
+    let model = identified();
+    let nominal = std::fs::read_to_string(FANUC).unwrap();
+    assert!(nominal.contains("d = 205.0"));
+    let long = tmp("tool_long_nominal.toml");
+    std::fs::write(&long, nominal.replace("d = 205.0", "d = 505.0")).unwrap();
+    let truth = std::fs::read_to_string("datasets/case_d/test_truth.csv").unwrap();
+    let targets = tmp("tool_targets.csv");
+    std::fs::write(
+        &targets,
+        truth.lines().take(4).collect::<Vec<_>>().join("\n"),
+    )
+    .unwrap();
+    let report = tmp("tool_report.json");
+    let run = |nominal: &str| {
+        robocal(&[
+            "compensate",
+            "--nominal",
+            nominal,
+            "--robot",
+            model.to_str().unwrap(),
+            "--targets",
+            targets.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+        ])
+    };
+    let o = run(long.to_str().unwrap());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let said = stderr(&o);
+    let r = common::json(&report);
+    let gap = r["tool_gap_mm"].as_f64().unwrap();
+    assert!((300.0..=600.0).contains(&gap), "{gap}");
+    assert!(
+        said.contains(&format!(
+            "note: the distances between the tool positions at the same joints differ by up to \
+             {gap:.1} mm"
+        )),
+        "{said}"
+    );
+    let o = run(FANUC);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("tool positions at the same joints"));
+    assert!(common::json(&report).get("tool_gap_mm").is_none());
+}

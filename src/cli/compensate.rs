@@ -103,6 +103,18 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     super::fk::warn_if_radian_seeds(&a.targets, &robot, &tt);
     // The limits every solution is held to: the calibrated model's.
     let calibrated = comp.as_ref().map_or(&robot, |c| &c.robot);
+    let tool_gap = robocal::kinematics::tool_gap(&nominal, calibrated, TOOL_GAP_MM);
+    if let Some(gap) = tool_gap {
+        eprintln!(
+            "note: the distances between the tool positions at the same joints differ by up to \
+             {gap:.1} mm between {} and {}, beyond a calibration's millimetres (their flanges \
+             agree): the files hold different tools (a measurement tool, or a TCP updated in \
+             one file only); the commands are poses of the nominal's tool, which the \
+             controller must run as its TCP",
+            a.nominal.display(),
+            a.compensator.as_ref().unwrap_or(&a.robot).display()
+        );
+    }
     let picks = "still pick the branch and the turns (and, for a position-only target, the \
                  orientation), and every solution is held to the limits";
     if let Some(s) = &global_seed
@@ -234,6 +246,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         lines_outside_domain: outside,
         note,
         frame_change: frame_change(&nominal, calibrated, &moved),
+        tool_gap_mm: tool_gap,
         written_miss: d.and_then(|decimals| written_miss(decimals, &as_written)),
         unchecked: unchecked.report(),
     };
@@ -325,6 +338,12 @@ fn mean_and_max(v: &[f64]) -> Option<(f64, f64)> {
         )
     })
 }
+
+/// Difference of the tool's distances (mm, [`robocal::kinematics::tool_gap`]) beyond which
+/// the nominal's and the calibrated model's tools are said to differ: a calibration moves
+/// them by millimetres, a forgotten TCP or a measurement tool by tens or hundreds (a
+/// reviewer's nominal tool 300 mm longer than the calibrated one went without a word).
+const TOOL_GAP_MM: f64 = 20.0;
 
 /// Base offset (mm) beyond which [`frame_change`] speaks: far beyond a base's calibration
 /// correction (millimetres).

@@ -25,7 +25,7 @@ pub use ik_numeric::{
 };
 pub use jacobian::joint_jacobian;
 pub use reach::Reach;
-pub use same_arm::{GEOMETRY_GAP, another_arm, arm_distance_gap};
+pub use same_arm::{GEOMETRY_GAP, another_arm, arm_distance_gap, tool_gap};
 pub use unobserved::{Unchecked, UnobservedProbe};
 
 pub use crate::geometry::{Pose, pose_from_file, pose_to_file};

@@ -47,6 +47,12 @@ pub struct CompensateReport {
     /// tracker): the change of frame the shifts above include.
     #[serde(default)]
     pub frame_change: Option<FrameChange>,
+    /// Where the nominal's and the calibrated model's tools differ beyond a calibration's
+    /// millimetres: the largest difference of the distances between tool positions at the
+    /// same joints (mm; their flanges' differ less). None where they agree, and in reports
+    /// written before it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool_gap_mm: Option<f64>,
     /// With `--decimals`: the largest miss of a target (mm, and deg) by the calibrated robot
     /// given the command as written, rounded, and the line of the largest position miss
     /// (none without `--decimals`, and in reports written before it).
