@@ -2161,6 +2161,12 @@ fn edge_inputs_of_the_sixtieth_hunt() {
         &["plan", "--robot", FANUC, &format!("--evaluate={five}")],
         "5 units give 30 equations for 30 identifiable parameters: at least 6 units",
     );
+    let one: String = training.lines().take(2).collect::<Vec<_>>().join("\n") + "\n";
+    let one = file("s60_one.csv", &one);
+    refused(
+        &["plan", "--robot", FANUC, &format!("--evaluate={one}")],
+        "1 unit gives 6 equations for 6 identifiable parameters: at least 2 units",
+    );
 
     // Ball-bar distances, one of them read as 0: the misfit is said, but not blamed on a
     // frame (a distance is the same in every frame).

@@ -238,8 +238,10 @@ pub fn enough_equations(design: &Design, n: usize) -> Result<()> {
     let p = design.p();
     if n * design.dim <= p {
         return Err(Error::Invalid(format!(
-            "{n} units give {} equations for {p} identifiable parameters: at least {} units \
+            "{n} unit{} give{} {} equations for {p} identifiable parameters: at least {} units \
              ({} equations) are needed",
+            if n == 1 { "" } else { "s" },
+            if n == 1 { "s" } else { "" },
             n * design.dim,
             p / design.dim + 1,
             (p / design.dim + 1) * design.dim

@@ -55,7 +55,9 @@ pub fn smallest_meeting(
         p => {
             return Err(Error::Invalid(format!(
                 "the whole pool ({units} units) predicts {} mean position error, above the \
-                 target {target_mm} mm: lower the noise, widen the region or change the measure",
+                 target {target_mm} mm: give more units to choose from (a larger --pool, or \
+                 more --candidates; the whole pool measured is the best a plan from it gives), \
+                 lower the noise, widen the region or change the measure",
                 p.map_or("no bounded".to_string(), |p| format!(
                     "{:.4} mm",
                     position_mean(&p)
