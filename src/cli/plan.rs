@@ -14,6 +14,7 @@ use robocal::plan::{
     Constraints, Design, Pool, choose, enough_equations, pool, predict, smallest_meeting,
 };
 use robocal::sim::Region;
+use std::io::IsTerminal;
 use std::path::PathBuf;
 
 /// Largest candidate pool drawn: each unit holds its Jacobian block three or four times over
@@ -555,7 +556,18 @@ pub fn run(a: PlanArgs) -> Result<()> {
             ((0..design.units()).collect::<Vec<_>>(), None)
         }
         (None, Some(t), _) => {
-            let (c, _) = smallest_meeting(&design, criterion, t, a.seed)?;
+            let bar = if std::io::stderr().is_terminal() {
+                let b = indicatif::ProgressBar::new_spinner();
+                b.enable_steady_tick(std::time::Duration::from_millis(200));
+                b
+            } else {
+                indicatif::ProgressBar::hidden()
+            };
+            let (c, _) = smallest_meeting(&design, criterion, t, a.seed, &mut |n| {
+                bar.set_message(format!("--target-mm {t}: planning {n} units"));
+                bar.tick();
+            })?;
+            bar.finish_and_clear();
             say!("target {t} mm: {} units", c.units.len());
             (c.units.clone(), Some(c))
         }

@@ -35,11 +35,13 @@ fn position_mean(p: &Prediction) -> f64 {
 /// bisecting (the predicted error of planned units falls with their number); a plan that
 /// does not identify every parameter counts as missing the target. Returns the plan and its
 /// prediction; an error, before any plan, when even the whole pool misses the target.
+/// `progress` is told each number of units tried (a plan of thousands takes minutes).
 pub fn smallest_meeting(
     design: &Design,
     criterion: Criterion,
     target_mm: f64,
     seed: u64,
+    progress: &mut dyn FnMut(usize),
 ) -> Result<(Chosen, Prediction)> {
     let units = design.units();
     let first = design.p() / design.dim + 1;
@@ -66,7 +68,8 @@ pub fn smallest_meeting(
         }
     }
     // A plan and its prediction, or None when it misses.
-    let attempt = |n: usize| -> Result<Option<(Chosen, Prediction)>> {
+    let mut attempt = |n: usize| -> Result<Option<(Chosen, Prediction)>> {
+        progress(n);
         let chosen = choose(design, n, criterion, &[])?;
         Ok(predict(design, &chosen.units, seed)
             .filter(|p| position_mean(p) <= target_mm)
