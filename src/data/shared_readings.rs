@@ -248,14 +248,8 @@ pub fn suspect_rows(shared: &[SharedReading]) -> Vec<usize> {
 mod tests {
     use super::*;
     use crate::data::Measurement;
+    use crate::model::test_ur10 as ur10;
     use nalgebra::Rotation3;
-
-    fn ur10() -> Robot {
-        crate::model::read_robot(
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/ur10.toml"),
-        )
-        .unwrap()
-    }
 
     /// A row at joints `q` (rad) whose reading is the model's pose at `at` (rad), moved by
     /// `off` (mm) and turned by `turn` (rad about x), on `line`.

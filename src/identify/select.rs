@@ -159,11 +159,7 @@ mod tests {
         let e = select(&r, "offsets,d3").unwrap_err().to_string();
         assert!(e.contains("`d3`") && e.contains("beta3"), "{e}");
         // A 6-DOF base comes before the offsets.
-        let ur = crate::model::read_robot(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/datasets/robots/ur10.toml"
-        ))
-        .unwrap();
+        let ur = crate::model::test_ur10();
         let up = ur.parameters();
         let s = select(&ur, "offsets,base").unwrap();
         assert_eq!(up[s[0]].name(), "base.x");

@@ -581,14 +581,8 @@ fn covariance_from(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::test_ur10 as ur10;
     use nalgebra::{DMatrix, DVector};
-
-    fn ur10() -> Robot {
-        crate::model::read_robot(
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/ur10.toml"),
-        )
-        .unwrap()
-    }
 
     /// The covariance's refusal names the parameters the rows do not move (a zero column of
     /// J), or all of them when the columns are dependent.

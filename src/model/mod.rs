@@ -25,3 +25,13 @@ pub(crate) fn test_fanuc() -> Robot {
     ))
     .unwrap()
 }
+
+/// The shipped UR10's nominal model, for the unit tests.
+#[cfg(test)]
+pub(crate) fn test_ur10() -> Robot {
+    read_robot(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/datasets/robots/ur10.toml"
+    ))
+    .unwrap()
+}

@@ -183,10 +183,7 @@ mod tests {
 
     #[test]
     fn refinements_add_the_compliances_as_asked() {
-        let robot = crate::model::read_robot(
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/robots/ur10.toml"),
-        )
-        .unwrap();
+        let robot = crate::model::test_ur10();
         let refinements =
             |spec: &str, c| refinements(spec, names_compliance(&robot, spec).unwrap(), c);
         let s = |v: &[&str]| -> Vec<Option<String>> {
