@@ -273,12 +273,27 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
             std::fs::write(&path, resign(v)).unwrap();
             assert_eq!(Compensator::load(&path).unwrap().mlp_share, 0.5);
         }
+        {
+            // Version 8 records whether training refined the model; a version 7 file, without
+            // it, is read as not refined; a version 8 file must say.
+            assert_eq!(back.model_refined, c.model_refined);
+            let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            assert_eq!(v["model_refined"], c.model_refined);
+            v.as_object_mut().unwrap().remove("model_refined");
+            let e = edit(&|w| {
+                w.as_object_mut().unwrap().remove("model_refined");
+            });
+            assert!(e.contains("`model_refined`"), "{e}");
+            v["version"] = serde_json::json!(7);
+            std::fs::write(&path, resign(v)).unwrap();
+            assert!(!Compensator::load(&path).unwrap().model_refined);
+        }
         if let Some(rbf) = &c.rbf {
             // Version 7 gave each kernel its covariance function (Matern 5/2 by default); a
             // version 6 file, without it, is read with the squared exponential it was made
             // with, and one of another name is refused.
             let v: serde_json::Value = serde_json::from_str(&text).unwrap();
-            assert_eq!(v["version"], 7);
+            assert_eq!(v["version"], 8);
             assert_eq!(v["rbf"]["kernels"][0]["covariance"], "matern52");
             assert!(
                 rbf.kernels

@@ -109,6 +109,7 @@ fn baseline_fit(model: &Robot, set: &MeasurementSet, hidden: usize, alpha: f64) 
         input_norm: p.input_norm,
         output_norm: out_norm,
         domain,
+        model_refined: false,
     }
 }
 
@@ -397,8 +398,8 @@ fn a_refinement_on_a_few_rows_must_win_significantly() {
         "{rms} against the model's {model_rms}"
     );
     // The model alone, not refined, has no network to extrapolate and fitted nothing on the
-    // rows: no row is outside its domain, the robot's limits (before, 20 of the 495 were
-    // flagged, their correction said to fade).
+    // rows: no row is outside its domain (before, 20 of the 495 were flagged, their
+    // correction said to fade).
     let mut ws = PredictWorkspace::default();
     assert!(c.members.is_empty() && c.rbf.is_none());
     assert!(

@@ -107,8 +107,8 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     if let Some(gap) = tool_gap {
         eprintln!(
             "note: the distances between the tool positions at the same joints differ by up to \
-             {gap:.1} mm between {} and {}, beyond a calibration's millimetres (their flanges \
-             agree): the files hold different tools (a measurement tool, or a TCP updated in \
+             {gap:.1} mm between {} and {}, beyond a calibration's millimetres (the flanges' \
+             agree within {TOOL_GAP_MM} mm): the files hold different tools (a measurement tool, or a TCP updated in \
              one file only); the commands are poses of the nominal's tool, which the \
              controller must run as its TCP",
             a.nominal.display(),
@@ -166,8 +166,10 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     let mut outside = Vec::new();
     let mut dws = robocal::neural::predict::PredictWorkspace::default();
     let mut unchecked = super::unchecked::UncheckedRows::new(calibrated);
-    // With --decimals: the miss (mm, deg) of each command as written, and its line.
+    // With --decimals: the miss (mm, deg) of each command as written, and its line; the
+    // lines of the commands whose miss could not be found.
     let mut as_written: Vec<(f64, f64, usize)> = Vec::new();
+    let mut not_checked: Vec<usize> = Vec::new();
     for r in 0..t.rows.len() {
         bar.inc(1);
         let desired = tt.targets[r];
@@ -193,7 +195,10 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
                             row.push(num(rad.to_degrees(), Some(9)));
                             as_written.push((mm, rad.to_degrees(), t.lines[r]));
                         }
-                        None => row.extend([String::new(), String::new()]),
+                        None => {
+                            row.extend([String::new(), String::new()]);
+                            not_checked.push(t.lines[r]);
+                        }
                     }
                 }
                 shifts.push((c.fake.translation.vector - c.desired.translation.vector).norm());
@@ -247,7 +252,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         note,
         frame_change: frame_change(&nominal, calibrated, &moved),
         tool_gap_mm: tool_gap,
-        written_miss: d.and_then(|decimals| written_miss(decimals, &as_written)),
+        written_miss: d.and_then(|decimals| written_miss(decimals, &as_written, not_checked)),
         unchecked: unchecked.report(),
     };
     match (report.shift_mean_mm, report.shift_max_mm) {
@@ -266,11 +271,21 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         eprintln!(
             "compensate: as written ({} decimals), the commands reach the targets within \
              {} mm (line {}) and {} deg; the residual columns are the unrounded commands', \
-             the written_miss columns each row's",
+             the written_miss columns each row's{}",
             w.decimals,
             short(w.max_mm),
             w.max_line,
-            short(w.max_deg)
+            short(w.max_deg),
+            if w.unchecked.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; not checked, where the nominal's solve of the rounded command did not \
+                     converge (empty cells): {} command(s), lines {}",
+                    w.unchecked.len(),
+                    robocal::data::measurement::list_lines(&w.unchecked)
+                )
+            }
         );
     }
     if let Some(p) = &a.report {
@@ -309,14 +324,20 @@ fn across_frames(f: &FrameChange) -> String {
 }
 
 /// The largest misses (mm, deg) of the commands as written, rounded to `decimals`, from each
-/// row's (mm, deg, line); None where no command was checked.
-fn written_miss(decimals: usize, rows: &[(f64, f64, usize)]) -> Option<WrittenMiss> {
+/// row's (mm, deg, line), and the lines of those `unchecked`; None where no command was
+/// checked.
+fn written_miss(
+    decimals: usize,
+    rows: &[(f64, f64, usize)],
+    unchecked: Vec<usize>,
+) -> Option<WrittenMiss> {
     let worst = rows.iter().max_by(|a, b| a.0.total_cmp(&b.0))?;
     Some(WrittenMiss {
         decimals,
         max_mm: worst.0,
         max_line: worst.2,
         max_deg: rows.iter().map(|r| r.1).fold(0.0, f64::max),
+        unchecked,
     })
 }
 

@@ -3,7 +3,7 @@
 use super::choices::{Measure, Method, RobustLoss};
 use super::data_args::{DataArgs, FitInputs, SigmaArgs, open_fit};
 use super::summary::{print_stats, write_report};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use robocal::data::MeasurementSet;
 use robocal::evaluate::{ErrorStats, RowError, row_errors, summarize, worst_rows};
@@ -112,8 +112,13 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     if let (Some(v), Measured::Pose | Measured::Position) = (&val, measure) {
         check_position_scale(&nominal, v)?;
     }
-    let id = identify(&nominal, &cal, &opts)
-        .with_context(|| format!("identifying from {}", a.data.display()))?;
+    // A solve's failure names no file (the input errors name theirs).
+    let id = identify(&nominal, &cal, &opts).map_err(|e| match e {
+        robocal::error::Error::NotConverged(_) => {
+            anyhow::Error::new(e).context(format!("identifying from {}", a.data.display()))
+        }
+        e => e.into(),
+    })?;
     super::output::writing(write_robot(&id.robot, &a.out), &a.out)?;
     let m = id.measure;
     // Row errors before and after, per set: for the statistics and the pictures.

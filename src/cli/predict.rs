@@ -130,7 +130,7 @@ pub fn warn_outside(path: &Path, lines: &[usize], column: bool, network: bool) {
              training configurations, not for a joint beyond its training range alone)"
         } else {
             "a joint lies beyond the training rows' range, the only rows the compensator's \
-             model (the model alone, refined in training where asked) was fitted on"
+             model (the model alone, refined in training) was fitted on"
         };
         eprintln!(
             "warning: {}: {} row(s) outside the compensator's training domain (lines {}): \

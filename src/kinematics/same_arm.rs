@@ -68,13 +68,13 @@ pub fn arm_distance_gap(reference: &Robot, other: &Robot) -> (f64, f64) {
 
 /// How far `other`'s tool is from `reference`'s on one arm: the largest difference between
 /// the two models' distances from one configuration's tool position to another's (mm), where
-/// the flange's distances differ less (else the files split the chain elsewhere, and the
-/// tools agree); None where they do not, or where the difference is within `tolerance` (mm).
-/// A calibration moves it by millimetres; a measurement tool the other model lacks, or a TCP
+/// it exceeds `tolerance` (mm) and the flanges' distances differ by `tolerance` or less (else
+/// the files split the chain elsewhere, or the arms differ beyond a tool); None otherwise. A
+/// calibration moves it by millimetres; a measurement tool the other model lacks, or a TCP
 /// updated in one file only, by up to twice the tools' distance.
 pub fn tool_gap(reference: &Robot, other: &Robot, tolerance: f64) -> Option<f64> {
     let [flange, tool] = point_gaps(reference, other);
-    (tool.0 > tolerance && tool.0 > flange.0).then_some(tool.0)
+    (tool.0 > tolerance && flange.0 <= tolerance).then_some(tool.0)
 }
 
 /// `None` when `other` is an arm of `reference`'s (its [`arm_distance_gap`] within

@@ -48,6 +48,9 @@ pub struct Compensator {
     pub output_norm: Affine,
     /// Where the networks have seen data; beyond it their correction fades out.
     pub domain: Domain,
+    /// Whether training refined `robot` on the training rows (then fitted on those rows
+    /// alone, so that a compensator without a network still has a domain: its joint ranges).
+    pub model_refined: bool,
 }
 
 impl Compensator {

@@ -251,18 +251,6 @@ impl Domain {
         (k, d, w)
     }
 
-    /// The domain widened to `robot`'s joint limits (rad, mm): for a compensator that fitted
-    /// nothing on its rows (the model alone, not refined), which holds wherever its model did,
-    /// so that only a joint beyond the limits is flagged.
-    pub fn widened_to_limits(mut self, robot: &Robot) -> Domain {
-        for (j, joint) in robot.joints().iter().enumerate() {
-            let [lo, hi] = joint.limits_internal();
-            self.joint_min[j] = self.joint_min[j].min(lo);
-            self.joint_max[j] = self.joint_max[j].max(hi);
-        }
-        self
-    }
-
     /// True when the sizes fit `dof` joints and `inputs` features and every number is finite.
     pub fn is_valid(&self, dof: usize, inputs: usize) -> bool {
         let bound = super::weights::VALUE_BOUND;

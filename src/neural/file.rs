@@ -1,9 +1,13 @@
-//! The compensator file (JSON, version 7): format and version, form, encoding, shapes,
+//! The compensator file (JSON, version 8): format and version, form, encoding, shapes,
 //! normalisations, training domain, the robot file it runs in series with (embedded, with its
 //! hash), one burn record (burnpack bytes, hex) per MLP of the ensemble, the RBF network
 //! (`rbf`: centres, one kernel per output with its widths and variances, weights; or null),
 //! the MLPs' share of the correction where both are present (`mlp_share`), the shrinkage of
-//! the MLPs' mean (`shrink`: centre and signal variance, or null), and a checksum of it all.
+//! the MLPs' mean (`shrink`: centre and signal variance, or null), whether training refined
+//! the embedded model (`model_refined`), and a checksum of it all.
+//!
+//! Version 8 records whether training refined the embedded model; earlier files are read as
+//! not refined (a compensator without a network then flags no configuration, as it did).
 //!
 //! Version 7 gave each RBF kernel its covariance function (`covariance`: `matern52`, the
 //! default since, or `squared_exponential`); earlier files are read with the squared
@@ -33,7 +37,7 @@ use serde_json::Value;
 use std::path::Path;
 
 const FORMAT: &str = "robocal-compensator";
-const VERSION: u64 = 7;
+const VERSION: u64 = 8;
 /// The oldest version this robocal reads.
 const OLDEST: u64 = 2;
 
@@ -87,6 +91,7 @@ impl Compensator {
             "rbf": self.rbf,
             "mlp_share": self.mlp_share,
             "shrink": self.shrink,
+            "model_refined": self.model_refined,
         });
         let sum = fnv1a(
             serde_json::to_string(&body)
@@ -280,6 +285,7 @@ impl Compensator {
             MIX_SHARE
         };
         check_share(mlp_share).map_err(|e| bad(format!("`mlp_share`: {e}")))?;
+        let model_refined = version >= 8 && de::<bool>(&v, "model_refined", path)?;
         if members.is_empty() != (nh == 0) {
             return Err(bad(format!(
                 "{} network records for {nh} hidden units",
@@ -301,6 +307,7 @@ impl Compensator {
             input_norm: de::<Affine>(&v, "input_norm", path)?,
             output_norm: de::<Affine>(&v, "output_norm", path)?,
             domain: de::<Domain>(&v, "domain", path)?,
+            model_refined,
         };
         // A consistent checksum does not prove consistent shapes or sane numbers: prediction
         // indexes by the shapes and would spread a non-finite number into every pose.

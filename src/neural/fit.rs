@@ -73,10 +73,7 @@ impl Compensator {
         let started = std::time::Instant::now();
         let (mut c, networks) =
             fit_with(&robot, set, settings, train_opts, true, true, Vec::new())?;
-        if settings.refine.is_none() && !c.has_network() {
-            // Nothing was fitted on the rows: the model as given, whose domain is the robot's.
-            c.domain = c.domain.widened_to_limits(&robot);
-        }
+        c.model_refined = settings.refine.is_some();
         let rbf_centred_on = c
             .rbf
             .as_ref()
@@ -197,6 +194,7 @@ pub(crate) fn fit_with(
             input_norm: problem.input_norm,
             output_norm: problem.output_norm,
             domain,
+            model_refined: false,
         },
         reports,
     ))

@@ -10,6 +10,7 @@ use super::settings::Form;
 use super::targets::base_rotation;
 use crate::geometry::rotation::from_rotation_vector;
 use crate::kinematics::{Frames, Pose, frames, joint_jacobian, tool_pose};
+use crate::model::JointType;
 use nalgebra::{DMatrix, Matrix3, Matrix6xX, Translation3, Vector3};
 
 /// Scratch space for prediction, reused across calls.
@@ -422,29 +423,35 @@ impl Compensator {
     }
 
     /// Where `q` (rad, mm) stands against the training domain. For a compensator without a
-    /// network (the model alone) nothing fades, but a model refined in training was fitted
-    /// on the training rows alone: a joint beyond their range is flagged all the same (a
-    /// reviewer's FANUC refined on rows with joint 1 within +-10 deg did worse than the model
-    /// identified over the whole range on 25 of 100 targets beyond it, by up to 0.32 mm,
-    /// every one `inside`). The model alone not refined fitted nothing: its domain is the
-    /// robot's joint limits ([`Domain::widened_to_limits`]).
+    /// network (the model alone) nothing fades, but a model refined in training
+    /// ([`Compensator::model_refined`]) was fitted on the training rows alone: a joint beyond
+    /// their range is flagged all the same (a reviewer's FANUC refined on rows with joint 1
+    /// within +-10 deg did worse than the model identified over the whole range on 25 of 100
+    /// targets beyond it, by up to 0.32 mm, every one `inside`), modulo whole turns for a
+    /// revolute joint (a geometric model is periodic whatever the network's inputs). The
+    /// model alone not refined fitted nothing: inside everywhere.
     pub fn domain_check(&self, q: &[f64], ws: &mut PredictWorkspace) -> DomainCheck {
         let joints = self.robot.joints();
-        let periodic = |j: usize| {
-            joints
-                .get(j)
-                .is_some_and(|joint| self.encoding.is_periodic(joint.joint_type))
-        };
         if !self.has_network() {
+            let revolute = |j: usize| {
+                (joints.get(j)).is_some_and(|joint| joint.joint_type == JointType::Revolute)
+            };
+            let joints_outside = if self.model_refined {
+                self.domain.joints_outside(q, revolute)
+            } else {
+                Vec::new()
+            };
             return DomainCheck {
-                joints_outside: self.domain.joints_outside(q, periodic),
+                joints_outside,
                 nearest: 0.0,
                 radius: self.domain.radius,
                 weight: 1.0,
             };
         }
         let x = ws.normalised_inputs(self, q);
-        self.domain.check(q, x, periodic)
+        self.domain.check(q, x, |j| {
+            (joints.get(j)).is_some_and(|joint| self.encoding.is_periodic(joint.joint_type))
+        })
     }
 }
 

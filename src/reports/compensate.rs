@@ -77,6 +77,9 @@ pub struct WrittenMiss {
     /// Largest orientation miss of a target (deg).
     #[serde(with = "crate::io::json_number")]
     pub max_deg: f64,
+    /// Lines of the solved targets whose miss is not known: the nominal's solve of the
+    /// rounded command from q* did not converge (a command at its singularity).
+    pub unchecked: Vec<usize>,
 }
 
 /// Results that depend on parameters a calibration did not observe
