@@ -1001,6 +1001,73 @@ fn edge_inputs_of_train_and_evaluate() {
         "{}",
         stderr(&o)
     );
+    // A robot file in another frame (its base 3 m off) than the compensator's own model: the
+    // compensator's poses are in its training frame, said as a warning (it had been a note
+    // that the compensator runs its own model).
+    let fanuc = std::fs::read_to_string(FANUC).unwrap();
+    let moved = common::tmp("edge_moved_base.toml");
+    std::fs::write(
+        &moved,
+        fanuc.replacen(
+            "a = 0.0\ntheta = 0.0\nd = 0.0",
+            "a = 0.0\ntheta = 0.0\nd = 3000.0",
+            1,
+        ),
+    )
+    .unwrap();
+    assert_ne!(std::fs::read_to_string(&moved).unwrap(), fanuc);
+    let evaluate = |robot: &str| {
+        robocal(&[
+            "evaluate",
+            "--robot",
+            robot,
+            "--data",
+            TRAIN,
+            "--compensator",
+            out,
+        ])
+    };
+    let said = stderr(&evaluate(moved.to_str().unwrap()));
+    assert!(
+        said.contains("warning: the compensator's model has its base 3000.0 mm and 0.0 deg from"),
+        "{said}"
+    );
+    assert!(!stderr(&evaluate(FANUC)).contains("has its base"));
+    // The other way round: the robot file fits the rows, the compensator's own model (trained
+    // with the moved file) misses them by 3 m, said as the robot file's miss would be.
+    let moved_rcal = common::tmp("edge_moved.rcal");
+    let moved_rcal = moved_rcal.to_str().unwrap();
+    let o = robocal(&[
+        "train",
+        "--robot",
+        moved.to_str().unwrap(),
+        "--data",
+        TRAIN,
+        "--members",
+        "0",
+        "--refine",
+        "none",
+        "--out",
+        moved_rcal,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = robocal(&[
+        "evaluate",
+        "--robot",
+        FANUC,
+        "--data",
+        TRAIN,
+        "--compensator",
+        moved_rcal,
+    ]);
+    let said = stderr(&o);
+    assert!(
+        said.contains(&format!(
+            "warning: the model embedded in {moved_rcal} misses the positions of {TRAIN} by \
+             2990.8 mm"
+        )),
+        "{said}"
+    );
     // With the refinement open, one candidate per refinement: the model alone has no form,
     // inputs, size or penalty to choose (each network setting was a candidate of one figure).
     let o = train(&["--members", "0", "--report", report.to_str().unwrap()]);

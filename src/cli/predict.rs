@@ -35,6 +35,18 @@ pub fn load_compensator(
         ));
         c.robot = limited;
     }
+    // The embedded model's base far from the robot file's: trained in another measurement
+    // frame (another tracker set-up), whose poses are not the robot file's.
+    let d = robot.base().transform().inverse() * c.robot.base().transform();
+    let (mm, deg) = (d.translation.vector.norm(), d.rotation.angle().to_degrees());
+    if mm > FRAME_APART_MM || deg > FRAME_APART_DEG {
+        eprintln!(
+            "warning: the compensator's model has its base {mm:.1} mm and {deg:.1} deg from {}'s: \
+             it was trained in another frame (another measurement set-up), and its poses are in \
+             that frame, not in the robot file's",
+            robot_path.display()
+        );
+    }
     if c.runs_another_model(robot) {
         notes.push(format!(
             "note: the compensator runs in series with its own model (embedded: the model it \
@@ -52,6 +64,12 @@ pub fn load_compensator(
     }
     Ok((c, (!notes.is_empty()).then(|| notes.join("\n"))))
 }
+
+/// Base offset (mm) and rotation (deg) between a compensator's model and the robot file beyond
+/// which [`load_compensator`] says they lie in different frames: far beyond a base's
+/// calibration correction (millimetres, tenths of a degree).
+const FRAME_APART_MM: f64 = 100.0;
+const FRAME_APART_DEG: f64 = 5.0;
 
 #[derive(Args)]
 pub struct PredictArgs {
