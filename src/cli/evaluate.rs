@@ -237,6 +237,11 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     if let Some(w) = &report.worst_rows {
         print_worst("data", "the model", m, w);
     }
+    if let Some(w) = (net_rows.as_deref())
+        .and_then(|n| super::summary::worse_than_model(&a.data, &model_rows, n))
+    {
+        eprintln!("warning: {w}");
+    }
     if let Some(note) = &report.note {
         say!("{note}");
     }

@@ -399,6 +399,8 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     let mut accuracy = Vec::new();
     let mut clean = Vec::new();
     let mut val_worst = None;
+    // Where the compensator does worse than the model alone on the validation rows.
+    let mut val_worse = None;
     // The validation rows outside the compensator's training domain, by line.
     let mut val_outside: Vec<usize> = Vec::new();
     // The training rows' readings logged with other joints were judged in training, under the
@@ -469,6 +471,8 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             .len();
         }
         if name == "validation" {
+            val_worse = (a.validate.as_ref())
+                .and_then(|p| super::summary::worse_than_model(p, &before_rows, &after_rows));
             val_worst = worst_rows(&before_rows, Some(&after_rows))?;
             val_outside = (s.rows.iter().zip(&inside))
                 .filter(|(_, inside)| !**inside)
@@ -513,6 +517,9 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     }
     if let Some(path) = &a.validate {
         super::predict::warn_outside(path, &val_outside, false, c.has_network());
+    }
+    if let Some(w) = &val_worse {
+        eprintln!("warning: {w}");
     }
     report.validation_lines_outside_domain = val_outside;
     super::output::writing(c.save(&a.out), &a.out)?;
