@@ -1001,6 +1001,28 @@ fn edge_inputs_of_train_and_evaluate() {
         "{}",
         stderr(&o)
     );
+    // Rows without orientations: readings logged with other joints are not looked for, and
+    // that is said (the check's silence read as a clean result).
+    let train_text = std::fs::read_to_string(TRAIN).unwrap();
+    let position_only: String = (train_text.lines())
+        .map(|l| l.split(',').skip(1).take(9).collect::<Vec<_>>().join(",") + "\n")
+        .collect();
+    assert!(position_only.starts_with("q1,q2,q3,q4,q5,q6,x,y,z\n"));
+    let pos = common::tmp("edge_position_only.csv");
+    std::fs::write(&pos, position_only).unwrap();
+    for (data, said) in [(pos.to_str().unwrap(), true), (TRAIN, false)] {
+        let o = robocal(&["evaluate", "--robot", FANUC, "--data", data]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(
+            stderr(&o).contains(&format!(
+                "note: {data}: no row has both a position and an orientation, so readings \
+                 logged with other joints are not looked for"
+            )),
+            said,
+            "{}",
+            stderr(&o)
+        );
+    }
     // A robot file in another frame (its base 3 m off) than the compensator's own model: the
     // compensator's poses are in its training frame, said as a warning (it had been a note
     // that the compensator runs its own model).

@@ -343,6 +343,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         a.robot.display()
     );
     super::summary::print_copies(&set);
+    super::summary::note_unchecked_readings(&robot, &set);
     if let Some(r) = &report.repeats {
         super::summary::print_repeats(r);
     }
