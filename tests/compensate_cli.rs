@@ -418,6 +418,29 @@ fn a_position_only_calibration_leaves_the_tools_rotation_unchecked_and_says_so()
 
     // Desired poses: the true robot's at five configurations, their joints the seeds.
     simulate("pose", "5", "22", "0", "targets.csv");
+    // `evaluate` of that model on pose rows: its orientation errors are of the tool rotation
+    // it kept from the start model, said so; in position, nothing to say.
+    for (measure, warned) in [("pose", true), ("position", false)] {
+        let o = robocal(&[
+            "evaluate",
+            "--robot",
+            &path("pos.toml"),
+            "--data",
+            &path("targets.csv"),
+            "--measure",
+            measure,
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(
+            stderr(&o).contains(
+                "the orientation of 5 row(s) (lines 2, 3, 4, 5, 6) depends on tool.rz, tool.ry, \
+                 tool.rx of"
+            ),
+            warned,
+            "{measure}: {}",
+            stderr(&o)
+        );
+    }
     let report = file("report.json");
     let o = compensate(
         &file("pos.toml"),
