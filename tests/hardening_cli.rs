@@ -1023,6 +1023,41 @@ fn edge_inputs_of_train_and_evaluate() {
             stderr(&o)
         );
     }
+    // Second readings of 20 configurations 2 mm off the first, under the true robot (which
+    // misses the rows by their noise): the repeats disagree by more than the model misses,
+    // said as a warning; the first readings repeated exactly (a pure error of nothing) are not.
+    let lines: Vec<&str> = train_text.lines().collect();
+    for (shift, warned) in [(2.0, true), (0.0, false)] {
+        let mut text: String = lines.iter().map(|l| format!("{l}\n")).collect();
+        for l in &lines[1..21] {
+            let mut cells: Vec<String> = l.split(',').map(str::to_string).collect();
+            cells[0] = format!("{}0", cells[0]);
+            let x: f64 = cells[7].parse().unwrap();
+            cells[7] = format!("{}", x + shift + 1e-3);
+            text.push_str(&(cells.join(",") + "\n"));
+        }
+        let repeated = common::tmp(&format!("edge_repeats_{warned}.csv"));
+        std::fs::write(&repeated, text).unwrap();
+        let o = robocal(&[
+            "evaluate",
+            "--robot",
+            "datasets/case_d/true_robot.toml",
+            "--data",
+            repeated.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(
+            stdout(&o).contains("repeats: 20 configurations"),
+            "{}",
+            stdout(&o)
+        );
+        assert_eq!(
+            stderr(&o).contains("warning: the repeats' pure error"),
+            warned,
+            "{}",
+            stderr(&o)
+        );
+    }
     // A robot file in another frame (its base 3 m off) than the compensator's own model: the
     // compensator's poses are in its training frame, said as a warning (it had been a note
     // that the compensator runs its own model).

@@ -181,7 +181,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     };
     super::summary::print_copies(&set);
     if let Some(r) = &report.repeats {
-        print_repeats(r);
+        print_repeats(r, &robot, &set);
     }
     if let (Some(path), Some(r)) = (&a.check_against, &reference) {
         // Said whatever it found: a check that could not run is not a clean result.

@@ -345,7 +345,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     super::summary::print_copies(&set);
     super::summary::note_unchecked_readings(&robot, &set);
     if let Some(r) = &report.repeats {
-        super::summary::print_repeats(r);
+        super::summary::print_repeats(r, &robot, &set);
     }
     if let Some(sel) = &report.selection {
         print_selection(sel);
