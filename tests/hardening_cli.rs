@@ -1011,23 +1011,48 @@ fn edge_inputs_of_train_and_evaluate() {
     let pos = common::tmp("edge_position_only.csv");
     std::fs::write(&pos, position_only).unwrap();
     for (data, said) in [(pos.to_str().unwrap(), true), (TRAIN, false)] {
+        let note = format!(
+            "note: {data}: no row has both a position and an orientation, so readings logged \
+             with other joints are not looked for"
+        );
         let o = robocal(&["evaluate", "--robot", FANUC, "--data", data]);
         assert!(o.status.success(), "{}", stderr(&o));
-        assert_eq!(
-            stderr(&o).contains(&format!(
-                "note: {data}: no row has both a position and an orientation, so readings \
-                 logged with other joints are not looked for"
-            )),
-            said,
-            "{}",
-            stderr(&o)
-        );
+        assert_eq!(stdout(&o).contains(&note), said, "{}", stdout(&o));
+        // With --check-against, its own warning says it (once, not twice).
+        let o = robocal(&[
+            "evaluate",
+            "--robot",
+            FANUC,
+            "--data",
+            data,
+            "--check-against",
+            data,
+        ]);
+        assert!(!stdout(&o).contains(&note), "{}", stdout(&o));
+        // `identify` says it among its notes, and in its report.
+        let report = common::tmp("edge_position_only.json");
+        let o = robocal(&[
+            "identify",
+            "--robot",
+            FANUC,
+            "--data",
+            data,
+            "--out",
+            common::tmp("edge_position_only.toml").to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(stdout(&o).contains(&note), said, "{}", stdout(&o));
+        let notes = common::json(&report)["notes"].to_string();
+        assert_eq!(notes.contains("no row has both"), said, "{notes}");
     }
     // Second readings of 20 configurations 2 mm off the first, under the true robot (which
     // misses the rows by their noise): the repeats disagree by more than the model misses,
-    // said as a warning; the first readings repeated exactly (a pure error of nothing) are not.
+    // said as a warning. Readings 0.1 mm apart give a pure error about the model's own (0.07
+    // against 0.06 mm: noise, no anomaly), and are not.
     let lines: Vec<&str> = train_text.lines().collect();
-    for (shift, warned) in [(2.0, true), (0.0, false)] {
+    for (shift, warned) in [(2.0, true), (0.1, false)] {
         let mut text: String = lines.iter().map(|l| format!("{l}\n")).collect();
         for l in &lines[1..21] {
             let mut cells: Vec<String> = l.split(',').map(str::to_string).collect();

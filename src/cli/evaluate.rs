@@ -115,9 +115,10 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     // word).
     if matches!(m, Measure::Pose | Measure::Position | Measure::Orientation) {
         let mut unchecked = super::unchecked::UncheckedRows::new(&robot);
+        let position = matches!(m, Measure::Pose | Measure::Position);
         let orientation = matches!(m, Measure::Pose | Measure::Orientation);
         for r in &set.rows {
-            unchecked.add(&robot, &r.q, r.line, orientation);
+            unchecked.add_measured(&robot, &r.q, r.line, position, orientation);
         }
         unchecked.warn(&a.data, &a.robot);
     }
@@ -249,13 +250,27 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     if let Some(w) = &report.worst_rows {
         print_worst("data", "the model", m, w);
     }
+    // Not where the compensator's own model misses the rows by metres (said above): its
+    // figures then say nothing of the network.
+    let embedded_off = matches!(m, Measure::Pose | Measure::Position)
+        && comp
+            .as_ref()
+            .is_some_and(|c| misplaced_median(&c.robot, &set).is_some());
+    let suspects: Vec<usize> = report.shared_readings.iter().map(|r| r.line).collect();
     if let Some(w) = (net_rows.as_deref())
-        .and_then(|n| super::summary::worse_than_model(&a.data, &model_rows, n))
+        .filter(|_| !embedded_off)
+        .and_then(|n| super::summary::worse_than_model(&a.data, &model_rows, n, m, &suspects))
     {
         eprintln!("warning: {w}");
     }
     if let Some(note) = &report.note {
         say!("{note}");
+    }
+    // With --check-against, the check's own warning says where it could not compare.
+    if a.check_against.is_none()
+        && let Some(n) = super::summary::unchecked_readings_note(&robot, &set, m)
+    {
+        say!("note: {n}");
     }
     warn_outside(
         &a.data,

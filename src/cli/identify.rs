@@ -163,6 +163,9 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     }
     report.warnings.extend(worse);
     report.notes.extend(a.sigma.unused(&cal));
+    report
+        .notes
+        .extend(super::summary::unchecked_readings_note(&id.robot, &cal, m));
     print_identified(&report);
     print_stats(&report.accuracy, report.measure);
     if let Some(w) = &report.validation_worst_rows {

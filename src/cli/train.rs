@@ -343,7 +343,6 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         a.robot.display()
     );
     super::summary::print_copies(&set);
-    super::summary::note_unchecked_readings(&robot, &set);
     if let Some(r) = &report.repeats {
         super::summary::print_repeats(r, &robot, &set);
     }
@@ -351,7 +350,14 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         print_selection(sel);
     }
     say!("settings: {}", report.settings.describe());
-    for n in report.notes.iter().chain(&a.sigma.unused(&set)) {
+    let unchecked: Vec<String> = std::iter::once(&set)
+        .chain(&val)
+        .filter_map(|s| super::summary::unchecked_readings_note(&robot, s, Measure::default_for(s)))
+        .collect();
+    for n in (report.notes.iter())
+        .chain(&a.sigma.unused(&set))
+        .chain(&unchecked)
+    {
         say!("note: {n}");
     }
     for w in report.selection.iter().flat_map(|s| &s.warnings) {
@@ -472,8 +478,10 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             .len();
         }
         if name == "validation" {
-            val_worse = (a.validate.as_ref())
-                .and_then(|p| super::summary::worse_than_model(p, &before_rows, &after_rows));
+            let suspects: Vec<usize> = shared.iter().map(|r| r.line).collect();
+            val_worse = (a.validate.as_ref()).and_then(|p| {
+                super::summary::worse_than_model(p, &before_rows, &after_rows, m, &suspects)
+            });
             val_worst = worst_rows(&before_rows, Some(&after_rows))?;
             val_outside = (s.rows.iter().zip(&inside))
                 .filter(|(_, inside)| !**inside)

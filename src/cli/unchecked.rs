@@ -28,11 +28,24 @@ impl UncheckedRows {
     /// Checks the row at file `line` with joints `q` (rad or mm) of `robot` (the probe's);
     /// `orientation`: whether the row's result includes an orientation that matters.
     pub fn add(&mut self, robot: &Robot, q: &[f64], line: usize, orientation: bool) {
+        self.add_measured(robot, q, line, true, orientation);
+    }
+
+    /// [`UncheckedRows::add`] for a result whose position matters only where `position` holds
+    /// (an orientation measure prints no position).
+    pub fn add_measured(
+        &mut self,
+        robot: &Robot,
+        q: &[f64],
+        line: usize,
+        position: bool,
+        orientation: bool,
+    ) {
         if self.probe.is_empty() {
             return;
         }
         let u = self.probe.at(robot, q);
-        if u.position {
+        if u.position && position {
             self.position.push(line);
         }
         if u.orientation && orientation {
