@@ -29,7 +29,8 @@ fn import(name: &str, body: &str, extra: &[&str]) -> (i32, String, Option<String
     )
 }
 
-const GOOD: &str = "a,0,0,0,0,0,0,1,2,3\nb,10,10,10,10,10,10,4,5,6\nc,20,20,20,20,20,20,7,8,9\n";
+// Positions near the FANUC's own at those joints (mm): a file in metres gets a warning.
+const GOOD: &str = "a,0,0,0,0,0,0,2032,-182,1970\nb,10,10,10,10,10,10,2215.8,203.5,1940.2\nc,20,20,20,20,20,20,2315.8,638.4,1877.2\n";
 
 #[test]
 fn good_file_imports_silently() {
@@ -38,8 +39,28 @@ fn good_file_imports_silently() {
     assert!(!err.contains("warning"), "{err}");
     assert!(
         out.unwrap()
-            .starts_with("id,q1,q2,q3,q4,q5,q6,x,y,z\na,0,0,0,0,0,0,1,2,3\n")
+            .starts_with("id,q1,q2,q3,q4,q5,q6,x,y,z\na,0,0,0,0,0,0,2032,-182,1970\n")
     );
+    // The same positions in metres: written as read, with the warning `identify` would
+    // turn into an error.
+    let metres = GOOD
+        .lines()
+        .map(|l| {
+            let mut c: Vec<String> = l.split(',').map(str::to_string).collect();
+            for v in &mut c[7..] {
+                *v = format!("{}", v.parse::<f64>().unwrap() / 1000.0);
+            }
+            c.join(",") + "\n"
+        })
+        .collect::<String>();
+    let (code, err, out) = import("good_metres", &metres, &[]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("0.0010 times as far (positions in metres give 0.001")
+            && err.contains("(written as read: `identify` and `train` refuse such rows)"),
+        "{err}"
+    );
+    assert!(out.unwrap().contains("a,0,0,0,0,0,0,2.032,-0.182,1.97\n"));
 }
 
 #[test]

@@ -239,6 +239,19 @@ fn report_refuses_empty_folders_and_bad_json() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("broken.json:3:"), "{}", stderr(&o));
     assert!(!out.exists());
+    // A page under a picture's or a report's name: refused before any work (usage, 2).
+    for name in ["new.png", "new.SVG", "new.json"] {
+        let out = empty.join(name);
+        let o = robocal(&[
+            "report",
+            empty.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains("give an .html name"), "{}", stderr(&o));
+        assert!(!out.exists());
+    }
 }
 
 /// `report` embeds only regular files inside the run folder, of bounded size: a figure list

@@ -42,6 +42,17 @@ pub fn run(a: ImportArgs) -> Result<()> {
     }
     let joints = joints_of(a.robot.as_ref(), n)?;
     let set = a.data.read(&a.input, &joints)?;
+    // Positions in metres or inches: `identify` and `train` refuse them, and the canonical
+    // file written here would carry the mistake on (a reviewer's metres were written as mm
+    // without a word).
+    if let Some(path) = &a.robot
+        && let Err(e) = robocal::identify::register::check_position_scale(
+            &robocal::model::read_robot(path)?,
+            &set,
+        )
+    {
+        eprintln!("warning: {e} (written as read: `identify` and `train` refuse such rows)");
+    }
     super::output::writing(write_measurements(&set, &joints, &a.out), &a.out)?;
     let written = Layout::of(&set).carried_names(joints.len());
     let renamed: Vec<String> = (set.extra_columns.iter().zip(&written))

@@ -15,6 +15,17 @@ pub struct ReportArgs {
 
 pub fn run(a: ReportArgs) -> Result<()> {
     use super::paths::{files_under, guard, req};
+    // A page under a report's or a picture's name would pass for one in a run folder (a
+    // reviewer's `--out run/new.png` left HTML among the pictures).
+    if let Some(e) = (a.out.extension().and_then(|e| e.to_str()))
+        .filter(|e| ["json", "png", "svg"].contains(&e.to_ascii_lowercase().as_str()))
+    {
+        usage!(
+            "--out {}: the page is HTML; a .{e} name would pass for a run folder's report or \
+             picture (give an .html name)",
+            a.out.display()
+        );
+    }
     // What the page is made of: the folder's reports and pictures (a page written there
     // before is not read, so it may be written again).
     let read: Vec<_> = files_under(&a.run_dir)
