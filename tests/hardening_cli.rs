@@ -201,7 +201,8 @@ fn outputs_never_overwrite_an_input_or_each_other() {
     assert_eq!(before(&data), db);
     assert_eq!(before(&fanuc), fb);
     assert!(!std::path::Path::new(a).exists(), "nothing was written");
-    // `report` reads every file of its run folder.
+    // `report` reads every file of its run folder (a report's name is refused as a name for
+    // the page before the guard sees it).
     let run = common::tmp("guard_run");
     std::fs::create_dir_all(&run).unwrap();
     let id = run.join("identify.json");
@@ -213,7 +214,7 @@ fn outputs_never_overwrite_an_input_or_each_other() {
             "--out",
             id.to_str().unwrap(),
         ],
-        "refusing to overwrite an input",
+        "give an .html name",
     );
     assert_eq!(std::fs::read_to_string(&id).unwrap(), "{}");
 }
