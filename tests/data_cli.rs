@@ -119,6 +119,33 @@ fn import_fails(name: &str, text: &str, needles: &[&str]) {
     assert!(!out.exists());
 }
 
+/// A column the header holds in capitals is named so (names are case-sensitive), beside the
+/// header's list.
+#[test]
+fn a_column_in_other_case_is_said_to_differ_only_in_case() {
+    import_fails(
+        "case",
+        "q1,q2,q3,q4,q5,q6,X,y,z\n0,0,0,0,0,0,1,2,3\n",
+        &[
+            "case.csv:1: field `x`: position columns must come as a group of three; missing \
+             column(s); X differs only in case (column names are case-sensitive)",
+        ],
+    );
+    import_fails(
+        "case_q",
+        "Q1,q2,q3,q4,q5,q6,x,y,z\n0,0,0,0,0,0,1,2,3\n",
+        &[
+            "case_q.csv:1: field `q1`: missing column (the header has: Q1, q2",
+            "; Q1 differs only in case (column names are case-sensitive)",
+        ],
+    );
+    import_fails(
+        "case_xyz",
+        "q1,q2,q3,q4,q5,q6,X,Y,Z\n0,0,0,0,0,0,1,2,3\n",
+        &["no measurement columns", "; Z differs only in case"],
+    );
+}
+
 #[test]
 fn duplicate_header_is_an_error() {
     import_fails(

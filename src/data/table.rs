@@ -295,16 +295,31 @@ impl Table {
             Error::input(
                 Location::at(&self.path, 1, name),
                 format!(
-                    "missing column (the header has: {}){}",
+                    "missing column (the header has: {}){}{}",
                     self.headers
                         .iter()
                         .map(|h| shown(h))
                         .collect::<Vec<_>>()
                         .join(", "),
-                    self.delimiter_hint()
+                    self.delimiter_hint(),
+                    self.case_hint(name)
                 ),
             )
         })
+    }
+
+    /// A hint for a column `name` the header holds in other letter case (an export written in
+    /// capitals): "; `SHOULDER_PAN_JOINT` differs only in case (names are case-sensitive)",
+    /// else empty.
+    pub fn case_hint(&self, name: &str) -> String {
+        (self.headers.iter())
+            .find(|h| h.eq_ignore_ascii_case(name))
+            .map_or_else(String::new, |h| {
+                format!(
+                    "; {} differs only in case (column names are case-sensitive)",
+                    shown(h)
+                )
+            })
     }
 
     /// A hint for a header read as one column that holds another delimiter (`;`, a tab, `|`):

@@ -52,7 +52,10 @@ fn group(t: &Table, names: &[String; 3], what: &str) -> Result<Option<[usize; 3]
                 .collect();
             Err(Error::input(
                 Location::at(&t.path, 1, missing.join(", ")),
-                format!("{what} columns must come as a group of three; missing column(s)"),
+                format!(
+                    "{what} columns must come as a group of three; missing column(s){}",
+                    missing.iter().map(|n| t.case_hint(n)).collect::<String>()
+                ),
             ))
         }
     }
@@ -171,13 +174,21 @@ impl Columns {
             return Err(Error::input(
                 Location::file(&t.path),
                 format!(
-                    "no measurement columns: expected position ({}), orientation ({}) or distance ({})",
+                    "no measurement columns: expected position ({}), orientation ({}) or distance ({}){}",
                     cols.position.join(", "),
                     match profile.orientation {
                         Orientation::Quaternion => cols.quaternion.join(", "),
                         _ => cols.angles.join(", "),
                     },
-                    cols.distance
+                    cols.distance,
+                    (cols.position.iter())
+                        .chain(match profile.orientation {
+                            Orientation::Quaternion => &cols.quaternion[..],
+                            _ => &cols.angles[..],
+                        })
+                        .chain(std::iter::once(&cols.distance))
+                        .map(|n| t.case_hint(n))
+                        .collect::<String>()
                 ),
             ));
         }
