@@ -295,16 +295,15 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
 }
 
 /// Where the calibrated model's base frame lies far from the nominal's (a base registered to
-/// a tracker's frame: more than [`FRAME_CHANGE_MM`] or [`FRAME_CHANGE_DEG`]), the targets are
+/// a tracker's frame: [`super::predict::bases_apart`]), the targets are
 /// in the calibrated model's world frame and the commands in the nominal model's, so the
 /// shift mixes that change of frame with the correction: the change, and the shift of the
 /// targets carried into the nominal frame (`moved`, mm); else (or with no target solved)
 /// None.
 fn frame_change(nominal: &Robot, calibrated: &Robot, moved: &[f64]) -> Option<FrameChange> {
-    let d = nominal.base().transform().inverse() * calibrated.base().transform();
-    let (mm, deg) = (d.translation.vector.norm(), d.rotation.angle().to_degrees());
+    let (mm, deg) = super::predict::bases_apart(nominal, calibrated)?;
     let (mean, max) = mean_and_max(moved)?;
-    (mm > FRAME_CHANGE_MM || deg > FRAME_CHANGE_DEG).then_some(FrameChange {
+    Some(FrameChange {
         base_offset_mm: mm,
         base_rotation_deg: deg,
         carried_shift_mean_mm: mean,
@@ -365,12 +364,6 @@ fn mean_and_max(v: &[f64]) -> Option<(f64, f64)> {
 /// them by millimetres, a forgotten TCP or a measurement tool by tens or hundreds (a
 /// reviewer's nominal tool 300 mm longer than the calibrated one went without a word).
 const TOOL_GAP_MM: f64 = 20.0;
-
-/// Base offset (mm) beyond which [`frame_change`] speaks: far beyond a base's calibration
-/// correction (millimetres).
-const FRAME_CHANGE_MM: f64 = 100.0;
-/// Base rotation (deg) beyond which [`frame_change`] speaks (a correction: tenths of a deg).
-const FRAME_CHANGE_DEG: f64 = 5.0;
 
 /// The columns compensate writes after the target file's: for position targets the
 /// orientation used, the branch, the joints, the command, the residuals and the status, with

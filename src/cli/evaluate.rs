@@ -212,14 +212,18 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     print_stats(&report.accuracy, m);
     // Measures of single rows only: a pair's displacement or length does not see the frame.
     // With a compensator, said where the model it runs (refined or not) misses too.
-    if matches!(m, Measure::Pose | Measure::Position) {
+    let single_rows = matches!(m, Measure::Pose | Measure::Position);
+    let embedded_off = single_rows
+        && comp
+            .as_ref()
+            .is_some_and(|c| misplaced_median(&c.robot, &set).is_some());
+    if single_rows {
         if let Some(w) = misplaced_model_warning(&a.robot.display().to_string(), &robot, &set)
-            && comp
-                .as_ref()
-                .is_none_or(|c| misplaced_median(&c.robot, &set).is_some())
+            && (comp.is_none() || embedded_off)
         {
             eprintln!("warning: {w}");
-        } else if let (Some(c), Some(path)) = (&comp, &a.compensator)
+        } else if embedded_off
+            && let (Some(c), Some(path)) = (&comp, &a.compensator)
             && let Some(w) = misplaced_model_warning(
                 &format!("the model embedded in {}", path.display()),
                 &c.robot,
@@ -252,10 +256,6 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     }
     // Not where the compensator's own model misses the rows by metres (said above): its
     // figures then say nothing of the network.
-    let embedded_off = matches!(m, Measure::Pose | Measure::Position)
-        && comp
-            .as_ref()
-            .is_some_and(|c| misplaced_median(&c.robot, &set).is_some());
     let suspects: Vec<usize> = report.shared_readings.iter().map(|r| r.line).collect();
     if let Some(w) = (net_rows.as_deref())
         .filter(|_| !embedded_off)

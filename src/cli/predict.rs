@@ -37,9 +37,7 @@ pub fn load_compensator(
     }
     // The embedded model's base far from the robot file's: trained in another measurement
     // frame (another tracker set-up), whose poses are not the robot file's.
-    let d = robot.base().transform().inverse() * c.robot.base().transform();
-    let (mm, deg) = (d.translation.vector.norm(), d.rotation.angle().to_degrees());
-    if mm > FRAME_APART_MM || deg > FRAME_APART_DEG {
+    if let Some((mm, deg)) = bases_apart(robot, &c.robot) {
         eprintln!(
             "warning: the compensator's model has its base {mm:.1} mm and {deg:.1} deg from {}'s: \
              it was trained in another frame (another measurement set-up), and its poses are in \
@@ -65,11 +63,19 @@ pub fn load_compensator(
     Ok((c, (!notes.is_empty()).then(|| notes.join("\n"))))
 }
 
-/// Base offset (mm) and rotation (deg) between a compensator's model and the robot file beyond
-/// which [`load_compensator`] says they lie in different frames: far beyond a base's
+/// Base offset (mm) and rotation (deg) between two models of one robot beyond which their
+/// bases lie in different frames (a base registered to a tracker's): far beyond a base's
 /// calibration correction (millimetres, tenths of a degree).
 const FRAME_APART_MM: f64 = 100.0;
 const FRAME_APART_DEG: f64 = 5.0;
+
+/// The offset (mm) and rotation (deg) of `b`'s base from `a`'s where they lie in different
+/// frames (beyond [`FRAME_APART_MM`] or [`FRAME_APART_DEG`]), else None.
+pub fn bases_apart(a: &Robot, b: &Robot) -> Option<(f64, f64)> {
+    let d = a.base().transform().inverse() * b.base().transform();
+    let (mm, deg) = (d.translation.vector.norm(), d.rotation.angle().to_degrees());
+    (mm > FRAME_APART_MM || deg > FRAME_APART_DEG).then_some((mm, deg))
+}
 
 #[derive(Args)]
 pub struct PredictArgs {
