@@ -810,3 +810,158 @@ fn a_nominal_tool_other_than_the_calibrated_ones_is_said() {
     assert!(!stderr(&o).contains("tool positions at the same joints"));
     assert!(common::json(&report).get("tool_gap_mm").is_none());
 }
+
+/// An ABB IRB 2600 (a reviewer's, modified DH with a Hayati row for the parallel axes 2-3,
+/// on a 6-DOF base) whose shoulder limit is -95 deg.
+const IRB2600: &str = r#"name = "IRB2600 MDH"
+[base]
+convention = "transform"
+x = 100.0
+y = -50.0
+z = 20.0
+rz = 30.0
+ry = 2.0
+rx = -1.0
+[[joint]]
+convention = "mdh"
+d = 445.0
+limits = [-180.0, 180.0]
+[[joint]]
+convention = "mdh"
+alpha = -90.0
+a = 150.0
+theta = -90.0
+limits = [-95.0, 155.0]
+[[joint]]
+convention = "hayati"
+a = 700.0
+limits = [-180.0, 75.0]
+[[joint]]
+convention = "mdh"
+alpha = -90.0
+a = 115.0
+d = 795.0
+limits = [-400.0, 400.0]
+[[joint]]
+convention = "mdh"
+alpha = 90.0
+limits = [-120.0, 120.0]
+[[joint]]
+convention = "mdh"
+alpha = -90.0
+d = 85.0
+limits = [-400.0, 400.0]
+[tool]
+convention = "transform"
+x = 10.0
+y = 5.0
+z = 150.0
+rz = 10.0
+ry = 20.0
+rx = 5.0
+"#;
+
+/// The reviewer's identification of [`IRB2600`] from simulated rows (`--params full`).
+const IRB2600_CALIBRATED: &str = r#"name = "IRB2600 MDH"
+[base]
+convention = "transform"
+x = 100.82102360170775
+y = -50.47520011078764
+z = 21.89840542919746
+rz = 30.114448924387382
+ry = 1.9782362407808887
+rx = -0.9633616272766662
+[[joint]]
+convention = "mdh"
+alpha = 0.0
+a = 0.0
+theta = 0.0
+d = 445.0
+limits = [-180.0, 180.0]
+[[joint]]
+convention = "mdh"
+alpha = -90.05138729033659
+a = 150.35254300056013
+theta = -90.12583157796674
+d = 0.453418838629817
+limits = [-95.0, 155.0]
+[[joint]]
+convention = "hayati"
+beta = 0.03145169066142765
+alpha = 0.02280485379059872
+a = 699.40026771499
+theta = 0.09752088703473206
+limits = [-180.0, 75.0]
+[[joint]]
+convention = "mdh"
+alpha = -90.0691179549128
+a = 115.50854306969389
+theta = 0.12035505257157203
+d = 794.0951322672103
+limits = [-400.0, 400.0]
+[[joint]]
+convention = "mdh"
+alpha = 90.04558734319825
+a = -0.30276451728835957
+theta = -0.0850985839431503
+d = 0.5958631003968995
+limits = [-120.0, 120.0]
+[[joint]]
+convention = "mdh"
+alpha = -89.92439144360327
+a = 0.25756079989476355
+theta = 0.0
+d = 85.0
+limits = [-400.0, 400.0]
+[tool]
+convention = "transform"
+x = 10.387724634904416
+y = 4.7262515139356935
+z = 150.80126054270863
+rz = 10.075922299541046
+ry = 20.040365296134954
+rx = 5.05159173982943
+"#;
+
+/// Without a seed the branch nearest the middle of the ranges is tried first; where the
+/// calibrated solution on it leaves the limits (the nominal's shoulder, placed as the
+/// calibrated model, at -94.8 deg; the calibrated model's at -95.4), the other branches are
+/// tried before the target is given up. A reviewer's target had been refused
+/// `outside-limits` although `ik` solved it.
+#[test]
+fn without_a_seed_a_branch_that_leaves_the_limits_gives_way_to_another() {
+    let nominal = tmp("irb2600.toml");
+    std::fs::write(&nominal, IRB2600).unwrap();
+    let calibrated = tmp("irb2600_calibrated.toml");
+    std::fs::write(&calibrated, IRB2600_CALIBRATED).unwrap();
+    let targets = tmp("irb2600_targets.csv");
+    std::fs::write(
+        &targets,
+        "id,x,y,z,rz,ry,rx\n34,-701.8472285754846,-1382.6000334240382,331.0280755841943,\
+         95.05080559246458,81.54821316216247,-137.56635787083786\n",
+    )
+    .unwrap();
+    let out = tmp("irb2600_commands.csv");
+    let o = robocal(&[
+        "compensate",
+        "--nominal",
+        nominal.to_str().unwrap(),
+        "--robot",
+        calibrated.to_str().unwrap(),
+        "--targets",
+        targets.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows = csv(&std::fs::read_to_string(&out).unwrap());
+    assert_eq!(rows[1][col(&rows, "status")], "ok", "{rows:?}");
+    let q: Vec<f64> = (1..=6)
+        .map(|j| rows[1][col(&rows, &format!("q{j}"))].parse().unwrap())
+        .collect();
+    // The solution `ik` gives the calibrated model (the shoulder at 61.4 deg, within limits).
+    assert!(
+        (q[1] - 61.4176).abs() < 1e-3 && (q[0] + 151.3295).abs() < 1e-3,
+        "{q:?}"
+    );
+}

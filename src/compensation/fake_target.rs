@@ -6,7 +6,9 @@
 //!    branch nearest them (without a seed: the solution nearest the middle of the joint
 //!    ranges), within the limits if one is; its [`Branch`] is the configuration the
 //!    controller is asked to keep. Out of the nominal's reach, the
-//!    row's seed joints start the solve instead;
+//!    row's seed joints start the solve instead. Without a seed, where the calibrated
+//!    solution on that branch fails (beyond a limit the nominal's was within), the other
+//!    branches are tried in the same order;
 //! 2. numerical IK of the calibrated model from q0 (LM, `kinematics::ik_numeric`) gives q*;
 //! 3. q* must lie within the limits, and the nominal closed form of F = FK_nominal(q*) on the
 //!    seed's branch must return q* itself: that is what the controller will compute from F.
@@ -531,6 +533,25 @@ impl<'a> FakeTargetSolver<'a> {
                 }
                 self.command(target, solved.solution, &allowed)
             });
+        // Without a seed no branch is the user's: where the calibrated solution on the branch
+        // nearest the middle of the ranges fails (a reviewer's ABB arm: the nominal's shoulder
+        // at -94.8 deg within its -95 limit, the calibrated model's at -95.4 beyond it), the
+        // other branches are tried in the same order, and the first command stands.
+        let first = match first {
+            Err(
+                Failure::OutsideLimits(_) | Failure::NotConverged(_) | Failure::BranchChanged(_),
+            ) if seed.is_none() => {
+                let others = self.ik.start_branches(&target);
+                (others.into_iter().skip(1))
+                    .find_map(|b| {
+                        let solved = self.ik.from_nearest_start(&target, None, &[b]).ok()?;
+                        self.command(target, solved.solution, &[b]).ok()
+                    })
+                    .ok_or(())
+                    .or(first)
+            }
+            first => first,
+        };
         // Near a wrist singularity the closed-form start on the seed's branch can lie on the
         // other side of it (q5 of the other sign, q4 and q6 half a turn away) when the
         // calibrated model puts the seed's q5 on one side and the nominal on the other. Its

@@ -402,6 +402,18 @@ impl<M: ToolModel> IkSolver<M> {
         Ok(polished)
     }
 
+    /// The branches of the closed form's solutions of `target`, in the order
+    /// [`Self::from_nearest_start`] takes them without a seed: those whose solution lies
+    /// within the limits first, each group nearest the middle of the ranges first. Empty
+    /// without a closed form.
+    pub fn start_branches(&mut self, target: &Pose) -> Vec<Branch> {
+        let mid = self.mid.clone();
+        self.starts(target, &mid, &[])
+            .into_iter()
+            .map(|s| s.2)
+            .collect()
+    }
+
     /// One solve from the closed-form start nearest `seed` (or the middle of the ranges) on
     /// one of `branches` if any are given (the seed's: one, or both wrist flips at a straight
     /// wrist), within the limits if one is. The start's branch is the configuration kept
