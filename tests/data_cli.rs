@@ -144,6 +144,77 @@ fn a_column_in_other_case_is_said_to_differ_only_in_case() {
         "q1,q2,q3,q4,q5,q6,X,Y,Z\n0,0,0,0,0,0,1,2,3\n",
         &["no measurement columns", "; Z differs only in case"],
     );
+    // An optional group in other case beside one that reads: it had been left out without a
+    // word (a reviewer's X, Y, Z beside angles identified from orientations alone; SX, SY, SZ
+    // left the default sigmas; a `Pair` column chained the rows in file order).
+    for (name, header, needle) in [
+        (
+            "case_pos",
+            "q1,q2,q3,q4,q5,q6,X,Y,Z,rz,ry,rx",
+            "case_pos.csv:1: field `x, y, z`: no position column(s) x, y, z, but the header \
+             has X for x, Y for y, Z for z: column names are case-sensitive",
+        ),
+        (
+            "case_rot",
+            "q1,q2,q3,q4,q5,q6,x,y,z,RZ,RY,RX",
+            "no orientation column(s) rx, ry, rz, but the header has RX for rx",
+        ),
+        (
+            "case_sigma",
+            "q1,q2,q3,q4,q5,q6,x,y,z,SX,SY,SZ",
+            "no position sigma column(s) sx, sy, sz",
+        ),
+        (
+            "case_pair",
+            "q1,q2,q3,q4,q5,q6,x,y,z,Pair",
+            "no pair column(s) pair, but the header has Pair for pair",
+        ),
+    ] {
+        let cells = header.split(',').count();
+        let row = vec!["1"; cells].join(",");
+        import_fails(name, &format!("{header}\n{row}\n"), &[needle]);
+    }
+}
+
+/// A column a profile names for a label or a distance that the file lacks is an error, as a
+/// position's is: a typo had left the distances computed from positions without a word.
+#[test]
+fn a_label_or_distance_column_the_profile_names_must_be_there() {
+    let input = tmp("labels.csv");
+    std::fs::write(
+        &input,
+        "q1,q2,q3,q4,q5,q6,x,y,z,ballbar\n0,0,0,0,0,0,1,2,3,4\n",
+    )
+    .unwrap();
+    for (key, name) in [
+        ("distance", "ball_bar"),
+        ("pair", "pairs"),
+        ("set", "group"),
+        ("id", "label"),
+    ] {
+        let profile = tmp(&format!("p_{key}.toml"));
+        std::fs::write(&profile, format!("[columns]\n{key} = \"{name}\"\n")).unwrap();
+        let out = tmp(&format!("labels_{key}.out"));
+        let o = robocal(&[
+            "import",
+            input.to_str().unwrap(),
+            "--robot",
+            FANUC,
+            "--profile",
+            profile.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{key}: {err}");
+        assert!(
+            err.contains(&format!(
+                "p_{key}.toml: the profile reads the {key} from column `{name}`, which"
+            )) && err.contains("labels.csv does not have (its columns: q1"),
+            "{key}: {err}"
+        );
+        assert!(!out.exists());
+    }
 }
 
 #[test]

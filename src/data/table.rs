@@ -308,6 +308,14 @@ impl Table {
         })
     }
 
+    /// The header's name that differs from `name` in letter case only, if any (an export
+    /// written in capitals).
+    pub fn other_case(&self, name: &str) -> Option<&str> {
+        (self.headers.iter())
+            .find(|h| h.as_str() != name && h.eq_ignore_ascii_case(name))
+            .map(String::as_str)
+    }
+
     /// A hint for a column `name` the header holds in other letter case (an export written in
     /// capitals): "; `SHOULDER_PAN_JOINT` differs only in case (names are case-sensitive)",
     /// else empty.

@@ -197,6 +197,83 @@ impl Columns {
             t.column(&cols.set),
             t.column(&cols.pair),
         );
+        // An optional column the header holds in other letter case would be left out without
+        // a word, and change what is measured (positions read as absent: an identification
+        // from orientations alone; sigmas as absent: the defaults).
+        let optional: [(&[String], bool, &str); 8] = [
+            (&cols.position, position.is_none(), "position"),
+            (
+                &cols.angles,
+                angles.is_none() && quaternion.is_none(),
+                "orientation",
+            ),
+            (
+                &cols.quaternion,
+                angles.is_none() && quaternion.is_none(),
+                "orientation",
+            ),
+            (
+                &cols.sigma_position,
+                sigma_position.is_none(),
+                "position sigma",
+            ),
+            (
+                &cols.sigma_angles,
+                sigma_angles.is_none(),
+                "orientation sigma",
+            ),
+            (
+                std::slice::from_ref(&cols.distance),
+                distance.is_none(),
+                "distance",
+            ),
+            (std::slice::from_ref(&cols.set), set.is_none(), "set"),
+            (std::slice::from_ref(&cols.pair), pair.is_none(), "pair"),
+        ];
+        for (names, absent, what) in optional {
+            let other: Vec<String> = (names.iter())
+                .filter_map(|n| t.other_case(n).map(|h| format!("{} for {n}", shown(h))))
+                .collect();
+            if absent && !other.is_empty() {
+                return Err(Error::input(
+                    Location::at(&t.path, 1, names.join(", ")),
+                    format!(
+                        "no {what} column(s) {}, but the header has {}: column names are \
+                         case-sensitive, and the {what} would be read as absent; rename the \
+                         column(s), or name them in a profile",
+                        names.join(", "),
+                        other.join(", ")
+                    ),
+                ));
+            }
+        }
+        // A column the profile names for a label or a distance (not the default name) is one
+        // the user expects read: a typo would silently leave it out (pairs chained in file
+        // order, distances computed from positions).
+        for (name, default, found, what) in [
+            (&cols.distance, &defaults.distance, distance, "distance"),
+            (&cols.id, &defaults.id, id, "id"),
+            (&cols.set, &defaults.set, set, "set"),
+            (&cols.pair, &defaults.pair, pair, "pair"),
+        ] {
+            if found.is_none() && name != default {
+                let at = profile.path.as_deref().unwrap_or(&t.path);
+                return Err(Error::input(
+                    Location::file(at),
+                    format!(
+                        "the profile reads the {what} from column `{name}`, which {} does not \
+                         have{} (its columns: {})",
+                        t.path.display(),
+                        t.case_hint(name),
+                        t.headers
+                            .iter()
+                            .map(|h| shown(h))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                ));
+            }
+        }
         // Every column the measurements are read from, with the field that reads it: one
         // column read as two fields (a profile's `x = "q1"` beside the default joints) would
         // give both its numbers.
