@@ -407,6 +407,15 @@ fn mass_free_compliance_is_identified_written_and_read_back() {
     let full = identify(&nominal, &cal, &Options::default()).unwrap();
     let robot = &id.robot;
     assert!(robot.is_compliant() && robot.masses().is_none());
+    // The rows give no payload: the coefficients hold for the one carried, and a note says so.
+    assert!(
+        id.notes
+            .iter()
+            .any(|n| n.starts_with("mass-free compliance: the coefficients carry the payload")),
+        "{:?}",
+        id.notes
+    );
+    assert!(!full.notes.iter().any(|n| n.starts_with("mass-free")));
     // Joint 1 is vertical: none of its coefficients has an effect.
     assert!(id.parameters.iter().all(|p| !p.name.starts_with("k1.")));
     assert!(id.parameters.iter().any(|p| p.name.starts_with("k2.")));

@@ -108,6 +108,39 @@ fn bad_mass_tables_name_their_line_and_field() {
             "field `gravity`: [mass]: gravity components beyond 100 m/s^2",
             3,
         ),
+        // A table in part (a reviewer's payload without the links identified c2 at 18 std
+        // from the truth, the links' weight taken as zero), and the payload's centre of mass
+        // named at its own line.
+        (
+            "[mass]\npayload_kg = 210.0\npayload_com_mm = [0, 0, 0]\n",
+            "field `payload_kg`: [mass]: payload_kg given without link_kg and link_com_mm",
+            1,
+        ),
+        (
+            "[mass]\ngravity = [0, 0, -9.81]\nlink_kg = [1, 2, 3, 4, 5, 6]\n",
+            "field `link_kg`: [mass]: link_kg given without link_com_mm",
+            2,
+        ),
+        (
+            "[mass]\nlink_com_mm = [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]]\n",
+            "field `link_com_mm`: [mass]: link_com_mm given without link_kg",
+            1,
+        ),
+        (
+            "[mass]\nlink_kg = [1, 2, 3, 4, 5, 6]\nlink_com_mm = [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]]\npayload_kg = 10\n",
+            "field `payload_kg`: [mass]: payload_kg given without payload_com_mm",
+            3,
+        ),
+        (
+            "[mass]\nlink_kg = [1, 2, 3, 4, 5, 6]\nlink_com_mm = [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]]\npayload_com_mm = [0, 0, 50]\n",
+            "field `payload_com_mm`: [mass]: payload_com_mm given without payload_kg",
+            3,
+        ),
+        (
+            "[mass]\nlink_kg = [1, 2, 3, 4, 5, 6]\nlink_com_mm = [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]]\npayload_kg = 10\npayload_com_mm = [0, 0, 1e9]\n",
+            "field `payload_com_mm`: [mass]: payload: centre of mass beyond",
+            4,
+        ),
     ] {
         let text = format!("{base}\n{table}");
         let line = text.lines().count() - table.lines().count() + 1;

@@ -775,3 +775,28 @@ fn a_fit_that_turns_the_start_into_another_arm_is_warned_of() {
     let id = identify(&nominal, &set, &Options::default()).unwrap();
     assert!(id.warnings.is_empty(), "{:?}", id.warnings);
 }
+
+/// A DH or MDH row after a parallel axis cannot express the tilt out of parallel a real arm
+/// has: where its d regroups with the run's first d, a note says so and names Hayati's row.
+/// The UR10's standard DH (axes 2, 3 and 4 parallel) gets it; its MDH file with Hayati rows
+/// and the FANUC's (a Hayati row for joint 3) do not.
+#[test]
+fn parallel_axes_without_a_hayati_row_are_noted() {
+    let note = |file: &str| -> Option<String> {
+        let robot = read_robot(root().join("datasets/robots").join(file)).unwrap();
+        let (set, _) = simulate(&robot, 60, 7, true, Observe::Pose);
+        let id = identify(&robot, &set, &Options::default()).unwrap();
+        id.notes
+            .into_iter()
+            .find(|n| n.starts_with("parallel axes"))
+    };
+    let dh = note("ur10.toml").expect("a note for the UR10's DH rows");
+    assert!(
+        dh.contains(
+            "d3 regroups with d2 (joint 3's dh row), d4 regroups with d2 (joint 4's dh row)"
+        ) && dh.contains("convention = \"hayati\""),
+        "{dh}"
+    );
+    assert_eq!(note("ur10_mdh_hayati.toml"), None);
+    assert_eq!(note("fanuc_r2000ib_210f.toml"), None);
+}

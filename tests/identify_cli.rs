@@ -604,3 +604,72 @@ fn a_registration_beyond_the_bounds_names_the_file() {
     );
     assert!(identify(&["--no-register"]).status.success());
 }
+
+/// Compliances start where the robot file puts them: one the rows cannot tell from its
+/// start value is held there, and `identify` says which value (it had said "held at zero"
+/// while keeping a start of 0.45 mrad/kNm); the report gives it. A compliance identified
+/// alone on rows with geometric errors comes out below zero, which no joint does: a warning
+/// says what it stands in for.
+#[test]
+fn compliances_held_at_their_start_and_negative_ones_are_said() {
+    let dir = "datasets/nongeometric_robot";
+    let masses = std::fs::read_to_string(format!("{dir}/nominal_masses.toml")).unwrap();
+    let start = tmp("start_compliant.toml");
+    std::fs::write(
+        &start,
+        masses.replacen(
+            "[mass]",
+            "[compliance]\njoints = [0, 0.06, 0.09, 0.35, 0.45, 0.2]\n\n[mass]",
+            1,
+        ),
+    )
+    .unwrap();
+    let (out, report) = (tmp("held.toml"), tmp("held.json"));
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        start.to_str().unwrap(),
+        "--data",
+        &format!("{dir}/calibration.csv"),
+        "--params",
+        "full,compliance",
+        "--out",
+        out.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    let (so, se) = text(&o);
+    assert!(o.status.success(), "{se}");
+    assert!(
+        so.contains("held at its start value 0.45 mrad/kNm") && !so.contains("held at zero"),
+        "{so}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let c5 = (json["dropped"].as_array().unwrap().iter())
+        .find(|d| d["name"] == "c5")
+        .unwrap();
+    assert_eq!(c5["held_at"], 0.45, "{c5}");
+    assert_eq!(c5["unit"], "mrad/kNm", "{c5}");
+    let written = std::fs::read_to_string(&out).unwrap();
+    assert!(written.contains("0.45"), "{written}");
+    // The compliances alone, the geometry left at its nominal.
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        &format!("{dir}/nominal_masses.toml"),
+        "--data",
+        &format!("{dir}/calibration.csv"),
+        "--params",
+        "compliance",
+        "--out",
+        tmp("alone.toml").to_str().unwrap(),
+    ]);
+    let (_, se) = text(&o);
+    assert!(o.status.success(), "{se}");
+    assert!(
+        se.contains("warning: negative compliance: c3 = -0.75")
+            && se.contains("--params full,compliance"),
+        "{se}"
+    );
+}

@@ -302,7 +302,14 @@ fn print_identified(r: &IdentifyReport) {
         let why = if d.reason == "no effect" {
             "no effect on these measurements".to_string()
         } else if let Some(t) = d.estimate_over_std {
-            format!("not significant (estimate {t:+.2} std), held at zero")
+            match d.held_at {
+                Some(v) if v != 0.0 => format!(
+                    "not significant (estimate {t:+.2} std from its start), held at its start \
+                     value {v} {}",
+                    d.unit
+                ),
+                _ => format!("not significant (estimate {t:+.2} std), held at zero"),
+            }
         } else {
             format!(
                 "regroups with {}",

@@ -315,7 +315,67 @@ impl RowReader<'_> {
         table: std::ops::Range<usize>,
         n: usize,
     ) -> Result<MassProperties> {
-        // Masses are optional (a table may give gravity alone, for mass-free compliance).
+        // Masses are optional (a table may give gravity alone, for mass-free compliance), but
+        // not in part: a key left out would be taken as zero (links without weight, a centre
+        // of mass at its frame's origin), and the gravity torques, and every compliance
+        // identified from them, would be wrong by that much without a word. Only the payload
+        // may be left out (none).
+        let payload = m.payload_kg.as_ref().filter(|p| p.get_ref().0 != 0.0);
+        let part = |key: &str, span: std::ops::Range<usize>, without: &str, why: &str| {
+            Err(Error::input(
+                self.at(span, key),
+                format!(
+                    "[mass]: {key} given without {without}: {why}; give both (zeros where they \
+                     are meant), or gravity alone for the mass-free compliance coefficients"
+                ),
+            ))
+        };
+        match (&m.link_kg, &m.link_com_mm) {
+            (Some(k), None) => {
+                return part(
+                    "link_kg",
+                    k.span(),
+                    "link_com_mm",
+                    "every link's centre of mass would be taken at its joint's origin",
+                );
+            }
+            (None, Some(c)) => {
+                return part(
+                    "link_com_mm",
+                    c.span(),
+                    "link_kg",
+                    "the links would be taken as weightless",
+                );
+            }
+            (None, None) if let Some(p) = payload => {
+                return part(
+                    "payload_kg",
+                    p.span(),
+                    "link_kg and link_com_mm",
+                    "the links would be taken as weightless, the arm's own weight left out of every gravity torque",
+                );
+            }
+            _ => {}
+        }
+        match (payload, &m.payload_com_mm) {
+            (Some(p), None) => {
+                return part(
+                    "payload_kg",
+                    p.span(),
+                    "payload_com_mm",
+                    "the payload's centre of mass would be taken at the tool's origin (give [0, 0, 0] where it is)",
+                );
+            }
+            (None, Some(c)) if m.payload_kg.is_none() => {
+                return part(
+                    "payload_com_mm",
+                    c.span(),
+                    "payload_kg",
+                    "a centre of mass without a mass is no payload",
+                );
+            }
+            _ => {}
+        }
         let kg_span = m.link_kg.as_ref().map_or(table.clone(), |k| k.span());
         let com_span = m.link_com_mm.as_ref().map_or(table.clone(), |c| c.span());
         let zero = Number(0.0);
@@ -373,8 +433,13 @@ impl RowReader<'_> {
         match props.fault(n) {
             Some(f) => {
                 // The line of the value at fault.
+                let payload_com = (f.starts_with("payload") && f.contains("centre of mass"))
+                    .then_some(m.payload_com_mm.as_ref())
+                    .flatten();
                 let at = if let (true, Some(g)) = (f.starts_with("gravity"), &m.gravity) {
                     self.at(g.span(), "gravity")
+                } else if let Some(c) = payload_com {
+                    self.at(c.span(), "payload_com_mm")
                 } else if let (true, Some(p)) = (f.starts_with("payload"), &m.payload_kg) {
                     self.at(p.span(), "payload_kg")
                 } else if f.contains("centre of mass") {

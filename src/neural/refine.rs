@@ -14,6 +14,7 @@
 
 use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
+use crate::identify::identifiability::DropReason;
 use crate::identify::{Options, Sigmas, identify};
 use crate::model::Robot;
 
@@ -87,6 +88,28 @@ pub fn refine(
             "refinement: the model misses the training rows' positions by {median:.1} mm \
              (median): their frame was registered first (RMS {:.4} mm), as `identify` does",
             r.rms_mm
+        ));
+    }
+    // A compliance the rows cannot tell from the model's value keeps it: where that is not
+    // zero (a compliant model's), the user is told, as `identify` tells it.
+    let params = id.robot.parameters();
+    let held: Vec<String> = (id.identifiability.dropped.iter())
+        .filter(|d| matches!(d.reason, DropReason::NotSignificant(_)))
+        .map(|d| params[d.param])
+        .filter(|p| id.robot.param(*p) != 0.0)
+        .map(|p| {
+            format!(
+                "{} {} {}",
+                p.name(),
+                p.field.to_file(id.robot.param(p)),
+                p.field.file_unit()
+            )
+        })
+        .collect();
+    if !held.is_empty() {
+        notes.push(format!(
+            "refinement: not significant on the training rows, held at the model's values: {}",
+            held.join(", ")
         ));
     }
     // The weights the refined values and their sigmas come from, as `identify` reports them.

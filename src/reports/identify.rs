@@ -3,7 +3,7 @@
 use super::Accuracy;
 use crate::data::shared_readings::SharedReading;
 use crate::identify::identifiability::DropReason;
-use crate::identify::run::{Outlier, ParamReport};
+use crate::identify::run::{Outlier, ParamReport, file_value};
 use crate::identify::{Identified, Measure, Method, Options, RobustLoss, StopReason};
 use crate::neural::repeats::Repeats;
 use serde::{Deserialize, Serialize};
@@ -14,14 +14,22 @@ pub struct DroppedParam {
     /// Its name (`a3`, `tool.rz`, ...).
     pub name: String,
     /// `no effect` (its Jacobian column is zero), `regroups` (a combination of others) or
-    /// `not significant` (a compliance whose estimate was within the significance level of
-    /// zero).
+    /// `not significant` (a compliance whose change from its start value was within the
+    /// significance level).
     pub reason: String,
     /// The kept parameters it moves with, for `regroups`.
     pub regroups_with: Vec<Regroup>,
-    /// Its estimate over its standard deviation when it was dropped, for `not significant`.
+    /// Its estimate's change from its start value over its standard deviation when it was
+    /// dropped, for `not significant`.
     #[serde(default)]
     pub estimate_over_std: Option<f64>,
+    /// The value it is held at, for `not significant`: its start value (zero unless the
+    /// robot file gave one), in `unit`.
+    #[serde(default)]
+    pub held_at: Option<f64>,
+    /// Its file unit (`mm`, `deg`, `mrad/kNm`, ...).
+    #[serde(default)]
+    pub unit: String,
 }
 
 /// One term of a regrouping: the dropped parameter's column equals the sum of coefficient
@@ -168,12 +176,19 @@ impl IdentifyReport {
                     reason: "no effect".into(),
                     regroups_with: Vec::new(),
                     estimate_over_std: None,
+                    held_at: None,
+                    unit: params[d.param].field.file_unit().into(),
                 },
                 DropReason::NotSignificant(t) => DroppedParam {
                     name: params[d.param].name(),
                     reason: "not significant".into(),
                     regroups_with: Vec::new(),
                     estimate_over_std: Some(*t),
+                    held_at: Some(file_value(
+                        &params[d.param],
+                        id.robot.param(params[d.param]),
+                    )),
+                    unit: params[d.param].field.file_unit().into(),
                 },
                 DropReason::Regroups(g) => DroppedParam {
                     name: params[d.param].name(),
@@ -186,6 +201,8 @@ impl IdentifyReport {
                         })
                         .collect(),
                     estimate_over_std: None,
+                    held_at: None,
+                    unit: params[d.param].field.file_unit().into(),
                 },
             })
             .collect();
