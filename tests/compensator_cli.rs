@@ -1096,3 +1096,41 @@ fn a_fixed_network_worse_than_the_model_alone_is_kept_with_a_warning() {
         stdout(&o)
     );
 }
+
+/// A refinement keeps a compliance the training rows cannot tell from the model's value, and
+/// says so where that value is not zero (it had kept a start's 0.45 mrad/kNm without a word).
+#[test]
+fn a_refinement_names_the_compliances_it_holds_at_the_models_values() {
+    let dir = "datasets/nongeometric_robot";
+    let masses = std::fs::read_to_string(format!("{dir}/nominal_masses.toml")).unwrap();
+    let start = tmp("refine_start_compliant.toml");
+    std::fs::write(
+        &start,
+        masses.replacen(
+            "[mass]",
+            "[compliance]\njoints = [0, 0.06, 0.09, 0.35, 0.45, 0.2]\n\n[mass]",
+            1,
+        ),
+    )
+    .unwrap();
+    let out = tmp("refine_held.rcal");
+    let o = robocal(&[
+        "train",
+        "--robot",
+        start.to_str().unwrap(),
+        "--data",
+        &format!("{dir}/training.csv"),
+        "--members",
+        "0",
+        "--refine",
+        "full,compliance",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let (out, err) = (stdout(&o), stderr(&o));
+    assert!(o.status.success(), "{err}");
+    let note = (out.lines().chain(err.lines()))
+        .find(|l| l.starts_with("note: refinement: not significant on the training rows"))
+        .unwrap_or_else(|| panic!("{out}{err}"));
+    assert!(note.contains("c5 0.45 mrad/kNm"), "{note}");
+}

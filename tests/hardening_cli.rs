@@ -2617,3 +2617,131 @@ fn pasted_rows_are_named_and_are_no_repeats() {
     // Not counted as repeated configurations (a pure error of 0 mm).
     assert!(!stdout(&o).contains("repeats:"), "{}", stdout(&o));
 }
+
+/// Edge inputs of the fifty-fourth session's hunt: a deviation is named at its own line (a
+/// key under `[tool]`, a quoted dotted key, the second of two); an output under a file is
+/// said to be under a file; a robot file in metres is refused by `identify`; `simulate
+/// --true-robot` says what of --nongeometric its file leaves out.
+#[test]
+fn edge_inputs_of_the_fifty_fourth_hunt() {
+    use common::FANUC;
+    let sim = |dev: &str, out: &str| -> Vec<String> {
+        [
+            "simulate",
+            "--robot",
+            FANUC,
+            "--deviations",
+            dev,
+            "--count",
+            "3",
+            "--seed",
+            "1",
+            "--out",
+            out,
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    let out = common::tmp("s54.csv");
+    let out = out.to_str().unwrap();
+    for (text, says) in [
+        (
+            "a1 = 1.0\nd1 = 2.0\n\"tool.d\" = nan\n",
+            "s54_dev.toml:3: field `tool.d`: a deviation must be a finite number",
+        ),
+        (
+            "a1 = 1.0\nd1 = 2.0\n[tool]\nd = \"x\"\n",
+            "s54_dev.toml:4: field `tool.d`",
+        ),
+        (
+            "\"base.theta\" = 1.0\ntheta1 = 2.0\nthetaR = 1\n",
+            "s54_dev.toml:3: field `thetaR`: this parameter is given twice",
+        ),
+    ] {
+        let dev = file("s54_dev.toml", text);
+        let args = sim(&dev, out);
+        refused(&args.iter().map(String::as_str).collect::<Vec<_>>(), says);
+    }
+    // An output under a file.
+    let blocker = file("s54_blocker.csv", "x\n");
+    let under = format!("{blocker}/s.csv");
+    let args = sim("datasets/deviations/table_6_1.toml", &under);
+    refused(
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+        "s54_blocker.csv is a file, not a folder",
+    );
+    // The FANUC's lengths in metres: the positions spread a thousand times farther than the
+    // model's, and the spread check (skipped for a model under 100 mm) refuses it.
+    let (text, _) = shipped("datasets/robots/fanuc_r2000ib_210f.toml", "name");
+    let metres: String = text
+        .lines()
+        .map(|l| {
+            let t = l.trim_start();
+            match t.split_once(" = ") {
+                Some((k, v)) if ["a", "d", "x", "y", "z"].contains(&k) => {
+                    let v: f64 = v.split_whitespace().next().unwrap().parse().unwrap();
+                    format!("{k} = {}\n", v / 1000.0)
+                }
+                _ => format!("{l}\n"),
+            }
+        })
+        .collect();
+    let metres = file("s54_metres.toml", &metres);
+    refused_saying(
+        &[
+            "identify",
+            "--robot",
+            &metres,
+            "--data",
+            "datasets/case_d/calibration.csv",
+            "--out",
+            common::tmp("s54_m.toml").to_str().unwrap(),
+        ],
+        &["Is the robot file in metres?", "calibration.csv"],
+    );
+    // `reproduce` and `case-d` hint at --datasets only where the shipped robot is not there.
+    let broken = common::tmp("s54_datasets");
+    std::fs::create_dir_all(broken.join("robots")).unwrap();
+    std::fs::write(broken.join("robots/fanuc_r2000ib_210f.toml"), "name = 3\n").unwrap();
+    for cmd in ["reproduce", "case-d"] {
+        let o = robocal(&[cmd, "--datasets", broken.to_str().unwrap()]);
+        let err = stderr(&o);
+        assert!(
+            !o.status.success() && !err.contains("run from the repository root"),
+            "{cmd}: {err}"
+        );
+        assert!(err.contains("fanuc_r2000ib_210f.toml:1"), "{cmd}: {err}");
+        let o = robocal(&[cmd, "--datasets", common::tmp("s54_none").to_str().unwrap()]);
+        assert!(
+            stderr(&o).contains("run from the repository root"),
+            "{cmd}: {}",
+            stderr(&o)
+        );
+    }
+    // What --nongeometric adds is not in the true robot's file: said.
+    let true_robot = common::tmp("s54_true.toml");
+    let o = robocal(&[
+        "simulate",
+        "--robot",
+        FANUC,
+        "--nongeometric",
+        "datasets/nongeometric/fanuc_compliance_gear.toml",
+        "--count",
+        "3",
+        "--seed",
+        "1",
+        "--out",
+        out,
+        "--true-robot",
+        true_robot.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains(
+            "holds the nominal and the deviations only: the gravity compliance and gear errors \
+             of datasets/nongeometric/fanuc_compliance_gear.toml are not in it"
+        ),
+        "{err}"
+    );
+}

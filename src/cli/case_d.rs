@@ -138,11 +138,18 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
     let opts = a
         .build
         .options(a.sigma.sigmas(), std::io::stderr().is_terminal())?;
+    // The hint only where the shipped robot is not there: an error in a file that is there
+    // names that file itself.
+    let shipped = a.datasets.join(robocal::studies::thesis::FANUC).exists();
     let rows = run(&a.datasets, &opts).with_context(|| {
-        format!(
-            "run from the repository root, or give --datasets ({})",
-            a.datasets.display()
-        )
+        if shipped {
+            format!("Case D from {}", a.datasets.display())
+        } else {
+            format!(
+                "run from the repository root, or give --datasets ({})",
+                a.datasets.display()
+            )
+        }
     })?;
     say!(
         "Case D (thesis 6.4): identification on the 30 calibration poses, then a compensator \

@@ -99,9 +99,14 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
             && !parent.is_dir()
         {
             bail!(
-                "{flag} {}: the folder {} does not exist",
+                "{flag} {}: the folder {} {}",
                 path.display(),
-                parent.display()
+                parent.display(),
+                if parent.exists() {
+                    "is a file, not a folder"
+                } else {
+                    "does not exist"
+                }
             );
         }
         // Where the write lands, through its links (also to a file not there yet). None for

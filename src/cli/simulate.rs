@@ -47,7 +47,7 @@ pub struct SimulateArgs {
     /// Noise-free poses of the same rows (CSV).
     #[arg(long)]
     truth_out: Option<PathBuf>,
-    /// The true robot (nominal + deviations) as a robot file.
+    /// The true robot (nominal + deviations; not --nongeometric's errors) as a robot file.
     #[arg(long)]
     true_robot: Option<PathBuf>,
 }
@@ -131,6 +131,30 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     }
     if let Some(p) = &a.true_robot {
         writing(write_robot(&truth, p), p)?;
+        // The file is the geometry the rows were simulated with: what --nongeometric adds
+        // (a compliance the model could carry, gear errors and backlash it could not) is not
+        // in it, and the file misses the rows by that much.
+        let left: Vec<&str> = [
+            ng.compliance.is_some().then_some("gravity compliance"),
+            (!ng.gear.is_empty()).then_some("gear errors"),
+            ng.backlash.is_some().then_some("backlash"),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        if let (false, Some(n)) = (left.is_empty(), &a.nongeometric) {
+            told_after_on_stderr!(
+                "note: {} holds the nominal and the deviations only: the {} of {} are not in \
+                 it, so it misses the rows by what they add",
+                p.display(),
+                match left.split_last() {
+                    Some((last, [])) => last.to_string(),
+                    Some((last, rest)) => format!("{} and {last}", rest.join(", ")),
+                    None => String::new(),
+                },
+                n.display()
+            );
+        }
     }
     if count > 0 {
         let mean = sum / count as f64;

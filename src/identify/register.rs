@@ -119,11 +119,17 @@ pub const SCALE_MIN_SPREAD_MM: f64 = 100.0;
 /// nominal model lacks can change it a few times over, a wrong unit by 25.4 or 1000.
 pub const SCALE_LIMIT: f64 = 8.0;
 
+/// How many times farther than a small model's (spread below [`SCALE_MIN_SPREAD_MM`]) the
+/// measured positions may spread before the robot file is taken to be in metres (1000):
+/// a tool the small model lacks can make the spread a few times larger, not a hundred.
+pub const TINY_MODEL_RATIO: f64 = 100.0;
+
 /// Refuses measured positions whose spread about their centre differs from the model's tool
 /// positions at the same joints by more than [`SCALE_LIMIT`] times: positions in metres
 /// (1/1000) or inches (1/25.4) instead of mm, which a registration and the identified
-/// lengths would otherwise silently absorb (a robot a thousand times smaller). Not checked
-/// where the model's positions spread less than [`SCALE_MIN_SPREAD_MM`].
+/// lengths would otherwise silently absorb (a robot a thousand times smaller). Where the
+/// model's positions spread less than [`SCALE_MIN_SPREAD_MM`], only a model
+/// [`TINY_MODEL_RATIO`] times smaller than its rows is refused (a robot file in metres).
 pub fn check_position_scale(robot: &Robot, set: &MeasurementSet) -> Result<()> {
     let (measured, model): (Vec<Vector3<f64>>, Vec<Vector3<f64>>) = set
         .rows
@@ -131,8 +137,23 @@ pub fn check_position_scale(robot: &Robot, set: &MeasurementSet) -> Result<()> {
         .filter_map(|m| Some((m.position?, tool_pose(robot, &m.q).translation.vector)))
         .unzip();
     let (ours, theirs) = (spread_about_centre(&model), spread_about_centre(&measured));
-    if measured.len() < 3 || ours < SCALE_MIN_SPREAD_MM {
+    if measured.len() < 3 {
         return Ok(());
+    }
+    // A model whose tool positions spread less than [`SCALE_MIN_SPREAD_MM`] is a small arm,
+    // or a robot file in metres; only the latter spreads a hundred times less than its rows.
+    if ours < SCALE_MIN_SPREAD_MM {
+        if theirs < SCALE_MIN_SPREAD_MM || theirs < TINY_MODEL_RATIO * ours {
+            return Ok(());
+        }
+        return Err(Error::Invalid(format!(
+            "{}: the model's tool positions at the rows' joints spread {ours:.4} mm RMS about \
+             their centre, the measured positions (columns x, y, z) {theirs:.1} mm: {:.0} \
+             times as far. Is the robot file in metres? Its lengths (a, d, base and tool \
+             x, y, z) must be in mm",
+            set.source.display(),
+            theirs / ours.max(f64::MIN_POSITIVE)
+        )));
     }
     let ratio = theirs / ours;
     if (1.0 / SCALE_LIMIT..=SCALE_LIMIT).contains(&ratio) {

@@ -42,18 +42,47 @@ impl Deviations {
         let table: toml::Table = crate::io::parse_toml(text, path)?;
         let mut flat = Vec::new();
         flatten("", &table, &mut flat);
-        let line_of_key = |name: &str| {
-            let last = name.rsplit('.').next().unwrap_or(name);
-            text.lines()
-                .position(|l| {
-                    let l = l.trim_start().trim_start_matches('"');
-                    l.starts_with(name) || l.starts_with(last)
-                })
-                .map_or(0, |i| i + 1)
+        // The line of each key by its full dotted name: a key under a `[tool]` header is
+        // `tool.<key>`, a quoted `"tool.d"` is `tool.d`; the n-th key of one name is on the
+        // n-th line that gives it (a parameter given twice is named at its second line).
+        let mut prefix = String::new();
+        let mut key_lines: Vec<(String, usize)> = Vec::new();
+        for (i, line) in text.lines().enumerate() {
+            let l = line.trim();
+            if let Some(h) = l.strip_prefix('[') {
+                let h = h.split(']').next().unwrap_or("");
+                prefix = h
+                    .split('.')
+                    .map(|p| p.trim().trim_matches('"'))
+                    .collect::<Vec<_>>()
+                    .join(".");
+                continue;
+            }
+            let Some((key, _)) = l.split_once('=') else {
+                continue;
+            };
+            let key: Vec<&str> = key.split('.').map(|p| p.trim().trim_matches('"')).collect();
+            let key = key.join(".");
+            let full = if prefix.is_empty() {
+                key
+            } else {
+                format!("{prefix}.{key}")
+            };
+            key_lines.push((full, i + 1));
+        }
+        let mut seen: Vec<String> = Vec::new();
+        let mut line_of_key = |name: &str| {
+            let nth = seen.iter().filter(|s| *s == name).count();
+            seen.push(name.to_string());
+            (key_lines.iter())
+                .filter(|(k, _)| k == name)
+                .nth(nth)
+                .map_or(0, |(_, line)| *line)
         };
         let mut out = Vec::with_capacity(flat.len());
         for (name, value) in flat {
-            let at = || Location::at(path, line_of_key(&name), name.clone());
+            let line = line_of_key(&name);
+            let at = || Location::at(path, line, name.clone());
             let id = robot.find_param(&name).ok_or_else(|| {
                 Error::input(
                     at(),
