@@ -964,4 +964,13 @@ fn without_a_seed_a_branch_that_leaves_the_limits_gives_way_to_another() {
         (q[1] - 61.4176).abs() < 1e-3 && (q[0] + 151.3295).abs() < 1e-3,
         "{q:?}"
     );
+    // Said: a move to it may change configuration.
+    assert!(
+        stderr(&o).contains(
+            "note: 1 target(s) without seed joints are solved on another branch than the one \
+             nearest the middle of the joint ranges"
+        ) && stderr(&o).contains("line 2: s1e0w0 instead of s0"),
+        "{}",
+        stderr(&o)
+    );
 }

@@ -164,15 +164,50 @@ fn a_column_in_other_case_is_said_to_differ_only_in_case() {
             "q1,q2,q3,q4,q5,q6,x,y,z,SX,SY,SZ",
             "no position sigma column(s) sx, sy, sz",
         ),
-        (
-            "case_pair",
-            "q1,q2,q3,q4,q5,q6,x,y,z,Pair",
-            "no pair column(s) pair, but the header has Pair for pair",
-        ),
     ] {
         let cells = header.split(',').count();
         let row = vec!["1"; cells].join(",");
         import_fails(name, &format!("{header}\n{row}\n"), &[needle]);
+    }
+    // Groups that would not be read stay carried columns: a quaternion under the default
+    // (Euler) profile, orientation sigmas beside positions alone, a `Set` label. A `Pair` or
+    // `Distance` column counts only under the pair measures: a warning.
+    for (name, header, warned) in [
+        ("case_quat", "q1,q2,q3,q4,q5,q6,x,y,z,QW,QX,QY,QZ", None),
+        ("case_srx", "q1,q2,q3,q4,q5,q6,x,y,z,SRX,SRY,SRZ", None),
+        ("case_set", "q1,q2,q3,q4,q5,q6,x,y,z,Set", None),
+        (
+            "case_pair",
+            "q1,q2,q3,q4,q5,q6,x,y,z,Pair",
+            Some(
+                "no pair column, but the header has Pair for pair: column names are case-sensitive",
+            ),
+        ),
+        (
+            "case_distance",
+            "q1,q2,q3,q4,q5,q6,x,y,z,Distance",
+            Some("no distance column, but the header has Distance for distance"),
+        ),
+    ] {
+        let cells = header.split(',').count();
+        let row = vec!["1"; cells].join(",");
+        let input = tmp(&format!("{name}.csv"));
+        std::fs::write(&input, format!("{header}\n{row}\n")).unwrap();
+        let out = tmp(&format!("{name}.out"));
+        let o = robocal(&[
+            "import",
+            input.to_str().unwrap(),
+            "--robot",
+            FANUC,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = stderr(&o);
+        assert!(o.status.success(), "{name}: {err}");
+        match warned {
+            Some(w) => assert!(err.contains(w), "{name}: {err}"),
+            None => assert!(!err.contains("case-sensitive"), "{name}: {err}"),
+        }
     }
 }
 

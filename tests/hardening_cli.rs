@@ -2697,8 +2697,41 @@ fn edge_inputs_of_the_fifty_fourth_hunt() {
             "--out",
             common::tmp("s54_m.toml").to_str().unwrap(),
         ],
-        &["Is the robot file in metres?", "calibration.csv"],
+        &["is the robot file in metres?", "calibration.csv"],
     );
+    // A circle of joint 6 with a probe the nominal lacks: the nominal's flange stays put
+    // (its positions spread 0 mm), the probe's spread 150 mm; the arm reaches 1.3 m, so this
+    // is no file in metres, and the probe is identified.
+    let ur10 = shipped(UR10, "name").0;
+    let at = ur10.find("[tool]").unwrap();
+    let probe = format!(
+        "{}{}",
+        &ur10[..at],
+        ur10[at..].replacen("x = 0.0", "x = 150.0", 1)
+    );
+    let probe = file("s54_probe.toml", &probe);
+    let joints: String = (0..18)
+        .map(|k| format!("10,-80,70,-80,-90,{}\n", -170 + 20 * k))
+        .collect();
+    let joints = file("s54_j6.csv", &format!("q1,q2,q3,q4,q5,q6\n{joints}"));
+    let o = robocal(&["fk", "--robot", &probe, "--joints", &joints]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let circle = file("s54_circle.csv", &stdout(&o));
+    let circle_out = common::tmp("s54_circle.toml");
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        UR10,
+        "--data",
+        &circle,
+        "--params",
+        "tool",
+        "--out",
+        circle_out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let tool = std::fs::read_to_string(&circle_out).unwrap();
+    assert!(tool.contains("\nx = 150"), "{tool}");
     // `reproduce` and `case-d` hint at --datasets only where the shipped robot is not there.
     let broken = common::tmp("s54_datasets");
     std::fs::create_dir_all(broken.join("robots")).unwrap();

@@ -776,10 +776,11 @@ fn a_fit_that_turns_the_start_into_another_arm_is_warned_of() {
     assert!(id.warnings.is_empty(), "{:?}", id.warnings);
 }
 
-/// A DH or MDH row after a parallel axis cannot express the tilt out of parallel a real arm
-/// has: where its d regroups with the run's first d, a note says so and names Hayati's row.
-/// The UR10's standard DH (axes 2, 3 and 4 parallel) gets it; its MDH file with Hayati rows
-/// and the FANUC's (a Hayati row for joint 3) do not.
+/// An MDH or DH description cannot express the tilt of parallel axes out of parallel: where
+/// a joint's d regroups with another's, a note names the run of parallel axes and the joints
+/// an MDH description needs Hayati rows for. The UR10's standard DH (axes 2, 3 and 4
+/// parallel) gets it; its MDH file with Hayati rows for joints 3 and 4 and the FANUC's (a
+/// Hayati row for joint 3) do not.
 #[test]
 fn parallel_axes_without_a_hayati_row_are_noted() {
     let note = |file: &str| -> Option<String> {
@@ -792,9 +793,8 @@ fn parallel_axes_without_a_hayati_row_are_noted() {
     };
     let dh = note("ur10.toml").expect("a note for the UR10's DH rows");
     assert!(
-        dh.contains(
-            "d3 regroups with d2 (joint 3's dh row), d4 regroups with d2 (joint 4's dh row)"
-        ) && dh.contains("convention = \"hayati\""),
+        dh.starts_with("parallel axes: joints 2, 3 and 4: an MDH or DH description cannot")
+            && dh.contains("convention = \"hayati\", thesis eq. 3.11) for joint(s) 3 and 4 "),
         "{dh}"
     );
     assert_eq!(note("ur10_mdh_hayati.toml"), None);

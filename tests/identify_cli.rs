@@ -669,7 +669,41 @@ fn compliances_held_at_their_start_and_negative_ones_are_said() {
     assert!(o.status.success(), "{se}");
     assert!(
         se.contains("warning: negative compliance: c3 = -0.75")
+            && se.contains("the geometry, which was not selected")
             && se.contains("--params full,compliance"),
         "{se}"
+    );
+    // With the geometry selected, the warning does not tell the user to select it: a
+    // payload's centre of mass 1.5 m off (a reviewer's) leaves c5 below zero.
+    let off = tmp("com_off.toml");
+    std::fs::write(
+        &off,
+        masses.replacen(
+            "payload_com_mm = [0.0, 0.0, 0.0]",
+            "payload_com_mm = [0.0, 0.0, -1500.0]",
+            1,
+        ),
+    )
+    .unwrap();
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        off.to_str().unwrap(),
+        "--data",
+        &format!("{dir}/calibration.csv"),
+        "--params",
+        "full,compliance",
+        "--out",
+        tmp("com_off_out.toml").to_str().unwrap(),
+    ]);
+    let (_, se) = text(&o);
+    assert!(o.status.success(), "{se}");
+    let w = se
+        .lines()
+        .find(|l| l.starts_with("warning: negative compliance: c5"))
+        .unwrap_or_else(|| panic!("{se}"));
+    assert!(
+        w.contains("mass properties that are not the arm's") && !w.contains("--params"),
+        "{w}"
     );
 }

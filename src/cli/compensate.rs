@@ -170,6 +170,9 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     // lines of the commands whose miss could not be found.
     let mut as_written: Vec<(f64, f64, usize)> = Vec::new();
     let mut not_checked: Vec<usize> = Vec::new();
+    // Targets without seed joints solved on another branch than the middle's: (line, the
+    // middle's branch, the command's).
+    let mut other_branch: Vec<(usize, String, String)> = Vec::new();
     for r in 0..t.rows.len() {
         bar.inc(1);
         let desired = tt.targets[r];
@@ -177,6 +180,9 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         let mut row = t.rows[r].clone();
         match solver.solve(&desired, seed) {
             Ok(c) => {
+                if let (Some(middle), Some(b)) = (c.instead_of, c.branch) {
+                    other_branch.push((t.lines[r], middle.to_string(), b.to_string()));
+                }
                 row.extend(command_cells(&c, &nominal, with_orientation, d));
                 unchecked.add(calibrated, &c.q, t.lines[r], with_orientation);
                 if let Some(cm) = &comp {
@@ -254,7 +260,22 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         tool_gap_mm: tool_gap,
         written_miss: d.and_then(|decimals| written_miss(decimals, &as_written, not_checked)),
         unchecked: unchecked.report(),
+        other_branch_lines: other_branch.iter().map(|o| o.0).collect(),
     };
+    if !other_branch.is_empty() {
+        let shown: Vec<String> = (other_branch.iter().take(5))
+            .map(|(line, middle, b)| format!("line {line}: {b} instead of {middle}"))
+            .collect();
+        eprintln!(
+            "note: {} target(s) without seed joints are solved on another branch than the one \
+             nearest the middle of the joint ranges, where the calibrated solution left the \
+             limits or did not converge ({}{}): a move between consecutive targets may change \
+             configuration; seed joints choose the branch",
+            other_branch.len(),
+            shown.join(", "),
+            if other_branch.len() > 5 { ", ..." } else { "" }
+        );
+    }
     match (report.shift_mean_mm, report.shift_max_mm) {
         (Some(mean), Some(max)) => eprintln!(
             "compensate: {} of {total} targets solved; the commands move the tool positions by \

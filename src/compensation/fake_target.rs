@@ -81,6 +81,9 @@ pub struct Command {
     /// solves near the seed joints instead (the UR class, or a nominal model without a closed
     /// form).
     pub branch: Option<Branch>,
+    /// Without seed joints, where the calibrated solution on the branch nearest the middle
+    /// of the ranges failed and the command is on another: that branch. None otherwise.
+    pub instead_of: Option<Branch>,
     /// LM iterations.
     pub iterations: usize,
     /// Remaining position error of the calibrated model at q (mm).
@@ -541,11 +544,14 @@ impl<'a> FakeTargetSolver<'a> {
             Err(
                 Failure::OutsideLimits(_) | Failure::NotConverged(_) | Failure::BranchChanged(_),
             ) if seed.is_none() => {
-                let others = self.ik.start_branches(&target);
-                (others.into_iter().skip(1))
+                let branches = self.ik.start_branches(&target);
+                let middle = branches.first().copied();
+                (branches.into_iter().skip(1))
                     .find_map(|b| {
                         let solved = self.ik.from_nearest_start(&target, None, &[b]).ok()?;
-                        self.command(target, solved.solution, &[b]).ok()
+                        let mut c = self.command(target, solved.solution, &[b]).ok()?;
+                        c.instead_of = middle;
+                        Some(c)
                     })
                     .ok_or(())
                     .or(first)
@@ -658,6 +664,7 @@ impl Command {
             desired,
             fake,
             branch,
+            instead_of: None,
             iterations: sol.iterations,
             position_residual_mm: sol.position_error_mm,
             rotation_residual_rad: sol.rotation_error_rad,

@@ -119,17 +119,20 @@ pub const SCALE_MIN_SPREAD_MM: f64 = 100.0;
 /// nominal model lacks can change it a few times over, a wrong unit by 25.4 or 1000.
 pub const SCALE_LIMIT: f64 = 8.0;
 
-/// How many times farther than a small model's (spread below [`SCALE_MIN_SPREAD_MM`]) the
-/// measured positions may spread before the robot file is taken to be in metres (1000):
-/// a tool the small model lacks can make the spread a few times larger, not a hundred.
-pub const TINY_MODEL_RATIO: f64 = 100.0;
+/// How many times farther than a small arm reaches (under [`SCALE_MIN_SPREAD_MM`]) the
+/// measured positions may spread before the robot file is taken to be in metres: positions
+/// spread less than the arm reaches plus the tool, so only a tool the model lacks nine times
+/// longer than the arm could do it. A FANUC in metres reaches 3.87 "mm", and Case D's rows
+/// spread 93 times as far (rows spread over a fraction of the reach).
+pub const TINY_MODEL_RATIO: f64 = 10.0;
 
 /// Refuses measured positions whose spread about their centre differs from the model's tool
 /// positions at the same joints by more than [`SCALE_LIMIT`] times: positions in metres
 /// (1/1000) or inches (1/25.4) instead of mm, which a registration and the identified
 /// lengths would otherwise silently absorb (a robot a thousand times smaller). Where the
-/// model's positions spread less than [`SCALE_MIN_SPREAD_MM`], only a model
-/// [`TINY_MODEL_RATIO`] times smaller than its rows is refused (a robot file in metres).
+/// model's positions spread less than [`SCALE_MIN_SPREAD_MM`], only an arm that reaches less
+/// than that, [`TINY_MODEL_RATIO`] times less than its rows spread, is refused (a robot file
+/// in metres).
 pub fn check_position_scale(robot: &Robot, set: &MeasurementSet) -> Result<()> {
     let (measured, model): (Vec<Vector3<f64>>, Vec<Vector3<f64>>) = set
         .rows
@@ -141,18 +144,19 @@ pub fn check_position_scale(robot: &Robot, set: &MeasurementSet) -> Result<()> {
         return Ok(());
     }
     // A model whose tool positions spread less than [`SCALE_MIN_SPREAD_MM`] is a small arm,
-    // or a robot file in metres; only the latter spreads a hundred times less than its rows.
+    // rows that barely move its tool (a circle of joint 6 about the flange, whose probe the
+    // model lacks), or a robot file in metres: only the last is an arm that reaches less
+    // than [`SCALE_MIN_SPREAD_MM`] with rows spread [`TINY_MODEL_RATIO`] times as far.
     if ours < SCALE_MIN_SPREAD_MM {
-        if theirs < SCALE_MIN_SPREAD_MM || theirs < TINY_MODEL_RATIO * ours {
+        let reach = crate::kinematics::Reach::of(robot).bound_mm;
+        if reach >= SCALE_MIN_SPREAD_MM || theirs < TINY_MODEL_RATIO * reach {
             return Ok(());
         }
         return Err(Error::Invalid(format!(
-            "{}: the model's tool positions at the rows' joints spread {ours:.4} mm RMS about \
-             their centre, the measured positions (columns x, y, z) {theirs:.1} mm: {:.0} \
-             times as far. Is the robot file in metres? Its lengths (a, d, base and tool \
-             x, y, z) must be in mm",
+            "{}: the model's arm reaches at most {reach:.4} mm, and the measured positions \
+             (columns x, y, z) spread {theirs:.1} mm RMS about their centre: is the robot \
+             file in metres? Its lengths (a, d, base and tool x, y, z) must be in mm",
             set.source.display(),
-            theirs / ours.max(f64::MIN_POSITIVE)
         )));
     }
     let ratio = theirs / ours;

@@ -13,7 +13,7 @@ use super::solve::{Method, Solution, SolveOptions, StopReason, covariance_of, so
 use super::unmodelled::Unmodelled;
 use crate::data::MeasurementSet;
 use crate::error::{Error, Result};
-use crate::model::{Convention, Field, ParamId, Robot, Slot};
+use crate::model::{Convention, Field, JointType, ParamId, Robot, Slot};
 use crate::stats::median;
 use nalgebra::{DMatrix, DVector};
 
@@ -572,17 +572,26 @@ fn unobserved(
 /// in for an error the model leaves out (a reviewer's compliances identified alone on data
 /// with geometric errors came out at c3 = -0.93 +- 0.098 mrad/kNm on 20 seeds of 20).
 /// `ids` are the solved parameters, `reports` their values in the same order.
-fn negative_compliance_warning(ids: &[ParamId], reports: &[ParamReport]) -> Option<String> {
+fn negative_compliance_warning(
+    ids: &[ParamId],
+    reports: &[ParamReport],
+    geometry: bool,
+) -> Option<String> {
     let negative: Vec<String> = (ids.iter().zip(reports))
         .filter(|(id, p)| id.field == Field::C && p.estimate < -SIGNIFICANCE * p.std)
         .map(|(_, p)| format!("{} = {:.4} +- {:.4} {}", p.name, p.estimate, p.std, p.unit))
         .collect();
     (!negative.is_empty()).then(|| {
+        let causes = if geometry {
+            "mass properties that are not the arm's (a centre of mass, the payload), or an \
+             error of another kind (a gear's, a compliance of another joint)"
+        } else {
+            "the geometry, which was not selected (identify it with the compliances: --params \
+             full,compliance), or mass properties that are not the arm's"
+        };
         format!(
             "negative compliance: {}: a joint does not turn against the torque it holds, so \
-             the compliance stands in for an error the model leaves out (geometric parameters \
-             not selected: identify them with it, --params full,compliance; or mass \
-             properties that are not the arm's)",
+             the compliance stands in for an error the model leaves out: {causes}",
             negative.join(", ")
         )
     })
@@ -603,51 +612,71 @@ fn mass_free_note(ids: &[ParamId]) -> Option<String> {
         })
 }
 
-/// Where a joint's `d` regroups with its neighbour's alone (their axes are parallel) and the
-/// joint's row is MDH or DH, the note that the row cannot express the small tilt out of
-/// parallel a real arm has: Hayati's row can (thesis eq. 3.11). A reviewer's ABB arm with
-/// axis 3 tilted by 0.55 mrad fitted with s^2 = 38 and nothing said why.
+/// Where a revolute joint's `d` regroups with another revolute joint's `d` alone, their
+/// axes are parallel (each `d` runs along its joint's axis in MDH and DH alike), and an MDH
+/// or DH description cannot express the small tilt out of parallel a real arm has: the note
+/// names each run of parallel axes and the joints an MDH description needs Hayati rows for
+/// (thesis eq. 3.11: each after the run's first; a Hayati row has no `d`, so it regroups with
+/// nothing). A reviewer's ABB arm with axis 3 tilted by 0.55 mrad fitted with s^2 = 38 and
+/// nothing said why.
 fn parallel_axes_note(
     robot: &Robot,
     params: &[ParamId],
     ident: &Identifiability,
 ) -> Option<String> {
-    let rows: Vec<String> = (ident.dropped.iter())
+    let revolute = |k: usize| robot.joints()[k].joint_type == JointType::Revolute;
+    let pairs: Vec<(usize, usize)> = (ident.dropped.iter())
         .filter_map(|d| {
             let DropReason::Regroups(g) = &d.reason else {
                 return None;
             };
-            let p = params[d.param];
-            let (Slot::Joint(k), Field::D, [(other, c)]) = (p.slot, p.field, &g[..]) else {
+            let (p, [(other, c)]) = (params[d.param], &g[..]) else {
                 return None;
             };
             let o = params[*other];
-            // Along a run of parallel axes (the UR10's 2, 3 and 4) each d regroups with the
-            // run's first.
-            let neighbour = matches!(o.slot, Slot::Joint(j) if j != k);
-            let conv = robot.joints()[k].row.convention();
-            (neighbour
-                && o.field == Field::D
-                && (c.abs() - 1.0).abs() < 1e-3
-                && matches!(conv, Convention::Mdh | Convention::Dh))
-            .then(|| {
-                format!(
-                    "{} regroups with {} (joint {}'s {} row)",
-                    p.name(),
-                    o.name(),
-                    k + 1,
-                    conv.name()
-                )
-            })
+            match (p.slot, p.field, o.slot, o.field) {
+                (Slot::Joint(k), Field::D, Slot::Joint(j), Field::D)
+                    if j != k && revolute(j) && revolute(k) && (c.abs() - 1.0).abs() < 1e-3 =>
+                {
+                    Some((j.min(k), j.max(k)))
+                }
+                _ => None,
+            }
         })
         .collect();
-    (!rows.is_empty()).then(|| {
+    // Runs of parallel axes: pairs that share a joint are one run (the UR10's d3 and d4
+    // both regroup with d2).
+    let mut runs: Vec<Vec<usize>> = Vec::new();
+    for (a, b) in pairs {
+        match runs.iter_mut().find(|r| r.contains(&a) || r.contains(&b)) {
+            Some(r) => r.extend([a, b]),
+            None => runs.push(vec![a, b]),
+        }
+    }
+    let list = |v: &[usize]| -> String {
+        let names: Vec<String> = v.iter().map(|k| (k + 1).to_string()).collect();
+        match names.split_last() {
+            Some((last, [])) => last.clone(),
+            Some((last, rest)) => format!("{} and {last}", rest.join(", ")),
+            None => String::new(),
+        }
+    };
+    let (mut axes, mut hayati) = (Vec::new(), Vec::new());
+    for run in &mut runs {
+        run.sort_unstable();
+        run.dedup();
+        axes.push(list(run));
+        hayati.extend_from_slice(&run[1..]);
+    }
+    (!axes.is_empty()).then(|| {
         format!(
-            "parallel axes: {}: an MDH or DH row after a parallel axis cannot express \
-             the small tilt out of parallel a real arm has, so what it leaves is left in the \
-             residuals (see s^2); a Hayati row (convention = \"hayati\", thesis eq. 3.11) \
-             identifies it",
-            rows.join(", ")
+            "parallel axes: joints {}: an MDH or DH description cannot express the small tilt \
+             out of parallel a real arm has, and what it leaves stays in the residuals (see \
+             s^2); describe the arm in MDH with Hayati rows (convention = \"hayati\", thesis \
+             eq. 3.11) for joint(s) {} to identify it (datasets/robots/ur10_mdh_hayati.toml \
+             is the UR10 so)",
+            axes.join("; joints "),
+            list(&hayati)
         )
     })
 }
@@ -793,7 +822,8 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
     notes.extend(super::plausibility::gimbal_notes(&solution.robot, &ids));
     let (parameters, correlations) = parameter_reports(nominal, &solution.robot, &ids, &cov);
     warnings.extend(aliased_warning(&correlations));
-    warnings.extend(negative_compliance_warning(&ids, &parameters));
+    let geometry = candidates.iter().any(|&c| !is_compliance(&params[c]));
+    warnings.extend(negative_compliance_warning(&ids, &parameters, geometry));
     notes.extend(mass_free_note(&ids));
     notes.extend(parallel_axes_note(nominal, &params, &ident));
     let outliers = outliers(set, &obs, &solution.robot, opts.outlier_k);

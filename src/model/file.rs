@@ -42,6 +42,7 @@ use crate::error::{Error, IN_MEMORY, Location, Result};
 use crate::io::line_of;
 use nalgebra::Vector3;
 use serde::Deserialize;
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::fmt::Write as _;
 use std::path::Path;
 use toml::Spanned;
@@ -169,6 +170,9 @@ fn short(v: f64) -> String {
     }
 }
 
+/// How near (deg) an angle of a robot file must be to pi/2 or pi to be taken as radians.
+const RADIAN_TOLERANCE: f64 = 1e-3;
+
 /// Reads a robot file.
 pub fn read_robot(path: impl AsRef<Path>) -> Result<Robot> {
     let path = path.as_ref();
@@ -185,7 +189,11 @@ impl Robot {
 /// Parses robot-file text; `path` is used in error messages.
 pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
     let file: RobotFile = crate::io::parse_toml(text, path)?;
-    let rows = RowReader { text, path };
+    let rows = RowReader {
+        text,
+        path,
+        radian_turns: Default::default(),
+    };
     let fixed = |r: &Option<Spanned<RowFile>>, what: &str| -> Result<Row> {
         match r {
             None => Ok(Row::zero(Convention::Transform)),
@@ -208,6 +216,36 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
             joint_type,
             limits,
         });
+    }
+    let mut turns = rows.radian_turns.take();
+    turns.sort_by_key(|(at, _)| at.line);
+    if let [(at, first), (_, second), ..] = &turns[..] {
+        return Err(Error::input(
+            at.clone(),
+            format!(
+                "{first} and {second}{} are quarter or half turns in radians: robot files give \
+                 angles in degrees (90, 180)",
+                if turns.len() > 2 {
+                    format!(" ({} angles in all)", turns.len())
+                } else {
+                    String::new()
+                }
+            ),
+        ));
+    }
+    // Limits in radians: every revolute joint within a turn in "degrees" (+-6.3), which no
+    // robot of two or more revolute joints is.
+    let revolute: Vec<&Joint> = (joints.iter())
+        .filter(|j| j.joint_type == JointType::Revolute)
+        .collect();
+    let within_radians = |j: &&Joint| j.limits.iter().all(|l| l.abs() <= TAU + RADIAN_TOLERANCE);
+    if revolute.len() >= 2 && revolute.iter().all(within_radians) {
+        let at = file.joint.iter().find_map(|j| j.get_ref().limits.as_ref());
+        return Err(Error::input(
+            at.map_or_else(|| Location::file(path), |l| rows.at(l.span(), "limits")),
+            "every revolute joint's limits lie within +-6.3 deg: radians? robot files give \
+             limits in degrees (e.g. [-180, 180])",
+        ));
     }
     let name = file.name.unwrap_or_else(|| {
         path.file_stem()
@@ -300,6 +338,8 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
 struct RowReader<'a> {
     text: &'a str,
     path: &'a Path,
+    /// The angles read that are a quarter or half turn in radians, with where they are.
+    radian_turns: std::cell::RefCell<Vec<(Location, String)>>,
 }
 
 impl RowReader<'_> {
@@ -525,6 +565,18 @@ impl RowReader<'_> {
                         field.file_unit(),
                         field.file_unit()
                     ),
+                ));
+            }
+            // A quarter or half turn written in radians (1.5708 deg): no robot's geometry
+            // holds such angles in degrees, and read as one it is a robot of another shape.
+            // Two are needed (a calibrated angle may land on one).
+            let radian_turn = [FRAC_PI_2, PI]
+                .iter()
+                .any(|t| (v.abs() - t).abs() < RADIAN_TOLERANCE);
+            if field.is_angle() && radian_turn {
+                self.radian_turns.borrow_mut().push((
+                    self.at(value.span(), key),
+                    format!("{what}: {key} = {} deg", short(v)),
                 ));
             }
             row.set_file_value(field, v);
@@ -757,6 +809,42 @@ mod tests {
     }
 
     const ONE_JOINT: &str = "name = \"t\"\n[base]\nconvention = \"mdh\"\nd = 5\n\n[[joint]]\nconvention = \"mdh\"\nalpha = 90\na = 100\nlimits = [-90, 90]\n\n[tool]\nconvention = \"transform\"\nz = 10.5\n";
+
+    /// A robot file in radians is refused where it shows: an angle at a quarter or half
+    /// turn in radians (a reviewer's ABB in standard DH, alpha = -1.5707963), or every
+    /// revolute joint's limits within a turn in radians. Near misses read.
+    #[test]
+    fn angles_and_limits_in_radians_are_refused() {
+        let radians = ONE_JOINT
+            .replace("alpha = 90", "alpha = -1.5707963")
+            .replace("z = 10.5", "z = 10.5\nrx = 3.1416");
+        let e = parse(&radians).unwrap_err().to_string();
+        assert!(
+            e.starts_with(
+                "r.toml:8: field `alpha`: joint 1: alpha = -1.5707963 deg and tool: rx = \
+                 3.1416 deg are quarter or half turns in radians"
+            ),
+            "{e}"
+        );
+        // One such angle reads (a calibration may land on it), and so do near misses.
+        assert!(parse(&ONE_JOINT.replace("alpha = 90", "alpha = -1.5707963")).is_ok());
+        assert!(parse(&radians.replace("3.1416", "3.15")).is_ok());
+        let two = |lo: &str, hi: &str| {
+            let joint =
+                format!("\n[[joint]]\nconvention = \"mdh\"\nalpha = 90\nlimits = [{lo}, {hi}]\n");
+            ONE_JOINT
+                .replace("limits = [-90, 90]", &format!("limits = [{lo}, {hi}]"))
+                .replace("\n[tool]", &format!("{joint}\n[tool]"))
+        };
+        let e = parse(&two("-3.1416", "3.1416")).unwrap_err().to_string();
+        assert!(
+            e.starts_with("r.toml:10: field `limits`: every revolute joint's limits lie within"),
+            "{e}"
+        );
+        assert!(parse(&two("-6.3", "6.3")).is_ok());
+        // One joint alone may turn a few degrees (a test axis).
+        assert!(parse(&ONE_JOINT.replace("[-90, 90]", "[-3, 3]")).is_ok());
+    }
 
     #[test]
     fn integers_and_missing_fields_read_as_numbers_and_zero() {

@@ -62,6 +62,10 @@ pub struct CompensateReport {
     /// observe (none: left out of the file, and absent in reports written before it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unchecked: Option<UncheckedLines>,
+    /// Lines of the targets without seed joints solved on another branch than the one
+    /// nearest the middle of the ranges, whose calibrated solution failed (none: left out).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub other_branch_lines: Vec<usize>,
 }
 
 /// How far rounding the commands to the output's decimals moves what the robot reaches.

@@ -33,6 +33,13 @@ pub struct ReadReport {
     pub skipped: Vec<(usize, String)>,
 }
 
+/// The header's names that differ from `names` in letter case only, as "X for x".
+fn other_case(t: &Table, names: &[String]) -> Vec<String> {
+    (names.iter())
+        .filter_map(|n| t.other_case(n).map(|h| format!("{} for {n}", shown(h))))
+        .collect()
+}
+
 /// Column indices of one group of three (x, y, z style); all present or all absent.
 fn group(t: &Table, names: &[String; 3], what: &str) -> Result<Option<[usize; 3]>> {
     let idx: Vec<Option<usize>> = names.iter().map(|n| t.column(n)).collect();
@@ -197,43 +204,29 @@ impl Columns {
             t.column(&cols.set),
             t.column(&cols.pair),
         );
-        // An optional column the header holds in other letter case would be left out without
-        // a word, and change what is measured (positions read as absent: an identification
-        // from orientations alone; sigmas as absent: the defaults).
-        let optional: [(&[String], bool, &str); 8] = [
+        // An optional group the header holds in other letter case would be left out without a
+        // word, and change what is measured (positions read as absent: an identification from
+        // orientations alone; sigmas as absent: the defaults). Only groups that would be read
+        // are checked: the profile's form of orientation, the sigmas of what is measured.
+        let orientation = angles.is_some() || quaternion.is_some();
+        let quaternions = profile.orientation == Orientation::Quaternion;
+        let optional: [(&[String], bool, &str); 5] = [
             (&cols.position, position.is_none(), "position"),
-            (
-                &cols.angles,
-                angles.is_none() && quaternion.is_none(),
-                "orientation",
-            ),
-            (
-                &cols.quaternion,
-                angles.is_none() && quaternion.is_none(),
-                "orientation",
-            ),
+            (&cols.angles, !orientation && !quaternions, "orientation"),
+            (&cols.quaternion, !orientation && quaternions, "orientation"),
             (
                 &cols.sigma_position,
-                sigma_position.is_none(),
+                position.is_some() && sigma_position.is_none(),
                 "position sigma",
             ),
             (
                 &cols.sigma_angles,
-                sigma_angles.is_none(),
+                orientation && sigma_angles.is_none(),
                 "orientation sigma",
             ),
-            (
-                std::slice::from_ref(&cols.distance),
-                distance.is_none(),
-                "distance",
-            ),
-            (std::slice::from_ref(&cols.set), set.is_none(), "set"),
-            (std::slice::from_ref(&cols.pair), pair.is_none(), "pair"),
         ];
         for (names, absent, what) in optional {
-            let other: Vec<String> = (names.iter())
-                .filter_map(|n| t.other_case(n).map(|h| format!("{} for {n}", shown(h))))
-                .collect();
+            let other = other_case(t, names);
             if absent && !other.is_empty() {
                 return Err(Error::input(
                     Location::at(&t.path, 1, names.join(", ")),
@@ -591,6 +584,20 @@ pub fn parse_measurements(
     let c = Columns::resolve(t, joints.len(), profile)?;
     let cols = &profile.columns;
     let mut report = ReadReport::default();
+    // A distance or pair column in other letter case is read as absent: it counts only
+    // under the pair measures (which `--measure` chooses later), so it is a warning.
+    for (name, found) in [(&cols.distance, c.distance), (&cols.pair, c.pair)] {
+        let other = other_case(t, std::slice::from_ref(name));
+        if found.is_none() && !other.is_empty() {
+            report.warnings.push(format!(
+                "{}: no {name} column, but the header has {}: column names are \
+                 case-sensitive, so it is read as absent (the pair measures would not use it); \
+                 rename it, or name it in a profile",
+                t.path.display(),
+                other.join(", ")
+            ));
+        }
+    }
     if c.sigma_position.is_none() && cols.sigma_position[0] != "sx" {
         report.warnings.push(format!(
             "no position sigma columns ({}) in this file: the set-level sigma applies",
