@@ -1102,17 +1102,7 @@ fn a_fixed_network_worse_than_the_model_alone_is_kept_with_a_warning() {
 #[test]
 fn a_refinement_names_the_compliances_it_holds_at_the_models_values() {
     let dir = "datasets/nongeometric_robot";
-    let masses = std::fs::read_to_string(format!("{dir}/nominal_masses.toml")).unwrap();
-    let start = tmp("refine_start_compliant.toml");
-    std::fs::write(
-        &start,
-        masses.replacen(
-            "[mass]",
-            "[compliance]\njoints = [0, 0.06, 0.09, 0.35, 0.45, 0.2]\n\n[mass]",
-            1,
-        ),
-    )
-    .unwrap();
+    let start = common::compliant_start("refine_start_compliant.toml");
     let out = tmp("refine_held.rcal");
     let o = robocal(&[
         "train",

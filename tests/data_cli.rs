@@ -97,20 +97,32 @@ fn line_numbers_count_every_line() {
     assert!(err.contains("lines.csv:4") && err.contains("`x`"), "{err}");
 }
 
-/// Imports a whole file text (header included) and expects exit code 1 with `needles` in the
-/// message.
-fn import_fails(name: &str, text: &str, needles: &[&str]) {
+/// Imports a whole file text (header included) written as `name`.csv, with `extra` flags,
+/// into `name`.out: the run and the output's path.
+fn import_text(
+    name: &str,
+    text: &str,
+    extra: &[&str],
+) -> (std::process::Output, std::path::PathBuf) {
     let input = tmp(&format!("{name}.csv"));
     std::fs::write(&input, text).unwrap();
     let out = tmp(&format!("{name}.out"));
-    let o = robocal(&[
+    let mut args = vec![
         "import",
         input.to_str().unwrap(),
         "--robot",
         FANUC,
         "--out",
         out.to_str().unwrap(),
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    (robocal(&args), out)
+}
+
+/// Imports a whole file text (header included) and expects exit code 1 with `needles` in the
+/// message.
+fn import_fails(name: &str, text: &str, needles: &[&str]) {
+    let (o, out) = import_text(name, text, &[]);
     assert_eq!(o.status.code(), Some(1));
     let err = stderr(&o);
     for n in needles {
@@ -191,17 +203,7 @@ fn a_column_in_other_case_is_said_to_differ_only_in_case() {
     ] {
         let cells = header.split(',').count();
         let row = vec!["1"; cells].join(",");
-        let input = tmp(&format!("{name}.csv"));
-        std::fs::write(&input, format!("{header}\n{row}\n")).unwrap();
-        let out = tmp(&format!("{name}.out"));
-        let o = robocal(&[
-            "import",
-            input.to_str().unwrap(),
-            "--robot",
-            FANUC,
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let (o, _) = import_text(name, &format!("{header}\n{row}\n"), &[]);
         let err = stderr(&o);
         assert!(o.status.success(), "{name}: {err}");
         match warned {
@@ -215,12 +217,7 @@ fn a_column_in_other_case_is_said_to_differ_only_in_case() {
 /// position's is: a typo had left the distances computed from positions without a word.
 #[test]
 fn a_label_or_distance_column_the_profile_names_must_be_there() {
-    let input = tmp("labels.csv");
-    std::fs::write(
-        &input,
-        "q1,q2,q3,q4,q5,q6,x,y,z,ballbar\n0,0,0,0,0,0,1,2,3,4\n",
-    )
-    .unwrap();
+    let text = "q1,q2,q3,q4,q5,q6,x,y,z,ballbar\n0,0,0,0,0,0,1,2,3,4\n";
     for (key, name) in [
         ("distance", "ball_bar"),
         ("pair", "pairs"),
@@ -229,23 +226,17 @@ fn a_label_or_distance_column_the_profile_names_must_be_there() {
     ] {
         let profile = tmp(&format!("p_{key}.toml"));
         std::fs::write(&profile, format!("[columns]\n{key} = \"{name}\"\n")).unwrap();
-        let out = tmp(&format!("labels_{key}.out"));
-        let o = robocal(&[
-            "import",
-            input.to_str().unwrap(),
-            "--robot",
-            FANUC,
-            "--profile",
-            profile.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let (o, out) = import_text(
+            &format!("labels_{key}"),
+            text,
+            &["--profile", profile.to_str().unwrap()],
+        );
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(1), "{key}: {err}");
         assert!(
             err.contains(&format!(
                 "p_{key}.toml: the profile reads the {key} from column `{name}`, which"
-            )) && err.contains("labels.csv does not have (its columns: q1"),
+            )) && err.contains(&format!("labels_{key}.csv does not have (its columns: q1")),
             "{key}: {err}"
         );
         assert!(!out.exists());

@@ -2751,6 +2751,36 @@ fn edge_inputs_of_the_fifty_fourth_hunt() {
             stderr(&o)
         );
     }
+    // A pan-tilt unit reaching 50 mm whose 700 mm probe the model lacks (a reviewer's): its
+    // rows spread 12 times its reach, and it is no file in metres.
+    let ptu = "name = \"ptu\"\n[base]\nconvention = \"transform\"\nx = 1000.0\ny = 500.0\n\
+               z = 200.0\n[[joint]]\nconvention = \"mdh\"\nd = 40.0\nlimits = [-170, 170]\n\
+               [[joint]]\nconvention = \"mdh\"\nalpha = 90.0\na = 10.0\nlimits = [-90, 30]\n\
+               [tool]\nconvention = \"transform\"\nx = 0.0\n";
+    let nominal = file("s54_ptu.toml", ptu);
+    let probe = file("s54_ptu_probe.toml", &ptu.replace("x = 0.0", "x = 700.0"));
+    let joints: String = (0..24)
+        .map(|k| format!("{},{}\n", -165 + 14 * k, -85 + 5 * k))
+        .collect();
+    let joints = file("s54_ptu_q.csv", &format!("q1,q2\n{joints}"));
+    let o = robocal(&["fk", "--robot", &probe, "--joints", &joints]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows = file("s54_ptu_rows.csv", &stdout(&o));
+    let ptu_out = common::tmp("s54_ptu_out.toml");
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        &nominal,
+        "--data",
+        &rows,
+        "--params",
+        "tool",
+        "--measure",
+        "position",
+        "--out",
+        ptu_out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
     // What --nongeometric adds is not in the true robot's file: said.
     let true_robot = common::tmp("s54_true.toml");
     let o = robocal(&[

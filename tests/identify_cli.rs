@@ -614,16 +614,7 @@ fn a_registration_beyond_the_bounds_names_the_file() {
 fn compliances_held_at_their_start_and_negative_ones_are_said() {
     let dir = "datasets/nongeometric_robot";
     let masses = std::fs::read_to_string(format!("{dir}/nominal_masses.toml")).unwrap();
-    let start = tmp("start_compliant.toml");
-    std::fs::write(
-        &start,
-        masses.replacen(
-            "[mass]",
-            "[compliance]\njoints = [0, 0.06, 0.09, 0.35, 0.45, 0.2]\n\n[mass]",
-            1,
-        ),
-    )
-    .unwrap();
+    let start = common::compliant_start("start_compliant.toml");
     let (out, report) = (tmp("held.toml"), tmp("held.json"));
     let o = robocal(&[
         "identify",
@@ -669,7 +660,7 @@ fn compliances_held_at_their_start_and_negative_ones_are_said() {
     assert!(o.status.success(), "{se}");
     assert!(
         se.contains("warning: negative compliance: c3 = -0.75")
-            && se.contains("the geometry, which was not selected")
+            && se.contains("the joints' geometry, which was not selected")
             && se.contains("--params full,compliance"),
         "{se}"
     );

@@ -269,7 +269,8 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         eprintln!(
             "note: {} target(s) without seed joints are solved on another branch than the one \
              nearest the middle of the joint ranges, where the calibrated solution left the \
-             limits or did not converge ({}{}): a move between consecutive targets may change \
+             limits, did not converge or changed branch ({}{}): a move between consecutive \
+             targets may change \
              configuration; seed joints choose the branch",
             other_branch.len(),
             shown.join(", "),

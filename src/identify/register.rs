@@ -119,7 +119,13 @@ pub const SCALE_MIN_SPREAD_MM: f64 = 100.0;
 /// nominal model lacks can change it a few times over, a wrong unit by 25.4 or 1000.
 pub const SCALE_LIMIT: f64 = 8.0;
 
-/// How many times farther than a small arm reaches (under [`SCALE_MIN_SPREAD_MM`]) the
+/// The reach (mm) under which an arm whose tool positions barely spread is taken to be a
+/// robot file in metres, where its rows spread far beyond it: an industrial arm in metres
+/// reaches 0.5 to 5 "mm"; a pan-tilt unit 50 mm (its probe, which the model may lack, can
+/// spread its rows 10 times as far).
+pub const METRES_REACH_MM: f64 = 10.0;
+
+/// How many times farther than a small arm reaches (under [`METRES_REACH_MM`]) the
 /// measured positions may spread before the robot file is taken to be in metres: positions
 /// spread less than the arm reaches plus the tool, so only a tool the model lacks nine times
 /// longer than the arm could do it. A FANUC in metres reaches 3.87 "mm", and Case D's rows
@@ -131,8 +137,8 @@ pub const TINY_MODEL_RATIO: f64 = 10.0;
 /// (1/1000) or inches (1/25.4) instead of mm, which a registration and the identified
 /// lengths would otherwise silently absorb (a robot a thousand times smaller). Where the
 /// model's positions spread less than [`SCALE_MIN_SPREAD_MM`], only an arm that reaches less
-/// than that, [`TINY_MODEL_RATIO`] times less than its rows spread, is refused (a robot file
-/// in metres).
+/// than [`METRES_REACH_MM`] (but more than nothing), [`TINY_MODEL_RATIO`] times less than its
+/// rows spread, is refused (a robot file in metres).
 pub fn check_position_scale(robot: &Robot, set: &MeasurementSet) -> Result<()> {
     let (measured, model): (Vec<Vector3<f64>>, Vec<Vector3<f64>>) = set
         .rows
@@ -143,13 +149,16 @@ pub fn check_position_scale(robot: &Robot, set: &MeasurementSet) -> Result<()> {
     if measured.len() < 3 {
         return Ok(());
     }
-    // A model whose tool positions spread less than [`SCALE_MIN_SPREAD_MM`] is a small arm,
-    // rows that barely move its tool (a circle of joint 6 about the flange, whose probe the
-    // model lacks), or a robot file in metres: only the last is an arm that reaches less
-    // than [`SCALE_MIN_SPREAD_MM`] with rows spread [`TINY_MODEL_RATIO`] times as far.
+    // A model whose tool positions spread less than [`SCALE_MIN_SPREAD_MM`] is a small arm or
+    // device (a pan-tilt unit), rows that barely move its tool (a circle of joint 6 about the
+    // flange), each perhaps with a probe the model lacks, or a robot file in metres: only the
+    // last is an arm of more than no length that reaches less than [`METRES_REACH_MM`] (an
+    // industrial arm in metres reaches 0.5 to 5 "mm"), with rows spread
+    // [`TINY_MODEL_RATIO`] times as far.
     if ours < SCALE_MIN_SPREAD_MM {
         let reach = crate::kinematics::Reach::of(robot).bound_mm;
-        if reach >= SCALE_MIN_SPREAD_MM || theirs < TINY_MODEL_RATIO * reach {
+        let metres = reach > 1e-6 && reach < METRES_REACH_MM;
+        if !metres || theirs < TINY_MODEL_RATIO * reach {
             return Ok(());
         }
         return Err(Error::Invalid(format!(

@@ -586,8 +586,8 @@ fn negative_compliance_warning(
             "mass properties that are not the arm's (a centre of mass, the payload), or an \
              error of another kind (a gear's, a compliance of another joint)"
         } else {
-            "the geometry, which was not selected (identify it with the compliances: --params \
-             full,compliance), or mass properties that are not the arm's"
+            "the joints' geometry, which was not selected (identify it with the compliances: \
+             --params full,compliance), or mass properties that are not the arm's"
         };
         format!(
             "negative compliance: {}: a joint does not turn against the torque it holds, so \
@@ -822,7 +822,9 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
     notes.extend(super::plausibility::gimbal_notes(&solution.robot, &ids));
     let (parameters, correlations) = parameter_reports(nominal, &solution.robot, &ids, &cov);
     warnings.extend(aliased_warning(&correlations));
-    let geometry = candidates.iter().any(|&c| !is_compliance(&params[c]));
+    // The joints' geometry: base and tool alone leave the arm's errors to the compliances.
+    let geometry = (candidates.iter())
+        .any(|&c| matches!(params[c].slot, Slot::Joint(_)) && !is_compliance(&params[c]));
     warnings.extend(negative_compliance_warning(&ids, &parameters, geometry));
     notes.extend(mass_free_note(&ids));
     notes.extend(parallel_axes_note(nominal, &params, &ident));

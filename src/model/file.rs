@@ -42,7 +42,7 @@ use crate::error::{Error, IN_MEMORY, Location, Result};
 use crate::io::line_of;
 use nalgebra::Vector3;
 use serde::Deserialize;
-use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::f64::consts::{FRAC_PI_2, PI};
 use std::fmt::Write as _;
 use std::path::Path;
 use toml::Spanned;
@@ -170,8 +170,9 @@ fn short(v: f64) -> String {
     }
 }
 
-/// How near (deg) an angle of a robot file must be to pi/2 or pi to be taken as radians.
-const RADIAN_TOLERANCE: f64 = 1e-3;
+/// How near (deg) an angle of a robot file must be to pi/2 or pi to be taken as radians:
+/// 1.57 and 3.14 are (0.0008 and 0.0016 off).
+const RADIAN_TOLERANCE: f64 = 2e-3;
 
 /// Reads a robot file.
 pub fn read_robot(path: impl AsRef<Path>) -> Result<Robot> {
@@ -231,20 +232,6 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
                     String::new()
                 }
             ),
-        ));
-    }
-    // Limits in radians: every revolute joint within a turn in "degrees" (+-6.3), which no
-    // robot of two or more revolute joints is.
-    let revolute: Vec<&Joint> = (joints.iter())
-        .filter(|j| j.joint_type == JointType::Revolute)
-        .collect();
-    let within_radians = |j: &&Joint| j.limits.iter().all(|l| l.abs() <= TAU + RADIAN_TOLERANCE);
-    if revolute.len() >= 2 && revolute.iter().all(within_radians) {
-        let at = file.joint.iter().find_map(|j| j.get_ref().limits.as_ref());
-        return Err(Error::input(
-            at.map_or_else(|| Location::file(path), |l| rows.at(l.span(), "limits")),
-            "every revolute joint's limits lie within +-6.3 deg: radians? robot files give \
-             limits in degrees (e.g. [-180, 180])",
         ));
     }
     let name = file.name.unwrap_or_else(|| {
@@ -810,9 +797,9 @@ mod tests {
 
     const ONE_JOINT: &str = "name = \"t\"\n[base]\nconvention = \"mdh\"\nd = 5\n\n[[joint]]\nconvention = \"mdh\"\nalpha = 90\na = 100\nlimits = [-90, 90]\n\n[tool]\nconvention = \"transform\"\nz = 10.5\n";
 
-    /// A robot file in radians is refused where it shows: an angle at a quarter or half
-    /// turn in radians (a reviewer's ABB in standard DH, alpha = -1.5707963), or every
-    /// revolute joint's limits within a turn in radians. Near misses read.
+    /// A robot file in radians is refused where it shows: two angles at a quarter or half
+    /// turn in radians (a reviewer's ABB in standard DH, alpha = -1.5707963). One such angle
+    /// and near misses read.
     #[test]
     fn angles_and_limits_in_radians_are_refused() {
         let radians = ONE_JOINT
@@ -829,21 +816,17 @@ mod tests {
         // One such angle reads (a calibration may land on it), and so do near misses.
         assert!(parse(&ONE_JOINT.replace("alpha = 90", "alpha = -1.5707963")).is_ok());
         assert!(parse(&radians.replace("3.1416", "3.15")).is_ok());
-        let two = |lo: &str, hi: &str| {
-            let joint =
-                format!("\n[[joint]]\nconvention = \"mdh\"\nalpha = 90\nlimits = [{lo}, {hi}]\n");
-            ONE_JOINT
-                .replace("limits = [-90, 90]", &format!("limits = [{lo}, {hi}]"))
-                .replace("\n[tool]", &format!("{joint}\n[tool]"))
-        };
-        let e = parse(&two("-3.1416", "3.1416")).unwrap_err().to_string();
-        assert!(
-            e.starts_with("r.toml:10: field `limits`: every revolute joint's limits lie within"),
-            "{e}"
-        );
-        assert!(parse(&two("-6.3", "6.3")).is_ok());
-        // One joint alone may turn a few degrees (a test axis).
+        // Two decimals are radians too; limits of a few degrees are a rig's, not radians.
+        let short = ONE_JOINT
+            .replace("alpha = 90", "alpha = 1.57")
+            .replace("z = 10.5", "z = 10.5\nrz = -3.14");
+        assert!(parse(&short).is_err());
         assert!(parse(&ONE_JOINT.replace("[-90, 90]", "[-3, 3]")).is_ok());
+        let rig = ONE_JOINT.replace("[-90, 90]", "[-5, 5]").replace(
+            "\n[tool]",
+            "\n[[joint]]\nconvention = \"mdh\"\nalpha = 90\nlimits = [-5, 5]\n\n[tool]",
+        );
+        assert_eq!(parse(&rig).map(|r| r.dof()).ok(), Some(2));
     }
 
     #[test]

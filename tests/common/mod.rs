@@ -232,3 +232,23 @@ pub fn accuracy<'a>(r: &'a serde_json::Value, data: &str, model: &str) -> &'a se
         .find(|a| a["data"] == data && a["model"] == model)
         .unwrap_or_else(|| panic!("no accuracy row {data} / {model}"))["stats"]
 }
+
+/// The shipped non-geometric robot's nominal with its masses and a start of compliances
+/// (mrad/kNm) `[0, 0.06, 0.09, 0.35, 0.45, 0.2]` the rows cannot all tell apart, written as
+/// `name` in the test folder.
+#[allow(dead_code)]
+pub fn compliant_start(name: &str) -> PathBuf {
+    let masses =
+        std::fs::read_to_string("datasets/nongeometric_robot/nominal_masses.toml").unwrap();
+    let start = tmp(name);
+    std::fs::write(
+        &start,
+        masses.replacen(
+            "[mass]",
+            "[compliance]\njoints = [0, 0.06, 0.09, 0.35, 0.45, 0.2]\n\n[mass]",
+            1,
+        ),
+    )
+    .unwrap();
+    start
+}

@@ -590,10 +590,10 @@ pub fn parse_measurements(
         let other = other_case(t, std::slice::from_ref(name));
         if found.is_none() && !other.is_empty() {
             report.warnings.push(format!(
-                "{}: no {name} column, but the header has {}: column names are \
-                 case-sensitive, so it is read as absent (the pair measures would not use it); \
-                 rename it, or name it in a profile",
-                t.path.display(),
+                "no {name} column, but the header has {}: column names are case-sensitive, so \
+                 it is read as absent: under --measure relative or distance, pairs are then \
+                 chained in file order and distances found from the positions; rename it, or \
+                 name it in a profile",
                 other.join(", ")
             ));
         }
