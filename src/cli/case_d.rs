@@ -138,19 +138,8 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
     let opts = a
         .build
         .options(a.sigma.sigmas(), std::io::stderr().is_terminal())?;
-    // The hint only where the shipped robot is not there: an error in a file that is there
-    // names that file itself.
-    let shipped = a.datasets.join(robocal::studies::thesis::FANUC).exists();
-    let rows = run(&a.datasets, &opts).with_context(|| {
-        if shipped {
-            format!("Case D from {}", a.datasets.display())
-        } else {
-            format!(
-                "run from the repository root, or give --datasets ({})",
-                a.datasets.display()
-            )
-        }
-    })?;
+    let rows = run(&a.datasets, &opts)
+        .with_context(|| super::paths::datasets_context(&a.datasets, "Case D"))?;
     say!(
         "Case D (thesis 6.4): identification on the 30 calibration poses, then a compensator \
          trained on the 150 training poses (seed {}; settings and the refinement of the \

@@ -270,8 +270,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
             "note: {} target(s) without seed joints are solved on another branch than the one \
              nearest the middle of the joint ranges, where the calibrated solution left the \
              limits, did not converge or changed branch ({}{}): a move between consecutive \
-             targets may change \
-             configuration; seed joints choose the branch",
+             targets may change configuration; seed joints choose the branch",
             other_branch.len(),
             shown.join(", "),
             if other_branch.len() > 5 { ", ..." } else { "" }

@@ -1,11 +1,11 @@
 //! `robocal import`: a foreign export to canonical CSV through an import profile.
 
-use super::data_args::{DataArgs, counted_joints, joints_of};
+use super::data_args::{DataArgs, counted_joints};
 use anyhow::Result;
 use clap::Args;
-use robocal::data::joint_columns;
 use robocal::data::measurement::Layout;
 use robocal::data::measurement::write_measurements;
+use robocal::data::{JointInfo, joint_columns};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -40,16 +40,21 @@ pub fn run(a: ImportArgs) -> Result<()> {
             "note: no --robot: joints are taken as revolute and their limits are not checked"
         );
     }
-    let joints = joints_of(a.robot.as_ref(), n)?;
+    // The robot, read once: its joints for the read, its positions for the scale check.
+    let robot = a
+        .robot
+        .as_ref()
+        .map(robocal::model::read_robot)
+        .transpose()?;
+    let joints = robot
+        .as_ref()
+        .map_or_else(|| JointInfo::revolute(n), JointInfo::of);
     let set = a.data.read(&a.input, &joints)?;
     // Positions in metres or inches: `identify` and `train` refuse them, and the canonical
     // file written here would carry the mistake on (a reviewer's metres were written as mm
     // without a word).
-    if let Some(path) = &a.robot
-        && let Err(e) = robocal::identify::register::check_position_scale(
-            &robocal::model::read_robot(path)?,
-            &set,
-        )
+    if let Some(robot) = &robot
+        && let Err(e) = robocal::identify::register::check_position_scale(robot, &set)
     {
         eprintln!("warning: {e} (written as read: `identify` and `train` refuse such rows)");
     }

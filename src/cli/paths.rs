@@ -170,6 +170,21 @@ pub fn files_under(dir: &Path) -> Vec<PathBuf> {
     out
 }
 
+/// The context of an error reading the shipped data sets under `datasets` for `what`: where
+/// the shipped robot is not there, the hint to run from the repository root or give
+/// `--datasets`; where it is, the error names its own file, and the context only says what
+/// was being read.
+pub fn datasets_context(datasets: &Path, what: &str) -> String {
+    if datasets.join(robocal::studies::thesis::FANUC).exists() {
+        format!("{what} from {}", datasets.display())
+    } else {
+        format!(
+            "run from the repository root, or give --datasets ({})",
+            datasets.display()
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

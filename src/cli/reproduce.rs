@@ -27,18 +27,8 @@ pub fn run(a: ReproduceArgs) -> Result<()> {
     let inputs: Vec<_> = read.iter().map(|p| req("--datasets", p)).collect();
     guard(&inputs, &[opt("--report", a.report.as_ref())])?;
     let robot_path = a.datasets.join(robocal::studies::thesis::FANUC);
-    // The hint only where the file is not there: a file that is there and does not read is
-    // told as it is.
-    let nominal = read_robot(&robot_path).with_context(|| {
-        if robot_path.exists() {
-            format!("reading {}", robot_path.display())
-        } else {
-            format!(
-                "run from the repository root, or give --datasets ({})",
-                robot_path.display()
-            )
-        }
-    })?;
+    let nominal = read_robot(&robot_path)
+        .with_context(|| super::paths::datasets_context(&a.datasets, "the shipped robot"))?;
     say!(
         "Shipped data sets (one draw each); errors against the noisy measurements unless marked truth."
     );

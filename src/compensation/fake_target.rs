@@ -7,8 +7,8 @@
 //!    ranges), within the limits if one is; its [`Branch`] is the configuration the
 //!    controller is asked to keep. Out of the nominal's reach, the
 //!    row's seed joints start the solve instead. Without a seed, where the calibrated
-//!    solution on that branch fails (beyond a limit the nominal's was within), the other
-//!    branches are tried in the same order;
+//!    solution on that branch fails (beyond a limit the nominal's was within, not converged,
+//!    or on another branch), the other branches are tried in the same order;
 //! 2. numerical IK of the calibrated model from q0 (LM, `kinematics::ik_numeric`) gives q*;
 //! 3. q* must lie within the limits, and the nominal closed form of F = FK_nominal(q*) on the
 //!    seed's branch must return q* itself: that is what the controller will compute from F.
@@ -553,8 +553,7 @@ impl<'a> FakeTargetSolver<'a> {
                         c.instead_of = middle;
                         Some(c)
                     })
-                    .ok_or(())
-                    .or(first)
+                    .map_or(first, Ok)
             }
             first => first,
         };

@@ -296,16 +296,19 @@ impl Table {
                 Location::at(&self.path, 1, name),
                 format!(
                     "missing column (the header has: {}){}{}",
-                    self.headers
-                        .iter()
-                        .map(|h| shown(h))
-                        .collect::<Vec<_>>()
-                        .join(", "),
+                    self.header_list(),
                     self.delimiter_hint(),
                     self.case_hint(name)
                 ),
             )
         })
+    }
+
+    /// The header's names as messages show them, comma-separated.
+    pub fn header_list(&self) -> String {
+        (self.headers.iter().map(|h| shown(h)))
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 
     /// The header's name that differs from `name` in letter case only, if any (an export
@@ -320,14 +323,12 @@ impl Table {
     /// capitals): "; `SHOULDER_PAN_JOINT` differs only in case (names are case-sensitive)",
     /// else empty.
     pub fn case_hint(&self, name: &str) -> String {
-        (self.headers.iter())
-            .find(|h| h.eq_ignore_ascii_case(name))
-            .map_or_else(String::new, |h| {
-                format!(
-                    "; {} differs only in case (column names are case-sensitive)",
-                    shown(h)
-                )
-            })
+        self.other_case(name).map_or_else(String::new, |h| {
+            format!(
+                "; {} differs only in case (column names are case-sensitive)",
+                shown(h)
+            )
+        })
     }
 
     /// A hint for a header read as one column that holds another delimiter (`;`, a tab, `|`):

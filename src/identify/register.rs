@@ -120,9 +120,9 @@ pub const SCALE_MIN_SPREAD_MM: f64 = 100.0;
 pub const SCALE_LIMIT: f64 = 8.0;
 
 /// The reach (mm) under which an arm whose tool positions barely spread is taken to be a
-/// robot file in metres, where its rows spread far beyond it: an industrial arm in metres
-/// reaches 0.5 to 5 "mm"; a pan-tilt unit 50 mm (its probe, which the model may lack, can
-/// spread its rows 10 times as far).
+/// robot file in metres, where its rows spread far beyond it: the shipped FANUC in metres
+/// reaches 3.87 "mm", the UR10 1.54; a pan-tilt unit 50 mm (its probe, which the model may
+/// lack, can spread its rows 10 times as far).
 pub const METRES_REACH_MM: f64 = 10.0;
 
 /// How many times farther than a small arm reaches (under [`METRES_REACH_MM`]) the
@@ -152,9 +152,8 @@ pub fn check_position_scale(robot: &Robot, set: &MeasurementSet) -> Result<()> {
     // A model whose tool positions spread less than [`SCALE_MIN_SPREAD_MM`] is a small arm or
     // device (a pan-tilt unit), rows that barely move its tool (a circle of joint 6 about the
     // flange), each perhaps with a probe the model lacks, or a robot file in metres: only the
-    // last is an arm of more than no length that reaches less than [`METRES_REACH_MM`] (an
-    // industrial arm in metres reaches 0.5 to 5 "mm"), with rows spread
-    // [`TINY_MODEL_RATIO`] times as far.
+    // last is an arm of more than no length that reaches less than [`METRES_REACH_MM`], with
+    // rows spread [`TINY_MODEL_RATIO`] times as far.
     if ours < SCALE_MIN_SPREAD_MM {
         let reach = crate::kinematics::Reach::of(robot).bound_mm;
         let metres = reach > 1e-6 && reach < METRES_REACH_MM;

@@ -190,11 +190,7 @@ impl Robot {
 /// Parses robot-file text; `path` is used in error messages.
 pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
     let file: RobotFile = crate::io::parse_toml(text, path)?;
-    let rows = RowReader {
-        text,
-        path,
-        radian_turns: Default::default(),
-    };
+    let rows = RowReader { text, path };
     let fixed = |r: &Option<Spanned<RowFile>>, what: &str| -> Result<Row> {
         match r {
             None => Ok(Row::zero(Convention::Transform)),
@@ -218,7 +214,30 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
             limits,
         });
     }
-    let mut turns = rows.radian_turns.take();
+    // A quarter or half turn written in radians (1.5708 deg): no robot's geometry holds such
+    // angles in degrees, and read as them it is a robot of another shape. Two are needed (a
+    // calibrated angle may land on one).
+    let radian_turn = |v: f64| {
+        [FRAC_PI_2, PI]
+            .iter()
+            .any(|t| (v.abs() - t).abs() < RADIAN_TOLERANCE)
+    };
+    let named = (file.base.iter().map(|r| ("base".to_string(), r)))
+        .chain(file.tool.iter().map(|r| ("tool".to_string(), r)))
+        .chain((file.joint.iter().enumerate()).map(|(i, j)| (format!("joint {}", i + 1), j)));
+    let mut turns: Vec<(Location, String)> = named
+        .flat_map(|(what, r)| {
+            (r.get_ref().values().into_iter())
+                .filter(|(f, v)| f.is_angle() && radian_turn(v.get_ref().0))
+                .map(|(f, v)| {
+                    (
+                        rows.at(v.span(), f.name()),
+                        format!("{what}: {} = {} deg", f.name(), short(v.get_ref().0)),
+                    )
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect();
     turns.sort_by_key(|(at, _)| at.line);
     if let [(at, first), (_, second), ..] = &turns[..] {
         return Err(Error::input(
@@ -325,8 +344,6 @@ pub fn parse_robot(text: &str, path: &Path) -> Result<Robot> {
 struct RowReader<'a> {
     text: &'a str,
     path: &'a Path,
-    /// The angles read that are a quarter or half turn in radians, with where they are.
-    radian_turns: std::cell::RefCell<Vec<(Location, String)>>,
 }
 
 impl RowReader<'_> {
@@ -552,18 +569,6 @@ impl RowReader<'_> {
                         field.file_unit(),
                         field.file_unit()
                     ),
-                ));
-            }
-            // A quarter or half turn written in radians (1.5708 deg): no robot's geometry
-            // holds such angles in degrees, and read as one it is a robot of another shape.
-            // Two are needed (a calibrated angle may land on one).
-            let radian_turn = [FRAC_PI_2, PI]
-                .iter()
-                .any(|t| (v.abs() - t).abs() < RADIAN_TOLERANCE);
-            if field.is_angle() && radian_turn {
-                self.radian_turns.borrow_mut().push((
-                    self.at(value.span(), key),
-                    format!("{what}: {key} = {} deg", short(v)),
                 ));
             }
             row.set_file_value(field, v);

@@ -170,40 +170,34 @@ impl IdentifyReport {
         let dropped = ident
             .dropped
             .iter()
-            .map(|d| match &d.reason {
-                DropReason::NoEffect => DroppedParam {
-                    name: params[d.param].name(),
-                    reason: "no effect".into(),
+            .map(|d| {
+                let p = params[d.param];
+                let mut dropped = DroppedParam {
+                    name: p.name(),
+                    reason: String::new(),
                     regroups_with: Vec::new(),
                     estimate_over_std: None,
                     held_at: None,
-                    unit: params[d.param].field.file_unit().into(),
-                },
-                DropReason::NotSignificant(t) => DroppedParam {
-                    name: params[d.param].name(),
-                    reason: "not significant".into(),
-                    regroups_with: Vec::new(),
-                    estimate_over_std: Some(*t),
-                    held_at: Some(file_value(
-                        &params[d.param],
-                        id.robot.param(params[d.param]),
-                    )),
-                    unit: params[d.param].field.file_unit().into(),
-                },
-                DropReason::Regroups(g) => DroppedParam {
-                    name: params[d.param].name(),
-                    reason: "regroups".into(),
-                    regroups_with: g
-                        .iter()
-                        .map(|(p, c)| Regroup {
-                            name: params[*p].name(),
-                            coefficient: *c,
-                        })
-                        .collect(),
-                    estimate_over_std: None,
-                    held_at: None,
-                    unit: params[d.param].field.file_unit().into(),
-                },
+                    unit: p.field.file_unit().into(),
+                };
+                match &d.reason {
+                    DropReason::NoEffect => dropped.reason = "no effect".into(),
+                    DropReason::NotSignificant(t) => {
+                        dropped.reason = "not significant".into();
+                        dropped.estimate_over_std = Some(*t);
+                        dropped.held_at = Some(file_value(&p, id.robot.param(p)));
+                    }
+                    DropReason::Regroups(g) => {
+                        dropped.reason = "regroups".into();
+                        dropped.regroups_with = (g.iter())
+                            .map(|(q, c)| Regroup {
+                                name: params[*q].name(),
+                                coefficient: *c,
+                            })
+                            .collect();
+                    }
+                }
+                dropped
             })
             .collect();
         IdentifyReport {

@@ -258,11 +258,7 @@ impl Columns {
                          have{} (its columns: {})",
                         t.path.display(),
                         t.case_hint(name),
-                        t.headers
-                            .iter()
-                            .map(|h| shown(h))
-                            .collect::<Vec<_>>()
-                            .join(", ")
+                        t.header_list()
                     ),
                 ));
             }
