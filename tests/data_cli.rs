@@ -182,34 +182,77 @@ fn a_column_in_other_case_is_said_to_differ_only_in_case() {
         import_fails(name, &format!("{header}\n{row}\n"), &[needle]);
     }
     // Groups that would not be read stay carried columns: a quaternion under the default
-    // (Euler) profile, orientation sigmas beside positions alone, a `Set` label. A `Pair` or
-    // `Distance` column counts only under the pair measures: a warning.
-    for (name, header, warned) in [
-        ("case_quat", "q1,q2,q3,q4,q5,q6,x,y,z,QW,QX,QY,QZ", None),
-        ("case_srx", "q1,q2,q3,q4,q5,q6,x,y,z,SRX,SRY,SRZ", None),
-        ("case_set", "q1,q2,q3,q4,q5,q6,x,y,z,Set", None),
-        (
-            "case_pair",
-            "q1,q2,q3,q4,q5,q6,x,y,z,Pair",
-            Some(
-                "no pair column, but the header has Pair for pair: column names are case-sensitive",
-            ),
-        ),
-        (
-            "case_distance",
-            "q1,q2,q3,q4,q5,q6,x,y,z,Distance",
-            Some("no distance column, but the header has Distance for distance"),
-        ),
+    // (Euler) profile, orientation sigmas beside positions alone, a `Set` label, and a `Pair`
+    // or `Distance` column, which counts only under the pair measures (refused there, below).
+    for name in [
+        "case_quat",
+        "case_srx",
+        "case_set",
+        "case_pair",
+        "case_distance",
     ] {
+        let header = match name {
+            "case_quat" => "q1,q2,q3,q4,q5,q6,x,y,z,QW,QX,QY,QZ",
+            "case_srx" => "q1,q2,q3,q4,q5,q6,x,y,z,SRX,SRY,SRZ",
+            "case_set" => "q1,q2,q3,q4,q5,q6,x,y,z,Set",
+            "case_pair" => "q1,q2,q3,q4,q5,q6,x,y,z,Pair",
+            _ => "q1,q2,q3,q4,q5,q6,x,y,z,Distance",
+        };
         let cells = header.split(',').count();
         let row = vec!["1"; cells].join(",");
         let (o, _) = import_text(name, &format!("{header}\n{row}\n"), &[]);
         let err = stderr(&o);
         assert!(o.status.success(), "{name}: {err}");
-        match warned {
-            Some(w) => assert!(err.contains(w), "{name}: {err}"),
-            None => assert!(!err.contains("case-sensitive"), "{name}: {err}"),
+        assert!(!err.contains("case-sensitive"), "{name}: {err}");
+    }
+}
+
+/// A `Pair` or `Distance` column in other letter case is refused by the measures that pair
+/// rows (read as absent, it had left the pairs chained in file order and the distances found
+/// from the positions), in `identify` and `evaluate`; the other measures read the file.
+#[test]
+fn a_pair_column_in_other_case_is_refused_by_the_pair_measures() {
+    let rows = "0,0,0,0,0,0,2032,-182,1970,a,1\n10,10,10,10,10,10,2215.8,203.5,1940.2,a,2\n\
+                20,20,20,20,20,20,2315.8,638.4,1877.2,b,3\n0,10,0,10,0,10,2000,0,1900,b,4\n";
+    for (header, column) in [
+        ("q1,q2,q3,q4,q5,q6,x,y,z,Pair,distance", "Pair for pair"),
+        (
+            "q1,q2,q3,q4,q5,q6,x,y,z,pair,DISTANCE",
+            "DISTANCE for distance",
+        ),
+    ] {
+        let data = tmp(&format!("case_{column}.csv").replace(' ', "_"));
+        std::fs::write(&data, format!("{header}\n{rows}")).unwrap();
+        let out = tmp("case_pair_out.toml");
+        let d = data.to_str().unwrap();
+        for measure in ["relative", "distance"] {
+            for cmd in ["identify", "evaluate"] {
+                let mut args = vec![cmd, "--robot", FANUC, "--data", d, "--measure", measure];
+                if cmd == "identify" {
+                    args.extend(["--out", out.to_str().unwrap()]);
+                }
+                let o = robocal(&args);
+                let err = stderr(&o);
+                assert_eq!(o.status.code(), Some(1), "{cmd} {measure} {column}: {err}");
+                assert!(
+                    err.contains(&format!(
+                        "measuring by {measure} pairs rows, but the header has {column}: column \
+                         names are case-sensitive"
+                    )),
+                    "{cmd} {measure} {column}: {err}"
+                );
+            }
         }
+        let o = robocal(&[
+            "evaluate",
+            "--robot",
+            FANUC,
+            "--data",
+            d,
+            "--measure",
+            "position",
+        ]);
+        assert!(o.status.success(), "{column}: {}", stderr(&o));
     }
 }
 

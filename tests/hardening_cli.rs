@@ -1356,7 +1356,7 @@ fn edge_inputs_of_the_twenty_third_hunt() {
         rcal.to_str().unwrap(),
         &[
             "--momentum-epochs",
-            "0",
+            "1",
             "--max-epochs",
             "0",
             "--members",
@@ -2807,4 +2807,153 @@ fn edge_inputs_of_the_fifty_fourth_hunt() {
         ),
         "{err}"
     );
+}
+
+/// Names that contradict what is written, and a training of no epoch, are refused before any
+/// work: JSON under `.csv` (or CSV under `.json`) would pass for the other format, and no
+/// epoch in either phase would keep the random initial weights as the network.
+#[test]
+fn output_names_and_epochs_that_contradict_the_request_are_refused() {
+    use common::FANUC;
+    let joints = file("s55_joints.csv", "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n");
+    for (out, json, says) in [
+        (
+            "s55.csv",
+            true,
+            "the output is JSON (--json), under a name that says otherwise",
+        ),
+        (
+            "s55.JSON",
+            false,
+            "the output is CSV, under a name that says otherwise",
+        ),
+    ] {
+        let path = common::tmp(out);
+        let _ = std::fs::remove_file(&path);
+        let mut args = vec!["fk", "--robot", FANUC, "--joints", &joints, "--out"];
+        args.push(path.to_str().unwrap());
+        if json {
+            args.push("--json");
+        }
+        refused(&args, says);
+        assert!(!path.exists(), "{out} written");
+        // The name that agrees writes.
+        let fixed = common::tmp(if json { "s55.json" } else { "s55.csv" });
+        args[6] = fixed.to_str().unwrap();
+        let o = robocal(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = std::fs::read_to_string(&fixed).unwrap();
+        assert_eq!(text.starts_with('['), json, "{text}");
+    }
+    refused(
+        &[
+            "train",
+            "--robot",
+            FANUC,
+            "--data",
+            "datasets/case_d/calibration.csv",
+            "--out",
+            "never.rcal",
+            "--momentum-epochs",
+            "0",
+            "--max-epochs",
+            "0",
+        ],
+        "--momentum-epochs 0 with --max-epochs 0 trains no epoch",
+    );
+}
+
+/// The JSON reports of `train`, `evaluate` and `compensate` hold every warning the command
+/// printed, in order (a reviewer's `train` report had none of its warnings, nor the rows
+/// `--skip-bad-rows` dropped): what the terminal said is what the file holds.
+#[test]
+fn reports_hold_the_warnings_printed() {
+    use common::{FANUC, json};
+    // A copied row (line 6 repeats line 3) and a bad row skipped (line 42).
+    let text = std::fs::read_to_string("datasets/case_d/training.csv").unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let rows = [&lines[..5], &lines[2..3], &lines[5..40], &["1,2,3"]].concat();
+    let data = file("s55_warned.csv", &(rows.join("\n") + "\n"));
+    let printed = |o: &std::process::Output| -> Vec<String> {
+        (stderr(o).lines())
+            .filter_map(|l| l.strip_prefix("warning: ").map(str::to_string))
+            .collect()
+    };
+    let kept = |report: &std::path::Path| -> Vec<String> {
+        (json(report)["warnings"].as_array().unwrap().iter())
+            .map(|w| w.as_str().unwrap().to_string())
+            .collect()
+    };
+    let rcal = common::tmp("s55_warned.rcal");
+    let report = common::tmp("s55_train.json");
+    let o = robocal(&[
+        "train",
+        "--robot",
+        FANUC,
+        "--data",
+        &data,
+        "--skip-bad-rows",
+        "--members",
+        "0",
+        "--out",
+        rcal.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (said, held) = (printed(&o), kept(&report));
+    assert!(
+        said.iter().any(|w| w.contains("(line 6 repeats line 3)"))
+            && held.iter().any(|w| w.contains("(lines 42): ")),
+        "{said:?}\n{held:?}"
+    );
+    // The read's skipped rows come as one line in the report, their heading on the terminal.
+    assert!(
+        said.iter()
+            .all(|w| held.iter().any(|h| h.starts_with(w.trim_end_matches(':')))),
+        "{said:?}\n{held:?}"
+    );
+    let report = common::tmp("s55_evaluate.json");
+    let o = robocal(&[
+        "evaluate",
+        "--robot",
+        FANUC,
+        "--data",
+        &data,
+        "--skip-bad-rows",
+        "--compensator",
+        rcal.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (said, held) = (printed(&o), kept(&report));
+    assert!(
+        said.iter().any(|w| w.contains("(line 6 repeats line 3)")),
+        "{said:?}"
+    );
+    assert!(
+        said.iter()
+            .all(|w| held.iter().any(|h| h.starts_with(w.trim_end_matches(':')))),
+        "{said:?}\n{held:?}"
+    );
+    let targets = file(
+        "s55_targets.csv",
+        "x,y,z,rz,ry,rx,q1,q2,q3,q4,q5,q6\n1800,0,1500,0,90,0,175,0,0,0,0,0\n",
+    );
+    let report = common::tmp("s55_compensate.json");
+    let o = robocal(&[
+        "compensate",
+        "--nominal",
+        FANUC,
+        "--robot",
+        "datasets/case_d/true_robot.toml",
+        "--targets",
+        &targets,
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (said, held) = (printed(&o), kept(&report));
+    assert!(!said.is_empty() && said == held, "{said:?}\n{held:?}");
 }

@@ -777,20 +777,23 @@ fn a_fit_that_turns_the_start_into_another_arm_is_warned_of() {
 }
 
 /// An MDH or DH description cannot express the tilt of parallel axes out of parallel: where
-/// a joint's d regroups with another's, a note names the run of parallel axes and the joints
-/// an MDH description needs Hayati rows for. The UR10's standard DH (axes 2, 3 and 4
-/// parallel) gets it; its MDH file with Hayati rows for joints 3 and 4 and the FANUC's (a
-/// Hayati row for joint 3) do not.
+/// a joint's d regroups with another's, or two joints' each with the base's z, a note names
+/// the run of parallel axes and the joints an MDH description needs Hayati rows for. The
+/// UR10's standard DH (axes 2, 3 and 4 parallel) and a SCARA's (axes 1, 2 and 4 along the
+/// base's z; a reviewer's with axis 2 tilted by 0.05 deg had fitted with s^2 = 43 and no
+/// note) get it; MDH files with Hayati rows for those joints, and the FANUC's (a Hayati row
+/// for joint 3, its axis 1 alone along the base's z), do not.
 #[test]
 fn parallel_axes_without_a_hayati_row_are_noted() {
-    let note = |file: &str| -> Option<String> {
-        let robot = read_robot(root().join("datasets/robots").join(file)).unwrap();
-        let (set, _) = simulate(&robot, 60, 7, true, Observe::Pose);
-        let id = identify(&robot, &set, &Options::default()).unwrap();
+    let note_of = |robot: &Robot| -> Option<String> {
+        let (set, _) = simulate(robot, 60, 7, true, Observe::Pose);
+        let id = identify(robot, &set, &Options::default()).unwrap();
         id.notes
             .into_iter()
             .find(|n| n.starts_with("parallel axes"))
     };
+    let note =
+        |file: &str| note_of(&read_robot(root().join("datasets/robots").join(file)).unwrap());
     let dh = note("ur10.toml").expect("a note for the UR10's DH rows");
     assert!(
         dh.starts_with("parallel axes: joints 2, 3 and 4: an MDH or DH description cannot")
@@ -799,4 +802,59 @@ fn parallel_axes_without_a_hayati_row_are_noted() {
     );
     assert_eq!(note("ur10_mdh_hayati.toml"), None);
     assert_eq!(note("fanuc_r2000ib_210f.toml"), None);
+    // A SCARA: the third joint prismatic, the others about the base's z.
+    let frame = |z: f64| {
+        format!(
+            "convention = \"transform\"\nx = 30.0\ny = 20.0\nz = {z:?}\nrz = 0.0\nry = 0.0\nrx = 0.0\n"
+        )
+    };
+    let row = |fields: &str, limits: &str| format!("\n[[joint]]\n{fields}\nlimits = {limits}\n");
+    let scara_dh = [
+        row(
+            "convention = \"dh\"\nd = 400.0\na = 325.0\nalpha = 0.0",
+            "[-140.0, 140.0]",
+        ),
+        row(
+            "convention = \"dh\"\nd = 0.0\na = 275.0\nalpha = 180.0",
+            "[-145.0, 145.0]",
+        ),
+        row(
+            "convention = \"dh\"\ntype = \"prismatic\"\nd = 0.0\na = 0.0\nalpha = 0.0",
+            "[0.0, 200.0]",
+        ),
+        row(
+            "convention = \"dh\"\nd = 50.0\na = 0.0\nalpha = 0.0",
+            "[-360.0, 360.0]",
+        ),
+    ]
+    .concat();
+    let hayati = "convention = \"hayati\"\nbeta = 0.0\nalpha = 0.0\ntheta = 0.0";
+    let scara_mdh = [
+        row(
+            "convention = \"mdh\"\nalpha = 0.0\na = 0.0\nd = 400.0",
+            "[-140.0, 140.0]",
+        ),
+        row(&format!("{hayati}\na = 325.0"), "[-145.0, 145.0]"),
+        row(
+            "convention = \"mdh\"\ntype = \"prismatic\"\nalpha = 180.0\na = 275.0\nd = 0.0",
+            "[0.0, 200.0]",
+        ),
+        row(&format!("{hayati}\na = 0.0"), "[-360.0, 360.0]"),
+    ]
+    .concat();
+    let scara = |rows: &str, tool_z: f64| {
+        let text = format!(
+            "name = \"scara\"\n[base]\n{}{rows}\n[tool]\n{}",
+            frame(0.0).replace("x = 30.0\ny = 20.0", "x = 0.0\ny = 0.0"),
+            frame(tool_z)
+        );
+        note_of(&Robot::from_toml(&text).unwrap())
+    };
+    let dh = scara(&scara_dh, 100.0).expect("a note for the SCARA's DH rows");
+    assert!(
+        dh.starts_with("parallel axes: joints 1, 2 and 4: ")
+            && dh.contains("thesis eq. 3.11) for joint(s) 2 and 4 "),
+        "{dh}"
+    );
+    assert_eq!(scara(&scara_mdh, 150.0), None);
 }

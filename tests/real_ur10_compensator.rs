@@ -409,6 +409,60 @@ fn a_refinement_on_a_few_rows_must_win_significantly() {
     );
 }
 
+/// A network the flags fix that cross-validates far above the model alone is warned of,
+/// whatever its paired z: a reviewer's 64-unit pose-form network without a penalty on 50
+/// Series A rows cross-validated at 55 times the model's RMS with z 1.4 (a few rows of huge
+/// errors), got a note only, and missed held-out rows by up to 65 mm. Here: 50 Series A rows.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "trains a few networks: release builds only"
+)]
+fn a_fixed_network_far_worse_than_the_model_is_warned_of() {
+    use robocal::neural::compensator::{Network, Refine};
+    use robocal::neural::tuning::{FIXED_NETWORK_WORSE, NETWORK_Z};
+    let ur = common::ur10::robot();
+    let (id, rest) = split(&series(&ur, SERIES_A), 0.33, 1);
+    let model = identified(&ur, &id);
+    let few = MeasurementSet {
+        rows: rest.rows[..50].to_vec(),
+        ..rest.clone()
+    };
+    let opts = CompensatorOptions {
+        network: Some(Network::Mlp),
+        form: Some(Form::Pose),
+        encoding: Some(Encoding::Angles),
+        hidden: Some(64),
+        penalty: Some(0.0),
+        members: Some(1),
+        refine: Refine::Off,
+        ..Default::default()
+    };
+    let (_, report) = Compensator::train(&model, &few, &opts, &|_, _| {}).unwrap();
+    let sel = report.selection.as_ref().unwrap();
+    let t = sel
+        .fixed_network_test
+        .as_ref()
+        .expect("the fixed network is tested");
+    let rms = |i: usize| sel.candidates[i].score.as_ref().unwrap().position_rms_mm;
+    let ratio = rms(t.network) / rms(t.alone);
+    assert!(ratio >= FIXED_NETWORK_WORSE, "{ratio} {t:?}");
+    let warned = sel
+        .warnings
+        .iter()
+        .any(|w| w.contains("the model alone is more accurate on rows it did not see"));
+    assert!(warned, "{:?} {:?}", sel.warnings, sel.notes);
+    // The case the paired z alone let through (z 1.1 here, the RMS 9.1 times the model's).
+    assert!(t.z < NETWORK_Z, "{t:?}");
+    assert!(
+        !sel.notes
+            .iter()
+            .any(|n| n.contains("kept as --members fixes it")),
+        "{:?}",
+        sel.notes
+    );
+}
+
 /// Release builds only: the default compensator beats the baseline by at least 10 % RMS on
 /// the Series B split, and its max error stays within 10 % of the model's on the validation
 /// rows whose measurement agrees with a repeat of theirs in the pool (or has none); on a row

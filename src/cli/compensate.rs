@@ -56,10 +56,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
             opt("--compensator", a.compensator.as_ref()),
             req("--targets", &a.targets),
         ],
-        &[
-            opt("--out", a.output.out.as_ref()),
-            opt("--report", a.report.as_ref()),
-        ],
+        &[a.output.out_named()?, opt("--report", a.report.as_ref())],
     )?;
     let nominal = read_robot(&a.nominal)?;
     let robot = read_robot(&a.robot)?;
@@ -71,9 +68,10 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
             a.robot.display()
         );
     }
+    let mut warnings = super::warnings::Warnings::default();
     let (comp, note) = match &a.compensator {
         Some(p) => {
-            let (c, note) = load_compensator(p, &a.robot, &robot)?;
+            let (c, note) = load_compensator(p, &a.robot, &robot, &mut warnings)?;
             if let Some(note) = &note {
                 eprintln!("{note}");
             }
@@ -100,7 +98,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     };
 
     let tt = TargetTable::read(&a.targets, &nominal, true)?;
-    super::fk::warn_if_radian_seeds(&a.targets, &robot, &tt);
+    warnings.say_some(super::fk::radian_seeds_warning(&a.targets, &robot, &tt));
     // The limits every solution is held to: the calibrated model's.
     let calibrated = comp.as_ref().map_or(&robot, |c| &c.robot);
     let tool_gap = robocal::kinematics::tool_gap(&nominal, calibrated, TOOL_GAP_MM);
@@ -122,11 +120,10 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     {
         let beyond = calibrated.joints_outside_limits(s);
         if !beyond.is_empty() {
-            eprintln!(
-                "warning: --seed leaves the calibrated model's limits of joint(s) {}: its \
-                 joints {picks}",
+            warnings.say(format!(
+                "--seed leaves the calibrated model's limits of joint(s) {}: its joints {picks}",
                 join_joints(&beyond)
-            );
+            ));
         }
     }
     let seeds_beyond: Vec<usize> = (tt.seeds.iter().zip(&tt.table.lines))
@@ -137,13 +134,13 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         .map(|(_, &line)| line)
         .collect();
     if !seeds_beyond.is_empty() {
-        eprintln!(
-            "warning: {}: {} row(s) have seed joints outside the calibrated model's limits \
-             (lines {}): they {picks}",
+        warnings.say(format!(
+            "{}: {} row(s) have seed joints outside the calibrated model's limits (lines {}): \
+             they {picks}",
             a.targets.display(),
             seeds_beyond.len(),
             robocal::data::measurement::list_lines(&seeds_beyond)
-        );
+        ));
     }
     let with_orientation = tt.with_orientation;
     let d = a.output.decimals;
@@ -231,9 +228,11 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         .emit(&headers, &out_rows, written.len())
         .context("writing the commands")?;
     let network = comp.as_ref().is_some_and(|c| c.has_network());
-    super::predict::warn_outside(&a.targets, &outside, true, network);
+    warnings.say_some(super::predict::outside_warning(
+        &a.targets, &outside, true, network,
+    ));
     let robot_path = a.compensator.as_ref().unwrap_or(&a.robot);
-    unchecked.warn(&a.targets, robot_path);
+    warnings.say_some(unchecked.warning(&a.targets, robot_path));
     let total = t.rows.len();
     let (mean, max) = mean_and_max(&shifts).unzip();
     let report = CompensateReport {
@@ -261,6 +260,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
         written_miss: d.and_then(|decimals| written_miss(decimals, &as_written, not_checked)),
         unchecked: unchecked.report(),
         other_branch_lines: other_branch.iter().map(|o| o.0).collect(),
+        warnings: warnings.into_vec(),
     };
     if !other_branch.is_empty() {
         let shown: Vec<String> = (other_branch.iter().take(5))

@@ -261,6 +261,12 @@ impl CompensatorArgs {
         if self.momentum_epochs > 100_000 || self.max_epochs.is_some_and(|m| m > 100_000) {
             usage!("--momentum-epochs and --max-epochs take at most 100000");
         }
+        // No epoch in either phase would keep the random initial weights as the network.
+        if self.momentum_epochs == 0 && self.max_epochs == Some(0) {
+            usage!(
+                "--momentum-epochs 0 with --max-epochs 0 trains no epoch: give one phase epochs"
+            );
+        }
         if !(self.goal.is_finite() && self.goal >= 0.0) {
             usage!("--goal {}: give a finite goal >= 0", self.goal);
         }

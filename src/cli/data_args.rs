@@ -191,10 +191,6 @@ pub fn joints_of(robot: Option<&PathBuf>, fallback: usize) -> Result<Vec<JointIn
     })
 }
 
-pub fn read_set(args: &DataArgs, path: &Path, robot: &Robot) -> Result<MeasurementSet> {
-    args.read(path, &JointInfo::of(robot))
-}
-
 /// The data of a fit on measurements, as [`open_fit`] reads them.
 pub struct FitInputs {
     pub robot: Robot,

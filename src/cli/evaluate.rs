@@ -1,7 +1,7 @@
 //! `robocal evaluate`: the accuracy of a model (and a compensator) on measurements.
 
-use super::data_args::{DataArgs, read_set};
-use super::predict::{load_compensator, warn_outside};
+use super::data_args::DataArgs;
+use super::predict::{load_compensator, outside_warning};
 use super::summary::{
     clean_accuracy, print_repeats, print_shared, print_stats, print_worst, shared_under,
     write_report,
@@ -72,14 +72,17 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         ],
     )?;
     let robot = read_robot(&a.robot)?;
+    let mut warnings = super::warnings::Warnings::default();
     let (comp, note) = match &a.compensator {
         Some(p) => {
-            let (c, note) = load_compensator(p, &a.robot, &robot)?;
+            let (c, note) = load_compensator(p, &a.robot, &robot, &mut warnings)?;
             (Some(c), note)
         }
         None => (None, None),
     };
-    let set = read_set(&a.read, &a.data, &robot)?;
+    let joints = robocal::data::JointInfo::of(&robot);
+    let (set, read) = a.read.read_noted(&a.data, &joints)?;
+    warnings.printed_too(read);
     let m = a
         .measure
         .map(Measure::from)
@@ -87,10 +90,8 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     // What `identify` asks of the rows for this measure (an orientation in every row, pairs,
     // ...): a measure the file cannot give is refused, not reported as empty columns.
     robocal::identify::problem::Observations::new(&set, m, Default::default())?;
-    if matches!(m, Measure::Relative | Measure::Distance)
-        && let Some(w) = robocal::data::pairs::broken_pairs_warning(&set)
-    {
-        eprintln!("warning: {w}");
+    if matches!(m, Measure::Relative | Measure::Distance) {
+        warnings.say_some(robocal::data::pairs::broken_pairs_warning(&set));
     }
     // Positions in metres or inches, refused as `identify` refuses them.
     if matches!(m, Measure::Pose | Measure::Position) {
@@ -103,11 +104,14 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             m.name()
         );
     }
-    let reference = a
-        .check_against
-        .as_ref()
-        .map(|p| read_set(&a.read, p, &robot))
-        .transpose()?;
+    let reference = match &a.check_against {
+        Some(p) => {
+            let (r, read) = a.read.read_noted(p, &joints)?;
+            warnings.printed_too(read);
+            Some(r)
+        }
+        None => None,
+    };
     let model_rows = row_errors(&set, m, |q| tool_pose(&robot, q))?;
     // A model calibrated without orientations (or positions) keeps its start values of the
     // parameters they did not observe: its errors there say nothing of its accuracy (a
@@ -120,7 +124,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         for r in &set.rows {
             unchecked.add_measured(&robot, &r.q, r.line, position, orientation);
         }
-        unchecked.warn(&a.data, &a.robot);
+        warnings.say_some(unchecked.warning(&a.data, &a.robot));
     }
     let s = summarize(&model_rows);
     say!(
@@ -166,7 +170,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         &model_rows,
         net_rows.as_deref().map(|n| (n, &inside[..])),
     ));
-    let report = EvaluateReport {
+    let mut report = EvaluateReport {
         robot: a.robot.display().to_string(),
         compensator: a.compensator.as_ref().map(|p| p.display().to_string()),
         data: a.data.display().to_string(),
@@ -179,10 +183,11 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         shared_readings: shared,
         check_against: a.check_against.as_ref().map(|p| p.display().to_string()),
         worst_rows: worst_rows(&model_rows, net_rows.as_deref())?,
+        warnings: Vec::new(),
     };
-    super::summary::print_copies(&set);
+    super::summary::warn_copies(&set, &mut warnings);
     if let Some(r) = &report.repeats {
-        print_repeats(r, &robot, &set);
+        print_repeats(r, &robot, &set, &mut warnings);
     }
     if let (Some(path), Some(r)) = (&a.check_against, &reference) {
         // Said whatever it found: a check that could not run is not a clean result.
@@ -194,12 +199,12 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             report.shared_readings.len()
         );
         if mine == 0 || theirs == 0 {
-            eprintln!(
-                "warning: --check-against {}: {} no row with both a position and an \
-                 orientation, so no reading was compared with its rows",
+            warnings.say(format!(
+                "--check-against {}: {} no row with both a position and an orientation, so no \
+                 reading was compared with its rows",
                 path.display(),
                 if mine == 0 { "the data have" } else { "it has" }
-            );
+            ));
         }
     }
     if !report.shared_readings.is_empty() {
@@ -221,7 +226,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         if let Some(w) = misplaced_model_warning(&a.robot.display().to_string(), &robot, &set)
             && (comp.is_none() || embedded_off)
         {
-            eprintln!("warning: {w}");
+            warnings.say(w);
         } else if embedded_off
             && let (Some(c), Some(path)) = (&comp, &a.compensator)
             && let Some(w) = misplaced_model_warning(
@@ -234,11 +239,11 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
             // another frame (another tracker set-up) or with another tool. A reviewer's
             // compensator trained on Series B, evaluated on Series A rows: 3.5 m off, and only
             // the note that it runs its own model.
-            eprintln!(
-                "warning: {w} (The compensator runs in series with its own model, not with {}: \
-                 train it on rows in this frame.)",
+            warnings.say(format!(
+                "{w} (The compensator runs in series with its own model, not with {}: train it \
+                 on rows in this frame.)",
                 a.robot.display()
-            );
+            ));
         }
     }
     for row in report.accuracy.iter().filter(|r| r.data == "data") {
@@ -261,7 +266,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         .filter(|_| !embedded_off)
         .and_then(|n| super::summary::worse_than_model(&a.data, &model_rows, n, m, &suspects))
     {
-        eprintln!("warning: {w}");
+        warnings.say(w);
     }
     if let Some(note) = &report.note {
         say!("{note}");
@@ -272,12 +277,13 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     {
         say!("note: {n}");
     }
-    warn_outside(
+    warnings.say_some(outside_warning(
         &a.data,
         &outside,
         false,
         comp.as_ref().is_some_and(|c| c.has_network()),
-    );
+    ));
+    report.warnings = warnings.into_vec();
     if let Some(dir) = &a.plot {
         let mut runs = vec![ErrorRun {
             label: "model",

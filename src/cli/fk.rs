@@ -36,19 +36,33 @@ pub(super) fn warn_if_radians(path: &std::path::Path, robot: &Robot, t: &JointTa
 /// [`warn_if_radians`]): a seed read as degrees picks another branch, or none within the
 /// limits, and the target fails or is solved in another configuration.
 pub(super) fn warn_if_radian_seeds(path: &std::path::Path, robot: &Robot, t: &TargetTable) {
-    if t.seeds_look_like_radians(robot) {
-        warn_radians(path, "every seed joint angle", "the seed columns are read");
+    if let Some(w) = radian_seeds_warning(path, robot, t) {
+        eprintln!("warning: {w}");
     }
 }
 
+/// The warning of [`warn_if_radian_seeds`], where there is one.
+pub(super) fn radian_seeds_warning(
+    path: &std::path::Path,
+    robot: &Robot,
+    t: &TargetTable,
+) -> Option<String> {
+    (t.seeds_look_like_radians(robot))
+        .then(|| radians_warning(path, "every seed joint angle", "the seed columns are read"))
+}
+
 fn warn_radians(path: &std::path::Path, what: &str, read: &str) {
-    eprintln!(
-        "warning: {}: {what} lies within +-{:.2}, one turn in radians (or its joint's range in \
-         radians, where that is wider): {read} in degrees; if they hold radians, convert them \
-         (or import the file with a profile whose joint_unit is \"rad\")",
+    eprintln!("warning: {}", radians_warning(path, what, read));
+}
+
+fn radians_warning(path: &std::path::Path, what: &str, read: &str) -> String {
+    format!(
+        "{}: {what} lies within +-{:.2}, one turn in radians (or its joint's range in radians, \
+         where that is wider): {read} in degrees; if they hold radians, convert them (or import \
+         the file with a profile whose joint_unit is \"rad\")",
         path.display(),
         std::f64::consts::TAU
-    );
+    )
 }
 
 /// Warns that the rows at file `lines` of `path` hold joints beyond the robot's limits.
@@ -68,7 +82,7 @@ pub fn run(a: FkArgs) -> Result<()> {
     use super::paths::{guard, opt, req};
     guard(
         &[req("--robot", &a.robot), opt("--joints", a.joints.as_ref())],
-        &[opt("--out", a.output.out.as_ref())],
+        &[a.output.out_named()?],
     )?;
     let robot = read_robot(&a.robot)?;
     let n = robot.dof();

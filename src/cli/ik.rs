@@ -65,7 +65,7 @@ pub fn run(a: IkArgs) -> Result<bool> {
             opt("--poses", a.poses.as_ref()),
             opt("--nominal", a.nominal.as_ref()),
         ],
-        &[opt("--out", a.output.out.as_ref())],
+        &[a.output.out_named()?],
     )?;
     let robot = read_robot(&a.robot)?;
     let n = robot.dof();

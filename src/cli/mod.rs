@@ -144,6 +144,7 @@ mod split;
 mod summary;
 mod train;
 mod unchecked;
+mod warnings;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::process::ExitCode;

@@ -30,6 +30,24 @@ pub struct OutputArgs {
 }
 
 impl OutputArgs {
+    /// The output file for [`super::paths::guard`]'s list, once its name agrees with the
+    /// format: JSON under a `.csv` name (or CSV under `.json`) would pass for the other.
+    pub fn out_named(&self) -> Result<super::paths::Named<'_>> {
+        let Some(out) = self.out.as_deref() else {
+            return Ok(None);
+        };
+        let ext = (out.extension().and_then(|e| e.to_str())).map(str::to_ascii_lowercase);
+        let (given, fix) = match (ext.as_deref(), self.json) {
+            (Some("csv"), true) => ("JSON (--json)", "a .json name, or leave out --json"),
+            (Some("json"), false) => ("CSV", "--json for JSON, or a .csv name"),
+            _ => return Ok(Some(("--out", out))),
+        };
+        usage!(
+            "--out {}: the output is {given}, under a name that says otherwise (give {fix})",
+            out.display()
+        )
+    }
+
     /// Writes rows as CSV or JSON, to the file or stdout; the last `written` columns are the
     /// command's, the others carried from its input ([`rows_to_json`]).
     pub fn emit(&self, headers: &[String], rows: &[Vec<String>], written: usize) -> Result<()> {

@@ -16,6 +16,7 @@ pub fn load_compensator(
     path: &Path,
     robot_path: &Path,
     robot: &Robot,
+    warnings: &mut super::warnings::Warnings,
 ) -> Result<(Compensator, Option<String>)> {
     let mut c = Compensator::load_for(path, robot)?;
     let mut notes = Vec::new();
@@ -38,12 +39,12 @@ pub fn load_compensator(
     // The embedded model's base far from the robot file's: trained in another measurement
     // frame (another tracker set-up), whose poses are not the robot file's.
     if let Some((mm, deg)) = bases_apart(robot, &c.robot) {
-        eprintln!(
-            "warning: the compensator's model has its base {mm:.1} mm and {deg:.1} deg from {}'s: \
-             it was trained in another frame (another measurement set-up), and its poses are in \
-             that frame, not in the robot file's",
+        warnings.say(format!(
+            "the compensator's model has its base {mm:.1} mm and {deg:.1} deg from {}'s: it was \
+             trained in another frame (another measurement set-up), and its poses are in that \
+             frame, not in the robot file's",
             robot_path.display()
-        );
+        ));
     }
     if c.runs_another_model(robot) {
         notes.push(format!(
@@ -91,13 +92,13 @@ pub struct PredictArgs {
 
 /// Compensated tool poses (x, y, z mm; rz, ry, rx deg) for a joint CSV.
 pub fn run_predict(a: PredictArgs) -> Result<()> {
-    use super::paths::{guard, opt, req};
+    use super::paths::{guard, req};
     guard(
         &[
             req("--compensator", &a.compensator),
             req("--joints", &a.joints),
         ],
-        &[opt("--out", a.output.out.as_ref())],
+        &[a.output.out_named()?],
     )?;
     let c = Compensator::load(&a.compensator)?;
     let t = JointTable::read(&a.joints, &c.robot)?;
@@ -145,10 +146,23 @@ pub fn run_predict(a: PredictArgs) -> Result<()> {
 /// The output column that says where a row stands against the training domain.
 pub const DOMAIN_COLUMN: &str = "domain";
 
-/// Warns (stderr) about rows outside a compensator's training domain, by line; `column`: the
-/// output has the domain column; `network`: the compensator has one (else the model alone).
+/// Warns (stderr) about rows outside a compensator's training domain: [`outside_warning`].
 pub fn warn_outside(path: &Path, lines: &[usize], column: bool, network: bool) {
-    if !lines.is_empty() {
+    if let Some(w) = outside_warning(path, lines, column, network) {
+        eprintln!("warning: {w}");
+    }
+}
+
+/// The warning on rows outside a compensator's training domain, by line; `column`: the
+/// output has the domain column; `network`: the compensator has one (else the model alone).
+/// None where no row is outside.
+pub fn outside_warning(
+    path: &Path,
+    lines: &[usize],
+    column: bool,
+    network: bool,
+) -> Option<String> {
+    (!lines.is_empty()).then(|| {
         let why = if network {
             "the network extrapolates there (its correction fades with the distance from the \
              training configurations, not for a joint beyond its training range alone)"
@@ -156,9 +170,8 @@ pub fn warn_outside(path: &Path, lines: &[usize], column: bool, network: bool) {
             "a joint lies beyond the training rows' range, the only rows the compensator's \
              model (the model alone, refined in training) was fitted on"
         };
-        eprintln!(
-            "warning: {}: {} row(s) outside the compensator's training domain (lines {}): \
-             {why}{}",
+        format!(
+            "{}: {} row(s) outside the compensator's training domain (lines {}): {why}{}",
             path.display(),
             lines.len(),
             robocal::data::measurement::list_lines(lines),
@@ -167,6 +180,6 @@ pub fn warn_outside(path: &Path, lines: &[usize], column: bool, network: bool) {
             } else {
                 String::new()
             }
-        );
-    }
+        )
+    })
 }

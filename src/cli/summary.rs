@@ -49,10 +49,8 @@ pub fn print_stats(rows: &[Accuracy], measure: robocal::identify::Measure) {
 
 /// Warns of rows of `set` that copy an earlier row to the last digit (as `identify` does):
 /// `evaluate` and `train` count them as rows of their own, and leave them out of the repeats.
-pub fn print_copies(set: &MeasurementSet) {
-    if let Some(w) = robocal::identify::plausibility::copied_warning(set) {
-        eprintln!("warning: {w}");
-    }
+pub fn warn_copies(set: &MeasurementSet, warnings: &mut super::warnings::Warnings) {
+    warnings.say_some(robocal::identify::plausibility::copied_warning(set));
 }
 
 /// Prints the line on the data's repeated configurations (`train` and `evaluate` alike):
@@ -69,7 +67,12 @@ const REPEATS_RATIO: f64 = 1.5;
 /// than the model misses, which a warning says (a reviewer's second readings 1.8 mm off 20
 /// rows: pure error 0.98 mm against the model's 0.61, an info line only, and held-out RMS
 /// 0.34 against 0.28 mm).
-pub fn print_repeats(r: &Repeats, model: &Robot, set: &MeasurementSet) {
+pub fn print_repeats(
+    r: &Repeats,
+    model: &Robot,
+    set: &MeasurementSet,
+    warnings: &mut super::warnings::Warnings,
+) {
     say!(
         "repeats: {} configuration{} measured more than once ({} rows); the model's position \
          residuals of one configuration differ by {:.4} mm (median), at most {:.4} mm (lines \
@@ -96,14 +99,14 @@ pub fn print_repeats(r: &Repeats, model: &Robot, set: &MeasurementSet) {
         .collect();
     let model_rms = (squares.iter().sum::<f64>() / squares.len().max(1) as f64).sqrt();
     if !squares.is_empty() && r.pure_error_rms_mm > REPEATS_RATIO * model_rms {
-        eprintln!(
-            "warning: the repeats' pure error ({:.4} mm RMS) is more than {REPEATS_RATIO} times \
-             the model's own position RMS on these rows ({model_rms:.4} mm): readings of one \
-             configuration disagree by more than the model misses them (lines {} and {} by {:.4} mm). A \
-             reading logged with other joints, a robot or a target moved between the readings? \
-             A compensator learns their mean",
+        warnings.say(format!(
+            "the repeats' pure error ({:.4} mm RMS) is more than {REPEATS_RATIO} times the \
+             model's own position RMS on these rows ({model_rms:.4} mm): readings of one \
+             configuration disagree by more than the model misses them (lines {} and {} by \
+             {:.4} mm). A reading logged with other joints, a robot or a target moved between \
+             the readings? A compensator learns their mean",
             r.pure_error_rms_mm, r.max_spread_lines[0], r.max_spread_lines[1], r.max_spread_mm
-        );
+        ));
     }
 }
 

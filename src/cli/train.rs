@@ -292,7 +292,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         robot,
         data: set,
         validation: val,
-        ..
+        read_warnings,
     } = super::data_args::open_fit(
         &a.robot,
         &a.data,
@@ -307,12 +307,13 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     for s in std::iter::once(&set).chain(&val) {
         robocal::identify::register::check_position_scale(&robot, s)?;
     }
+    let mut warnings = super::warnings::Warnings::printed(read_warnings);
     // A model far off its rows is said before the training, not after it.
     if let Some(w) = misplaced_model_warning(&a.robot.display().to_string(), &robot, &set) {
-        eprintln!(
-            "warning: {w} The compensator is trained and written as asked: its refinement may \
-             take up a frame or a tool, never another robot"
-        );
+        warnings.say(format!(
+            "{w} The compensator is trained and written as asked: its refinement may take up a \
+             frame or a tool, never another robot"
+        ));
     }
     let terminal = std::io::stderr().is_terminal();
     let opts = a.build.options(a.sigma.sigmas(), terminal)?;
@@ -342,9 +343,9 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         a.data.display(),
         a.robot.display()
     );
-    super::summary::print_copies(&set);
+    super::summary::warn_copies(&set, &mut warnings);
     if let Some(r) = &report.repeats {
-        super::summary::print_repeats(r, &robot, &set);
+        super::summary::print_repeats(r, &robot, &set, &mut warnings);
     }
     if let Some(sel) = &report.selection {
         print_selection(sel);
@@ -361,17 +362,16 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         say!("note: {n}");
     }
     for w in report.selection.iter().flat_map(|s| &s.warnings) {
-        eprintln!("warning: {w}");
+        warnings.say(w.clone());
     }
     if c.has_network() && c.domain.radius == 0.0 {
-        eprintln!(
-            "warning: the training rows hold one configuration (every joint within {} rad of \
-             one another's, or a whole turn from it): the training domain's radius is 0, so the \
-             network corrects \
-             nothing away from that configuration; measure configurations spread over the \
-             workspace",
+        warnings.say(format!(
+            "the training rows hold one configuration (every joint within {} rad of one \
+             another's, or a whole turn from it): the training domain's radius is 0, so the \
+             network corrects nothing away from that configuration; measure configurations \
+             spread over the workspace",
             robocal::neural::repeats::SAME_CONFIGURATION
-        );
+        ));
     }
     // The rows cross-validation saw: the training rows but those left out for carrying
     // another configuration's reading.
@@ -493,12 +493,12 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         // not learned (no epochs, a step limit hit at once): written as asked, but said.
         let (b, f) = (before.position_rms_mm(), after.position_rms_mm());
         if name == "training" && f > b {
-            eprintln!(
-                "warning: the compensator misses its own training rows by more than the model \
-                 alone ({f:.4} against {b:.4} mm RMS): its networks did not learn them (too \
-                 few epochs or iterations?); the file is written as asked, but the model alone \
-                 is more accurate"
-            );
+            warnings.say(format!(
+                "the compensator misses its own training rows by more than the model alone \
+                 ({f:.4} against {b:.4} mm RMS): its networks did not learn them (too few epochs \
+                 or iterations?); the file is written as asked, but the model alone is more \
+                 accurate"
+            ));
         }
         accuracy.push(Accuracy::new(name, "model", before));
         accuracy.push(Accuracy {
@@ -525,12 +525,16 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         super::summary::print_worst("validation", "the model", Measure::default_for(v), w);
     }
     if let Some(path) = &a.validate {
-        super::predict::warn_outside(path, &val_outside, false, c.has_network());
+        warnings.say_some(super::predict::outside_warning(
+            path,
+            &val_outside,
+            false,
+            c.has_network(),
+        ));
     }
-    if let Some(w) = &val_worse {
-        eprintln!("warning: {w}");
-    }
+    warnings.say_some(val_worse);
     report.validation_lines_outside_domain = val_outside;
+    report.warnings = warnings.into_vec();
     super::output::writing(c.save(&a.out), &a.out)?;
     told_after!("wrote {}", a.out.display());
     if let Some(dir) = &a.plot {

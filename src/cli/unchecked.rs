@@ -62,9 +62,16 @@ impl UncheckedRows {
         })
     }
 
-    /// Warns (stderr) about the rows of `path` found (a flag such as `--q`: the one pose it
-    /// gave), naming `robot_path`'s unobserved parameters.
+    /// Warns (stderr) about the rows of `path` found: [`UncheckedRows::warning`].
     pub fn warn(&self, path: &Path, robot_path: &Path) {
+        if let Some(w) = self.warning(path, robot_path) {
+            eprintln!("warning: {w}");
+        }
+    }
+
+    /// The warning on the rows of `path` found (a flag such as `--q`: the one pose it
+    /// gave), naming `robot_path`'s unobserved parameters; None where none was found.
+    pub fn warning(&self, path: &Path, robot_path: &Path) -> Option<String> {
         // One pose given on the command line (`--q`, `--pose`) has no lines to list.
         let single = path.to_str().is_some_and(|p| p.starts_with("--"));
         let mut parts = Vec::new();
@@ -85,16 +92,16 @@ impl UncheckedRows {
                 )
             });
         }
-        if !parts.is_empty() {
-            eprintln!(
-                "warning: {}: {} {} on {} of {}, which its calibration did not observe \
-                 (no effect on its measurements; they keep the start model's values): unchecked",
+        (!parts.is_empty()).then(|| {
+            format!(
+                "{}: {} {} on {} of {}, which its calibration did not observe (no effect on its \
+                 measurements; they keep the start model's values): unchecked",
                 path.display(),
                 parts.join(" and "),
                 if parts.len() > 1 { "depend" } else { "depends" },
                 self.names.join(", "),
                 robot_path.display()
-            );
-        }
+            )
+        })
     }
 }

@@ -206,11 +206,13 @@ impl Profile {
     /// Parses profile text; `path` is used in messages.
     pub fn parse(text: &str, path: &Path) -> Result<Profile> {
         let f: ProfileFile = crate::io::parse_toml(text, path)?;
+        // A field's line from the parser's spans: a top-level key, or one of `[columns]`
+        // (under the header, dotted or inline; the two share no name).
+        let key_lines = crate::io::key_lines(text);
         let bad = |field: &str, msg: String| {
-            let line = text
-                .lines()
-                .position(|l| l.trim_start().starts_with(field))
-                .map(|i| i + 1);
+            let line = (key_lines.iter())
+                .find(|(k, _)| k == field || k.strip_prefix("columns.") == Some(field))
+                .map(|(_, line)| *line);
             Error::input(
                 Location {
                     file: path.to_path_buf(),
@@ -466,5 +468,38 @@ mod tests {
         }
         let tab = Profile::parse("delimiter = \"\\t\"\n", Path::new("p.toml")).unwrap();
         assert_eq!(tab.delimiter, b'\t');
+    }
+
+    /// A field's error names its line however the key is written: under `[columns]`, dotted,
+    /// quoted or in an inline table (a dotted key had lost its line), and not a line that
+    /// merely starts with the field's name (`x` is not `xyz_note`'s line).
+    #[test]
+    fn errors_name_the_line_of_the_key_however_written() {
+        for (text, line) in [
+            ("# z\n\n[columns]\nx = \"A\"\ny = \"A\"\n", 5),
+            (
+                "orientation = \"euler\"\ncolumns.x = \"A\"\n\ncolumns.y = \"A\"\n",
+                4,
+            ),
+            ("[columns]\nx = \"A\"\n\"y\" = \"A\"\n", 3),
+            ("\ncolumns = { x = \"A\", y = \"A\" }\n", 2),
+            ("[columns]\nx = \"A\"\n\n\n  y = \"A\"\n", 5),
+        ] {
+            let e = Profile::parse(text, Path::new("p.toml"))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains(&format!(
+                    "p.toml:{line}: field `y`: column `A` is already read"
+                )),
+                "{text}: {e}"
+            );
+        }
+        let e = Profile::parse("\n\nmy.delimiter = 1\n", Path::new("p.toml"));
+        assert!(e.is_err());
+        let e = Profile::parse("\n\ndelimiter = \"ab\"\n", Path::new("p.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("p.toml:3: field `delimiter`"), "{e}");
     }
 }

@@ -165,6 +165,19 @@ impl<'a> Observations<'a> {
                 }
             }
             Measure::Relative | Measure::Distance => {
+                // Read as absent, such a column would leave pairs chained in file order and
+                // distances found from the positions, without a word.
+                if !set.other_case_pair_columns.is_empty() {
+                    return Err(Error::Invalid(format!(
+                        "{}: measuring by {} pairs rows, but the header has {}: column names \
+                         are case-sensitive, so it would be read as absent (pairs chained in \
+                         file order, distances found from the positions); rename it, or name \
+                         it in a profile",
+                        set.source.display(),
+                        measure.name(),
+                        set.other_case_pair_columns.join(", ")
+                    )));
+                }
                 if measure == Measure::Relative {
                     need(set.has_position(), "a position")?;
                 }

@@ -617,14 +617,19 @@ fn mass_free_note(ids: &[ParamId]) -> Option<String> {
 /// or DH description cannot express the small tilt out of parallel a real arm has: the note
 /// names each run of parallel axes and the joints an MDH description needs Hayati rows for
 /// (thesis eq. 3.11: each after the run's first; a Hayati row has no `d`, so it regroups with
-/// nothing). A reviewer's ABB arm with axis 3 tilted by 0.55 mrad fitted with s^2 = 38 and
-/// nothing said why.
+/// nothing). Two joints whose `d` each regroup with the base's (or each with the tool's)
+/// translation along z alone are parallel too: a SCARA's axes 1, 2 and 4 all run along the
+/// base's z. A reviewer's ABB arm with axis 3 tilted by 0.55 mrad fitted with s^2 = 38 and
+/// nothing said why; a reviewer's SCARA with axis 2 tilted by 0.05 deg, s^2 = 43.
 fn parallel_axes_note(
     robot: &Robot,
     params: &[ParamId],
     ident: &Identifiability,
 ) -> Option<String> {
     let revolute = |k: usize| robot.joints()[k].joint_type == JointType::Revolute;
+    // Nodes: joints by index; the base's and the tool's z translation beyond them.
+    let n = robot.dof();
+    let (base_z, tool_z) = (n, n + 1);
     let pairs: Vec<(usize, usize)> = (ident.dropped.iter())
         .filter_map(|d| {
             let DropReason::Regroups(g) = &d.reason else {
@@ -634,25 +639,43 @@ fn parallel_axes_note(
                 return None;
             };
             let o = params[*other];
-            match (p.slot, p.field, o.slot, o.field) {
-                (Slot::Joint(k), Field::D, Slot::Joint(j), Field::D)
-                    if j != k && revolute(j) && revolute(k) && (c.abs() - 1.0).abs() < 1e-3 =>
-                {
-                    Some((j.min(k), j.max(k)))
-                }
+            let (Slot::Joint(k), Field::D) = (p.slot, p.field) else {
+                return None;
+            };
+            if !revolute(k) || (c.abs() - 1.0).abs() >= 1e-3 {
+                return None;
+            }
+            match (o.slot, o.field) {
+                (Slot::Joint(j), Field::D) if j != k && revolute(j) => Some((k, j)),
+                (Slot::Base, Field::Z | Field::D) => Some((k, base_z)),
+                (Slot::Tool, Field::Z | Field::D) => Some((k, tool_z)),
                 _ => None,
             }
         })
         .collect();
-    // Runs of parallel axes: pairs that share a joint are one run (the UR10's d3 and d4
-    // both regroup with d2).
-    let mut runs: Vec<Vec<usize>> = Vec::new();
+    // Runs of parallel axes: joints linked through pairs (or through the base's or the
+    // tool's z) are one run (the UR10's d3 and d4 both regroup with d2); a joint whose d
+    // alone regroups with the base's z (every arm's first) is no run.
+    let mut root: Vec<usize> = (0..n + 2).collect();
+    fn find(root: &[usize], mut x: usize) -> usize {
+        while root[x] != x {
+            x = root[x];
+        }
+        x
+    }
     for (a, b) in pairs {
-        match runs.iter_mut().find(|r| r.contains(&a) || r.contains(&b)) {
-            Some(r) => r.extend([a, b]),
-            None => runs.push(vec![a, b]),
+        let (ra, rb) = (find(&root, a), find(&root, b));
+        root[ra.max(rb)] = ra.min(rb);
+    }
+    let mut runs: Vec<Vec<usize>> = Vec::new();
+    for k in 0..n {
+        let r = find(&root, k);
+        match runs.iter_mut().find(|run| find(&root, run[0]) == r) {
+            Some(run) => run.push(k),
+            None => runs.push(vec![k]),
         }
     }
+    runs.retain(|r| r.len() >= 2);
     let list = |v: &[usize]| -> String {
         let names: Vec<String> = v.iter().map(|k| (k + 1).to_string()).collect();
         match names.split_last() {

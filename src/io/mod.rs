@@ -7,7 +7,7 @@ pub mod json_number;
 mod read;
 mod write;
 
-pub use read::{line_of, parse_toml, read_capped, read_text, without_bom};
+pub use read::{key_lines, line_of, parse_toml, read_capped, read_text, without_bom};
 pub use write::{
     AtomicWriter, abandon, all_or_nothing, create_dir_all, discarded_outputs, is_standard_output,
     kept_outputs, output_file, staged_bytes, write_atomic,

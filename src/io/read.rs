@@ -71,6 +71,36 @@ pub fn line_of(text: &str, offset: usize) -> usize {
         + 1
 }
 
+/// The full dotted name (`tool.d`) and the 1-based line of every value (not table) of TOML
+/// text, in file order, from the parser's spans: a key under a `[tool]` header, in an inline
+/// table or dotted is `tool.<key>`, a quoted `"tool.d"` is `tool.d`. Empty for text that does
+/// not parse.
+pub fn key_lines(text: &str) -> Vec<(String, usize)> {
+    fn walk(
+        prefix: &str,
+        table: &toml::de::DeTable<'_>,
+        text: &str,
+        out: &mut Vec<(String, usize)>,
+    ) {
+        for (k, v) in table {
+            let name = if prefix.is_empty() {
+                k.get_ref().to_string()
+            } else {
+                format!("{prefix}.{}", k.get_ref())
+            };
+            match v.get_ref() {
+                toml::de::DeValue::Table(t) => walk(&name, t, text, out),
+                _ => out.push((name, line_of(text, k.span().start))),
+            }
+        }
+    }
+    let mut out = Vec::new();
+    if let Ok(spanned) = toml::de::DeTable::parse(text) {
+        walk("", spanned.get_ref(), text, &mut out);
+    }
+    out
+}
+
 /// Parses TOML text into `T`; a syntax or type error names the file, the line and the key.
 pub fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T> {
     toml::from_str(text).map_err(|e| {

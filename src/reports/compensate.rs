@@ -66,6 +66,9 @@ pub struct CompensateReport {
     /// nearest the middle of the ranges, whose calibrated solution failed (none: left out).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub other_branch_lines: Vec<usize>,
+    /// Every warning `compensate` printed, in order; empty in reports written before it.
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 /// How far rounding the commands to the output's decimals moves what the robot reaches.

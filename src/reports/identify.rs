@@ -289,6 +289,10 @@ pub struct EvaluateReport {
     /// before it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub worst_rows: Option<crate::evaluate::WorstRows>,
+    /// Every warning `evaluate` printed, in order (those of reading the files included);
+    /// empty in reports written before it.
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 fn unmodelled_is_none(u: &crate::identify::Unmodelled) -> bool {

@@ -65,6 +65,10 @@ pub struct TrainReport {
     /// file, and in reports written before it).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub validation_lines_outside_domain: Vec<usize>,
+    /// Every warning `train` printed, in order (those of reading the files, of the selection
+    /// and of the fit); empty in reports written before it.
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 impl TrainReport {
@@ -101,6 +105,7 @@ impl TrainReport {
             validation_shared_readings: Vec::new(),
             validation_worst_rows: None,
             validation_lines_outside_domain: Vec::new(),
+            warnings: Vec::new(),
         }
     }
 }

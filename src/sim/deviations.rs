@@ -29,27 +29,6 @@ fn flatten(prefix: &str, table: &toml::Table, out: &mut Vec<(String, toml::Value
     }
 }
 
-/// The full dotted name and the line of every value (not table) of `table`, as [`flatten`]
-/// names them.
-fn key_spans(
-    prefix: &str,
-    table: &toml::de::DeTable<'_>,
-    text: &str,
-    out: &mut Vec<(String, usize)>,
-) {
-    for (k, v) in table {
-        let name = if prefix.is_empty() {
-            k.get_ref().to_string()
-        } else {
-            format!("{prefix}.{}", k.get_ref())
-        };
-        match v.get_ref() {
-            toml::de::DeValue::Table(t) => key_spans(&name, t, text, out),
-            _ => out.push((name, crate::io::line_of(text, k.span().start))),
-        }
-    }
-}
-
 impl Deviations {
     /// Reads a deviations file for `robot`; an unknown parameter or a non-number is an error
     /// naming the file, the line and the parameter.
@@ -66,10 +45,7 @@ impl Deviations {
         // The line of each key by its full dotted name, from the parser's spans: a key under
         // a `[tool]` header, in an inline table or dotted is `tool.<key>`, a quoted `"tool.d"`
         // is `tool.d`; the n-th key of one name is on the n-th line that gives it.
-        let mut key_lines: Vec<(String, usize)> = Vec::new();
-        if let Ok(spanned) = toml::de::DeTable::parse(text) {
-            key_spans("", spanned.get_ref(), text, &mut key_lines);
-        }
+        let key_lines = crate::io::key_lines(text);
         let mut seen: Vec<String> = Vec::new();
         let mut line_of_key = |name: &str| {
             let nth = seen.iter().filter(|s| *s == name).count();

@@ -88,6 +88,10 @@ pub struct MeasurementSet {
     /// skipped, or left out of a subset), so their displacement is not one measured step.
     /// Ascending.
     pub chain_breaks: Vec<usize>,
+    /// The header's names that differ from the `pair` or `distance` column's name in letter
+    /// case only, as "`Pair` for pair": read as absent. They matter under the pair measures
+    /// alone, which refuse them ([`crate::identify::problem::Observations::new`]).
+    pub other_case_pair_columns: Vec<String>,
 }
 
 impl MeasurementSet {
@@ -99,6 +103,7 @@ impl MeasurementSet {
             rows,
             extra_columns: Vec::new(),
             chain_breaks: Vec::new(),
+            other_case_pair_columns: Vec::new(),
         }
     }
 
@@ -261,6 +266,7 @@ pub fn subset(set: &MeasurementSet, keep: impl Fn(usize) -> bool) -> Measurement
         rows: kept.iter().map(|&i| set.rows[i].clone()).collect(),
         extra_columns: set.extra_columns.clone(),
         chain_breaks,
+        other_case_pair_columns: set.other_case_pair_columns.clone(),
     }
 }
 

@@ -581,19 +581,12 @@ pub fn parse_measurements(
     let cols = &profile.columns;
     let mut report = ReadReport::default();
     // A distance or pair column in other letter case is read as absent: it counts only
-    // under the pair measures (which `--measure` chooses later), so it is a warning.
-    for (name, found) in [(&cols.distance, c.distance), (&cols.pair, c.pair)] {
-        let other = other_case(t, std::slice::from_ref(name));
-        if found.is_none() && !other.is_empty() {
-            report.warnings.push(format!(
-                "no {name} column, but the header has {}: column names are case-sensitive, so \
-                 it is read as absent: under --measure relative or distance, pairs are then \
-                 chained in file order and distances found from the positions; rename it, or \
-                 name it in a profile",
-                other.join(", ")
-            ));
-        }
-    }
+    // under the pair measures (which `--measure` chooses later), which refuse it.
+    let other_case_pair_columns: Vec<String> = [(&cols.distance, c.distance), (&cols.pair, c.pair)]
+        .into_iter()
+        .filter(|(_, found)| found.is_none())
+        .flat_map(|(name, _)| other_case(t, std::slice::from_ref(name)))
+        .collect();
     if c.sigma_position.is_none() && cols.sigma_position[0] != "sx" {
         report.warnings.push(format!(
             "no position sigma columns ({}) in this file: the set-level sigma applies",
@@ -676,6 +669,7 @@ pub fn parse_measurements(
             rows,
             extra_columns: c.extra.iter().map(|&i| t.headers[i].clone()).collect(),
             chain_breaks,
+            other_case_pair_columns,
         },
         report,
     ))
