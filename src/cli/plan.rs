@@ -46,7 +46,7 @@ pub struct PlanArgs {
     #[arg(long, conflicts_with = "region")]
     candidates: Option<PathBuf>,
     /// Joint ranges to draw candidates and the validation cloud from (TOML `ranges = [[min,
-    /// max], ...]`, deg).
+    /// max], ...]`, deg; mm for a prismatic joint).
     #[arg(long)]
     region: Option<PathBuf>,
     /// Candidate units drawn (1 to 200000).
@@ -513,8 +513,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
                 "candidates",
                 "identify",
                 "a plan from them leaves them at their nominal values too (give candidates \
-                 that move every joint, or a --region as narrow as the candidates, over which \
-                 the validation cloud is drawn)",
+                 that move every joint)",
             )
         };
         eprintln!(

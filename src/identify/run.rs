@@ -621,10 +621,12 @@ fn mass_free_note(ids: &[ParamId]) -> Option<String> {
 /// translation along z alone are parallel too: a SCARA's axes 1, 2 and 4 all run along the
 /// base's z. A reviewer's ABB arm with axis 3 tilted by 0.55 mrad fitted with s^2 = 38 and
 /// nothing said why; a reviewer's SCARA with axis 2 tilted by 0.05 deg, s^2 = 43.
-fn parallel_axes_note(
+/// `consequence` says what the missing tilt does to the caller's figures.
+pub(crate) fn parallel_axes_note(
     robot: &Robot,
     params: &[ParamId],
     ident: &Identifiability,
+    consequence: &str,
 ) -> Option<String> {
     let revolute = |k: usize| robot.joints()[k].joint_type == JointType::Revolute;
     // Nodes: joints by index; the base's and the tool's z translation beyond them.
@@ -694,10 +696,9 @@ fn parallel_axes_note(
     (!axes.is_empty()).then(|| {
         format!(
             "parallel axes: joints {}: an MDH or DH description cannot express the small tilt \
-             out of parallel a real arm has, and what it leaves stays in the residuals (see \
-             s^2); describe the arm in MDH with Hayati rows (convention = \"hayati\", thesis \
-             eq. 3.11) for joint(s) {} to identify it (datasets/robots/ur10_mdh_hayati.toml \
-             is the UR10 so)",
+             out of parallel a real arm has, and {consequence}; describe the arm in MDH with \
+             Hayati rows (convention = \"hayati\", thesis eq. 3.11) for joint(s) {} to identify \
+             it (datasets/robots/ur10_mdh_hayati.toml is the UR10 so)",
             axes.join("; joints "),
             list(&hayati)
         )
@@ -850,7 +851,12 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         .any(|&c| matches!(params[c].slot, Slot::Joint(_)) && !is_compliance(&params[c]));
     warnings.extend(negative_compliance_warning(&ids, &parameters, geometry));
     notes.extend(mass_free_note(&ids));
-    notes.extend(parallel_axes_note(nominal, &params, &ident));
+    notes.extend(parallel_axes_note(
+        nominal,
+        &params,
+        &ident,
+        "what it leaves stays in the residuals (see s^2)",
+    ));
     let outliers = outliers(set, &obs, &solution.robot, opts.outlier_k);
     let robot =
         solution
