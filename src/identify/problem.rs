@@ -165,17 +165,35 @@ impl<'a> Observations<'a> {
                 }
             }
             Measure::Relative | Measure::Distance => {
-                // Read as absent, such a column would leave pairs chained in file order and
-                // distances found from the positions, without a word.
-                if !set.other_case_pair_columns.is_empty() {
+                // Read as absent, such a column would leave pairs chained in file order, or
+                // distances found from the positions, without a word. Relative reads no
+                // distance.
+                let [pair, distance] = &set.other_case_pair_columns;
+                let read = [
+                    (
+                        pair,
+                        "the label of each row's pair",
+                        "the pairs chained in file order",
+                    ),
+                    (
+                        distance,
+                        "each pair's distance",
+                        "the distances found from the positions",
+                    ),
+                ];
+                let reads_distance = measure == Measure::Distance;
+                if let Some((Some((name, header)), what, then)) = (read.into_iter())
+                    .enumerate()
+                    .find(|(k, (found, ..))| found.is_some() && (reads_distance || *k == 0))
+                    .map(|(_, r)| r)
+                {
                     return Err(Error::Invalid(format!(
-                        "{}: measuring by {} pairs rows, but the header has {}: column names \
-                         are case-sensitive, so it would be read as absent (pairs chained in \
-                         file order, distances found from the positions); rename it, or name \
-                         it in a profile",
+                        "{}: measuring by {} reads {what} from a `{name}` column, but the header \
+                         has `{}`: column names are case-sensitive, so it would be read as \
+                         absent, and {then}; rename it `{name}`, or name it in a profile",
                         set.source.display(),
                         measure.name(),
-                        set.other_case_pair_columns.join(", ")
+                        crate::data::table::shown(header),
                     )));
                 }
                 if measure == Measure::Relative {

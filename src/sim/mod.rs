@@ -286,7 +286,7 @@ impl Simulation<'_> {
             rows,
             extra_columns: Vec::new(),
             chain_breaks: Vec::new(),
-            other_case_pair_columns: Vec::new(),
+            other_case_pair_columns: [None, None],
         };
         Ok(SimOutput {
             measured: set(measured),

@@ -88,10 +88,11 @@ pub struct MeasurementSet {
     /// skipped, or left out of a subset), so their displacement is not one measured step.
     /// Ascending.
     pub chain_breaks: Vec<usize>,
-    /// The header's names that differ from the `pair` or `distance` column's name in letter
-    /// case only, as "`Pair` for pair": read as absent. They matter under the pair measures
-    /// alone, which refuse them ([`crate::identify::problem::Observations::new`]).
-    pub other_case_pair_columns: Vec<String>,
+    /// The pair label's column name (first) or the distance's (second), with a header name
+    /// that differs from it in letter case only and is read as absent: the pair measures that
+    /// would read that column refuse it ([`crate::identify::problem::Observations::new`]);
+    /// the other measures read no such column.
+    pub other_case_pair_columns: [Option<(String, String)>; 2],
 }
 
 impl MeasurementSet {
@@ -103,7 +104,7 @@ impl MeasurementSet {
             rows,
             extra_columns: Vec::new(),
             chain_breaks: Vec::new(),
-            other_case_pair_columns: Vec::new(),
+            other_case_pair_columns: [None, None],
         }
     }
 

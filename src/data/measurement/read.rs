@@ -582,11 +582,11 @@ pub fn parse_measurements(
     let mut report = ReadReport::default();
     // A distance or pair column in other letter case is read as absent: it counts only
     // under the pair measures (which `--measure` chooses later), which refuse it.
-    let other_case_pair_columns: Vec<String> = [(&cols.distance, c.distance), (&cols.pair, c.pair)]
-        .into_iter()
-        .filter(|(_, found)| found.is_none())
-        .flat_map(|(name, _)| other_case(t, std::slice::from_ref(name)))
-        .collect();
+    let other_case_pair_columns =
+        [(&cols.pair, c.pair), (&cols.distance, c.distance)].map(|(name, found)| {
+            let header = t.other_case(name).filter(|_| found.is_none());
+            header.map(|h| (name.clone(), h.to_string()))
+        });
     if c.sigma_position.is_none() && cols.sigma_position[0] != "sx" {
         report.warnings.push(format!(
             "no position sigma columns ({}) in this file: the set-level sigma applies",

@@ -136,7 +136,7 @@ mod tests {
             rows,
             extra_columns: Vec::new(),
             chain_breaks: Vec::new(),
-            other_case_pair_columns: Vec::new(),
+            other_case_pair_columns: [None, None],
         };
         let qs: Vec<&[f64]> = set.rows.iter().map(|m| m.q.as_slice()).collect();
         let groups = crate::neural::repeats::joint_groups(&qs);
