@@ -312,6 +312,7 @@ fn train_refuses_bad_input_and_predict_refuses_a_corrupt_compensator() {
         &["--rbf-start", "0"],
         &["--rbf-start", "4"],
         &["--keep-outliers", "--drop-outliers"],
+        &["--keep-outliers", "--first-choice"],
         &["--rbf-start", "2", "--network", "mlp"],
         &["--rbf-search-rows", "1"],
         &["--rbf-search-rows", "3001"],
@@ -1123,4 +1124,55 @@ fn a_refinement_names_the_compliances_it_holds_at_the_models_values() {
         .find(|l| l.starts_with("note: refinement: not significant on the training rows"))
         .unwrap_or_else(|| panic!("{out}{err}"));
     assert!(note.contains("c5 0.45 mrad/kNm"), "{note}");
+}
+
+/// A row 3 mm off among 60 of Case D's training rows weighs in the choice of settings: `train`
+/// says it chose them again without it, and its report lists the row among `first_outliers`;
+/// `--first-choice` keeps the choice made with it (the row listed among `outliers`).
+#[test]
+fn train_chooses_again_without_an_outlier_that_weighs_in_the_choice() {
+    let text =
+        std::fs::read_to_string(common::root().join("datasets/case_d/training.csv")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let mut csv: Vec<String> = lines[..61].iter().map(|l| l.to_string()).collect();
+    let mut cells: Vec<String> = csv[11].split(',').map(str::to_string).collect();
+    cells[7] = format!("{}", cells[7].parse::<f64>().unwrap() + 3.0);
+    csv[11] = cells.join(",");
+    let data = tmp("outlier_choice.csv");
+    std::fs::write(&data, csv.join("\n") + "\n").unwrap();
+    let run = |extra: &[&str]| {
+        let (comp, report) = (tmp("outlier_choice.rcal"), tmp("outlier_choice.json"));
+        let mut args = vec![
+            "--network",
+            "rbf",
+            "--refine",
+            "none",
+            "--report",
+            report.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = common::train_fanuc(data.to_str().unwrap(), comp.to_str().unwrap(), &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let r = json(&report)["training"]["selection"].clone();
+        (stdout(&o) + &stderr(&o), r)
+    };
+    let lines_of = |v: &serde_json::Value| -> Vec<u64> {
+        v.as_array()
+            .map(|a| a.iter().map(|o| o["line"].as_u64().unwrap()).collect())
+            .unwrap_or_default()
+    };
+    let (said, r) = run(&[]);
+    assert!(
+        said.contains("line 12") && said.contains("settings chosen again without them"),
+        "{said}"
+    );
+    // Missed by about its own 3 mm, as cross-validation missed it: no row fell outside the
+    // training domain.
+    assert!(!said.contains("left out of the final fit by"), "{said}");
+    assert!(lines_of(&r["first_outliers"]).contains(&12), "{r}");
+    assert!(!lines_of(&r["outliers"]).contains(&12), "{r}");
+    let (said, r) = run(&["--first-choice"]);
+    assert!(!said.contains("chosen again"), "{said}");
+    assert!(r.get("first_outliers").is_none(), "{r}");
+    assert!(lines_of(&r["outliers"]).contains(&12), "{r}");
 }

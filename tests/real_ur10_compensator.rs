@@ -309,9 +309,9 @@ fn a_compensator_that_misses_its_training_rows_is_warned_of() {
         .position_rms_mm;
     let rms = position_rms(&c, &rows);
     assert!(
-        s.outliers_left_out && s.outliers.len() > 15,
+        s.outliers_left_out && s.listed_outliers().len() > 15,
         "{:?}",
-        s.outliers.len()
+        s.listed_outliers().len()
     );
     assert!(
         rms > 2.0 * cv,
@@ -320,7 +320,7 @@ fn a_compensator_that_misses_its_training_rows_is_warned_of() {
     let warned = |s: &robocal::neural::selection::Selection| {
         s.warnings
             .iter()
-            .any(|w| w.contains("misses its training rows by"))
+            .any(|w| w.contains("row(s) left out of the final fit by"))
     };
     assert!(warned(s), "{:?}", s.warnings);
     assert!(
@@ -463,6 +463,69 @@ fn a_fixed_network_far_worse_than_the_model_is_warned_of() {
     );
 }
 
+/// One row 5 mm off among 100 Series A rows held most of every candidate's held-out error: a
+/// reviewer's training kept the model alone (0.4364 mm RMS on 1120 new rows, where the rows
+/// without it chose a network at 0.3276). The row is listed, the settings are chosen again
+/// without it, and the compensator is the one the rows without it train.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "trains dozens of networks: release builds only"
+)]
+fn an_outlier_that_weighs_in_the_choice_is_left_out_of_it() {
+    let ur = common::ur10::robot();
+    let (id, rest) = split(&series(&ur, SERIES_A), 0.05, 3);
+    let model = identified(&ur, &id);
+    let (few, val) = split(&rest, 100.0 / rest.rows.len() as f64, 4);
+    let bad = 10;
+    let mut moved = few.clone();
+    moved.rows[bad].position.as_mut().unwrap().x += 5.0;
+    let opts = CompensatorOptions::default();
+    let (c, report) = Compensator::train(&model, &moved, &opts, &|_, _| {}).unwrap();
+    let s = report.selection.as_ref().unwrap();
+    let first: Vec<usize> = s.first_outliers.iter().map(|o| o.row).collect();
+    assert_eq!(first, vec![bad], "{:?}", s.notes);
+    assert!(
+        report
+            .notes
+            .iter()
+            .any(|n| n.contains("chosen again without them")),
+        "{:?}",
+        report.notes
+    );
+    let without = robocal::neural::tuning::subset(&moved, |i| i != bad);
+    let (other, again) = Compensator::train(&model, &without, &opts, &|_, _| {}).unwrap();
+    assert_eq!(report.settings, again.settings);
+    let val = MeasurementSet {
+        rows: val.rows[..1000].to_vec(),
+        ..val
+    };
+    let (rms, rms_without) = (position_rms(&c, &val), position_rms(&other, &val));
+    assert!((rms - rms_without).abs() < 1e-9, "{rms} {rms_without}");
+    // Kept in the choice, as before, on the same rows.
+    let first_choice = CompensatorOptions {
+        reselect: false,
+        ..Default::default()
+    };
+    let (kept, report) = Compensator::train(&model, &moved, &first_choice, &|_, _| {}).unwrap();
+    let s = report.selection.as_ref().unwrap();
+    assert!(s.first_outliers.is_empty() && s.outliers.iter().any(|o| o.row == bad));
+    println!(
+        "held-out RMS: chosen again {rms:.4} mm, first choice {:.4} mm ({}), model {:.4} mm",
+        position_rms(&kept, &val),
+        report.settings.describe(),
+        summarize(
+            &row_errors(&val, Measure::Position, |q| {
+                robocal::kinematics::tool_pose(&model, q)
+            })
+            .unwrap()
+        )
+        .position_mm
+        .unwrap()
+        .rms
+    );
+}
+
 /// Release builds only: the default compensator beats the baseline by at least 10 % RMS on
 /// the Series B split, and its max error stays within 10 % of the model's on the validation
 /// rows whose measurement agrees with a repeat of theirs in the pool (or has none); on a row
@@ -521,6 +584,9 @@ fn default_beats_the_plain_baseline_on_series_b() {
         assert_eq!(lines, vec![534, 1065]);
         let trained = robocal::neural::tuning::subset(&pool, |i| !shared.contains(&i));
         let outliers: Vec<usize> = sel.outliers.iter().map(|o| o.row).collect();
+        // The two weigh too little in the choice to make it again (see
+        // `an_outlier_that_weighs_in_the_choice_is_left_out_of_it`).
+        assert!(sel.first_outliers.is_empty(), "{:?}", sel.first_outliers);
         // The cut is for gross errors: it lists two rows here, at most 0.5 % of the pool (5
         // rows), not the tail of the network's error (a cut of 4 listed 6).
         assert!(
@@ -742,7 +808,7 @@ fn the_default_cut_lists_rows_two_millimetres_off() {
         .selection
         .as_ref()
         .unwrap()
-        .outliers
+        .listed_outliers()
         .iter()
         .map(|o| (o.line, o.robust_sigmas))
         .collect();
@@ -1074,7 +1140,11 @@ fn series_pools() {
             rep.settings.describe()
         );
         if let Some(sel) = &rep.selection {
-            println!("  outliers listed: {}", sel.outliers.len());
+            println!(
+                "  outliers listed: {} ({} of a first choice made again without them)",
+                sel.listed_outliers().len(),
+                sel.first_outliers.len()
+            );
             if let Some(t) = &sel.rbf_network_test {
                 println!("  failed on rows no search saw: {t:?}");
             }

@@ -137,6 +137,12 @@ pub struct CompensatorArgs {
     /// mis-measured row would bend the RBF network's fit around it and spoil its neighbours).
     #[arg(long, conflicts_with = "drop_outliers")]
     pub keep_outliers: bool,
+    /// Keep the choice of settings made with the outliers it lists, where they weigh in it
+    /// (default: where their held-out errors make more than 4 % of the chosen settings'
+    /// cross-validated squared position error, the settings are chosen again without them,
+    /// for twice the cross-validation's time).
+    #[arg(long, conflicts_with = "keep_outliers")]
+    pub first_choice: bool,
     /// The RBF network's likelihood search start, 1-3: widths of 1, 0.2 or 0.05 standard
     /// deviations (1, the smooth one, by default under cross-validation; a fixed network with
     /// nothing else open takes, output by output, the start of highest likelihood).
@@ -425,6 +431,7 @@ impl CompensatorArgs {
             },
             outlier_k: self.outlier_k,
             drop_outliers: !self.keep_outliers,
+            reselect: !self.first_choice,
             budget: self.max_epochs.is_none(),
             test_fixed: true,
         })

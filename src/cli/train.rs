@@ -374,15 +374,23 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         ));
     }
     // The rows cross-validation saw: the training rows but those left out for carrying
-    // another configuration's reading.
+    // another configuration's reading, and the outliers of a first choice made again without
+    // them.
     let trained;
+    let first: &[robocal::neural::selection::Outlier] = report
+        .selection
+        .as_ref()
+        .map_or(&[], |s| s.first_outliers.as_slice());
     print_fit(
         &c,
         &report,
         seconds,
         (
             if opts.drop_outliers {
-                trained = subset(&set, |i| report.shared_readings.iter().all(|r| r.row != i));
+                trained = subset(&set, |i| {
+                    report.shared_readings.iter().all(|r| r.row != i)
+                        && first.iter().all(|o| o.row != i)
+                });
                 &trained
             } else {
                 &set

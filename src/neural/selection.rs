@@ -68,6 +68,16 @@ impl Candidate {
     }
 }
 
+impl Selection {
+    /// Every row listed as an outlier, by row: those of a first choice made again without
+    /// them ([`Selection::first_outliers`]) and those of the choice these figures are of.
+    pub fn listed_outliers(&self) -> Vec<&Outlier> {
+        let mut all: Vec<&Outlier> = self.first_outliers.iter().chain(&self.outliers).collect();
+        all.sort_by_key(|o| o.row);
+        all
+    }
+}
+
 /// What cross-validation did.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Selection {
@@ -86,8 +96,15 @@ pub struct Selection {
     /// errors (the final fit leaves them out when the options say so, they are few enough
     /// to be mis-measured rows, and the fit without them is sound: `outliers_left_out`).
     pub outliers: Vec<Outlier>,
-    /// Whether the final fit left `outliers` out.
+    /// Whether the final fit left the listed outliers out (`outliers` and `first_outliers`).
     pub outliers_left_out: bool,
+    /// Outliers of a first cross-validation on every row that weighed in its choice (they
+    /// made more than [`RESELECT_SHARE`](crate::neural::tuning::RESELECT_SHARE) of the
+    /// chosen candidate's squared position error): left out of the cross-validation whose
+    /// figures these are, and of the final fit. Empty where there was no such first choice
+    /// (and in reports written before it).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub first_outliers: Vec<Outlier>,
     /// The cut, robust sigmas (infinite: no row is left out).
     #[serde(with = "crate::io::json_number")]
     pub outlier_k: f64,

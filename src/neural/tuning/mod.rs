@@ -148,6 +148,13 @@ pub const COMPLIANCE_MARGIN: f64 = 0.02;
 /// [`COMPLIANCE_MARGIN`] as well.
 pub const NETWORK_MARGIN: f64 = 0.02;
 
+/// Share of the chosen candidate's cross-validated squared position error above which the
+/// listed outliers' own held-out errors make the settings be chosen again without them
+/// ([`CompensatorOptions::reselect`]): 1 - (1 - [`NETWORK_MARGIN`])^2, the share whose removal
+/// alone moves a cross-validated RMS by the margin that decides between a network and the
+/// model alone. One row beyond the cut of 5 robust sigmas makes it in a few hundred rows.
+pub const RESELECT_SHARE: f64 = NETWORK_MARGIN * (2.0 - NETWORK_MARGIN);
+
 /// Paired z (row by row over every held-out row, [`NetworkTest::z`]) by which the network
 /// chosen in stages 1-4 must be below the best model alone to be kept, besides
 /// [`NETWORK_MARGIN`]: a lower RMS over a few hundred rows can be a few rows' noise, and the
@@ -477,6 +484,7 @@ fn cross_validate(
             notes,
             outliers,
             outliers_left_out: false,
+            first_outliers: Vec::new(),
             outlier_k: opts.outlier_k,
             rbf_hyper,
             network_test,
