@@ -1303,3 +1303,103 @@ fn an_rbf_network_on_more_rows_than_units_centres_them_on_a_choice_of_rows() {
         );
     }
 }
+
+/// Rows too few to cross-validate a network (each fold must leave 4 to train on): the
+/// default is the model alone as given, with a warning that says why (before, 2-4 rows failed
+/// with every candidate's error where 6 gave the model alone, and 1 row advised fixing the
+/// choices, whose fit then failed too); a network the options ask for is refused with the
+/// reason, and a fixed network's fit names the rows it needs.
+#[test]
+fn rows_too_few_for_a_network_give_the_model_alone_with_a_warning() {
+    use robocal::neural::compensator::Network;
+    use robocal::neural::train::MIN_ROWS;
+    use robocal::neural::tuning::too_few_rows;
+    let (model, train) = case_d_offsets();
+    let first = |n: usize| robocal::neural::tuning::subset(&train, |i| i < n);
+    let opts = CompensatorOptions::default();
+    let mut ws = PredictWorkspace::default();
+    for n in 1..=MIN_ROWS {
+        let rows = first(n);
+        assert!(too_few_rows(&model, &rows, &opts).is_some(), "{n} rows");
+        let (c, report) = Compensator::train(&model, &rows, &opts, &|_, _| {}).unwrap();
+        assert!(
+            !c.has_network() && report.settings.refine.is_none(),
+            "{n} rows"
+        );
+        assert!(report.selection.is_none());
+        assert!(
+            report.warnings.len() == 1
+                && report.warnings[0].contains(&format!("{n} training row(s)"))
+                && report.warnings[0].contains("the compensator is the model alone"),
+            "{:?}",
+            report.warnings
+        );
+        // The model as given, to the last bit.
+        for m in &train.rows[..5] {
+            let p = c.predict(&m.q, &mut ws);
+            let t = robocal::kinematics::tool_pose(&model, &m.q);
+            assert_eq!(p.translation.vector, t.translation.vector);
+        }
+        let asked = CompensatorOptions {
+            members: Some(2),
+            ..Default::default()
+        };
+        let e = Compensator::train(&model, &rows, &asked, &|_, _| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("members are fixed at 2"), "{e}");
+    }
+    // From 5 rows of distinct configurations on, cross-validation runs (5 folds of one row).
+    let five = first(MIN_ROWS + 1);
+    assert_eq!(too_few_rows(&model, &five, &opts), None);
+    let (_, report) = Compensator::train(&model, &five, &opts, &|_, _| {}).unwrap();
+    assert!(report.selection.is_some() && report.warnings.is_empty());
+    // A network fixed by every choice on 3 rows: its fit says how many it needs.
+    let fixed = CompensatorOptions::fixed(
+        &Settings {
+            network: Network::Mlp,
+            rbf_start: None,
+            form: Form::Pose,
+            encoding: Encoding::Angles,
+            hidden: 4,
+            penalty: 1.0,
+            members: 1,
+            refine: None,
+            mlp_share: None,
+        },
+        Default::default(),
+    );
+    let e = Compensator::train(&model, &first(3), &fixed, &|_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("needs at least 4 rows (got 3)"), "{e}");
+}
+
+/// An outlier that weighs in the choice of a set too small to choose again without it (5
+/// rows, one 20 mm off: 4 left, too few to cross-validate a network): the first choice stands,
+/// a note says why, and the row is left out of the final fit as usual (a reviewer's 5 and 6
+/// Series A rows failed `train` where the choice was first made again).
+#[test]
+fn a_set_too_small_to_choose_again_keeps_the_first_choice() {
+    let (model, clean) = case_d_offsets();
+    let mut five = robocal::neural::tuning::subset(&clean, |i| i < 5);
+    five.rows[2].position.as_mut().unwrap().x += 20.0;
+    let (_, report) =
+        Compensator::train(&model, &five, &CompensatorOptions::default(), &|_, _| {}).unwrap();
+    let sel = report.selection.as_ref().expect("the first choice");
+    assert!(sel.first_outliers.is_empty());
+    assert!(
+        sel.outliers.iter().any(|o| o.row == 2) && sel.outliers_left_out,
+        "{:?} {:?}",
+        sel.outliers,
+        report.notes
+    );
+    assert!(
+        report
+            .notes
+            .iter()
+            .any(|n| n.contains("could not be chosen again") && n.contains("too few")),
+        "{:?}",
+        report.notes
+    );
+}

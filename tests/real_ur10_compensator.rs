@@ -328,10 +328,17 @@ fn a_compensator_that_misses_its_training_rows_is_warned_of() {
         "{:?}",
         report.notes
     );
-    // Kept, they train the network: no warning.
+    println!(
+        "{} rows listed ({} of a first choice), {rms:.2} mm RMS on the training rows, {cv:.2} \
+         cross-validated; {:?}",
+        s.listed_outliers().len(),
+        s.first_outliers.len(),
+        s.warnings
+    );
+    // Kept, they train the network (and no choice is made again without them).
     let (c, report) = Compensator::train(&ur, &rows, &opts(true), &|_, _| {}).unwrap();
     let s = report.selection.as_ref().unwrap();
-    assert!(!s.outliers_left_out && !warned(s), "{:?}", s.warnings);
+    assert!(!s.outliers_left_out && s.first_outliers.is_empty() && !s.outliers.is_empty());
     assert!(position_rms(&c, &rows) < cv);
 }
 
@@ -463,10 +470,10 @@ fn a_fixed_network_far_worse_than_the_model_is_warned_of() {
     );
 }
 
-/// One row 5 mm off among 100 Series A rows held most of every candidate's held-out error: a
-/// reviewer's training kept the model alone (0.4364 mm RMS on 1120 new rows, where the rows
-/// without it chose a network at 0.3276). The row is listed, the settings are chosen again
-/// without it, and the compensator is the one the rows without it train.
+/// One row 5 mm off among 100 Series A rows made 54 % of the model alone's cross-validated
+/// squared error, and `train` kept the model alone (0.4283 mm RMS on 1000 new rows). The row
+/// is listed, the settings are chosen again without it, the compensator is the one the rows
+/// without it train, and it beats the first choice on the new rows (0.3075 mm).
 #[test]
 #[cfg_attr(
     debug_assertions,
@@ -510,9 +517,11 @@ fn an_outlier_that_weighs_in_the_choice_is_left_out_of_it() {
     let (kept, report) = Compensator::train(&model, &moved, &first_choice, &|_, _| {}).unwrap();
     let s = report.selection.as_ref().unwrap();
     assert!(s.first_outliers.is_empty() && s.outliers.iter().any(|o| o.row == bad));
+    let first_rms = position_rms(&kept, &val);
+    assert!(rms < first_rms, "{rms} {first_rms}");
     println!(
-        "held-out RMS: chosen again {rms:.4} mm, first choice {:.4} mm ({}), model {:.4} mm",
-        position_rms(&kept, &val),
+        "held-out RMS: chosen again {rms:.4} mm, first choice {first_rms:.4} mm ({}), model \
+         {:.4} mm",
         report.settings.describe(),
         summarize(
             &row_errors(&val, Measure::Position, |q| {

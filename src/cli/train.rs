@@ -361,7 +361,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     {
         say!("note: {n}");
     }
-    for w in report.selection.iter().flat_map(|s| &s.warnings) {
+    for w in (report.warnings.iter()).chain(report.selection.iter().flat_map(|s| &s.warnings)) {
         warnings.say(w.clone());
     }
     if c.has_network() && c.domain.radius == 0.0 {

@@ -53,6 +53,10 @@ pub struct CompensatorReport {
     /// on every row, or no RBF network (then left out of the file).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rbf_centred_on: Option<usize>,
+    /// What the user must know before using the compensator that no cross-validation said
+    /// (rows too few to train a network: the model alone). Empty when there is none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 impl Compensator {
@@ -92,6 +96,7 @@ impl Compensator {
                 repeats: Repeats::of(&robot, set),
                 shared_readings: Vec::new(),
                 rbf_centred_on,
+                warnings: Vec::new(),
             },
         ))
     }

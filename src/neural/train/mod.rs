@@ -106,12 +106,15 @@ pub fn holdout(s: &Samples, fraction: f64, seed: u64) -> (Vec<usize>, Vec<usize>
     (0..n).partition(|&k| !held.contains(&s.group(k)))
 }
 
+/// Training rows (samples) a network needs at least.
+pub const MIN_ROWS: usize = 4;
+
 /// Refuses samples too few or of unequal shapes, and a network without hidden units.
 fn check_samples(samples: &Samples, outputs: usize, opts: &TrainOptions) -> Result<()> {
     let n = samples.len();
-    if samples.b.len() != n || n < 4 {
+    if samples.b.len() != n || n < MIN_ROWS {
         return Err(Error::Invalid(format!(
-            "training needs at least 4 samples (got {n})"
+            "training a network needs at least {MIN_ROWS} rows (got {n})"
         )));
     }
     let rows = samples.rows();

@@ -48,6 +48,7 @@ use super::selection::Sums;
 pub use super::selection::{Candidate, NetworkTest, Outlier, Score, Selection, Unseen, UnseenTest};
 pub use super::settings::OUTLIER_K;
 use super::settings::{CompensatorOptions, Network, Refine, Settings};
+use super::train::MIN_ROWS;
 use crate::data::MeasurementSet;
 use crate::data::measurement::row_name;
 use crate::error::{Error, Result};
@@ -196,14 +197,57 @@ pub const REFINEMENT_MARGIN: f64 = 0.02;
 /// mm RMS.
 pub const REFINEMENT_Z: f64 = 2.5;
 
+/// What [`select_settings`] says beside a selection: notes on a test that could not be had,
+/// and warnings on a choice made without one.
+#[derive(Debug, Clone, Default)]
+pub struct Remarks {
+    /// What the user should know.
+    pub notes: Vec<String>,
+    /// What the user must know before using the compensator.
+    pub warnings: Vec<String>,
+}
+
+/// Why the rows of `set` are too few to cross-validate a network: fewer than
+/// [`MIN_ROWS`] + 1 rows, or folds (as [`select_settings`] draws them) of which some leaves
+/// fewer than [`MIN_ROWS`] rows to train on. None where they suffice, and where rows enough
+/// to fit a network hold too few distinct configurations for folds (fixing the choices fits
+/// one there).
+pub fn too_few_rows(
+    robot: &Robot,
+    set: &MeasurementSet,
+    opts: &CompensatorOptions,
+) -> Option<String> {
+    let n = set.rows.len();
+    let groups = super::repeats::configuration_groups(robot, set);
+    let distinct = super::repeats::group_count(&groups);
+    let want = opts.folds.unwrap_or(if distinct >= MANY { 4 } else { 5 });
+    let fold_of = folds(&groups, want.max(2), opts.train.seed);
+    let k = fold_of.iter().max().map_or(0, |m| m + 1);
+    let largest = (0..k)
+        .map(|f| fold_of.iter().filter(|&&g| g == f).count())
+        .max()
+        .unwrap_or(n);
+    if n <= MIN_ROWS || (k >= 2 && n - largest < MIN_ROWS) {
+        Some(format!(
+            "{n} training row(s) of {distinct} distinct configuration(s) are too few to \
+             cross-validate a network: each fold must leave at least {MIN_ROWS} rows to train \
+             on"
+        ))
+    } else {
+        None
+    }
+}
+
 /// The settings to fit: `opts`'s fixed choices, the rest chosen by cross-validation on `set`
-/// (None when nothing was left to choose), and notes on a test that could not be had.
+/// (None when nothing was left to choose), and remarks. Where the rows are too few to
+/// cross-validate a network ([`too_few_rows`]) and the options leave it open, the model alone
+/// as given, with a warning that says why.
 pub fn select_settings(
     robot: &Robot,
     set: &MeasurementSet,
     opts: &CompensatorOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<(Settings, Option<Selection>, Vec<String>)> {
+) -> Result<(Settings, Option<Selection>, Remarks)> {
     let space = Space::of(robot, opts)?;
     // Nothing to choose (a fixed mix, its share given, keeps, output by output, the start of
     // highest likelihood): the settings are the options'. A network among them is still
@@ -220,25 +264,60 @@ pub fn select_settings(
     });
     match fixed {
         Some(settings) if !(opts.test_fixed && settings.has_network()) => {
-            Ok((settings, None, Vec::new()))
+            Ok((settings, None, Remarks::default()))
         }
         // The test informs only: where it cannot be had (fewer than 2 folds, a fold too small
         // to fit), the fixed fit stands without it, as it did before the test, and says so.
         Some(settings) => Ok(
             match cross_validate(robot, set, opts, progress, space, Some(settings.clone())) {
-                Ok((settings, selection)) => (settings, selection, Vec::new()),
+                Ok((settings, selection)) => (settings, selection, Remarks::default()),
                 Err(e) => (
                     settings,
                     None,
-                    vec![format!(
-                        "the fixed network could not be held against the model alone by \
-                         cross-validation ({e}): it is fitted as fixed, untested"
-                    )],
+                    Remarks {
+                        notes: vec![format!(
+                            "the fixed network could not be held against the model alone by \
+                             cross-validation ({e}): it is fitted as fixed, untested"
+                        )],
+                        warnings: Vec::new(),
+                    },
                 ),
             },
         ),
-        None => cross_validate(robot, set, opts, progress, space, None)
-            .map(|(settings, selection)| (settings, selection, Vec::new())),
+        // Too few rows for any network the search would try: the model as given, which
+        // needs no rows, where the options allow it (before, 2-4 rows failed with every
+        // candidate's error where 6 gave the model alone).
+        None if opts.members.is_none_or(|m| m == 0)
+            && let Some(why) = too_few_rows(robot, set, opts) =>
+        {
+            let alone = Settings {
+                refine: None,
+                ..stages::model_alone_of(&space.base)
+            };
+            Ok((
+                alone,
+                None,
+                Remarks {
+                    notes: Vec::new(),
+                    warnings: vec![format!(
+                        "{why}: the compensator is the model alone (as given, nothing \
+                         refined); measure more configurations"
+                    )],
+                },
+            ))
+        }
+        None => {
+            if let Some(why) = too_few_rows(robot, set, opts) {
+                return Err(Error::Invalid(format!(
+                    "{why}, and the members are fixed at {} network(s): leave them open \
+                     (the model alone), or fix every choice to fit a network on at least \
+                     {MIN_ROWS} rows untested",
+                    opts.members.unwrap_or(0)
+                )));
+            }
+            cross_validate(robot, set, opts, progress, space, None)
+                .map(|(settings, selection)| (settings, selection, Remarks::default()))
+        }
     }
 }
 

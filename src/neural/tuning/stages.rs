@@ -639,7 +639,7 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
 
 /// The settings of the model alone, without a network, as `w` names the model and its
 /// refinement.
-fn model_alone_of(w: &Settings) -> Settings {
+pub(super) fn model_alone_of(w: &Settings) -> Settings {
     Settings {
         network: Network::Mlp,
         members: 0,
