@@ -457,3 +457,56 @@ fn a_selection_short_of_full_is_said_to_take_the_others_as_exact() {
         assert!(!said.contains("leaves out"), "{params}: {said}");
     }
 }
+
+/// Positions of a point on the UR10's flange (the shipped file's tool) cannot identify a5 and
+/// alpha5, which positions of a point off it can (`identify` found 25 parameters on the
+/// measured Series A, whose reflector sits off the flange, where the plan said 23): `plan`
+/// says so, and with the tool point moved off the flange in the file it plans for 25.
+#[test]
+fn a_position_plan_at_the_flange_says_what_an_offset_point_identifies() {
+    let ur10 = common::root().join("datasets/robots/ur10.toml");
+    let text = std::fs::read_to_string(&ur10).unwrap();
+    let (head, tool) = text.split_at(text.find("[tool]").unwrap());
+    let moved = tmp("ur10_off_tool.toml");
+    std::fs::write(
+        &moved,
+        format!(
+            "{head}{}",
+            tool.replacen("x = 0.0", "x = 50.0", 1)
+                .replacen("z = 0.0", "z = 100.0", 1)
+        ),
+    )
+    .unwrap();
+    let out = tmp("ur10_position_plan.csv");
+    let plan = |robot: &std::path::Path| {
+        let o = robocal(&[
+            "plan",
+            "--robot",
+            robot.to_str().unwrap(),
+            "--measure",
+            "position",
+            "--count",
+            "40",
+            "--pool",
+            "600",
+            "--seed",
+            "1",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (stdout(&o), stderr(&o))
+    };
+    let (said, warned) = plan(&ur10);
+    assert!(said.contains("23 identifiable parameters"), "{said}");
+    assert!(
+        warned.contains("identify 2 parameter(s) more than the tool point's (a5, alpha5)"),
+        "{warned}"
+    );
+    let (said, warned) = plan(&moved);
+    assert!(said.contains("25 identifiable parameters"), "{said}");
+    assert!(
+        !warned.contains("parameter(s) more than the tool point's"),
+        "{warned}"
+    );
+}

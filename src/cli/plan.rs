@@ -253,7 +253,13 @@ fn warn_unseen(
     design: &Design,
     what: &str,
 ) -> Result<()> {
-    let pose = pose_identifiable(robot, params, sigmas, pool)?;
+    let pose = identifiable(
+        robot,
+        params,
+        robocal::identify::Measure::Pose,
+        sigmas,
+        pool,
+    )?;
     let seen: Vec<String> = {
         let names = design.robot.parameters();
         design.params.iter().map(|&d| names[d].name()).collect()
@@ -274,7 +280,57 @@ fn warn_unseen(
                 .join(", ")
         );
     }
+    // Positions of a point identify more where it lies off the wrist's last axis: a file's
+    // tool at the flange centre plans for a point the tracker does not measure (a UR10 at its
+    // flange: 23 parameters; 100 mm off it, as a reflector on its mount sits, 25 (a5 and
+    // alpha5), as `identify` found on the measured Series A).
+    if measure == robocal::identify::Measure::Position
+        && let Some(moved) = off_tool(robot)
+    {
+        let off = identifiable(&moved, params, measure, sigmas, pool)?;
+        let more: Vec<&str> = (off.iter())
+            .filter(|name| !seen.contains(name))
+            .map(|s| s.as_str())
+            .collect();
+        if !more.is_empty() {
+            let t = |name: &str| {
+                let names = robot.parameters();
+                names
+                    .iter()
+                    .find(|p| p.name() == name)
+                    .map_or(0.0, |&p| robot.param(p))
+            };
+            eprintln!(
+                "warning: the positions of a point {OFF_TOOL_MM} mm off the file's tool point \
+                 along each axis of the flange frame (at ({:.1}, {:.1}, {:.1}) mm in it) \
+                 identify {} parameter(s) more than the tool point's ({}): the plan is for a \
+                 point at the file's tool; give the measured point's offset (the reflector's \
+                 on its mount) in the file's [tool] to plan for it",
+                t("tool.x") + OFF_TOOL_MM,
+                t("tool.y") + OFF_TOOL_MM,
+                t("tool.z") + OFF_TOOL_MM,
+                more.len(),
+                more.join(", ")
+            );
+        }
+    }
     Ok(())
+}
+
+/// How far (mm, along each axis of the flange frame) [`off_tool`] moves the tool point.
+const OFF_TOOL_MM: f64 = 100.0;
+
+/// `robot` with its tool point moved by [`OFF_TOOL_MM`] along each of the x, y and z of the
+/// frame the tool row starts from (the flange's; a tool row with `tool.x`, `tool.y` and
+/// `tool.z`); None for another tool row.
+fn off_tool(robot: &Robot) -> Option<Robot> {
+    let ids = robot.parameters();
+    let mut moved = Vec::new();
+    for name in ["tool.x", "tool.y", "tool.z"] {
+        let &id = ids.iter().find(|p| p.name() == name)?;
+        moved.push((id, robot.param(id) + OFF_TOOL_MM));
+    }
+    robot.with_params(&moved).ok()
 }
 
 /// The names of the parameters of selection `params` that pose measurements at the first
@@ -282,6 +338,24 @@ fn warn_unseen(
 fn pose_identifiable(
     robot: &Robot,
     params: &str,
+    sigmas: robocal::identify::Sigmas,
+    pool: &Pool,
+) -> Result<Vec<String>> {
+    identifiable(
+        robot,
+        params,
+        robocal::identify::Measure::Pose,
+        sigmas,
+        pool,
+    )
+}
+
+/// The names of the parameters of selection `params` that `measure` (pose or position) at
+/// the first [`POSE_CHECK_CONFIGURATIONS`] configurations of `pool` identifies.
+fn identifiable(
+    robot: &Robot,
+    params: &str,
+    measure: robocal::identify::Measure,
     sigmas: robocal::identify::Sigmas,
     pool: &Pool,
 ) -> Result<Vec<String>> {
@@ -294,16 +368,11 @@ fn pose_identifiable(
         sources: Vec::new(),
     };
     let cloud = vec![single.units[0][0].clone()];
-    let pose = Design::new(
-        robot,
-        params,
-        robocal::identify::Measure::Pose,
-        sigmas,
-        &single,
-        cloud,
-        RANK_TOL,
-    )
-    .context("the parameters pose measurements would identify, to hold the measure against")?;
+    let pose =
+        Design::new(robot, params, measure, sigmas, &single, cloud, RANK_TOL).context(format!(
+            "the parameters {} measurements would identify, to hold the measure against",
+            measure.name()
+        ))?;
     let names = pose.robot.parameters();
     Ok(pose.params.iter().map(|&c| names[c].name()).collect())
 }
