@@ -60,7 +60,8 @@ pub struct PlanArgs {
     /// Random seed (candidate pool, validation cloud, prediction draws).
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Angle kept from every revolute joint's limits (deg, 0 to 90).
+    /// Angle kept from every revolute joint's limits (deg, 0 to 90; one that leaves a joint no
+    /// room is an error).
     #[arg(long, default_value_t = 0.0)]
     margin_deg: f64,
     /// Lowest height of the tool origin (mm, z in the robot's world frame).

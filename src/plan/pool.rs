@@ -101,17 +101,33 @@ impl Constraints {
         }
     }
 
-    /// The region narrowed by the margin; an error when a joint has no room left.
+    /// The region narrowed by the margin; an error when a joint has no room left (at most
+    /// [`NO_ROOM`], where the region gave it some).
     pub fn narrow(&self, robot: &Robot, region: &Region) -> Result<Region> {
         let mut out = Vec::with_capacity(region.0.len());
         for (i, (&[lo, hi], j)) in region.0.iter().zip(robot.joints()).enumerate() {
             let [llo, lhi] = j.limits_internal();
             let m = self.margin_of(j);
             let (a, b) = (lo.max(llo + m), hi.min(lhi - m));
-            if a > b {
+            // One value left of a range is no room either (a margin of half the limits' span
+            // held a FANUC's joints 2 and 3 still, and the plan identified 22 parameters of
+            // 30 without a word); a region that fixes the joint itself keeps it.
+            if a > b || (b - a <= NO_ROOM && lo < hi) {
+                let deg = |v: f64| match j.joint_type {
+                    crate::model::JointType::Revolute => format!("{:.1} deg", v.to_degrees()),
+                    crate::model::JointType::Prismatic => format!("{v:.1} mm"),
+                };
                 return Err(Error::Invalid(format!(
-                    "joint {}: the margin leaves no room in its range",
-                    i + 1
+                    "joint {}: the margin ({}) leaves no room in its range ({} to {}{})",
+                    i + 1,
+                    deg(m),
+                    deg(lo),
+                    deg(hi),
+                    if (lo, hi) == (llo, lhi) {
+                        ", its limits"
+                    } else {
+                        ", the region's within its limits"
+                    }
                 )));
             }
             out.push([a, b]);
@@ -119,6 +135,10 @@ impl Constraints {
         Ok(Region(out))
     }
 }
+
+/// The span (rad, mm) a margin may leave of a joint's range and still leave it no room: the
+/// rounding of limits in degrees less a margin of half their span.
+pub const NO_ROOM: f64 = 1e-9;
 
 /// Candidate units: each one or two configurations (rad, mm).
 #[derive(Debug, Clone, PartialEq)]
@@ -337,6 +357,35 @@ mod tests {
             ..Default::default()
         };
         assert!(draw(&robot, &Region::limits(&robot), &wide, 10, 1, 1).is_err());
+    }
+
+    /// A margin of half a joint's span leaves it one value: no room, an error naming the
+    /// joint (joint 2 of the FANUC, limits -50 to 70 deg, margin 60 deg); a region that fixes
+    /// a joint itself keeps it fixed, and a margin just short of half the span leaves room.
+    #[test]
+    fn a_margin_of_half_a_joints_span_leaves_it_no_room() {
+        let robot = fanuc();
+        let margin = |deg: f64| Constraints {
+            margin: deg.to_radians(),
+            ..Default::default()
+        };
+        let limits = Region::limits(&robot);
+        let e = margin(60.0)
+            .narrow(&robot, &limits)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("joint 2: the margin (60.0 deg) leaves no room")
+                && e.contains("(-50.0 deg to 70.0 deg, its limits)"),
+            "{e}"
+        );
+        let narrowed = margin(59.9).narrow(&robot, &limits).unwrap();
+        assert!(narrowed.0[1][1] - narrowed.0[1][0] > 0.003);
+        let mut fixed = limits.clone();
+        fixed.0[1] = [0.2, 0.2];
+        fixed.0[2] = [0.0, 0.0];
+        let kept = margin(30.0).narrow(&robot, &fixed).unwrap();
+        assert_eq!((kept.0[1], kept.0[2]), ([0.2, 0.2], [0.0, 0.0]));
     }
 
     #[test]
