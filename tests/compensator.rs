@@ -1354,6 +1354,43 @@ fn rows_too_few_for_a_network_give_the_model_alone_with_a_warning() {
     assert_eq!(too_few_rows(&model, &five, &opts), None);
     let (_, report) = Compensator::train(&model, &five, &opts, &|_, _| {}).unwrap();
     assert!(report.selection.is_some() && report.warnings.is_empty());
+    // The RBF network alone needs 2 rows per fold: 4 rows cross-validate it (5 folds of one
+    // row would leave 3 rows), fixed at one member too.
+    let rbf = CompensatorOptions {
+        network: Some(Network::Rbf),
+        ..Default::default()
+    };
+    assert_eq!(too_few_rows(&model, &first(4), &rbf), None);
+    let (_, report) = Compensator::train(&model, &first(4), &rbf, &|_, _| {}).unwrap();
+    assert!(report.selection.is_some() && report.warnings.is_empty());
+    let one_rbf = CompensatorOptions {
+        members: Some(1),
+        ..rbf.clone()
+    };
+    let (c, _) = Compensator::train(&model, &first(4), &one_rbf, &|_, _| {}).unwrap();
+    assert!(c.rbf.is_some());
+    // No network asked for: 3 rows of distinct configurations still cross-validate the
+    // refinements against the model as given.
+    let alone = CompensatorOptions {
+        members: Some(0),
+        ..Default::default()
+    };
+    assert_eq!(too_few_rows(&model, &first(3), &alone), None);
+    // Six measurements of one configuration cannot be folded: the model alone, with a
+    // warning that a network fixed by every choice could still be fitted.
+    let mut same = first(6);
+    for m in &mut same.rows {
+        m.q = train.rows[0].q.clone();
+    }
+    let (c, report) = Compensator::train(&model, &same, &opts, &|_, _| {}).unwrap();
+    assert!(!c.has_network());
+    assert!(
+        report.warnings.len() == 1
+            && report.warnings[0].contains("1 distinct configuration(s)")
+            && report.warnings[0].contains("fix every choice"),
+        "{:?}",
+        report.warnings
+    );
     // A network fixed by every choice on 3 rows: its fit says how many it needs.
     let fixed = CompensatorOptions::fixed(
         &Settings {

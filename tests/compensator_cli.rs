@@ -1171,6 +1171,15 @@ fn train_chooses_again_without_an_outlier_that_weighs_in_the_choice() {
     assert!(!said.contains("left out of the final fit by"), "{said}");
     assert!(lines_of(&r["first_outliers"]).contains(&12), "{r}");
     assert!(!lines_of(&r["outliers"]).contains(&12), "{r}");
+    // Every candidate carries the label the table gives it; those without a network (stored
+    // with the form and encoding of the network they were held against) say so.
+    let candidates = r["candidates"].as_array().unwrap();
+    assert!(candidates.iter().any(|c| c["settings"]["members"] == 0));
+    for c in candidates {
+        let label = c["label"].as_str().unwrap();
+        let alone = c["settings"]["members"] == 0;
+        assert_eq!(label.starts_with("model alone"), alone, "{c}");
+    }
     let (said, r) = run(&["--first-choice"]);
     assert!(!said.contains("chosen again"), "{said}");
     assert!(r.get("first_outliers").is_none(), "{r}");

@@ -509,4 +509,66 @@ fn a_position_plan_at_the_flange_says_what_an_offset_point_identifies() {
         !warned.contains("parameter(s) more than the tool point's"),
         "{warned}"
     );
+    // Pairs of positions (relative) lose the same two at the flange.
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        ur10.to_str().unwrap(),
+        "--measure",
+        "relative",
+        "--count",
+        "40",
+        "--pool",
+        "600",
+        "--seed",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("identify 2 parameter(s) more than the tool point's (a5, alpha5)"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// A margin that leaves a joint no room is an error naming it (the FANUC's joint 2, limits
+/// -50 to 70 deg, at 60 deg); one that leaves it under a tenth of its range is warned of.
+#[test]
+fn a_margin_that_leaves_a_joint_no_room_is_refused_and_a_narrow_one_warned_of() {
+    let out = tmp("margin_plan.csv");
+    let plan = |margin: &str| {
+        robocal(&[
+            "plan",
+            "--robot",
+            FANUC,
+            "--count",
+            "30",
+            "--pool",
+            "600",
+            "--seed",
+            "1",
+            "--margin-deg",
+            margin,
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let o = plan("60");
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("joint 2: the margin (60.0 deg) leaves no room"),
+        "{}",
+        stderr(&o)
+    );
+    let o = plan("59.99");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("leaves joint 2 0.020 deg of its 120.0 deg range (under a tenth)"),
+        "{}",
+        stderr(&o)
+    );
+    let o = plan("30");
+    assert!(o.status.success() && !stderr(&o).contains("under a tenth"));
 }

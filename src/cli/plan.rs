@@ -111,6 +111,32 @@ fn constraints(a: &PlanArgs) -> Result<Constraints> {
     })
 }
 
+/// Warns of the joints `--margin-deg` leaves under a tenth of their range of `region` (where
+/// it leaves some: none is an error when the pool is drawn): the plan barely moves them, and
+/// what they alone excite is poorly determined (a reviewer's FANUC at 59.999 deg, joint 2's
+/// limits -50 to 70 deg: base.z predicted to 434.7 mm, without a word).
+fn warn_narrow(robot: &Robot, region: &Region, limits: &Constraints) {
+    for (i, (&[lo, hi], j)) in region.0.iter().zip(robot.joints()).enumerate() {
+        if j.joint_type != robocal::model::JointType::Revolute || hi <= lo {
+            continue;
+        }
+        let [llo, lhi] = j.limits_internal();
+        let room = hi.min(lhi - limits.margin) - lo.max(llo + limits.margin);
+        if room > robocal::plan::pool::NO_ROOM && room < 0.1 * (hi - lo) {
+            eprintln!(
+                "warning: --margin-deg {:.3} leaves joint {} {:.3} deg of its {:.1} deg range \
+                 (under a tenth): \
+                 the plan barely moves it, and the parameters it alone excites are poorly \
+                 determined (see their predicted standard deviations)",
+                limits.margin.to_degrees(),
+                i + 1,
+                room.to_degrees(),
+                (hi - lo).to_degrees()
+            );
+        }
+    }
+}
+
 /// The configurations of a joints CSV (rad, mm) and the table read.
 fn configurations(path: &PathBuf, robot: &Robot) -> Result<(Vec<Vec<f64>>, JointTable)> {
     let t = JointTable::read(path, robot)?;
@@ -285,27 +311,32 @@ fn warn_unseen(
     // tool at the flange centre plans for a point the tracker does not measure (a UR10 at its
     // flange: 23 parameters; 100 mm off it, as a reflector on its mount sits, 25 (a5 and
     // alpha5), as `identify` found on the measured Series A).
-    if measure == robocal::identify::Measure::Position
-        && let Some(moved) = off_tool(robot)
+    // The design's robot carries the tool as a 6-DOF transform whatever the file's row
+    // (an MDH tool row is so identified); relative and distance measures are positions too.
+    use robocal::identify::Measure as M;
+    if matches!(measure, M::Position | M::Relative | M::Distance)
+        && let Some(moved) = off_tool(&design.robot)
     {
-        let off = identifiable(&moved, params, measure, sigmas, pool)?;
+        let at = identifiable(&design.robot, params, M::Position, sigmas, pool)?;
+        let off = identifiable(&moved, params, M::Position, sigmas, pool)?;
         let more: Vec<&str> = (off.iter())
-            .filter(|name| !seen.contains(name))
+            .filter(|name| !at.contains(name))
             .map(|s| s.as_str())
             .collect();
         if !more.is_empty() {
+            let r = &design.robot;
             let t = |name: &str| {
-                let names = robot.parameters();
+                let names = r.parameters();
                 names
                     .iter()
                     .find(|p| p.name() == name)
-                    .map_or(0.0, |&p| robot.param(p))
+                    .map_or(0.0, |&p| r.param(p))
             };
             eprintln!(
-                "warning: the positions of a point {OFF_TOOL_MM} mm off the file's tool point \
-                 along each axis of the flange frame (at ({:.1}, {:.1}, {:.1}) mm in it) \
-                 identify {} parameter(s) more than the tool point's ({}): the plan is for a \
-                 point at the file's tool; give the measured point's offset (the reflector's \
+                "warning: the positions of a point moved {OFF_TOOL_MM} mm along each axis of \
+                 the flange frame from the file's tool point (to ({:.1}, {:.1}, {:.1}) mm in \
+                 it) identify {} parameter(s) more than the tool point's ({}): the plan is for \
+                 a point at the file's tool; give the measured point's offset (the reflector's \
                  on its mount) in the file's [tool] to plan for it",
                 t("tool.x") + OFF_TOOL_MM,
                 t("tool.y") + OFF_TOOL_MM,
@@ -449,6 +480,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
         Some(p) => Region::read(p, &robot)?,
         None => Region::limits(&robot),
     };
+    warn_narrow(&robot, &region, &limits);
     // The pool, and the file lines of its configurations where they were given.
     let (candidates, lines): (Pool, Vec<usize>) = match (&a.evaluate, &a.candidates) {
         (Some(p), _) => evaluated_list(p, &robot, per, &limits)?,

@@ -37,6 +37,12 @@ pub struct Candidate {
     pub stage: usize,
     /// The settings tried.
     pub settings: Settings,
+    /// The settings as the table and the notes name them ([`Settings::describe`]): "model
+    /// alone (no network)" for a candidate without a network, whose `settings` still carry
+    /// the form and encoding of the network it was held against. Empty in reports written
+    /// before it.
+    #[serde(default)]
+    pub label: String,
     /// None when the candidate failed on some fold (see `error`), was dropped early (see
     /// `pruned`) or is a proxy (see `proxy`).
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -9,8 +9,8 @@ use super::selection::{Outlier, Selection};
 use super::settings::CompensatorOptions;
 use super::train::{RbfHyper, TrainOptions};
 use super::tuning::{
-    FIT_WORK, NETWORK_MARGIN, RESELECT_SHARE, budget_epochs, outlier_note, select_settings,
-    too_few_rows,
+    FIT_WORK, MIN_RBF_ROWS, NETWORK_MARGIN, RESELECT_SHARE, budget_epochs, outlier_note,
+    select_settings, too_few_rows,
 };
 use crate::data::MeasurementSet;
 use crate::data::measurement::{row_name, subset};
@@ -137,10 +137,27 @@ impl Compensator {
         }
         let selection_seconds = started.elapsed().as_secs_f64();
         // Rows cross-validation listed as outliers stay out of the final fit when asked.
-        let left_out: Vec<usize> = match &selection {
+        let mut left_out: Vec<usize> = match &selection {
             Some(s) if opts.drop_outliers => s.outliers.iter().map(|o| o.row).collect(),
             _ => Vec::new(),
         };
+        // A network needs its rows: where leaving the outliers out would leave fewer, they
+        // stay in the fit (a reviewer's 5 rows, 3 of them listed at --outlier-k 2, failed the
+        // final fit of a fixed network on the other 2).
+        let need = match settings.network {
+            _ if !settings.has_network() => 0,
+            super::settings::Network::Rbf => MIN_RBF_ROWS,
+            _ => super::train::MIN_ROWS,
+        };
+        if !left_out.is_empty() && set.rows.len() - left_out.len() < need {
+            remarks.notes.push(format!(
+                "leaving the {} listed row(s) out of the final fit would leave {} row(s), fewer \
+                 than the network needs ({need}): they stay in the fit",
+                left_out.len(),
+                set.rows.len() - left_out.len()
+            ));
+            left_out.clear();
+        }
         let kept;
         let fit_set = if left_out.is_empty() {
             set

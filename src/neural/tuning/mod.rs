@@ -207,11 +207,24 @@ pub struct Remarks {
     pub warnings: Vec<String>,
 }
 
-/// Why the rows of `set` are too few to cross-validate a network: fewer than
-/// [`MIN_ROWS`] + 1 rows, or folds (as [`select_settings`] draws them) of which some leaves
-/// fewer than [`MIN_ROWS`] rows to train on. None where they suffice, and where rows enough
-/// to fit a network hold too few distinct configurations for folds (fixing the choices fits
-/// one there).
+/// Training rows an RBF network needs at least (the MLPs need [`MIN_ROWS`]).
+pub const MIN_RBF_ROWS: usize = 2;
+
+/// The fewest training rows a network the options allow needs: [`MIN_RBF_ROWS`] where they
+/// fix the RBF network alone, [`MIN_ROWS`] where MLPs may take part; None where they fix the
+/// members at 0 (no network).
+fn network_rows(opts: &CompensatorOptions) -> Option<usize> {
+    match (opts.members, opts.network) {
+        (Some(0), _) => None,
+        (_, Some(Network::Rbf)) => Some(MIN_RBF_ROWS),
+        _ => Some(MIN_ROWS),
+    }
+}
+
+/// Why the rows of `set` are too few to cross-validate what the options leave open: fewer than
+/// 2 folds of distinct configurations (as [`select_settings`] draws them), or folds of which
+/// some leaves fewer rows to train on than a network the options allow needs
+/// (the rows of the network the options allow). None where they suffice.
 pub fn too_few_rows(
     robot: &Robot,
     set: &MeasurementSet,
@@ -223,19 +236,28 @@ pub fn too_few_rows(
     let want = opts.folds.unwrap_or(if distinct >= MANY { 4 } else { 5 });
     let fold_of = folds(&groups, want.max(2), opts.train.seed);
     let k = fold_of.iter().max().map_or(0, |m| m + 1);
+    let what = if network_rows(opts).is_some() {
+        "a network"
+    } else {
+        "a refinement"
+    };
+    if k < 2 {
+        return Some(format!(
+            "{n} training row(s) of {distinct} distinct configuration(s) are too few to \
+             cross-validate {what}: it needs 2 folds of distinct configurations"
+        ));
+    }
+    let need = network_rows(opts)?;
     let largest = (0..k)
         .map(|f| fold_of.iter().filter(|&&g| g == f).count())
         .max()
         .unwrap_or(n);
-    if n <= MIN_ROWS || (k >= 2 && n - largest < MIN_ROWS) {
-        Some(format!(
+    (n - largest < need).then(|| {
+        format!(
             "{n} training row(s) of {distinct} distinct configuration(s) are too few to \
-             cross-validate a network: each fold must leave at least {MIN_ROWS} rows to train \
-             on"
-        ))
-    } else {
-        None
-    }
+             cross-validate {what}: each fold must leave at least {need} rows to train on"
+        )
+    })
 }
 
 /// The settings to fit: `opts`'s fixed choices, the rest chosen by cross-validation on `set`
@@ -294,6 +316,13 @@ pub fn select_settings(
                 refine: None,
                 ..stages::model_alone_of(&space.base)
             };
+            // Rows enough for a network, of too few configurations to fold, can still fit
+            // one untested with every choice fixed.
+            let fix = if set.rows.len() >= MIN_ROWS && network_rows(opts).is_some() {
+                " (or fix every choice to fit a network untested)"
+            } else {
+                ""
+            };
             Ok((
                 alone,
                 None,
@@ -301,7 +330,7 @@ pub fn select_settings(
                     notes: Vec::new(),
                     warnings: vec![format!(
                         "{why}: the compensator is the model alone (as given, nothing \
-                         refined); measure more configurations"
+                         refined); measure more configurations{fix}"
                     )],
                 },
             ))
@@ -311,8 +340,9 @@ pub fn select_settings(
                 return Err(Error::Invalid(format!(
                     "{why}, and the members are fixed at {} network(s): leave them open \
                      (the model alone), or fix every choice to fit a network on at least \
-                     {MIN_ROWS} rows untested",
-                    opts.members.unwrap_or(0)
+                     {} rows untested",
+                    opts.members.unwrap_or(0),
+                    network_rows(opts).unwrap_or(MIN_ROWS)
                 )));
             }
             cross_validate(robot, set, opts, progress, space, None)
@@ -812,6 +842,7 @@ mod tests {
     fn the_network_note_gives_the_errors_own_ratio_first() {
         let candidate = |network: Network, members: usize, refine: &str, rms: f64| Candidate {
             stage: 5,
+            label: String::new(),
             settings: Settings {
                 network,
                 rbf_start: Some(0),

@@ -175,6 +175,7 @@ impl Race<'_, '_> {
             let kept = survivors.contains(&c);
             candidates.push(Candidate {
                 stage,
+                label: s.describe(),
                 settings: s,
                 score: (error.is_none() && kept).then(|| total.score()),
                 pruned: (error.is_none() && !kept).then(|| total.score()),
