@@ -102,7 +102,7 @@ pub struct Selection {
     /// errors (the final fit leaves them out when the options say so, they are few enough
     /// to be mis-measured rows, and the fit without them is sound: `outliers_left_out`).
     pub outliers: Vec<Outlier>,
-    /// Whether the final fit left the listed outliers out (`outliers` and `first_outliers`).
+    /// Whether the final fit left `outliers` out (`first_outliers` always are).
     pub outliers_left_out: bool,
     /// Outliers of a first cross-validation on every row that weighed in its choice (they
     /// made more than [`RESELECT_SHARE`](crate::neural::tuning::RESELECT_SHARE) of the

@@ -216,7 +216,13 @@ impl Compensator {
         {
             let mut gone = subset(set, |i| train.rbf_left_out.contains(&i));
             gone.rows.extend(first_rows.map_or(Vec::new(), |f| f.rows));
-            let held = (s.outliers.iter().chain(&first))
+            // The outliers of the choice made count only where they were left out too.
+            let second = if train.rbf_left_out.is_empty() {
+                &[][..]
+            } else {
+                &s.outliers[..]
+            };
+            let held = (second.iter().chain(&first))
                 .map(|o| o.position_mm.powi(2))
                 .sum::<f64>();
             let cv = (held / left as f64).sqrt();
@@ -240,7 +246,7 @@ impl Compensator {
             for o in &mut s.outliers {
                 o.row = index[o.row];
             }
-            s.outliers_left_out = !train.rbf_left_out.is_empty() || !first.is_empty();
+            s.outliers_left_out = !train.rbf_left_out.is_empty();
             if let Some(note) = first_note {
                 s.notes.push(note);
             }

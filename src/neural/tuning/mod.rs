@@ -318,10 +318,13 @@ pub fn select_settings(
             };
             // Rows enough for a network, of too few configurations to fold, can still fit
             // one untested with every choice fixed.
-            let fix = if set.rows.len() >= MIN_ROWS && network_rows(opts).is_some() {
-                " (or fix every choice to fit a network untested)"
-            } else {
-                ""
+            let fix = match (network_rows(opts), opts.folds) {
+                // Fewer folds asked for than rows allow: more leave more rows to train on.
+                (Some(_), Some(f)) if f < set.rows.len() => " (or more --folds)",
+                (Some(need), _) if set.rows.len() >= need => {
+                    " (or fix every choice to fit a network untested)"
+                }
+                _ => "",
             };
             Ok((
                 alone,
