@@ -367,23 +367,6 @@ fn off_tool(robot: &Robot) -> Option<Robot> {
     robot.with_params(&moved).ok()
 }
 
-/// The names of the parameters of selection `params` that pose measurements at the first
-/// [`POSE_CHECK_CONFIGURATIONS`] configurations of `pool` identify.
-fn pose_identifiable(
-    robot: &Robot,
-    params: &str,
-    sigmas: robocal::identify::Sigmas,
-    pool: &Pool,
-) -> Result<Vec<String>> {
-    identifiable(
-        robot,
-        params,
-        robocal::identify::Measure::Pose,
-        sigmas,
-        pool,
-    )
-}
-
 /// The names of the parameters of selection `params` that `measure` (pose or position) at
 /// the first [`POSE_CHECK_CONFIGURATIONS`] configurations of `pool` identifies.
 fn identifiable(
@@ -422,8 +405,9 @@ fn warn_partial(
     sigmas: robocal::identify::Sigmas,
     pool: &Pool,
 ) -> Result<()> {
-    let chosen = pose_identifiable(robot, params, sigmas, pool)?;
-    let full = pose_identifiable(robot, "full", sigmas, pool)?;
+    let pose = robocal::identify::Measure::Pose;
+    let chosen = identifiable(robot, params, pose, sigmas, pool)?;
+    let full = identifiable(robot, "full", pose, sigmas, pool)?;
     let left: Vec<&String> = full.iter().filter(|name| !chosen.contains(name)).collect();
     if !left.is_empty() {
         eprintln!(

@@ -9,7 +9,7 @@ use super::selection::{Outlier, Selection};
 use super::settings::CompensatorOptions;
 use super::train::{RbfHyper, TrainOptions};
 use super::tuning::{
-    FIT_WORK, MIN_RBF_ROWS, NETWORK_MARGIN, RESELECT_SHARE, budget_epochs, outlier_note,
+    FIT_WORK, NETWORK_MARGIN, RESELECT_SHARE, budget_epochs, outlier_note, rows_needed,
     select_settings, too_few_rows,
 };
 use crate::data::MeasurementSet;
@@ -91,11 +91,12 @@ impl Compensator {
         let without;
         let mut index = index;
         let mut set = set;
-        if let Some(s) = selection.as_ref().filter(|_| opts.drop_outliers)
-            && opts.reselect
-            && outlier_weight(s, set) > RESELECT_SHARE
+        if let Some(s) = selection
+            .as_ref()
+            .filter(|_| opts.drop_outliers && opts.reselect)
+            && let share = outlier_weight(s, set)
+            && share > RESELECT_SHARE
         {
-            let share = outlier_weight(s, set);
             let out: std::collections::HashSet<usize> = s.outliers.iter().map(|o| o.row).collect();
             without = subset(set, |i| !out.contains(&i));
             let named: Vec<Outlier> = (s.outliers.iter())
@@ -144,10 +145,10 @@ impl Compensator {
         // A network needs its rows: where leaving the outliers out would leave fewer, they
         // stay in the fit (a reviewer's 5 rows, 3 of them listed at --outlier-k 2, failed the
         // final fit of a fixed network on the other 2).
-        let need = match settings.network {
-            _ if !settings.has_network() => 0,
-            super::settings::Network::Rbf => MIN_RBF_ROWS,
-            _ => super::train::MIN_ROWS,
+        let need = if settings.has_network() {
+            rows_needed(settings.network)
+        } else {
+            0
         };
         if !left_out.is_empty() && set.rows.len() - left_out.len() < need {
             remarks.notes.push(format!(

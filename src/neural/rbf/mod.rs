@@ -45,6 +45,9 @@ mod search;
 
 use super::samples::Samples;
 use crate::error::{Error, Result};
+/// Training rows an RBF network needs at least.
+pub const MIN_ROWS: usize = 2;
+
 pub use covariance::Covariance;
 pub use draw::{Draw, HYPER_BLOCKS, HYPER_ROWS, LeftOut, MAX_UNITS, drawn_rows, unit_rows};
 use faer::Mat;
@@ -270,9 +273,9 @@ fn shape(s: &Samples) -> Result<(usize, usize, usize)> {
     }
     let n = s.len();
     let (d, o) = (s.x.first().map_or(0, |x| x.len()), s.rows());
-    if n < 2 || d == 0 || o == 0 {
+    if n < MIN_ROWS || d == 0 || o == 0 {
         return Err(Error::Invalid(format!(
-            "an RBF network needs at least 2 training rows (got {n})"
+            "an RBF network needs at least {MIN_ROWS} training rows (got {n})"
         )));
     }
     Ok((n, d, o))

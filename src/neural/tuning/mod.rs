@@ -207,17 +207,53 @@ pub struct Remarks {
     pub warnings: Vec<String>,
 }
 
-/// Training rows an RBF network needs at least (the MLPs need [`MIN_ROWS`]).
-pub const MIN_RBF_ROWS: usize = 2;
+/// The fewest training rows `network` needs: the RBF network's
+/// ([`crate::neural::rbf::MIN_ROWS`]) alone, [`MIN_ROWS`] where MLPs take part.
+pub fn rows_needed(network: Network) -> usize {
+    match network {
+        Network::Rbf => crate::neural::rbf::MIN_ROWS,
+        Network::Mlp | Network::Mix => MIN_ROWS,
+    }
+}
 
-/// The fewest training rows a network the options allow needs: [`MIN_RBF_ROWS`] where they
-/// fix the RBF network alone, [`MIN_ROWS`] where MLPs may take part; None where they fix the
-/// members at 0 (no network).
+/// The fewest training rows a network the options allow needs ([`rows_needed`]; MLPs where
+/// the network is open); None where they fix the members at 0 (no network).
 fn network_rows(opts: &CompensatorOptions) -> Option<usize> {
-    match (opts.members, opts.network) {
-        (Some(0), _) => None,
-        (_, Some(Network::Rbf)) => Some(MIN_RBF_ROWS),
-        _ => Some(MIN_ROWS),
+    match opts.members {
+        Some(0) => None,
+        _ => Some(rows_needed(opts.network.unwrap_or(Network::Mlp))),
+    }
+}
+
+/// Cross-validation's folds of a set: its configuration groups, how many distinct, the folds
+/// asked for (`--folds`, else 4 from [`MANY`] configurations on, else 5), each row's fold and
+/// the number of folds drawn (whole configurations each, seeded).
+struct Folds {
+    groups: Vec<usize>,
+    distinct: usize,
+    want: usize,
+    fold_of: Vec<usize>,
+    k: usize,
+}
+
+/// [`Folds`] of `set` under `opts`: the one draw [`select_settings`] and [`too_few_rows`]
+/// both see.
+fn fold_plan(robot: &Robot, set: &MeasurementSet, opts: &CompensatorOptions) -> Folds {
+    let groups = super::repeats::configuration_groups(robot, set);
+    let distinct = super::repeats::group_count(&groups);
+    // Fewer folds train candidates on a smaller part of the set; where the held-out error
+    // still falls steeply with more rows (real tracker data), 3 folds chose penalties ten
+    // times too large. From MANY configurations on, candidate fits sit at their iteration
+    // floor and the cost grows with the folds: 4 there.
+    let want = opts.folds.unwrap_or(if distinct >= MANY { 4 } else { 5 });
+    let fold_of = folds(&groups, want.max(2), opts.train.seed);
+    let k = fold_of.iter().max().map_or(0, |m| m + 1);
+    Folds {
+        groups,
+        distinct,
+        want,
+        fold_of,
+        k,
     }
 }
 
@@ -231,11 +267,12 @@ pub fn too_few_rows(
     opts: &CompensatorOptions,
 ) -> Option<String> {
     let n = set.rows.len();
-    let groups = super::repeats::configuration_groups(robot, set);
-    let distinct = super::repeats::group_count(&groups);
-    let want = opts.folds.unwrap_or(if distinct >= MANY { 4 } else { 5 });
-    let fold_of = folds(&groups, want.max(2), opts.train.seed);
-    let k = fold_of.iter().max().map_or(0, |m| m + 1);
+    let Folds {
+        distinct,
+        fold_of,
+        k,
+        ..
+    } = fold_plan(robot, set, opts);
     let what = if network_rows(opts).is_some() {
         "a network"
     } else {
@@ -365,15 +402,13 @@ fn cross_validate(
     mut space: Space,
     fixed: Option<Settings>,
 ) -> Result<(Settings, Option<Selection>)> {
-    // Fewer folds train candidates on a smaller part of the set; where the held-out error
-    // still falls steeply with more rows (real tracker data), 3 folds chose penalties ten
-    // times too large. From MANY configurations on, candidate fits sit at their iteration
-    // floor and the cost grows with the folds: 4 there.
-    let groups = super::repeats::configuration_groups(robot, set);
-    let distinct = super::repeats::group_count(&groups);
-    let want = opts.folds.unwrap_or(if distinct >= MANY { 4 } else { 5 });
-    let fold_of = folds(&groups, want.max(2), opts.train.seed);
-    let k = fold_of.iter().max().map_or(0, |m| m + 1);
+    let Folds {
+        groups,
+        distinct,
+        want,
+        fold_of,
+        k,
+    } = fold_plan(robot, set, opts);
     if k < 2 || want < 2 {
         return Err(Error::Invalid(format!(
             "choosing the settings by cross-validation needs at least 2 folds of distinct \
