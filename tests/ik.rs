@@ -1785,3 +1785,86 @@ fn ranked_lists_every_solution_nearest_the_seed_first() {
         }
     }
 }
+
+/// A SCARA (four joints: two vertical revolute axes, a prismatic one, a revolute wrist) in
+/// MDH, nominal or with its second axis tilted by 0.05 deg and its wrist by 0.03 deg.
+fn scara(tilt_deg: f64) -> Robot {
+    let text = format!(
+        "name = \"scara\"\n[base]\nconvention = \"transform\"\nz = 300.0\n\
+         [[joint]]\nconvention = \"mdh\"\nlimits = [-130.0, 130.0]\n\
+         [[joint]]\nconvention = \"mdh\"\na = 400.0\nalpha = {tilt_deg}\nlimits = [-145.0, 145.0]\n\
+         [[joint]]\nconvention = \"mdh\"\na = 250.0\ntype = \"prismatic\"\nlimits = [-200.0, 0.0]\n\
+         [[joint]]\nconvention = \"mdh\"\nalpha = {}\nlimits = [-360.0, 360.0]\n\
+         [tool]\nconvention = \"transform\"\nz = 80.0\n",
+        180.0 + 0.6 * tilt_deg
+    );
+    parse_robot(&text, Path::new("scara.toml")).unwrap()
+}
+
+/// An arm of fewer than six joints cannot turn its tool about every axis: a calibrated
+/// SCARA (axes tilted by hundredths of a degree) cannot hold the nominal's vertical tool, so
+/// a pose target's orientation is out of its reach by the tilt. The solve meets the position
+/// exactly and leaves the orientation as near as the joints allow, its error in the solution
+/// (before, every such target stalled micrometres from its position: "out of reach").
+#[test]
+fn an_arm_of_four_joints_meets_the_position_and_nears_the_orientation() {
+    let (nominal, tilted) = (scara(0.0), scara(0.05));
+    let mut ws = IkWorkspace::new(&tilted);
+    let opts = IkOptions::default();
+    for seed_deg in [
+        [10.0, 20.0, -50.0, 30.0],
+        [-60.0, 100.0, -150.0, 200.0],
+        [30.0, 45.0, -100.0, 0.0],
+    ] {
+        let seed = nominal.joints_to_internal(&seed_deg);
+        let target = tool_pose(&nominal, &seed);
+        let sol = solve_numeric(&tilted, &IkTarget::Pose(target), &seed, &opts, &mut ws)
+            .unwrap_or_else(|e| panic!("{seed_deg:?}: {e}"));
+        let reached = tool_pose(&tilted, &sol.q);
+        let miss = (reached.translation.vector - target.translation.vector).norm();
+        assert!(
+            miss <= 1e-9 && sol.position_error_mm <= 1e-9,
+            "{seed_deg:?}: {miss}"
+        );
+        // The tilt is out of reach: about 1e-3 rad of it remains, as the solution says.
+        let turn = angle_between(&reached.rotation, &target.rotation);
+        assert!(
+            (turn - sol.rotation_error_rad).abs() < 1e-9 && turn > 1e-4 && turn < 2e-3,
+            "{seed_deg:?}: {turn} {}",
+            sol.rotation_error_rad
+        );
+        // Along the one joint motion that keeps the position (to first order: the null
+        // space of the position's Jacobian, by central differences), the orientation error
+        // is least at the solution.
+        let position = |q: &[f64]| tool_pose(&tilted, q).translation.vector;
+        let mut jp = nalgebra::Matrix3x4::zeros();
+        for k in 0..4 {
+            let (mut a, mut b) = (sol.q.clone(), sol.q.clone());
+            a[k] += 1e-6;
+            b[k] -= 1e-6;
+            jp.set_column(k, &((position(&a) - position(&b)) / 2e-6));
+        }
+        let svd = nalgebra::SVD::new(jp.transpose() * jp, true, true);
+        let smallest = svd.singular_values.imin();
+        let null = svd.v_t.unwrap().row(smallest).transpose();
+        assert!((jp * null).norm() < 1e-6 * jp.norm(), "{}", jp * null);
+        for t in [-1e-4, 1e-4] {
+            let q: Vec<f64> = (0..4).map(|k| sol.q[k] + t * null[k]).collect();
+            let other = angle_between(&tool_pose(&tilted, &q).rotation, &target.rotation);
+            assert!(other >= turn - 1e-12, "{seed_deg:?}: {other} < {turn}");
+        }
+        // A tool tilted 20 deg is out of a SCARA's reach, position met or not.
+        let tilted_tool = Pose::from_parts(
+            target.translation,
+            target.rotation * nalgebra::Rotation3::from_euler_angles(0.0, 20f64.to_radians(), 0.0),
+        );
+        let err = solve_numeric(&tilted, &IkTarget::Pose(tilted_tool), &seed, &opts, &mut ws)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("out of its reach"), "{err}");
+        // A pose the tilted arm reaches is met exactly, as before.
+        let own = tool_pose(&tilted, &seed);
+        let sol = solve_numeric(&tilted, &IkTarget::Pose(own), &seed, &opts, &mut ws).unwrap();
+        assert!(sol.rotation_error_rad <= 1e-12 && sol.position_error_mm <= 1e-9);
+    }
+}

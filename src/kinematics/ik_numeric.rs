@@ -4,7 +4,11 @@
 //! Residual: e = [p_target - p(q); L * rotvec(R_target R(q)^T)] (mm), with L a length (mm per
 //! rad) that puts orientation on the scale of position. Step: (J^T J + lambda diag(J^T J))
 //! dq = J^T e with J the geometric Jacobian (orientation rows scaled by L). A solve either
-//! meets both tolerances or returns [`Error::NotConverged`] with the error it reached.
+//! meets both tolerances or returns [`Error::NotConverged`] with the error it reached; but an
+//! arm of fewer than six joints, which cannot turn its tool about every axis, meets the
+//! position and leaves the orientation as near as its joints allow (the least-squares point,
+//! then Gauss-Newton on the position alone), its orientation error in the solution, where
+//! that error is within [`REACHABLE_TURN_RAD`].
 //!
 //! The solver works on any [`ToolModel`] (a pose and its geometric Jacobian): the robot's
 //! kinematic model, rigid or compliant ([`solve_numeric`]), or a model with a neural
@@ -18,7 +22,7 @@ use super::jacobian::joint_jacobian;
 use crate::error::{Error, Result};
 use crate::geometry::rotation::rotation_vector;
 use crate::model::{JointType, LIMIT_TOL, Robot};
-use nalgebra::{DMatrix, DVector, Matrix6xX, Vector3, Vector6};
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix6xX, Vector3, Vector6};
 use std::f64::consts::PI;
 
 /// What the tool must reach.
@@ -309,6 +313,17 @@ fn solve_lm<M: ToolModel>(
             lambda *= 10.0;
         }
         if !improved {
+            // An arm of fewer than six joints cannot turn its tool about every axis: where
+            // its calibrated axes tilt, the target's orientation is out of reach by a little
+            // (a SCARA's by the tilt), and the least-squares point trades micrometres of
+            // position for it. The position is met exactly from there, the orientation left
+            // as near as the joints allow (its error is the solution's).
+            if n < 6
+                && !position_only
+                && let Some((pos, rot)) = meet_position(model, target, &mut e, opts, l, ws)
+            {
+                return within_reach(n, rot).map(|()| finish(model.robot(), &ws.q, iter, pos, rot));
+            }
             // The caller gets the error at the best point.
             let (pos, rot) = errors(&e);
             return Err(Error::NotConverged(format!(
@@ -319,6 +334,13 @@ fn solve_lm<M: ToolModel>(
             )));
         }
     }
+    if n < 6
+        && !position_only
+        && let Some((pos, rot)) = meet_position(model, target, &mut e, opts, l, ws)
+    {
+        return within_reach(n, rot)
+            .map(|()| finish(model.robot(), &ws.q, opts.max_iterations, pos, rot));
+    }
     let (pos, rot) = errors(&e);
     Err(Error::NotConverged(format!(
         "numerical IK did not converge in {} iterations: position error {pos:.3e} mm, \
@@ -326,6 +348,71 @@ fn solve_lm<M: ToolModel>(
         opts.max_iterations,
         rot.to_degrees()
     )))
+}
+
+/// Orientation error (rad) an arm of fewer than six joints may leave with the position met
+/// (`meet_position`): a calibrated arm's tilts leave milliradians of the nominal's
+/// orientation out of its reach; a target farther off in orientation is one the arm cannot
+/// take (a SCARA's tool tilted by 20 deg), and its solve fails.
+pub const REACHABLE_TURN_RAD: f64 = 0.01;
+
+/// Ok where the orientation error `rot` (rad) that an arm of `n` joints leaves with the
+/// position met is within [`REACHABLE_TURN_RAD`], else the error that says so.
+fn within_reach(n: usize, rot: f64) -> Result<()> {
+    if rot <= REACHABLE_TURN_RAD {
+        return Ok(());
+    }
+    Err(Error::NotConverged(format!(
+        "the position is met, but the arm's {n} joints leave the tool {:.4} deg from the \
+         target's orientation, more than the {:.4} deg a calibrated arm's tilts leave: an arm \
+         of fewer than six joints cannot turn its tool about every axis, and this orientation \
+         is out of its reach",
+        rot.to_degrees(),
+        REACHABLE_TURN_RAD.to_degrees()
+    )))
+}
+
+/// Steps of [`meet_position`] at most.
+const POSITION_STEPS: usize = 20;
+
+/// From the least-squares point `ws.q` of an arm of fewer than six joints (its residual in
+/// `e`), Gauss-Newton on the position alone with the smallest joint step (dq = J_p^T (J_p
+/// J_p^T)^-1 e_p, J_p the 3 x N position rows), which leaves the orientation where the
+/// least squares put it but for a change of second order: the position and orientation
+/// errors (mm, rad) once the position is within tolerance, None where it does not get there
+/// (fewer than three joints move the tool's origin independently, or the target is out of
+/// reach). `ws.q` and `e` hold the last point either way.
+fn meet_position<M: ToolModel>(
+    model: &mut M,
+    target: &IkTarget,
+    e: &mut Vector6<f64>,
+    opts: &IkOptions,
+    l: f64,
+    ws: &mut LmBuffers,
+) -> Option<(f64, f64)> {
+    let n = ws.q.len();
+    for _ in 0..POSITION_STEPS {
+        let pos = e.fixed_rows::<3>(0).norm();
+        if pos <= opts.tol_position_mm {
+            return Some((pos, e.fixed_rows::<3>(3).norm() / l));
+        }
+        model.jacobian(&ws.q, &mut ws.jac);
+        let jp = ws.jac.fixed_rows::<3>(0);
+        let a: Matrix3<f64> = jp * jp.transpose();
+        let y = a.cholesky()?.solve(&e.fixed_rows::<3>(0).into_owned());
+        for k in 0..n {
+            ws.trial[k] = ws.q[k] + jp.column(k).dot(&y);
+        }
+        let e_new = residual(model, target, &ws.trial, l);
+        // A NaN miss is no progress either.
+        if e_new.fixed_rows::<3>(0).norm().partial_cmp(&pos) != Some(std::cmp::Ordering::Less) {
+            return None;
+        }
+        std::mem::swap(&mut ws.q, &mut ws.trial);
+        *e = e_new;
+    }
+    let pos = e.fixed_rows::<3>(0).norm();
+    (pos <= opts.tol_position_mm).then(|| (pos, e.fixed_rows::<3>(3).norm() / l))
 }
 
 fn finish(robot: &Robot, q: &[f64], iterations: usize, pos: f64, rot: f64) -> IkSolution {
