@@ -858,3 +858,124 @@ fn parallel_axes_without_a_hayati_row_are_noted() {
     );
     assert_eq!(scara(&scara_mdh, 150.0), None);
 }
+
+/// Rows that hold a joint at one value (the FANUC's q5 at 25 deg) identify combinations of
+/// the parameters its motion would tell apart that hold there only: the fit reaches the
+/// noise, other q5 values are missed by millimetres, and identify says so, naming the joint;
+/// rows where every joint moves give no such warning.
+#[test]
+fn rows_that_hold_a_joint_at_one_value_are_warned_of() {
+    let nominal = fanuc();
+    let truth = table_6_1(&nominal);
+    let mut region = Region::limits(&truth);
+    region.0[4] = [25f64.to_radians(); 2];
+    let held = Simulation {
+        truth: &truth,
+        nongeometric: &NonGeometric::default(),
+        region: &region,
+        count: 50,
+        seed: 4,
+        sigma_position_mm: 0.033,
+        sigma_rotation_rad: 0.174e-3,
+        observe: Observe::Pose,
+    }
+    .run(PathBuf::from("held.csv"))
+    .unwrap()
+    .measured;
+    let opts = Options {
+        params: "full".into(),
+        ..Default::default()
+    };
+    let id = identify(&nominal, &held, &opts).unwrap();
+    let warning = id
+        .warnings
+        .iter()
+        .find(|w| w.contains("hold one value"))
+        .unwrap_or_else(|| panic!("{:?}", id.warnings));
+    assert!(
+        warning.starts_with("held.csv: 1 joint(s)")
+            && warning.contains("q5 within 25.0000 to 25.0000 deg"),
+        "{warning}"
+    );
+    // What it warns of: other q5 values are missed by far more than the rows' noise.
+    let (val, _) = simulate(&truth, 100, 5, false, Observe::Pose);
+    let at_held = evaluate_model(&id.robot, &held, Measure::Pose).unwrap();
+    let elsewhere = evaluate_model(&id.robot, &val, Measure::Pose).unwrap();
+    assert!(
+        elsewhere.position_mm.unwrap().rms > 10.0 * at_held.position_mm.unwrap().rms,
+        "{elsewhere:?} {at_held:?}"
+    );
+    // The base and tool alone: the joints' own model turns the tool with them.
+    let frames = Options {
+        params: "base,tool".into(),
+        ..Default::default()
+    };
+    let id = identify(&nominal, &held, &frames).unwrap();
+    assert!(
+        id.warnings.iter().all(|w| !w.contains("hold one value")),
+        "{:?}",
+        id.warnings
+    );
+    let (moving, _) = simulate(&truth, 50, 4, true, Observe::Pose);
+    let id = identify(&nominal, &moving, &opts).unwrap();
+    assert!(
+        id.warnings.iter().all(|w| !w.contains("hold one value")),
+        "{:?}",
+        id.warnings
+    );
+}
+
+/// A tool along the flange's x (ry = 90 deg, the gimbal lock of its Z-Y-X angles) is
+/// identified in full: there rz and rx turn it about one axis and no angle about the third,
+/// so a tool turned 3 mrad about that third axis kept its error (orientation RMS 0.17 deg,
+/// s^2 69 on a reviewer's noisy rows); the solve takes the frame's rotation as turns about
+/// its own axes, and the file gets the true frame in its angles.
+#[test]
+fn a_tool_at_the_gimbal_lock_is_identified_in_full() {
+    use robocal::model::{Slot, file::parse_robot, file::robot_to_toml};
+    let start = fanuc().with_frame_as_transform(Slot::Tool).unwrap();
+    let set = |r: &Robot, name: &str, deg: f64| {
+        let id = r.find_param(name).unwrap();
+        r.with_param(id, deg.to_radians()).unwrap()
+    };
+    let start = set(&set(&start, "tool.ry", 90.0), "tool.rz", 0.0);
+    let start = set(&start, "tool.rx", 0.0);
+    // The truth: the tool turned 3 mrad about its own z axis (the flange's x), the one axis
+    // rz and rx cannot turn it about at ry = 90 deg.
+    let truth_rot = start.tool().transform().rotation
+        * nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::z_axis(), 3e-3);
+    let [rz, ry, rx] = robocal::geometry::rotation::rotation_to_zyx(&truth_rot);
+    let truth = set(&start, "tool.rz", rz.to_degrees());
+    let truth = set(
+        &set(&truth, "tool.ry", ry.to_degrees()),
+        "tool.rx",
+        rx.to_degrees(),
+    );
+    let (data, _) = simulate(&truth, 40, 5, false, Observe::Pose);
+    let opts = Options {
+        params: "tool".into(),
+        ..Default::default()
+    };
+    let id = identify(&start, &data, &opts).unwrap();
+    let gap = angle_between(
+        &id.robot.tool().transform().rotation,
+        &truth.tool().transform().rotation,
+    );
+    assert!(gap < 1e-9, "{gap} rad from the true tool; {:?}", id.notes);
+    let fit = evaluate_model(&id.robot, &data, Measure::Pose).unwrap();
+    assert!(fit.orientation_deg.unwrap().max < 1e-7, "{fit:?}");
+    assert!(
+        id.notes
+            .iter()
+            .any(|n| n.contains("turns about its start frame's own z, y and x")),
+        "{:?}",
+        id.notes
+    );
+    // The file holds the frame in its angles, read back alike.
+    let back = parse_robot(&robot_to_toml(&id.robot), Path::new("id.toml")).unwrap();
+    let gap = angle_between(
+        &back.tool().transform().rotation,
+        &truth.tool().transform().rotation,
+    );
+    assert!(gap < 1e-9, "{gap}");
+}

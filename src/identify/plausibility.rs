@@ -40,6 +40,55 @@ pub fn misfit(robot: &Robot, obs: &Observations) -> [Option<f64>; 2] {
     [rms(pos), rms(rot)]
 }
 
+/// Spread (max - min over the rows; deg for a revolute joint, mm for a prismatic one) under
+/// which a joint counts as held at one value: its motion cannot tell apart the parameters
+/// that move with it (those after it in the chain and its own offset), whose regroupings
+/// then hold at that value only.
+pub const HELD_JOINT_SPREAD: f64 = 1.0;
+
+/// The warning for rows in which some joints hold one value (spread under
+/// [`HELD_JOINT_SPREAD`] deg or mm) while parameters of their rows or of the joint rows
+/// after them are solved for (`ids`): those the joints' motion would tell apart come out as
+/// combinations that hold at that value only (a FANUC with q5 held at 25 deg fits its rows
+/// to the noise and misses other q5 by 2.1 mm RMS), or, where the rest of the rows cannot
+/// hold them, wander far (a KUKA with q4 held: lengths moved by 62 mm, 24 mm RMS on other
+/// rows). None where every joint moves, or where only the base and tool are solved for (the
+/// joints' own model turns the tool with them).
+pub fn held_joints_warning(robot: &Robot, set: &MeasurementSet, ids: &[ParamId]) -> Option<String> {
+    if set.rows.len() < 2 {
+        return None;
+    }
+    let moved = |j: usize| {
+        ids.iter()
+            .any(|p| matches!(p.slot, crate::model::Slot::Joint(k) if k >= j))
+    };
+    let held: Vec<String> = (robot.joints().iter().enumerate())
+        .filter(|(j, _)| moved(*j))
+        .filter_map(|(j, joint)| {
+            let values = set.rows.iter().filter_map(|r| r.q.get(j).copied());
+            let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            });
+            let unit = joint.joint_type.file_unit();
+            let [lo, hi] = [lo, hi].map(|v| joint.joint_type.to_file(v));
+            (hi - lo < HELD_JOINT_SPREAD)
+                .then(|| format!("q{} within {lo:.4} to {hi:.4} {unit}", j + 1))
+        })
+        .collect();
+    (!held.is_empty()).then(|| {
+        format!(
+            "{}: {} joint(s) hold one value in these rows ({}; under {HELD_JOINT_SPREAD} deg \
+             or mm of spread): the parameters their motion would tell apart are identified \
+             as combinations that hold at that value only (see the left-out parameters and \
+             the standard deviations), and the model may miss by far more elsewhere; measure \
+             over each joint's range, or use the model at those values only",
+            set.source.display(),
+            held.len(),
+            held.join(", ")
+        )
+    })
+}
+
 /// Distance (deg) from ry = +-90 deg within which a 6-DOF row's Z-Y-X angles are near their
 /// gimbal lock: there rz and rx turn about axes less than this apart, so only rz - rx
 /// (rz + rx at -90 deg) is well determined, and a rotation of the frame by a fraction of a
@@ -51,7 +100,11 @@ pub const GIMBAL_LOCK_DEG: f64 = 2.0;
 /// those angles' standard deviations, describe the frame through a nearly singular map (a
 /// wall- or ceiling-mounted base, a tool along the flange's x), so the file's rz and rx may
 /// lie far from the start's with the frame itself close to it.
-pub fn gimbal_notes(robot: &Robot, ids: &[ParamId]) -> Vec<String> {
+///
+/// `rebased`: the frames whose rotation the solve took as turns about their own axes
+/// (`Robot::with_frames_rebased`): the note says so, and that their
+/// standard deviations are those turns'.
+pub fn gimbal_notes(robot: &Robot, ids: &[ParamId], rebased: &[crate::model::Slot]) -> Vec<String> {
     use crate::model::{Convention, Field, Slot};
     [
         (Slot::Base, "base", robot.base()),
@@ -64,10 +117,30 @@ pub fn gimbal_notes(robot: &Robot, ids: &[ParamId]) -> Vec<String> {
                 .iter()
                 .any(|p| p.slot == *slot && matches!(p.field, Field::Rz | Field::Rx))
     })
-    .filter_map(|(_, name, row)| {
+    .filter_map(|(slot, name, row)| {
         let ry = row.file_value(Field::Ry)?;
+        let turns = if rebased.contains(&slot) {
+            format!(
+                " (the solve took {name}'s rotation as turns about its start frame's own z, y \
+                 and x axes, which the lock does not touch: the frame is identified in full, \
+                 and the standard deviations of {name}.rz, .ry and .rx are those turns')"
+            )
+        } else {
+            String::new()
+        };
         let off = 90.0 - ry.abs();
-        (off.abs() < GIMBAL_LOCK_DEG).then(|| {
+        if off.abs() >= GIMBAL_LOCK_DEG {
+            // Rebased within a few degrees more of the lock: only the turns are told of.
+            return rebased.contains(&slot).then(|| {
+                format!(
+                    "{name}: ry = {ry:.4} deg lies {:.4} deg from {}90 deg, near the gimbal \
+                     lock of Z-Y-X angles{turns}",
+                    off.abs(),
+                    if ry > 0.0 { "+" } else { "-" }
+                )
+            });
+        }
+        Some({
             let (sum, sign) = if ry > 0.0 {
                 ("rz - rx", "+")
             } else {
@@ -78,7 +151,7 @@ pub fn gimbal_notes(robot: &Robot, ids: &[ParamId]) -> Vec<String> {
                      of Z-Y-X angles: there {name}.rz and {name}.rx turn the frame about nearly \
                      the same axis, so only {sum} is well determined, and a rotation of the \
                      frame by a fraction of a milliradian moves the two by tens of degrees; \
-                     compare frames (poses), not these angles, with another calibration's",
+                     compare frames (poses), not these angles, with another calibration's{turns}",
                 off.abs()
             )
         })
@@ -195,20 +268,20 @@ mod tests {
         let robot = test_fanuc().with_frame_as_transform(Slot::Base).unwrap();
         let ids = |r: &Robot| vec![r.find_param("base.rz").unwrap()];
         let wall = with(&robot, "base.ry", 89.94f64.to_radians());
-        let notes = gimbal_notes(&wall, &ids(&wall));
+        let notes = gimbal_notes(&wall, &ids(&wall), &[]);
         assert_eq!(notes.len(), 1, "{notes:?}");
         assert!(notes[0].starts_with("base: ry = 89.9400 deg lies 0.0600 deg from +90"));
         assert!(notes[0].contains("only rz - rx"), "{}", notes[0]);
         let ceiling = with(&robot, "base.ry", (-91.5f64).to_radians());
-        let notes = gimbal_notes(&ceiling, &ids(&ceiling));
+        let notes = gimbal_notes(&ceiling, &ids(&ceiling), &[]);
         assert!(
             notes.len() == 1 && notes[0].contains("only rz + rx"),
             "{notes:?}"
         );
         // 2.5 deg away, or the angles not solved for: nothing to say.
         let tilted = with(&robot, "base.ry", 87.5f64.to_radians());
-        assert!(gimbal_notes(&tilted, &ids(&tilted)).is_empty());
-        assert!(gimbal_notes(&wall, &[wall.find_param("base.x").unwrap()]).is_empty());
+        assert!(gimbal_notes(&tilted, &ids(&tilted), &[]).is_empty());
+        assert!(gimbal_notes(&wall, &[wall.find_param("base.x").unwrap()], &[]).is_empty());
     }
 
     #[test]

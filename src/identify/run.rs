@@ -705,6 +705,37 @@ pub(crate) fn parallel_axes_note(
     })
 }
 
+/// Within this many degrees of ry = +-90 deg a 6-DOF frame's rotation is solved for as turns
+/// about its own axes (`Robot::with_frames_rebased`): there the Z-Y-X angles'
+/// map to rotations loses rank (exactly at the lock, one axis of turn is lost; 10 deg from
+/// it, the angles' columns are 6 times longer than the turn they make).
+pub const REBASE_WITHIN_DEG: f64 = 10.0;
+
+/// The base and tool slots of `robot` whose rows are 6-DOF transforms with all three
+/// rotation angles among the `candidates` (indices into `params`) and ry within
+/// [`REBASE_WITHIN_DEG`] of +-90 deg. (Where only some angles are selected, each keeps its
+/// own meaning: a turn about the frame's own z is not the file's rz, and solving for it
+/// would move the angles held.)
+pub(crate) fn frames_near_lock(
+    robot: &Robot,
+    params: &[ParamId],
+    candidates: &[usize],
+) -> Vec<Slot> {
+    [(Slot::Base, robot.base()), (Slot::Tool, robot.tool())]
+        .into_iter()
+        .filter(|(slot, row)| {
+            row.convention() == Convention::Transform
+                && [Field::Rz, Field::Ry, Field::Rx].iter().all(|f| {
+                    (candidates.iter()).any(|&c| params[c].slot == *slot && params[c].field == *f)
+                })
+                && row
+                    .file_value(Field::Ry)
+                    .is_some_and(|ry| (90.0 - ry.abs()).abs() < REBASE_WITHIN_DEG)
+        })
+        .map(|(slot, _)| slot)
+        .collect()
+}
+
 /// Identifies `nominal`'s selected parameters from `set`.
 pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result<Identified> {
     let measure = opts.measure.unwrap_or_else(|| Measure::default_for(set));
@@ -759,6 +790,14 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         }
     }
 
+    // A 6-DOF frame near the gimbal lock of its Z-Y-X angles is solved for as turns about
+    // its own axes: at the lock its rz and rx turn it about one axis and no angle about the
+    // third, which the data would then never correct (a tool along the flange's x, its
+    // orientation left 0.17 deg off). The file gets the same frame in its own angles.
+    let rebased = frames_near_lock(&start, &params, &candidates);
+    if !rebased.is_empty() {
+        start = start.with_frames_rebased(&rebased)?;
+    }
     // Compliances are analysed with the rest at the (registered) nominal; they come last in
     // priority, so the geometric subset is what it would be without them.
     let mut ident = analyse(&start, &obs, &candidates, opts.rank_tolerance);
@@ -824,8 +863,9 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         ));
     }
 
-    let (solution, cols, cov, s2) =
+    let (mut solution, cols, cov, s2) =
         drop_insignificant(nominal, solution, &mut obs, cols, opts, &mut ident)?;
+    solution.robot = solution.robot.plain()?;
     let misfit = super::plausibility::warning(
         &solution.robot,
         &obs,
@@ -841,9 +881,19 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         .flatten();
     warnings.extend(misfit);
     warnings.extend(super::plausibility::copied_warning(set));
+    let candidate_ids: Vec<ParamId> = candidates.iter().map(|&c| params[c]).collect();
+    warnings.extend(super::plausibility::held_joints_warning(
+        nominal,
+        set,
+        &candidate_ids,
+    ));
     warnings.extend(another);
     let ids: Vec<ParamId> = cols.iter().map(|&c| params[c]).collect();
-    notes.extend(super::plausibility::gimbal_notes(&solution.robot, &ids));
+    notes.extend(super::plausibility::gimbal_notes(
+        &solution.robot,
+        &ids,
+        &rebased,
+    ));
     let (parameters, correlations) = parameter_reports(nominal, &solution.robot, &ids, &cov);
     warnings.extend(aliased_warning(&correlations));
     // The joints' geometry: base and tool alone leave the arm's errors to the compliances.

@@ -100,7 +100,7 @@ pub(crate) fn row_axes(row: &Row, joint: Option<usize>, entry: Anchor) -> Vec<Pa
                     Field::Ry => rot_z(v(Field::Rz)) * y,
                     _ => rot_z(v(Field::Rz)) * rot_y(v(Field::Ry)) * x,
                 };
-                rot(entry, u, t)
+                rot(entry, row.reference() * u, t)
             }
             (c, f) => unreachable!("{} has no field {}", c.name(), f.name()),
         })

@@ -694,6 +694,8 @@ pub fn robot_to_toml(robot: &Robot) -> String {
         toml::Value::String(robot.name().to_string())
     );
     let write_row = |s: &mut String, row: &Row| {
+        // A frame rebased for a solve is written as the same frame in its file's angles.
+        let row = &row.plain();
         let conv = row.convention();
         let _ = writeln!(s, "convention = \"{}\"  # {}", conv.name(), conv.formula());
         for &f in conv.fields() {

@@ -631,6 +631,38 @@ impl Robot {
         )
     }
 
+    /// A copy whose 6-DOF base or tool rows in `slots` are [`Row::rebased`]: the same
+    /// frames, their angles turns about the frames' own axes from here on (for a solve that
+    /// starts here, where a frame sits at the gimbal lock of its Z-Y-X angles).
+    pub(crate) fn with_frames_rebased(&self, slots: &[Slot]) -> Result<Robot> {
+        let row = |slot: Slot, r: &Row| {
+            if slots.contains(&slot) {
+                r.rebased()
+            } else {
+                r.clone()
+            }
+        };
+        self.with_rows(row(Slot::Base, &self.base), row(Slot::Tool, &self.tool))
+    }
+
+    /// The robot with every reference rotation folded into its rows' angles (a copy; the
+    /// same robot where there is none): the frames as a file writes them.
+    pub fn plain(&self) -> Result<Robot> {
+        if !self.base.is_rebased() && !self.tool.is_rebased() {
+            return Ok(self.clone());
+        }
+        self.with_rows(self.base.plain(), self.tool.plain())
+    }
+
+    fn with_rows(&self, base: Row, tool: Row) -> Result<Robot> {
+        Ok(
+            Robot::new(self.name.clone(), base, self.joints.clone(), tool)?
+                .with_masses(self.masses.clone())?
+                .with_compliance(self.compliance.clone())?
+                .keeping_unobserved(&self.unobserved),
+        )
+    }
+
     /// Whether `other` has the same number and types of joints (so joint vectors fit both).
     pub fn same_joints(&self, other: &Robot) -> bool {
         self.dof() == other.dof()

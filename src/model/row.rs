@@ -200,6 +200,11 @@ pub struct Row {
     convention: Convention,
     /// Values in the order of `convention.fields()`; unused slots stay 0.
     values: [f64; 6],
+    /// A 6-DOF transform's rotation before its Z-Y-X angles, T = Trans(x, y, z) R_ref
+    /// RotZ(rz) RotY(ry) RotX(rx), while `identify` solves for the frame near its start
+    /// ([`Row::rebased`]): there the angles are small turns about the start frame's own
+    /// axes, which no gimbal lock touches. Never in a file ([`Row::plain`]).
+    reference: Option<nalgebra::Rotation3<f64>>,
 }
 
 impl Row {
@@ -208,7 +213,60 @@ impl Row {
         Row {
             convention,
             values: [0.0; 6],
+            reference: None,
         }
+    }
+
+    /// A 6-DOF transform row as the same frame with its rotation taken as the reference and
+    /// its angles 0 (other rows as they are): near its start its angles are then turns about
+    /// the frame's own z, y and x axes, where at ry = +-90 deg the file's rz and rx turn it
+    /// about one axis and no angle turns it about the third (a tool along the flange's x).
+    pub(crate) fn rebased(&self) -> Row {
+        if self.convention != Convention::Transform {
+            return self.clone();
+        }
+        let mut row = self.clone();
+        row.reference = Some(self.rotation());
+        for f in [Field::Rz, Field::Ry, Field::Rx] {
+            row.set_file_value(f, 0.0);
+        }
+        row
+    }
+
+    /// The row with its reference folded into its angles ([`Row::rebased`] undone: the same
+    /// frame, as a file writes it).
+    pub(crate) fn plain(&self) -> Row {
+        if self.reference.is_none() {
+            return self.clone();
+        }
+        let [rz, ry, rx] = crate::geometry::rotation::rotation_to_zyx(&self.rotation());
+        let mut row = self.clone();
+        row.reference = None;
+        for (f, v) in [(Field::Rz, rz), (Field::Ry, ry), (Field::Rx, rx)] {
+            row.set_value(f, v);
+        }
+        row
+    }
+
+    /// Whether the row carries a reference rotation ([`Row::rebased`]).
+    pub(crate) fn is_rebased(&self) -> bool {
+        self.reference.is_some()
+    }
+
+    /// A 6-DOF transform's rotation, R_ref RotZ(rz) RotY(ry) RotX(rx) (identity for others).
+    fn rotation(&self) -> nalgebra::Rotation3<f64> {
+        let v = |f| self.value(f);
+        let angles = zyx_to_rotation(v(Field::Rz), v(Field::Ry), v(Field::Rx));
+        match (self.convention, self.reference) {
+            (Convention::Transform, Some(r)) => r * angles,
+            (Convention::Transform, None) => angles,
+            _ => nalgebra::Rotation3::identity(),
+        }
+    }
+
+    /// The reference rotation before the angles ([`Row::rebased`]), identity without one.
+    pub(crate) fn reference(&self) -> nalgebra::Rotation3<f64> {
+        self.reference.unwrap_or_else(nalgebra::Rotation3::identity)
     }
 
     /// A row from `(field, value in mm or deg)` pairs; fields not named stay 0.
@@ -292,7 +350,7 @@ impl Row {
             Convention::Transform => Split {
                 pre: Pose::from_parts(
                     Translation3::new(v(Field::X), v(Field::Y), v(Field::Z)),
-                    zyx_to_rotation(v(Field::Rz), v(Field::Ry), v(Field::Rx)),
+                    self.rotation(),
                 ),
                 theta: 0.0,
                 d: 0.0,

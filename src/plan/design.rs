@@ -109,6 +109,14 @@ impl Design {
             )));
         }
         let (robot, candidates, mut notes) = crate::identify::candidates(nominal, params)?;
+        // As `identify` solves for it: a frame at the gimbal lock of its angles by turns
+        // about its own axes (else a tool along the flange's x plans one rotation short).
+        let near = crate::identify::run::frames_near_lock(&robot, &robot.parameters(), &candidates);
+        let robot = if near.is_empty() {
+            robot
+        } else {
+            robot.with_frames_rebased(&near)?
+        };
         let set = as_measurements(&robot, pool);
         let obs = Observations::new(&set, measure, sigmas)?;
         let identifiability = analyse(&robot, &obs, &candidates, rank_tol);
