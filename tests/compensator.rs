@@ -1440,3 +1440,49 @@ fn a_set_too_small_to_choose_again_keeps_the_first_choice() {
         report.notes
     );
 }
+
+/// The second choice's own outliers stay in the final fit where leaving them out too would
+/// leave fewer rows than the network needs (8 rows, the last 3 of them 20 mm off, one network
+/// member fixed, outliers beyond 1 robust sigma: the first choice lists the 3, the second 2
+/// of the 5 left): the report says they are kept and does not call them left out (a
+/// reviewer's 8 rows once failed the final fit here).
+#[test]
+fn a_second_choice_keeps_its_outliers_where_too_few_rows_would_remain() {
+    let (model, clean) = case_d_offsets();
+    let mut eight = robocal::neural::tuning::subset(&clean, |i| (8..16).contains(&i));
+    for (r, dy) in [(5, 20.0), (6, -20.0), (7, 20.0)] {
+        eight.rows[r].position.as_mut().unwrap().y += dy;
+    }
+    let opts = CompensatorOptions {
+        members: Some(1),
+        outlier_k: 1.0,
+        ..Default::default()
+    };
+    let (comp, report) = Compensator::train(&model, &eight, &opts, &|_, _| {}).unwrap();
+    let sel = report.selection.as_ref().expect("a choice");
+    let rows =
+        |o: &[robocal::neural::selection::Outlier]| o.iter().map(|o| o.row).collect::<Vec<_>>();
+    let (first, second) = (rows(&sel.first_outliers), rows(&sel.outliers));
+    assert!(
+        !first.is_empty() && second.len() >= 2 && first.iter().all(|r| !second.contains(r)),
+        "first {first:?}, second {second:?}"
+    );
+    assert_eq!(first, vec![5, 6, 7]);
+    // Five rows were left for the second choice; leaving its outliers out as well would
+    // leave fewer than the 4 an MLP needs.
+    assert!(eight.rows.len() - first.len() - second.len() < 4);
+    assert!(!sel.outliers_left_out, "{:?}", report.notes);
+    let has = |a: &str, b: &str| report.notes.iter().any(|n| n.contains(a) && n.contains(b));
+    assert!(
+        has("they stay in the fit", "fewer than the network needs"),
+        "{:?}",
+        report.notes
+    );
+    assert!(has("robust sigmas", "kept ("), "{:?}", report.notes);
+    assert!(
+        has("settings first chosen", "chosen again without them"),
+        "{:?}",
+        report.notes
+    );
+    assert_eq!(comp.members.len(), 1);
+}

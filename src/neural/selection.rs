@@ -166,14 +166,18 @@ pub struct NetworkTest {
     pub ratio: f64,
     /// Paired z of the rows' differences of squared position errors (network minus model
     /// alone, mm^2): their mean over its standard error, negative where the network is lower;
-    /// the error clustered by arm configuration (rows that repeat one configuration count
-    /// as one cluster, as they stay in one fold).
+    /// each arm configuration weighed once (rows that repeat one configuration are averaged
+    /// first, as they stay in one fold).
     /// Not a number where the held-out rows could not be recomputed as they were scored
     /// (the margin alone then decided).
     #[serde(with = "crate::io::json_number")]
     pub z: f64,
     /// Held-out rows compared (0: the test could not be run).
     pub rows: usize,
+    /// The distinct arm configurations among them, each weighed once in `z` (0 in reports
+    /// written before it).
+    #[serde(default)]
+    pub configurations: usize,
     /// Whether the network was kept: by `unseen`'s figures where that test ran.
     pub kept: bool,
     /// Where the network carries an RBF network and passed on the figures above (whose

@@ -7,11 +7,13 @@ use crate::neural::selection::Candidate;
 
 /// What to tell about the refinements asked for, `tried` (besides none; `added`, if any, is
 /// the one with the compliances cross-validation added on its own): which changed the model
-/// on some fold (`kept`: the others were left out) and what was chosen (`winner`).
+/// on some fold (`kept`: the others were left out), whether any refined candidate could be
+/// scored (`scored`: where each failed, the table says why) and what was chosen (`winner`).
 pub(super) fn refinement_notes(
     tried: &[String],
     kept: &[Option<String>],
     added: Option<&str>,
+    scored: bool,
     winner: Option<&str>,
 ) -> Vec<String> {
     let changes = |r: &str| kept.iter().any(|k| k.as_deref() == Some(r));
@@ -22,6 +24,14 @@ pub(super) fn refinement_notes(
     if !tried.iter().any(|t| changes(t)) {
         notes.push(format!(
             "refining `{first}` changes nothing on these rows: the model is kept as given"
+        ));
+        return notes;
+    }
+    // "Did not lower the error" would claim a comparison that never took place.
+    if !scored {
+        notes.push(format!(
+            "refining `{first}` could not be cross-validated on these rows (the table says \
+             why): the model is kept as given"
         ));
         return notes;
     }
@@ -85,35 +95,60 @@ mod tests {
             n[0].clone()
         };
         // Nothing changed the model.
-        let n = one(refinement_notes(&both, &k(&[]), added, None));
+        let n = one(refinement_notes(&both, &k(&[]), added, true, None));
         assert!(n.contains("`full` changes nothing"), "{n}");
         // The geometry alone changed nothing; the compliances did, and lost by the margin.
-        let n = refinement_notes(&both, &k(&["full,compliance"]), added, None);
+        let n = refinement_notes(&both, &k(&["full,compliance"]), added, true, None);
         assert_eq!(n.len(), 2, "{n:?}");
         assert!(n[0].contains("`full` alone changes nothing"), "{n:?}");
         assert!(n[1].contains("not by 2 % or more"), "{n:?}");
         // ... or won.
-        let n = refinement_notes(&both, &k(&["full,compliance"]), added, added);
+        let n = refinement_notes(&both, &k(&["full,compliance"]), added, true, added);
         assert_eq!(n.len(), 2, "{n:?}");
         assert!(
             n[1].contains("added the joints' gravity compliances"),
             "{n:?}"
         );
         // Both changed it; the geometry was kept: nothing to tell.
-        let n = refinement_notes(&both, &k(&["full", "full,compliance"]), added, Some("full"));
+        let n = refinement_notes(
+            &both,
+            &k(&["full", "full,compliance"]),
+            added,
+            true,
+            Some("full"),
+        );
         assert!(n.is_empty(), "{n:?}");
         // A fixed selection that did not lower the error.
         let n = one(refinement_notes(
             &t(&["offsets"]),
             &k(&["offsets"]),
             None,
+            true,
             None,
         ));
         assert!(
             n.contains("`offsets` did not lower") && !n.contains("2 %"),
             "{n}"
         );
-        let n = one(refinement_notes(&t(&["offsets"]), &k(&[]), None, None));
+        let n = one(refinement_notes(
+            &t(&["offsets"]),
+            &k(&[]),
+            None,
+            true,
+            None,
+        ));
         assert!(n.contains("`offsets` changes nothing"), "{n}");
+        // Every refined candidate failed (too few rows on each fold): nothing was compared.
+        let n = one(refinement_notes(
+            &both,
+            &k(&["full", "full,compliance"]),
+            added,
+            false,
+            None,
+        ));
+        assert!(
+            n.contains("`full` could not be cross-validated") && !n.contains("did not lower"),
+            "{n}"
+        );
     }
 }

@@ -85,13 +85,36 @@ pub(super) fn share_sums(
 
 /// The rows of `set` whose held-out errors `held` (mm, deg per row) lie beyond `k` robust
 /// sigmas ([`crate::stats::robust_sigma`]) of their column; none for an infinite or NaN `k`.
-pub fn outliers_of(set: &MeasurementSet, held: &[(f64, Option<f64>)], k: f64) -> Vec<Outlier> {
+/// The scale weighs each arm configuration once (`groups[i]`: row i's, ids from 0; the
+/// robust sigma of each configuration's mean error): a configuration measured thirty times
+/// would otherwise be the median, and its error the scale (a reviewer's repeatability run
+/// put an ordinary row at 6.6 sigmas).
+pub fn outliers_of(
+    set: &MeasurementSet,
+    held: &[(f64, Option<f64>)],
+    groups: &[usize],
+    k: f64,
+) -> Vec<Outlier> {
     if !k.is_finite() {
         return Vec::new();
     }
-    let scale = |v: Vec<f64>| (!v.is_empty()).then(|| crate::stats::robust_sigma(&v));
-    let pos = scale(held.iter().map(|h| h.0).collect()).unwrap_or(0.0);
-    let rot = scale(held.iter().filter_map(|h| h.1).collect()).unwrap_or(0.0);
+    let per_configuration = |value: fn(&(f64, Option<f64>)) -> Option<f64>| {
+        let g = groups.iter().max().map_or(0, |m| m + 1);
+        let (mut sums, mut counts) = (vec![0.0; g], vec![0usize; g]);
+        for (h, &i) in held.iter().zip(groups) {
+            if let Some(v) = value(h) {
+                sums[i] += v;
+                counts[i] += 1;
+            }
+        }
+        let means: Vec<f64> = (sums.iter().zip(&counts))
+            .filter(|(_, c)| **c > 0)
+            .map(|(s, &c)| s / c as f64)
+            .collect();
+        (!means.is_empty()).then(|| crate::stats::robust_sigma(&means))
+    };
+    let pos = per_configuration(|h| Some(h.0)).unwrap_or(0.0);
+    let rot = per_configuration(|h| h.1).unwrap_or(0.0);
     let sigmas = |e: f64, s: f64| if s > 0.0 { e / s } else { 0.0 };
     held.iter()
         .zip(&set.rows)
@@ -157,5 +180,42 @@ mod tests {
         };
         assert!((0..5).all(|k| configurations(k) == 6));
         assert_ne!(f, folds(&groups, 5, 8), "the seed shuffles");
+    }
+
+    /// The outlier scale weighs each configuration once: 30 rows of one configuration held
+    /// out at 0.05 mm beside 11 others (0.3-0.65 mm, 0.9 and 5 mm) put the rows' median at
+    /// 0.05 mm, and every ordinary row from 0.4 mm up beyond 5 robust sigmas; over the 12
+    /// configurations (median 0.5 mm) the 0.9 mm row is 1.2 sigmas out, and the 5 mm row is
+    /// still named.
+    #[test]
+    fn a_repeated_configuration_is_one_value_of_the_outlier_scale() {
+        let mut rows = vec![Measurement::new(vec![0.1, 0.2, 0.3]); 30];
+        let mut held = vec![(0.05, None); 30];
+        let mut groups = vec![0; 30];
+        for k in 0..11 {
+            rows.push(Measurement::new(vec![0.5 + 0.1 * k as f64, 0.2, 0.3]));
+            held.push((if k == 10 { 5.0 } else { 0.3 + 0.05 * k as f64 }, None));
+            groups.push(k + 1);
+        }
+        held[39].0 = 0.9;
+        let set = MeasurementSet {
+            source: "x.csv".into(),
+            rows,
+            extra_columns: Vec::new(),
+            chain_breaks: Vec::new(),
+            other_case_pair_columns: [None, None],
+        };
+        let named: Vec<usize> = outliers_of(&set, &held, &groups, 5.0)
+            .iter()
+            .map(|o| o.row)
+            .collect();
+        assert_eq!(named, vec![40]);
+        // Each row its own configuration, as before: every row from 0.4 mm up is named.
+        let alone: Vec<usize> = (0..held.len()).collect();
+        let named: Vec<usize> = outliers_of(&set, &held, &alone, 5.0)
+            .iter()
+            .map(|o| o.row)
+            .collect();
+        assert_eq!(named, (32..41).collect::<Vec<_>>());
     }
 }

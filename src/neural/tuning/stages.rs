@@ -550,8 +550,9 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             ((rms - scored).abs() <= 1e-9 * scored.max(1e-12)).then_some((folds, squares))
         };
         let (network, alone_rows) = (held(net), held(alone));
+        let clusters = self.clusters();
         let paired = match (&network, &alone_rows) {
-            (Some((_, a)), Some((_, b))) => Some((paired_z(a, b, &self.clusters()), a.len())),
+            (Some((_, a)), Some((_, b))) => Some((paired_z(a, b, &clusters), a.len())),
             _ => None,
         };
         // Where the rows cannot be had again as they were scored (not expected: every fit
@@ -565,6 +566,7 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             ratio,
             z,
             rows,
+            configurations: if rows > 0 { distinct(&clusters) } else { 0 },
             kept,
             unseen: None,
         };
@@ -666,4 +668,12 @@ fn squares(folds: &[Vec<RowError>]) -> Vec<f64> {
         .flatten()
         .map(|r| r.position_mm.unwrap_or(0.0).powi(2))
         .collect()
+}
+
+/// The number of distinct values among `ids`.
+fn distinct(ids: &[usize]) -> usize {
+    let mut v = ids.to_vec();
+    v.sort_unstable();
+    v.dedup();
+    v.len()
 }
