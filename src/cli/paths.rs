@@ -179,8 +179,10 @@ pub fn datasets_context(datasets: &Path, what: &str) -> String {
         format!("{what} from {}", datasets.display())
     } else {
         format!(
-            "run from the repository root, or give --datasets ({})",
-            datasets.display()
+            "{}: no shipped data sets there (no {}): give --datasets the repository's \
+             datasets folder, or run from the repository root",
+            datasets.display(),
+            robocal::studies::thesis::FANUC
         )
     }
 }

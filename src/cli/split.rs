@@ -1,7 +1,7 @@
 //! `robocal split`: a seeded random split of a measurement set (calibration / validation).
 
 use super::data_args::{DataArgs, counted_joints, joints_of};
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
 use robocal::data::measurement::{pair_units, split, write_measurements};
 use std::path::PathBuf;
@@ -45,12 +45,19 @@ pub fn run(a: SplitArgs) -> Result<()> {
     }
     let profile = a.data.profile()?;
     let n = counted_joints(&a.input, a.robot.as_ref(), &profile)?;
+    // A profile's joint unit converts every joint alike: a prismatic joint's length would be
+    // read as an angle (a reviewer's metres became degrees), as `import` says too.
+    if a.robot.is_none() && a.data.profile.is_some() {
+        eprintln!(
+            "note: no --robot: joints are taken as revolute and their limits are not checked"
+        );
+    }
     let joints = joints_of(a.robot.as_ref(), n)?;
     let set = a.data.read(&a.input, &joints)?;
     let (x, y) = split(&set, a.fraction, a.seed);
     for (part, flag) in [(&x, "--out-a"), (&y, "--out-b")] {
         if part.rows.is_empty() {
-            bail!(
+            usage!(
                 "{flag} would get no rows ({} rows, --fraction {:?}): a file without rows is \
                  refused by every command",
                 set.rows.len(),
