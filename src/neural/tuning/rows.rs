@@ -154,13 +154,7 @@ mod tests {
                 config.push(k);
             }
         }
-        let set = MeasurementSet {
-            source: "x.csv".into(),
-            rows,
-            extra_columns: Vec::new(),
-            chain_breaks: Vec::new(),
-            other_case_pair_columns: [None, None],
-        };
+        let set = MeasurementSet::from_rows(rows);
         let qs: Vec<&[f64]> = set.rows.iter().map(|m| m.q.as_slice()).collect();
         let groups = crate::neural::repeats::joint_groups(&qs);
         let f = folds(&groups, 5, 7);
@@ -198,13 +192,7 @@ mod tests {
             groups.push(k + 1);
         }
         held[39].0 = 0.9;
-        let set = MeasurementSet {
-            source: "x.csv".into(),
-            rows,
-            extra_columns: Vec::new(),
-            chain_breaks: Vec::new(),
-            other_case_pair_columns: [None, None],
-        };
+        let set = MeasurementSet::from_rows(rows);
         let named: Vec<usize> = outliers_of(&set, &held, &groups, 5.0)
             .iter()
             .map(|o| o.row)
