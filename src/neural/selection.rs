@@ -104,9 +104,9 @@ pub struct Selection {
     pub outliers: Vec<Outlier>,
     /// Whether the final fit left `outliers` out (`first_outliers` always are).
     pub outliers_left_out: bool,
-    /// Outliers of a first cross-validation on every row that weighed in its choice (they
-    /// made more than [`RESELECT_SHARE`](crate::neural::tuning::RESELECT_SHARE) of the
-    /// chosen candidate's squared position error): left out of the cross-validation whose
+    /// Outliers of a first cross-validation on every row that weighed in its choice (one of
+    /// them made more than [`RESELECT_SHARE`](crate::neural::tuning::RESELECT_SHARE) of the
+    /// chosen candidate's squared position error alone): left out of the cross-validation whose
     /// figures these are, and of the final fit. Empty where there was no such first choice
     /// (and in reports written before it).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

@@ -266,10 +266,10 @@ pub struct CompensatorOptions {
     /// another configuration's reading ([`crate::data::shared_readings`]) out of
     /// cross-validation and the fit (default true).
     pub drop_outliers: bool,
-    /// Where the outliers left out weigh in the choice (their held-out errors make more than
-    /// [`super::tuning::RESELECT_SHARE`] of the chosen candidate's cross-validated squared
-    /// position error), choose the settings again without them (default true; false keeps
-    /// the choice made with them, for half the cross-validation's time).
+    /// Where the outliers left out weigh in the choice (one's held-out error alone makes more
+    /// than [`super::tuning::RESELECT_SHARE`] of the chosen candidate's cross-validated
+    /// squared position error), choose the settings again without them (default true; false
+    /// keeps the choice made with them, for half the cross-validation's time).
     pub reselect: bool,
     /// Phase-2 epoch limits from the row count ([`super::tuning::CV_WORK`] for candidates,
     /// [`super::tuning::FIT_WORK`] for the final fit) instead of `train.max_epochs`.
