@@ -258,6 +258,8 @@ fn solve_lm<M: ToolModel>(
     let mut e = residual(model, target, &ws.q, l);
     let mut cost = e.norm_squared();
     let mut lambda = 1e-3;
+    // The iteration at which no step lowered the error, where one did not.
+    let mut stalled = None;
     let errors = |e: &Vector6<f64>| {
         let pos = e.fixed_rows::<3>(0).norm();
         let rot = e.fixed_rows::<3>(3).norm() / l;
@@ -313,33 +315,31 @@ fn solve_lm<M: ToolModel>(
             lambda *= 10.0;
         }
         if !improved {
-            // An arm of fewer than six joints cannot turn its tool about every axis: where
-            // its calibrated axes tilt, the target's orientation is out of reach by a little
-            // (a SCARA's by the tilt), and the least-squares point trades micrometres of
-            // position for it. The position is met exactly from there, the orientation left
-            // as near as the joints allow (its error is the solution's).
-            if n < 6
-                && !position_only
-                && let Some((pos, rot)) = meet_position(model, target, &mut e, opts, l, ws)
-            {
-                return within_reach(n, rot).map(|()| finish(model.robot(), &ws.q, iter, pos, rot));
-            }
-            // The caller gets the error at the best point.
-            let (pos, rot) = errors(&e);
-            return Err(Error::NotConverged(format!(
-                "numerical IK stalled after {iter} iterations (no step lowers the error): \
-                 position error {pos:.3e} mm, orientation error {:.3e} deg; \
-                 the target may be out of reach",
-                rot.to_degrees()
-            )));
+            stalled = Some(iter);
+            break;
         }
     }
+    // An arm of fewer than six joints cannot turn its tool about every axis: where its
+    // calibrated axes tilt, the target's orientation is out of reach by a little (a SCARA's
+    // by the tilt), and the least-squares point trades micrometres of position for it. The
+    // position is met exactly from there, the orientation left as near as the joints allow
+    // (its error is the solution's).
+    let iterations = stalled.unwrap_or(opts.max_iterations);
     if n < 6
         && !position_only
         && let Some((pos, rot)) = meet_position(model, target, &mut e, opts, l, ws)
     {
-        return within_reach(n, rot)
-            .map(|()| finish(model.robot(), &ws.q, opts.max_iterations, pos, rot));
+        return within_reach(n, rot).map(|()| finish(model.robot(), &ws.q, iterations, pos, rot));
+    }
+    // The caller gets the error at the best point.
+    if let Some(iter) = stalled {
+        let (pos, rot) = errors(&e);
+        return Err(Error::NotConverged(format!(
+            "numerical IK stalled after {iter} iterations (no step lowers the error): \
+             position error {pos:.3e} mm, orientation error {:.3e} deg; \
+             the target may be out of reach",
+            rot.to_degrees()
+        )));
     }
     let (pos, rot) = errors(&e);
     Err(Error::NotConverged(format!(

@@ -623,12 +623,7 @@ impl Robot {
             (self.base.clone(), new)
         };
         // A re-expressed frame has other parameters: marks on the old ones have no meaning.
-        Ok(
-            Robot::new(self.name.clone(), base, self.joints.clone(), tool)?
-                .with_masses(self.masses.clone())?
-                .with_compliance(self.compliance.clone())?
-                .keeping_unobserved(&self.unobserved),
-        )
+        self.with_rows(base, tool)
     }
 
     /// A copy whose 6-DOF base or tool rows in `slots` are [`Row::rebased`]: the same
@@ -654,6 +649,8 @@ impl Robot {
         self.with_rows(self.base.plain(), self.tool.plain())
     }
 
+    /// A copy with the base and tool rows given (joints, masses, compliance and the marks
+    /// kept where they still name parameters).
     fn with_rows(&self, base: Row, tool: Row) -> Result<Robot> {
         Ok(
             Robot::new(self.name.clone(), base, self.joints.clone(), tool)?

@@ -155,7 +155,7 @@ pub const NETWORK_MARGIN: f64 = 0.02;
 /// whose removal alone moves a cross-validated RMS by the margin that decides between a
 /// network and the model alone. A gross row makes it in a set of any size (one 5 mm row,
 /// 54 % of 100 Series A rows'); a heavy tail of rows just beyond the cut of 5 robust sigmas,
-/// each far under it, does not (Series A's pools of 2000: chosen again without such rows,
+/// each under it, does not (Series A's pools of 2000: chosen again without such rows,
 /// they held out 1.3-1.7 % worse, in twice the time).
 pub const RESELECT_SHARE: f64 = NETWORK_MARGIN * (2.0 - NETWORK_MARGIN);
 

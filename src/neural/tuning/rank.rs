@@ -68,22 +68,12 @@ pub(super) fn better_by(
 /// mean alone (a reviewer's repeatability run made a network that was 44 % worse on new rows
 /// pass at z -5.0; each configuration weighed once, the same rows give -0.3). With every row
 /// its own cluster this is the usual sd / sqrt(n), and with clusters of equal size it is the
-/// cluster-robust standard error of the row mean. Negative where `a` is lower; 0 for fewer than 2 clusters
-/// or where the differences are all equal to zero, and infinite (of the mean's sign) where
-/// the clusters' means are all equal otherwise.
+/// cluster-robust standard error of the row mean. Negative where `a` is lower; 0 for fewer
+/// than 2 clusters or where the differences are all equal to zero, and infinite (of the
+/// mean's sign) where the clusters' means are all equal otherwise.
 pub(super) fn paired_z(a: &[f64], b: &[f64], cluster: &[usize]) -> f64 {
     let n = a.len().min(b.len()).min(cluster.len());
-    let g = cluster[..n].iter().max().map_or(0, |m| m + 1);
-    let mut sums = vec![0.0; g];
-    let mut rows = vec![0usize; g];
-    for i in 0..n {
-        sums[cluster[i]] += a[i] - b[i];
-        rows[cluster[i]] += 1;
-    }
-    let means: Vec<f64> = (sums.iter().zip(&rows))
-        .filter(|(_, r)| **r > 0)
-        .map(|(s, &r)| s / r as f64)
-        .collect();
+    let means = cluster_means((0..n).map(|i| (cluster[i], a[i] - b[i])));
     if means.len() < 2 {
         return 0.0;
     }
@@ -98,6 +88,25 @@ pub(super) fn paired_z(a: &[f64], b: &[f64], cluster: &[usize]) -> f64 {
     } else {
         mean.signum() * f64::INFINITY
     }
+}
+
+/// The mean value of each cluster among `(cluster, value)` pairs (ids from 0), in the
+/// clusters' order, those without a value left out: each arm configuration as one value,
+/// however often it was measured.
+pub(super) fn cluster_means(pairs: impl IntoIterator<Item = (usize, f64)>) -> Vec<f64> {
+    let (mut sums, mut counts): (Vec<f64>, Vec<usize>) = (Vec::new(), Vec::new());
+    for (c, v) in pairs {
+        if c >= sums.len() {
+            sums.resize(c + 1, 0.0);
+            counts.resize(c + 1, 0);
+        }
+        sums[c] += v;
+        counts[c] += 1;
+    }
+    (sums.iter().zip(&counts))
+        .filter(|(_, n)| **n > 0)
+        .map(|(s, &n)| s / n as f64)
+        .collect()
 }
 
 /// `x` to 3 significant digits (penalties read back as typed: 0.333, not 0.3333333333333333).

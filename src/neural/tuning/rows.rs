@@ -99,18 +99,8 @@ pub fn outliers_of(
         return Vec::new();
     }
     let per_configuration = |value: fn(&(f64, Option<f64>)) -> Option<f64>| {
-        let g = groups.iter().max().map_or(0, |m| m + 1);
-        let (mut sums, mut counts) = (vec![0.0; g], vec![0usize; g]);
-        for (h, &i) in held.iter().zip(groups) {
-            if let Some(v) = value(h) {
-                sums[i] += v;
-                counts[i] += 1;
-            }
-        }
-        let means: Vec<f64> = (sums.iter().zip(&counts))
-            .filter(|(_, c)| **c > 0)
-            .map(|(s, &c)| s / c as f64)
-            .collect();
+        let pairs = (groups.iter().zip(held)).filter_map(|(&g, h)| value(h).map(|v| (g, v)));
+        let means = super::rank::cluster_means(pairs);
         (!means.is_empty()).then(|| crate::stats::robust_sigma(&means))
     };
     let pos = per_configuration(|h| Some(h.0)).unwrap_or(0.0);

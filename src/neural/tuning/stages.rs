@@ -13,6 +13,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::evaluate::RowError;
+use crate::neural::repeats::group_count;
 use crate::neural::selection::{Candidate, NetworkTest, Unseen, UnseenTest};
 use crate::neural::settings::{CompensatorOptions, Form, Network, Settings};
 
@@ -566,7 +567,7 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             ratio,
             z,
             rows,
-            configurations: if rows > 0 { distinct(&clusters) } else { 0 },
+            configurations: if rows > 0 { group_count(&clusters) } else { 0 },
             kept,
             unseen: None,
         };
@@ -668,12 +669,4 @@ fn squares(folds: &[Vec<RowError>]) -> Vec<f64> {
         .flatten()
         .map(|r| r.position_mm.unwrap_or(0.0).powi(2))
         .collect()
-}
-
-/// The number of distinct values among `ids`.
-fn distinct(ids: &[usize]) -> usize {
-    let mut v = ids.to_vec();
-    v.sort_unstable();
-    v.dedup();
-    v.len()
 }
