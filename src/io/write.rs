@@ -146,13 +146,17 @@ fn standard_stream(_: &std::fs::Metadata) -> Option<Standard> {
 /// stream: this process's own standard output or error through their handles (after the
 /// text the command printed before it), any other stream opened for appending.
 fn deliver(path: &Path, target: &Target, tmp: tempfile::NamedTempFile) -> Result<()> {
-    match target {
+    let name = tmp.path().to_path_buf();
+    // Dropped on failure (and after a stream's copy): the temporary file is deleted.
+    let delivered = match target {
         Target::File(to) => tmp
             .persist(to)
             .map(|_| ())
             .map_err(|e| Error::io(path, bare(e.error))),
         Target::Stream(standard) => write_stream(path, *standard, &tmp),
-    }
+    };
+    settled(&name);
+    delivered
 }
 
 /// [`deliver`] into a stream, copied from the temporary file (a million rows need no memory).
@@ -184,11 +188,62 @@ struct Transaction {
 impl Transaction {
     /// Deletes the staged temporary files and removes the folders made, when empty.
     fn discard(self) {
+        let names: Vec<PathBuf> = (self.writes.iter())
+            .map(|w| w.tmp.path().to_path_buf())
+            .collect();
         drop(self.writes);
-        // Deepest first: a folder's own subfolders go before it.
-        for d in &self.dirs {
-            let _ = std::fs::remove_dir(d);
+        for n in &names {
+            settled(n);
         }
+        remove_empty_dirs(self.dirs);
+    }
+}
+
+/// Every temporary file not yet renamed into place or deleted, and every folder an open
+/// transaction made, across threads: what [`discard_pending`] removes when the process is
+/// interrupted (a signal ends it without unwinding, so no destructor runs).
+#[derive(Default)]
+struct Pending {
+    files: Vec<PathBuf>,
+    dirs: Vec<PathBuf>,
+}
+
+static PENDING: std::sync::Mutex<Pending> = std::sync::Mutex::new(Pending {
+    files: Vec::new(),
+    dirs: Vec::new(),
+});
+
+/// Runs `f` on the pending list (also after a thread panicked holding it: the list stays a
+/// list of paths).
+fn pending<T>(f: impl FnOnce(&mut Pending) -> T) -> T {
+    f(&mut PENDING
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner))
+}
+
+/// A temporary file no longer pending: renamed into place or deleted.
+fn settled(tmp: &Path) {
+    pending(|p| p.files.retain(|f| f != tmp));
+}
+
+/// Deletes every temporary file this process has not yet renamed into place and removes the
+/// folders its open transactions made (when empty): for a process about to end on a signal
+/// (Ctrl-C), whose destructors will not run. What is already in place stays. The caller
+/// exits next: a write still under way fails or lands, and nothing else is cleaned up after.
+pub fn discard_pending() {
+    let (files, dirs) = pending(|p| (std::mem::take(&mut p.files), std::mem::take(&mut p.dirs)));
+    for f in &files {
+        let _ = std::fs::remove_file(f);
+    }
+    remove_empty_dirs(dirs);
+}
+
+/// Removes the folders of `dirs` that are empty, deepest first (a folder's subfolders, made
+/// by a later call, go before it).
+fn remove_empty_dirs(mut dirs: Vec<PathBuf>) {
+    dirs.sort_by_key(|d| std::cmp::Reverse(d.components().count()));
+    for d in &dirs {
+        let _ = std::fs::remove_dir(d);
     }
 }
 
@@ -306,7 +361,9 @@ fn temporary_in(dir: &Path, path: &Path) -> std::io::Result<tempfile::NamedTempF
         let mode = std::fs::metadata(path).map_or(0o666, |m| m.permissions().mode() & 0o7777);
         b.permissions(std::fs::Permissions::from_mode(mode));
     }
-    b.tempfile_in(dir)
+    let tmp = b.tempfile_in(dir)?;
+    pending(|p| p.files.push(tmp.path().to_path_buf()));
+    Ok(tmp)
 }
 
 /// The OS error without the temporary file's name that `tempfile` wraps around it: the
@@ -348,6 +405,7 @@ pub fn create_dir_all(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     OPEN.with_borrow_mut(|open| {
         if let Some(t) = open {
+            pending(|p| p.dirs.extend(missing.iter().cloned()));
             t.dirs.extend(missing);
         }
     });
@@ -381,6 +439,8 @@ pub fn all_or_nothing<T, E: From<Error>>(
     OPEN.set(Some(Transaction::default()));
     let result = f();
     let t = OPEN.take().unwrap_or_default();
+    // Kept on success, removed by `discard` on failure: no longer for an interrupt to remove.
+    pending(|p| p.dirs.retain(|d| !t.dirs.contains(d)));
     // A destination that cannot take a file fails before any rename, not halfway.
     let result = match result {
         Ok(v) => match destinations_ready(&t.writes) {
