@@ -1219,3 +1219,74 @@ fn train_chooses_again_without_an_outlier_that_weighs_in_the_choice() {
         "{r}"
     );
 }
+
+#[test]
+fn the_robot_files_tool_holds_for_a_compensator_trained_with_another() {
+    // A joint-form compensator of the nominal FANUC (its joint corrections hold for any tool).
+    let comp = tmp("tool_edit.rcal");
+    let mut args = vec![
+        "train",
+        "--robot",
+        FANUC,
+        "--data",
+        "datasets/nongeometric_robot/training.csv",
+        "--out",
+        comp.to_str().unwrap(),
+    ];
+    let cheap: Vec<&str> = CHEAP_TRAIN.to_vec();
+    let form = cheap.iter().position(|a| *a == "--form").unwrap();
+    args.extend(cheap[..form].iter().chain(&cheap[form + 2..]));
+    args.extend(["--form", "joint"]);
+    let o = robocal(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Another gripper: the tool 50 mm longer, and rows measured with it.
+    let text = std::fs::read_to_string(common::root().join(FANUC)).unwrap();
+    let longer = tmp("fanuc_longer_tool.toml");
+    let edited = text.replacen("d = 205.0", "d = 255.0", 1);
+    assert_ne!(edited, text);
+    std::fs::write(&longer, edited).unwrap();
+    let rows = tmp("longer_tool_rows.csv");
+    let o = robocal(&[
+        "simulate",
+        "--robot",
+        longer.to_str().unwrap(),
+        "--count",
+        "40",
+        "--seed",
+        "3",
+        "--out",
+        rows.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rms_with = |robot: &str, name: &str| {
+        let report = tmp(name);
+        let o = robocal(&[
+            "evaluate",
+            "--robot",
+            robot,
+            "--compensator",
+            comp.to_str().unwrap(),
+            "--data",
+            rows.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let r = json(&report);
+        let net = accuracy(&r, "data", "+net")["position_mm"]["rms"]
+            .as_f64()
+            .unwrap();
+        (net, stderr(&o) + &stdout(&o))
+    };
+    // The edited file: its tool holds, and the compensator misses the rows by its own
+    // correction (millimetres), not by the 50 mm of the tool it was trained with.
+    let (edited_rms, said) = rms_with(longer.to_str().unwrap(), "tool_edit_longer.json");
+    assert!(edited_rms < 10.0, "{edited_rms} mm: {said}");
+    assert!(
+        said.contains("the tool of") && said.contains("50.000 mm and 0.000 deg apart"),
+        "{said}"
+    );
+    // The file it was trained with: its own tool, 50 mm short of these rows.
+    let (own_rms, said) = rms_with(FANUC, "tool_edit_own.json");
+    assert!(own_rms > 40.0, "{own_rms} mm: {said}");
+}

@@ -27,10 +27,16 @@ fn interrupted(args: &[&str], signal: &str, ready: impl Fn() -> bool) -> (Option
             child.try_wait().unwrap().is_none(),
             "{args:?} ended before it could be interrupted"
         );
-        assert!(start.elapsed() < Duration::from_secs(60), "{args:?} never got ready");
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "{args:?} never got ready"
+        );
         std::thread::sleep(Duration::from_millis(5));
     }
-    assert!(child.try_wait().unwrap().is_none(), "{args:?} ended too soon");
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "{args:?} ended too soon"
+    );
     let pid = child.id().to_string();
     let kill = Command::new("kill").args(["-s", signal, &pid]).status();
     assert!(kill.unwrap().success());

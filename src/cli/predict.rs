@@ -46,11 +46,50 @@ pub fn load_compensator(
             robot_path.display()
         ));
     }
-    if c.runs_another_model(robot) {
+    // The tool and the payload are the cell's too (another gripper, another load). Where
+    // the robot file is the compensator's own unrefined model with another tool or payload,
+    // they hold; where the model differs otherwise (refined in training, another
+    // identification), an edit cannot be told from the calibration, and the note says what
+    // the compensator runs with instead.
+    let (cell, tool, payload) = c.robot.with_tool_and_payload_of(robot)?;
+    let differs = cell_differences(&c.robot, robot, tool, payload);
+    if (tool || payload)
+        && !c.model_refined
+        && robocal::model::robot_to_toml(&cell) == robocal::model::robot_to_toml(robot)
+    {
+        let pose_form = tool && c.form == robocal::neural::settings::Form::Pose;
+        let what = match (tool, payload) {
+            (true, true) => "tool and payload",
+            (true, false) => "tool",
+            _ => "payload",
+        };
+        notes.push(format!(
+            "note: the {what} of {} hold{}, not the {what} the compensator was trained with \
+             ({differs}){}",
+            robot_path.display(),
+            if tool && payload { "" } else { "s" },
+            if pose_form {
+                ": its network corrects the pose of the tool it was trained with, and moves \
+                 another tool's point a little otherwise; train it again with this file for \
+                 the new tool's own correction"
+            } else {
+                ""
+            }
+        ));
+        c.robot = cell;
+    } else if c.runs_another_model(robot) {
         notes.push(format!(
             "note: the compensator runs in series with its own model (embedded: the model it \
-             was trained with, or that model refined in training), not with {}",
-            robot_path.display()
+             was trained with, or that model refined in training), not with {}{}",
+            robot_path.display(),
+            if tool || payload {
+                format!(
+                    ", and with that model's tool and payload ({differs}): for another tool or \
+                     payload, train it again with the robot file that has them"
+                )
+            } else {
+                String::new()
+            }
         ));
     }
     // Its figures are labelled as a network's (`+net`): say that none is there.
@@ -62,6 +101,27 @@ pub fn load_compensator(
         );
     }
     Ok((c, (!notes.is_empty()).then(|| notes.join("\n"))))
+}
+
+/// How the tool and payload of `file` differ from the compensator's `own` model's (those
+/// flagged): the tool's offset (mm) and rotation (deg), the payloads' masses (kg).
+fn cell_differences(own: &Robot, file: &Robot, tool: bool, payload: bool) -> String {
+    let mut parts = Vec::new();
+    if tool {
+        let d = own.tool().transform().inverse() * file.tool().transform();
+        parts.push(format!(
+            "tool {:.3} mm and {:.3} deg apart",
+            d.translation.vector.norm(),
+            d.rotation.angle().to_degrees()
+        ));
+    }
+    if payload && let (Some(a), Some(b)) = (own.masses(), file.masses()) {
+        parts.push(format!(
+            "payload {} kg, trained with {} kg",
+            b.payload.mass_kg, a.payload.mass_kg
+        ));
+    }
+    parts.join("; ")
 }
 
 /// Base offset (mm) and rotation (deg) between two models of one robot beyond which their

@@ -660,6 +660,29 @@ impl Robot {
         )
     }
 
+    /// This robot with `other`'s tool row and payload (mass, mm centre of mass; where both
+    /// have mass properties): what a cell changes (another gripper, another load) while the
+    /// arm's calibration stays, so that a model embedded elsewhere (a compensator's) takes
+    /// those of the file given with it. Also says whether the tool and the payload changed.
+    pub fn with_tool_and_payload_of(&self, other: &Robot) -> Result<(Robot, bool, bool)> {
+        let tool = self.tool != other.tool;
+        let mut robot = if tool {
+            self.with_rows(self.base.clone(), other.tool.clone())?
+        } else {
+            self.clone()
+        };
+        let payload = match (&self.masses, &other.masses) {
+            (Some(a), Some(b)) if a.payload != b.payload => {
+                let mut m = a.clone();
+                m.payload = b.payload;
+                robot = robot.with_masses(Some(m))?;
+                true
+            }
+            _ => false,
+        };
+        Ok((robot, tool, payload))
+    }
+
     /// Whether `other` has the same number and types of joints (so joint vectors fit both).
     pub fn same_joints(&self, other: &Robot) -> bool {
         self.dof() == other.dof()
@@ -938,6 +961,37 @@ mod tests {
         assert_eq!(got.param(r.parameters()[3]), 0.25);
         assert_eq!(got.joints()[0].row, moved.joints()[0].row);
         assert!(moved.with_limits_of(&moved).unwrap().1.is_empty());
+    }
+
+    #[test]
+    fn tool_and_payload_come_from_another_file_and_nothing_else_does() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/datasets/nongeometric_robot/nominal_masses.toml"
+        );
+        let r = crate::model::read_robot(path).unwrap();
+        let moved = r.with_param(r.parameters()[3], 0.25).unwrap();
+        let tool = r
+            .parameters()
+            .into_iter()
+            .find(|p| matches!(p.slot, crate::model::Slot::Tool) && r.param(*p) != 0.0);
+        let tool = tool.unwrap();
+        let cell = r.with_param(tool, 0.5 * r.param(tool)).unwrap();
+        let mut masses = cell.masses().unwrap().clone();
+        masses.payload.mass_kg = 50.0;
+        masses.payload.com_mm.x += 30.0;
+        masses.links[2].mass_kg += 1.0;
+        let cell = cell.with_masses(Some(masses.clone())).unwrap();
+        let (got, tool_changed, payload_changed) = moved.with_tool_and_payload_of(&cell).unwrap();
+        assert!(tool_changed && payload_changed);
+        assert_eq!(got.tool(), cell.tool());
+        assert_eq!(got.masses().unwrap().payload, masses.payload);
+        // The arm is the robot's own: its geometry and its links' masses.
+        assert_eq!(got.param(r.parameters()[3]), 0.25);
+        assert_eq!(got.masses().unwrap().links, r.masses().unwrap().links);
+        assert_eq!(got.base(), moved.base());
+        let (same, t, p) = moved.with_tool_and_payload_of(&moved).unwrap();
+        assert!(!t && !p && same == moved);
     }
 
     #[test]
