@@ -1391,6 +1391,22 @@ fn rows_too_few_for_a_network_give_the_model_alone_with_a_warning() {
         "{:?}",
         report.warnings
     );
+    // More folds help only where one fold per configuration would leave rows enough: not
+    // for six measurements of one configuration; for six distinct rows in 2 folds (3 rows
+    // to train on each, a network needs 4), whose 6 folds would leave 5.
+    let warned = |set: &robocal::data::MeasurementSet| {
+        let two = CompensatorOptions {
+            folds: Some(2),
+            ..opts.clone()
+        };
+        let (_, report) = Compensator::train(&model, set, &two, &|_, _| {}).unwrap();
+        assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
+        report.warnings[0].clone()
+    };
+    let w = warned(&same);
+    assert!(!w.contains("more --folds"), "{w}");
+    let w = warned(&first(6));
+    assert!(w.contains("more --folds"), "{w}");
     // A network fixed by every choice on 3 rows: its fit says how many it needs.
     let fixed = CompensatorOptions::fixed(
         &Settings {

@@ -1290,3 +1290,46 @@ fn the_robot_files_tool_holds_for_a_compensator_trained_with_another() {
     let (own_rms, said) = rms_with(FANUC, "tool_edit_own.json");
     assert!(own_rms > 40.0, "{own_rms} mm: {said}");
 }
+
+#[test]
+fn a_fixed_rbf_network_is_cross_validated_as_it_is_fitted() {
+    // Every choice fixed but the search start: the fit takes, output by output, the start of
+    // highest likelihood, and its test against the model alone scores that network, not the
+    // smooth start's (before 2026-12-02 the table's `rbf 1` was another network than the
+    // file's). A start given is scored and fitted alike.
+    for (start, want) in [(None, serde_json::Value::Null), (Some("2"), 2.into())] {
+        let (comp, report) = (tmp("fixed_rbf.rcal"), tmp("fixed_rbf.json"));
+        let mut args = vec![
+            "--network",
+            "rbf",
+            "--members",
+            "1",
+            "--encoding",
+            "sincos",
+            "--refine",
+            "none",
+            "--report",
+            report.to_str().unwrap(),
+        ];
+        if let Some(s) = start {
+            args.extend(["--rbf-start", s]);
+        }
+        let o = common::train_fanuc(
+            "datasets/case_d/training.csv",
+            comp.to_str().unwrap(),
+            &args,
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        let r = json(&report);
+        let tested: Vec<&serde_json::Value> = (r["training"]["selection"]["candidates"]
+            .as_array()
+            .unwrap()
+            .iter())
+        .filter(|c| c["settings"]["network"] == "rbf")
+        .collect();
+        assert_eq!(tested.len(), 1, "{r}");
+        assert_eq!(tested[0]["settings"]["rbf_search_start"], want, "{r}");
+        let fitted = &r["training"]["settings"]["rbf_search_start"];
+        assert_eq!(*fitted, want, "{r}");
+    }
+}

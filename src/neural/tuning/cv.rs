@@ -48,10 +48,10 @@ pub(super) struct Cv<'a> {
     /// All training rows: the RBF hyperparameters are searched on them once per (encoding,
     /// start); the folds fit only the weights.
     pub(super) set: &'a MeasurementSet,
-    pub(super) hypers: Mutex<HashMap<(Encoding, usize), Searched>>,
+    pub(super) hypers: Mutex<HashMap<(Encoding, Option<usize>), Searched>>,
     /// The RBF hyperparameters of (encoding, start, fold) searched on that fold's training
     /// rows alone, for the network test ([`Cv::unseen`]).
-    pub(super) fold_hypers: Mutex<HashMap<(Encoding, usize, usize), Searched>>,
+    pub(super) fold_hypers: Mutex<HashMap<(Encoding, Option<usize>, usize), Searched>>,
     /// The RBF network alone of each (refinement, encoding, start, fold, hyperparameters'
     /// rows).
     pub(super) rbf_fits: Mutex<HashMap<RbfKey, Compensator>>,
@@ -61,7 +61,7 @@ pub(super) struct Cv<'a> {
 pub(super) type Searched = std::result::Result<Hyper, String>;
 
 /// (refinement, encoding, search start, fold, hyperparameters' rows) of a fold's RBF fit.
-pub(super) type RbfKey = (Option<String>, Encoding, usize, usize, Hypers);
+pub(super) type RbfKey = (Option<String>, Encoding, Option<usize>, usize, Hypers);
 
 /// The rows a fold's RBF hyperparameters are searched on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -93,20 +93,24 @@ impl Cv<'_> {
         }
     }
 
-    /// The RBF hyperparameters of `encoding` from search start `start` on all training rows
-    /// (searched once, then cached), on the model as given's residual: a refinement's
+    /// The RBF hyperparameters of `encoding` from search start `start` (None: output by output
+    /// the start of highest likelihood, as the final fit of a fixed RBF network searches) on
+    /// all training rows (searched once, then cached), on the model as given's residual: a refinement's
     /// candidates are judged with them, and the final fit of a refined winner searches its
     /// own residual again. A search per refinement here (on the model refined on all rows)
     /// made training on 2000 poses 30 % slower and did not lower the held-out error over 28
     /// Series B runs (mean RMS +0.7 %).
-    pub(super) fn hyper(&self, encoding: Encoding, start: usize) -> Result<Hyper> {
+    pub(super) fn hyper(&self, encoding: Encoding, start: Option<usize>) -> Result<Hyper> {
         if let Ok(h) = self.hypers.lock()
             && let Some(r) = h.get(&(encoding, start))
         {
             return r.clone().map_err(Error::Invalid);
         }
         let found = build(self.robot, self.set, Form::Pose, encoding)
-            .and_then(|p| rbf::search(&p.samples, start, self.opts.train.rbf_draw()))
+            .and_then(|p| {
+                let draw = self.opts.train.rbf_draw();
+                rbf::search_start_without(&p.samples, start, draw, rbf::LeftOut::NONE)
+            })
             .map(|f| f.hyper)
             .map_err(|e| e.to_string());
         if let Ok(mut h) = self.hypers.lock() {
@@ -115,14 +119,15 @@ impl Cv<'_> {
         found.map_err(Error::Invalid)
     }
 
-    /// The RBF hyperparameters of `encoding` from search start `start` on fold `fold`'s
+    /// The RBF hyperparameters of `encoding` from search start `start` (None: the best,
+    /// [`Cv::hyper`]) on fold `fold`'s
     /// training rows alone (searched once, then cached): from the start, as the final fit
     /// searches, on the rows the search on all training rows draws but the fold's held-out
     /// ones, for the model as given's residual ([`Cv::hyper`]).
     pub(super) fn hyper_without(
         &self,
         encoding: Encoding,
-        start: usize,
+        start: Option<usize>,
         fold: usize,
     ) -> Result<Hyper> {
         let key = (encoding, start, fold);
@@ -136,7 +141,10 @@ impl Cv<'_> {
             groups: &self.groups,
         };
         let found = build(self.robot, &self.train[fold], Form::Pose, encoding)
-            .and_then(|p| rbf::search_without(&p.samples, start, self.opts.train.rbf_draw(), left))
+            .and_then(|p| {
+                let draw = self.opts.train.rbf_draw();
+                rbf::search_start_without(&p.samples, start, draw, left)
+            })
             .map(|f| f.hyper)
             .map_err(|e| e.to_string());
         if let Ok(mut h) = self.fold_hypers.lock() {
@@ -199,7 +207,9 @@ impl Cv<'_> {
         hypers: Hypers,
     ) -> Result<Compensator> {
         if settings.has_rbf() {
-            let start = settings.rbf_start.unwrap_or(0);
+            // None (a fixed RBF network without `--rbf-start`): the best start, as its final
+            // fit takes; the search's candidates carry theirs.
+            let start = settings.rbf_start;
             // The RBF network of one fold, shared by the candidate alone and mixed: one
             // factorisation per (refinement, encoding, start, fold, hyperparameters' rows).
             let key = (
@@ -219,7 +229,7 @@ impl Cv<'_> {
                         hidden: 0,
                         penalty: 0.0,
                         members: 1,
-                        rbf_start: Some(start),
+                        rbf_start: start,
                         refine: None,
                         ..settings.clone()
                     };
@@ -367,10 +377,10 @@ impl Cv<'_> {
 /// The RBF hyperparameter searches `list` needs, run in parallel before its fold fits
 /// (which would otherwise wait on one another for them).
 pub(super) fn searches(cv: &Cv, list: &[Settings]) {
-    let mut keys: Vec<(Encoding, usize)> = list
+    let mut keys: Vec<(Encoding, Option<usize>)> = list
         .iter()
         .filter(|s| s.has_rbf())
-        .map(|s| (s.encoding, s.rbf_start.unwrap_or(0)))
+        .map(|s| (s.encoding, s.rbf_start))
         .collect();
     keys.sort_by_key(|(e, k)| (e.name(), *k));
     keys.dedup();

@@ -301,6 +301,19 @@ pub fn too_few_rows(
     })
 }
 
+/// Whether more folds than `folds` would let cross-validation train a network of `need`
+/// rows on `set`: there are more distinct configurations than folds, and one fold per
+/// configuration leaves at least `need` rows in every fold's training part.
+fn more_folds_help(robot: &Robot, set: &MeasurementSet, folds: usize, need: usize) -> bool {
+    let groups = super::repeats::configuration_groups(robot, set);
+    let distinct = super::repeats::group_count(&groups);
+    let largest = (0..distinct)
+        .map(|g| groups.iter().filter(|&&x| x == g).count())
+        .max()
+        .unwrap_or(0);
+    distinct >= 2 && folds < distinct && set.rows.len() - largest >= need
+}
+
 /// The settings to fit: `opts`'s fixed choices, the rest chosen by cross-validation on `set`
 /// (None when nothing was left to choose), and remarks. Where the rows are too few to
 /// cross-validate a network ([`too_few_rows`]) and the options leave it open, the model alone
@@ -360,8 +373,11 @@ pub fn select_settings(
             // Rows enough for a network, of too few configurations to fold, can still fit
             // one untested with every choice fixed.
             let fix = match (network_rows(opts), opts.folds) {
-                // Fewer folds asked for than rows allow: more leave more rows to train on.
-                (Some(_), Some(f)) if f < set.rows.len() => " (or more --folds)",
+                // Fewer folds asked for than rows allow: more leave more rows to train on,
+                // where one fold per configuration would leave enough.
+                (Some(need), Some(f)) if more_folds_help(robot, set, f, need) => {
+                    " (or more --folds)"
+                }
                 (Some(need), _) if set.rows.len() >= need => {
                     " (or fix every choice to fit a network untested)"
                 }
@@ -383,8 +399,9 @@ pub fn select_settings(
             if let Some(why) = too_few_rows(robot, set, opts) {
                 return Err(Error::Invalid(format!(
                     "{why}, and the members are fixed at {} network(s): leave them open \
-                     (the model alone), or fix every choice to fit a network on at least \
-                     {} rows untested",
+                     (the model alone), or fix every choice (--network, --form, --encoding, \
+                     --hidden, --penalty, --refine) to fit a network on at least {} rows \
+                     untested",
                     opts.members.unwrap_or(0),
                     network_rows(opts).unwrap_or(MIN_ROWS)
                 )));
@@ -416,8 +433,9 @@ fn cross_validate(
     if k < 2 || want < 2 {
         return Err(Error::Invalid(format!(
             "choosing the settings by cross-validation needs at least 2 folds of distinct \
-             configurations (got {k}); fix form, encoding, hidden units, penalty, ensemble \
-             size and refinement instead"
+             configurations (got {k}); fix the network, form, encoding, hidden units, \
+             penalty, ensemble size and refinement instead (--network, --form, --encoding, \
+             --hidden, --penalty, --members, --refine)"
         )));
     }
     let cv = Cv {
@@ -600,8 +618,7 @@ fn cross_validate(
         ));
     }
     let rbf_hyper = if winner.has_rbf() {
-        cv.hyper(winner.encoding, winner.rbf_start.unwrap_or(0))
-            .ok()
+        cv.hyper(winner.encoding, winner.rbf_start).ok()
     } else {
         None
     };

@@ -51,8 +51,10 @@ pub(super) struct Space {
     pub(super) hiddens: Vec<usize>,
     pub(super) penalties: Vec<f64>,
     pub(super) base: Settings,
-    /// The RBF network's search start tried by cross-validation.
-    pub(super) rbf_start: usize,
+    /// The RBF network's search start tried by cross-validation; None where every choice
+    /// is fixed and none given: the fixed network's fit takes, output by output, the start
+    /// of highest likelihood, and its test against the model alone scores that network.
+    pub(super) rbf_start: Option<usize>,
     pub(super) try_rbf: bool,
     /// The RBF network alone may be a candidate: not where the MLPs' hidden units or
     /// penalty are given (those set up MLPs, which the RBF network alone has none of).
@@ -141,11 +143,6 @@ impl Space {
             hiddens = vec![base.hidden];
             penalties = vec![base.penalty];
         }
-        // The smooth start only, unless one is asked for: each start costs a search per
-        // output, and with a kernel per output the smooth start's cross-validated error was
-        // the lowest or within 0.8 % of it on the Series B pools tried (500 rows, seeds 0-2:
-        // 0.286 against 0.296; 0.253 against 0.251; 0.244 against 0.265 mm).
-        let rbf_start = opts.rbf_start.unwrap_or(0);
         // An RBF network (alone or with the MLPs) is tried where the network is left open
         // (and not fixed at none, `members` 0: the model alone), on the pose form; on a large
         // set its units sit on a choice of the rows (`TrainOptions::rbf_units`).
@@ -159,6 +156,15 @@ impl Space {
             || opts.members.is_none()
             || try_rbf
             || (mix_only && opts.mlp_share.is_none() && opts.members != Some(0));
+        // The smooth start only, unless one is asked for: each start costs a search per
+        // output, and with a kernel per output the smooth start's cross-validated error was
+        // the lowest or within 0.8 % of it on the Series B pools tried (500 rows, seeds 0-2:
+        // 0.286 against 0.296; 0.253 against 0.251; 0.244 against 0.265 mm).
+        let rbf_start = if open {
+            Some(opts.rbf_start.unwrap_or(0))
+        } else {
+            opts.rbf_start
+        };
         Ok(Space {
             refines,
             auto_compliance,

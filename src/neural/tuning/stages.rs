@@ -137,7 +137,7 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             for &e in &space.encodings {
                 list.push(Settings {
                     encoding: e,
-                    rbf_start: Some(space.rbf_start),
+                    rbf_start: space.rbf_start,
                     members: 1,
                     ..space.base.clone()
                 });
@@ -214,7 +214,7 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
         if let Some(p) = pose_mlp {
             list.push(Settings {
                 network: Network::Mix,
-                rbf_start: Some(space.rbf_start),
+                rbf_start: space.rbf_start,
                 mlp_share: self.opts.mlp_share,
                 ..self.candidates[p].settings.clone()
             });
@@ -229,7 +229,7 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
                 hidden: 0,
                 penalty: 0.0,
                 members: 1,
-                rbf_start: Some(space.rbf_start),
+                rbf_start: space.rbf_start,
                 refine: space.refines[0].clone(),
                 mlp_share: None,
             });
