@@ -182,10 +182,17 @@ pub fn check_position_scale(robot: &Robot, set: &MeasurementSet) -> Result<()> {
     )))
 }
 
-/// Registers the base (and, with `tool`, the tool) of `robot` to the positions of `set`.
-/// The base (and tool) must be 6-DOF transform rows; needs at least 3 rows with positions that
-/// are not collinear.
-pub fn register(robot: &Robot, set: &MeasurementSet, tool: bool) -> Result<(Robot, Registration)> {
+/// Registers the base (and, with `tool`, the tool) of `robot` to the positions of `set`; with
+/// `orientations`, the tool's rotation to the rows' measured orientations too, else it keeps
+/// `robot`'s (a position-only identification, whose data then leave it unobserved, must not
+/// take it from columns it was told to ignore). The base (and tool) must be 6-DOF transform
+/// rows; needs at least 3 rows with positions that are not collinear.
+pub fn register(
+    robot: &Robot,
+    set: &MeasurementSet,
+    tool: bool,
+    orientations: bool,
+) -> Result<(Robot, Registration)> {
     if robot.base().convention() != Convention::Transform {
         return Err(Error::Invalid(
             "registration needs a 6-DOF transform base row".into(),
@@ -270,7 +277,7 @@ pub fn register(robot: &Robot, set: &MeasurementSet, tool: bool) -> Result<(Robo
         let with_rot: Vec<_> = rows
             .iter()
             .zip(&flange)
-            .filter(|(m, _)| m.rotation.is_some())
+            .filter(|(m, _)| orientations && m.rotation.is_some())
             .collect();
         let rot = if with_rot.is_empty() {
             t0.rotation

@@ -774,7 +774,8 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
                 }
                 // A frame the registration puts beyond a robot file's bounds is said as the
                 // registration's, with the rows' file (`--no-register` starts from the file).
-                let (r, reg) = register(nominal, set, tool_free && tool_held.is_none())
+                let tool = tool_free && tool_held.is_none();
+                let (r, reg) = register(nominal, set, tool, measure == Measure::Pose)
                     .map_err(|e| match e {
                         Error::Model(m) => Error::Invalid(format!(
                             "{}: the registration of the base (and tool) to the measured \
