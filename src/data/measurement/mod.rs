@@ -193,11 +193,22 @@ impl JointInfo {
                 if at.parse::<f64>().is_ok_and(|a| a >= f(lo) && a <= f(hi)) {
                     at = f(v).to_string();
                 }
+                // The limits as the robot file gives them: the trip through radians leaves
+                // float dust (60 read back as 59.99999999999999).
+                let tidy = |x: f64| {
+                    let s = format!("{:.9}", f(x));
+                    let s = s.trim_end_matches('0').trim_end_matches('.');
+                    if s == "-0" {
+                        "0".to_string()
+                    } else {
+                        s.to_string()
+                    }
+                };
                 format!(
                     "joint {} at {at} {unit}, beyond [{}, {}]",
                     i + 1,
-                    f(lo),
-                    f(hi)
+                    tidy(lo),
+                    tidy(hi)
                 )
             })
         })
@@ -398,5 +409,14 @@ mod tests {
         let said = JointInfo::first_outside(&joints, &[75f64.to_radians()]).unwrap();
         assert_eq!(said, "joint 1 at 75.0000 deg, beyond [-50, 70]");
         assert!(JointInfo::first_outside(&joints, &[70f64.to_radians()]).is_none());
+        // Limits read back from radians as the file gives them (60 comes back as
+        // 59.99999999999999).
+        assert_ne!(60f64.to_radians().to_degrees(), 60.0);
+        let joints = vec![JointInfo {
+            joint_type: JointType::Revolute,
+            limits: Some([(-55f64).to_radians(), 60f64.to_radians()]),
+        }];
+        let said = JointInfo::first_outside(&joints, &[61f64.to_radians()]).unwrap();
+        assert_eq!(said, "joint 1 at 61.0000 deg, beyond [-55, 60]");
     }
 }
