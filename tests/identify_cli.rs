@@ -698,3 +698,50 @@ fn compliances_held_at_their_start_and_negative_ones_are_said() {
         "{w}"
     );
 }
+
+#[test]
+fn validation_rows_that_are_calibration_rows_are_warned_of() {
+    let root = common::root().join("datasets/case_d");
+    let cal = std::fs::read_to_string(root.join("calibration.csv")).unwrap();
+    let test = std::fs::read_to_string(root.join("test.csv")).unwrap();
+    // Lines 2-4 of the validation file are calibration rows 6-8; lines 5-9 are test rows.
+    let cal_lines: Vec<&str> = cal.lines().collect();
+    let test_lines: Vec<&str> = test.lines().collect();
+    let mixed = tmp("mixed_validation.csv");
+    let body: Vec<&str> = std::iter::once(cal_lines[0])
+        .chain(cal_lines[6..9].iter().copied())
+        .chain(test_lines[1..6].iter().copied())
+        .collect();
+    std::fs::write(&mixed, body.join("\n") + "\n").unwrap();
+    let run = |validate: &str| {
+        let out = tmp("overlap.toml");
+        let o = robocal(&[
+            "identify",
+            "--robot",
+            FANUC,
+            "--data",
+            "datasets/case_d/calibration.csv",
+            "--validate",
+            validate,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
+    let err = run(mixed.to_str().unwrap());
+    assert!(
+        err.contains(
+            "3 of 8 validation rows (lines 2, 3, 4) are rows of datasets/case_d/calibration.csv too"
+        ),
+        "{err}"
+    );
+    let err = run("datasets/case_d/calibration.csv");
+    assert!(
+        err.contains("every validation row (30) is a row of"),
+        "{err}"
+    );
+    // A held-out file: nothing said.
+    let err = run("datasets/case_d/test.csv");
+    assert!(!err.contains("validation row"), "{err}");
+}

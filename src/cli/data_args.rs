@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use robocal::data::measurement::{list_lines, parse_measurements};
+use robocal::data::measurement::{lines_also_in, list_lines, parse_measurements};
 use robocal::data::{JointInfo, MeasurementSet, Profile, ReadOptions, ReadReport, Table};
 use robocal::model::{Robot, read_robot};
 use std::path::{Path, PathBuf};
@@ -202,6 +202,40 @@ pub struct FitInputs {
 
 /// The model and the data of a fit on measurements (`identify`, `train`), after refusing
 /// outputs that name one of its inputs or each other ([`super::paths::guard`]).
+/// The warning for validation rows (`val`, read from `val_path`) that are rows of the
+/// training data too (`set`, from `data`): their figures are not held out.
+fn shared_rows_warning(
+    val_path: &Path,
+    val: &MeasurementSet,
+    data: &Path,
+    set: &MeasurementSet,
+) -> Option<String> {
+    let lines = lines_also_in(val, set);
+    if lines.is_empty() {
+        return None;
+    }
+    let what = if lines.len() == val.rows.len() {
+        format!(
+            "every validation row ({}) is a row of {} too",
+            lines.len(),
+            data.display()
+        )
+    } else {
+        format!(
+            "{} of {} validation rows (lines {}) are rows of {} too",
+            lines.len(),
+            val.rows.len(),
+            list_lines(&lines),
+            data.display()
+        )
+    };
+    Some(format!(
+        "{}: {what}, the same joints and reading: their validation figures are fitted ones, \
+         not held out (split the rows with `robocal split` for a held-out check)",
+        val_path.display()
+    ))
+}
+
 pub fn open_fit(
     robot: &Path,
     data: &Path,
@@ -232,6 +266,10 @@ pub fn open_fit(
         Some(p) => {
             let (v, w) = read.read_noted(p, &joints)?;
             read_warnings.extend(w);
+            if let Some(w) = shared_rows_warning(p, &v, data, &set) {
+                eprintln!("warning: {w}");
+                read_warnings.push(w);
+            }
             Some(v)
         }
         None => None,

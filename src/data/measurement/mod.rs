@@ -238,23 +238,10 @@ pub fn row_name(line: usize, row: usize) -> String {
 /// (row, earlier row) indices. A real repeat of a configuration reads differently in the last digits; a copied
 /// row counts its reading twice.
 pub fn copied_rows(set: &MeasurementSet) -> Vec<(usize, usize)> {
-    let key = |m: &Measurement| -> Option<Vec<u64>> {
-        // A labelled chain repeats each inner row under two pair labels by design.
-        let measured = m.position.is_some() || m.rotation.is_some() || m.distance.is_some();
-        if !measured || m.pair.is_some() {
-            return None;
-        }
-        let rot = m.rotation.map(|r| *r.matrix());
-        let values = (m.q.iter().copied())
-            .chain(m.position.iter().flat_map(|p| p.iter().copied()))
-            .chain(rot.iter().flat_map(|r| r.iter().copied()))
-            .chain(m.distance);
-        Some(values.map(f64::to_bits).collect())
-    };
     let mut first: std::collections::HashMap<Vec<u64>, usize> = Default::default();
     let mut out = Vec::new();
     for (i, m) in set.rows.iter().enumerate() {
-        let Some(k) = key(m) else { continue };
+        let Some(k) = reading_key(m) else { continue };
         match first.get(&k) {
             Some(&j) => out.push((i, j)),
             None => {
@@ -263,6 +250,34 @@ pub fn copied_rows(set: &MeasurementSet) -> Vec<(usize, usize)> {
         }
     }
     out
+}
+
+/// A row's joints and reading to the last bit ([`copied_rows`]); None for a row with nothing
+/// measured or with a pair label (a labelled chain repeats each inner row under two pair
+/// labels by design).
+fn reading_key(m: &Measurement) -> Option<Vec<u64>> {
+    let measured = m.position.is_some() || m.rotation.is_some() || m.distance.is_some();
+    if !measured || m.pair.is_some() {
+        return None;
+    }
+    let rot = m.rotation.map(|r| *r.matrix());
+    let values = (m.q.iter().copied())
+        .chain(m.position.iter().flat_map(|p| p.iter().copied()))
+        .chain(rot.iter().flat_map(|r| r.iter().copied()))
+        .chain(m.distance);
+    Some(values.map(f64::to_bits).collect())
+}
+
+/// The 1-based file lines of the rows of `set` that are rows of `other` too, joints and
+/// reading to the last bit (as [`copied_rows`] compares): a validation file that shares rows
+/// with the training file (the same file, or a split gone wrong) does not hold them out.
+pub fn lines_also_in(set: &MeasurementSet, other: &MeasurementSet) -> Vec<usize> {
+    let seen: std::collections::HashSet<Vec<u64>> =
+        other.rows.iter().filter_map(reading_key).collect();
+    (set.rows.iter())
+        .filter(|m| reading_key(m).is_some_and(|k| seen.contains(&k)))
+        .map(|m| m.line)
+        .collect()
 }
 
 /// The rows of `set` whose index `keep` accepts, in order (same source and columns); the
