@@ -459,6 +459,7 @@ fn a_network_that_learns_only_noise_is_judged_on_rows_no_search_saw() {
     let unseen = &rbf["unseen"];
     assert_eq!(unseen["by"], "folds", "{rbf}");
     assert_eq!(unseen["rows"], 150, "{rbf}");
+    assert_eq!(unseen["configurations"], 150, "{rbf}");
     assert!(number(&unseen["ratio"]) > 1.0, "{rbf}");
     assert!(number(&unseen["ratio"]) > number(&rbf["ratio"]), "{rbf}");
     assert_eq!(rbf["kept"], false);

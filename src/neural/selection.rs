@@ -214,6 +214,10 @@ pub struct UnseenTest {
     pub z: f64,
     /// Rows compared.
     pub rows: usize,
+    /// The distinct arm configurations among them, each weighed once in `z` (0 in reports
+    /// written before it).
+    #[serde(default)]
+    pub configurations: usize,
 }
 
 /// Sums of squared errors over held-out rows.

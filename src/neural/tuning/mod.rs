@@ -728,15 +728,24 @@ fn alone_model(alone: &Settings) -> String {
         .map_or("as given".to_string(), |r| format!("refine {r}"))
 }
 
+/// "12 held-out rows", or "12 held-out rows of 9 configurations (each weighed once)" where
+/// configurations repeat (0 configurations: a report written before they were counted).
+fn rows_of(rows: usize, configurations: usize) -> String {
+    if configurations > 0 && configurations < rows {
+        format!("{rows} held-out rows of {configurations} configurations (each weighed once)")
+    } else {
+        format!("{rows} held-out rows")
+    }
+}
+
 /// A test's row-by-row figures as the notes give them.
 fn paired_rows(t: &NetworkTest) -> String {
-    if t.rows > 0 && t.configurations > 0 && t.configurations < t.rows {
+    if t.rows > 0 {
         format!(
-            "paired z {:.1} over {} held-out rows of {} configurations (each weighed once)",
-            t.z, t.rows, t.configurations
+            "paired z {:.1} over {}",
+            t.z,
+            rows_of(t.rows, t.configurations)
         )
-    } else if t.rows > 0 {
-        format!("paired z {:.1} over {} held-out rows", t.z, t.rows)
     } else {
         "no row-by-row test (the held-out rows could not be recomputed as scored)".into()
     }
@@ -810,20 +819,26 @@ fn network_note(t: &NetworkTest, candidates: &[Candidate], network: &str, then: 
         test.push_str(&if u.by == Unseen::Folds {
             format!(
                 "searched on each fold's training rows alone (no search seeing the rows it is \
-                 judged on), {}{}, paired z {:.1} over {} held-out rows",
+                 judged on), {}{}, paired z {:.1} over {}",
                 by(u.ratio * raw / t.ratio),
                 judged(u.ratio).map_or(String::new(), |j| format!(" ({j})")),
                 u.z,
-                u.rows
+                rows_of(u.rows, u.configurations)
             )
         } else {
             format!(
                 "on the {} held-out rows of configurations that search did not draw, {}{}, \
-                 paired z {:.1}",
+                 paired z {:.1}{}",
                 u.rows,
                 by(u.ratio * raw / t.ratio),
                 judged(u.ratio).map_or(String::new(), |j| format!(" ({j})")),
-                u.z
+                u.z,
+                match u.configurations {
+                    c if c > 0 && c < u.rows => {
+                        format!(" over their {c} configurations (each weighed once)")
+                    }
+                    _ => String::new(),
+                }
             )
         });
     }
@@ -902,6 +917,17 @@ mod tests {
     use super::*;
     use crate::neural::compensator::Form;
     use crate::neural::encoding::Encoding;
+
+    #[test]
+    fn held_out_rows_name_their_configurations_where_some_repeat() {
+        assert_eq!(
+            rows_of(12, 9),
+            "12 held-out rows of 9 configurations (each weighed once)"
+        );
+        assert_eq!(rows_of(12, 12), "12 held-out rows");
+        // A report written before the configurations were counted.
+        assert_eq!(rows_of(12, 0), "12 held-out rows");
+    }
 
     /// The network test's note gives the errors' own ratio, whose sign the paired z shares,
     /// and the ratio as judged beside it where a compliance refinement's margin moved it (a

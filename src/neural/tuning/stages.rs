@@ -634,6 +634,7 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
                 ratio,
                 z,
                 rows: rows.len(),
+                configurations: group_count(&clusters),
             }),
             ..t
         })
