@@ -1,20 +1,37 @@
 //! A command interrupted by Ctrl-C (SIGINT) or SIGTERM leaves nothing behind: no temporary
-//! file of an output it had not yet put in place, no folder it made; it exits 130.
+//! file of an output it had not yet put in place, no folder it made; it ends killed by the
+//! signal, as a shell loop needs to stop. A signal ignored at start-up (`nohup`) stays ignored.
 #![cfg(unix)]
 
 mod common;
 use common::{FANUC, root, tmp};
 
 const UR10: &str = "datasets/robots/ur10.toml";
+use std::os::unix::process::ExitStatusExt;
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::{Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
-/// Runs `robocal args`, sends `signal` (`INT`, `TERM`) as soon as `ready` holds, and returns
-/// its exit code and standard error. Panics where `ready` never holds or the command ended
-/// before the signal (the test would then prove nothing).
-fn interrupted(args: &[&str], signal: &str, ready: impl Fn() -> bool) -> (Option<i32>, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_robocal"))
+/// Runs `robocal args` (under `wrapper`, a command such as `nohup`, where given), sends
+/// `signal` (`INT`, `TERM`, `HUP`) as soon as `ready` holds, and returns how it ended and its
+/// standard error. Panics where `ready` never holds or the command ended before the signal
+/// (the test would then prove nothing).
+fn interrupted(
+    wrapper: Option<&str>,
+    args: &[&str],
+    signal: &str,
+    ready: impl Fn() -> bool,
+) -> (ExitStatus, String) {
+    let exe = env!("CARGO_BIN_EXE_robocal");
+    let mut command = match wrapper {
+        Some(w) => {
+            let mut c = Command::new(w);
+            c.arg(exe);
+            c
+        }
+        None => Command::new(exe),
+    };
+    let mut child = command
         .args(args)
         .current_dir(root())
         .stdout(Stdio::null())
@@ -42,9 +59,19 @@ fn interrupted(args: &[&str], signal: &str, ready: impl Fn() -> bool) -> (Option
     assert!(kill.unwrap().success());
     let out = child.wait_with_output().unwrap();
     (
-        out.status.code(),
+        out.status,
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
+}
+
+/// The simulation of a million rows into `out`.
+fn simulation(out: &Path) -> Vec<String> {
+    let args = [
+        "simulate", "--robot", UR10, "--count", "1000000", "--seed", "1", "--out",
+    ];
+    (args.iter().map(|a| a.to_string()))
+        .chain([out.to_str().unwrap().to_string()])
+        .collect()
 }
 
 /// The names in folder `dir`.
@@ -61,27 +88,35 @@ fn an_interrupted_simulation_leaves_no_temporary_file() {
     let dir = tmp("interrupted_simulation");
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("kept.txt"), "an earlier file").unwrap();
-    let out = dir.join("million.csv");
-    let (code, err) = interrupted(
-        &[
-            "simulate",
-            "--robot",
-            UR10,
-            "--count",
-            "1000000",
-            "--seed",
-            "1",
-            "--out",
-            out.to_str().unwrap(),
-        ],
+    let args = simulation(&dir.join("million.csv"));
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (status, err) = interrupted(
+        None,
+        &args,
         "INT",
         // The rows stream into a temporary file beside the output from the start.
         || names(&dir).iter().any(|n| n.starts_with(".tmp")),
     );
-    assert_eq!(code, Some(130), "{err}");
-    assert!(err.contains("interrupted"), "{err}");
+    assert_eq!(status.signal(), Some(2), "{status:?}: {err}");
     assert!(!err.contains("panicked"), "{err}");
     assert_eq!(names(&dir), ["kept.txt"]);
+}
+
+#[test]
+fn a_hang_up_ignored_at_start_up_stays_ignored() {
+    // `nohup` ignores SIGHUP for the command it runs: logging out must not end it.
+    let dir = tmp("nohup_simulation");
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("million.csv");
+    let args = simulation(&out);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (status, err) = interrupted(Some("nohup"), &args, "HUP", || {
+        names(&dir).iter().any(|n| n.starts_with(".tmp"))
+    });
+    assert!(status.success(), "{status:?}: {err}");
+    assert_eq!(names(&dir), ["million.csv"]);
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(text.lines().count(), 1_000_001);
 }
 
 #[test]
@@ -89,7 +124,8 @@ fn a_terminated_training_removes_the_plot_folder_it_made() {
     let dir = tmp("terminated_training");
     std::fs::create_dir_all(&dir).unwrap();
     let plots = dir.join("plots/deeper");
-    let (code, err) = interrupted(
+    let (status, err) = interrupted(
+        None,
         &[
             "train",
             "--robot",
@@ -105,7 +141,7 @@ fn a_terminated_training_removes_the_plot_folder_it_made() {
         // The `--plot` folder is made before the training starts.
         || plots.is_dir(),
     );
-    assert_eq!(code, Some(130), "{err}");
+    assert_eq!(status.signal(), Some(15), "{status:?}: {err}");
     assert!(!err.contains("panicked"), "{err}");
     assert!(names(&dir).is_empty(), "left {:?}", names(&dir));
 }

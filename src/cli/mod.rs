@@ -132,6 +132,7 @@ mod fk;
 mod identify;
 mod ik;
 mod import;
+mod interrupt;
 mod output;
 mod paths;
 mod plan;
@@ -207,7 +208,7 @@ pub const EXIT_SOME_TARGETS_FAILED: u8 = 3;
 /// output files appear together when it succeeds, and none of them when it fails.
 pub fn main() -> ExitCode {
     quiet_on_closed_stdout();
-    clean_up_on_interrupt();
+    interrupt::clean_up_on_interrupt();
     let matches = Cli::command().get_matches();
     let mut cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     if let Some((_, m)) = matches.subcommand() {
@@ -333,25 +334,6 @@ fn quiet_on_closed_stdout() {
         }
         default(info);
     }));
-}
-
-/// Ctrl-C (SIGINT), SIGTERM or SIGHUP ends the command at once, as it would without a
-/// handler, but first deletes the temporary files of the outputs it had not yet put in place
-/// and the folders it made ([`robocal::io::discard_pending`]): an interrupted `simulate` of a
-/// million rows or `train --plot` leaves no `.tmp` file and no empty folder behind. Exit 130,
-/// the shell's code for an interrupt.
-fn clean_up_on_interrupt() {
-    // Where no handler can be set the signal ends the process as it did before.
-    let _ = ctrlc::set_handler(|| {
-        use std::io::Write;
-        robocal::io::discard_pending();
-        // Not `eprintln!`: a closed standard error must not panic here.
-        let _ = writeln!(
-            std::io::stderr(),
-            "\ninterrupted: the outputs not yet written are discarded"
-        );
-        std::process::exit(130);
-    });
 }
 
 /// A message of at most [`MAX_MESSAGE`] characters: a megabyte of header, key or cell is

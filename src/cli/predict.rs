@@ -57,21 +57,26 @@ pub fn load_compensator(
         && !c.model_refined
         && robocal::model::robot_to_toml(&cell) == robocal::model::robot_to_toml(robot)
     {
-        let pose_form = tool && c.form == robocal::neural::settings::Form::Pose;
+        let pose_form = tool && c.form == robocal::neural::settings::Form::Pose && c.has_network();
         let what = match (tool, payload) {
             (true, true) => "tool and payload",
             (true, false) => "tool",
             _ => "payload",
         };
-        notes.push(format!(
-            "note: the {what} of {} hold{}, not the {what} the compensator was trained with \
-             ({differs}){}",
-            robot_path.display(),
+        // A warning, not a note: a tool of another calibration (the nominal file given
+        // where the identified one belongs) looks the same as a new gripper, and its
+        // commands would miss by the difference.
+        let path = robot_path.display();
+        warnings.say(format!(
+            "the {what} of {path} hold{}, not the {what} the compensator was trained with \
+             ({differs}){}: right for a new gripper or load, wrong where {path} is another \
+             calibration of the same robot (its nominal file, say): then give the file the \
+             compensator was trained with",
             if tool && payload { "" } else { "s" },
             if pose_form {
-                ": its network corrects the pose of the tool it was trained with, and moves \
-                 another tool's point a little otherwise; train it again with this file for \
-                 the new tool's own correction"
+                "; its network corrects the pose of the tool it was trained with, and moves \
+                 another tool's point a little otherwise (train it again with this file for \
+                 the new tool's own correction)"
             } else {
                 ""
             }
@@ -116,10 +121,17 @@ fn cell_differences(own: &Robot, file: &Robot, tool: bool, payload: bool) -> Str
         ));
     }
     if payload && let (Some(a), Some(b)) = (own.masses(), file.masses()) {
-        parts.push(format!(
-            "payload {} kg, trained with {} kg",
-            b.payload.mass_kg, a.payload.mass_kg
-        ));
+        let (a, b) = (&a.payload, &b.payload);
+        parts.push(if a.mass_kg != b.mass_kg {
+            format!("payload {} kg, trained with {} kg", b.mass_kg, a.mass_kg)
+        } else {
+            let c = |v: &nalgebra::Vector3<f64>| format!("[{}, {}, {}]", v.x, v.y, v.z);
+            format!(
+                "payload centre of mass {} mm, trained with {} mm",
+                c(&b.com_mm),
+                c(&a.com_mm)
+            )
+        });
     }
     parts.join("; ")
 }

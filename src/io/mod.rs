@@ -9,6 +9,6 @@ mod write;
 
 pub use read::{key_lines, line_of, parse_toml, read_capped, read_text, without_bom};
 pub use write::{
-    AtomicWriter, abandon, all_or_nothing, create_dir_all, discard_pending, discarded_outputs,
-    is_standard_output, kept_outputs, output_file, staged_bytes, write_atomic,
+    AtomicWriter, PendingHeld, abandon, all_or_nothing, create_dir_all, discard_pending,
+    discarded_outputs, is_standard_output, kept_outputs, output_file, staged_bytes, write_atomic,
 };

@@ -147,16 +147,25 @@ fn standard_stream(_: &std::fs::Metadata) -> Option<Standard> {
 /// text the command printed before it), any other stream opened for appending.
 fn deliver(path: &Path, target: &Target, tmp: tempfile::NamedTempFile) -> Result<()> {
     let name = tmp.path().to_path_buf();
-    // Dropped on failure (and after a stream's copy): the temporary file is deleted.
-    let delivered = match target {
-        Target::File(to) => tmp
-            .persist(to)
-            .map(|_| ())
-            .map_err(|e| Error::io(path, bare(e.error))),
-        Target::Stream(standard) => write_stream(path, *standard, &tmp),
-    };
-    settled(&name);
-    delivered
+    match target {
+        // The rename and the file's leaving the pending list are one step for an interrupt
+        // ([`discard_pending`]): it deletes the temporary file before, or finds it gone.
+        // Dropped on failure: the temporary file is deleted.
+        Target::File(to) => pending(|p| {
+            let renamed = tmp.persist(to);
+            p.files.retain(|f| *f != name);
+            renamed
+                .map(|_| ())
+                .map_err(|e| Error::io(path, bare(e.error)))
+        }),
+        // A copy into a stream may wait on a full pipe: not while holding the list.
+        Target::Stream(standard) => {
+            let copied = write_stream(path, *standard, &tmp);
+            drop(tmp);
+            settled(&name);
+            copied
+        }
+    }
 }
 
 /// [`deliver`] into a stream, copied from the temporary file (a million rows need no memory).
@@ -226,16 +235,24 @@ fn settled(tmp: &Path) {
     pending(|p| p.files.retain(|f| f != tmp));
 }
 
+/// The pending list held by [`discard_pending`]: until it is dropped, no temporary file is
+/// made or renamed into place and no folder made, in any thread.
+pub struct PendingHeld(#[allow(dead_code)] std::sync::MutexGuard<'static, Pending>);
+
 /// Deletes every temporary file this process has not yet renamed into place and removes the
 /// folders its open transactions made (when empty): for a process about to end on a signal
-/// (Ctrl-C), whose destructors will not run. What is already in place stays. The caller
-/// exits next: a write still under way fails or lands, and nothing else is cleaned up after.
-pub fn discard_pending() {
-    let (files, dirs) = pending(|p| (std::mem::take(&mut p.files), std::mem::take(&mut p.dirs)));
-    for f in &files {
+/// (Ctrl-C), whose destructors will not run. What is already in place stays. The list stays
+/// held (the result) for the caller to end the process with: a write under way in another
+/// thread then waits, and puts nothing in place after the clean-up.
+pub fn discard_pending() -> PendingHeld {
+    let mut held = PENDING
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    for f in std::mem::take(&mut held.files) {
         let _ = std::fs::remove_file(f);
     }
-    remove_empty_dirs(dirs);
+    remove_empty_dirs(std::mem::take(&mut held.dirs));
+    PendingHeld(held)
 }
 
 /// Removes the folders of `dirs` that are empty, deepest first (a folder's subfolders, made
@@ -281,7 +298,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 pub struct AtomicWriter {
     path: PathBuf,
     target: Target,
-    out: std::io::BufWriter<tempfile::NamedTempFile>,
+    /// None once finished (then staged or delivered).
+    out: Option<std::io::BufWriter<tempfile::NamedTempFile>>,
+    /// The temporary file's path, taken off the pending list when it is dropped unfinished.
+    tmp_name: PathBuf,
 }
 
 impl AtomicWriter {
@@ -301,7 +321,8 @@ impl AtomicWriter {
         Ok(AtomicWriter {
             path: path.to_path_buf(),
             target,
-            out: std::io::BufWriter::new(tmp),
+            tmp_name: tmp.path().to_path_buf(),
+            out: Some(std::io::BufWriter::new(tmp)),
         })
     }
 
@@ -312,19 +333,32 @@ impl AtomicWriter {
 
     /// Flushes and renames the file into place, or copies it into a stream (or stages it for
     /// the open transaction).
-    pub fn finish(self) -> Result<()> {
-        let path = self.path;
-        let target = self.target;
-        let tmp = self
-            .out
-            .into_inner()
-            .map_err(|e| Error::io(&path, bare(e.into_error())))?;
-        tmp.as_file()
-            .sync_all()
-            .map_err(|e| Error::io(&path, bare(e)))?;
+    pub fn finish(mut self) -> Result<()> {
+        let path = self.path.clone();
+        let target = self.target.clone();
+        // Dropped on a failure below, the temporary file is deleted and `self`'s drop takes
+        // it off the pending list; from here on it is staged or delivered instead.
+        let Some(out) = self.out.take() else {
+            return Ok(());
+        };
+        let failed = |e: std::io::Error| {
+            settled(&self.tmp_name);
+            Error::io(&path, bare(e))
+        };
+        let tmp = out.into_inner().map_err(|e| failed(e.into_error()))?;
+        if let Err(e) = tmp.as_file().sync_all() {
+            drop(tmp);
+            return Err(failed(e));
+        }
         let staged = OPEN.with_borrow_mut(|open| match open {
             Some(t) => {
-                t.writes.retain(|w| w.path != path);
+                // A later write of the same path replaces the staged one (deleted here).
+                if let Some(k) = t.writes.iter().position(|w| w.path == path) {
+                    let replaced = t.writes.remove(k);
+                    let name = replaced.tmp.path().to_path_buf();
+                    drop(replaced);
+                    settled(&name);
+                }
                 t.writes.push(Staged {
                     path: path.clone(),
                     target: target.clone(),
@@ -341,13 +375,33 @@ impl AtomicWriter {
     }
 }
 
+impl Drop for AtomicWriter {
+    /// Unfinished, the temporary file is deleted (tempfile's own drop) and leaves the list.
+    fn drop(&mut self) {
+        if let Some(out) = self.out.take() {
+            drop(out);
+            settled(&self.tmp_name);
+        }
+    }
+}
+
+impl AtomicWriter {
+    /// The open temporary file (an error once finished, which `finish` taking `self` rules
+    /// out).
+    fn out(&mut self) -> std::io::Result<&mut std::io::BufWriter<tempfile::NamedTempFile>> {
+        self.out
+            .as_mut()
+            .ok_or_else(|| std::io::Error::other("the file is finished"))
+    }
+}
+
 impl Write for AtomicWriter {
     fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.out.write(buf)
+        self.out()?.write(buf)
     }
 
     fn flush(&mut self) -> std::io::Result<()> {
-        self.out.flush()
+        self.out()?.flush()
     }
 }
 
@@ -361,9 +415,12 @@ fn temporary_in(dir: &Path, path: &Path) -> std::io::Result<tempfile::NamedTempF
         let mode = std::fs::metadata(path).map_or(0o666, |m| m.permissions().mode() & 0o7777);
         b.permissions(std::fs::Permissions::from_mode(mode));
     }
-    let tmp = b.tempfile_in(dir)?;
-    pending(|p| p.files.push(tmp.path().to_path_buf()));
-    Ok(tmp)
+    // Made and listed in one step for an interrupt ([`discard_pending`]).
+    pending(|p| {
+        let tmp = b.tempfile_in(dir)?;
+        p.files.push(tmp.path().to_path_buf());
+        Ok(tmp)
+    })
 }
 
 /// The OS error without the temporary file's name that `tempfile` wraps around it: the
@@ -402,10 +459,17 @@ pub fn create_dir_all(dir: &Path) -> Result<()> {
         missing.push(p.to_path_buf());
         d = p.parent();
     }
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let open = OPEN.with_borrow(Option::is_some);
+    // Made and listed in one step for an interrupt ([`discard_pending`]).
+    pending(|p| {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        if open {
+            p.dirs.extend(missing.iter().cloned());
+        }
+        Ok::<(), Error>(())
+    })?;
     OPEN.with_borrow_mut(|open| {
         if let Some(t) = open {
-            pending(|p| p.dirs.extend(missing.iter().cloned()));
             t.dirs.extend(missing);
         }
     });
@@ -461,10 +525,16 @@ pub fn all_or_nothing<T, E: From<Error>>(
             let all: Vec<Staged> = files.into_iter().chain(streams).collect();
             let total = all.len();
             let mut kept = Vec::new();
-            for w in all {
+            let mut all = all.into_iter();
+            while let Some(w) = all.next() {
                 if let Err(e) = deliver(&w.path, &w.target, w.tmp) {
                     DISCARDED.set(total - kept.len() - 1);
                     KEPT.set(kept);
+                    Transaction {
+                        writes: all.collect(),
+                        dirs: Vec::new(),
+                    }
+                    .discard();
                     return Err(E::from(e));
                 }
                 kept.push(w.path);

@@ -187,12 +187,6 @@ impl JointInfo {
             (v < lo - 1e-9 || v > hi + 1e-9).then(|| {
                 let f = |x: f64| j.joint_type.to_file(x);
                 let unit = j.joint_type.file_unit();
-                // 4 decimals, unless they would read as inside the range (70.00000006 beyond
-                // [-50, 70] printed as 70.0000): then every digit.
-                let mut at = format!("{:.4}", f(v));
-                if at.parse::<f64>().is_ok_and(|a| a >= f(lo) && a <= f(hi)) {
-                    at = f(v).to_string();
-                }
                 // The limits as the robot file gives them: the trip through radians leaves
                 // float dust (60 read back as 59.99999999999999).
                 let tidy = |x: f64| {
@@ -204,12 +198,15 @@ impl JointInfo {
                         s.to_string()
                     }
                 };
-                format!(
-                    "joint {} at {at} {unit}, beyond [{}, {}]",
-                    i + 1,
-                    tidy(lo),
-                    tidy(hi)
-                )
+                let (low, high) = (tidy(lo), tidy(hi));
+                // 4 decimals, unless they would read as inside the range as printed
+                // (70.00000006 beyond [-50, 70] printed as 70.0000): then every digit.
+                let mut at = format!("{:.4}", f(v));
+                let read = |s: &str| s.parse::<f64>().unwrap_or(f64::NAN);
+                if read(&at) >= read(&low) && read(&at) <= read(&high) {
+                    at = f(v).to_string();
+                }
+                format!("joint {} at {at} {unit}, beyond [{low}, {high}]", i + 1)
             })
         })
     }
@@ -433,5 +430,9 @@ mod tests {
         }];
         let said = JointInfo::first_outside(&joints, &[61f64.to_radians()]).unwrap();
         assert_eq!(said, "joint 1 at 61.0000 deg, beyond [-55, 60]");
+        // Just beyond the limit as printed: every digit, not 60.0000.
+        let said = JointInfo::first_outside(&joints, &[60.00001f64.to_radians()]).unwrap();
+        assert!(said.starts_with("joint 1 at 60.0000"), "{said}");
+        assert_ne!(said, "joint 1 at 60.0000 deg, beyond [-55, 60]");
     }
 }

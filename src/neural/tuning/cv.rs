@@ -51,7 +51,7 @@ pub(super) struct Cv<'a> {
     pub(super) hypers: Mutex<HashMap<(Encoding, Option<usize>), Searched>>,
     /// The RBF hyperparameters of (encoding, start, fold) searched on that fold's training
     /// rows alone, for the network test ([`Cv::unseen`]).
-    pub(super) fold_hypers: Mutex<HashMap<(Encoding, Option<usize>, usize), Searched>>,
+    pub(super) fold_hypers: Mutex<HashMap<FoldSearch, Searched>>,
     /// The RBF network alone of each (refinement, encoding, start, fold, hyperparameters'
     /// rows).
     pub(super) rbf_fits: Mutex<HashMap<RbfKey, Compensator>>,
@@ -59,6 +59,9 @@ pub(super) struct Cv<'a> {
 
 /// A hyperparameter search's outcome, its error as text (cached and told by the candidates).
 pub(super) type Searched = std::result::Result<Hyper, String>;
+
+/// (encoding, search start (None: the best), fold) of a search on a fold's training rows.
+pub(super) type FoldSearch = (Encoding, Option<usize>, usize);
 
 /// (refinement, encoding, search start, fold, hyperparameters' rows) of a fold's RBF fit.
 pub(super) type RbfKey = (Option<String>, Encoding, Option<usize>, usize, Hypers);

@@ -641,9 +641,16 @@ fn cross_validate(
         outliers_of(set, &held, &cv.groups, opts.outlier_k)
     };
     // With every choice fixed the search only informs: the fit is the options' settings,
-    // on every row, its RBF network searching its own hyperparameters.
+    // on every row, its RBF network taking the hyperparameters its test searched on them
+    // (the same search, cached: searched again it doubled a fixed network's training time),
+    // as a chosen one does.
     let (winner, rbf_hyper) = match fixed {
-        Some(settings) => (settings, None),
+        Some(settings) => {
+            let searched = (settings.has_rbf() && settings.refine.is_none())
+                .then(|| cv.hyper(settings.encoding, settings.rbf_start).ok())
+                .flatten();
+            (settings, searched)
+        }
         None => (winner, rbf_hyper),
     };
     Ok((
