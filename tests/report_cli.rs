@@ -319,3 +319,33 @@ fn report_embeds_only_files_inside_the_run_folder() {
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn a_second_run_into_a_plot_folder_replaces_the_listing_of_the_first() {
+    // identify with validation rows (8 pictures), then without them into the same folder:
+    // the list holds the second run's 4 identify pictures, not the first run's validation
+    // ones beside them; another command's pictures stay listed.
+    let dir = run_dir("plots_twice");
+    let comp = dir.join("net.rcal");
+    let o = common::train_fanuc(
+        "datasets/case_d/training.csv",
+        comp.to_str().unwrap(),
+        &[&common::CHEAP_TRAIN[..], &["--plot", dir.to_str().unwrap()]].concat(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let trained = figures(&dir).len() - 8;
+    assert!(trained > 0);
+    let out = identify_case_d(
+        &dir.join("robot2.toml"),
+        &["--plot", dir.to_str().unwrap()],
+    );
+    assert!(out.contains("plots: 4 pictures"), "{out}");
+    let figs = figures(&dir);
+    let png = |f: &serde_json::Value| f["png"].as_str().unwrap().to_string();
+    let identify: Vec<String> = (figs.iter().map(png))
+        .filter(|p| p.starts_with("identify_"))
+        .collect();
+    assert_eq!(identify.len(), 4, "{identify:?}");
+    assert!(identify.iter().all(|p| !p.contains("validation")), "{identify:?}");
+    assert_eq!(figs.len(), 4 + trained, "{figs:?}");
+}

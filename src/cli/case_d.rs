@@ -79,6 +79,7 @@ fn print_set(s: &CaseDSet) {
 
 /// Per set: the test errors of every stage, and the training curves of the network stages.
 fn plot(dir: &Path, datasets: &Path, rows: &[Row]) -> Result<usize> {
+    robocal::plot::forget_earlier(dir, "case_d")?;
     let nominal = robocal::studies::thesis::fanuc(datasets)?;
     let mut figs = 0;
     for set in Robotset::ALL {

@@ -285,6 +285,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     ));
     report.warnings = warnings.into_vec();
     if let Some(dir) = &a.plot {
+        robocal::plot::forget_earlier(dir, "evaluate")?;
         let mut runs = vec![ErrorRun {
             label: "model",
             errors: &model_rows,

@@ -181,6 +181,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
     report.warnings.splice(0..0, read_warnings);
     told_after!("wrote {}", a.out.display());
     if let Some(dir) = &a.plot {
+        robocal::plot::forget_earlier(dir, "identify")?;
         let mut figs = 0;
         let sets = [
             ("calibration", Some((&cal, &cal_rows))),

@@ -100,6 +100,7 @@ pub fn run_study(a: PlanStudyArgs) -> Result<()> {
         say!("{} {name}: random  {}", case.name, line(&o.random));
     }
     if let Some(dir) = &a.plot {
+        robocal::plot::forget_earlier(dir, "plan")?;
         for ((case, name, _), o) in cases.iter().zip(&outcomes) {
             let chart = Curves {
                 title: format!(

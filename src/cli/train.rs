@@ -404,6 +404,9 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         ),
     );
     let mut figs = 0;
+    if let Some(dir) = &a.plot {
+        robocal::plot::forget_earlier(dir, "train")?;
+    }
     if let Some(dir) = &a.plot
         && let Some(first) = report.networks.first()
     {

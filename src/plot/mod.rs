@@ -125,6 +125,25 @@ pub fn read_manifest(dir: &Path) -> Result<Vec<Figure>> {
         .map_err(|e| Error::Invalid(format!("{}: not a figure list: {e}", path.display())))
 }
 
+/// Takes the pictures named `{command}_*` off the manifest of `dir`: called once before a
+/// command draws its own, so that its run replaces the listing of its earlier run in the
+/// folder (a run with validation rows, then one without: the report showed the first run's
+/// validation pictures beside the second's). Their files stay, unlisted (the command's own
+/// outputs replace them where it draws the same pictures). Returns how many were taken off.
+pub fn forget_earlier(dir: &Path, command: &str) -> Result<usize> {
+    let figs = read_manifest(dir)?;
+    let prefix = format!("{command}_");
+    let kept: Vec<Figure> = (figs.iter())
+        .filter(|f| !f.png.starts_with(&prefix))
+        .cloned()
+        .collect();
+    let gone = figs.len() - kept.len();
+    if gone > 0 {
+        write_manifest(dir, &kept)?;
+    }
+    Ok(gone)
+}
+
 /// Adds or replaces `fig` in the manifest.
 fn record(dir: &Path, fig: &Figure) -> Result<()> {
     let mut figs = read_manifest(dir)?;
@@ -132,7 +151,12 @@ fn record(dir: &Path, fig: &Figure) -> Result<()> {
         Some(f) => *f = fig.clone(),
         None => figs.push(fig.clone()),
     }
-    let mut text = serde_json::to_string_pretty(&figs)
+    write_manifest(dir, &figs)
+}
+
+/// Writes the manifest of `dir` (atomically).
+fn write_manifest(dir: &Path, figs: &[Figure]) -> Result<()> {
+    let mut text = serde_json::to_string_pretty(figs)
         .map_err(|e| Error::Invalid(format!("figure list: {e}")))?;
     text.push('\n');
     write_atomic(&manifest_path(dir), text.as_bytes())
