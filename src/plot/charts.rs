@@ -6,14 +6,19 @@ use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
-/// Series colours, in order (colour-blind-safe Tableau tones).
-pub const COLOURS: [RGBColor; 6] = [
+/// Series colours, in order (Tableau's ten): `case-d` draws eight series in one chart, and
+/// with six its first two shared their colours with the last two.
+pub const COLOURS: [RGBColor; 10] = [
     RGBColor(214, 39, 40),
     RGBColor(31, 119, 180),
     RGBColor(44, 160, 44),
     RGBColor(255, 127, 14),
     RGBColor(148, 103, 189),
     RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
 ];
 
 fn font(size: u32) -> TextStyle<'static> {
@@ -469,10 +474,13 @@ impl Chart for Curves {
             let line: Vec<(f64, f64)> = curve.points.iter().map(|p| (p.0, p.1)).collect();
             let style = col.stroke_width(2);
             if curve.dashed {
+                // Dashed in the legend too.
                 c.draw_series(DashedLineSeries::new(line, 8, 6, style))?
                     .label(curve.label.as_str())
                     .legend(move |(x, y)| {
-                        PathElement::new([(x, y), (x + 20, y)], col.stroke_width(2))
+                        EmptyElement::at((x, y))
+                            + PathElement::new([(0, 0), (8, 0)], col.stroke_width(2))
+                            + PathElement::new([(13, 0), (20, 0)], col.stroke_width(2))
                     });
             } else {
                 c.draw_series(LineSeries::new(line.clone(), style))?
@@ -489,5 +497,19 @@ impl Chart for Curves {
             }
         }
         legend(&mut c)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::COLOURS;
+
+    #[test]
+    fn the_eight_series_of_case_d_have_eight_colours() {
+        // `case-d` draws its eight stages in one chart (`studies::case_d::Stage::ALL`).
+        assert!(COLOURS.len() >= 8);
+        for (i, a) in COLOURS.iter().enumerate() {
+            assert!(COLOURS[..i].iter().all(|b| b != a), "colour {i} repeats");
+        }
     }
 }
