@@ -556,3 +556,37 @@ fn a_margin_that_leaves_a_joint_no_room_is_refused_and_a_narrow_one_warned_of() 
     let o = plan("30");
     assert!(o.status.success() && !stderr(&o).contains("under a tenth"));
 }
+
+#[test]
+fn a_region_that_holds_a_joint_at_one_value_is_warned_of() {
+    let region = tmp("flat_region.toml");
+    let ranges =
+        |q3: &str| format!("ranges = [[-10, 10], [0, 20], {q3}, [-20, 20], [30, 60], [-30, 30]]\n");
+    let plan = |name: &str| {
+        let out = tmp(name);
+        robocal(&[
+            "plan",
+            "--robot",
+            FANUC,
+            "--region",
+            region.to_str().unwrap(),
+            "--count",
+            "30",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    std::fs::write(&region, ranges("[5, 5]")).unwrap();
+    let o = plan("flat_plan.csv");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("the region holds joint 3 within 5.0000 to 5.0000 deg"),
+        "{err}"
+    );
+    // A range of its own: nothing said.
+    std::fs::write(&region, ranges("[5, 25]")).unwrap();
+    let o = plan("wide_plan.csv");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("the region holds"), "{}", stderr(&o));
+}

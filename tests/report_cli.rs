@@ -335,10 +335,7 @@ fn a_second_run_into_a_plot_folder_replaces_the_listing_of_the_first() {
     assert!(o.status.success(), "{}", stderr(&o));
     let trained = figures(&dir).len() - 8;
     assert!(trained > 0);
-    let out = identify_case_d(
-        &dir.join("robot2.toml"),
-        &["--plot", dir.to_str().unwrap()],
-    );
+    let out = identify_case_d(&dir.join("robot2.toml"), &["--plot", dir.to_str().unwrap()]);
     assert!(out.contains("plots: 4 pictures"), "{out}");
     let figs = figures(&dir);
     let png = |f: &serde_json::Value| f["png"].as_str().unwrap().to_string();
@@ -346,6 +343,9 @@ fn a_second_run_into_a_plot_folder_replaces_the_listing_of_the_first() {
         .filter(|p| p.starts_with("identify_"))
         .collect();
     assert_eq!(identify.len(), 4, "{identify:?}");
-    assert!(identify.iter().all(|p| !p.contains("validation")), "{identify:?}");
+    assert!(
+        identify.iter().all(|p| !p.contains("validation")),
+        "{identify:?}"
+    );
     assert_eq!(figs.len(), 4 + trained, "{figs:?}");
 }

@@ -116,8 +116,27 @@ fn constraints(a: &PlanArgs) -> Result<Constraints> {
 /// what they alone excite is poorly determined (a reviewer's FANUC at 59.999 deg, joint 2's
 /// limits -50 to 70 deg, `--count 30 --seed 1`: base.z predicted to 405.6 mm, without a
 /// word).
+/// A `--region` that holds a joint at one value (a range under
+/// [`robocal::identify::plausibility::HELD_JOINT_SPREAD`]) is warned of too: the plan cannot
+/// move it, and the parameters its motion alone tells apart are left out (a FANUC region with
+/// q3 held at 5 deg: 26 parameters of 30, without a word), as `identify` warns of such rows.
 fn warn_narrow(robot: &Robot, region: &Region, limits: &Constraints) {
+    use robocal::identify::plausibility::HELD_JOINT_SPREAD;
     for (i, (&[lo, hi], j)) in region.0.iter().zip(robot.joints()).enumerate() {
+        let width = j.joint_type.to_file(hi) - j.joint_type.to_file(lo);
+        if width < HELD_JOINT_SPREAD {
+            let unit = j.joint_type.file_unit();
+            eprintln!(
+                "warning: the region holds joint {} within {:.4} to {:.4} {unit} (under \
+                 {HELD_JOINT_SPREAD} {unit} of range): the plan cannot move it, and the \
+                 parameters its motion alone tells apart are left out or planned as \
+                 combinations that hold at that value only; widen its range",
+                i + 1,
+                j.joint_type.to_file(lo),
+                j.joint_type.to_file(hi)
+            );
+            continue;
+        }
         if j.joint_type != robocal::model::JointType::Revolute || hi <= lo {
             continue;
         }
