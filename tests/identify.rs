@@ -1011,3 +1011,38 @@ fn a_tool_at_the_gimbal_lock_is_identified_in_full() {
     );
     assert!(gap < 1e-9, "{gap}");
 }
+
+/// A frame parameter the data cannot tell from another (a SCARA's tool.z from its base.z, all
+/// of its axes vertical) keeps the robot file's value, the registration's change to it carried
+/// by the one it regroups with: before 2026-12-02 the registration's arbitrary share stayed
+/// (tool.z 90.8 mm for the file's 100, base.z -8.5 mm for the 0.7 the truth's d3 gives it),
+/// and a user copying base.z into a controller's frame took a value the data never said.
+#[test]
+fn a_frame_parameter_the_data_leave_out_keeps_the_files_value() {
+    let text = "name = \"scara\"\n[base]\nconvention = \"transform\"\n\
+         [[joint]]\nconvention = \"mdh\"\nd = 400.0\nlimits = [-150.0, 150.0]\n\
+         [[joint]]\nconvention = \"mdh\"\na = 350.0\nlimits = [-140.0, 140.0]\n\
+         [[joint]]\nconvention = \"mdh\"\na = 300.0\ntype = \"prismatic\"\nlimits = [-200.0, 0.0]\n\
+         [[joint]]\nconvention = \"mdh\"\nalpha = 180.0\nlimits = [-360.0, 360.0]\n\
+         [tool]\nconvention = \"transform\"\nx = 20.0\nz = 100.0\n";
+    let nominal = robocal::model::file::parse_robot(text, Path::new("scara.toml")).unwrap();
+    let d3 = nominal.find_param("d3").unwrap();
+    let truth = nominal.with_param(d3, 0.7).unwrap();
+    let (set, _) = simulate(&truth, 60, 3, false, Observe::Pose);
+    let id = identify(&nominal, &set, &Options::default()).unwrap();
+    let (tool_z, base_z) = (
+        nominal.find_param("tool.z").unwrap(),
+        nominal.find_param("base.z").unwrap(),
+    );
+    let left_out: Vec<String> = (id.identifiability.dropped.iter())
+        .map(|d| nominal.parameters()[d.param].name())
+        .collect();
+    assert!(left_out.contains(&"tool.z".to_string()), "{left_out:?}");
+    assert_eq!(id.robot.param(tool_z), 100.0);
+    assert!(
+        (id.robot.param(base_z) - 0.7).abs() < 1e-6,
+        "{}",
+        id.robot.param(base_z)
+    );
+    assert!(model_gap(&id.robot, &truth, 5).0 < 1e-6);
+}

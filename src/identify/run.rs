@@ -802,6 +802,9 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
     // Compliances are analysed with the rest at the (registered) nominal; they come last in
     // priority, so the geometric subset is what it would be without them.
     let mut ident = analyse(&start, &obs, &candidates, opts.rank_tolerance);
+    if registration.is_some() && rebased.is_empty() {
+        start = frames_left_as_given(nominal, start, &ident, &obs);
+    }
     let mut cols = ident.selected.clone();
     // A compliance the data cannot tell from zero (a light wrist's) would stand in for a
     // geometric error and run to its bound in the nonlinear solve: screen them first.
@@ -937,6 +940,69 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         notes,
         warnings,
     })
+}
+
+/// The relative rise of the start's cost within which [`frames_left_as_given`] hands a
+/// registered frame parameter's change to the parameters it regroups with.
+const START_COST_SLACK: f64 = 1e-3;
+
+/// `start` (registered) with the base and tool parameters the data leave out back at the
+/// values of `nominal` (the file's), the change the registration made to each carried by the
+/// kept parameters it regroups with (a change dp of it acts as c dp of each, c its
+/// coefficient; one without effect carries none): the registration sets every base and tool
+/// field, and where the data cannot tell one from its partners (a SCARA's tool.z from its
+/// base.z) it would keep an arbitrary share (tool.z 90.8 mm for the file's 100, base.z -8.5 mm
+/// for the truth's 0 with d3 +0.7), which a user would copy into a controller's frame.
+/// Kept only where the model's cost on the rows stays within [`START_COST_SLACK`] of
+/// `start`'s: a regrouping holds to first order (the SCARA's tool.z and base.z are parallel
+/// but for the registered base's tilt: 6.5e-7 of the cost), a large rotation moved so might
+/// not; the solve then fits the kept parameters as from any start.
+fn frames_left_as_given(
+    nominal: &Robot,
+    start: Robot,
+    ident: &Identifiability,
+    obs: &Observations,
+) -> Robot {
+    let params = nominal.parameters();
+    let mut moves: Vec<(ParamId, f64)> = Vec::new();
+    for d in &ident.dropped {
+        let id = params[d.param];
+        if !matches!(id.slot, Slot::Base | Slot::Tool) {
+            continue;
+        }
+        let back = nominal.param(id) - start.param(id);
+        if back == 0.0 {
+            continue;
+        }
+        moves.push((id, nominal.param(id)));
+        if let DropReason::Regroups(with) = &d.reason {
+            for &(k, c) in with {
+                let kid = params[k];
+                let at = moves
+                    .iter()
+                    .position(|(m, _)| *m == kid)
+                    .unwrap_or_else(|| {
+                        moves.push((kid, start.param(kid)));
+                        moves.len() - 1
+                    });
+                moves[at].1 -= c * back;
+            }
+        }
+    }
+    if moves.is_empty() {
+        return start;
+    }
+    let Ok(moved) = start.with_params(&moves) else {
+        return start;
+    };
+    let mut ws = IdentifyWorkspace::new(&start);
+    let before = super::problem::cost(&start, obs, &mut ws);
+    let after = super::problem::cost(&moved, obs, &mut ws);
+    if after.is_finite() && after <= before * (1.0 + START_COST_SLACK) {
+        moved
+    } else {
+        start
+    }
 }
 
 #[cfg(test)]
