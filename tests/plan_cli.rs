@@ -30,6 +30,12 @@ fn a_plan_is_written_within_its_constraints_and_evaluate_predicts_it_the_same() 
     ]);
     let o = robocal(&args);
     assert!(o.status.success(), "{}", stderr(&o));
+    // The prediction's cloud is drawn within the floor too, and says so.
+    assert!(
+        stdout(&o).contains("validation configurations (drawn within --floor-mm too"),
+        "{}",
+        stdout(&o)
+    );
     let text = std::fs::read_to_string(&out).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines[0], "id,q1,q2,q3,q4,q5,q6");
