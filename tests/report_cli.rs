@@ -330,7 +330,7 @@ fn a_second_run_into_a_plot_folder_replaces_the_listing_of_the_first() {
     let o = common::train_fanuc(
         "datasets/case_d/training.csv",
         comp.to_str().unwrap(),
-        &[&common::CHEAP_TRAIN[..], &["--plot", dir.to_str().unwrap()]].concat(),
+        &[common::CHEAP_TRAIN, &["--plot", dir.to_str().unwrap()]].concat(),
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let trained = figures(&dir).len() - 8;
