@@ -7,7 +7,7 @@ mod common;
 use common::{FANUC, root, tmp};
 
 const UR10: &str = "datasets/robots/ur10.toml";
-use std::os::unix::process::ExitStatusExt;
+use std::os::unix::process::{CommandExt, ExitStatusExt};
 use std::path::Path;
 use std::process::{Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
@@ -31,6 +31,17 @@ fn interrupted(
         }
         None => Command::new(exe),
     };
+    // The signals as a terminal's foreground job has them: a background job of a script
+    // (CI's) starts with SIGINT ignored, which robocal rightly leaves ignored.
+    // SAFETY: signal() is async-signal-safe, as a pre_exec hook must be.
+    unsafe {
+        command.pre_exec(|| {
+            for sig in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
+                libc::signal(sig, libc::SIG_DFL);
+            }
+            Ok(())
+        });
+    }
     let mut child = command
         .args(args)
         .current_dir(root())
