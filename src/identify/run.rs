@@ -970,7 +970,13 @@ fn frames_left_as_given(
         if !matches!(id.slot, Slot::Base | Slot::Tool) {
             continue;
         }
-        let back = nominal.param(id) - start.param(id);
+        let mut back = nominal.param(id) - start.param(id);
+        use std::f64::consts::PI;
+        // An angle's change the short way round (a registered 179 deg for the file's -179 is
+        // 2 deg, not 358).
+        if id.field.is_angle() {
+            back = (back + PI).rem_euclid(2.0 * PI) - PI;
+        }
         if back == 0.0 {
             continue;
         }

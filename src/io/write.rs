@@ -503,8 +503,11 @@ pub fn all_or_nothing<T, E: From<Error>>(
     OPEN.set(Some(Transaction::default()));
     let result = f();
     let t = OPEN.take().unwrap_or_default();
-    // Kept on success, removed by `discard` on failure: no longer for an interrupt to remove.
-    pending(|p| p.dirs.retain(|d| !t.dirs.contains(d)));
+    // The folders made stay on the pending list until the files are in them (an interrupt
+    // before then removes them), then leave it: kept on success, removed by `discard` on
+    // failure.
+    let made = t.dirs.clone();
+    let unlist = || pending(|p| p.dirs.retain(|d| !made.contains(d)));
     // A destination that cannot take a file fails before any rename, not halfway.
     let result = match result {
         Ok(v) => match destinations_ready(&t.writes) {
@@ -535,13 +538,16 @@ pub fn all_or_nothing<T, E: From<Error>>(
                         dirs: Vec::new(),
                     }
                     .discard();
+                    unlist();
                     return Err(E::from(e));
                 }
                 kept.push(w.path);
             }
+            unlist();
             Ok(v)
         }
         Err(e) => {
+            unlist();
             t.discard();
             Err(e)
         }
@@ -565,18 +571,24 @@ fn destinations_ready(writes: &[Staged]) -> Result<()> {
             ));
         }
         if !to.exists() {
-            match std::fs::OpenOptions::new()
-                .write(true)
-                .create_new(true)
-                .open(to)
-            {
-                Ok(_) => {
-                    let _ = std::fs::remove_file(to);
+            // Under the pending list's lock: an interrupt's clean-up, which ends the process
+            // holding it, never falls between the probe's create and remove (an empty file
+            // at the output's name).
+            pending(|_| {
+                match std::fs::OpenOptions::new()
+                    .write(true)
+                    .create_new(true)
+                    .open(to)
+                {
+                    Ok(_) => {
+                        let _ = std::fs::remove_file(to);
+                        Ok(())
+                    }
+                    // Another writer made it meanwhile: the name is one the folder takes.
+                    Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+                    Err(e) => Err(Error::io(&w.path, e)),
                 }
-                // Another writer made it meanwhile: the name is one the folder takes.
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
-                Err(e) => return Err(Error::io(&w.path, e)),
-            }
+            })?;
         }
     }
     Ok(())
