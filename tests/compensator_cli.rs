@@ -615,6 +615,14 @@ fn train_says_how_many_rows_the_rbf_search_saw() {
         assert!(o.status.success(), "{}", stderr(&o));
         let out = stdout(&o);
         assert!(out.contains("rbf network: 150 units ("), "{out}");
+        // The table's RBF rows say how far their figures are held out.
+        assert!(
+            out.contains(
+                "(rbf and mix rows: their RBF hyperparameters were searched once on all \
+                 training rows, each fold's held-out rows among them"
+            ),
+            "{out}"
+        );
         assert!(
             out.contains(&format!(
                 "one Gaussian process per output ({kernel} covariance), its hyperparameters \

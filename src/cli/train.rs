@@ -134,6 +134,15 @@ fn print_selection(sel: &Selection) {
             say!("        {e}");
         }
     }
+    // Said where the figures are read: the RBF rows' hyperparameters saw the rows each fold
+    // holds out (one search for every fold, for speed), which the MLP rows' fits never do.
+    if sel.candidates.iter().any(|c| c.settings.has_rbf()) {
+        say!(
+            "  (rbf and mix rows: their RBF hyperparameters were searched once on all training \
+             rows, each fold's held-out rows among them, which can flatter them; a chosen one \
+             is tested again on rows no search saw, in the notes)"
+        );
+    }
 }
 
 /// Which of `rows` training rows (of `configurations` arm configurations) the RBF search saw,
