@@ -109,7 +109,7 @@ fn baseline_fit(model: &Robot, set: &MeasurementSet, hidden: usize, alpha: f64) 
         input_norm: p.input_norm,
         output_norm: out_norm,
         domain,
-        model_refined: false,
+        model_refined: Some(false),
     }
 }
 

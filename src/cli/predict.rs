@@ -54,7 +54,7 @@ pub fn load_compensator(
     let (cell, tool, payload) = c.robot.with_tool_and_payload_of(robot)?;
     let differs = cell_differences(&c.robot, robot, tool, payload);
     if (tool || payload)
-        && !c.model_refined
+        && c.model_refined == Some(false)
         && robocal::model::robot_to_toml(&cell) == robocal::model::robot_to_toml(robot)
     {
         let pose_form = tool && c.form == robocal::neural::settings::Form::Pose && c.has_network();

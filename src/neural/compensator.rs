@@ -49,8 +49,11 @@ pub struct Compensator {
     /// Where the networks have seen data; beyond it their correction fades out.
     pub domain: Domain,
     /// Whether training refined `robot` on the training rows (then fitted on those rows
-    /// alone, so that a compensator without a network still has a domain: its joint ranges).
-    pub model_refined: bool,
+    /// alone, so that a compensator without a network still has a domain: its joint ranges);
+    /// None for a file written before it was recorded (version 7 and older), which is taken
+    /// as not refined where that is the safe reading (the domain) and as unknown where it is
+    /// not (a robot file's tool taken over only where the model is known unrefined).
+    pub model_refined: Option<bool>,
 }
 
 impl Compensator {

@@ -7,7 +7,9 @@
 //! the embedded model (`model_refined`), and a checksum of it all.
 //!
 //! Version 8 records whether training refined the embedded model; earlier files are read as
-//! not refined (a compensator without a network then flags no configuration, as it did).
+//! unknown: not refined for the domain (a compensator without a network then flags no
+//! configuration, as it did), and not known unrefined where a robot file's tool or payload
+//! would be taken over (`predict`, `evaluate` and `compensate` keep the file's own then).
 //!
 //! Version 7 gave each RBF kernel its covariance function (`covariance`: `matern52`, the
 //! default since, or `squared_exponential`); earlier files are read with the squared
@@ -91,7 +93,8 @@ impl Compensator {
             "rbf": self.rbf,
             "mlp_share": self.mlp_share,
             "shrink": self.shrink,
-            "model_refined": self.model_refined,
+            // Unknown (a version 7 file's) is written as it was read: not refined.
+            "model_refined": self.model_refined.unwrap_or(false),
         });
         let sum = fnv1a(
             serde_json::to_string(&body)
@@ -285,7 +288,11 @@ impl Compensator {
             MIX_SHARE
         };
         check_share(mlp_share).map_err(|e| bad(format!("`mlp_share`: {e}")))?;
-        let model_refined = version >= 8 && de::<bool>(&v, "model_refined", path)?;
+        let model_refined = if version >= 8 {
+            Some(de::<bool>(&v, "model_refined", path)?)
+        } else {
+            None
+        };
         if members.is_empty() != (nh == 0) {
             return Err(bad(format!(
                 "{} network records for {nh} hidden units",

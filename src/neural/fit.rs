@@ -77,7 +77,7 @@ impl Compensator {
         let started = std::time::Instant::now();
         let (mut c, networks) =
             fit_with(&robot, set, settings, train_opts, true, true, Vec::new())?;
-        c.model_refined = settings.refine.is_some();
+        c.model_refined = Some(settings.refine.is_some());
         let rbf_centred_on = c
             .rbf
             .as_ref()
@@ -199,7 +199,7 @@ pub(crate) fn fit_with(
             input_norm: problem.input_norm,
             output_norm: problem.output_norm,
             domain,
-            model_refined: false,
+            model_refined: Some(false),
         },
         reports,
     ))

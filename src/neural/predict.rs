@@ -436,7 +436,7 @@ impl Compensator {
             let revolute = |j: usize| {
                 (joints.get(j)).is_some_and(|joint| joint.joint_type == JointType::Revolute)
             };
-            let joints_outside = if self.model_refined {
+            let joints_outside = if self.model_refined == Some(true) {
                 self.domain.joints_outside(q, revolute)
             } else {
                 Vec::new()
