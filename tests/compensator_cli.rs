@@ -1232,20 +1232,14 @@ fn train_chooses_again_without_an_outlier_that_weighs_in_the_choice() {
 fn the_robot_files_tool_holds_for_a_compensator_trained_with_another() {
     // A joint-form compensator of the nominal FANUC (its joint corrections hold for any tool).
     let comp = tmp("tool_edit.rcal");
-    let mut args = vec![
-        "train",
-        "--robot",
-        FANUC,
-        "--data",
+    let joint_form: Vec<&str> = (CHEAP_TRAIN.iter())
+        .map(|a| if *a == "pose" { "joint" } else { a })
+        .collect();
+    let o = common::train_fanuc(
         "datasets/nongeometric_robot/training.csv",
-        "--out",
         comp.to_str().unwrap(),
-    ];
-    let cheap: Vec<&str> = CHEAP_TRAIN.to_vec();
-    let form = cheap.iter().position(|a| *a == "--form").unwrap();
-    args.extend(cheap[..form].iter().chain(&cheap[form + 2..]));
-    args.extend(["--form", "joint"]);
-    let o = robocal(&args);
+        &joint_form,
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     // Another gripper: the tool 50 mm longer, and rows measured with it.
     let text = std::fs::read_to_string(common::root().join(FANUC)).unwrap();

@@ -963,6 +963,7 @@ fn frames_left_as_given(
     ident: &Identifiability,
     obs: &Observations,
 ) -> Robot {
+    use std::f64::consts::PI;
     let params = nominal.parameters();
     let mut moves: Vec<(ParamId, f64)> = Vec::new();
     for d in &ident.dropped {
@@ -971,7 +972,6 @@ fn frames_left_as_given(
             continue;
         }
         let mut back = nominal.param(id) - start.param(id);
-        use std::f64::consts::PI;
         // An angle's change the short way round (a registered 179 deg for the file's -179 is
         // 2 deg, not 358).
         if id.field.is_angle() {

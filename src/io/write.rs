@@ -201,9 +201,7 @@ impl Transaction {
             .map(|w| w.tmp.path().to_path_buf())
             .collect();
         drop(self.writes);
-        for n in &names {
-            settled(n);
-        }
+        pending(|p| p.files.retain(|f| !names.contains(f)));
         remove_empty_dirs(self.dirs);
     }
 }
@@ -222,12 +220,17 @@ static PENDING: std::sync::Mutex<Pending> = std::sync::Mutex::new(Pending {
     dirs: Vec::new(),
 });
 
-/// Runs `f` on the pending list (also after a thread panicked holding it: the list stays a
-/// list of paths).
-fn pending<T>(f: impl FnOnce(&mut Pending) -> T) -> T {
-    f(&mut PENDING
+/// The pending list, locked (also after a thread panicked holding it: the list stays a list
+/// of paths).
+fn lock_pending() -> std::sync::MutexGuard<'static, Pending> {
+    PENDING
         .lock()
-        .unwrap_or_else(std::sync::PoisonError::into_inner))
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// Runs `f` on the pending list, locked.
+fn pending<T>(f: impl FnOnce(&mut Pending) -> T) -> T {
+    f(&mut lock_pending())
 }
 
 /// A temporary file no longer pending: renamed into place or deleted.
@@ -245,9 +248,7 @@ pub struct PendingHeld(#[allow(dead_code)] std::sync::MutexGuard<'static, Pendin
 /// held (the result) for the caller to end the process with: a write under way in another
 /// thread then waits, and puts nothing in place after the clean-up.
 pub fn discard_pending() -> PendingHeld {
-    let mut held = PENDING
-        .lock()
-        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let mut held = lock_pending();
     for f in std::mem::take(&mut held.files) {
         let _ = std::fs::remove_file(f);
     }

@@ -307,10 +307,11 @@ pub fn too_few_rows(
 fn more_folds_help(robot: &Robot, set: &MeasurementSet, folds: usize, need: usize) -> bool {
     let groups = super::repeats::configuration_groups(robot, set);
     let distinct = super::repeats::group_count(&groups);
-    let largest = (0..distinct)
-        .map(|g| groups.iter().filter(|&&x| x == g).count())
-        .max()
-        .unwrap_or(0);
+    let mut sizes = vec![0; distinct];
+    for &g in &groups {
+        sizes[g] += 1;
+    }
+    let largest = sizes.into_iter().max().unwrap_or(0);
     distinct >= 2 && folds < distinct && set.rows.len() - largest >= need
 }
 
@@ -738,11 +739,16 @@ fn alone_model(alone: &Settings) -> String {
 /// "12 held-out rows", or "12 held-out rows of 9 configurations (each weighed once)" where
 /// configurations repeat (0 configurations: a report written before they were counted).
 fn rows_of(rows: usize, configurations: usize) -> String {
-    if configurations > 0 && configurations < rows {
-        format!("{rows} held-out rows of {configurations} configurations (each weighed once)")
-    } else {
-        format!("{rows} held-out rows")
+    match repeated(rows, configurations) {
+        Some(c) => format!("{rows} held-out rows of {c} configurations (each weighed once)"),
+        None => format!("{rows} held-out rows"),
     }
+}
+
+/// The count of `configurations` among `rows` where some repeat (None where none does, or
+/// where a report written before they were counted holds 0).
+fn repeated(rows: usize, configurations: usize) -> Option<usize> {
+    (configurations > 0 && configurations < rows).then_some(configurations)
 }
 
 /// A test's row-by-row figures as the notes give them.
@@ -840,12 +846,9 @@ fn network_note(t: &NetworkTest, candidates: &[Candidate], network: &str, then: 
                 by(u.ratio * raw / t.ratio),
                 judged(u.ratio).map_or(String::new(), |j| format!(" ({j})")),
                 u.z,
-                match u.configurations {
-                    c if c > 0 && c < u.rows => {
-                        format!(" over their {c} configurations (each weighed once)")
-                    }
-                    _ => String::new(),
-                }
+                repeated(u.rows, u.configurations).map_or(String::new(), |c| {
+                    format!(" over their {c} configurations (each weighed once)")
+                })
             )
         });
     }
