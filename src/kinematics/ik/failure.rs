@@ -51,7 +51,7 @@ impl std::fmt::Display for IkFailure {
             IkFailure::NotConverged(m) => write!(f, "{m}"),
             IkFailure::OutsideLimits(j) => write!(
                 f,
-                "every solution leaves the limits; the one nearest the seed (or, without one, \
+                "every solution found leaves the limits; the one nearest the seed (or, without one, \
                  the middle of the ranges) leaves those of joint{} {}",
                 if j.len() == 1 { "" } else { "s" },
                 j.iter()

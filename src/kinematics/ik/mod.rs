@@ -45,8 +45,8 @@ use super::ik_numeric::{IkOptions, IkSolution, IkTarget, IkWorkspace, ToolModel,
 use super::{Pose, Reach};
 use crate::error::{Error, Result};
 use crate::geometry::rotation::angle_between;
-use crate::model::Robot;
 pub use crate::model::joint_distance;
+use crate::model::{JointType, Robot};
 pub use failure::IkFailure;
 use failure::out_of_reach;
 use nalgebra::Matrix6xX;
@@ -355,7 +355,8 @@ impl<M: ToolModel> IkSolver<M> {
 
     /// Every distinct solution within the limits, nearest `seed` (or the middle of the
     /// ranges) first, by [`joint_distance`]: for an exact closed form every whole-turn copy
-    /// the limits allow (as [`Self::all`]), else the candidates of [`Self::nearest`].
+    /// the limits allow (as [`Self::all`]), else the candidates of [`Self::nearest`], each
+    /// in its copy nearest the reference (where [`Self::all`] lists every copy).
     pub fn ranked(
         &mut self,
         target: &Pose,
@@ -465,9 +466,12 @@ impl<M: ToolModel> IkSolver<M> {
             .map_err(|e| IkFailure::NotConverged(e.to_string()))
     }
 
-    /// Every distinct solution within the limits: for an exact closed form every whole-turn
-    /// copy the limits allow (at most [`MAX_SOLUTIONS`](super::ik_closed::MAX_SOLUTIONS)); else one numerical solve from the
-    /// seed and from each closed-form start.
+    /// Every distinct solution within the limits, with every whole-turn copy the limits allow
+    /// (at most [`MAX_SOLUTIONS`](super::ik_closed::MAX_SOLUTIONS), else
+    /// [`IkFailure::TooMany`]): an exact closed form's, or those of one numerical solve from
+    /// the seed and from each closed-form start, each solution first and then its other
+    /// copies, a copy kept where the model reaches the target there as at the solution (a
+    /// model whose pose repeats when a revolute joint turns by 2 pi, as every kinematic model).
     pub fn all(
         &mut self,
         target: &Pose,
@@ -481,10 +485,80 @@ impl<M: ToolModel> IkSolver<M> {
             return Ok(copies.into_iter().map(|s| s.q).collect());
         }
         let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
-        Ok(self
-            .refined(target, seed, &reference)?
-            .into_iter()
-            .map(|s| s.q)
-            .collect())
+        let mut out = Vec::new();
+        for s in self.refined(target, seed, &reference)? {
+            let misses = |model: &mut M, q: &[f64]| {
+                let at = model.pose(q);
+                let mm = (at.translation.vector - target.translation.vector).norm();
+                (mm, angle_between(&at.rotation, &target.rotation))
+            };
+            let (mm, rad) = misses(&mut self.model, &s.q);
+            for copy in turn_copies(self.model.robot(), &s.q) {
+                let (c_mm, c_rad) = misses(&mut self.model, &copy);
+                // Rounding moves a copy's pose by ~1e-12 mm; a model that does not repeat
+                // over a turn (a network on the raw angles) misses by far more.
+                if c_mm <= mm + COPY_SLACK_MM && c_rad <= rad + COPY_SLACK_RAD {
+                    out.push(copy);
+                }
+            }
+            if out.len() > super::ik_closed::MAX_SOLUTIONS {
+                return Err(IkFailure::TooMany);
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// How much farther (mm) a whole-turn copy of a solution may miss the target than the
+/// solution and still be listed ([`IkSolver::all`]).
+const COPY_SLACK_MM: f64 = 1e-9;
+/// The same for the orientation (rad).
+const COPY_SLACK_RAD: f64 = 1e-12;
+
+/// `q` (rad, mm) and then its other whole-turn copies within `robot`'s limits (tolerance
+/// 1e-9 rad): its revolute joints moved by multiples of 2 pi, prismatic joints as they are;
+/// `q` itself first even where it leaves a limit. Capped a little past
+/// [`MAX_SOLUTIONS`](super::ik_closed::MAX_SOLUTIONS), which the caller checks.
+fn turn_copies(robot: &Robot, q: &[f64]) -> Vec<Vec<f64>> {
+    const TOL: f64 = 1e-9;
+    let tau = 2.0 * std::f64::consts::PI;
+    let turns: Vec<(i64, i64)> = (robot.joints().iter().zip(q))
+        .map(|(j, &v)| match j.joint_type {
+            JointType::Prismatic => (0, 0),
+            JointType::Revolute => {
+                let [lo, hi] = j.limits_internal();
+                let kmin = ((lo - TOL - v) / tau).ceil() as i64;
+                let kmax = ((hi + TOL - v) / tau).floor() as i64;
+                (kmin.min(0), kmax.max(0))
+            }
+        })
+        .collect();
+    let mut out = vec![q.to_vec()];
+    let mut k: Vec<i64> = turns.iter().map(|t| t.0).collect();
+    loop {
+        if k.iter().any(|&x| x != 0) {
+            let copy: Vec<f64> = (q.iter().zip(&k))
+                .map(|(v, &x)| v + x as f64 * tau)
+                .collect();
+            if robot.joints_outside_limits(&copy).is_empty() {
+                out.push(copy);
+                if out.len() > super::ik_closed::MAX_SOLUTIONS + 1 {
+                    return out;
+                }
+            }
+        }
+        // Odometer over the turn counts.
+        let mut j = 0;
+        loop {
+            if j == k.len() {
+                return out;
+            }
+            if k[j] < turns[j].1 {
+                k[j] += 1;
+                break;
+            }
+            k[j] = turns[j].0;
+            j += 1;
+        }
     }
 }
