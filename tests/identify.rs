@@ -366,7 +366,18 @@ fn robust_loss_resists_bad_rows_and_the_outlier_report_names_them() {
     assert_eq!(lines, [6, 19, 32], "{:?}", plain_id.outliers);
     for loss in [RobustLoss::Huber, RobustLoss::Cauchy] {
         let (robust, id) = err(Some(loss));
-        assert!(id.robust_rounds > 0);
+        assert!(id.effort.robust_rounds > 0);
+        // Every round is a solve, and the first solve comes before them.
+        assert!(
+            id.effort.solves > id.effort.robust_rounds,
+            "{:?}",
+            id.effort
+        );
+        assert!(
+            id.effort.iterations > id.solution.iterations,
+            "{:?}",
+            id.effort
+        );
         assert!(robust < 0.5 * plain, "{loss:?}: {robust} vs plain {plain}");
         assert!(robust < 0.05, "{loss:?}: {robust} mm against the truth");
     }

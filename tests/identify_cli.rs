@@ -745,3 +745,37 @@ fn validation_rows_that_are_calibration_rows_are_warned_of() {
     let err = run("datasets/case_d/test.csv");
     assert!(!err.contains("validation row"), "{err}");
 }
+
+/// The `solution:` line counts every solve where there was more than one (a robust loss's
+/// reweighting rounds, each a solve), as the report does: before 2026-12-02 it gave the last
+/// solve's iterations alone ("0 iterations, converged" after 22 rounds of Huber weights).
+#[test]
+fn the_solution_line_counts_every_solve_as_the_report_does() {
+    let out = tmp("robust_b.toml");
+    let report = tmp("robust_b.json");
+    let (o, r) = (out.to_str().unwrap(), report.to_str().unwrap());
+    let run = identify_fanuc(
+        "datasets/case_b_sim/calibration.csv",
+        o,
+        &["--robust", "huber", "--report", r],
+    );
+    assert!(run.status.success(), "{}", stderr(&run));
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let count = |key: &str| r[key].as_u64().unwrap();
+    let (solves, rounds, total) = (
+        count("solves"),
+        count("robust_rounds"),
+        count("total_iterations"),
+    );
+    assert!(
+        rounds > 0 && solves > rounds && total >= count("iterations"),
+        "{r}"
+    );
+    let line = format!(
+        "solution: {solves} solves, {rounds} of them robust reweighting rounds, {total} \
+         iterations in all; the last: {} iterations, ",
+        count("iterations")
+    );
+    assert!(stdout(&run).contains(&line), "{line}\n{}", stdout(&run));
+}

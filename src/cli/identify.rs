@@ -324,9 +324,8 @@ fn print_identified(r: &IdentifyReport) {
         say!("  left out {:<12} {why}", d.name);
     }
     say!(
-        "solution: {} iterations, {}; variance factor s^2 = {:.4}",
-        r.iterations,
-        r.stop,
+        "solution: {}; variance factor s^2 = {:.4}",
+        solve_work(r),
         r.variance_factor
     );
     if let Some(note) = r.unmodelled.note("the rows") {
@@ -380,4 +379,22 @@ fn print_identified(r: &IdentifyReport) {
             "kept in the fit, as outliers are",
         );
     }
+}
+
+/// How the solution was reached, in words: the last solve's iterations and stop, and where
+/// there were more solves (robust reweighting rounds, solves again with the unmodelled error
+/// in the sigmas or without an insignificant parameter), how many and their iterations.
+fn solve_work(r: &IdentifyReport) -> String {
+    let last = format!("{} iterations, {}", r.iterations, r.stop);
+    if r.solves <= 1 {
+        return last;
+    }
+    let rounds = match r.robust_rounds {
+        0 => String::new(),
+        k => format!(", {k} of them robust reweighting rounds"),
+    };
+    format!(
+        "{} solves{rounds}, {} iterations in all; the last: {last}",
+        r.solves, r.total_iterations
+    )
 }

@@ -15,6 +15,6 @@ pub mod unmodelled;
 
 pub use jacobian::parameter_jacobian;
 pub use problem::{Measure, Sigmas};
-pub use run::{Identified, Options, RobustLoss, candidates, identify};
+pub use run::{Effort, Identified, Options, RobustLoss, candidates, identify};
 pub use solve::{Method, SolveOptions, StopReason};
 pub use unmodelled::Unmodelled;

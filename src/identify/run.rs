@@ -126,8 +126,8 @@ pub struct Identified {
     pub outliers: Vec<Outlier>,
     /// The registered base (and tool), when registration ran.
     pub registration: Option<Registration>,
-    /// Robust reweighting rounds (0 without a robust loss).
-    pub robust_rounds: usize,
+    /// The solves' work, all of them counted ([`Effort`]; `solution` is the last solve).
+    pub effort: Effort,
     /// The unmodelled error added to the rows' own sigmas, by kind (see
     /// [`super::unmodelled`]); none where the sigmas account for the residuals, or where
     /// every component of a kind has the same sigma (however far the residuals exceed it).
@@ -262,27 +262,29 @@ fn enough_equations(set: &MeasurementSet, obs: &Observations, k: usize) -> Resul
 
 /// The solve from `start` (Nelder-Mead or a gradient method), and with a robust loss its
 /// iteratively reweighted rounds (weights from the residuals in robust sigmas, 1.4826 x the
-/// median; at most 30 rounds, until no weight moves by 1e-6); the rounds taken.
-/// `normal`: the normal equations at `start` over `cols` when the caller has them (the
-/// first solve then saves a pass over the data).
+/// median; at most 30 rounds, until no weight moves by 1e-6), each solve and round counted
+/// in `effort`. `normal`: the normal equations at `start` over `cols` when the caller has
+/// them (the first solve then saves a pass over the data).
 fn solve_robust(
     start: &Robot,
     obs: &mut Observations,
     cols: &[usize],
     opts: &Options,
     normal: Option<Normal>,
-) -> Result<(Solution, usize)> {
-    let run = |start: &Robot, obs: &Observations, normal| -> Result<Solution> {
-        match opts.solve.method {
+    effort: &mut Effort,
+) -> Result<Solution> {
+    let mut run = |start: &Robot, obs: &Observations, normal| -> Result<Solution> {
+        let s = match opts.solve.method {
             Method::Nm => solve_nelder_mead(start, obs, cols, &opts.solve),
             _ => solve_gradient(start, obs, cols, &opts.solve, normal),
-        }
+        }?;
+        effort.solves += 1;
+        effort.iterations += s.iterations;
+        Ok(s)
     };
     let mut solution = run(start, obs, normal)?;
-    let mut robust_rounds = 0;
     if let Some(loss) = opts.robust {
         for _ in 0..30 {
-            robust_rounds += 1;
             let e = normalized_residuals(&solution.robot, obs);
             let scale = (1.4826 * median(&e)).max(1e-12);
             let mut change: f64 = 0.0;
@@ -292,12 +294,26 @@ fn solve_robust(
                 o.weight = w;
             }
             solution = run(&solution.robot, obs, None)?;
+            effort.robust_rounds += 1;
             if change < 1e-6 {
                 break;
             }
         }
     }
-    Ok((solution, robust_rounds))
+    Ok(solution)
+}
+
+/// The work of an identification's solves, counted over all of them: the first, robust
+/// reweighting rounds, the solves again with the unmodelled error in the sigmas and those
+/// after an insignificant parameter leaves.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Effort {
+    /// Nonlinear solves run.
+    pub solves: usize,
+    /// Their iterations, summed (Nelder-Mead: its iterations).
+    pub iterations: usize,
+    /// Robust reweighting rounds (0 without a robust loss).
+    pub robust_rounds: usize,
 }
 
 /// Each identified parameter's nominal value, estimate and standard deviation (file units,
@@ -423,6 +439,7 @@ fn drop_insignificant(
     mut cols: Vec<usize>,
     opts: &Options,
     ident: &mut Identifiability,
+    effort: &mut Effort,
 ) -> Result<(Solution, Vec<usize>, nalgebra::DMatrix<f64>, f64)> {
     let params = start.parameters();
     loop {
@@ -443,7 +460,7 @@ fn drop_insignificant(
             solution.robot = reset;
             return Ok((solution, cols, cov, s2));
         }
-        solution = solve_robust(&reset, obs, &cols, opts, None)?.0;
+        solution = solve_robust(&reset, obs, &cols, opts, None, effort)?;
     }
 }
 
@@ -833,8 +850,8 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         ));
     }
 
-    let (mut solution, mut robust_rounds) =
-        solve_robust(&start, &mut obs, &cols, opts, first_normal)?;
+    let mut effort = Effort::default();
+    let mut solution = solve_robust(&start, &mut obs, &cols, opts, first_normal, &mut effort)?;
     // Where the model misses by far more than the rows' own sigmas, they no longer decide
     // which rows and axes it fits: each kind's sigmas take its unmodelled error, and the
     // problem is solved again until that settles.
@@ -856,9 +873,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         }
         unmodelled = tau;
         super::unmodelled::apply(&mut obs, &sigma_inv, &unmodelled);
-        let (s, rounds) = solve_robust(&solution.robot, &mut obs, &cols, opts, None)?;
-        solution = s;
-        robust_rounds += rounds;
+        solution = solve_robust(&solution.robot, &mut obs, &cols, opts, None, &mut effort)?;
     }
     if solution.stop == StopReason::MaxIterations {
         warnings.push(format!(
@@ -867,8 +882,15 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         ));
     }
 
-    let (mut solution, cols, cov, s2) =
-        drop_insignificant(nominal, solution, &mut obs, cols, opts, &mut ident)?;
+    let (mut solution, cols, cov, s2) = drop_insignificant(
+        nominal,
+        solution,
+        &mut obs,
+        cols,
+        opts,
+        &mut ident,
+        &mut effort,
+    )?;
     solution.robot = solution.robot.plain()?;
     let misfit = super::plausibility::warning(
         &solution.robot,
@@ -935,7 +957,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         correlations,
         outliers,
         registration,
-        robust_rounds,
+        effort,
         unmodelled,
         notes,
         warnings,

@@ -93,8 +93,15 @@ pub struct IdentifyReport {
     pub condition_number: f64,
     /// Candidates left out, and why.
     pub dropped: Vec<DroppedParam>,
-    /// Solver iterations.
+    /// Iterations of the last solve (the one `stop_reason` ends).
     pub iterations: usize,
+    /// Nonlinear solves run, the first, robust reweighting rounds and solves again counted
+    /// ([`crate::identify::run::Effort`]); 0 in reports written before it.
+    #[serde(default)]
+    pub solves: usize,
+    /// Iterations of all those solves, summed; 0 in reports written before it.
+    #[serde(default)]
+    pub total_iterations: usize,
     /// Why the solver stopped.
     pub stop_reason: StopReason,
     /// The same, in words.
@@ -219,6 +226,8 @@ impl IdentifyReport {
             condition_number: ident.selected_condition_number,
             dropped,
             iterations: id.solution.iterations,
+            solves: id.effort.solves,
+            total_iterations: id.effort.iterations,
             stop_reason: id.solution.stop,
             stop: id.solution.stop.describe().into(),
             variance_factor: id.variance_factor,
@@ -238,7 +247,7 @@ impl IdentifyReport {
             shared_readings: Vec::new(),
             validation_worst_rows: None,
             robust: opts.robust,
-            robust_rounds: id.robust_rounds,
+            robust_rounds: id.effort.robust_rounds,
             singular_values: ident.singular_values.clone(),
             notes: id.notes.clone(),
             warnings: id.warnings.clone(),
