@@ -352,6 +352,80 @@ fn a_controller_solving_near_the_seed_needs_one_for_each_target() {
             && err.contains("the targets move by 0.000 mm on average (max 0.000 mm)"),
         "{err}"
     );
+    assert!(!err.contains("read in the nominal model's frame"), "{err}");
+    // The same target given in the robot's own base frame, 3 m from the calibrated model's
+    // (registered) base: out of its reach, and said to be within it in the nominal's frame.
+    let nominal_pose = robocal::kinematics::pose_to_file(&robocal::kinematics::tool_pose(
+        &ur10,
+        &q.map(f64::to_radians),
+    ));
+    let cells: Vec<String> = (nominal_pose.iter().chain(&q))
+        .map(|v| format!("{v:.12}"))
+        .collect();
+    std::fs::write(
+        &good,
+        format!("x,y,z,rz,ry,rx,q1,q2,q3,q4,q5,q6\n{}\n", cells.join(",")),
+    )
+    .unwrap();
+    let o = ur10_nominal(moved.to_str().unwrap(), &good, &out);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains(
+            "1 of the 1 target(s) out of the calibrated model's reach (lines 2) would be within \
+             it read in the nominal model's frame: the calibrated model's base lies 3000.0 mm \
+             and 0.0 deg from the nominal's"
+        ),
+        "{err}"
+    );
+}
+
+/// Target orientations in radians (every value within +-6.3 on three rows or more) are
+/// warned of, as seeds and measurement files in radians are; degrees are not.
+#[test]
+fn target_orientations_in_radians_are_warned_of() {
+    let ur10_path = "datasets/robots/ur10.toml";
+    let ur10 = robocal::model::read_robot(ur10_path).unwrap();
+    let targets = tmp("ur10_radian_targets.csv");
+    let out = tmp("ur10_radian_commands.csv");
+    let qs = [
+        [30.0f64, -70.0, 80.0, -100.0, -60.0, 20.0],
+        [10.0, -80.0, 70.0, -90.0, -50.0, 10.0],
+        [-20.0, -60.0, 90.0, -110.0, -70.0, 30.0],
+    ];
+    for radians in [false, true] {
+        let mut text = String::from("x,y,z,rz,ry,rx,q1,q2,q3,q4,q5,q6\n");
+        for q in &qs {
+            let mut pose = robocal::kinematics::pose_to_file(&robocal::kinematics::tool_pose(
+                &ur10,
+                &q.map(f64::to_radians),
+            ));
+            if radians {
+                for v in &mut pose[3..] {
+                    *v = v.to_radians();
+                }
+            }
+            let cells: Vec<String> = pose.iter().chain(q).map(|v| format!("{v:.12}")).collect();
+            text.push_str(&format!("{}\n", cells.join(",")));
+        }
+        std::fs::write(&targets, text).unwrap();
+        let (t, o) = (targets.to_str().unwrap(), out.to_str().unwrap());
+        let warning = "every orientation value (rz, ry, rx) lies within +-6.3, one turn in radians";
+        let run = robocal(&[
+            "compensate",
+            "--nominal",
+            ur10_path,
+            "--robot",
+            ur10_path,
+            "--targets",
+            t,
+            "--out",
+            o,
+        ]);
+        assert_eq!(stderr(&run).contains(warning), radians, "{}", stderr(&run));
+        let run = robocal(&["ik", "--robot", ur10_path, "--poses", t, "--out", o]);
+        assert_eq!(stderr(&run).contains(warning), radians, "{}", stderr(&run));
+    }
 }
 
 /// A column of a CSV's rows as numbers.

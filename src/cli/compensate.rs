@@ -4,9 +4,11 @@ use super::output::{OutputArgs, joints_arg, num};
 use super::predict::load_compensator;
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use nalgebra::{IsometryMatrix3, Point3};
 use robocal::compensation::{CalibratedModel, Command, Failure, FakeTargetSolver};
-use robocal::data::{POSE_COLUMNS, TargetTable, joint_columns};
-use robocal::kinematics::{pose_from_file, pose_to_file};
+use robocal::data::{POSE_COLUMNS, Target, TargetTable, joint_columns};
+use robocal::kinematics::ik::REACH_MARGIN;
+use robocal::kinematics::{Reach, pose_from_file, pose_to_file};
 use robocal::model::{Robot, read_robot};
 use robocal::reports::compensate::{FrameChange, TargetFailure, WrittenMiss};
 use robocal::reports::{CompensateReport, Report};
@@ -99,6 +101,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
 
     let tt = TargetTable::read(&a.targets, &nominal, true)?;
     warnings.say_some(super::fk::radian_seeds_warning(&a.targets, &robot, &tt));
+    warnings.say_some(super::fk::radian_orientations_warning(&a.targets, &tt));
     // The limits every solution is held to: the calibrated model's.
     let calibrated = comp.as_ref().map_or(&robot, |c| &c.robot);
     let tool_gap = robocal::kinematics::tool_gap(&nominal, calibrated, TOOL_GAP_MM);
@@ -170,6 +173,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     // Targets without seed joints solved on another branch than the middle's: (line, the
     // middle's branch, the command's).
     let mut other_branch: Vec<(usize, String, String)> = Vec::new();
+    let mut frame_mix = FrameMix::new(&nominal, calibrated);
     for r in 0..t.rows.len() {
         bar.inc(1);
         let desired = tt.targets[r];
@@ -218,6 +222,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
                 if d.is_some() {
                     row.extend([String::new(), String::new()]);
                 }
+                frame_mix.check(&desired, &why, t.lines[r]);
                 failed.push((t.lines[r], why));
             }
         }
@@ -233,6 +238,10 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     ));
     let robot_path = a.compensator.as_ref().unwrap_or(&a.robot);
     warnings.say_some(unchecked.warning(&a.targets, robot_path));
+    let unreachable = (failed.iter())
+        .filter(|(_, why)| matches!(why, Failure::Unreachable(_)))
+        .count();
+    warnings.say_some(frame_mix.warning(&a.targets, unreachable));
     let total = t.rows.len();
     let (mean, max) = mean_and_max(&shifts).unzip();
     let report = CompensateReport {
@@ -330,6 +339,67 @@ fn frame_change(nominal: &Robot, calibrated: &Robot, moved: &[f64]) -> Option<Fr
         carried_shift_mean_mm: mean,
         carried_shift_max_mm: max,
     })
+}
+
+/// Targets out of the calibrated model's reach that it would reach read in the nominal
+/// model's frame, where the two bases lie apart ([`super::predict::bases_apart`]): targets
+/// given in the robot's own base frame to a model whose base `identify` registered to the
+/// measuring instrument's frame.
+struct FrameMix {
+    /// The bases' distance (mm) and angle (deg), the calibrated model's reach and the map
+    /// from the nominal's frame to its world frame (B_c B_n^-1); None where the bases agree.
+    apart: Option<(f64, f64, Reach, IsometryMatrix3<f64>)>,
+    /// The lines of such targets.
+    lines: Vec<usize>,
+}
+
+impl FrameMix {
+    fn new(nominal: &Robot, calibrated: &Robot) -> FrameMix {
+        let apart = super::predict::bases_apart(nominal, calibrated).map(|(mm, deg)| {
+            let into = calibrated.base().transform() * nominal.base().transform().inverse();
+            (mm, deg, Reach::of(calibrated), into)
+        });
+        FrameMix {
+            apart,
+            lines: Vec::new(),
+        }
+    }
+
+    /// Counts the target at `line` when it `failed` out of reach and, carried from the
+    /// nominal's frame into the calibrated model's world frame, lies within reach.
+    fn check(&mut self, target: &Target, failed: &Failure, line: usize) {
+        let Some((_, _, reach, into)) = &self.apart else {
+            return;
+        };
+        let p = Point3::from(match target {
+            Target::Pose(t) => t.translation.vector,
+            Target::Position(p) => *p,
+        });
+        let within =
+            |p: &Point3<f64>| reach.distance_mm(&p.coords) <= REACH_MARGIN * reach.bound_mm;
+        if matches!(failed, Failure::Unreachable(_)) && !within(&p) && within(&(into * p)) {
+            self.lines.push(line);
+        }
+    }
+
+    /// The warning on `targets` where some of its `unreachable` targets are such targets.
+    fn warning(&self, targets: &std::path::Path, unreachable: usize) -> Option<String> {
+        let (mm, deg, ..) = self.apart?;
+        (!self.lines.is_empty()).then(|| {
+            format!(
+                "{}: {} of the {unreachable} target(s) out of the calibrated model's reach (lines \
+                 {}) would be within it read in the nominal model's frame: the calibrated \
+                 model's base lies {mm:.1} mm and {deg:.1} deg from the nominal's (`identify` \
+                 registers it to the measuring instrument's frame), and targets are read in the \
+                 calibrated model's world frame; targets given in the robot's own base frame \
+                 must first be carried into it (T_world = B_calibrated B_nominal^-1 T, the \
+                 [base] rows of the two files)",
+                targets.display(),
+                self.lines.len(),
+                robocal::data::measurement::list_lines(&self.lines)
+            )
+        })
+    }
 }
 
 /// The summary's words on a change of frame ([`frame_change`]).

@@ -51,6 +51,22 @@ pub(super) fn radian_seeds_warning(
         .then(|| radians_warning(path, "every seed joint angle", "the seed columns are read"))
 }
 
+/// The warning where the orientation columns of target file `path` probably hold radians
+/// ([`TargetTable::orientations_look_like_radians`]): read as degrees, each target is turned
+/// by up to 6.3 deg, not by up to 360, and is solved for that orientation without a word.
+pub(super) fn radian_orientations_warning(
+    path: &std::path::Path,
+    t: &TargetTable,
+) -> Option<String> {
+    t.orientations_look_like_radians().then(|| {
+        format!(
+            "{}: every orientation value (rz, ry, rx) lies within +-6.3, one turn in radians: \
+             the columns are read in degrees (R = Rz Ry Rx); if they hold radians, convert them",
+            path.display()
+        )
+    })
+}
+
 fn warn_radians(path: &std::path::Path, what: &str, read: &str) {
     eprintln!("warning: {}", radians_warning(path, what, read));
 }

@@ -103,6 +103,9 @@ pub fn run(a: IkArgs) -> Result<bool> {
         (None, Some(path)) => {
             let t = TargetTable::read(path, &robot, false)?;
             super::fk::warn_if_radian_seeds(path, &robot, &t);
+            if let Some(w) = super::fk::radian_orientations_warning(path, &t) {
+                eprintln!("warning: {w}");
+            }
             let headers = t.output_headers(&written)?;
             let targets = t
                 .targets
