@@ -61,15 +61,16 @@ fn ur10_import_gives_hand_checked_rows() {
     // Angles rx -90,179302, ry -20,118749, rz -90,169308 deg as R = Rx Ry Rz.
     let r = xyz_intrinsic(-90.179302, -20.118749, -90.169308);
     assert!((m.rotation.unwrap().matrix() - r).abs().max() < 1e-14);
-    // Sigmas: 0,031674 0,013252 0,0037622 mm; 0,0011832 0,0013871 0,0041345 deg.
+    // Sigmas: 0,031674 0,013252 0,0037622 mm; 0,0011832 0,0013871 0,0041345 deg, those of
+    // the Euler angles (the profile's sigma_angles = "angles"): about the tracker's axes,
+    // sqrt(diag(E diag(s^2) E^T)) with E = [x, Rx(rx) y, Rx(rx) Ry(ry) z], here from numpy.
     assert_eq!(
         m.sigma_position.unwrap(),
         Vector3::new(0.031674, 0.013252, 0.0037622)
     );
-    let sr = m.sigma_rotation.unwrap();
-    assert!(
-        (sr - Vector3::new(0.0011832, 0.0013871, 0.0041345).map(f64::to_radians)).norm() < 1e-18
-    );
+    let sr = m.sigma_rotation.unwrap().map(f64::to_degrees);
+    let about_axes = Vector3::new(0.001849978420, 0.003882203444, 0.001387146411);
+    assert!((sr - about_axes).norm() < 1e-11, "{sr:?}");
     // Carried columns, with decimal commas made points.
     let col = |name: &str| set.extra_columns.iter().position(|c| c == name).unwrap();
     assert_eq!(m.extra[col("Timestamp")], "2.02011E+13");

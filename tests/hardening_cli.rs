@@ -1856,7 +1856,8 @@ fn edge_inputs_of_the_twenty_fifth_session() {
     let o = robocal(&["ik", "--robot", FANUC, "--poses", &poses]);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     assert!(
-        stdout(&o).contains("origin,0,0,0,0,0,0,,,,,,,,\"outside-limits: every solution found leaves"),
+        stdout(&o)
+            .contains("origin,0,0,0,0,0,0,,,,,,,,\"outside-limits: every solution found leaves"),
         "{}",
         stdout(&o)
     );

@@ -34,6 +34,16 @@ pub fn count(s: &str) -> Result<usize, String> {
     whole(s, "configurations", 1, MAX_COUNT)
 }
 
+/// `plan --count`: 1 to [`MAX_COUNT`] units, configurations or (relative, distance) pairs.
+pub fn units(s: &str) -> Result<usize, String> {
+    whole(
+        s,
+        "units (configurations, or pairs for --measure relative|distance)",
+        1,
+        MAX_COUNT,
+    )
+}
+
 /// `identify --max-iterations`: 1 to 100000 (each solves the normal equations once).
 pub fn iterations(s: &str) -> Result<usize, String> {
     whole(s, "iterations", 1, 100_000)

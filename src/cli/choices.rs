@@ -98,7 +98,7 @@ choice! {
 }
 
 choice! {
-    /// What a measurement plan maximises.
+    /// What a measurement plan optimises.
     Criterion => robocal::plan::Criterion {
         /// D-optimal: the determinant of the information matrix.
         D,
@@ -106,9 +106,11 @@ choice! {
         O1,
         /// Nahvi and Hollerbach's O3: the smallest singular value.
         O3,
-        /// A-optimal: the sum of the parameters' variances (scaled).
+        /// A-optimal: the sum of the parameters' variances (scaled), minimised (printed as
+        /// its negative).
         A,
-        /// I-optimal: the predicted mean squared position error over the validation cloud.
+        /// I-optimal: the predicted mean squared position error over the validation cloud,
+        /// minimised (printed as its root, the RMS in mm).
         I,
     }
 }

@@ -27,7 +27,7 @@ pub struct PlanArgs {
     #[arg(long)]
     robot: PathBuf,
     /// Units to measure: configurations, or pairs for --measure relative|distance.
-    #[arg(long, value_parser = super::bounds::count, required_unless_present_any = ["target_mm", "evaluate"], conflicts_with_all = ["target_mm", "evaluate"])]
+    #[arg(long, value_parser = super::bounds::units, required_unless_present_any = ["target_mm", "evaluate"], conflicts_with_all = ["target_mm", "evaluate"])]
     count: Option<usize>,
     /// Plan the fewest units whose predicted mean position error is at most this (mm).
     #[arg(long, value_parser = super::bounds::target_mm, conflicts_with = "evaluate")]
@@ -39,9 +39,11 @@ pub struct PlanArgs {
     /// Parameters to identify (as `identify --params`).
     #[arg(long, default_value = "full")]
     params: String,
-    /// How the planned units will be measured.
-    #[arg(long, value_enum, default_value_t = Measure::Pose)]
-    measure: Measure,
+    /// How the planned units will be measured (default: pose; with --evaluate, what the
+    /// file measures, as `identify` reads it: position where it has x, y, z without rz, ry,
+    /// rx, orientation where the reverse).
+    #[arg(long, value_enum)]
+    measure: Option<Measure>,
     /// Candidate configurations (CSV with q1..qN, deg); default: drawn within the limits.
     #[arg(long, conflicts_with = "region")]
     candidates: Option<PathBuf>,
@@ -52,7 +54,7 @@ pub struct PlanArgs {
     /// Candidate units drawn (1 to 200000).
     #[arg(long, default_value_t = 5000, conflicts_with = "candidates")]
     pool: usize,
-    /// What the plan maximises.
+    /// What the plan optimises (each one's value is printed with its unit and direction).
     #[arg(long, value_enum, default_value_t = Criterion::D)]
     criterion: Criterion,
     #[command(flatten)]
@@ -170,6 +172,29 @@ fn configurations(path: &PathBuf, robot: &Robot) -> Result<(Vec<Vec<f64>>, Joint
     ))
 }
 
+/// The measure of a list to evaluate without `--measure`: what its columns hold, as
+/// `identify` reads a measured file (pose with x, y, z and rz, ry, rx or with neither: a list
+/// of joints; position with the positions alone; orientation with the angles alone), said in
+/// a note where it is not pose.
+fn measured_in(path: &PathBuf) -> Result<robocal::identify::Measure> {
+    use robocal::identify::Measure as M;
+    let t = robocal::data::Table::read(path)?;
+    let all = |names: &[&str]| names.iter().all(|c| t.column(c).is_some());
+    let measure = match (all(&["x", "y", "z"]), all(&["rz", "ry", "rx"])) {
+        (true, false) => M::Position,
+        (false, true) => M::Orientation,
+        _ => return Ok(M::Pose),
+    };
+    eprintln!(
+        "note: {}: measure {}, as `identify` reads the file (its columns hold {}s alone); \
+         give --measure to plan for another",
+        path.display(),
+        measure.name(),
+        measure.name()
+    );
+    Ok(measure)
+}
+
 /// The file lines of the configurations `qs` (read from `t`) that `constraints` refuse,
 /// each with its index in `qs`.
 fn refused_lines(
@@ -201,7 +226,7 @@ fn evaluated_list(
     robot: &Robot,
     per: usize,
     cell: &Constraints,
-) -> Result<(Pool, Vec<usize>)> {
+) -> Result<(Pool, Vec<usize>, Vec<Vec<f64>>)> {
     let (qs, t) = configurations(path, robot)?;
     let joints = robocal::data::measurement::JointInfo::of(robot);
     let beyond = refused_lines(robot, &qs, &t, &Constraints::default());
@@ -244,7 +269,7 @@ fn evaluated_list(
     if per == 1 {
         let what = path.display().to_string();
         let pool = pool::from_configurations(robot, &qs, &Constraints::default(), 1, &what)?;
-        return Ok((pool, lines));
+        return Ok((pool, lines, t.joints));
     }
     let labels: Vec<Option<&str>> = match t.table.column("pair") {
         Some(c) => (t.table.rows.iter())
@@ -254,7 +279,7 @@ fn evaluated_list(
     };
     let pairs = robocal::data::pairs::pairs_of(&labels, &lines, path)?;
     let pool = pool::from_pairs(robot, &qs, &pairs, &Constraints::default());
-    Ok((pool, lines))
+    Ok((pool, lines, t.joints))
 }
 
 /// Prints a prediction: what the measure sees ([`Prediction`]'s position and orientation,
@@ -471,7 +496,11 @@ pub fn run(a: PlanArgs) -> Result<()> {
     if let Err(e) = robocal::identify::select::select(&robot, &a.params) {
         usage!("--params `{}`: {e}", a.params);
     }
-    let measure: robocal::identify::Measure = a.measure.into();
+    let measure: robocal::identify::Measure = match (a.measure, &a.evaluate) {
+        (Some(m), _) => m.into(),
+        (None, Some(p)) => measured_in(p)?,
+        (None, None) => robocal::identify::Measure::Pose,
+    };
     if a.target_mm.is_some() && measure == robocal::identify::Measure::Orientation {
         usage!(
             "--target-mm sets a mean position error, which an orientation measure does not \
@@ -490,7 +519,12 @@ pub fn run(a: PlanArgs) -> Result<()> {
         warn_narrow(&robot, &region, &limits);
     }
     // The pool, and the file lines of its configurations where they were given.
-    let (candidates, lines): (Pool, Vec<usize>) = match (&a.evaluate, &a.candidates) {
+    // The pool, and the file lines and joints (file units, as read) of its configurations
+    // where they were given.
+    let (candidates, lines, listed): (Pool, Vec<usize>, Vec<Vec<f64>>) = match (
+        &a.evaluate,
+        &a.candidates,
+    ) {
         (Some(p), _) => evaluated_list(p, &robot, per, &limits)?,
         (None, Some(p)) => {
             let what = p.display().to_string();
@@ -508,10 +542,11 @@ pub fn run(a: PlanArgs) -> Result<()> {
                     lines_of(&refused_lines(&robot, &qs, &t, &limits))
                 );
             }
-            (pool, t.table.lines.clone())
+            (pool, t.table.lines.clone(), t.joints)
         }
         (None, None) => (
             pool::draw(&robot, &region, &limits, a.pool, per, a.seed)?,
+            Vec::new(),
             Vec::new(),
         ),
     };
@@ -694,8 +729,9 @@ pub fn run(a: PlanArgs) -> Result<()> {
     })?;
     if let Some(c) = &chosen {
         say!(
-            "criterion {}: {:.6} after the greedy start, {:.6} after {} exchange(s)",
+            "criterion {} ({}): {:.6} after the greedy start, {:.6} after {} exchange(s)",
             criterion.name(),
+            criterion.value_words(),
             c.greedy_value,
             c.value,
             c.exchanges
@@ -744,14 +780,19 @@ pub fn run(a: PlanArgs) -> Result<()> {
     } else {
         None
     };
+    // A row from a given file is written as read there (a round trip through radians moves
+    // the last digit of some: a reviewer's 32 of 480 cells), a drawn one in file units.
+    let (listed, robot_ref) = (&listed, &robot);
     let rows: Vec<Vec<f64>> = units
         .iter()
-        .flat_map(|&u| candidates.units[u].iter())
-        .map(|q| {
-            q.iter()
-                .zip(robot.joints())
-                .map(|(v, j)| j.joint_type.to_file(*v))
-                .collect()
+        .flat_map(|&u| {
+            let from_file = candidates.sources.get(u);
+            (candidates.units[u].iter().enumerate()).map(move |(k, q)| match from_file {
+                Some(rows) => listed[rows[k]].clone(),
+                None => (q.iter().zip(robot_ref.joints()))
+                    .map(|(v, j)| j.joint_type.to_file(*v))
+                    .collect(),
+            })
         })
         .collect();
     if let Some(out) = &a.out {

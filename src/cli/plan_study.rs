@@ -2,7 +2,7 @@
 //! seeds (the README's "Plan your measurements" table and picture).
 
 use super::choices::Criterion;
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use robocal::identify::Measure;
 use robocal::plot::charts::{Curve, Curves};
@@ -57,10 +57,23 @@ pub fn run_study(a: PlanStudyArgs) -> Result<()> {
     if !(100..=20_000).contains(&a.pool) {
         usage!("--pool {}: give 100 to 20000", a.pool);
     }
+    let context = || super::paths::datasets_context(&a.datasets, "the planning study");
     let cases = [
-        (Case::table_6_1(&a.datasets)?, "pose", Measure::Pose),
-        (Case::table_6_1(&a.datasets)?, "position", Measure::Position),
-        (Case::nongeometric(&a.datasets)?, "pose", Measure::Pose),
+        (
+            Case::table_6_1(&a.datasets).with_context(context)?,
+            "pose",
+            Measure::Pose,
+        ),
+        (
+            Case::table_6_1(&a.datasets).with_context(context)?,
+            "position",
+            Measure::Position,
+        ),
+        (
+            Case::nongeometric(&a.datasets).with_context(context)?,
+            "pose",
+            Measure::Pose,
+        ),
     ];
     let bar = super::compensator_args::progress_bar(std::io::stderr().is_terminal());
     bar.set_length((a.seeds * cases.len()) as u64);

@@ -23,7 +23,8 @@ pub struct SimulateArgs {
     /// Non-geometric errors (TOML: compliance, gear, backlash). None: purely geometric.
     #[arg(long)]
     nongeometric: Option<PathBuf>,
-    /// Joint ranges to draw from (TOML `ranges = [[min, max], ...]`, deg). Default: the limits.
+    /// Joint ranges to draw from (TOML `ranges = [[min, max], ...]`, deg; mm for a prismatic
+    /// joint). Default: the limits.
     #[arg(long)]
     region: Option<PathBuf>,
     /// Number of configurations (1 to 1000000).

@@ -14,7 +14,7 @@ pub use measurement::{
     JointInfo, Measurement, MeasurementSet, ReadOptions, ReadReport, read_canonical,
     read_measurements, write_measurements,
 };
-pub use profile::{Orientation, Profile};
+pub use profile::{Orientation, Profile, SigmaAngles};
 pub use table::Table;
 pub use targets::{Target, TargetTable};
 

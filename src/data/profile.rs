@@ -11,6 +11,9 @@
 //!                            #   controller reports; angle_unit) | quaternion (qw, qx, qy, qz)
 //! euler = "xyz_intrinsic"    # zyx (R = Rz Ry Rx) | xyz_intrinsic (R = Rx Ry Rz)
 //!                            # | xyz_extrinsic (R = Rz Ry Rx, roll-pitch-yaw about fixed axes)
+//! sigma_angles = "angles"    # axes (srx, sry, srz: small rotations about x, y, z; default)
+//!                            # | angles (standard deviations of the three Euler angles, as a
+//!                            #   Leica T-Mac exports them; orientation = "euler" only)
 //! [columns]
 //! joints = ["j1", "j2", ...] # in chain order; default q1..qN
 //! x = "X"                    # positions; default x, y, z
@@ -77,6 +80,21 @@ pub enum Orientation {
     Quaternion,
 }
 
+/// What the orientation sigma columns (srx, sry, srz) hold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SigmaAngles {
+    /// Standard deviations (angle unit) of small rotations about the frame's x, y and z
+    /// axes: the canonical form's, whatever the orientation's form.
+    Axes,
+    /// Standard deviations of the three Euler angles themselves (each with its angle's
+    /// column: srx with rx), as a tracker that exports Euler angles gives them. They are
+    /// carried to the axes to first order through the convention's angular Jacobian E
+    /// ([`EulerConvention::angular_jacobian`]): the sigma about each axis is the square root
+    /// of that axis's diagonal entry of E diag(sigma^2) E^T (the off-diagonal covariances,
+    /// which the rows' weights have no place for, are left out).
+    Angles,
+}
+
 /// Column names of each measurement field in the source file.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Columns {
@@ -121,6 +139,8 @@ pub struct Profile {
     pub orientation: Orientation,
     /// How the three orientation angles compose into a rotation (orientation = "euler").
     pub euler: EulerConvention,
+    /// What the orientation sigma columns hold.
+    pub sigma_angles: SigmaAngles,
     /// Column name of each field.
     pub columns: Columns,
     /// The file the profile was read from, which messages about it name; None for the
@@ -139,6 +159,7 @@ impl Default for Profile {
             angle_unit: AngleUnit::Deg,
             orientation: Orientation::Euler,
             euler: EulerConvention::Zyx,
+            sigma_angles: SigmaAngles::Axes,
             columns: Columns {
                 joints: None,
                 position: s(["x", "y", "z"]),
@@ -166,6 +187,7 @@ struct ProfileFile {
     angle_unit: Option<String>,
     orientation: Option<String>,
     euler: Option<String>,
+    sigma_angles: Option<String>,
     #[serde(default)]
     columns: ColumnsFile,
 }
@@ -312,6 +334,20 @@ impl Profile {
             ],
             |w| bad("euler", format!("unknown convention {w}")),
         )?;
+        p.sigma_angles = pick(
+            &f.sigma_angles,
+            &[("axes", SigmaAngles::Axes), ("angles", SigmaAngles::Angles)],
+            |w| bad("sigma_angles", format!("unknown meaning {w}")),
+        )?;
+        if p.orientation != Orientation::Euler && p.sigma_angles == SigmaAngles::Angles {
+            return Err(bad(
+                "sigma_angles",
+                "\"angles\" are the standard deviations of three Euler angles: a rotation \
+                 vector's or a quaternion's sigmas are small rotations about the axes \
+                 (\"axes\")"
+                    .into(),
+            ));
+        }
         let c = f.columns;
         let set = |slot: &mut String, v: Option<String>| {
             if let Some(v) = v {
@@ -468,6 +504,26 @@ mod tests {
         }
         let tab = Profile::parse("delimiter = \"\\t\"\n", Path::new("p.toml")).unwrap();
         assert_eq!(tab.delimiter, b'\t');
+        // The orientation sigmas: small rotations about the axes unless said otherwise; the
+        // Euler angles' own only with Euler angles.
+        assert_eq!(p.sigma_angles, SigmaAngles::Axes);
+        let a = Profile::parse("sigma_angles = \"angles\"\n", Path::new("p.toml")).unwrap();
+        assert_eq!(a.sigma_angles, SigmaAngles::Angles);
+        for (text, want) in [
+            (
+                "sigma_angles = \"euler\"\n",
+                "p.toml:1: field `sigma_angles`: unknown meaning `euler`",
+            ),
+            (
+                "orientation = \"quaternion\"\nsigma_angles = \"angles\"\n",
+                "p.toml:2: field `sigma_angles`: \"angles\" are the standard deviations of three",
+            ),
+        ] {
+            let e = Profile::parse(text, Path::new("p.toml"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(want), "{e}");
+        }
     }
 
     /// A field's error names its line however the key is written: under `[columns]`, dotted,

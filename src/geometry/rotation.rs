@@ -46,6 +46,31 @@ impl EulerConvention {
         }
     }
 
+    /// The angular-velocity Jacobian E of this convention at `angles` (rad, this
+    /// convention's order): omega = E d(angles), omega the small rotation (rad) about the
+    /// frame's fixed x, y, z axes, as in R(angles + d) R(angles)^T = exp(\[omega\]x) to first
+    /// order. Column k belongs to angle k: for R = R1(a1) R2(a2) R3(a3) about axes e1, e2, e3,
+    /// the columns are e1, R1 e2 and R1 R2 e3.
+    pub fn angular_jacobian(self, angles: [f64; 3]) -> Matrix3<f64> {
+        let (x, y, z) = (Vector3::x(), Vector3::y(), Vector3::z());
+        let [a1, a2, a3] = angles;
+        match self {
+            EulerConvention::Zyx => {
+                let (r1, r2) = (rot_z(a1), rot_y(a2));
+                Matrix3::from_columns(&[z, r1 * y, r1 * r2 * x])
+            }
+            EulerConvention::XyzIntrinsic => {
+                let (r1, r2) = (rot_x(a1), rot_y(a2));
+                Matrix3::from_columns(&[x, r1 * y, r1 * r2 * z])
+            }
+            // R = Rz(a3) Ry(a2) Rx(a1): the third angle's factor comes first.
+            EulerConvention::XyzExtrinsic => {
+                let (r1, r2) = (rot_z(a3), rot_y(a2));
+                Matrix3::from_columns(&[r1 * r2 * x, r1 * y, z])
+            }
+        }
+    }
+
     /// The three angles (rad) of `r` in this convention's order.
     pub fn from_rotation(self, r: &Rotation3<f64>) -> [f64; 3] {
         match self {
@@ -132,6 +157,33 @@ mod tests {
 
     fn close(a: &Rotation3<f64>, b: &Rotation3<f64>, tol: f64) -> bool {
         (a.matrix() - b.matrix()).abs().max() < tol
+    }
+
+    /// The angular Jacobian of each convention against central differences of
+    /// rotation_vector(R(angles + h e_k) R(angles)^T) / h.
+    #[test]
+    fn angular_jacobians_match_finite_differences() {
+        let h = 1e-6;
+        for conv in [
+            EulerConvention::Zyx,
+            EulerConvention::XyzIntrinsic,
+            EulerConvention::XyzExtrinsic,
+        ] {
+            for angles in [[0.3, -1.1, 2.0], [-1.57, 0.2, -0.4], [3.0, 1.4, -2.9]] {
+                let e = conv.angular_jacobian(angles);
+                let r = conv.to_rotation(angles);
+                for k in 0..3 {
+                    let (mut plus, mut minus) = (angles, angles);
+                    plus[k] += h;
+                    minus[k] -= h;
+                    let w = (rotation_vector(&(conv.to_rotation(plus) * r.inverse()))
+                        - rotation_vector(&(conv.to_rotation(minus) * r.inverse())))
+                        / (2.0 * h);
+                    let gap = (w - e.column(k)).abs().max();
+                    assert!(gap < 1e-8, "{conv:?} {angles:?} column {k}: {gap:e}");
+                }
+            }
+        }
     }
 
     #[test]

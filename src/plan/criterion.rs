@@ -55,6 +55,22 @@ impl Criterion {
         }
     }
 
+    /// What [`Criterion::value`] reports, in words: the quantity, its unit and whether more
+    /// is better, as `plan` prints it.
+    pub fn value_words(self) -> &'static str {
+        match self {
+            Criterion::D => "ln det M, higher is better",
+            Criterion::O1 => "det(M)^(1/2p) / sqrt(N), higher is better",
+            Criterion::O3 => "the smallest singular value of M's root, higher is better",
+            Criterion::A => {
+                "-trace(M^-1), minus the scaled parameters' summed variances, higher is better"
+            }
+            Criterion::I => {
+                "the predicted RMS position error over the validation cloud in mm, lower is better"
+            }
+        }
+    }
+
     /// The quantity the exchange compares: ln det M for `d` and `o1` (the same ordering),
     /// lambda_min(M) for `o3`, -trace(M^-1) for `a`, -trace(R M^-1 R^T) for `i` (`r` the
     /// cloud's root R, p x p); -infinity when M is singular.

@@ -54,6 +54,25 @@ pub struct CaseDSet {
     pub gain_after_compliance: Option<f64>,
 }
 
+/// A row's label: its stage's, but for a network stage whose training kept no network
+/// (cross-validation chose the model alone), which says what the row is instead: the model
+/// refined on the training poses ("full geometric, refined"), or as identified ("full
+/// geometric (no network)"), and not "+ network" for an error no network made.
+fn row_label(r: &Row) -> String {
+    let label = r.stage.label();
+    match &r.training {
+        Some(t) if !t.settings.has_network() => {
+            let plain = label.trim_end_matches(" + network");
+            if t.refined.is_empty() {
+                format!("{plain} (no network)")
+            } else {
+                format!("{plain}, refined")
+            }
+        }
+        _ => label.into(),
+    }
+}
+
 /// What `case-d` found.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct CaseDReport {
@@ -84,7 +103,7 @@ impl CaseDReport {
                         .iter()
                         .map(|r| CaseDRow {
                             stage: r.stage,
-                            label: r.stage.label().into(),
+                            label: row_label(r),
                             thesis_mm: r.stage.thesis(set).map(|t| t.0),
                             thesis_deg: r.stage.thesis(set).map(|t| t.1),
                             truth: r.truth,

@@ -3,7 +3,7 @@
 
 use super::{JointInfo, Measurement, MeasurementSet, list_lines};
 use crate::data::joint_columns;
-use crate::data::profile::{AngleUnit, Orientation, Profile};
+use crate::data::profile::{AngleUnit, Orientation, Profile, SigmaAngles};
 use crate::data::table::{Table, shown};
 use crate::error::{Error, Location, Result};
 use crate::geometry::rotation::EulerConvention;
@@ -404,7 +404,13 @@ fn parse_row(
         m.sigma_position = Some(vec3(i, &|v| lu.to_mm(v))?);
     }
     if let Some(i) = c.sigma_angles {
-        m.sigma_rotation = Some(vec3(i, &|v| au.to_rad(v))?);
+        let s = vec3(i, &|v| au.to_rad(v))?;
+        m.sigma_rotation = Some(match (profile.sigma_angles, c.angles) {
+            (SigmaAngles::Angles, Some(a)) => {
+                about_axes(profile.euler, vec3(a, &|v| au.to_rad(v))?, s)
+            }
+            _ => s,
+        });
     }
     check_bounds(t, r, c, &m, joints)?;
     if let Some(i) = c.distance {
@@ -444,6 +450,31 @@ fn parse_row(
 /// within 4 turns (100 m), positions within 100 m, standard deviations from 1 nm (1 nrad)
 /// to 1 m (1 rad): a smaller one weighs its row by 1e18 and more, which no instrument
 /// justifies.
+/// The sigmas (rad) about the frame's x, y and z axes of Euler angles `angles` whose own
+/// standard deviations are `sigmas` (rad; both in column order rx, ry, rz): first order
+/// through the convention's angular Jacobian E, sqrt(diag(E diag(sigma^2) E^T))
+/// ([`SigmaAngles::Angles`]).
+fn about_axes(euler: EulerConvention, angles: Vector3<f64>, sigmas: Vector3<f64>) -> Vector3<f64> {
+    // Each convention takes the columns in its own order ([`parse_row`]'s rotation).
+    let (ordered, s) = match euler {
+        EulerConvention::Zyx => (
+            [angles.z, angles.y, angles.x],
+            [sigmas.z, sigmas.y, sigmas.x],
+        ),
+        EulerConvention::XyzIntrinsic | EulerConvention::XyzExtrinsic => (
+            [angles.x, angles.y, angles.z],
+            [sigmas.x, sigmas.y, sigmas.z],
+        ),
+    };
+    let e = euler.angular_jacobian(ordered);
+    Vector3::from_fn(|axis, _| {
+        (0..3)
+            .map(|k| (e[(axis, k)] * s[k]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    })
+}
+
 fn check_bounds(
     t: &Table,
     r: usize,
