@@ -332,16 +332,20 @@ fn a_controller_solving_near_the_seed_needs_one_for_each_target() {
     assert_ne!(moved_text, text);
     let moved = tmp("ur10_moved_base.toml");
     std::fs::write(&moved, &moved_text).unwrap();
-    let pose = robocal::kinematics::pose_to_file(&robocal::kinematics::tool_pose(
-        &robocal::model::Robot::from_toml(&moved_text).unwrap(),
-        &q.map(f64::to_radians),
-    ));
-    let cells: Vec<String> = pose.iter().chain(&q).map(|v| format!("{v:.12}")).collect();
-    std::fs::write(
-        &good,
-        format!("x,y,z,rz,ry,rx,q1,q2,q3,q4,q5,q6\n{}\n", cells.join(",")),
-    )
-    .unwrap();
+    // The pose `robot` reaches at q as the target, q its seed.
+    let target_of = |robot: &robocal::model::Robot| {
+        let pose = robocal::kinematics::pose_to_file(&robocal::kinematics::tool_pose(
+            robot,
+            &q.map(f64::to_radians),
+        ));
+        let cells: Vec<String> = pose.iter().chain(&q).map(|v| format!("{v:.12}")).collect();
+        std::fs::write(
+            &good,
+            format!("x,y,z,rz,ry,rx,q1,q2,q3,q4,q5,q6\n{}\n", cells.join(",")),
+        )
+        .unwrap();
+    };
+    target_of(&robocal::model::Robot::from_toml(&moved_text).unwrap());
     let o = ur10_nominal(moved.to_str().unwrap(), &good, &out);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let err = stderr(&o);
@@ -355,18 +359,7 @@ fn a_controller_solving_near_the_seed_needs_one_for_each_target() {
     assert!(!err.contains("read in the nominal model's frame"), "{err}");
     // The same target given in the robot's own base frame, 3 m from the calibrated model's
     // (registered) base: out of its reach, and said to be within it in the nominal's frame.
-    let nominal_pose = robocal::kinematics::pose_to_file(&robocal::kinematics::tool_pose(
-        &ur10,
-        &q.map(f64::to_radians),
-    ));
-    let cells: Vec<String> = (nominal_pose.iter().chain(&q))
-        .map(|v| format!("{v:.12}"))
-        .collect();
-    std::fs::write(
-        &good,
-        format!("x,y,z,rz,ry,rx,q1,q2,q3,q4,q5,q6\n{}\n", cells.join(",")),
-    )
-    .unwrap();
+    target_of(&ur10);
     let o = ur10_nominal(moved.to_str().unwrap(), &good, &out);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     let err = stderr(&o);
