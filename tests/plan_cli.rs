@@ -42,6 +42,38 @@ fn a_plan_is_written_within_its_constraints_and_evaluate_predicts_it_the_same() 
     assert_eq!(lines.len(), 13);
     let r = json(&report);
     assert_eq!(r["units"], 12);
+    // What the plan was drawn from and held to, to run it again.
+    let inputs = &r["inputs"];
+    assert_eq!(
+        (
+            &inputs["seed"],
+            &inputs["pool"],
+            &inputs["count"],
+            &inputs["margin_deg"]
+        ),
+        (
+            &serde_json::json!(4),
+            &serde_json::json!(800),
+            &serde_json::json!(12),
+            &serde_json::json!(5.0)
+        ),
+        "{inputs}"
+    );
+    assert_eq!(
+        (
+            &inputs["floor_mm"],
+            &inputs["validation"],
+            &inputs["forbid_mm"],
+            &inputs["evaluate"]
+        ),
+        (
+            &serde_json::json!(300.0),
+            &serde_json::json!(300),
+            &serde_json::Value::Null,
+            &serde_json::Value::Null
+        ),
+        "{inputs}"
+    );
     let robot = robocal::model::read_robot(common::root().join(FANUC)).unwrap();
     let rows = r["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 12);

@@ -20,7 +20,7 @@ pub mod train;
 pub use compensate::{CompensateReport, TargetFailure};
 pub use identify::{Correlation, DroppedParam, EvaluateReport, IdentifyReport, Regroup};
 pub use node::Node;
-pub use plan::PlanReport;
+pub use plan::{PlanInputs, PlanReport};
 pub use studies::{CaseDReport, ReproduceCase, ReproduceFigure, ReproduceReport, SeedFigure};
 pub use train::TrainReport;
 

@@ -16,6 +16,10 @@ pub struct PlanReport {
     pub measure: String,
     /// The design criterion.
     pub criterion: String,
+    /// What the plan was drawn from and held to, so that it can be run again: its inputs
+    /// (absent in reports written before 2026-12-02).
+    #[serde(default)]
+    pub inputs: PlanInputs,
     /// The tracker's position noise per coordinate (mm).
     pub sigma_position_mm: f64,
     /// Its orientation noise (mrad).
@@ -42,4 +46,31 @@ pub struct PlanReport {
     pub prediction: Prediction,
     /// What as many random units predict.
     pub random_prediction: Option<Prediction>,
+}
+
+/// The inputs of a plan besides the robot, parameters, measure and criterion.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct PlanInputs {
+    /// The seed of the candidate pool, the validation cloud and the prediction's draws.
+    pub seed: u64,
+    /// The list evaluated (`--evaluate`), if any.
+    pub evaluate: Option<String>,
+    /// The candidate file (`--candidates`), if any.
+    pub candidates: Option<String>,
+    /// The region file the pool and cloud were drawn from (`--region`), if any.
+    pub region: Option<String>,
+    /// Candidate units drawn (`--pool`), where they were drawn.
+    pub pool: Option<usize>,
+    /// The planned count (`--count`) or the mean position error aimed at (`--target-mm`, mm).
+    pub count: Option<usize>,
+    /// See `count` (mm).
+    pub target_mm: Option<f64>,
+    /// The angle kept from every revolute joint's limits (deg).
+    pub margin_deg: f64,
+    /// The tool origin's lowest height (mm), if any.
+    pub floor_mm: Option<f64>,
+    /// The box the tool origin stays out of (xmin, ymin, zmin, xmax, ymax, zmax; mm), if any.
+    pub forbid_mm: Option<[f64; 6]>,
+    /// Validation configurations the prediction averages over.
+    pub validation: usize,
 }
