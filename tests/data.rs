@@ -487,3 +487,59 @@ fn one_column_is_not_read_as_two_fields() {
     let set = read("[columns]\nx = \"x\"\n").unwrap();
     assert_eq!(set.rows[0].position.unwrap().x, 1500.0);
 }
+
+/// With `sigma_angles = "angles"` the file's own sigmas are checked before they are carried
+/// to the axes (a negative one was accepted, squared away), and at the gimbal lock the carried
+/// sigmas keep a floor of a tenth of the smallest (an axis there got about 1e-8 rad, or an
+/// error blaming a cell whose value was fine).
+#[test]
+fn euler_angle_sigmas_are_checked_as_given_and_floored_at_the_lock() {
+    let ur = robot("ur10.toml");
+    let profile = Profile::parse(
+        "euler = \"xyz_intrinsic\"\nsigma_angles = \"angles\"\n",
+        Path::new("p.toml"),
+    )
+    .unwrap();
+    let read = |rx: f64, ry: f64, srx: f64| {
+        let text = format!(
+            "q1,q2,q3,q4,q5,q6,x,y,z,rx,ry,rz,srx,sry,srz\n\
+             0,-90,0,-90,0,0,100,200,300,{rx},{ry},10,{srx},0.002,0.004\n"
+        );
+        let t = Table::parse(text.as_bytes(), Path::new("s.csv"), b',', false).unwrap();
+        parse_measurements(&t, &JointInfo::of(&ur), &profile, &ReadOptions::default())
+    };
+    // Without the angles there is nothing to carry the sigmas through.
+    let t = Table::parse(
+        b"q1,q2,q3,q4,q5,q6,x,y,z,srx,sry,srz\n0,-90,0,-90,0,0,100,200,300,0.001,0.002,0.004\n",
+        Path::new("s.csv"),
+        b',',
+        false,
+    )
+    .unwrap();
+    let e = parse_measurements(&t, &JointInfo::of(&ur), &profile, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("s.csv:1") && e.contains("no angle columns"),
+        "{e}"
+    );
+    let e = read(-90.0, -20.0, -0.001).unwrap_err().to_string();
+    assert!(
+        e.contains("s.csv:2") && e.contains("srx") && e.contains("must be positive"),
+        "{e}"
+    );
+    // At the lock (ry = 90 deg) rx and rz turn about one axis: the third axis is floored.
+    let (set, _) = read(0.0, 90.0, 0.001).unwrap();
+    let s = set.rows[0].sigma_rotation.unwrap().map(f64::to_degrees);
+    assert!(s.min() >= 0.1 * 0.001 - 1e-15, "{s:?}");
+    // Away from it, sqrt(diag(E diag(s^2) E^T)), E = [x, Rx y, Rx Ry z] (here rx = 0).
+    let (set, _) = read(0.0, -20.0, 0.001).unwrap();
+    let s = set.rows[0].sigma_rotation.unwrap().map(f64::to_degrees);
+    let (sb, cb) = (-20.0f64).to_radians().sin_cos();
+    let want = Vector3::new(
+        (0.001f64.powi(2) + (sb * 0.004).powi(2)).sqrt(),
+        0.002,
+        (cb * 0.004).abs(),
+    );
+    assert!((s - want).norm() < 1e-12, "{s:?} against {want:?}");
+}

@@ -772,10 +772,14 @@ fn the_solution_line_counts_every_solve_as_the_report_does() {
         rounds > 0 && solves > rounds && total >= count("iterations"),
         "{r}"
     );
+    let last = count("iterations");
     let line = format!(
-        "solution: {solves} solves, {rounds} of them robust reweighting rounds, {total} \
-         iterations in all; the last: {} iterations, ",
-        count("iterations")
+        "solution: {solves} solves, {}, {total} iterations in all; the last: {last} {}, ",
+        match rounds {
+            1 => "1 of them a robust reweighting round".to_string(),
+            k => format!("{k} of them robust reweighting rounds"),
+        },
+        if last == 1 { "iteration" } else { "iterations" }
     );
     assert!(stdout(&run).contains(&line), "{line}\n{}", stdout(&run));
 }

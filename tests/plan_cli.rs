@@ -645,8 +645,8 @@ fn evaluate_predicts_for_what_the_file_measures() {
     let text = run(&[]);
     assert!(
         text.contains(&format!(
-            "note: {file}: measure position, as `identify` reads the file (its columns hold \
-             positions alone)"
+            "note: {file}: measure position, as `identify` reads the file (of the measured \
+             columns it holds the positions alone)"
         )) && text.contains("measure position, 27 identifiable parameters")
             && text.contains("orientation not predicted"),
         "{text}"
@@ -654,6 +654,38 @@ fn evaluate_predicts_for_what_the_file_measures() {
     let text = run(&["--measure", "pose"]);
     assert!(
         !text.contains("as `identify` reads the file") && text.contains("measure pose, 30"),
+        "{text}"
+    );
+    // A ball-bar's file (joints, pairs, distances): distance, as `identify` reads it.
+    let mut bar = String::from("q1,q2,q3,q4,q5,q6,pair,distance\n");
+    for k in 0..40 {
+        let v = f64::from(k);
+        bar += &format!(
+            "{},{},{},{},{},{},{},500\n",
+            -60.0 + 3.0 * v,
+            -30.0 + (v * 7.0) % 50.0,
+            -20.0 + (v * 11.0) % 40.0,
+            -90.0 + (v * 13.0) % 180.0,
+            -60.0 + (v * 17.0) % 120.0,
+            -90.0 + (v * 19.0) % 180.0,
+            k / 2 + 1
+        );
+    }
+    let path = tmp("plan_ballbar.csv");
+    std::fs::write(&path, bar).unwrap();
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        FANUC,
+        "--evaluate",
+        path.to_str().unwrap(),
+    ]);
+    let text = stderr(&o) + &stdout(&o);
+    assert!(
+        text.contains(
+            "measure distance, as `identify` reads the file (of the measured columns \
+                       it holds the distances alone)"
+        ),
         "{text}"
     );
 }

@@ -385,12 +385,19 @@ fn print_identified(r: &IdentifyReport) {
 /// there were more solves (robust reweighting rounds, solves again with the unmodelled error
 /// in the sigmas or without an insignificant parameter), how many and their iterations.
 fn solve_work(r: &IdentifyReport) -> String {
-    let last = format!("{} iterations, {}", r.iterations, r.stop);
+    let plural = |n: usize| if n == 1 { "" } else { "s" };
+    let last = format!(
+        "{} iteration{}, {}",
+        r.iterations,
+        plural(r.iterations),
+        r.stop
+    );
     if r.solves <= 1 {
         return last;
     }
     let rounds = match r.robust_rounds {
         0 => String::new(),
+        1 => ", 1 of them a robust reweighting round".into(),
         k => format!(", {k} of them robust reweighting rounds"),
     };
     format!(

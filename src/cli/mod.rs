@@ -186,6 +186,10 @@ enum Command {
     Predict(predict::PredictArgs),
     /// Fake targets: joints at which the calibrated (compensated) robot reaches each desired
     /// pose, and the nominal pose an unmodified controller must be given for them.
+    ///
+    /// Targets are in the calibrated model's world frame (the tracker's, where `identify`
+    /// registered it). The residual_mm, residual_deg and written_miss columns, errors of a
+    /// solve, keep 9 decimals whatever --decimals says.
     Compensate(compensate::CompensateArgs),
     /// One self-contained HTML page (tables and pictures) from a run folder.
     Report(report::ReportArgs),

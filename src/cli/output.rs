@@ -24,9 +24,7 @@ pub struct OutputArgs {
     /// JSON instead of CSV: an array of objects keyed by column name.
     #[arg(long)]
     pub json: bool,
-    /// Round output numbers to this many decimals, 0 to 17 (default: shortest exact form);
-    /// `compensate`'s residual and written-miss columns, errors of a solve, are written to 9
-    /// decimals (1e-9 mm, 1e-9 deg) either way.
+    /// Round output numbers to this many decimals, 0 to 17 (default: shortest exact form).
     #[arg(long, value_parser = super::bounds::decimals)]
     pub decimals: Option<usize>,
 }

@@ -41,7 +41,7 @@ pub struct PlanArgs {
     params: String,
     /// How the planned units will be measured (default: pose; with --evaluate, what the
     /// file measures, as `identify` reads it: position where it has x, y, z without rz, ry,
-    /// rx, orientation where the reverse).
+    /// rx, orientation where the reverse, distance where it has a distance column alone).
     #[arg(long, value_enum)]
     measure: Option<Measure>,
     /// Candidate configurations (CSV with q1..qN, deg); default: drawn within the limits.
@@ -173,9 +173,10 @@ fn configurations(path: &PathBuf, robot: &Robot) -> Result<(Vec<Vec<f64>>, Joint
 }
 
 /// The measure of a list to evaluate without `--measure`: what its columns hold, as
-/// `identify` reads a measured file (pose with x, y, z and rz, ry, rx or with neither: a list
-/// of joints; position with the positions alone; orientation with the angles alone), said in
-/// a note where it is not pose.
+/// `identify` reads a measured file (pose with x, y, z and rz, ry, rx or with neither nor a
+/// distance: a list of joints; position with the positions alone; orientation with the
+/// angles alone; distance with a distance column alone), said in a note where it is not
+/// pose.
 fn measured_in(path: &PathBuf) -> Result<robocal::identify::Measure> {
     use robocal::identify::Measure as M;
     let t = robocal::data::Table::read(path)?;
@@ -183,14 +184,19 @@ fn measured_in(path: &PathBuf) -> Result<robocal::identify::Measure> {
     let measure = match (all(&["x", "y", "z"]), all(&["rz", "ry", "rx"])) {
         (true, false) => M::Position,
         (false, true) => M::Orientation,
+        (false, false) if all(&["distance"]) => M::Distance,
         _ => return Ok(M::Pose),
     };
     eprintln!(
-        "note: {}: measure {}, as `identify` reads the file (its columns hold {}s alone); \
-         give --measure to plan for another",
+        "note: {}: measure {}, as `identify` reads the file (of the measured columns it holds \
+         the {} alone); give --measure to plan for another",
         path.display(),
         measure.name(),
-        measure.name()
+        match measure {
+            M::Position => "positions",
+            M::Orientation => "orientations",
+            _ => "distances",
+        }
     );
     Ok(measure)
 }

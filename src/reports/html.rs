@@ -47,7 +47,9 @@ fn number(x: f64) -> String {
 }
 
 /// A cell: "none" for an absent value, numbers to 5 significant digits, lists joined (lists
-/// of records: each record's values joined, records separated by semicolons).
+/// of records: each record's fields with their names, records separated by semicolons;
+/// a list of more than 12 numbers or records cut there with its count, a list of names
+/// given whole).
 fn cell(v: &Node) -> String {
     match v {
         Node::Null => "none".into(),
@@ -60,7 +62,8 @@ fn cell(v: &Node) -> String {
             let items: Vec<String> = a
                 .iter()
                 .map(|x| match x {
-                    Node::Record(r) => r.iter().map(|(_, v)| cell(v)).collect::<Vec<_>>().join(" "),
+                    // Named: a reviewer could not tell `reproduce`'s before from its after.
+                    Node::Record(_) => cell(x),
                     Node::List(l) => {
                         format!("({})", l.iter().map(cell).collect::<Vec<_>>().join(" "))
                     }
@@ -72,7 +75,8 @@ fn cell(v: &Node) -> String {
             } else {
                 ", "
             };
-            if items.len() > 12 {
+            let names = a.iter().all(|x| matches!(x, Node::Text(_)));
+            if items.len() > 12 && !names {
                 format!("{} ... ({} values)", items[..12].join(sep), items.len())
             } else {
                 items.join(sep)
@@ -457,6 +461,18 @@ mod tests {
                 ("coefficient".into(), Node::Number(0.0010751)),
             ]),
         ]);
-        assert_eq!(cell(&terms), "base.rz 1; base.ry 0.0010751");
+        assert_eq!(
+            cell(&terms),
+            "name base.rz, coefficient 1; name base.ry, coefficient 0.0010751"
+        );
+        // Names are given whole, numbers cut at 12 with their count.
+        let names = Node::List((0..15).map(|k| Node::Text(format!("p{k}"))).collect());
+        assert!(cell(&names).ends_with("p13, p14"), "{}", cell(&names));
+        let numbers = Node::List((0..15).map(|k| Node::Number(k as f64)).collect());
+        assert!(
+            cell(&numbers).ends_with("11 ... (15 values)"),
+            "{}",
+            cell(&numbers)
+        );
     }
 }

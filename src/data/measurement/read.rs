@@ -404,15 +404,15 @@ fn parse_row(
         m.sigma_position = Some(vec3(i, &|v| lu.to_mm(v))?);
     }
     if let Some(i) = c.sigma_angles {
-        let s = vec3(i, &|v| au.to_rad(v))?;
-        m.sigma_rotation = Some(match (profile.sigma_angles, c.angles) {
-            (SigmaAngles::Angles, Some(a)) => {
-                about_axes(profile.euler, vec3(a, &|v| au.to_rad(v))?, s)
-            }
-            _ => s,
-        });
+        m.sigma_rotation = Some(vec3(i, &|v| au.to_rad(v))?);
     }
+    // The file's own values are checked, then an Euler angles' sigmas carried to the axes.
     check_bounds(t, r, c, &m, joints)?;
+    if let (SigmaAngles::Angles, Some(a), Some(s)) =
+        (profile.sigma_angles, c.angles, m.sigma_rotation)
+    {
+        m.sigma_rotation = Some(about_axes(profile.euler, vec3(a, &|v| au.to_rad(v))?, s));
+    }
     if let Some(i) = c.distance {
         m.distance = t.optional_number(r, i)?;
         if let Some(d) = m.distance {
@@ -446,14 +446,13 @@ fn parse_row(
     Ok(m)
 }
 
-/// The bounds of a parsed row's values (mm, rad): standard deviations positive, joints
-/// within 4 turns (100 m), positions within 100 m, standard deviations from 1 nm (1 nrad)
-/// to 1 m (1 rad): a smaller one weighs its row by 1e18 and more, which no instrument
-/// justifies.
 /// The sigmas (rad) about the frame's x, y and z axes of Euler angles `angles` whose own
 /// standard deviations are `sigmas` (rad; both in column order rx, ry, rz): first order
 /// through the convention's angular Jacobian E, sqrt(diag(E diag(sigma^2) E^T))
-/// ([`SigmaAngles::Angles`]).
+/// ([`SigmaAngles::Angles`]), each at least a tenth of the smallest of `sigmas`: next to
+/// the convention's gimbal lock E loses a direction, and an axis would get a sigma near zero
+/// (a weight no instrument justifies) where the angles cannot tell a turn about it. Away
+/// from it the floor does not bind (Series B: every axis at least 0.86 times the smallest).
 fn about_axes(euler: EulerConvention, angles: Vector3<f64>, sigmas: Vector3<f64>) -> Vector3<f64> {
     // Each convention takes the columns in its own order ([`parse_row`]'s rotation).
     let (ordered, s) = match euler {
@@ -467,14 +466,20 @@ fn about_axes(euler: EulerConvention, angles: Vector3<f64>, sigmas: Vector3<f64>
         ),
     };
     let e = euler.angular_jacobian(ordered);
+    let floor = 0.1 * sigmas.min();
     Vector3::from_fn(|axis, _| {
         (0..3)
             .map(|k| (e[(axis, k)] * s[k]).powi(2))
             .sum::<f64>()
             .sqrt()
+            .max(floor)
     })
 }
 
+/// The bounds of a parsed row's values (mm, rad): standard deviations positive, joints
+/// within 4 turns (100 m), positions within 100 m, standard deviations from 1 nm (1 nrad)
+/// to 1 m (1 rad): a smaller one weighs its row by 1e18 and more, which no instrument
+/// justifies.
 fn check_bounds(
     t: &Table,
     r: usize,
@@ -610,6 +615,17 @@ pub fn parse_measurements(
 ) -> Result<(MeasurementSet, ReadReport)> {
     let c = Columns::resolve(t, joints.len(), profile)?;
     let cols = &profile.columns;
+    // The Euler angles' sigmas are carried to the axes through the angles themselves.
+    if let (SigmaAngles::Angles, Some(i), None) = (profile.sigma_angles, c.sigma_angles, c.angles) {
+        return Err(Error::input(
+            Location::at(&t.path, 1, t.headers[i[0]].as_str()),
+            format!(
+                "the profile's sigma_angles = \"angles\" reads these columns as the standard \
+                 deviations of Euler angles, but the file has no angle columns ({})",
+                cols.angles.join(", ")
+            ),
+        ));
+    }
     let mut report = ReadReport::default();
     // A distance or pair column in other letter case is read as absent: it counts only
     // under the pair measures (which `--measure` chooses later), which refuse it.
