@@ -611,3 +611,36 @@ fn a_profile_from_a_pipe_is_read_once() {
     let written = std::fs::read_to_string(&out).unwrap();
     assert!(written.contains(",1.5,2,3"), "{written}");
 }
+
+/// A deviations file with an angle of thousands of mrad (degrees written as mrad: 286 deg) is
+/// simulated as given, with a warning naming it; the thesis's Table 6.1 gets none.
+#[test]
+fn deviations_far_beyond_a_robots_errors_are_warned_of() {
+    let dev = tmp("large_dev.toml");
+    std::fs::write(&dev, "alpha1 = 5000\na2 = 1.5\n").unwrap();
+    let out = tmp("large_dev_sim.csv");
+    let run = |dev: &str| {
+        let o = robocal(&[
+            "simulate",
+            "--robot",
+            FANUC,
+            "--deviations",
+            dev,
+            "--count",
+            "2",
+            "--seed",
+            "1",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
+    let err = run(dev.to_str().unwrap());
+    assert!(
+        err.contains("far beyond a robot's manufacturing errors: alpha1 5000 mrad")
+            && !err.contains("a2"),
+        "{err}"
+    );
+    assert!(!run("datasets/deviations/table_6_1.toml").contains("warning"));
+}

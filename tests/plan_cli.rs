@@ -651,6 +651,12 @@ fn evaluate_predicts_for_what_the_file_measures() {
             && text.contains("orientation not predicted"),
         "{text}"
     );
+    // A position measure has no orientation: --sigma-rot is said to be unused.
+    let text = run(&["--sigma-rot", "1000"]);
+    assert!(
+        text.contains("note: --sigma-rot is not used: a position measure has no orientation"),
+        "{text}"
+    );
     let text = run(&["--measure", "pose"]);
     assert!(
         !text.contains("as `identify` reads the file") && text.contains("measure pose, 30"),

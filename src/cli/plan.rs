@@ -513,6 +513,16 @@ pub fn run(a: PlanArgs) -> Result<()> {
              predict (its positions keep their nominal values): give --count"
         );
     }
+    {
+        use robocal::identify::Measure as M;
+        if a.sigma.sigma_rot.is_some() && matches!(measure, M::Position | M::Relative | M::Distance)
+        {
+            eprintln!(
+                "note: --sigma-rot is not used: a {} measure has no orientation",
+                measure.name()
+            );
+        }
+    }
     let criterion: robocal::plan::Criterion = a.criterion.into();
     let per = per_unit(measure);
     let limits = constraints(&a)?;

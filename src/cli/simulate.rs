@@ -70,9 +70,14 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     )?;
     let nominal = read_robot(&a.robot)?;
     let truth = match &a.deviations {
-        Some(p) => Deviations::read(p, &nominal)?
-            .apply(&nominal)
-            .with_context(|| format!("{}: the deviated robot", p.display()))?,
+        Some(p) => {
+            let d = Deviations::read(p, &nominal)?;
+            if let Some(w) = large_deviations(&d) {
+                eprintln!("warning: {}: {w}", p.display());
+            }
+            d.apply(&nominal)
+                .with_context(|| format!("{}: the deviated robot", p.display()))?
+        }
         None => nominal.clone(),
     };
     let ng = match &a.nongeometric {
@@ -172,4 +177,35 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Angle deviations (mrad) beyond which a deviations file is probably in another unit: 100
+/// mrad is 5.7 deg, far beyond a robot's manufacturing errors (thesis Table 6.1: 1-3 mrad);
+/// degrees written as mrad pass below the file's bound of two turns.
+const LARGE_DEVIATION_MRAD: f64 = 100.0;
+/// The same for lengths (mm): 100 mm is a wrong link, not a calibration's error.
+const LARGE_DEVIATION_MM: f64 = 100.0;
+
+/// A warning naming the deviations beyond [`LARGE_DEVIATION_MRAD`] or
+/// [`LARGE_DEVIATION_MM`], if any (each with its file value: mm, or mrad for an angle).
+fn large_deviations(d: &Deviations) -> Option<String> {
+    let large: Vec<String> = (d.0.iter())
+        .filter_map(|(id, v)| {
+            let (value, unit, bound) = if id.field.is_angle() {
+                (v * 1e3, "mrad", LARGE_DEVIATION_MRAD)
+            } else {
+                (*v, "mm", LARGE_DEVIATION_MM)
+            };
+            (value.abs() > bound).then(|| format!("{} {value} {unit}", id.name()))
+        })
+        .collect();
+    (!large.is_empty()).then(|| {
+        format!(
+            "deviations beyond {LARGE_DEVIATION_MRAD} mrad ({:.1} deg) or {LARGE_DEVIATION_MM} \
+             mm, far beyond a robot's manufacturing errors: {} (angles are read in mrad: \
+             degrees given as mrad?); simulated as given",
+            (LARGE_DEVIATION_MRAD * 1e-3).to_degrees(),
+            large.join(", ")
+        )
+    })
 }
