@@ -71,14 +71,14 @@ fn print_set(s: &CaseDSet) {
         let mut gains = vec![(o, "after offsets"), (f, "after full identification")];
         // A stage whose training kept no network: its gain is the refinement's, said so.
         let full = (s.rows.iter().find(|r| r.stage == Stage::FullNetwork))
-            .and_then(|r| r.training.as_ref())
-            .filter(|t| !t.settings.has_network());
-        if let Some(t) = full {
-            gains[1].1 = if t.refined.is_empty() {
-                "after full identification (no network)"
-            } else {
-                "after full identification (no network: the model refined on the training poses)"
-            };
+            .and_then(|r| robocal::reports::studies::kept_no_network(r.training.as_ref()));
+        match full {
+            Some(true) => {
+                gains[1].1 = "after full identification (no network: the model refined on the \
+                              training poses)"
+            }
+            Some(false) => gains[1].1 = "after full identification (no network)",
+            None => {}
         }
         gains.extend(
             s.gain_after_compliance

@@ -7,7 +7,6 @@ use clap::Args;
 use nalgebra::{IsometryMatrix3, Point3};
 use robocal::compensation::{CalibratedModel, Command, Failure, FakeTargetSolver};
 use robocal::data::{POSE_COLUMNS, Target, TargetTable, joint_columns};
-use robocal::kinematics::ik::REACH_MARGIN;
 use robocal::kinematics::{Reach, pose_from_file, pose_to_file};
 use robocal::model::{Robot, read_robot};
 use robocal::reports::compensate::{FrameChange, TargetFailure, WrittenMiss};
@@ -238,10 +237,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     ));
     let robot_path = a.compensator.as_ref().unwrap_or(&a.robot);
     warnings.say_some(unchecked.warning(&a.targets, robot_path));
-    let unreachable = (failed.iter())
-        .filter(|(_, why)| matches!(why, Failure::Unreachable(_)))
-        .count();
-    warnings.say_some(frame_mix.warning(&a.targets, unreachable));
+    warnings.say_some(frame_mix.warning(&a.targets));
     let total = t.rows.len();
     let (mean, max) = mean_and_max(&shifts).unzip();
     let report = CompensateReport {
@@ -351,6 +347,8 @@ struct FrameMix {
     apart: Option<(f64, f64, Reach, IsometryMatrix3<f64>)>,
     /// The lines of such targets.
     lines: Vec<usize>,
+    /// Targets out of reach, these and the others.
+    unreachable: usize,
 }
 
 impl FrameMix {
@@ -362,12 +360,17 @@ impl FrameMix {
         FrameMix {
             apart,
             lines: Vec::new(),
+            unreachable: 0,
         }
     }
 
-    /// Counts the target at `line` when it `failed` out of reach and, carried from the
-    /// nominal's frame into the calibrated model's world frame, lies within reach.
+    /// Counts a target that `failed` out of reach, and keeps its `line` where, carried from
+    /// the nominal's frame into the calibrated model's world frame, it lies within reach.
     fn check(&mut self, target: &Target, failed: &Failure, line: usize) {
+        if !matches!(failed, Failure::Unreachable(_)) {
+            return;
+        }
+        self.unreachable += 1;
         let Some((_, _, reach, into)) = &self.apart else {
             return;
         };
@@ -375,15 +378,14 @@ impl FrameMix {
             Target::Pose(t) => t.translation.vector,
             Target::Position(p) => *p,
         });
-        let within =
-            |p: &Point3<f64>| reach.distance_mm(&p.coords) <= REACH_MARGIN * reach.bound_mm;
-        if matches!(failed, Failure::Unreachable(_)) && !within(&p) && within(&(into * p)) {
+        if !reach.holds(&p.coords) && reach.holds(&(into * p).coords) {
             self.lines.push(line);
         }
     }
 
-    /// The warning on `targets` where some of its `unreachable` targets are such targets.
-    fn warning(&self, targets: &std::path::Path, unreachable: usize) -> Option<String> {
+    /// The warning on `targets` where some of its targets out of reach are such targets.
+    fn warning(&self, targets: &std::path::Path) -> Option<String> {
+        let unreachable = self.unreachable;
         let (mm, deg, ..) = self.apart?;
         (!self.lines.is_empty()).then(|| {
             format!(

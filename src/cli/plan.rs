@@ -177,15 +177,14 @@ fn configurations(path: &PathBuf, robot: &Robot) -> Result<(Vec<Vec<f64>>, Joint
 /// distance: a list of joints; position with the positions alone; orientation with the
 /// angles alone; distance with a distance column alone), said in a note where it is not
 /// pose.
-fn measured_in(path: &PathBuf) -> Result<robocal::identify::Measure> {
+fn measured_in(path: &std::path::Path, t: &robocal::data::Table) -> robocal::identify::Measure {
     use robocal::identify::Measure as M;
-    let t = robocal::data::Table::read(path)?;
     let all = |names: &[&str]| names.iter().all(|c| t.column(c).is_some());
     let measure = match (all(&["x", "y", "z"]), all(&["rz", "ry", "rx"])) {
         (true, false) => M::Position,
         (false, true) => M::Orientation,
         (false, false) if all(&["distance"]) => M::Distance,
-        _ => return Ok(M::Pose),
+        _ => return M::Pose,
     };
     eprintln!(
         "note: {}: measure {}, as `identify` reads the file (of the measured columns it holds \
@@ -198,7 +197,7 @@ fn measured_in(path: &PathBuf) -> Result<robocal::identify::Measure> {
             _ => "distances",
         }
     );
-    Ok(measure)
+    measure
 }
 
 /// The file lines of the configurations `qs` (read from `t`) that `constraints` refuse,
@@ -228,12 +227,12 @@ fn lines_of(refused: &[(usize, usize)]) -> String {
 /// an error naming its line; rows the cell's constraints (`--margin-deg`, `--floor-mm`,
 /// `--forbid`) refuse are kept (the list is what will be measured) and named in a warning.
 fn evaluated_list(
-    path: &PathBuf,
+    path: &std::path::Path,
+    (qs, t): (Vec<Vec<f64>>, JointTable),
     robot: &Robot,
     per: usize,
     cell: &Constraints,
 ) -> Result<(Pool, Vec<usize>, Vec<Vec<f64>>)> {
-    let (qs, t) = configurations(path, robot)?;
     let joints = robocal::data::measurement::JointInfo::of(robot);
     let beyond = refused_lines(robot, &qs, &t, &Constraints::default());
     if let Some(&(line, r)) = beyond.first() {
@@ -502,9 +501,14 @@ pub fn run(a: PlanArgs) -> Result<()> {
     if let Err(e) = robocal::identify::select::select(&robot, &a.params) {
         usage!("--params `{}`: {e}", a.params);
     }
-    let measure: robocal::identify::Measure = match (a.measure, &a.evaluate) {
+    // The list to evaluate, read once: its columns also say what it measures.
+    let evaluated = match &a.evaluate {
+        Some(p) => Some((p, configurations(p, &robot)?)),
+        None => None,
+    };
+    let measure: robocal::identify::Measure = match (a.measure, &evaluated) {
         (Some(m), _) => m.into(),
-        (None, Some(p)) => measured_in(p)?,
+        (None, Some((p, (_, t)))) => measured_in(p, &t.table),
         (None, None) => robocal::identify::Measure::Pose,
     };
     if a.target_mm.is_some() && measure == robocal::identify::Measure::Orientation {
@@ -534,14 +538,13 @@ pub fn run(a: PlanArgs) -> Result<()> {
     if a.evaluate.is_none() && a.candidates.is_none() {
         warn_narrow(&robot, &region, &limits);
     }
-    // The pool, and the file lines of its configurations where they were given.
     // The pool, and the file lines and joints (file units, as read) of its configurations
     // where they were given.
     let (candidates, lines, listed): (Pool, Vec<usize>, Vec<Vec<f64>>) = match (
-        &a.evaluate,
+        evaluated,
         &a.candidates,
     ) {
-        (Some(p), _) => evaluated_list(p, &robot, per, &limits)?,
+        (Some((p, list)), _) => evaluated_list(p, list, &robot, per, &limits)?,
         (None, Some(p)) => {
             let what = p.display().to_string();
             let (qs, t) = configurations(p, &robot)?;
@@ -798,19 +801,15 @@ pub fn run(a: PlanArgs) -> Result<()> {
     };
     // A row from a given file is written as read there (a round trip through radians moves
     // the last digit of some: a reviewer's 32 of 480 cells), a drawn one in file units.
-    let (listed, robot_ref) = (&listed, &robot);
-    let rows: Vec<Vec<f64>> = units
-        .iter()
-        .flat_map(|&u| {
-            let from_file = candidates.sources.get(u);
-            (candidates.units[u].iter().enumerate()).map(move |(k, q)| match from_file {
-                Some(rows) => listed[rows[k]].clone(),
-                None => (q.iter().zip(robot_ref.joints()))
-                    .map(|(v, j)| j.joint_type.to_file(*v))
-                    .collect(),
-            })
-        })
-        .collect();
+    let mut rows: Vec<Vec<f64>> = Vec::new();
+    for &u in &units {
+        for (k, q) in candidates.units[u].iter().enumerate() {
+            rows.push(match candidates.sources.get(u) {
+                Some(source) => listed[source[k]].clone(),
+                None => robot.joints_to_file(q),
+            });
+        }
+    }
     if let Some(out) = &a.out {
         let n = robot.dof();
         // Where each row came from in a given file: its ids are the plan's order.

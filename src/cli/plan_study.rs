@@ -57,24 +57,15 @@ pub fn run_study(a: PlanStudyArgs) -> Result<()> {
     if !(100..=20_000).contains(&a.pool) {
         usage!("--pool {}: give 100 to 20000", a.pool);
     }
-    let context = || super::paths::datasets_context(&a.datasets, "the planning study");
-    let cases = [
-        (
-            Case::table_6_1(&a.datasets).with_context(context)?,
-            "pose",
-            Measure::Pose,
-        ),
-        (
-            Case::table_6_1(&a.datasets).with_context(context)?,
-            "position",
-            Measure::Position,
-        ),
-        (
-            Case::nongeometric(&a.datasets).with_context(context)?,
-            "pose",
-            Measure::Pose,
-        ),
-    ];
+    let d = &a.datasets;
+    let cases = (|| -> robocal::error::Result<_> {
+        Ok([
+            (Case::table_6_1(d)?, "pose", Measure::Pose),
+            (Case::table_6_1(d)?, "position", Measure::Position),
+            (Case::nongeometric(d)?, "pose", Measure::Pose),
+        ])
+    })()
+    .with_context(|| super::paths::datasets_context(d, "the planning study"))?;
     let bar = super::compensator_args::progress_bar(std::io::stderr().is_terminal());
     bar.set_length((a.seeds * cases.len()) as u64);
     let mut outcomes = Vec::new();

@@ -87,6 +87,15 @@ impl JointTable {
     }
 }
 
+/// Whether the orientation values of a file read as degrees (angles or a rotation vector's
+/// components, every value of `rows` rows) probably hold radians: three rows or more, and
+/// every value within +-6.3 (a turn in radians) but not all 0. Measurement and target files
+/// are read by this rule.
+pub fn orientations_look_like_radians(rows: usize, values: impl Iterator<Item = f64>) -> bool {
+    let max = values.fold(0.0_f64, |m, v| m.max(v.abs()));
+    rows >= 3 && max > 0.0 && max <= 6.3
+}
+
 /// Whether joint vectors read as degrees (`rows`, file units: deg, mm) probably hold radians:
 /// every revolute angle lies within one turn in radians (|q| <= 2 pi), or within its joint's
 /// range in radians where that is wider (a joint of +-400 deg), and some exceed 1 (the joint

@@ -147,21 +147,20 @@ impl TargetTable {
         super::joints::look_like_radians(robot, file.iter().map(Vec::as_slice))
     }
 
-    /// Whether the orientation columns (read as degrees) probably hold radians: three rows or
-    /// more, and every value within +-6.3 (a turn in radians) but not all 0, the rule
-    /// measurement files are read by; false without orientation columns.
+    /// Whether the orientation columns (read as degrees) probably hold radians
+    /// ([`super::joints::orientations_look_like_radians`], the rule measurement files are
+    /// read by); false without orientation columns.
     pub fn orientations_look_like_radians(&self) -> bool {
-        if !self.with_orientation || self.targets.len() < 3 {
+        if !self.with_orientation {
             return false;
         }
         let cols: Vec<usize> = (POSE_COLUMNS[3..].iter())
             .filter_map(|c| self.table.column(c))
             .collect();
-        let max = (0..self.table.rows.len())
+        let values = (0..self.table.rows.len())
             .filter_map(|r| self.table.numbers(r, &cols).ok())
-            .flatten()
-            .fold(0.0_f64, |m, v| m.max(v.abs()));
-        max > 0.0 && max <= 6.3
+            .flatten();
+        super::joints::orientations_look_like_radians(self.targets.len(), values)
     }
 
     /// The output's header: the carried columns (seed columns renamed seed_q1..seed_qN),

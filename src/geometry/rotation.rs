@@ -46,6 +46,18 @@ impl EulerConvention {
         }
     }
 
+    /// Values given per axis (x, y, z: the angles about them, or those angles' standard
+    /// deviations, as files hold them) in this convention's order: z, y, x for `Zyx`, else
+    /// x, y, z.
+    pub fn ordered(self, about: Vector3<f64>) -> [f64; 3] {
+        match self {
+            EulerConvention::Zyx => [about.z, about.y, about.x],
+            EulerConvention::XyzIntrinsic | EulerConvention::XyzExtrinsic => {
+                [about.x, about.y, about.z]
+            }
+        }
+    }
+
     /// The angular-velocity Jacobian E of this convention at `angles` (rad, this
     /// convention's order): omega = E d(angles), omega the small rotation (rad) about the
     /// frame's fixed x, y, z axes, as in R(angles + d) R(angles)^T = exp(\[omega\]x) to first

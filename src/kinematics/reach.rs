@@ -5,6 +5,10 @@ use super::{Frames, frames};
 use crate::model::Robot;
 use nalgebra::Vector3;
 
+/// How far beyond the model's [`Reach`] a target must lie to be refused before any solve: a
+/// compensator's correction (millimetres) moves the tool beyond its robot's bound by far less.
+pub const REACH_MARGIN: f64 = 1.1;
+
 /// The arm's reach from its anchor: no configuration puts the tool's origin farther from
 /// `anchor` than `bound_mm`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -52,5 +56,11 @@ impl Reach {
     /// How far `point` (world, mm) lies from the anchor (mm).
     pub fn distance_mm(&self, point: &Vector3<f64>) -> f64 {
         (point - self.anchor).norm()
+    }
+
+    /// Whether `point` (world, mm) lies within [`REACH_MARGIN`] times the bound: a target
+    /// beyond is refused before any solve.
+    pub fn holds(&self, point: &Vector3<f64>) -> bool {
+        self.distance_mm(point) <= REACH_MARGIN * self.bound_mm
     }
 }

@@ -87,17 +87,31 @@ impl Joint {
     /// [`LIMIT_TOL`]): for a revolute joint the whole-turn copy v + 2 pi k, for a prismatic
     /// one `v` itself; None where no copy lies within them.
     pub fn nearest_turn(&self, v: f64, reference: f64) -> Option<f64> {
+        let (kmin, kmax) = self.turns(v)?;
+        let tau = std::f64::consts::TAU;
+        Some(
+            v + tau
+                * ((reference - v) / tau)
+                    .round()
+                    .clamp(kmin as f64, kmax as f64),
+        )
+    }
+
+    /// The whole turns k (lowest, highest) for which `v + 2 pi k` (rad) lies within the
+    /// limits widened by [`LIMIT_TOL`]; for a prismatic joint (0, 0) where `v` (mm) lies
+    /// within them; None where no copy does.
+    pub fn turns(&self, v: f64) -> Option<(i64, i64)> {
         const TOL: f64 = LIMIT_TOL;
         let [lo, hi] = self.limits_internal();
         if self.joint_type == JointType::Prismatic {
-            return (lo - TOL..=hi + TOL).contains(&v).then_some(v);
+            return (lo - TOL..=hi + TOL).contains(&v).then_some((0, 0));
         }
         let tau = std::f64::consts::TAU;
         let (kmin, kmax) = (
-            ((lo - TOL - v) / tau).ceil(),
-            ((hi + TOL - v) / tau).floor(),
+            ((lo - TOL - v) / tau).ceil() as i64,
+            ((hi + TOL - v) / tau).floor() as i64,
         );
-        (kmin <= kmax).then(|| v + tau * ((reference - v) / tau).round().clamp(kmin, kmax))
+        (kmin <= kmax).then_some((kmin, kmax))
     }
 }
 

@@ -60,17 +60,21 @@ pub struct CaseDSet {
 /// geometric (no network)"), and not "+ network" for an error no network made.
 fn row_label(r: &Row) -> String {
     let label = r.stage.label();
-    match &r.training {
-        Some(t) if !t.settings.has_network() => {
-            let plain = label.trim_end_matches(" + network");
-            if t.refined.is_empty() {
-                format!("{plain} (no network)")
-            } else {
-                format!("{plain}, refined")
-            }
-        }
-        _ => label.into(),
+    let plain = label.trim_end_matches(" + network");
+    match kept_no_network(r.training.as_ref()) {
+        Some(true) => format!("{plain}, refined"),
+        Some(false) => format!("{plain} (no network)"),
+        None => label.into(),
     }
+}
+
+/// For a network stage whose `training` kept no network (cross-validation chose the model
+/// alone): whether it refined the model on the training poses; None where a network was
+/// kept, or for a stage without training.
+pub fn kept_no_network(training: Option<&CompensatorReport>) -> Option<bool> {
+    training
+        .filter(|t| !t.settings.has_network())
+        .map(|t| !t.refined.is_empty())
 }
 
 /// What `case-d` found.

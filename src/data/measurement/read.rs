@@ -355,8 +355,11 @@ fn parse_row(
     if let Some(i) = c.position {
         m.position = Some(vec3(i, &|v| lu.to_mm(v))?);
     }
+    // The angles (rad, about x, y, z), kept for their sigmas below.
+    let mut angles = None;
     if let Some(i) = c.angles {
         let a = vec3(i, &|v| au.to_rad(v))?;
+        angles = Some(a);
         for k in 0..3 {
             bound(
                 t,
@@ -371,11 +374,7 @@ fn parse_row(
             Rotation3::new(a)
         } else {
             // Columns are the angles about x, y, z; each convention takes them in its order.
-            let ordered = match profile.euler {
-                EulerConvention::Zyx => [a.z, a.y, a.x],
-                EulerConvention::XyzIntrinsic | EulerConvention::XyzExtrinsic => [a.x, a.y, a.z],
-            };
-            profile.euler.to_rotation(ordered)
+            profile.euler.to_rotation(profile.euler.ordered(a))
         });
     }
     if let Some(i) = c.quaternion {
@@ -409,9 +408,9 @@ fn parse_row(
     // The file's own values are checked, then an Euler angles' sigmas carried to the axes.
     check_bounds(t, r, c, &m, joints)?;
     if let (SigmaAngles::Angles, Some(a), Some(s)) =
-        (profile.sigma_angles, c.angles, m.sigma_rotation)
+        (profile.sigma_angles, angles, m.sigma_rotation)
     {
-        m.sigma_rotation = Some(about_axes(profile.euler, vec3(a, &|v| au.to_rad(v))?, s));
+        m.sigma_rotation = Some(about_axes(profile.euler, a, s));
     }
     if let Some(i) = c.distance {
         m.distance = t.optional_number(r, i)?;
@@ -454,18 +453,11 @@ fn parse_row(
 /// (a weight no instrument justifies) where the angles cannot tell a turn about it. Away
 /// from it the floor does not bind (Series B: every axis at least 0.86 times the smallest).
 fn about_axes(euler: EulerConvention, angles: Vector3<f64>, sigmas: Vector3<f64>) -> Vector3<f64> {
-    // Each convention takes the columns in its own order ([`parse_row`]'s rotation).
-    let (ordered, s) = match euler {
-        EulerConvention::Zyx => (
-            [angles.z, angles.y, angles.x],
-            [sigmas.z, sigmas.y, sigmas.x],
-        ),
-        EulerConvention::XyzIntrinsic | EulerConvention::XyzExtrinsic => (
-            [angles.x, angles.y, angles.z],
-            [sigmas.x, sigmas.y, sigmas.z],
-        ),
-    };
-    let e = euler.angular_jacobian(ordered);
+    // Each convention takes the columns in its own order, as the rotation does.
+    let (e, s) = (
+        euler.angular_jacobian(euler.ordered(angles)),
+        euler.ordered(sigmas),
+    );
     let floor = 0.1 * sigmas.min();
     Vector3::from_fn(|axis, _| {
         (0..3)
@@ -696,13 +688,11 @@ pub fn parse_measurements(
     // radians: a UR controller's rotation vector, say, in rad.
     if let Some(i) = c.angles
         && profile.angle_unit == AngleUnit::Deg
-        && rows.len() >= 3
     {
-        let max = (0..t.rows.len())
+        let values = (0..t.rows.len())
             .filter_map(|r| t.numbers(r, &i).ok())
-            .flatten()
-            .fold(0.0_f64, |m, v| m.max(v.abs()));
-        if max > 0.0 && max <= 6.3 {
+            .flatten();
+        if crate::data::joints::orientations_look_like_radians(rows.len(), values) {
             report.warnings.push(format!(
                 "every orientation value ({}) is within +-6.3 although the file's angles are in \
                  degrees: are they radians? (set angle_unit = \"rad\" in a profile)",

@@ -45,8 +45,8 @@ use super::ik_numeric::{IkOptions, IkSolution, IkTarget, IkWorkspace, ToolModel,
 use super::{Pose, Reach};
 use crate::error::{Error, Result};
 use crate::geometry::rotation::angle_between;
+use crate::model::Robot;
 pub use crate::model::joint_distance;
-use crate::model::{JointType, Robot};
 pub use failure::IkFailure;
 use failure::out_of_reach;
 use nalgebra::Matrix6xX;
@@ -145,9 +145,7 @@ pub struct IkSolver<M: ToolModel> {
 /// form near a singularity is off by the square root of the rounding (1e-8), never by this.
 const POLISH_STEP: f64 = 1e-3;
 
-/// How far beyond the model's [`Reach`] a target must lie to be refused before any solve: a
-/// compensator's correction (millimetres) moves the tool beyond its robot's bound by far less.
-pub const REACH_MARGIN: f64 = 1.1;
+pub use super::reach::REACH_MARGIN;
 
 impl<M: ToolModel> IkSolver<M> {
     /// A solver of `model` starting as `start` says, numerical solves to `opts`.
@@ -172,9 +170,9 @@ impl<M: ToolModel> IkSolver<M> {
 
     /// A target beyond [`REACH_MARGIN`] times the model's reach as a failure saying how far.
     fn check_reach(&self, target: &Pose) -> std::result::Result<(), IkFailure> {
-        let d = self.reach.distance_mm(&target.translation.vector);
-        let bound = self.reach.bound_mm;
-        if d > REACH_MARGIN * bound {
+        if !self.reach.holds(&target.translation.vector) {
+            let d = self.reach.distance_mm(&target.translation.vector);
+            let bound = self.reach.bound_mm;
             return Err(IkFailure::OutOfReach(format!(
                 "the target is {d:.0} mm from the robot's base and the arm reaches at most \
                  {bound:.0} mm from it"
@@ -479,21 +477,22 @@ impl<M: ToolModel> IkSolver<M> {
     ) -> std::result::Result<Vec<Vec<f64>>, IkFailure> {
         self.check_seed(seed)?;
         self.check_reach(target)?;
+        let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
         if let IkStart::Exact(_) = self.start {
-            let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
             let copies = self.exact_copies(target, &reference)?;
             return Ok(copies.into_iter().map(|s| s.q).collect());
         }
-        let reference = seed.map_or_else(|| self.mid.clone(), <[f64]>::to_vec);
+        let misses = |model: &mut M, q: &[f64]| {
+            let at = model.pose(q);
+            let mm = (at.translation.vector - target.translation.vector).norm();
+            (mm, angle_between(&at.rotation, &target.rotation))
+        };
         let mut out = Vec::new();
         for s in self.refined(target, seed, &reference)? {
-            let misses = |model: &mut M, q: &[f64]| {
-                let at = model.pose(q);
-                let mm = (at.translation.vector - target.translation.vector).norm();
-                (mm, angle_between(&at.rotation, &target.rotation))
-            };
             let (mm, rad) = misses(&mut self.model, &s.q);
-            for copy in turn_copies(self.model.robot(), &s.q) {
+            let copies = turn_copies(self.model.robot(), &s.q);
+            out.push(s.q);
+            for copy in copies {
                 let (c_mm, c_rad) = misses(&mut self.model, &copy);
                 // Rounding moves a copy's pose by ~1e-12 mm; a model that does not repeat
                 // over a turn (a network on the raw angles) misses by far more.
@@ -515,50 +514,41 @@ const COPY_SLACK_MM: f64 = 1e-9;
 /// The same for the orientation (rad).
 const COPY_SLACK_RAD: f64 = 1e-12;
 
-/// `q` (rad, mm) and then its other whole-turn copies within `robot`'s limits (tolerance
-/// 1e-9 rad): its revolute joints moved by multiples of 2 pi, prismatic joints as they are;
-/// `q` itself first even where it leaves a limit. Capped a little past
+/// The other whole-turn copies of `q` (rad, mm) within `robot`'s limits ([`Joint::turns`]):
+/// its revolute joints moved by multiples of 2 pi, prismatic joints as they are; none where
+/// `q` itself leaves a limit. At most a little past
 /// [`MAX_SOLUTIONS`](super::ik_closed::MAX_SOLUTIONS), which the caller checks.
+///
+/// [`Joint::turns`]: crate::model::Joint::turns
 fn turn_copies(robot: &Robot, q: &[f64]) -> Vec<Vec<f64>> {
-    const TOL: f64 = 1e-9;
-    let tau = 2.0 * std::f64::consts::PI;
-    let turns: Vec<(i64, i64)> = (robot.joints().iter().zip(q))
-        .map(|(j, &v)| match j.joint_type {
-            JointType::Prismatic => (0, 0),
-            JointType::Revolute => {
-                let [lo, hi] = j.limits_internal();
-                let kmin = ((lo - TOL - v) / tau).ceil() as i64;
-                let kmax = ((hi + TOL - v) / tau).floor() as i64;
-                (kmin.min(0), kmax.max(0))
-            }
-        })
-        .collect();
-    let mut out = vec![q.to_vec()];
+    let Some(turns) = (robot.joints().iter().zip(q))
+        .map(|(j, &v)| j.turns(v))
+        .collect::<Option<Vec<(i64, i64)>>>()
+    else {
+        return Vec::new();
+    };
+    let tau = std::f64::consts::TAU;
+    let mut out = Vec::new();
     let mut k: Vec<i64> = turns.iter().map(|t| t.0).collect();
     loop {
         if k.iter().any(|&x| x != 0) {
-            let copy: Vec<f64> = (q.iter().zip(&k))
-                .map(|(v, &x)| v + x as f64 * tau)
-                .collect();
-            if robot.joints_outside_limits(&copy).is_empty() {
-                out.push(copy);
-                if out.len() > super::ik_closed::MAX_SOLUTIONS + 1 {
-                    return out;
-                }
-            }
-        }
-        // Odometer over the turn counts.
-        let mut j = 0;
-        loop {
-            if j == k.len() {
+            out.push(
+                (q.iter().zip(&k))
+                    .map(|(v, &x)| v + x as f64 * tau)
+                    .collect(),
+            );
+            if out.len() > super::ik_closed::MAX_SOLUTIONS {
                 return out;
             }
-            if k[j] < turns[j].1 {
-                k[j] += 1;
-                break;
-            }
-            k[j] = turns[j].0;
-            j += 1;
+        }
+        // Odometer over the turn counts: the first that can still count up does, those
+        // before it start again.
+        let Some(j) = (0..k.len()).find(|&j| k[j] < turns[j].1) else {
+            return out;
+        };
+        k[j] += 1;
+        for (i, t) in turns.iter().enumerate().take(j) {
+            k[i] = t.0;
         }
     }
 }
