@@ -367,7 +367,7 @@ fn save_load_gives_identical_predictions_and_damage_is_refused() {
 fn position_only_training_through_the_joint_jacobian() {
     // Three residuals per pose: the joint form still learns six joint corrections, because
     // the network is shared across poses. Non-geometric robot, fresh seeds, `full` refined.
-    use robocal::sim::{Deviations, NonGeometric, Observe, Region, Simulation};
+    use robocal::sim::{Configurations, Deviations, NonGeometric, Observe, Region, Simulation};
     let ds = root().join("datasets");
     let nominal = read_robot(ds.join("robots/fanuc_r2000ib_210f.toml")).unwrap();
     let truth = Deviations::read(ds.join("deviations/table_6_1.toml"), &nominal)
@@ -381,8 +381,10 @@ fn position_only_training_through_the_joint_jacobian() {
         Simulation {
             truth: &truth,
             nongeometric: &ng,
-            region: &region,
-            count,
+            configurations: Configurations::Drawn {
+                region: &region,
+                count,
+            },
             seed,
             sigma_position_mm: 0.033,
             sigma_rotation_rad: 0.174e-3,

@@ -227,7 +227,7 @@ mod recovery {
     use super::*;
     use robocal::data::MeasurementSet;
     use robocal::identify::{Options, identify};
-    use robocal::sim::{Deviations, Observe, Region, Simulation};
+    use robocal::sim::{Configurations, Deviations, Observe, Region, Simulation};
     use std::path::PathBuf;
 
     fn simulate(
@@ -240,8 +240,10 @@ mod recovery {
         let out = Simulation {
             truth,
             nongeometric: ng,
-            region: &region,
-            count,
+            configurations: Configurations::Drawn {
+                region: &region,
+                count,
+            },
             seed,
             sigma_position_mm: 0.033,
             sigma_rotation_rad: 0.174e-3,

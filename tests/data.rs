@@ -12,7 +12,7 @@ use robocal::geometry::rotation::{rotation_vector, zyx_to_rotation};
 use robocal::kinematics::{Frames, tool_pose};
 use robocal::model::{Robot, read_robot};
 use robocal::sim::nongeometric::{Backlash, Compliance, Gear, gravity_torques};
-use robocal::sim::{Deviations, NonGeometric, Observe, Region, Simulation};
+use robocal::sim::{Configurations, Deviations, NonGeometric, Observe, Region, Simulation};
 use std::path::{Path, PathBuf};
 
 fn root() -> PathBuf {
@@ -127,8 +127,10 @@ fn fanuc_sim(
     Simulation {
         truth: &r,
         nongeometric: ng,
-        region: &region,
-        count,
+        configurations: Configurations::Drawn {
+            region: &region,
+            count,
+        },
         seed,
         sigma_position_mm: sp,
         sigma_rotation_rad: sr,
@@ -227,6 +229,51 @@ fn simulation_is_reproducible_and_noise_does_not_move_configurations() {
     }
     let d = fanuc_sim(20, 4, 0.033, 1e-4, Observe::Pose, &NonGeometric::default());
     assert_ne!(a.measured.rows[0].q, d.measured.rows[0].q);
+}
+
+/// Given configurations are measured as drawn ones are: a drawn run's own configurations given
+/// back give its rows exactly (same noise stream); a configuration with the wrong number of
+/// joints or a value not finite is refused.
+#[test]
+fn given_configurations_give_the_drawn_rows() {
+    let r = robot("fanuc_r2000ib_210f.toml");
+    let ng = NonGeometric::default();
+    let drawn = fanuc_sim(15, 8, 0.033, 1e-4, Observe::Pose, &ng);
+    let qs: Vec<Vec<f64>> = drawn.measured.rows.iter().map(|m| m.q.clone()).collect();
+    let given = |qs: &[Vec<f64>]| {
+        Simulation {
+            truth: &r,
+            nongeometric: &ng,
+            configurations: Configurations::Given(qs),
+            seed: 8,
+            sigma_position_mm: 0.033,
+            sigma_rotation_rad: 1e-4,
+            observe: Observe::Pose,
+        }
+        .run(PathBuf::from("given.csv"))
+    };
+    let out = given(&qs).unwrap();
+    let j = JointInfo::of(&r);
+    assert_eq!(
+        measurements_to_csv(&out.measured, &j).unwrap(),
+        measurements_to_csv(&drawn.measured, &j).unwrap()
+    );
+    let mut short = qs.clone();
+    short[3].pop();
+    assert!(
+        given(&short)
+            .unwrap_err()
+            .to_string()
+            .contains("configuration 4: 5 joint values")
+    );
+    let mut nan = qs;
+    nan[6][2] = f64::NAN;
+    assert!(
+        given(&nan)
+            .unwrap_err()
+            .to_string()
+            .contains("configuration 7")
+    );
 }
 
 /// Displacement of the tool point (mm) that one non-geometric term causes at `q`.

@@ -518,7 +518,7 @@ fn simulate_streams_the_rows_the_library_returns() {
     use robocal::data::measurement::measurements_to_csv;
     use robocal::model::read_robot;
     use robocal::sim::nongeometric::NonGeometric;
-    use robocal::sim::{Observe, Region, Simulation};
+    use robocal::sim::{Configurations, Observe, Region, Simulation};
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let robot = read_robot(root.join("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
     let ng = NonGeometric::read(
@@ -560,8 +560,10 @@ fn simulate_streams_the_rows_the_library_returns() {
         let sim = Simulation {
             truth: &robot,
             nongeometric: &ng,
-            region: &region,
-            count: 40,
+            configurations: Configurations::Drawn {
+                region: &region,
+                count: 40,
+            },
             seed: 3,
             sigma_position_mm: sigma,
             sigma_rotation_rad: 0.2e-3,
@@ -579,6 +581,134 @@ fn simulate_streams_the_rows_the_library_returns() {
             measurements_to_csv(&lib.truth, &joints).unwrap(),
             "{measure}"
         );
+    }
+}
+
+/// `simulate --joints` measures the given configurations in their order: the rows a drawn run
+/// gave, its joints given back (the noise comes from its own stream, and backlash from the
+/// order, so the rows agree), labelled and carried as the file has them, its joints written
+/// as read; a row the robot cannot take, a file without rows and `--count` beside it are
+/// refused, and nothing is written.
+#[test]
+fn simulate_measures_given_joints_in_their_order() {
+    let ng = tmp("given_backlash.toml");
+    std::fs::write(
+        &ng,
+        "[backlash]\nmrad = [0.5, 0.8, 0.6, 0.3, 0.3, 0.2]\n\n[[gear]]\njoint = 2\n\
+         amplitude1_mrad = 0.04\nphase1_deg = 10.0\n",
+    )
+    .unwrap();
+    let sim = |extra: &[&str], out: &std::path::Path, truth: &std::path::Path| {
+        let mut args = vec![
+            "simulate",
+            "--robot",
+            FANUC,
+            "--deviations",
+            "datasets/deviations/table_6_1.toml",
+            "--nongeometric",
+            ng.to_str().unwrap(),
+            "--seed",
+            "5",
+            "--sigma-pos",
+            "0.05",
+            "--sigma-rot",
+            "0.2",
+            "--out",
+            out.to_str().unwrap(),
+            "--truth-out",
+            truth.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        robocal(&args)
+    };
+    let (drawn, drawn_truth) = (tmp("given_drawn.csv"), tmp("given_drawn_truth.csv"));
+    let o = sim(&["--count", "12"], &drawn, &drawn_truth);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows = |p: &std::path::Path| -> Vec<Vec<String>> {
+        (std::fs::read_to_string(p).unwrap().lines())
+            .map(|l| l.split(',').map(str::to_string).collect())
+            .collect()
+    };
+    let d = rows(&drawn);
+    // The plan: its own ids, pairs and a note column, the drawn joints as text.
+    let mut plan = String::from("id,pair,q1,q2,q3,q4,q5,q6,note\n");
+    for (k, r) in d[1..].iter().enumerate() {
+        plan += &format!("p{},{},{},n{k}\n", k + 1, k / 2 + 1, r[1..7].join(","));
+    }
+    let joints = tmp("given_plan.csv");
+    std::fs::write(&joints, &plan).unwrap();
+    let (given, given_truth) = (tmp("given_meas.csv"), tmp("given_meas_truth.csv"));
+    let o = sim(
+        &["--joints", joints.to_str().unwrap()],
+        &given,
+        &given_truth,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("simulated 12 configurations of"),
+        "{}",
+        stderr(&o)
+    );
+    for (a, b) in [(&drawn, &given), (&drawn_truth, &given_truth)] {
+        let (a, b) = (rows(a), rows(b));
+        assert_eq!(b[0][..2], ["id", "pair"]);
+        assert_eq!(b[0].last().unwrap(), "note");
+        assert_eq!(b.len(), 13);
+        for (k, (ra, rb)) in a[1..].iter().zip(&b[1..]).enumerate() {
+            assert_eq!(rb[0], format!("p{}", k + 1));
+            assert_eq!(rb[1], (k / 2 + 1).to_string());
+            assert_eq!(rb[2..8], ra[1..7], "joints as read");
+            assert_eq!(rb.last().unwrap(), &format!("n{k}"));
+            // x, y, z, rz, ry, rx: the same pose to float dust (the joints' trip through
+            // the file), noise included.
+            for c in 0..6 {
+                let (va, vb): (f64, f64) = (ra[7 + c].parse().unwrap(), rb[8 + c].parse().unwrap());
+                assert!((va - vb).abs() < 1e-8, "row {k} column {c}: {va} vs {vb}");
+            }
+        }
+    }
+    // Backlash makes the order matter: the rows reversed give other poses.
+    let mut reversed = String::from("q1,q2,q3,q4,q5,q6\n");
+    for r in d[1..].iter().rev() {
+        reversed += &format!("{}\n", r[1..7].join(","));
+    }
+    std::fs::write(&joints, &reversed).unwrap();
+    let o = sim(
+        &["--joints", joints.to_str().unwrap()],
+        &given,
+        &given_truth,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (t, dt) = (rows(&given_truth), rows(&drawn_truth));
+    assert_eq!(t[1][0], "1", "rows numbered without an id column");
+    let moved = (1..13)
+        .filter(|&k| {
+            (t[k][7].parse::<f64>().unwrap() - dt[13 - k][7].parse::<f64>().unwrap()).abs() > 1e-6
+        })
+        .count();
+    assert!(moved > 0, "backlash follows the order of the rows");
+    // Refused, nothing written: a row beyond the limits, no rows, --count beside --joints.
+    let limits_line = format!("q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n0,0,{},0,0,0\n", 400.0);
+    for (text, extra, said) in [
+        (limits_line.as_str(), None, "line 3: joint 3 at 400"),
+        ("q1,q2,q3,q4,q5,q6\n", None, "no data rows"),
+        (
+            "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n",
+            Some("--count"),
+            "cannot be used with",
+        ),
+    ] {
+        std::fs::write(&joints, text).unwrap();
+        let (out, truth) = (tmp("given_refused.csv"), tmp("given_refused_truth.csv"));
+        let _ = std::fs::remove_file(&out);
+        let mut args = vec!["--joints", joints.to_str().unwrap()];
+        if let Some(flag) = extra {
+            args.extend([flag, "3"]);
+        }
+        let o = sim(&args, &out, &truth);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains(said), "{said}: {}", stderr(&o));
+        assert!(!out.exists());
     }
 }
 

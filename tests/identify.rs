@@ -10,7 +10,7 @@ use robocal::identify::{Measure, Method, Options, RobustLoss, SolveOptions, iden
 use robocal::kinematics::{Pose, tool_pose};
 use robocal::model::{Robot, read_robot};
 use robocal::neural::refine::refine;
-use robocal::sim::{Deviations, NonGeometric, Observe, Region, Simulation};
+use robocal::sim::{Configurations, Deviations, NonGeometric, Observe, Region, Simulation};
 use robocal::studies::reproduce::{Case, median_range, over_seeds};
 use std::path::{Path, PathBuf};
 
@@ -40,8 +40,10 @@ fn simulate(
     let out = Simulation {
         truth,
         nongeometric: &NonGeometric::default(),
-        region: &region,
-        count,
+        configurations: Configurations::Drawn {
+            region: &region,
+            count,
+        },
         seed,
         sigma_position_mm: if noise { 0.033 } else { 0.0 },
         sigma_rotation_rad: if noise { 0.174e-3 } else { 0.0 },
@@ -915,8 +917,10 @@ fn rows_that_hold_a_joint_at_one_value_are_warned_of() {
     let held = Simulation {
         truth: &truth,
         nongeometric: &NonGeometric::default(),
-        region: &region,
-        count: 50,
+        configurations: Configurations::Drawn {
+            region: &region,
+            count: 50,
+        },
         seed: 4,
         sigma_position_mm: 0.033,
         sigma_rotation_rad: 0.174e-3,

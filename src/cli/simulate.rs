@@ -5,10 +5,13 @@ use super::output::writing;
 use anyhow::{Context, Result};
 use clap::Args;
 use robocal::data::JointInfo;
+use robocal::data::JointTable;
+use robocal::data::measurement::Measurement;
 use robocal::data::measurement::MeasurementWriter;
 use robocal::kinematics::tool_pose;
+use robocal::model::Robot;
 use robocal::model::{read_robot, write_robot};
-use robocal::sim::{Deviations, NonGeometric, Region, Simulation};
+use robocal::sim::{Configurations, Deviations, NonGeometric, Region, Simulation};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -27,10 +30,15 @@ pub struct SimulateArgs {
     /// joint). Default: the limits.
     #[arg(long)]
     region: Option<PathBuf>,
-    /// Number of configurations (1 to 1000000).
-    #[arg(long, value_parser = super::bounds::count)]
-    count: usize,
-    /// Random seed (configurations and noise).
+    /// Number of configurations to draw (1 to 1000000).
+    #[arg(long, value_parser = super::bounds::count, required_unless_present = "joints")]
+    count: Option<usize>,
+    /// Measure at these configurations, in their order, instead of drawing them (CSV with
+    /// q1..qN, deg; mm for a prismatic joint; within the limits), e.g. `plan --out`: its `id`,
+    /// `set` and `pair` columns label the rows, its other columns are carried through.
+    #[arg(long, conflicts_with_all = ["count", "region"])]
+    joints: Option<PathBuf>,
+    /// Random seed (configurations and noise; noise only with --joints).
     #[arg(long)]
     seed: u64,
     /// Noise on each position coordinate (mm, one standard deviation; 0, or 1e-6 to 1000).
@@ -61,6 +69,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
             opt("--deviations", a.deviations.as_ref()),
             opt("--nongeometric", a.nongeometric.as_ref()),
             opt("--region", a.region.as_ref()),
+            opt("--joints", a.joints.as_ref()),
         ],
         &[
             req("--out", &a.out),
@@ -88,11 +97,23 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         Some(p) => Region::read(p, &nominal)?,
         None => Region::limits(&nominal),
     };
+    let given = match &a.joints {
+        Some(p) => Some(Given::read(p, &nominal)?),
+        None => None,
+    };
+    let configurations = match (&given, a.count) {
+        (Some(g), _) => Configurations::Given(&g.q),
+        (None, Some(count)) => Configurations::Drawn {
+            region: &region,
+            count,
+        },
+        (None, None) => anyhow::bail!("give --count (configurations to draw) or --joints"),
+    };
+    let rows = configurations.count();
     let sim = Simulation {
         truth: &truth,
         nongeometric: &ng,
-        region: &region,
-        count: a.count,
+        configurations,
         seed: a.seed,
         sigma_position_mm: a.sigma_pos,
         sigma_rotation_rad: a.sigma_rot * 1e-3,
@@ -100,7 +121,18 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     };
     // Rows stream to the files as they are drawn: a million of them need no memory.
     let joints = JointInfo::of(&nominal);
-    let (measured_layout, truth_layout) = sim.layouts();
+    let (mut measured_layout, mut truth_layout) = sim.layouts();
+    if let Some(g) = &given {
+        for l in [&mut measured_layout, &mut truth_layout] {
+            l.set = g.set.is_some();
+            l.pair = g.pair.is_some();
+            l.extra = g
+                .extra
+                .iter()
+                .map(|&c| g.t.table.headers[c].clone())
+                .collect();
+        }
+    }
     let mut out = writing(
         MeasurementWriter::create(&a.out, measured_layout, &joints),
         &a.out,
@@ -115,12 +147,26 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     // How far the nominal model is from the truth, in position (mm), as a first look.
     let (mut sum, mut max, mut count) = (0.0, 0.0f64, 0usize);
     let bar = super::compensator_args::progress_bar(std::io::stderr().is_terminal());
-    bar.set_length(a.count as u64);
-    sim.run_each(|m, t| {
-        out.write(&m)?;
-        if let Some(w) = truth_out.as_mut() {
-            w.write(&t)?;
+    bar.set_length(rows as u64);
+    let mut k = 0;
+    sim.run_each(|mut m, mut t| {
+        match &given {
+            Some(g) => {
+                g.label(k, &mut m);
+                g.label(k, &mut t);
+                out.write_with_joints(&m, &g.t.joints[k])?;
+                if let Some(w) = truth_out.as_mut() {
+                    w.write_with_joints(&t, &g.t.joints[k])?;
+                }
+            }
+            None => {
+                out.write(&m)?;
+                if let Some(w) = truth_out.as_mut() {
+                    w.write(&t)?;
+                }
+            }
         }
+        k += 1;
         if let Some(p) = t.position {
             let e = (tool_pose(&nominal, &t.q).translation.vector - p).norm();
             sum += e;
@@ -162,17 +208,19 @@ pub fn run(a: SimulateArgs) -> Result<()> {
             );
         }
     }
+    let of = match &a.joints {
+        Some(p) => format!(" of {}", p.display()),
+        None => String::new(),
+    };
     if count > 0 {
         let mean = sum / count as f64;
         told_after_on_stderr!(
-            "simulated {} configurations into {}; nominal model vs truth: mean {mean:.4} mm, max {max:.4} mm",
-            a.count,
+            "simulated {rows} configurations{of} into {}; nominal model vs truth: mean {mean:.4} mm, max {max:.4} mm",
             a.out.display()
         );
     } else {
         told_after_on_stderr!(
-            "simulated {} configurations into {}",
-            a.count,
+            "simulated {rows} configurations{of} into {}",
             a.out.display()
         );
     }
@@ -208,4 +256,70 @@ fn large_deviations(d: &Deviations) -> Option<String> {
             large.join(", ")
         )
     })
+}
+
+/// The configurations of `--joints`: the file's joints and the columns that label or ride
+/// along with each row.
+struct Given {
+    /// The file as read (joints in file units: deg, mm).
+    t: JointTable,
+    /// Each row's joints (rad, mm).
+    q: Vec<Vec<f64>>,
+    /// The `id`, `set` and `pair` columns, where the file has them.
+    id: Option<usize>,
+    set: Option<usize>,
+    pair: Option<usize>,
+    /// The other columns (not joints nor labels), carried through in their order.
+    extra: Vec<usize>,
+}
+
+impl Given {
+    /// Reads `path` as `robot`'s joints: every row within the joint limits (a configuration
+    /// the robot cannot take is an error naming its line).
+    fn read(path: &std::path::Path, robot: &Robot) -> Result<Given> {
+        // The table reader refuses a file without rows.
+        let t = JointTable::read(path, robot)?;
+        super::fk::warn_if_radians(path, robot, &t);
+        let info = JointInfo::of(robot);
+        let q: Vec<Vec<f64>> = (0..t.joints.len()).map(|r| t.internal(r, robot)).collect();
+        for (r, q) in q.iter().enumerate() {
+            if let Some(why) = JointInfo::first_outside(&info, q) {
+                anyhow::bail!(
+                    "{}: line {}: {why}: the robot cannot be measured there",
+                    path.display(),
+                    t.table.lines[r]
+                );
+            }
+        }
+        let col = |name: &str| t.table.column(name);
+        let joint_names = robocal::data::joint_columns(robot.dof());
+        let labels = ["id", "set", "pair"];
+        let extra = (0..t.table.headers.len())
+            .filter(|&c| {
+                let h = &t.table.headers[c];
+                !joint_names.contains(h) && !labels.contains(&h.as_str())
+            })
+            .collect();
+        Ok(Given {
+            id: col("id"),
+            set: col("set"),
+            pair: col("pair"),
+            extra,
+            q,
+            t,
+        })
+    }
+
+    /// Labels row `k`'s measurement `m` as the file does (a blank label is no label) and
+    /// carries its other cells.
+    fn label(&self, k: usize, m: &mut Measurement) {
+        let cells = &self.t.table.rows[k];
+        let text = |c: Option<usize>| c.map(|c| cells[c].clone()).filter(|s| !s.is_empty());
+        if self.id.is_some() {
+            m.id = text(self.id);
+        }
+        m.set = text(self.set);
+        m.pair = text(self.pair);
+        m.extra = self.extra.iter().map(|&c| cells[c].clone()).collect();
+    }
 }

@@ -155,6 +155,31 @@ pub fn reading(
     (m, t)
 }
 
+/// Where the virtual robot is measured.
+#[derive(Debug, Clone, Copy)]
+pub enum Configurations<'a> {
+    /// `count` configurations drawn uniformly in `region` (rad or mm).
+    Drawn {
+        /// Joint ranges the configurations are drawn from (rad or mm).
+        region: &'a Region,
+        /// Number of configurations (rows) to simulate.
+        count: usize,
+    },
+    /// The given configurations, in their order (rad or mm, one value per joint): a
+    /// measurement plan rehearsed, the robot approaching each from the one before (backlash).
+    Given(&'a [Vec<f64>]),
+}
+
+impl Configurations<'_> {
+    /// Number of configurations (rows) to simulate.
+    pub fn count(&self) -> usize {
+        match self {
+            Configurations::Drawn { count, .. } => *count,
+            Configurations::Given(q) => q.len(),
+        }
+    }
+}
+
 /// A simulation run.
 #[derive(Debug, Clone)]
 pub struct Simulation<'a> {
@@ -162,10 +187,8 @@ pub struct Simulation<'a> {
     pub truth: &'a Robot,
     /// Non-geometric errors of the true robot (compliance, gears, backlash).
     pub nongeometric: &'a NonGeometric,
-    /// Joint ranges the configurations are drawn from (rad or mm).
-    pub region: &'a Region,
-    /// Number of configurations (rows) to simulate.
-    pub count: usize,
+    /// Where the robot is measured: drawn configurations or given ones.
+    pub configurations: Configurations<'a>,
     /// Seed of the configuration and noise streams.
     pub seed: u64,
     /// Noise on each position coordinate (mm).
@@ -186,9 +209,10 @@ pub struct SimOutput {
 }
 
 impl Simulation<'_> {
-    /// Draws the configurations (uniform in the region), applies the non-geometric joint
-    /// deflections, runs the true model's FK, and adds noise. Configurations and noise come
-    /// from separate streams of one seed, so changing the noise leaves the configurations.
+    /// Draws the configurations (uniform in the region) or takes the given ones, applies the
+    /// non-geometric joint deflections, runs the true model's FK, and adds noise.
+    /// Configurations and noise come from separate streams of one seed, so changing the noise
+    /// leaves the configurations. Rows are numbered 1, 2, ... in their `id`.
     /// [`Simulation::run`] row by row: `emit(measured, truth)` for each configuration in
     /// order, nothing kept (the same rows as `run`, from the same streams).
     pub fn run_each(
@@ -197,8 +221,26 @@ impl Simulation<'_> {
     ) -> Result<()> {
         let robot = self.truth;
         let n = robot.dof();
-        if self.region.0.len() != n {
-            return Err(Error::Invalid("region does not match the robot".into()));
+        match self.configurations {
+            Configurations::Drawn { region, .. } if region.0.len() != n => {
+                return Err(Error::Invalid("region does not match the robot".into()));
+            }
+            Configurations::Given(given) => {
+                if let Some(k) = given.iter().position(|q| q.len() != n) {
+                    return Err(Error::Invalid(format!(
+                        "configuration {}: {} joint values for a robot with {n} joints",
+                        k + 1,
+                        given[k].len()
+                    )));
+                }
+                if let Some(k) = given.iter().position(|q| q.iter().any(|v| !v.is_finite())) {
+                    return Err(Error::Invalid(format!(
+                        "configuration {}: a joint value is not finite",
+                        k + 1
+                    )));
+                }
+            }
+            _ => {}
         }
         for s in [self.sigma_position_mm, self.sigma_rotation_rad] {
             if !s.is_finite() || s < 0.0 {
@@ -212,21 +254,21 @@ impl Simulation<'_> {
         rng_noise.set_stream(1);
         let mut ws = Frames::new(robot);
         let mut previous = vec![0.0; n];
-        for k in 0..self.count {
+        for k in 0..self.configurations.count() {
             // Configurations and noise come from separate streams: drawing them in turn
             // gives the rows drawing all configurations first gave.
-            let q: Vec<f64> = self
-                .region
-                .0
-                .iter()
-                .map(|&[lo, hi]| {
-                    if lo < hi {
-                        rng_q.random_range(lo..hi)
-                    } else {
-                        lo
-                    }
-                })
-                .collect();
+            let q: Vec<f64> = match self.configurations {
+                Configurations::Drawn { region, .. } => (region.0.iter())
+                    .map(|&[lo, hi]| {
+                        if lo < hi {
+                            rng_q.random_range(lo..hi)
+                        } else {
+                            lo
+                        }
+                    })
+                    .collect(),
+                Configurations::Given(given) => given[k].clone(),
+            };
             let pose = actual_pose(robot, self.nongeometric, &q, &previous, &mut ws);
             let (mut m, mut t) = reading(
                 &pose,
@@ -274,8 +316,8 @@ impl Simulation<'_> {
     /// All rows of [`Simulation::run_each`] in memory, both sets naming `source` as their
     /// file.
     pub fn run(&self, source: PathBuf) -> Result<SimOutput> {
-        let mut measured = Vec::with_capacity(self.count);
-        let mut truth = Vec::with_capacity(self.count);
+        let mut measured = Vec::with_capacity(self.configurations.count());
+        let mut truth = Vec::with_capacity(self.configurations.count());
         self.run_each(|m, t| {
             measured.push(m);
             truth.push(t);

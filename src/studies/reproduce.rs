@@ -19,7 +19,7 @@ use crate::error::Result;
 use crate::evaluate::{ErrorStats, evaluate_model};
 use crate::identify::{Measure, Options, identify};
 use crate::model::Robot;
-use crate::sim::{Deviations, NonGeometric, Observe, Region, Simulation};
+use crate::sim::{Configurations, Deviations, NonGeometric, Observe, Region, Simulation};
 use std::path::{Path, PathBuf};
 
 /// One case study's protocol.
@@ -164,8 +164,10 @@ pub fn simulate_case(nominal: &Robot, datasets: &Path, case: Case, seed: u64) ->
         Simulation {
             truth: &truth,
             nongeometric: &ng,
-            region: &region,
-            count,
+            configurations: Configurations::Drawn {
+                region: &region,
+                count,
+            },
             seed,
             sigma_position_mm: noise.position_mm,
             sigma_rotation_rad: noise.rotation_rad,

@@ -198,6 +198,23 @@ impl MeasurementWriter {
             .map_err(|e| Error::Invalid(format!("{}: {e}", self.w.get_ref().path().display())))
     }
 
+    /// [`write`](Self::write), the joint columns holding `q` (file units: deg, mm) in place
+    /// of the row's joints: values read from a file are written as read, without the float
+    /// dust of a trip through radians (30 deg read back as 29.999999999999996).
+    pub fn write_with_joints(&mut self, m: &Measurement, q: &[f64]) -> Result<()> {
+        let mut cells = self.layout.cells(m, &self.joints);
+        let first = [self.layout.id, self.layout.set, self.layout.pair]
+            .iter()
+            .filter(|on| **on)
+            .count();
+        for (cell, &v) in cells[first..first + self.joints.len()].iter_mut().zip(q) {
+            *cell = format!("{}", if v == 0.0 { 0.0 } else { v });
+        }
+        self.w
+            .write_record(cells)
+            .map_err(|e| Error::Invalid(format!("{}: {e}", self.w.get_ref().path().display())))
+    }
+
     /// Flushes the rows and moves the file into place (or stages it for the open transaction).
     pub fn finish(self) -> Result<()> {
         let path = self.w.get_ref().path().to_path_buf();
