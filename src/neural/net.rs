@@ -170,10 +170,22 @@ pub fn weights_from_record(
     m.weights()
 }
 
+/// The learning rate of phase 1 (thesis 3.2).
+pub const LEARNING_RATE: f64 = 0.01;
+/// The largest step phase 1 takes along the penalty's own curvature (rate x 2 lambda / M):
+/// half of heavy ball's bound 2 (1 + 0.9) = 3.8 would do; 1 leaves room for the data's
+/// curvature on top.
+pub const PENALTY_STEP_BOUND: f64 = 1.0;
+
 /// Phase 1 (thesis 3.2): full-batch gradient descent with momentum 0.9 and learning rate
 /// 0.01 on the penalised mean squared residual of [`Samples`] (`lambda`: the L2 weight
 /// penalty of [`super::samples::objective`]), through burn's autodiff and SGD optimizer
-/// (heavy-ball momentum: v <- 0.9 v + g, w <- w - 0.01 v). Starts from `start`; calls
+/// (heavy-ball momentum: v <- 0.9 v + g, w <- w - 0.01 v). The penalty alone has curvature
+/// c = 2 lambda / M (M residual components) along every weight, and heavy ball diverges where
+/// rate c > 2 (1 + 0.9): where 0.01 c would exceed [`PENALTY_STEP_BOUND`] (lambda above 50 M)
+/// the rate is lowered to bring it there, so that a large penalty shrinks the weights rather
+/// than blowing them up (a reviewer's --penalty 1e6 on 150 rows diverged at epoch 5); below,
+/// every penalty the search tries included, the thesis's 0.01 stands. Starts from `start`; calls
 /// `epoch_done` with (epoch, training MSE without the penalty, weights) after each epoch and
 /// stops when it returns false.
 pub fn train_momentum(
@@ -201,6 +213,8 @@ pub fn train_momentum(
             MomentumConfig::new().with_momentum(0.9).with_dampening(0.0),
         ))
         .init();
+    let components = (n * nr).max(1) as f64;
+    let rate = LEARNING_RATE.min(PENALTY_STEP_BOUND * components / (2.0 * lambda.max(1e-300)));
     let mut current = start.clone();
     for epoch in 1..=epochs {
         let y = model.forward(xt.clone());
@@ -227,7 +241,7 @@ pub fn train_momentum(
             )));
         }
         let grads = GradientsParams::from_grads(loss.backward(), &model);
-        model = optim.step(0.01, model, grads);
+        model = optim.step(rate, model, grads);
         current = model.weights()?;
         if !epoch_done(epoch, mse, &current) {
             break;
@@ -353,5 +367,34 @@ mod tests {
         let expected = start.to_vector() - g * 0.01;
         let got = after.to_vector();
         assert!((got - &expected).amax() < 1e-12, "{expected}");
+    }
+
+    #[test]
+    fn a_penalty_beyond_the_stable_step_shrinks_the_weights() {
+        // lambda 1e7 on 8 samples of 2 components: the rate 0.01 would step 0.01 x 2e7 / 16
+        // = 12500 times the weights along the penalty, and diverge; the lowered rate takes
+        // the penalised objective down and the penalised weights toward 0.
+        let start = weights(2, 4, 2, 0.45);
+        let s = Samples {
+            x: (0..8)
+                .map(|k| vec![k as f64 * 0.2 - 0.7, (k as f64).sin()])
+                .collect(),
+            b: (0..8)
+                .map(|k| vec![0.1 * k as f64, (k as f64).cos()])
+                .collect(),
+            ..Default::default()
+        };
+        let lambda = 1e7;
+        let mut g = DVector::zeros(start.len());
+        let f0 = crate::neural::samples::objective(&s, &start, lambda, &mut g);
+        let after = train_momentum(&start, &s, lambda, 200, |_, mse, _| {
+            assert!(mse.is_finite());
+            true
+        })
+        .unwrap();
+        let f1 = crate::neural::samples::objective(&s, &after, lambda, &mut g);
+        assert!(f1 < 1e-3 * f0, "{f0} -> {f1}");
+        let norm = |w: &Weights| w.w1.norm_squared() + w.w2.norm_squared();
+        assert!(norm(&after) < 1e-6 * norm(&start), "{}", norm(&after));
     }
 }
