@@ -1061,3 +1061,45 @@ fn a_frame_parameter_the_data_leave_out_keeps_the_files_value() {
     );
     assert!(model_gap(&id.robot, &truth, 5).0 < 1e-6);
 }
+
+/// One joint mistyped (case B's row 4, q2 100 deg for 2.2: the tool 3.6 m off) drags the
+/// whole fit: every residual is large, none stands out, and the outlier list is empty. The
+/// warning names the row that stood out against the (registered) start, and the same data
+/// with that row removed fit to the noise.
+#[test]
+fn a_row_that_drags_the_fit_is_named() {
+    let nominal = fanuc();
+    let src = std::fs::read_to_string(root().join("datasets/case_b_sim/calibration.csv")).unwrap();
+    let mut lines: Vec<String> = src.lines().map(str::to_string).collect();
+    let mut cells: Vec<String> = lines[4].split(',').map(str::to_string).collect();
+    cells[2] = "100".into();
+    lines[4] = cells.join(",");
+    let dir = std::env::temp_dir().join(format!("robocal-dragged-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("dragged.csv");
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+    let (set, _) =
+        read_measurements(&path, &nominal, &Profile::default(), &Default::default()).unwrap();
+    let id = identify(&nominal, &set, &Options::default()).unwrap();
+    assert!(id.outliers.is_empty(), "{:?}", id.outliers);
+    let named: Vec<&String> = (id.warnings.iter())
+        .filter(|w| w.contains("stood out against the start model"))
+        .collect();
+    assert_eq!(named.len(), 1, "{:?}", id.warnings);
+    assert!(named[0].contains("line 5 ("), "{}", named[0]);
+    assert!(!named[0].contains("line 4 ("), "{}", named[0]);
+    // Without the row the same rows fit: no such warning.
+    lines.remove(4);
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+    let (set, _) =
+        read_measurements(&path, &nominal, &Profile::default(), &Default::default()).unwrap();
+    let id = identify(&nominal, &set, &Options::default()).unwrap();
+    assert!(
+        !id.warnings
+            .iter()
+            .any(|w| w.contains("stood out") || w.contains("does not describe")),
+        "{:?}",
+        id.warnings
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
