@@ -349,3 +349,41 @@ fn a_second_run_into_a_plot_folder_replaces_the_listing_of_the_first() {
     );
     assert_eq!(figs.len(), 4 + trained, "{figs:?}");
 }
+
+/// A listed picture that is not a whole PNG (empty, cut short, text) is refused by name: a
+/// browser showed a broken picture and `report` said nothing (a reviewer's run folder).
+#[test]
+fn report_refuses_pictures_that_are_not_whole_pngs() {
+    let dir = run_dir("report_broken_png");
+    let name = "identify_calibration_position.png";
+    let png = std::fs::read(dir.join(name)).unwrap();
+    let page = dir.join("broken.html");
+    for (what, bytes) in [
+        ("empty", Vec::new()),
+        ("cut", png[..png.len() / 2].to_vec()),
+        ("text", b"hello".to_vec()),
+    ] {
+        std::fs::write(dir.join(name), &bytes).unwrap();
+        let o = robocal(&[
+            "report",
+            dir.to_str().unwrap(),
+            "--out",
+            page.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{what}");
+        let e = stderr(&o);
+        assert!(
+            e.contains(name) && e.contains("not a whole PNG picture"),
+            "{what}: {e}"
+        );
+        assert!(!page.exists(), "{what}");
+    }
+    std::fs::write(dir.join(name), &png).unwrap();
+    let o = robocal(&[
+        "report",
+        dir.to_str().unwrap(),
+        "--out",
+        page.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -323,6 +323,15 @@ fn inside(dir: &Path, name: &str) -> Result<std::path::PathBuf> {
 fn figure(dir: &Path, f: &Figure, html: &mut String) -> Result<()> {
     let path = inside(dir, &f.png)?;
     let bytes = crate::io::read_capped(&path, MAX_EMBED_BYTES)?;
+    // A browser shows a broken picture without a word: an empty, cut or foreign file is
+    // refused here, as a missing one is.
+    if let Err(e) = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png) {
+        return Err(Error::Invalid(format!(
+            "{}: not a whole PNG picture ({e}): draw the pictures again (--plot {})",
+            path.display(),
+            dir.display()
+        )));
+    }
     let b64 = base64::engine::general_purpose::STANDARD.encode(bytes);
     let _ = writeln!(
         html,
