@@ -81,7 +81,7 @@ pub fn run_identify(a: IdentifyArgs) -> Result<()> {
         a.plot.as_ref(),
     )?;
     // A selection that names no parameter of this robot is a flag's value refused.
-    if let Err(e) = robocal::identify::select::select(&nominal, &a.params) {
+    if let Err(e) = robocal::identify::candidates(&nominal, &a.params) {
         usage!("--params `{}`: {e}", a.params);
     }
     let opts = Options {

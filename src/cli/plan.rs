@@ -498,7 +498,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
     }
     let robot = read_robot(&a.robot)?;
     // A selection that names no parameter of this robot is a flag's value refused.
-    if let Err(e) = robocal::identify::select::select(&robot, &a.params) {
+    if let Err(e) = robocal::identify::candidates(&robot, &a.params) {
         usage!("--params `{}`: {e}", a.params);
     }
     // The list to evaluate, read once: its columns also say what it measures.

@@ -218,11 +218,48 @@ fn selection_in(nominal: &Robot, completed: &Robot, chosen: Vec<usize>) -> Resul
 /// candidate parameters (indices into that model's parameters, in priority order): a fully
 /// selected DH-type base or tool row becomes the equivalent 6-DOF transform. With notes
 /// saying so.
+///
+/// A DH-type base or tool row whose 6-DOF fields the selection names (`tool.x`, `base.rz`:
+/// the names `identify` prints for such a row once it is a transform) becomes the
+/// equivalent 6-DOF transform first, and those fields are selected in it.
 pub fn candidates(nominal: &Robot, params: &str) -> Result<(Robot, Vec<usize>, Vec<String>)> {
-    let chosen = select(nominal, params)?;
-    let (completed, notes) = complete_frames(nominal, &chosen)?;
-    let candidates = selection_in(nominal, &completed, chosen)?;
+    let (named, mut notes) = frames_named_as_transforms(nominal, params)?;
+    let chosen = select(&named, params)?;
+    let (completed, more) = complete_frames(&named, &chosen)?;
+    notes.extend(more);
+    let candidates = selection_in(&named, &completed, chosen)?;
     Ok((completed, candidates, notes))
+}
+
+/// `robot` with each DH-type base or tool row whose 6-DOF fields (x, y, z, rz, ry, rx) the
+/// selection `params` names as the equivalent 6-DOF transform, with a note for each.
+fn frames_named_as_transforms(robot: &Robot, params: &str) -> Result<(Robot, Vec<String>)> {
+    const FIELDS: [&str; 6] = ["x", "y", "z", "rz", "ry", "rx"];
+    let mut out = robot.clone();
+    let mut notes = Vec::new();
+    for (slot, what) in [(Slot::Base, "base"), (Slot::Tool, "tool")] {
+        let row = match slot {
+            Slot::Base => robot.base(),
+            _ => robot.tool(),
+        };
+        let named: Vec<&str> = (params.split(',').map(str::trim))
+            .filter(|item| {
+                item.strip_prefix(what)
+                    .and_then(|r| r.strip_prefix('.'))
+                    .is_some_and(|f| FIELDS.contains(&f))
+            })
+            .collect();
+        if row.convention() != Convention::Transform && !named.is_empty() {
+            out = out.with_frame_as_transform(slot)?;
+            notes.push(format!(
+                "the {what} row ({}) is identified as the equivalent 6-DOF transform, whose \
+                 fields {} the selection names; its other fields keep the row's pose",
+                row.convention().name(),
+                named.join(", ")
+            ));
+        }
+    }
+    Ok((out, notes))
 }
 
 /// Refuses data with no more independent residual components than `k` identifiable
@@ -1076,6 +1113,40 @@ fn frames_left_as_given(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn transform_fields_named_for_a_dh_row_select_them_in_its_equivalent_transform() {
+        // identify prints an MDH tool row, made a transform, as tool.x ... tool.rx: those
+        // names select its fields (they were refused as unknown), the pose kept.
+        let fanuc = crate::model::read_robot(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("datasets/robots/fanuc_r2000ib_210f.toml"),
+        )
+        .unwrap();
+        let (completed, chosen, notes) = candidates(&fanuc, "offsets,tool.x,base.rz").unwrap();
+        let all = completed.parameters();
+        let mut names: Vec<String> = chosen.iter().map(|&c| all[c].name()).collect();
+        names.sort();
+        let mut want: Vec<String> = ["base.rz", "tool.x"]
+            .into_iter()
+            .chain(["theta1", "theta2", "theta3", "theta4", "theta5", "theta6"])
+            .map(String::from)
+            .collect();
+        want.sort();
+        assert_eq!(names, want);
+        assert_eq!(completed.tool().convention(), Convention::Transform);
+        assert_eq!(completed.base().convention(), Convention::Transform);
+        assert_eq!(notes.len(), 2, "{notes:?}");
+        for q in [[0.1, -0.3, 0.4, 1.0, -0.7, 2.0], [0.0; 6]] {
+            let (a, b) = (
+                crate::kinematics::tool_pose(&fanuc, &q),
+                crate::kinematics::tool_pose(&completed, &q),
+            );
+            assert!((a.to_homogeneous() - b.to_homogeneous()).abs().max() < 1e-9);
+        }
+        // A field a transform does not have is still unknown.
+        assert!(candidates(&fanuc, "tool.q").is_err());
+    }
 
     #[test]
     fn a_row_made_a_transform_leaves_the_other_rows_selection_as_chosen() {

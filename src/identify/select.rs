@@ -92,6 +92,14 @@ pub fn select(robot: &Robot, spec: &str) -> Result<Vec<usize>> {
                         .filter(|p| !matches!(p.field, Field::K { .. }))
                         .map(|p| p.name())
                         .collect();
+                    for (what, row) in [("base", robot.base()), ("tool", robot.tool())] {
+                        if row.convention() != Convention::Transform {
+                            names.push(format!(
+                                "{what}.x, .y, .z, .rz, .ry, .rx (the {what} row as a 6-DOF \
+                                 transform)"
+                            ));
+                        }
+                    }
                     if params.iter().any(|p| matches!(p.field, Field::K { .. })) {
                         names.push("k<joint>.<m|mx|my|mz><link|P> (e.g. k2.mx3)".into());
                     }
