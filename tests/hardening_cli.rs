@@ -949,6 +949,13 @@ fn edge_inputs_of_train_and_evaluate() {
         "{}",
         stdout(&o)
     );
+    // Its rows are labelled for what it is: no network, the model as given.
+    let data_row = |text: &str, label: &str| {
+        text.lines()
+            .any(|l| l.starts_with("data") && l.split_whitespace().nth(1) == Some(label))
+    };
+    assert!(data_row(&stdout(&o), "no"), "{}", stdout(&o));
+    assert!(!stdout(&o).contains("+net"), "{}", stdout(&o));
     // Nothing fades without a network, but a model refined in training was fitted on the
     // training rows alone: a joint beyond their range is flagged (it had read `inside`
     // everywhere), a training row's joints are inside. Not refined (above), it fitted
@@ -957,6 +964,12 @@ fn edge_inputs_of_train_and_evaluate() {
     let refined = refined.to_str().unwrap();
     let o = common::train_fanuc(TRAIN, refined, &["--members", "0", "--refine", "full"]);
     assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        (stdout(&o).lines())
+            .any(|l| l.starts_with("training") && l.split_whitespace().nth(1) == Some("refined")),
+        "{}",
+        stdout(&o)
+    );
     let joints = common::tmp("edge_members0_joints.csv");
     std::fs::write(
         &joints,
@@ -2487,7 +2500,7 @@ fn noise_free_data_trains_and_writes_its_compensator() {
         assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
         let text = stdout(&o);
         let rms: f64 = (text.lines())
-            .find(|l| l.starts_with("data") && l.contains("+net"))
+            .find(|l| l.starts_with("data") && l.split_whitespace().nth(1) != Some("model"))
             .and_then(|l| l.split_whitespace().nth(3))
             .and_then(|v| v.parse().ok())
             .unwrap_or_else(|| panic!("{text}"));

@@ -156,10 +156,13 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         .collect();
     let compensated = net_rows.as_deref().map(summarize);
     let mut accuracy = vec![Accuracy::new("data", "model", s)];
+    let label = comp
+        .as_ref()
+        .map_or("+net", super::summary::compensated_label);
     if let Some(c) = compensated {
         accuracy.push(Accuracy {
             rows_outside_domain: Some(outside.len()),
-            ..Accuracy::new("data", "+net", c)
+            ..Accuracy::new("data", label, c)
         });
     }
     // Readings logged with other joints, judged under the robot file's model.
@@ -168,7 +171,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         CLEAN,
         &shared,
         &model_rows,
-        net_rows.as_deref().map(|n| (n, &inside[..])),
+        net_rows.as_deref().map(|n| (n, &inside[..], label)),
     ));
     let mut report = EvaluateReport {
         robot: a.robot.display().to_string(),

@@ -233,7 +233,7 @@ pub fn clean_accuracy(
     clean: &str,
     shared: &[SharedReading],
     model_rows: &[RowError],
-    net: Option<(&[RowError], &[bool])>,
+    net: Option<(&[RowError], &[bool], &str)>,
 ) -> Vec<Accuracy> {
     if shared.is_empty() {
         return Vec::new();
@@ -252,14 +252,25 @@ pub fn clean_accuracy(
         "model",
         summarize(&without(model_rows)),
     )];
-    if let Some((rows, inside)) = net {
+    if let Some((rows, inside, label)) = net {
         debug_assert_eq!(rows.len(), inside.len());
         out.push(Accuracy {
             rows_outside_domain: Some((0..inside.len()).filter(|i| kept(i) && !inside[*i]).count()),
-            ..Accuracy::new(clean, "+net", summarize(&without(rows)))
+            ..Accuracy::new(clean, label, summarize(&without(rows)))
         });
     }
     out
+}
+
+/// The accuracy tables' label of a compensator's rows: `+net` where a network corrects the
+/// model; where training kept none, `refined` (the model refined in training) or `no net` (the
+/// model as given: its rows are the model's), not `+net` for a network that is not there.
+pub fn compensated_label(c: &robocal::neural::compensator::Compensator) -> &'static str {
+    match (c.has_network(), c.model_refined) {
+        (true, _) => "+net",
+        (false, Some(true)) => "refined",
+        (false, _) => "no net",
+    }
 }
 
 /// Writes a typed report (JSON).

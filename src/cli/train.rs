@@ -475,7 +475,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             &format!("{name} clean"),
             shared,
             &before_rows,
-            Some((&after_rows, &inside)),
+            Some((&after_rows, &inside, super::summary::compensated_label(&c))),
         ));
         if let Some(dir) = &a.plot {
             let runs = [
@@ -523,7 +523,7 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         accuracy.push(Accuracy::new(name, "model", before));
         accuracy.push(Accuracy {
             rows_outside_domain: Some(outside),
-            ..Accuracy::new(name, "+net", after)
+            ..Accuracy::new(name, super::summary::compensated_label(&c), after)
         });
     }
     accuracy.extend(clean);

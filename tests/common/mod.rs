@@ -223,13 +223,20 @@ pub fn mutate(base: &[u8], edits: &[(usize, u8, u8)]) -> Vec<u8> {
     v
 }
 
-/// The statistics of a typed report's accuracy row (`data`, `model`).
+/// The statistics of a typed report's accuracy row (`data`, `model`); `+net` finds the
+/// compensator's row whatever its label (`+net`, or `refined` / `no net` where training kept
+/// no network).
 pub fn accuracy<'a>(r: &'a serde_json::Value, data: &str, model: &str) -> &'a serde_json::Value {
+    let labels: &[&str] = if model == "+net" {
+        &["+net", "refined", "no net"]
+    } else {
+        &[model]
+    };
     &r["accuracy"]
         .as_array()
         .expect("an accuracy table")
         .iter()
-        .find(|a| a["data"] == data && a["model"] == model)
+        .find(|a| a["data"] == data && labels.iter().any(|l| a["model"] == *l))
         .unwrap_or_else(|| panic!("no accuracy row {data} / {model}"))["stats"]
 }
 
