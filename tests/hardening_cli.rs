@@ -954,7 +954,7 @@ fn edge_inputs_of_train_and_evaluate() {
         text.lines()
             .any(|l| l.starts_with("data") && l.split_whitespace().nth(1) == Some(label))
     };
-    assert!(data_row(&stdout(&o), "no"), "{}", stdout(&o));
+    assert!(data_row(&stdout(&o), "no-net"), "{}", stdout(&o));
     assert!(!stdout(&o).contains("+net"), "{}", stdout(&o));
     // Nothing fades without a network, but a model refined in training was fitted on the
     // training rows alone: a joint beyond their range is flagged (it had read `inside`

@@ -263,13 +263,13 @@ pub fn clean_accuracy(
 }
 
 /// The accuracy tables' label of a compensator's rows: `+net` where a network corrects the
-/// model; where training kept none, `refined` (the model refined in training) or `no net` (the
+/// model; where training kept none, `refined` (the model refined in training) or `no-net` (the
 /// model as given: its rows are the model's), not `+net` for a network that is not there.
 pub fn compensated_label(c: &robocal::neural::compensator::Compensator) -> &'static str {
     match (c.has_network(), c.model_refined) {
         (true, _) => "+net",
         (false, Some(true)) => "refined",
-        (false, _) => "no net",
+        (false, _) => "no-net",
     }
 }
 

@@ -224,11 +224,11 @@ pub fn mutate(base: &[u8], edits: &[(usize, u8, u8)]) -> Vec<u8> {
 }
 
 /// The statistics of a typed report's accuracy row (`data`, `model`); `+net` finds the
-/// compensator's row whatever its label (`+net`, or `refined` / `no net` where training kept
+/// compensator's row whatever its label (`+net`, or `refined` / `no-net` where training kept
 /// no network).
 pub fn accuracy<'a>(r: &'a serde_json::Value, data: &str, model: &str) -> &'a serde_json::Value {
     let labels: &[&str] = if model == "+net" {
-        &["+net", "refined", "no net"]
+        &["+net", "refined", "no-net"]
     } else {
         &[model]
     };
