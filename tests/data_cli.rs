@@ -712,6 +712,60 @@ fn simulate_measures_given_joints_in_their_order() {
     }
 }
 
+/// Columns of a `--joints` file that a canonical reader would take as fields, in any letter
+/// case (`x`, `X`, `SX`, `Q7`), are carried under `input_<name>`, with a note, so that the
+/// file reads back (an `X` carried as read made `identify` refuse the file it had written).
+#[test]
+fn simulate_renames_carried_columns_a_reader_would_take() {
+    let joints = tmp("given_fields.csv");
+    std::fs::write(
+        &joints,
+        "q1,q2,q3,q4,q5,q6,X,x,SX,Q7,note\n\
+         0,0,0,0,0,0,1,2,3,4,a\n10,-20,15,30,-40,50,1,2,3,4,b\n-30,25,-10,60,20,-70,1,2,3,4,c\n\
+         45,10,30,-90,45,90,1,2,3,4,d\n-60,-30,20,120,-60,-120,1,2,3,4,e\n\
+         90,5,-40,-30,80,30,1,2,3,4,f\n-100,40,45,150,-90,10,1,2,3,4,g\n\
+         120,-40,-50,-150,30,-30,1,2,3,4,h\n",
+    )
+    .unwrap();
+    let out = tmp("given_fields_out.csv");
+    let o = robocal(&[
+        "simulate",
+        "--robot",
+        FANUC,
+        "--joints",
+        joints.to_str().unwrap(),
+        "--seed",
+        "1",
+        "--measure",
+        "orientation",
+        "--sigma-rot",
+        "0.174",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("renamed: X as input_X, x as input_x, SX as input_SX, Q7 as input_Q7"),
+        "{}",
+        stderr(&o)
+    );
+    let header = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        header.starts_with(
+            "id,q1,q2,q3,q4,q5,q6,rz,ry,rx,srx,sry,srz,input_X,input_x,input_SX,input_Q7,note\n"
+        ),
+        "{header}"
+    );
+    let o = robocal(&[
+        "evaluate",
+        "--robot",
+        FANUC,
+        "--data",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
 /// A profile given as a pipe (`--profile /dev/stdin`, `<(...)`) can be read once only: it is
 /// read once for the whole command (a second read found it empty and took the file for
 /// canonical CSV).

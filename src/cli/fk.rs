@@ -74,8 +74,8 @@ fn warn_radians(path: &std::path::Path, what: &str, read: &str) {
 fn radians_warning(path: &std::path::Path, what: &str, read: &str) -> String {
     format!(
         "{}: {what} lies within +-{:.2}, one turn in radians (or its joint's range in radians, \
-         where that is wider): {read} in degrees; if they hold radians, convert them (or import \
-         the file with a profile whose joint_unit is \"rad\")",
+         where that is wider): {read} in degrees; if they hold radians, convert them to degrees \
+         (a profile's joint_unit = \"rad\" reads measurement files, not these)",
         path.display(),
         std::f64::consts::TAU
     )

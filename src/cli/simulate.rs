@@ -132,6 +132,9 @@ pub fn run(a: SimulateArgs) -> Result<()> {
                 .map(|&c| g.t.table.headers[c].clone())
                 .collect();
         }
+        if let Some(note) = super::import::renamed_note(&measured_layout, joints.len()) {
+            told_after_on_stderr!("{note}");
+        }
     }
     let mut out = writing(
         MeasurementWriter::create(&a.out, measured_layout, &joints),

@@ -332,7 +332,8 @@ impl Table {
     }
 
     /// A hint for a header read as one column that holds another delimiter (`;`, a tab, `|`):
-    /// "; the header is one column holding `;`: set delimiter = ";" in a profile", else empty.
+    /// "; the header is one column holding `;`: set delimiter = ";" in a profile (...)", else
+    /// empty.
     pub fn delimiter_hint(&self) -> String {
         match &self.headers[..] {
             [h] => [';', '\t', '|', ',']
@@ -346,7 +347,8 @@ impl Table {
                     };
                     format!(
                         "; the header is one column holding `{shown}`: set delimiter = \"{shown}\" \
-                         in a profile"
+                         in a profile (--profile, where the command reads measurements), or \
+                         write the file with commas"
                     )
                 })
                 .unwrap_or_default(),

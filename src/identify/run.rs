@@ -223,43 +223,77 @@ fn selection_in(nominal: &Robot, completed: &Robot, chosen: Vec<usize>) -> Resul
 /// the names `identify` prints for such a row once it is a transform) becomes the
 /// equivalent 6-DOF transform first, and those fields are selected in it.
 pub fn candidates(nominal: &Robot, params: &str) -> Result<(Robot, Vec<usize>, Vec<String>)> {
-    let (named, mut notes) = frames_named_as_transforms(nominal, params)?;
+    let (named, converted) = frames_named_as_transforms(nominal, params)?;
     let chosen = select(&named, params)?;
+    let mut notes = Vec::new();
+    let all = named.parameters();
+    for (slot, what, convention, fields) in converted {
+        let whole = (all.iter().enumerate())
+            .filter(|(_, p)| p.slot == slot)
+            .all(|(k, _)| chosen.contains(&k));
+        notes.push(if whole {
+            format!(
+                "the {what} row ({convention}) is identified as the equivalent 6-DOF transform, \
+                 which can express any {what} frame"
+            )
+        } else {
+            format!(
+                "the {what} row ({convention}) is identified as the equivalent 6-DOF transform, \
+                 whose fields {} the selection names; its other fields keep the row's pose",
+                fields.join(", ")
+            )
+        });
+    }
     let (completed, more) = complete_frames(&named, &chosen)?;
     notes.extend(more);
     let candidates = selection_in(&named, &completed, chosen)?;
     Ok((completed, candidates, notes))
 }
 
+/// A base or tool row made a 6-DOF transform for the fields a selection names: its slot, its
+/// word, its convention's name and the names given.
+type Converted = (Slot, &'static str, &'static str, Vec<String>);
+
 /// `robot` with each DH-type base or tool row whose 6-DOF fields (x, y, z, rz, ry, rx) the
-/// selection `params` names as the equivalent 6-DOF transform, with a note for each.
-fn frames_named_as_transforms(robot: &Robot, params: &str) -> Result<(Robot, Vec<String>)> {
+/// selection `params` names as the equivalent 6-DOF transform, and those rows. A selection
+/// that also names a field of such a row in its own convention (`tool.a` beside `tool.x`)
+/// is refused: the row is one or the other.
+fn frames_named_as_transforms(robot: &Robot, params: &str) -> Result<(Robot, Vec<Converted>)> {
     const FIELDS: [&str; 6] = ["x", "y", "z", "rz", "ry", "rx"];
     let mut out = robot.clone();
-    let mut notes = Vec::new();
+    let mut converted = Vec::new();
+    let items: Vec<&str> = params.split(',').map(str::trim).collect();
     for (slot, what) in [(Slot::Base, "base"), (Slot::Tool, "tool")] {
         let row = match slot {
             Slot::Base => robot.base(),
             _ => robot.tool(),
         };
-        let named: Vec<&str> = (params.split(',').map(str::trim))
-            .filter(|item| {
-                item.strip_prefix(what)
-                    .and_then(|r| r.strip_prefix('.'))
-                    .is_some_and(|f| FIELDS.contains(&f))
-            })
-            .collect();
-        if row.convention() != Convention::Transform && !named.is_empty() {
-            out = out.with_frame_as_transform(slot)?;
-            notes.push(format!(
-                "the {what} row ({}) is identified as the equivalent 6-DOF transform, whose \
-                 fields {} the selection names; its other fields keep the row's pose",
-                row.convention().name(),
-                named.join(", ")
-            ));
+        fn field<'a>(item: &'a str, what: &str) -> Option<&'a str> {
+            item.strip_prefix(what).and_then(|r| r.strip_prefix('.'))
         }
+        let named: Vec<String> = (items.iter())
+            .filter(|item| field(item, what).is_some_and(|f| FIELDS.contains(&f)))
+            .map(|item| item.to_string())
+            .collect();
+        if row.convention() == Convention::Transform || named.is_empty() {
+            continue;
+        }
+        let own: Vec<&str> = (items.iter().copied())
+            .filter(|item| field(item, what).is_some() && robot.find_param(item).is_some())
+            .collect();
+        if !own.is_empty() {
+            return Err(Error::Invalid(format!(
+                "the selection names {} of the {what} row as a 6-DOF transform and {} of the \
+                 row in its own convention ({}): name the fields of one or the other",
+                named.join(", "),
+                own.join(", "),
+                row.convention().name()
+            )));
+        }
+        out = out.with_frame_as_transform(slot)?;
+        converted.push((slot, what, row.convention().name(), named));
     }
-    Ok((out, notes))
+    Ok((out, converted))
 }
 
 /// Refuses data with no more independent residual components than `k` identifiable
@@ -1144,8 +1178,27 @@ mod tests {
             );
             assert!((a.to_homogeneous() - b.to_homogeneous()).abs().max() < 1e-9);
         }
-        // A field a transform does not have is still unknown.
+        assert!(
+            notes.iter().all(|n| n.contains("its other fields keep")),
+            "{notes:?}"
+        );
+        // The whole row selected anyway: the note says so, not that fields are kept.
+        let (_, _, notes) = candidates(&fanuc, "full,tool.x").unwrap();
+        assert!(
+            notes.iter().all(|n| !n.contains("its other fields keep"))
+                && notes
+                    .iter()
+                    .any(|n| n.contains("can express any tool frame")),
+            "{notes:?}"
+        );
+        // A field a transform does not have is still unknown; the row's own field beside a
+        // transform field is refused as a mix.
         assert!(candidates(&fanuc, "tool.q").is_err());
+        let e = candidates(&fanuc, "tool.a,tool.x").unwrap_err().to_string();
+        assert!(
+            e.contains("tool.x") && e.contains("tool.a") && e.contains("one or the other"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -27,7 +27,9 @@ pub enum Robotset {
     /// `datasets/case_d`: Table 6.1 deviations, the focused region.
     CaseD,
     /// `datasets/nongeometric_robot`: Table 6.1 deviations plus gravity compliance and gear
-    /// errors, the full joint ranges.
+    /// errors, the full joint ranges. Named in reports by its folder, as the page names it
+    /// (reports written before 2026-12-02 named it `non_geometric`, still read).
+    #[serde(rename = "nongeometric_robot", alias = "non_geometric")]
     NonGeometric,
 }
 
@@ -259,4 +261,20 @@ pub fn run(datasets: &Path, opts: &CompensatorOptions) -> Result<Vec<Row>> {
 /// The row of `stage` on `set`.
 pub fn find(rows: &[Row], set: Robotset, stage: Stage) -> Option<&Row> {
     rows.iter().find(|r| r.set == set && r.stage == stage)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_set_is_named_by_its_folder_and_the_old_name_still_reads() {
+        for set in Robotset::ALL {
+            let json = serde_json::to_string(&set).unwrap();
+            assert_eq!(json, format!("\"{}\"", set.folder()));
+            assert_eq!(serde_json::from_str::<Robotset>(&json).unwrap(), set);
+        }
+        let old: Robotset = serde_json::from_str("\"non_geometric\"").unwrap();
+        assert_eq!(old, Robotset::NonGeometric);
+    }
 }

@@ -74,15 +74,16 @@ impl Layout {
 
     /// The carried columns' names as written: a name a canonical reader would take as a
     /// field (`x`, `rx`, `id`, a joint-like `q7`, ...: the export's own columns beside those
-    /// its profile mapped) becomes `input_<name>` (again, until it is unique), so that the
-    /// file reads back with the fields it was written with.
+    /// its profile mapped), or refuse as one in other letter case (`X`, `SX`: a reader
+    /// missing `x` names the `X` it found), becomes `input_<name>` (again, until it is
+    /// unique), so that the file reads back with the fields it was written with.
     pub fn carried_names(&self, joints: usize) -> Vec<String> {
         const FIELDS: [&str; 16] = [
             "id", "set", "pair", "x", "y", "z", "rz", "ry", "rx", "distance", "sx", "sy", "sz",
             "srx", "sry", "srz",
         ];
         let joint_like = |h: &str| {
-            h.strip_prefix('q')
+            (h.strip_prefix('q').or_else(|| h.strip_prefix('Q')))
                 .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
         };
         let mut taken: Vec<String> = joint_columns(joints);
@@ -90,7 +91,10 @@ impl Layout {
         let mut names = Vec::with_capacity(self.extra.len());
         for e in &self.extra {
             let mut name = e.clone();
-            while taken.contains(&name) || joint_like(&name) || names.contains(&name) {
+            while taken.iter().any(|t| t.eq_ignore_ascii_case(&name))
+                || joint_like(&name)
+                || names.contains(&name)
+            {
                 name = format!("input_{name}");
             }
             names.push(name);
