@@ -3,7 +3,8 @@
 use super::Accuracy;
 use crate::data::shared_readings::SharedReading;
 use crate::identify::identifiability::DropReason;
-use crate::identify::run::{Outlier, ParamReport, file_value};
+use crate::identify::outliers::Outlier;
+use crate::identify::run::{ParamReport, file_value};
 use crate::identify::{Identified, Measure, Method, Options, RobustLoss, StopReason};
 use crate::neural::repeats::Repeats;
 use serde::{Deserialize, Serialize};
