@@ -741,3 +741,35 @@ fn rows_from_a_given_file_are_written_as_read() {
         }
     }
 }
+
+/// `plan --report` holds the warnings `plan` printed, in order: what the terminal said is what
+/// the file holds (the report had none of them).
+#[test]
+fn the_report_holds_the_printed_warnings() {
+    let (out, report) = (tmp("plan_warned.csv"), tmp("plan_warned.json"));
+    let o = robocal(&[
+        "plan",
+        "--robot",
+        "datasets/robots/ur10.toml",
+        "--count",
+        "20",
+        "--measure",
+        "position",
+        "--params",
+        "offsets",
+        "--out",
+        out.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let printed: Vec<String> = (stderr(&o).lines())
+        .filter_map(|l| l.strip_prefix("warning: "))
+        .map(String::from)
+        .collect();
+    assert!(printed.len() >= 2, "{}", stderr(&o));
+    let kept: Vec<String> = (json(&report)["warnings"].as_array().unwrap().iter())
+        .map(|w| w.as_str().unwrap().to_string())
+        .collect();
+    assert_eq!(kept, printed);
+}

@@ -3,6 +3,7 @@
 use super::choices::{Criterion, Measure};
 use super::data_args::SigmaArgs;
 use super::output::{emit, num, parse_list};
+use super::warnings::Warnings;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use robocal::data::JointTable;
@@ -122,21 +123,21 @@ fn constraints(a: &PlanArgs) -> Result<Constraints> {
 /// [`robocal::identify::plausibility::HELD_JOINT_SPREAD`]) is warned of too: the plan cannot
 /// move it, and the parameters its motion alone tells apart are left out (a FANUC region with
 /// q3 held at 5 deg: 26 parameters of 30, without a word), as `identify` warns of such rows.
-fn warn_narrow(robot: &Robot, region: &Region, limits: &Constraints) {
+fn warn_narrow(robot: &Robot, region: &Region, limits: &Constraints, warnings: &mut Warnings) {
     use robocal::identify::plausibility::HELD_JOINT_SPREAD;
     for (i, (&[lo, hi], j)) in region.0.iter().zip(robot.joints()).enumerate() {
         let width = j.joint_type.to_file(hi) - j.joint_type.to_file(lo);
         if width < HELD_JOINT_SPREAD {
             let unit = j.joint_type.file_unit();
-            eprintln!(
-                "warning: the region holds joint {} within {:.4} to {:.4} {unit} (under \
+            warnings.say(format!(
+                "the region holds joint {} within {:.4} to {:.4} {unit} (under \
                  {HELD_JOINT_SPREAD} {unit} of range): the plan cannot move it, and the \
                  parameters its motion alone tells apart are left out or planned as \
                  combinations that hold at that value only; widen its range",
                 i + 1,
                 j.joint_type.to_file(lo),
                 j.joint_type.to_file(hi)
-            );
+            ));
             continue;
         }
         if j.joint_type != robocal::model::JointType::Revolute || hi <= lo {
@@ -146,8 +147,8 @@ fn warn_narrow(robot: &Robot, region: &Region, limits: &Constraints) {
         let room = hi.min(lhi - limits.margin) - lo.max(llo + limits.margin);
         // (Exactly a tenth, as 54 deg of the FANUC's joint 2 leaves, is not under it.)
         if room > robocal::plan::pool::NO_ROOM && room < 0.1 * (hi - lo) * (1.0 - 1e-9) {
-            eprintln!(
-                "warning: --margin-deg {:.3} leaves joint {} {:.3} deg of its {:.1} deg range \
+            warnings.say(format!(
+                "--margin-deg {:.3} leaves joint {} {:.3} deg of its {:.1} deg range \
                  (under a tenth): \
                  the plan barely moves it, and the parameters it alone excites are poorly \
                  determined (see their predicted standard deviations)",
@@ -155,7 +156,7 @@ fn warn_narrow(robot: &Robot, region: &Region, limits: &Constraints) {
                 i + 1,
                 room.to_degrees(),
                 (hi - lo).to_degrees()
-            );
+            ));
         }
     }
 }
@@ -232,6 +233,7 @@ fn evaluated_list(
     robot: &Robot,
     per: usize,
     cell: &Constraints,
+    warnings: &mut Warnings,
 ) -> Result<(Pool, Vec<usize>, Vec<Vec<f64>>)> {
     let joints = robocal::data::measurement::JointInfo::of(robot);
     let beyond = refused_lines(robot, &qs, &t, &Constraints::default());
@@ -253,22 +255,22 @@ fn evaluated_list(
         .filter(|c| t.table.column(c).is_some())
         .collect();
     if !sigma_columns.is_empty() {
-        eprintln!(
-            "warning: {}: its sigma columns ({}) are not read: the prediction takes \
+        warnings.say(format!(
+            "{}: its sigma columns ({}) are not read: the prediction takes \
              --sigma-pos and --sigma-rot for every unit",
             path.display(),
             sigma_columns.join(", ")
-        );
+        ));
     }
     let refused = refused_lines(robot, &qs, &t, cell);
     if !refused.is_empty() {
-        eprintln!(
-            "warning: {}: {} row(s) break the cell's constraints (--margin-deg, --floor-mm, \
+        warnings.say(format!(
+            "{}: {} row(s) break the cell's constraints (--margin-deg, --floor-mm, \
              --forbid; lines {}): predicted as listed",
             path.display(),
             refused.len(),
             lines_of(&refused)
-        );
+        ));
     }
     let lines = t.table.lines.clone();
     if per == 1 {
@@ -317,11 +319,12 @@ fn print_prediction(label: &str, p: &Prediction, measure: robocal::identify::Mea
 /// pool's first ones: enough for every parameter a pose set identifies).
 const POSE_CHECK_CONFIGURATIONS: usize = 500;
 
-/// Warns of the parameters pose measurements of the pool's configurations would identify and
-/// `measure` (position, orientation, relative, distance) cannot on the same pool (`design`;
-/// `what` names the pool in the warning):
-/// they keep their nominal values in the plan, and its predicted errors leave their errors
-/// out (lengths under orientation measurements, the base under distances).
+/// The warnings (printed by the caller) of the parameters pose measurements of the pool's
+/// configurations would identify and `measure` (position, orientation, relative, distance)
+/// cannot on the same pool (`design`; `what` names the pool in the warning): they keep their
+/// nominal values in the plan, and its predicted errors leave their errors out (lengths under
+/// orientation measurements, the base under distances); and, for a measure of positions,
+/// of those a point off the file's tool point would identify too.
 fn warn_unseen(
     robot: &Robot,
     params: &str,
@@ -330,7 +333,8 @@ fn warn_unseen(
     pool: &Pool,
     design: &Design,
     what: &str,
-) -> Result<()> {
+) -> Result<Vec<String>> {
+    let mut warnings = Vec::new();
     let pose = identifiable(
         robot,
         params,
@@ -344,8 +348,8 @@ fn warn_unseen(
     };
     let unseen: Vec<&String> = pose.iter().filter(|name| !seen.contains(name)).collect();
     if !unseen.is_empty() {
-        eprintln!(
-            "warning: measure {} cannot identify {} of the {} parameters pose measurements of \
+        warnings.push(format!(
+            "measure {} cannot identify {} of the {} parameters pose measurements of \
              {what} identify ({}): they keep their nominal values, and the predicted errors \
              below leave their errors out",
             measure.name(),
@@ -356,7 +360,7 @@ fn warn_unseen(
                 .map(|s| s.as_str())
                 .collect::<Vec<_>>()
                 .join(", ")
-        );
+        ));
     }
     // Positions of a point identify more where it lies off the wrist's last axis: a file's
     // tool at the flange centre plans for a point the tracker does not measure (a UR10 at its
@@ -383,8 +387,8 @@ fn warn_unseen(
                     .find(|p| p.name() == name)
                     .map_or(0.0, |&p| r.param(p))
             };
-            eprintln!(
-                "warning: the positions of a point moved {OFF_TOOL_MM} mm along each axis of \
+            warnings.push(format!(
+                "the positions of a point moved {OFF_TOOL_MM} mm along each axis of \
                  the flange frame from the file's tool point (to ({:.1}, {:.1}, {:.1}) mm in \
                  it) identify {} parameter(s) more than the tool point's ({}): the plan is for \
                  a point at the file's tool; give the measured point's offset (the reflector's \
@@ -394,10 +398,10 @@ fn warn_unseen(
                 t("tool.z") + OFF_TOOL_MM,
                 more.len(),
                 more.join(", ")
-            );
+            ));
         }
     }
-    Ok(())
+    Ok(warnings)
 }
 
 /// How far (mm, along each axis of the flange frame) [`off_tool`] moves the tool point.
@@ -453,14 +457,15 @@ fn warn_partial(
     params: &str,
     sigmas: robocal::identify::Sigmas,
     pool: &Pool,
+    warnings: &mut Warnings,
 ) -> Result<()> {
     let pose = robocal::identify::Measure::Pose;
     let chosen = identifiable(robot, params, pose, sigmas, pool)?;
     let full = identifiable(robot, "full", pose, sigmas, pool)?;
     let left: Vec<&String> = full.iter().filter(|name| !chosen.contains(name)).collect();
     if !left.is_empty() {
-        eprintln!(
-            "warning: --params {params} leaves out {} of the {} parameters `full` identifies \
+        warnings.say(format!(
+            "--params {params} leaves out {} of the {} parameters `full` identifies \
              ({}): the plan takes them as exact, so its predicted errors are those of a robot \
              whose deviations lie in --params alone (the noise floor of the selection, not a \
              forecast: a robot with deviations in the others misses by their effect, which \
@@ -471,7 +476,7 @@ fn warn_partial(
                 .map(|s| s.as_str())
                 .collect::<Vec<_>>()
                 .join(", ")
-        );
+        ));
     }
     Ok(())
 }
@@ -497,6 +502,8 @@ pub fn run(a: PlanArgs) -> Result<()> {
         usage!("--validation {}: give 1 to 100000", a.validation);
     }
     let robot = read_robot(&a.robot)?;
+    // What the command warns of, kept for its report.
+    let mut warnings = Warnings::default();
     // A selection that names no parameter of this robot is a flag's value refused.
     if let Err(e) = robocal::identify::candidates(&robot, &a.params) {
         usage!("--params `{}`: {e}", a.params);
@@ -536,7 +543,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
     };
     // A list evaluated or chosen from is taken as given: the margin only refuses its rows.
     if a.evaluate.is_none() && a.candidates.is_none() {
-        warn_narrow(&robot, &region, &limits);
+        warn_narrow(&robot, &region, &limits, &mut warnings);
     }
     // The pool, and the file lines and joints (file units, as read) of its configurations
     // where they were given.
@@ -544,7 +551,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
         evaluated,
         &a.candidates,
     ) {
-        (Some((p, list)), _) => evaluated_list(p, list, &robot, per, &limits)?,
+        (Some((p, list)), _) => evaluated_list(p, list, &robot, per, &limits, &mut warnings)?,
         (None, Some(p)) => {
             let what = p.display().to_string();
             let (qs, t) = configurations(p, &robot)?;
@@ -680,8 +687,8 @@ pub fn run(a: PlanArgs) -> Result<()> {
                  that move every joint)",
             )
         };
-        eprintln!(
-            "warning: {}: the {what} {verb} {} of the {} parameters that {} configurations \
+        warnings.say(format!(
+            "{}: the {what} {verb} {} of the {} parameters that {} configurations \
              spread over the region identify; {} ({}) keep their nominal values, and the \
              prediction below leaves their errors out: it is optimistic, {then}",
             list.display(),
@@ -690,7 +697,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
             a.pool,
             missed.len(),
             missed.join(", ")
-        );
+        ));
     }
     if measure != robocal::identify::Measure::Pose {
         // What the measure cannot see at all: against the spread configurations where a list
@@ -703,13 +710,16 @@ pub fn run(a: PlanArgs) -> Result<()> {
             ),
             _ => (&candidates, &design, "these configurations".to_string()),
         };
-        warn_unseen(&robot, &a.params, measure, sigmas, pool, against, &what)?;
+        for w in warn_unseen(&robot, &a.params, measure, sigmas, pool, against, &what)? {
+            warnings.say(w);
+        }
     }
     warn_partial(
         &robot,
         &a.params,
         sigmas,
         spread_pool.as_ref().unwrap_or(&candidates),
+        &mut warnings,
     )?;
     let (units, chosen) = match (&a.evaluate, a.target_mm, a.count) {
         (Some(p), _, _) => {
@@ -876,6 +886,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
             exchanges: chosen.as_ref().map(|c| c.exchanges),
             prediction,
             random_prediction,
+            warnings: warnings.into_vec(),
         };
         // Tagged as every report is (`kind`), so that `robocal report` reads it.
         super::summary::write_report(path, &robocal::reports::Report::Plan(report))?;

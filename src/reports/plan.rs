@@ -46,6 +46,9 @@ pub struct PlanReport {
     pub prediction: Prediction,
     /// What as many random units predict.
     pub random_prediction: Option<Prediction>,
+    /// The warnings `plan` printed, in order (absent in reports written before 2026-12-02).
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 /// The inputs of a plan besides the robot, parameters, measure and criterion.
