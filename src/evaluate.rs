@@ -51,7 +51,14 @@ impl Summary {
             mean: v.iter().sum::<f64>() / n,
             rms: (v.iter().map(|x| x * x).sum::<f64>() / n).sqrt(),
             p95: sorted[rank - 1],
-            max: v.iter().cloned().fold(0.0, f64::max),
+            // NaN propagates as in mean, rms and p95 (f64::max would drop it).
+            max: v.iter().fold(0.0, |m: f64, &x| {
+                if x.is_nan() || m.is_nan() {
+                    f64::NAN
+                } else {
+                    m.max(x)
+                }
+            }),
         })
     }
 }
@@ -321,6 +328,7 @@ pub fn misplaced_model_warning(
 
 /// Statistics of a kinematic model on a set.
 pub fn evaluate_model(robot: &Robot, set: &MeasurementSet, measure: Measure) -> Result<ErrorStats> {
+    set.check_rows(robot)?;
     Ok(summarize(&row_errors(set, measure, |q| {
         tool_pose(robot, q)
     })?))

@@ -276,6 +276,59 @@ fn given_configurations_give_the_drawn_rows() {
     );
 }
 
+/// Non-geometric errors and a region built in code meet the checks a file's reader makes: a
+/// gear of joint 0 or 7, a backlash of 3 joints, a NaN amplitude and a NaN region are errors,
+/// not an index out of bounds or NaN rows.
+#[test]
+fn simulation_checks_what_code_builds() {
+    let r = robot("fanuc_r2000ib_210f.toml");
+    let run = |ng: &NonGeometric, region: &Region| {
+        Simulation {
+            truth: &r,
+            nongeometric: ng,
+            configurations: Configurations::Drawn { region, count: 5 },
+            seed: 1,
+            sigma_position_mm: 0.0,
+            sigma_rotation_rad: 0.0,
+            observe: Observe::Pose,
+        }
+        .run(PathBuf::from("sim.csv"))
+    };
+    let limits = Region::limits(&r);
+    let gear = |joint: usize, amplitude: f64| NonGeometric {
+        gear: vec![Gear {
+            joint,
+            amplitude1_mrad: amplitude,
+            phase1_deg: 0.0,
+            amplitude2_mrad: 0.0,
+            phase2_deg: 0.0,
+        }],
+        ..NonGeometric::default()
+    };
+    for (ng, said) in [
+        (gear(0, 0.1), "gear"),
+        (gear(7, 0.1), "gear"),
+        (gear(2, f64::NAN), "gear"),
+        (
+            NonGeometric {
+                backlash: Some(Backlash { mrad: vec![0.1; 3] }),
+                ..NonGeometric::default()
+            },
+            "backlash",
+        ),
+    ] {
+        let e = run(&ng, &limits).unwrap_err().to_string();
+        assert!(
+            e.contains("non-geometric errors") && e.contains(said),
+            "{e}"
+        );
+    }
+    assert!(run(&gear(2, 0.1), &limits).is_ok());
+    let nan = Region(vec![[f64::NAN, f64::NAN]; 6]);
+    let e = run(&NonGeometric::default(), &nan).unwrap_err().to_string();
+    assert!(e.contains("region: joint 1"), "{e}");
+}
+
 /// Displacement of the tool point (mm) that one non-geometric term causes at `q`.
 fn displacement(r: &Robot, ng: &NonGeometric, q: &[f64], previous: &[f64]) -> (Vec<f64>, f64) {
     let mut ws = Frames::new(r);

@@ -118,3 +118,81 @@ fn compensator_round_trips_through_text_and_bytes() {
         .to_string();
     assert!(err.starts_with(IN_MEMORY), "{err}");
 }
+
+/// A set built in code with rows the robot cannot be evaluated at (joints of another count,
+/// a joint or reading not finite, a sigma not positive) is an error naming the row in
+/// `identify`, `evaluate_model` and compensator training (they panicked in forward
+/// kinematics, or said "the data identify none of the selected parameters"); an empty set is
+/// said to be empty. IK refuses a seed or target not finite (a NaN seed gave Ok(NaN joints)).
+#[test]
+fn rows_built_in_code_are_checked_not_panicked_on() {
+    use robocal::evaluate::evaluate_model;
+    use robocal::identify::{Measure, Options, identify};
+    use robocal::kinematics::{IkFailure, IkOptions, IkSolver, IkStart, RobotModel};
+    let robot = Robot::from_toml(&shipped("datasets/robots/fanuc_r2000ib_210f.toml")).unwrap();
+    let good = |k: usize| {
+        let q: Vec<f64> = (0..6).map(|j| 0.1 * ((k * 7 + j) as f64).sin()).collect();
+        let mut m = Measurement::new(q.clone());
+        let pose = tool_pose(&robot, &q);
+        m.position = Some(pose.translation.vector);
+        m.rotation = Some(pose.rotation);
+        m.line = k + 2;
+        m
+    };
+    let rows: Vec<Measurement> = (0..20).map(good).collect();
+    type Spoil = fn(&mut Measurement);
+    let spoils: [(Spoil, &str); 5] = [
+        (
+            |m| m.q.truncate(5),
+            "line 5: 5 joint values for a robot with 6 joints",
+        ),
+        (|m| m.q.push(0.0), "line 5: 7 joint values"),
+        (|m| m.q[2] = f64::NAN, "line 5: a joint value is not finite"),
+        (
+            |m| m.position = m.position.map(|p| p * f64::NAN),
+            "line 5: its position is not finite",
+        ),
+        (
+            |m| m.sigma_position = Some(nalgebra::Vector3::new(0.03, 0.0, 0.03)),
+            "line 5: a sigma is not finite and positive",
+        ),
+    ];
+    for (spoil, said) in spoils {
+        let mut bad = rows.clone();
+        spoil(&mut bad[3]);
+        let set = MeasurementSet::from_rows(bad);
+        let e = identify(&robot, &set, &Options::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(said), "identify: {e}");
+        let e = evaluate_model(&robot, &set, Measure::Position)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(said), "evaluate: {e}");
+        let e = Compensator::train(&robot, &set, &CompensatorOptions::default(), &|_, _| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(said), "train: {e}");
+    }
+    let e = identify(
+        &robot,
+        &MeasurementSet::from_rows(Vec::new()),
+        &Options::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("no rows to identify from"), "{e}");
+    // IK: a NaN seed or target is refused.
+    let start = IkStart::choose(&robot, None).unwrap();
+    let mut ik = IkSolver::new(RobotModel::new(&robot), start, IkOptions::default());
+    let target = tool_pose(&robot, &[0.1, 0.2, -0.1, 0.3, -0.4, 0.5]);
+    let nan = [f64::NAN; 6];
+    assert!(matches!(
+        ik.nearest(&target, Some(&nan)),
+        Err(IkFailure::BadSeed(_))
+    ));
+    let mut lost = target;
+    lost.translation.vector.x = f64::NAN;
+    assert!(ik.nearest(&lost, None).is_err());
+    assert!(ik.nearest(&target, None).is_ok());
+}

@@ -642,6 +642,13 @@ pub(crate) fn frames_near_lock(
 
 /// Identifies `nominal`'s selected parameters from `set`.
 pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result<Identified> {
+    if set.rows.is_empty() {
+        return Err(Error::Invalid(format!(
+            "{}: no rows to identify from",
+            set.source.display()
+        )));
+    }
+    set.check_rows(nominal)?;
     let measure = opts.measure.unwrap_or_else(|| Measure::default_for(set));
     let mut obs = Observations::new(set, measure, opts.sigmas)?;
     let (completed, candidates, mut notes) = candidates(nominal, &opts.params)?;

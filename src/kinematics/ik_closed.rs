@@ -218,6 +218,7 @@ impl ClosedFormIk {
     /// [`ClosedFormIk::solve_unlimited`] at a UR-class wrist singularity with q6 that of
     /// `reference` (rad) where the elbow reaches ([`super::ik_parallel`]); the same elsewhere.
     pub fn solve_unlimited_near(&self, target: &Pose, reference: &[f64], out: &mut Vec<[f64; 6]>) {
+        six_joints(reference);
         out.clear();
         self.each_solution(target, Some(reference), Beyond::Nothing, None, |_, q| {
             out.push(q)
@@ -410,6 +411,7 @@ impl ClosedFormIk {
     /// [`ClosedFormIk::solve`], a wrist singularity's split of q4 + s q6 the one nearest
     /// `reference` (rad).
     pub fn solve_around(&self, target: &Pose, reference: &[f64], out: &mut Vec<[f64; 6]>) -> bool {
+        six_joints(reference);
         let mut raw = Vec::with_capacity(8);
         self.solve_unlimited_near(target, reference, &mut raw);
         for q in &mut raw {
@@ -451,6 +453,7 @@ impl ClosedFormIk {
     /// The solution within the limits nearest `reference` (rad, Euclidean over the joints):
     /// each joint's copy is chosen on its own, so ranges of many turns cost nothing.
     pub fn solve_nearest(&self, target: &Pose, reference: &[f64]) -> Option<[f64; 6]> {
+        six_joints(reference);
         let mut raw = Vec::with_capacity(8);
         self.solve_unlimited_near(target, reference, &mut raw);
         let mut best: Option<(f64, [f64; 6])> = None;
@@ -475,6 +478,7 @@ impl ClosedFormIk {
     /// half of what the sum lacks, over the sum's nearest whole turn), so that a reference on
     /// the continuum is returned as it is. Elsewhere `q` unchanged.
     pub fn wrist_split_nearest(&self, q: &[f64; 6], reference: &[f64]) -> [f64; 6] {
+        six_joints(reference);
         match self.straight_wrist(q) {
             Some(s) => self.split_nearest(q, s, reference),
             None => *q,
@@ -512,6 +516,7 @@ impl ClosedFormIk {
     /// its limits, the copy nearest `reference` and false. At a wrist singularity, q4 and q6
     /// split first as [`ClosedFormIk::wrist_split_within_limits`] does.
     pub fn nearest_copy(&self, q: &[f64; 6], reference: &[f64]) -> ([f64; 6], bool) {
+        six_joints(reference);
         self.turn_copy(&self.wrist_split_within_limits(q, reference), reference)
     }
 
@@ -521,6 +526,7 @@ impl ClosedFormIk {
     /// to the box), the one nearest `reference` (rad); the unconstrained split where no line
     /// crosses the box. `q` unchanged away from a wrist singularity.
     pub fn wrist_split_within_limits(&self, q: &[f64; 6], reference: &[f64]) -> [f64; 6] {
+        six_joints(reference);
         let Some(s) = self.straight_wrist(q) else {
             return *q;
         };
@@ -684,4 +690,16 @@ fn distinct_mod_turn(raw: &[[f64; 6]]) -> Vec<[f64; 6]> {
         }
     }
     out
+}
+
+/// Panics unless `reference` holds six joints (rad): every function of [`ClosedFormIk`]
+/// taking a reference reads all six (some only at a wrist singularity, where a short one
+/// would pass ordinary use and fail there), as [`crate::kinematics::tool_pose`] requires a
+/// joint per joint.
+fn six_joints(reference: &[f64]) {
+    assert_eq!(
+        reference.len(),
+        6,
+        "a closed-form reference holds the six joints (rad) of the arm"
+    );
 }

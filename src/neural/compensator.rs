@@ -14,7 +14,7 @@
 //! [`super::domain`].
 
 use super::domain::Domain;
-use super::encoding::Encoding;
+pub use super::encoding::Encoding;
 use super::rbf::Rbf;
 pub use super::settings::{CompensatorOptions, Form, Network, Refine, Settings};
 use super::shrink::Shrink;

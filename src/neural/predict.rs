@@ -353,6 +353,10 @@ impl Compensator {
 
     /// The compensated tool pose for joints `q` (rad, mm). Allocation-free once `ws` has been
     /// used for this compensator.
+    ///
+    /// # Panics
+    /// Where `q` does not hold one value per joint of the compensator's robot (as
+    /// [`crate::kinematics::tool_pose`]).
     pub fn predict(&self, q: &[f64], ws: &mut PredictWorkspace) -> Pose {
         self.correction(q, ws);
         self.corrected(q, ws)

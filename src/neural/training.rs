@@ -54,6 +54,7 @@ impl Compensator {
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<(Compensator, CompensatorReport)> {
         let started = std::time::Instant::now();
+        set.check_rows(robot)?;
         // Positions in metres or inches, refused as `identify` and `evaluate` refuse them: a
         // network would learn the factor, and its file would write metres as mm.
         check_position_scale(robot, set)?;

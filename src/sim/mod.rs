@@ -221,9 +221,25 @@ impl Simulation<'_> {
     ) -> Result<()> {
         let robot = self.truth;
         let n = robot.dof();
+        // Built in code, the errors meet the checks a file's reader makes (a gear of joint 0
+        // indexed out of bounds; a NaN amplitude gave NaN poses).
+        self.nongeometric
+            .check(robot)
+            .map_err(|f| Error::Invalid(format!("non-geometric errors: {}: {f}", f.key)))?;
         match self.configurations {
             Configurations::Drawn { region, .. } if region.0.len() != n => {
                 return Err(Error::Invalid("region does not match the robot".into()));
+            }
+            Configurations::Drawn { region, .. } => {
+                if let Some(j) = (region.0.iter())
+                    .position(|&[lo, hi]| !(lo.is_finite() && hi.is_finite() && lo <= hi))
+                {
+                    return Err(Error::Invalid(format!(
+                        "region: joint {}: range {:?} must be finite and ordered",
+                        j + 1,
+                        region.0[j]
+                    )));
+                }
             }
             Configurations::Given(given) => {
                 if let Some(k) = given.iter().position(|q| q.len() != n) {
@@ -240,7 +256,6 @@ impl Simulation<'_> {
                     )));
                 }
             }
-            _ => {}
         }
         for s in [self.sigma_position_mm, self.sigma_rotation_rad] {
             if !s.is_finite() || s < 0.0 {
@@ -283,10 +298,10 @@ impl Simulation<'_> {
             previous = q.clone();
             // The bound a measurement file's positions have: the data must read back.
             let far = crate::model::MAX_LENGTH_MM;
-            if pose.translation.vector.iter().any(|v| v.abs() > far) {
+            if pose.translation.vector.iter().any(|v| !v.is_finite() || v.abs() > far) {
                 return Err(Error::Invalid(format!(
-                    "configuration {}: the simulated tool lies beyond {far} mm, the bound of a \
-                     measured position",
+                    "configuration {}: the simulated tool is not finite or lies beyond {far} \
+                     mm, the bound of a measured position",
                     k + 1
                 )));
             }

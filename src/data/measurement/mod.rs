@@ -120,6 +120,53 @@ impl MeasurementSet {
         )
     }
 
+    /// Refuses rows `robot` cannot be evaluated at: joints not one finite value per joint
+    /// (rad, mm), a position, orientation or distance not finite, or a sigma not finite and
+    /// positive. A file's reader refuses these cell by cell; a set built in code meets the
+    /// check here (`identify`, `evaluate_model` and compensator training call it first), not a
+    /// panic or NaN figures further on. The error names the row (its line where it has one).
+    pub fn check_rows(&self, robot: &Robot) -> Result<()> {
+        let bad = |i: usize, what: String| {
+            Err(crate::error::Error::Invalid(format!(
+                "{}: {}: {what}",
+                self.source.display(),
+                row_name(self.rows[i].line, i)
+            )))
+        };
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        let sigma = |v: &Vector3<f64>| v.iter().all(|x| x.is_finite() && *x > 0.0);
+        for (i, r) in self.rows.iter().enumerate() {
+            if r.q.len() != robot.dof() {
+                return bad(
+                    i,
+                    format!(
+                        "{} joint values for a robot with {} joints",
+                        r.q.len(),
+                        robot.dof()
+                    ),
+                );
+            }
+            if !finite(&r.q) {
+                return bad(i, "a joint value is not finite".into());
+            }
+            if r.position.is_some_and(|p| !finite(p.as_slice())) {
+                return bad(i, "its position is not finite".into());
+            }
+            if r.rotation.is_some_and(|m| !finite(m.matrix().as_slice())) {
+                return bad(i, "its orientation is not finite".into());
+            }
+            if r.distance.is_some_and(|d| !d.is_finite()) {
+                return bad(i, "its distance is not finite".into());
+            }
+            if r.sigma_position.is_some_and(|s| !sigma(&s))
+                || r.sigma_rotation.is_some_and(|s| !sigma(&s))
+            {
+                return bad(i, "a sigma is not finite and positive".into());
+            }
+        }
+        Ok(())
+    }
+
     /// Whether every row has a measured position.
     pub fn has_position(&self) -> bool {
         !self.rows.is_empty() && self.rows.iter().all(|r| r.position.is_some())

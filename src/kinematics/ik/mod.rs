@@ -170,6 +170,14 @@ impl<M: ToolModel> IkSolver<M> {
 
     /// A target beyond [`REACH_MARGIN`] times the model's reach as a failure saying how far.
     fn check_reach(&self, target: &Pose) -> std::result::Result<(), IkFailure> {
+        let finite = (target.translation.vector.iter())
+            .chain(target.rotation.matrix().iter())
+            .all(|v| v.is_finite());
+        if !finite {
+            return Err(IkFailure::Unreachable(
+                "the target pose is not finite".into(),
+            ));
+        }
         if !self.reach.holds(&target.translation.vector) {
             let d = self.reach.distance_mm(&target.translation.vector);
             let bound = self.reach.bound_mm;
@@ -303,6 +311,10 @@ impl<M: ToolModel> IkSolver<M> {
                 s.len(),
                 self.mid.len()
             ))),
+            // A seed not finite picks no branch (every distance NaN) and starts no solve.
+            Some(s) if s.iter().any(|v| !v.is_finite()) => {
+                Err(IkFailure::BadSeed("a seed joint is not finite".into()))
+            }
             _ => Ok(()),
         }
     }

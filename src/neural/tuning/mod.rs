@@ -434,9 +434,9 @@ fn cross_validate(
     if k < 2 || want < 2 {
         return Err(Error::Invalid(format!(
             "choosing the settings by cross-validation needs at least 2 folds of distinct \
-             configurations (got {k}); fix the network, form, encoding, hidden units, \
-             penalty, ensemble size and refinement instead (--network, --form, --encoding, \
-             --hidden, --penalty, --members, --refine)"
+             configurations (asked for {want}, the rows' {distinct} distinct configurations \
+             give {k}); fix the network, form, encoding, hidden units, penalty, ensemble size \
+             and refinement instead"
         )));
     }
     let cv = Cv {
