@@ -51,14 +51,12 @@ impl Summary {
             mean: v.iter().sum::<f64>() / n,
             rms: (v.iter().map(|x| x * x).sum::<f64>() / n).sqrt(),
             p95: sorted[rank - 1],
-            // NaN propagates as in mean, rms and p95 (f64::max would drop it).
-            max: v.iter().fold(0.0, |m: f64, &x| {
-                if x.is_nan() || m.is_nan() {
-                    f64::NAN
-                } else {
-                    m.max(x)
-                }
-            }),
+            // NaN propagates as in mean and rms (f64::max would drop it).
+            max: if v.iter().any(|x| x.is_nan()) {
+                f64::NAN
+            } else {
+                v.iter().copied().fold(0.0, f64::max)
+            },
         })
     }
 }
@@ -337,6 +335,14 @@ pub fn evaluate_model(robot: &Robot, set: &MeasurementSet, measure: Measure) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_summary_of_a_nan_is_nan_throughout() {
+        let s = Summary::of(&[1.0, 3.0, 2.0]).unwrap();
+        assert_eq!((s.mean, s.max), (2.0, 3.0));
+        let s = Summary::of(&[f64::NAN, 1.0, 2.0]).unwrap();
+        assert!(s.mean.is_nan() && s.rms.is_nan() && s.max.is_nan(), "{s:?}");
+    }
 
     fn row(line: usize, mm: Option<f64>) -> RowError {
         RowError {

@@ -298,7 +298,12 @@ impl Simulation<'_> {
             previous = q.clone();
             // The bound a measurement file's positions have: the data must read back.
             let far = crate::model::MAX_LENGTH_MM;
-            if pose.translation.vector.iter().any(|v| !v.is_finite() || v.abs() > far) {
+            if pose
+                .translation
+                .vector
+                .iter()
+                .any(|v| !v.is_finite() || v.abs() > far)
+            {
                 return Err(Error::Invalid(format!(
                     "configuration {}: the simulated tool is not finite or lies beyond {far} \
                      mm, the bound of a measured position",
