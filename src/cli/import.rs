@@ -59,7 +59,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
         eprintln!("warning: {e} (written as read: `identify` and `train` refuse such rows)");
     }
     super::output::writing(write_measurements(&set, &joints, &a.out), &a.out)?;
-    if let Some(note) = renamed_note(&Layout::of(&set), joints.len()) {
+    if let Some(note) = super::output::renamed_note(&Layout::of(&set), joints.len()) {
         eprintln!("{note}");
     }
     let what = match (set.has_position(), set.has_rotation()) {
@@ -82,20 +82,4 @@ pub fn run(a: ImportArgs) -> Result<()> {
         a.out.display()
     );
     Ok(())
-}
-
-/// The note naming the carried columns of `layout` written under another name
-/// ([`Layout::carried_names`]), None where none is.
-pub(super) fn renamed_note(layout: &Layout, joints: usize) -> Option<String> {
-    let written = layout.carried_names(joints);
-    let renamed: Vec<String> = (layout.extra.iter().zip(&written))
-        .filter(|(a, b)| a != b)
-        .map(|(a, b)| format!("{a} as {b}"))
-        .collect();
-    (!renamed.is_empty()).then(|| {
-        format!(
-            "note: carried column(s) a canonical reader would take as fields were renamed: {}",
-            renamed.join(", ")
-        )
-    })
 }

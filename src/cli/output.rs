@@ -207,6 +207,25 @@ pub fn emit(
     }
 }
 
+/// The note naming the carried columns of `layout` written under another name
+/// ([`robocal::data::measurement::Layout::carried_names`]), None where none is.
+pub(super) fn renamed_note(
+    layout: &robocal::data::measurement::Layout,
+    joints: usize,
+) -> Option<String> {
+    let written = layout.carried_names(joints);
+    let renamed: Vec<String> = (layout.extra.iter().zip(&written))
+        .filter(|(a, b)| a != b)
+        .map(|(a, b)| format!("{a} as {b}"))
+        .collect();
+    (!renamed.is_empty()).then(|| {
+        format!(
+            "note: carried column(s) a canonical reader would take as fields were renamed: {}",
+            renamed.join(", ")
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::rows_to_json;

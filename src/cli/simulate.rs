@@ -132,7 +132,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
                 .map(|&c| g.t.table.headers[c].clone())
                 .collect();
         }
-        if let Some(note) = super::import::renamed_note(&measured_layout, joints.len()) {
+        if let Some(note) = super::output::renamed_note(&measured_layout, joints.len()) {
             told_after_on_stderr!("{note}");
         }
     }

@@ -411,7 +411,6 @@ impl ClosedFormIk {
     /// [`ClosedFormIk::solve`], a wrist singularity's split of q4 + s q6 the one nearest
     /// `reference` (rad).
     pub fn solve_around(&self, target: &Pose, reference: &[f64], out: &mut Vec<[f64; 6]>) -> bool {
-        six_joints(reference);
         let mut raw = Vec::with_capacity(8);
         self.solve_unlimited_near(target, reference, &mut raw);
         for q in &mut raw {
@@ -453,7 +452,6 @@ impl ClosedFormIk {
     /// The solution within the limits nearest `reference` (rad, Euclidean over the joints):
     /// each joint's copy is chosen on its own, so ranges of many turns cost nothing.
     pub fn solve_nearest(&self, target: &Pose, reference: &[f64]) -> Option<[f64; 6]> {
-        six_joints(reference);
         let mut raw = Vec::with_capacity(8);
         self.solve_unlimited_near(target, reference, &mut raw);
         let mut best: Option<(f64, [f64; 6])> = None;
@@ -516,7 +514,6 @@ impl ClosedFormIk {
     /// its limits, the copy nearest `reference` and false. At a wrist singularity, q4 and q6
     /// split first as [`ClosedFormIk::wrist_split_within_limits`] does.
     pub fn nearest_copy(&self, q: &[f64; 6], reference: &[f64]) -> ([f64; 6], bool) {
-        six_joints(reference);
         self.turn_copy(&self.wrist_split_within_limits(q, reference), reference)
     }
 
@@ -693,7 +690,8 @@ fn distinct_mod_turn(raw: &[[f64; 6]]) -> Vec<[f64; 6]> {
 }
 
 /// Panics unless `reference` holds six joints (rad): every function of [`ClosedFormIk`]
-/// taking a reference reads all six (some only at a wrist singularity, where a short one
+/// taking a reference reads all six and checks them here, first or through the function it
+/// starts with (some only at a wrist singularity, where a short one
 /// would pass ordinary use and fail there), as [`crate::kinematics::tool_pose`] requires a
 /// joint per joint.
 fn six_joints(reference: &[f64]) {

@@ -107,7 +107,7 @@ impl Layout {
     /// The cells of one row (mm, deg), blank where the row lacks a group the layout has.
     pub fn cells(&self, m: &Measurement, joints: &[JointInfo]) -> Vec<String> {
         // -0 (an angle of an exact rotation, say) is written 0.
-        let num = |v: f64| format!("{}", if v == 0.0 { 0.0 } else { v });
+        let num = number_cell;
         let mut c: Vec<String> = Vec::new();
         let text = |o: &Option<String>| o.clone().unwrap_or_default();
         if self.id {
@@ -197,6 +197,11 @@ impl MeasurementWriter {
     /// Writes one row (in file units: deg, mm), blank where it lacks a group of the layout.
     pub fn write(&mut self, m: &Measurement) -> Result<()> {
         let cells = self.layout.cells(m, &self.joints);
+        self.record(cells)
+    }
+
+    /// Writes one row's cells.
+    fn record(&mut self, cells: Vec<String>) -> Result<()> {
         self.w
             .write_record(cells)
             .map_err(|e| Error::Invalid(format!("{}: {e}", self.w.get_ref().path().display())))
@@ -212,11 +217,9 @@ impl MeasurementWriter {
             .filter(|on| **on)
             .count();
         for (cell, &v) in cells[first..first + self.joints.len()].iter_mut().zip(q) {
-            *cell = format!("{}", if v == 0.0 { 0.0 } else { v });
+            *cell = number_cell(v);
         }
-        self.w
-            .write_record(cells)
-            .map_err(|e| Error::Invalid(format!("{}: {e}", self.w.get_ref().path().display())))
+        self.record(cells)
     }
 
     /// Flushes the rows and moves the file into place (or stages it for the open transaction).
@@ -227,4 +230,10 @@ impl MeasurementWriter {
             .map_err(|e| Error::Invalid(format!("{}: {}", path.display(), e.error())))?
             .finish()
     }
+}
+
+/// A number as a cell (mm, deg): shortest round-trip text, -0 (an angle of an exact rotation,
+/// say) written 0.
+fn number_cell(v: f64) -> String {
+    format!("{}", if v == 0.0 { 0.0 } else { v })
 }
