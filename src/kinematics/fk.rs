@@ -6,7 +6,7 @@ use super::load::{
     Load, accumulate_moments, axis_column, moment_deflection, torque, world_gravity,
 };
 use crate::model::Robot;
-use crate::model::robot::{Motion, apply_motion};
+use crate::model::chain::{Motion, apply_motion};
 
 /// The tool pose (mm, in the base row's reference frame) for commanded joints `q` (rad or
 /// mm); for a compliant robot, the pose it reaches under gravity.

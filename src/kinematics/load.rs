@@ -20,7 +20,7 @@
 
 use super::Pose;
 use super::gravity::{PointMass, mass_points};
-use crate::model::robot::Motion;
+use crate::model::chain::Motion;
 use crate::model::{Compliance, JointType, Robot};
 use nalgebra::{Matrix6x3, Vector3, Vector6};
 

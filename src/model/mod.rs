@@ -1,8 +1,10 @@
 //! Robot models: rows, joints, named parameters and robot files.
 
 pub(crate) mod axes;
+pub(crate) mod chain;
 pub mod compliance;
 pub mod file;
+pub mod joint;
 pub mod mass;
 pub mod robot;
 pub mod row;

@@ -4,21 +4,12 @@
 //! A [`Robot`] never changes during a solve. It keeps the rows as written (file units) and a
 //! compiled chain of constant transforms that forward kinematics runs through.
 
-use super::axes::{Anchor, ParamAxis};
+use super::chain::{Chain, compile};
 use super::compliance::Compliance;
+pub use super::joint::{Joint, JointType, LIMIT_TOL};
 use super::mass::MassProperties;
-use super::row::{Convention, Field, PAYLOAD, Row, apply_z, apply_z_sc};
+use super::row::{Convention, Field, PAYLOAD, Row};
 use crate::error::{Error, Result};
-use crate::geometry::Pose;
-
-/// Revolute joints add their variable to theta; prismatic joints add it to d.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum JointType {
-    /// Rotates: the variable (rad inside, deg in files) adds to theta.
-    Revolute,
-    /// Slides: the variable (mm) adds to d.
-    Prismatic,
-}
 
 /// Largest length (mm) a robot may hold: 100 m, far beyond any robot or cell, small enough
 /// that poses stay exact in f64.
@@ -27,93 +18,6 @@ pub const MAX_LENGTH_MM: f64 = 1e5;
 pub const MAX_ANGLE_DEG: f64 = 720.0;
 /// Largest joint limit (deg) of a revolute joint: four turns either way.
 pub const MAX_JOINT_DEG: f64 = 1440.0;
-
-impl JointType {
-    /// Lower-case name, as in robot files: `revolute` or `prismatic`.
-    pub fn name(self) -> &'static str {
-        match self {
-            JointType::Revolute => "revolute",
-            JointType::Prismatic => "prismatic",
-        }
-    }
-
-    /// The unit of the joint variable in files and on the command line.
-    pub fn file_unit(self) -> &'static str {
-        match self {
-            JointType::Revolute => "deg",
-            JointType::Prismatic => "mm",
-        }
-    }
-
-    /// Converts a joint value from file units (deg or mm) to internal units (rad or mm).
-    pub fn to_internal(self, v: f64) -> f64 {
-        match self {
-            JointType::Revolute => v.to_radians(),
-            JointType::Prismatic => v,
-        }
-    }
-
-    /// Converts a joint value from internal units (rad or mm) to file units (deg or mm).
-    pub fn to_file(self, v: f64) -> f64 {
-        match self {
-            JointType::Revolute => v.to_degrees(),
-            JointType::Prismatic => v,
-        }
-    }
-}
-
-/// One joint: its row, its type and its limits.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Joint {
-    /// The joint's row: its convention and constant field values (mm, deg).
-    pub row: Row,
-    /// Whether the joint variable is an angle or a length.
-    pub joint_type: JointType,
-    /// Lower and upper limit of the joint variable, in file units (deg or mm).
-    pub limits: [f64; 2],
-}
-
-/// Rounding allowance (rad or mm) of the joint limits: a joint value this little past a
-/// limit counts as within it (a solve that ends on a limit can end a rounding beyond it).
-pub const LIMIT_TOL: f64 = 1e-9;
-
-impl Joint {
-    /// Limits in internal units (rad or mm).
-    pub fn limits_internal(&self) -> [f64; 2] {
-        self.limits.map(|v| self.joint_type.to_internal(v))
-    }
-
-    /// The value `v` (rad, mm) takes nearest `reference` within the limits (widened by
-    /// [`LIMIT_TOL`]): for a revolute joint the whole-turn copy v + 2 pi k, for a prismatic
-    /// one `v` itself; None where no copy lies within them.
-    pub fn nearest_turn(&self, v: f64, reference: f64) -> Option<f64> {
-        let (kmin, kmax) = self.turns(v)?;
-        let tau = std::f64::consts::TAU;
-        Some(
-            v + tau
-                * ((reference - v) / tau)
-                    .round()
-                    .clamp(kmin as f64, kmax as f64),
-        )
-    }
-
-    /// The whole turns k (lowest, highest) for which `v + 2 pi k` (rad) lies within the
-    /// limits widened by [`LIMIT_TOL`]; for a prismatic joint (0, 0) where `v` (mm) lies
-    /// within them; None where no copy does.
-    pub fn turns(&self, v: f64) -> Option<(i64, i64)> {
-        const TOL: f64 = LIMIT_TOL;
-        let [lo, hi] = self.limits_internal();
-        if self.joint_type == JointType::Prismatic {
-            return (lo - TOL..=hi + TOL).contains(&v).then_some((0, 0));
-        }
-        let tau = std::f64::consts::TAU;
-        let (kmin, kmax) = (
-            ((lo - TOL - v) / tau).ceil() as i64,
-            ((hi + TOL - v) / tau).floor() as i64,
-        );
-        (kmin <= kmax).then_some((kmin, kmax))
-    }
-}
 
 /// Where a parameter sits in the chain.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -159,32 +63,6 @@ impl ParamId {
             Slot::Joint(i) => format!("{}{}", self.field.name(), i + 1),
         }
     }
-}
-
-/// Constant parts of one joint in the compiled chain.
-#[derive(Debug, Clone)]
-pub(crate) struct Link {
-    /// Constant theta (rad) and d (mm) of the row; the joint variable adds to one of them.
-    pub theta: f64,
-    pub d: f64,
-    pub prismatic: bool,
-    /// The part of the row after its RotZ TransZ (identity except for standard DH).
-    pub post: Pose,
-    /// Everything from this joint's RotZ TransZ to the next joint's RotZ TransZ:
-    /// `post_i * pre_{i+1}`, or `post_N * T_tool` for the last joint.
-    pub next: Pose,
-}
-
-/// The chain compiled into constant transforms.
-#[derive(Debug, Clone)]
-pub(crate) struct Chain {
-    /// `T_base * pre_1`.
-    pub head: Pose,
-    pub links: Vec<Link>,
-    /// The base row's transform.
-    pub base: Pose,
-    /// The screw of every parameter, in the order of [`Robot::parameters`].
-    pub axes: Vec<ParamAxis>,
 }
 
 /// A robot: base row, joints and tool row. Immutable during a solve; see [`Robot::with_param`]
@@ -807,103 +685,6 @@ impl Robot {
             .map(|(j, &v)| j.joint_type.to_file(v))
             .collect()
     }
-}
-
-fn compile(base: &Row, joints: &[Joint], tool: &Row) -> Chain {
-    let splits: Vec<_> = joints.iter().map(|j| j.row.split()).collect();
-    let base_t = base.transform();
-    let head = base_t * splits[0].pre;
-    let mut axes = super::axes::row_axes(base, None, Anchor::World);
-    for (i, j) in joints.iter().enumerate() {
-        axes.extend(super::axes::row_axes(&j.row, Some(i), Anchor::Entry(i)));
-    }
-    axes.extend(super::axes::row_axes(tool, None, Anchor::ToolEntry));
-    let tool_t = tool.transform();
-    let links = joints
-        .iter()
-        .enumerate()
-        .map(|(i, j)| {
-            let s = &splits[i];
-            let next = match splits.get(i + 1) {
-                Some(n) => s.post * n.pre,
-                None => s.post * tool_t,
-            };
-            Link {
-                theta: s.theta,
-                d: s.d,
-                prismatic: j.joint_type == JointType::Prismatic,
-                post: s.post,
-                next,
-            }
-        })
-        .collect();
-    Chain {
-        head,
-        links,
-        base: base_t,
-        axes,
-    }
-}
-
-impl Chain {
-    /// Applies joint i's variable part to `t`: `t <- t * RotZ(theta) TransZ(d)`.
-    #[inline]
-    pub(crate) fn apply_joint(&self, t: &mut Pose, i: usize, q: f64) {
-        let l = &self.links[i];
-        if l.prismatic {
-            apply_z(t, l.theta, l.d + q);
-        } else {
-            apply_z(t, l.theta + q, l.d);
-        }
-    }
-
-    /// Joint i's RotZ TransZ at its value q (rad or mm) as the sine and cosine of its angle
-    /// and its offset (mm): what [`Chain::apply_joint`] applies, for [`apply_motion`].
-    #[inline]
-    pub(crate) fn joint_motion(&self, i: usize, q: f64) -> Motion {
-        let l = &self.links[i];
-        let (theta, d) = if l.prismatic {
-            (l.theta, l.d + q)
-        } else {
-            (l.theta + q, l.d)
-        };
-        let (sin, cos) = libm::sincos(theta);
-        Motion { sin, cos, d }
-    }
-
-    /// Joint i's motion `m` moved on by `dq` (rad or mm; a deflection): the angle by the
-    /// angle-addition formulas from the sine and cosine of dq alone, which, small, needs no
-    /// range reduction, so a deflected joint costs no second full sincos. `m` itself when dq
-    /// is zero.
-    #[inline]
-    pub(crate) fn deflected(&self, i: usize, m: Motion, dq: f64) -> Motion {
-        if dq == 0.0 {
-            return m;
-        }
-        if self.links[i].prismatic {
-            return Motion { d: m.d + dq, ..m };
-        }
-        let (sd, cd) = libm::sincos(dq);
-        Motion {
-            sin: m.sin * cd + m.cos * sd,
-            cos: m.cos * cd - m.sin * sd,
-            d: m.d,
-        }
-    }
-}
-
-/// One joint's RotZ(theta) TransZ(d): sin and cos of theta, and d (mm).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub(crate) struct Motion {
-    pub sin: f64,
-    pub cos: f64,
-    pub d: f64,
-}
-
-/// `t <- t * RotZ(theta) TransZ(d)` for the motion `m`.
-#[inline]
-pub(crate) fn apply_motion(t: &mut Pose, m: Motion) {
-    apply_z_sc(t, m.sin, m.cos, m.d);
 }
 
 /// [`Field::K`]'s body code of body `b` (0-based link, or `n` for the payload).

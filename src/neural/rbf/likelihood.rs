@@ -140,14 +140,14 @@ const LANES: usize = 8;
 /// The inputs of the rows a search sees (or a fit's kernel matrix), laid out for the
 /// likelihood's two sweeps over the pairs of rows (i > j, column by column): by input
 /// (`columns`, the kernel's sweep adds input after input over many pairs at once) and by row
-/// (`rows`, each padded with zeros to a multiple of [`LANES`] inputs: the gradient's sweep
+/// (`rows`, each padded with zeros to a multiple of 8 (`LANES`) inputs: the gradient's sweep
 /// adds one pair to every input's sum, a register of inputs at a time, the sums held in
 /// registers over every pair: three times faster than through memory on 400 rows of 30
 /// inputs). The squared differences are formed on the fly from these two copies of
 /// the inputs (240 kB on 500 rows and 30 inputs, cache-resident) instead of being stored per
 /// pair and input (30 MB, read twice per evaluation). The padding only widens the registers:
 /// every pair's and every input's sum is added in the order of the sweeps written out
-/// ([`Pairs::column_squares`], `tests::pair_sweeps_match_the_pairs_written_out`), so the same
+/// (`Pairs::column_squares`, `tests::pair_sweeps_match_the_pairs_written_out`), so the same
 /// bits.
 pub struct Pairs {
     columns: Vec<Vec<f64>>,

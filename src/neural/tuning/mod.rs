@@ -35,6 +35,7 @@
 //! than the best so far on the same folds. The chosen settings are then fitted in full.
 
 mod cv;
+mod fold_plan;
 mod notes;
 mod race;
 mod rank;
@@ -50,11 +51,16 @@ pub use super::settings::OUTLIER_K;
 use super::settings::{CompensatorOptions, Network, Refine, Settings};
 use super::train::MIN_ROWS;
 use crate::data::MeasurementSet;
-use crate::data::measurement::row_name;
 use crate::error::{Error, Result};
 use crate::model::Robot;
 use cv::Cv;
-use notes::{failed, refinement_notes};
+use fold_plan::{Folds, fold_plan, more_folds_help, network_rows};
+pub use fold_plan::{rows_needed, too_few_rows};
+pub use notes::outlier_note;
+use notes::{
+    alone_model, below_or_above, failed, network_note, paired_rows, raw_ratio, refinement_notes,
+    refinement_test_note, with_margin,
+};
 use race::Race;
 use rows::sums;
 pub use rows::{folds, outliers_of, subset};
@@ -209,110 +215,6 @@ pub struct Remarks {
     pub notes: Vec<String>,
     /// What the user must know before using the compensator.
     pub warnings: Vec<String>,
-}
-
-/// The fewest training rows `network` needs: the RBF network's
-/// ([`crate::neural::rbf::MIN_ROWS`]) alone, [`MIN_ROWS`] where MLPs take part.
-pub fn rows_needed(network: Network) -> usize {
-    match network {
-        Network::Rbf => crate::neural::rbf::MIN_ROWS,
-        Network::Mlp | Network::Mix => MIN_ROWS,
-    }
-}
-
-/// The fewest training rows a network the options allow needs ([`rows_needed`]; MLPs where
-/// the network is open); None where they fix the members at 0 (no network).
-fn network_rows(opts: &CompensatorOptions) -> Option<usize> {
-    match opts.members {
-        Some(0) => None,
-        _ => Some(rows_needed(opts.network.unwrap_or(Network::Mlp))),
-    }
-}
-
-/// Cross-validation's folds of a set: its configuration groups, how many distinct, the folds
-/// asked for (`--folds`, else 4 from [`MANY`] configurations on, else 5), each row's fold and
-/// the number of folds drawn (whole configurations each, seeded).
-struct Folds {
-    groups: Vec<usize>,
-    distinct: usize,
-    want: usize,
-    fold_of: Vec<usize>,
-    k: usize,
-}
-
-/// [`Folds`] of `set` under `opts`: the one draw [`select_settings`] and [`too_few_rows`]
-/// both see.
-fn fold_plan(robot: &Robot, set: &MeasurementSet, opts: &CompensatorOptions) -> Folds {
-    let groups = super::repeats::configuration_groups(robot, set);
-    let distinct = super::repeats::group_count(&groups);
-    // Fewer folds train candidates on a smaller part of the set; where the held-out error
-    // still falls steeply with more rows (real tracker data), 3 folds chose penalties ten
-    // times too large. From MANY configurations on, candidate fits sit at their iteration
-    // floor and the cost grows with the folds: 4 there.
-    let want = opts.folds.unwrap_or(if distinct >= MANY { 4 } else { 5 });
-    let fold_of = folds(&groups, want.max(2), opts.train.seed);
-    let k = fold_of.iter().max().map_or(0, |m| m + 1);
-    Folds {
-        groups,
-        distinct,
-        want,
-        fold_of,
-        k,
-    }
-}
-
-/// Why the rows of `set` are too few to cross-validate what the options leave open: fewer than
-/// 2 folds of distinct configurations (as [`select_settings`] draws them), or folds of which
-/// some leaves fewer rows to train on than a network the options allow needs
-/// (the rows of the network the options allow). None where they suffice.
-pub fn too_few_rows(
-    robot: &Robot,
-    set: &MeasurementSet,
-    opts: &CompensatorOptions,
-) -> Option<String> {
-    let n = set.rows.len();
-    let Folds {
-        distinct,
-        fold_of,
-        k,
-        ..
-    } = fold_plan(robot, set, opts);
-    let what = if network_rows(opts).is_some() {
-        "a network"
-    } else {
-        "a refinement"
-    };
-    if k < 2 {
-        return Some(format!(
-            "{n} training row(s) of {distinct} distinct configuration(s) are too few to \
-             cross-validate {what}: it needs 2 folds of distinct configurations"
-        ));
-    }
-    let need = network_rows(opts)?;
-    let largest = (0..k)
-        .map(|f| fold_of.iter().filter(|&&g| g == f).count())
-        .max()
-        .unwrap_or(n);
-    (n - largest < need).then(|| {
-        format!(
-            "{n} training row(s) of {distinct} distinct configuration(s) are too few to \
-             cross-validate {what}: each fold must leave at least {need} rows to train on"
-        )
-    })
-}
-
-/// Whether more folds than `folds` would let cross-validation train a network of `need`
-/// rows on `set`: there are more distinct configurations than folds, and one fold per
-/// configuration leaves at least `need` rows in every fold's training part.
-fn more_folds_help(robot: &Robot, set: &MeasurementSet, folds: usize, need: usize) -> bool {
-    let groups = super::repeats::configuration_groups(robot, set);
-    let distinct = super::repeats::group_count(&groups);
-    let mut sizes = vec![0; distinct];
-    for &g in &groups {
-        sizes[g] += 1;
-    }
-    let largest = sizes.into_iter().max().unwrap_or(0);
-    distinct >= 2 && folds < distinct && set.rows.len() - largest >= need
 }
 
 /// The settings to fit: `opts`'s fixed choices, the rest chosen by cross-validation on `set`
@@ -718,167 +620,6 @@ fn stages_1_to_3(
     Ok(())
 }
 
-/// A ratio of cross-validated errors as the notes give it: `12.5 % below` or `3.0 % above`.
-fn below_or_above(ratio: f64) -> String {
-    let below = (1.0 - ratio) * 100.0;
-    if below >= 0.0 {
-        format!("{below:.1} % below")
-    } else {
-        format!("{:.1} % above", -below)
-    }
-}
-
-/// The model of a model alone's settings as the notes name it: `refine full` or `as given`.
-fn alone_model(alone: &Settings) -> String {
-    alone
-        .refine
-        .as_ref()
-        .map_or("as given".to_string(), |r| format!("refine {r}"))
-}
-
-/// "12 held-out rows", or "12 held-out rows of 9 configurations (each weighed once)" where
-/// configurations repeat (0 configurations: a report written before they were counted).
-fn rows_of(rows: usize, configurations: usize) -> String {
-    match repeated(rows, configurations) {
-        Some(c) => format!("{rows} held-out rows of {c} configurations (each weighed once)"),
-        None => format!("{rows} held-out rows"),
-    }
-}
-
-/// The count of `configurations` among `rows` where some repeat (None where none does, or
-/// where a report written before they were counted holds 0).
-fn repeated(rows: usize, configurations: usize) -> Option<usize> {
-    (configurations > 0 && configurations < rows).then_some(configurations)
-}
-
-/// A test's row-by-row figures as the notes give them.
-fn paired_rows(t: &NetworkTest) -> String {
-    if t.rows > 0 {
-        format!(
-            "paired z {:.1} over {}",
-            t.z,
-            rows_of(t.rows, t.configurations)
-        )
-    } else {
-        "no row-by-row test (the held-out rows could not be recomputed as scored)".into()
-    }
-}
-
-/// The note of a refinement's test ([`REFINEMENT_MARGIN`], [`REFINEMENT_Z`]): the refined
-/// candidate and what it was held against (each as [`Settings::describe`] says it), the
-/// figures as judged and the verdict.
-fn refinement_test_note(t: &NetworkTest, candidates: &[Candidate]) -> String {
-    let (refined, base) = (
-        &candidates[t.network].settings,
-        &candidates[t.alone].settings,
-    );
-    let by = below_or_above(t.ratio);
-    let rows = paired_rows(t);
-    let verdict = if t.kept {
-        "the refinement is kept".to_string()
-    } else {
-        format!(
-            "not {:.0} % below with a paired z of -{REFINEMENT_Z} or lower: the refinement is \
-             not kept",
-            REFINEMENT_MARGIN * 100.0
-        )
-    };
-    format!(
-        "refined, {}: cross-validated error {by} {}'s ({rows}, as judged): {verdict}",
-        refined.describe(),
-        base.describe()
-    )
-}
-
-/// The note on stage 5's test `t` of a network against the best model alone (`candidates`:
-/// the search's, which `t` indexes): `network` names the network, `then` what follows where
-/// it is not kept.
-/// The errors' own ratio of test `t` (network over model alone) and a function that gives a
-/// ratio as judged (each candidate's RMS times its refinement's margin, [`COMPLIANCE_MARGIN`])
-/// as "X % below as judged", None where the margins leave it the same: the errors' own ratio
-/// comes first, so that it and the paired z (of the errors) speak of the
-/// same figures.
-fn raw_ratio(t: &NetworkTest, candidates: &[Candidate]) -> (f64, impl Fn(f64) -> Option<String>) {
-    let raw = rank::cv_rms(candidates, t.network) / rank::cv_rms(candidates, t.alone);
-    let differs = (raw - t.ratio).abs() > 1e-12 * raw;
-    (raw, move |judged: f64| {
-        differs.then(|| format!("{} as judged", below_or_above(judged)))
-    })
-}
-
-/// `judged` (from [`raw_ratio`]) as the clause after a model alone's name.
-fn with_margin(judged: Option<String>) -> String {
-    judged.map_or(String::new(), |j| {
-        format!(
-            "; {j}, with the compliance refinement's {:.0} % margin",
-            COMPLIANCE_MARGIN * 100.0
-        )
-    })
-}
-
-fn network_note(t: &NetworkTest, candidates: &[Candidate], network: &str, then: &str) -> String {
-    let by = below_or_above;
-    let model = alone_model(&candidates[t.alone].settings);
-    let rows = paired_rows(t);
-    let (raw, judged) = raw_ratio(t, candidates);
-    let mut test = format!(
-        "{network}'s cross-validated error is {} the best model alone's ({model}{}), {rows}",
-        by(raw),
-        with_margin(judged(t.ratio))
-    );
-    // The figures that decide: those on rows no hyperparameter search saw, where they ran.
-    if let Some(u) = &t.unseen {
-        test.push_str(", with its RBF hyperparameters searched on all training rows; ");
-        test.push_str(&if u.by == Unseen::Folds {
-            format!(
-                "searched on each fold's training rows alone (no search seeing the rows it is \
-                 judged on), {}{}, paired z {:.1} over {}",
-                by(u.ratio * raw / t.ratio),
-                judged(u.ratio).map_or(String::new(), |j| format!(" ({j})")),
-                u.z,
-                rows_of(u.rows, u.configurations)
-            )
-        } else {
-            format!(
-                "on the {} held-out rows of configurations that search did not draw, {}{}, \
-                 paired z {:.1}{}",
-                u.rows,
-                by(u.ratio * raw / t.ratio),
-                judged(u.ratio).map_or(String::new(), |j| format!(" ({j})")),
-                u.z,
-                repeated(u.rows, u.configurations).map_or(String::new(), |c| {
-                    format!(" over their {c} configurations (each weighed once)")
-                })
-            )
-        });
-    }
-    if t.kept {
-        // The choice is made on position: say where the orientation pays for it.
-        let rot = |i: usize| {
-            candidates[i]
-                .score
-                .as_ref()
-                .and_then(|s| s.orientation_rms_deg)
-        };
-        return match (rot(t.network), rot(t.alone)) {
-            (Some(n), Some(a)) if n > a => format!(
-                "{test}: the network is kept (chosen on position; its cross-validated \
-                 orientation error is {:.1} % above the model alone's, {n:.4} against {a:.4} \
-                 deg RMS)",
-                (n / a - 1.0) * 100.0
-            ),
-            _ => format!("{test}: the network is kept"),
-        };
-    }
-    let ratio = t.unseen.as_ref().map_or(t.ratio, |u| u.ratio);
-    let why = if ratio * (1.0 + NETWORK_MARGIN) > 1.0 {
-        format!("not {:.0} % or more below", NETWORK_MARGIN * 100.0)
-    } else {
-        format!("not significant row by row (a paired z of -{NETWORK_Z} or lower is needed)")
-    };
-    format!("{test}, {why}: {then}")
-}
-
 /// Takes out of `refined` (each refinement with its models, one per fold) every refinement
 /// whose models are an earlier one's on every fold (the compliances all screened out): it is
 /// the same candidate, taken out before anything is fitted with it.
@@ -901,114 +642,5 @@ fn same_model(a: &Result<Robot>, b: &Result<Robot>) -> bool {
         (Ok(a), Ok(b)) if a.is_compliant() || b.is_compliant() => a == b,
         (Ok(a), Ok(b)) => a.rigid() == b.rigid(),
         _ => false,
-    }
-}
-
-/// The note on training rows beyond `k` robust sigmas of the cross-validated error, named in
-/// the rows given to training; `dropped`: left out of the final fit.
-pub fn outlier_note(outliers: &[Outlier], k: f64, dropped: bool) -> String {
-    let rows: Vec<String> = outliers.iter().map(|o| row_name(o.line, o.row)).collect();
-    format!(
-        "{} training row(s) beyond {k} robust sigmas of the cross-validated error ({}): {}",
-        outliers.len(),
-        rows.join(", "),
-        if dropped {
-            "left out of the final fit (a mis-measured row, or a sharp feature of the robot \
-             one sample cannot tell; check them, or ask for them to be kept)"
-        } else {
-            "kept (a mis-measured row, or a sharp feature of the robot; check them, or \
-             ask for them to be dropped from the final fit)"
-        }
-    )
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::neural::compensator::Form;
-    use crate::neural::encoding::Encoding;
-
-    #[test]
-    fn held_out_rows_name_their_configurations_where_some_repeat() {
-        assert_eq!(
-            rows_of(12, 9),
-            "12 held-out rows of 9 configurations (each weighed once)"
-        );
-        assert_eq!(rows_of(12, 12), "12 held-out rows");
-        // A report written before the configurations were counted.
-        assert_eq!(rows_of(12, 0), "12 held-out rows");
-    }
-
-    /// The network test's note gives the errors' own ratio, whose sign the paired z shares,
-    /// and the ratio as judged beside it where a compliance refinement's margin moved it (a
-    /// reviewer's note read "0.7 % below ..., paired z 0.4": the network was 1.3 % above).
-    #[test]
-    fn the_network_note_gives_the_errors_own_ratio_first() {
-        let candidate = |network: Network, members: usize, refine: &str, rms: f64| Candidate {
-            stage: 5,
-            label: String::new(),
-            settings: Settings {
-                network,
-                rbf_start: Some(0),
-                form: Form::Pose,
-                encoding: Encoding::Gravity,
-                hidden: 0,
-                penalty: 0.0,
-                members,
-                refine: Some(refine.to_string()),
-                mlp_share: None,
-            },
-            score: Some(Score {
-                position_rms_mm: rms,
-                orientation_rms_deg: None,
-            }),
-            error: None,
-            pruned: None,
-            proxy: false,
-            race: None,
-        };
-        let candidates = [
-            candidate(Network::Rbf, 1, "full", 0.1053),
-            candidate(Network::Mlp, 0, "full,compliance", 0.1039),
-        ];
-        let t = NetworkTest {
-            network: 0,
-            alone: 1,
-            ratio: 0.1053 / (0.1039 * (1.0 + COMPLIANCE_MARGIN)),
-            z: 0.4,
-            rows: 150,
-            configurations: 150,
-            kept: false,
-            unseen: None,
-        };
-        let note = network_note(
-            &t,
-            &candidates,
-            "the network",
-            "the compensator is the model alone",
-        );
-        assert!(
-            note.starts_with(
-                "the network's cross-validated error is 1.3 % above the best model alone's \
-                 (refine full,compliance; 0.6 % below as judged, with the compliance \
-                 refinement's 2 % margin), paired z 0.4 over 150 held-out rows"
-            ),
-            "{note}"
-        );
-        // Without a margin between them, the one ratio.
-        let t = NetworkTest {
-            ratio: 0.1053 / 0.1039,
-            ..t
-        };
-        let mut plain = candidates.clone();
-        plain[1].settings.refine = Some("full".into());
-        let note = network_note(&t, &plain, "the network", "the model alone");
-        assert!(
-            note.starts_with(
-                "the network's cross-validated error is 1.3 % above the best model alone's \
-                 (refine full), paired z"
-            ),
-            "{note}"
-        );
     }
 }
