@@ -29,7 +29,8 @@ pub(crate) struct Chain {
     pub links: Vec<Link>,
     /// The base row's transform.
     pub base: Pose,
-    /// The screw of every parameter, in the order of [`Robot::parameters`].
+    /// The screw of every parameter, in the order of
+    /// [`Robot::parameters`](super::Robot::parameters).
     pub axes: Vec<ParamAxis>,
 }
 

@@ -4,7 +4,7 @@ pub(crate) mod axes;
 pub(crate) mod chain;
 pub mod compliance;
 pub mod file;
-pub mod joint;
+pub(crate) mod joint;
 pub mod mass;
 pub mod robot;
 pub mod row;

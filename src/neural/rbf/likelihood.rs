@@ -144,7 +144,7 @@ const LANES: usize = 8;
 /// adds one pair to every input's sum, a register of inputs at a time, the sums held in
 /// registers over every pair: three times faster than through memory on 400 rows of 30
 /// inputs). The squared differences are formed on the fly from these two copies of
-/// the inputs (240 kB on 500 rows and 30 inputs, cache-resident) instead of being stored per
+/// the inputs (250 kB on 500 rows and 30 inputs, cache-resident) instead of being stored per
 /// pair and input (30 MB, read twice per evaluation). The padding only widens the registers:
 /// every pair's and every input's sum is added in the order of the sweeps written out
 /// (`Pairs::column_squares`, `tests::pair_sweeps_match_the_pairs_written_out`), so the same
@@ -246,7 +246,9 @@ impl Pairs {
             #[inline(always)]
             || {
                 let n = self.len();
-                let stride = self.stride;
+                // The width known to the compiler: R registers.
+                let stride = R * LANES;
+                debug_assert_eq!(self.stride, stride);
                 // -0.0: the start of an f64 sum, as an iterator's `sum` starts it.
                 let mut acc = [[-0.0; LANES]; R];
                 let mut at = 0;
@@ -629,50 +631,86 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let (small, _) = data(13);
         let mut cases = vec![(small.x, vec![0, 2, 3, 5, 7, 8, 12])];
-        for (n, d) in [(75, 30), (40, 8), (33, 1), (9, 50), (70, 12)] {
-            let x: Vec<Vec<f64>> = (0..n + 3)
+        // Inputs for every count of registers (1 to 6, the memory sweep beyond 48, none) and
+        // rows for the sweeps' edges (one row: no pair).
+        let shapes = [
+            (75, 30),
+            (40, 8),
+            (33, 1),
+            (20, 20),
+            (12, 40),
+            (10, 48),
+            (9, 49),
+            (9, 50),
+            (70, 12),
+            (6, 0),
+            (1, 5),
+        ];
+        for (n, d) in shapes {
+            let x: Vec<Vec<f64>> = (0..2 * n + 3)
                 .map(|_| (0..d).map(|_| rng.random_range(-2.0..2.0)).collect())
                 .collect();
-            let rows: Vec<usize> = (0..n + 3).filter(|r| r % 7 != 3).take(n).collect();
+            let rows: Vec<usize> = (0..2 * n + 3).filter(|r| r % 7 != 3).take(n).collect();
+            assert_eq!(rows.len(), n);
             cases.push((x, rows));
         }
+        // A constant input: its sum over weights all below zero stays -0.0 (the sum's start).
+        let mut x: Vec<Vec<f64>> = (0..12)
+            .map(|_| (0..9).map(|_| rng.random_range(-2.0..2.0)).collect())
+            .collect();
+        x.iter_mut().for_each(|r| r[4] = 0.5);
+        cases.push((x, (0..12).collect()));
         for (x, rows) in cases {
             let d = x[0].len();
             let pairs = Pairs::new(&x, &rows);
             let w: Vec<f64> = (0..d).map(|c| 0.25 + c as f64 / 3.0).collect();
-            let count = rows.len() * (rows.len() - 1) / 2;
+            let count = rows.len() * rows.len().saturating_sub(1) / 2;
             let mut q = vec![f64::NAN; count];
             pairs.weighted_squares(&w, &mut q);
-            let p: Vec<f64> = (0..count).map(|k| 1.0 - k as f64 / 7.0).collect();
-            let mut total = vec![f64::NAN; d];
-            pairs.weighted_sums(&p, &mut total);
-            // Written out pair by pair as the old table did it (and as an f64 sum starts, at
-            // -0.0): the same operations in the same order, so the same bits.
-            let mut expected_total = vec![-0.0; d];
-            let mut at = 0;
-            for j in 0..rows.len() {
-                // The kernel's sweep of one row (the kernel matrix's column).
-                let mut column = vec![f64::NAN; rows.len() - j - 1];
-                pairs.column_squares(j, &w, &mut column);
-                for i in j + 1..rows.len() {
-                    let (xi, xj) = (&x[rows[i]], &x[rows[j]]);
-                    let d2: Vec<f64> = (0..d).map(|c| (xi[c] - xj[c]).powi(2)).collect();
-                    let mut expected = 0.0;
-                    for c in 0..d {
-                        expected += d2[c] * w[c];
-                        expected_total[c] += p[at] * d2[c];
+            // Weights of both signs, and all below zero.
+            for p in [
+                (0..count)
+                    .map(|k| 1.0 - k as f64 / 7.0)
+                    .collect::<Vec<f64>>(),
+                (0..count).map(|k| -1.0 - k as f64 / 7.0).collect(),
+            ] {
+                let mut total = vec![f64::NAN; d];
+                pairs.weighted_sums(&p, &mut total);
+                // Written out pair by pair as the old table did it (and as an f64 sum starts,
+                // at -0.0): the same operations in the same order, so the same bits.
+                let mut expected_total = vec![-0.0; d];
+                let mut at = 0;
+                for j in 0..rows.len() {
+                    // The kernel's sweep of one row (the kernel matrix's column).
+                    let mut column = vec![f64::NAN; rows.len() - j - 1];
+                    pairs.column_squares(j, &w, &mut column);
+                    for i in j + 1..rows.len() {
+                        let (xi, xj) = (&x[rows[i]], &x[rows[j]]);
+                        let d2: Vec<f64> = (0..d).map(|c| (xi[c] - xj[c]).powi(2)).collect();
+                        let mut expected = 0.0;
+                        for c in 0..d {
+                            expected += d2[c] * w[c];
+                            expected_total[c] += p[at] * d2[c];
+                        }
+                        assert_eq!(q[at].to_bits(), expected.to_bits(), "{d} inputs, pair {at}");
+                        assert_eq!(column[i - j - 1].to_bits(), expected.to_bits(), "pair {at}");
+                        at += 1;
                     }
-                    assert_eq!(q[at].to_bits(), expected.to_bits(), "{d} inputs, pair {at}");
-                    assert_eq!(column[i - j - 1].to_bits(), expected.to_bits(), "pair {at}");
-                    at += 1;
                 }
-            }
-            for c in 0..d {
-                assert_eq!(
-                    total[c].to_bits(),
-                    expected_total[c].to_bits(),
-                    "{d} inputs, input {c}"
-                );
+                for c in 0..d {
+                    assert_eq!(
+                        total[c].to_bits(),
+                        expected_total[c].to_bits(),
+                        "{d} inputs, input {c}"
+                    );
+                }
+                if d == 9 && rows.len() == 12 && p[0] < 0.0 {
+                    assert_eq!(
+                        total[4].to_bits(),
+                        (-0.0f64).to_bits(),
+                        "the constant input"
+                    );
+                }
             }
         }
     }

@@ -37,8 +37,8 @@ pub(super) struct Folds {
     pub(super) k: usize,
 }
 
-/// [`Folds`] of `set` under `opts`: the one draw [`select_settings`](super::select_settings) and [`too_few_rows`]
-/// both see.
+/// [`Folds`] of `set` under `opts`: the one draw
+/// [`select_settings`](super::select_settings) and [`too_few_rows`] both see.
 pub(super) fn fold_plan(robot: &Robot, set: &MeasurementSet, opts: &CompensatorOptions) -> Folds {
     let groups = crate::neural::repeats::configuration_groups(robot, set);
     let distinct = crate::neural::repeats::group_count(&groups);
@@ -59,8 +59,9 @@ pub(super) fn fold_plan(robot: &Robot, set: &MeasurementSet, opts: &CompensatorO
 }
 
 /// Why the rows of `set` are too few to cross-validate what the options leave open: fewer than
-/// 2 folds of distinct configurations (as [`select_settings`](super::select_settings) draws them), or folds of which
-/// some leaves fewer rows to train on than a network the options allow needs
+/// 2 folds of distinct configurations (as [`select_settings`](super::select_settings) draws
+/// them), or folds of which some leaves fewer rows to train on than a network the options
+/// allow needs
 /// (the rows of the network the options allow). None where they suffice.
 pub fn too_few_rows(
     robot: &Robot,
