@@ -61,8 +61,7 @@ pub(super) fn fold_plan(robot: &Robot, set: &MeasurementSet, opts: &CompensatorO
 /// Why the rows of `set` are too few to cross-validate what the options leave open: fewer than
 /// 2 folds of distinct configurations (as [`select_settings`](super::select_settings) draws
 /// them), or folds of which some leaves fewer rows to train on than a network the options
-/// allow needs
-/// (the rows of the network the options allow). None where they suffice.
+/// allow needs. None where they suffice.
 pub fn too_few_rows(
     robot: &Robot,
     set: &MeasurementSet,
