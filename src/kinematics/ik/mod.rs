@@ -137,7 +137,7 @@ pub struct IkSolver<M: ToolModel> {
     copies: Vec<[f64; 6]>,
     mid: Vec<f64>,
     reach: Reach,
-    /// Scratch of [`across_fold`] (6 x N).
+    /// Scratch of [`across_fold`](crate::kinematics::fold::across_fold) (6 x N).
     jac: Matrix6xX<f64>,
 }
 

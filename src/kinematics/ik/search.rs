@@ -17,7 +17,7 @@ use crate::model::joint_distance;
 /// in which the pose barely moves (the error is quadratic there), so one configuration solved
 /// from several starts came back as several solutions at 1e-7 (a reviewer: up to 8 rows for a
 /// UR10 pose on its calibrated elbow's fold); no encoder tells apart configurations 1e-6 rad
-/// apart (the closed form's [`super::ik_closed`] roots are merged at the same distance).
+/// apart (the closed form's [`super::super::ik_closed`] roots are merged at the same distance).
 const SAME_SOLUTION: f64 = 1e-6;
 
 /// Whether joints `a` and `b` (rad, mm) are one solution: within [`SAME_SOLUTION`] in every
@@ -55,6 +55,8 @@ const SEARCH_ITERATIONS: usize = 40;
 /// one outside. On a UR10 with four times a calibration's deviations, its elbow within [0,
 /// 160] deg, 23 of 20,000 configurations drawn within the limits read outside-limits before;
 /// the spread search alone solved 19 of them, these starts alone 20, both all 23.
+///
+/// [`Robot::moved_within_limits`]: crate::model::Robot::moved_within_limits
 const LIMIT_INSET: f64 = 0.01;
 
 /// The solutions a run of solves found, and the failure to report where there are none.
@@ -254,8 +256,8 @@ impl<M: ToolModel> IkSolver<M> {
         }
     }
 
-    /// Solution `q` reflected across a fold of the model within [`super::fold::FOLD_NEAR_RAD`]
-    /// ([`across_fold`]), if any.
+    /// Solution `q` reflected across a fold of the model within
+    /// [`FOLD_NEAR_RAD`](crate::kinematics::fold::FOLD_NEAR_RAD) ([`across_fold`]), if any.
     fn reflected(&mut self, q: &[f64]) -> Option<Vec<f64>> {
         across_fold(&mut self.model, q, self.opts.length_scale_mm, &mut self.jac)
     }

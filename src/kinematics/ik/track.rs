@@ -75,6 +75,9 @@ impl<M: ToolModel> IkSolver<M> {
     /// the iteration does not settle within [`TRACK_ITERATIONS`], or where it stops
     /// contracting away from the pose ([`Self::near_target`]). The numerical solve from its
     /// result checks it.
+    ///
+    /// [`ClosedFormIk::solve_branch_nearest`]:
+    /// crate::kinematics::ClosedFormIk::solve_branch_nearest
     pub(super) fn tracked(
         &mut self,
         target: &Pose,
@@ -134,6 +137,9 @@ impl<M: ToolModel> IkSolver<M> {
     /// in `present`): each branch's nearest ([`ClosedFormIk::solve_branches_nearest`]) in the
     /// copy nearest `reference`, carried onto the model's solution of `target` on that branch
     /// ([`Self::tracked`]), where that settles.
+    ///
+    /// [`ClosedFormIk::solve_branches_nearest`]:
+    /// crate::kinematics::ClosedFormIk::solve_branches_nearest
     pub(super) fn beyond_starts(
         &mut self,
         target: &Pose,
