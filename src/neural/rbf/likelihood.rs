@@ -223,9 +223,9 @@ impl Pairs {
     /// added in pair order.
     fn weighted_sums(&self, p: &[f64], total: &mut [f64]) {
         // A register block per LANES inputs, the sums kept in registers over every pair
-        // (the padded inputs' lanes sum zeros, dropped).
+        // (the padded inputs' lanes sum zeros, dropped); no input, or more than the
+        // registers hold, through memory.
         match self.stride / LANES {
-            0 => total.fill(-0.0),
             1 => self.weighted_sums_of::<1>(p, total),
             2 => self.weighted_sums_of::<2>(p, total),
             3 => self.weighted_sums_of::<3>(p, total),
@@ -277,7 +277,7 @@ impl Pairs {
         );
     }
 
-    /// [`Pairs::weighted_sums`] through memory, for more inputs than registers hold.
+    /// [`Pairs::weighted_sums`] through memory, for more inputs than registers hold (or none).
     #[inline(always)]
     fn weighted_sums_in(&self, p: &[f64], total: &mut [f64]) {
         let n = self.len();
@@ -630,7 +630,8 @@ mod tests {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let (small, _) = data(13);
-        let mut cases = vec![(small.x, vec![0, 2, 3, 5, 7, 8, 12])];
+        // (inputs, rows, the input held constant if any)
+        let mut cases = vec![(small.x, vec![0, 2, 3, 5, 7, 8, 12], None)];
         // Inputs for every count of registers (1 to 6, the memory sweep beyond 48, none) and
         // rows for the sweeps' edges (one row: no pair).
         let shapes = [
@@ -652,15 +653,15 @@ mod tests {
                 .collect();
             let rows: Vec<usize> = (0..2 * n + 3).filter(|r| r % 7 != 3).take(n).collect();
             assert_eq!(rows.len(), n);
-            cases.push((x, rows));
+            cases.push((x, rows, None));
         }
         // A constant input: its sum over weights all below zero stays -0.0 (the sum's start).
         let mut x: Vec<Vec<f64>> = (0..12)
             .map(|_| (0..9).map(|_| rng.random_range(-2.0..2.0)).collect())
             .collect();
         x.iter_mut().for_each(|r| r[4] = 0.5);
-        cases.push((x, (0..12).collect()));
-        for (x, rows) in cases {
+        cases.push((x, (0..12).collect(), Some(4)));
+        for (x, rows, constant) in cases {
             let d = x[0].len();
             let pairs = Pairs::new(&x, &rows);
             let w: Vec<f64> = (0..d).map(|c| 0.25 + c as f64 / 3.0).collect();
@@ -704,9 +705,9 @@ mod tests {
                         "{d} inputs, input {c}"
                     );
                 }
-                if d == 9 && rows.len() == 12 && p[0] < 0.0 {
+                if let Some(c) = constant.filter(|_| p[0] < 0.0) {
                     assert_eq!(
-                        total[4].to_bits(),
+                        total[c].to_bits(),
                         (-0.0f64).to_bits(),
                         "the constant input"
                     );
