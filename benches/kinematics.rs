@@ -65,9 +65,27 @@ fn benches(c: &mut Criterion) {
     let start = IkStart::choose(&calibrated, Some(&ur)).unwrap();
     let mut solver = IkSolver::new(RobotModel::new(&calibrated), start, IkOptions::default());
     let near_straight = tool_pose(&calibrated, &[0.3, -1.2, 0.05, -1.4, -1.0, 0.5]);
-    // 4: the other wrist flips do not reach the pose (numerical solves from 2000 random
-    // starts find the same 4).
-    assert_eq!(solver.all(&near_straight, None).unwrap().len(), 4);
+    // 4 solutions: the other wrist flips do not reach the pose (numerical solves from 2000
+    // random starts find the same 4). `all` lists each with every whole-turn copy the limits
+    // allow: 2^6 within the UR10's +-360 deg.
+    let every = solver.all(&near_straight, None).unwrap();
+    let mut distinct: Vec<Vec<f64>> = Vec::new();
+    for q in &every {
+        let wrapped: Vec<f64> = q
+            .iter()
+            .map(|v| (v + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU))
+            .collect();
+        let same = |d: &Vec<f64>| {
+            d.iter().zip(&wrapped).all(|(a, b)| {
+                let e = (a - b).abs();
+                e.min(std::f64::consts::TAU - e) < 1e-9
+            })
+        };
+        if !distinct.iter().any(same) {
+            distinct.push(wrapped);
+        }
+    }
+    assert_eq!((distinct.len(), every.len()), (4, 4 * 64));
     c.bench_function("ik_calibrated_ur10_all_solutions", |b| {
         b.iter(|| solver.all(black_box(&near_straight), None).unwrap().len())
     });
