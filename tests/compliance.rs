@@ -180,6 +180,14 @@ fn robot_files_keep_compliances_and_refuse_bad_ones() {
             "joint compliances need mass properties",
             "[compliance]",
         ),
+        // A table of gravity alone (which the mass-free moments take) holds no mass for the
+        // compliances to deflect: they did nothing, without a word.
+        (
+            "[mass]\ngravity = [0, 0, -9.81]\n[compliance]\njoints = [0, 0.05, 0.08, 0, 0, 0]\n"
+                .to_string(),
+            "joint compliances need mass properties",
+            "joints =",
+        ),
         (
             format!("{mass}[compliance]\njoints = [0, 0.05]\n"),
             "2 compliances for a robot with 6 joints",

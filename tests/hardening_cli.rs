@@ -1193,6 +1193,34 @@ fn edge_inputs_of_train_and_evaluate() {
         &["fk", "--robot", FANUC, "--joints", seven],
         "`q7`: a joint column beyond the robot's 6 joints",
     );
+    // Rows without a position (orientation alone): the file's first one is named, as it is
+    // with every choice fixed (cross-validation named the first of a fold's rows, line 3).
+    let shipped = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("datasets/nongeometric_robot/training.csv"),
+    )
+    .unwrap();
+    let no_position: Vec<String> = (shipped.lines().take(61))
+        .map(|l| {
+            // The joints and the orientation (rz, ry, rx) alone.
+            let cells: Vec<&str> = l.split(',').collect();
+            [&cells[1..7], &cells[10..13]].concat().join(",")
+        })
+        .collect();
+    let no_position_path = common::tmp("edge_no_position.csv");
+    std::fs::write(&no_position_path, no_position.join("\n") + "\n").unwrap();
+    refused(
+        &[
+            "train",
+            "--robot",
+            FANUC,
+            "--data",
+            no_position_path.to_str().unwrap(),
+            "--out",
+            out,
+        ],
+        "edge_no_position.csv:2: field `x`: training needs a measured position in every row",
+    );
     // One configuration measured again and again (fixed settings: nothing to
     // cross-validate) trains, with a note.
     let mut once = String::from("q1,q2,q3,q4,q5,q6,x,y,z\n");
@@ -1210,6 +1238,23 @@ fn edge_inputs_of_train_and_evaluate() {
         common::stdout(&o).contains("are one configuration: the network can learn only a constant"),
         "{}",
         common::stdout(&o)
+    );
+    // That constant applies where the configuration is measured again, its joints a few
+    // hundredths of a degree off (the domain's radius was 0 and faded it to nothing there).
+    let again = common::tmp("edge_once_again.csv");
+    std::fs::write(&again, "q1,q2,q3,q4,q5,q6\n10.01,20.01,30,40,50,59.99\n").unwrap();
+    let p = robocal(&[
+        "predict",
+        "--compensator",
+        out,
+        "--joints",
+        again.to_str().unwrap(),
+    ]);
+    let said = common::stdout(&p);
+    assert!(p.status.success(), "{}", stderr(&p));
+    assert!(
+        !said.contains("from the nearest training configuration"),
+        "{said}"
     );
     // The same with an RBF network, whose search takes the configuration's rows.
     let rbf = [
@@ -2332,8 +2377,8 @@ fn edge_inputs_of_the_sixtieth_hunt() {
         "1 unit gives 6 equations for 6 identifiable parameters: at least 2 units",
     );
 
-    // Ball-bar distances, one of them read as 0: the misfit is said, but not blamed on a
-    // frame (a distance is the same in every frame).
+    // Ball-bar distances, one of them read as half its length: the misfit is said, but not
+    // blamed on a frame (a distance is the same in every frame).
     let mut distances = String::from("pair,q1,q2,q3,q4,q5,q6,distance\n");
     let rows: Vec<Vec<f64>> = (training.lines().skip(1))
         .map(|l| {
@@ -2349,7 +2394,7 @@ fn edge_inputs_of_the_sixtieth_hunt() {
             .map(|i| (w[0][6 + i] - w[1][6 + i]).powi(2))
             .sum::<f64>())
         .sqrt();
-        let d = if k == 2 { 0.0 } else { d };
+        let d = if k == 2 { 0.5 * d } else { d };
         let q = |r: &Vec<f64>| r[..6].iter().map(|v| v.to_string()).collect::<Vec<_>>();
         distances += &format!("p{k},{},\n", q(&w[0]).join(","));
         distances += &format!("p{k},{},{d}\n", q(&w[1]).join(","));
@@ -2375,6 +2420,30 @@ fn edge_inputs_of_the_sixtieth_hunt() {
         "{err}"
     );
     assert!(!err.contains("frame"), "{err}");
+    // A distance of 0 (one point measured twice) is refused, naming its cell: fitted, it
+    // shrank the arm to nothing with exit 0.
+    let zero: Vec<String> = (std::fs::read_to_string(&distances).unwrap().lines())
+        .enumerate()
+        .map(|(i, l)| match (i, l.rsplit_once(',')) {
+            (6, Some((head, _))) => format!("{head},0"),
+            _ => l.to_string(),
+        })
+        .collect();
+    let zero = file("s60_distances_zero.csv", &(zero.join("\n") + "\n"));
+    refused(
+        &[
+            "identify",
+            "--robot",
+            FANUC,
+            "--data",
+            &zero,
+            "--measure",
+            "distance",
+            "--out",
+            common::tmp("s60_distances_zero.toml").to_str().unwrap(),
+        ],
+        "s60_distances_zero.csv:7: field `distance`: a distance must be positive",
+    );
     // A distance written on a pair's first row was dropped unread: refused, naming the line.
     let mut lines: Vec<String> = std::fs::read_to_string(&distances)
         .unwrap()

@@ -43,6 +43,13 @@ pub struct ParamId {
 /// mass, then its moment along x, y, z.
 const K_PARTS: [&str; 4] = ["m", "mx", "my", "mz"];
 
+/// Why joint compliances c_j cannot go without a link or payload mass: the deflection is
+/// c_j tau_j, and without mass the gravity torque tau_j is zero (a `[mass]` table may give
+/// gravity alone, for the mass-free `moments`).
+const NO_MASS_FOR_COMPLIANCE: &str = "joint compliances need mass properties (a [mass] table \
+     with link masses or a payload: without mass there is no gravity torque to deflect the \
+     joints, and the compliances would do nothing)";
+
 impl ParamId {
     /// The parameter's name: `a3`, `alpha2`, `theta1`, `beta3`, `base.x`, `tool.rz`, `c2`
     /// (a compliance), `k2.mx3` (a mass-free compliance coefficient: joint 2, link 3's moment
@@ -166,20 +173,19 @@ impl Robot {
 
     /// A copy with these mass properties (none: massless); properties for another joint
     /// count, or out of their bounds, are an error, and so is removing the masses of a robot
-    /// with compliances (they would have no torque to act on).
+    /// with joint compliances, or giving it a table without mass (they would have no torque
+    /// to act on).
     pub fn with_masses(&self, masses: Option<MassProperties>) -> Result<Robot> {
         if let Some(f) = masses.as_ref().and_then(|m| m.fault(self.dof())) {
             return Err(Error::Model(format!("mass properties: {f}")));
         }
-        if masses.is_none()
+        if !masses.as_ref().is_some_and(MassProperties::has_mass)
             && self
                 .compliance
                 .as_ref()
-                .is_some_and(|c| !c.joints.is_empty())
+                .is_some_and(|c| c.joints.iter().any(|&v| v != 0.0))
         {
-            return Err(Error::Model(
-                "joint compliances need mass properties (a [mass] table)".into(),
-            ));
+            return Err(Error::Model(NO_MASS_FOR_COMPLIANCE.into()));
         }
         Ok(Robot {
             masses,
@@ -194,14 +200,15 @@ impl Robot {
         self.masses.as_ref()
     }
 
-    /// A copy with these joint compliances (none: rigid joints). Compliances need mass
-    /// properties; compliances for another joint count, or out of their bounds, are an error.
+    /// A copy with these joint compliances (none: rigid joints). Joint compliances need mass
+    /// properties with a link or payload mass; compliances for another joint count, or out of
+    /// their bounds, are an error.
     pub fn with_compliance(&self, compliance: Option<Compliance>) -> Result<Robot> {
         if let Some(c) = &compliance {
-            if self.masses.is_none() && c.joints.iter().any(|&v| v != 0.0) {
-                return Err(Error::Model(
-                    "joint compliances need mass properties (a [mass] table)".into(),
-                ));
+            if !self.masses.as_ref().is_some_and(MassProperties::has_mass)
+                && c.joints.iter().any(|&v| v != 0.0)
+            {
+                return Err(Error::Model(NO_MASS_FOR_COMPLIANCE.into()));
             }
             if let Some(f) = c.fault(self.dof()) {
                 return Err(Error::Model(format!("compliance: {f}")));

@@ -5,7 +5,8 @@
 //! covered and its distance to the nearest training configuration, measured in the network's
 //! normalised input space, is at most the domain's radius: the distance that 99 % of the
 //! training configurations are within of their nearest other configuration (a single
-//! isolated training row would make the largest such distance meaningless). Rows within
+//! isolated training row would make the largest such distance meaningless); with a single
+//! configuration, the distance within which a row of that configuration lies. Rows within
 //! [`super::repeats::SAME_CONFIGURATION`] of each other in every joint are one configuration
 //! ([`super::repeats::joint_groups`]), as in cross-validation.
 //!
@@ -29,7 +30,8 @@ pub struct Domain {
     pub inputs: Vec<Vec<f64>>,
     /// Largest trusted distance to the nearest training configuration (normalised input
     /// units): the 99th percentile of the distances from each training configuration to the
-    /// nearest other one (module doc).
+    /// nearest other one, or for a single configuration the reach of its own rows (module
+    /// doc).
     pub radius: f64,
 }
 
@@ -79,6 +81,41 @@ impl DomainCheck {
         }
         parts.join("; ")
     }
+}
+
+/// The radius of a domain of one configuration, whose rows leave no gap to measure: the
+/// distance (normalised input units) within which a row of the same configuration lies from
+/// `q` (rad, mm), every joint within [`super::repeats::SAME_CONFIGURATION`] of it: the
+/// root sum of squares over the joints of the distance a move of that size in the joint alone
+/// makes (a move of every joint at once to first order, each joint's part taken at right
+/// angles to the others', as with sin/cos inputs, where each joint has inputs of its own).
+/// Without it the radius was 0, and a row measured again at that configuration, its joints a
+/// few encoder counts off the training rows', had its correction faded to nothing.
+fn one_configuration_radius(
+    robot: &Robot,
+    encoding: Encoding,
+    norm: &Affine,
+    q: &[f64],
+    ws: &mut crate::kinematics::Frames,
+) -> f64 {
+    let mut at = |q: &[f64]| {
+        let mut feat = Vec::new();
+        encoding.features(robot, q, ws, &mut feat);
+        let mut x = vec![0.0; feat.len()];
+        norm.apply(&feat, &mut x);
+        x
+    };
+    let x0 = at(q);
+    let mut moved = q.to_vec();
+    (0..q.len())
+        .map(|j| {
+            moved[j] = q[j] + super::repeats::SAME_CONFIGURATION;
+            let d2 = distance2(&x0, &at(&moved));
+            moved[j] = q[j];
+            d2
+        })
+        .sum::<f64>()
+        .sqrt()
 }
 
 fn distance2(a: &[f64], b: &[f64]) -> f64 {
@@ -157,9 +194,10 @@ impl Domain {
         gaps.retain(|d| d.is_finite());
         let inputs: Vec<Vec<f64>> = points.into_iter().map(|(x, _)| x).collect();
         gaps.sort_by(f64::total_cmp);
-        let radius = match gaps.len() {
-            0 => 0.0,
-            n => gaps[((0.99 * n as f64).ceil() as usize).clamp(1, n) - 1].sqrt(),
+        let radius = match (gaps.len(), qs.first()) {
+            (0, Some(q)) => one_configuration_radius(robot, encoding, norm, q, &mut ws),
+            (0, None) => 0.0,
+            (n, _) => gaps[((0.99 * n as f64).ceil() as usize).clamp(1, n) - 1].sqrt(),
         };
         Domain {
             joint_min,
@@ -480,5 +518,35 @@ mod tests {
             inside > 100 && fading > 100 && outside > 100,
             "{inside} {fading} {outside}"
         );
+    }
+
+    #[test]
+    fn one_configuration_trusts_its_own_repeats_only() {
+        let robot = crate::model::test_fanuc();
+        let norm = Affine {
+            offset: vec![0.0; 12],
+            scale: vec![1.0; 12],
+        };
+        let q = [0.1, -0.4, 0.3, 0.8, -0.5, 1.2];
+        // Repeats a few encoder counts apart, and a row of that configuration and one of
+        // another (each joint moved by a tenth, and by three times, the tolerance).
+        let repeat = |by: f64| -> Vec<f64> { q.iter().map(|v| v + by).collect() };
+        let rows = [repeat(0.0), repeat(2e-6), repeat(-3e-6)];
+        let rows: Vec<&[f64]> = rows.iter().map(Vec::as_slice).collect();
+        let d = Domain::fit(&robot, Encoding::SinCos, &norm, &rows);
+        let mut ws = crate::kinematics::Frames::new(&robot);
+        let weight = |q: &[f64], ws: &mut crate::kinematics::Frames| {
+            let mut feat = Vec::new();
+            Encoding::SinCos.features(&robot, q, ws, &mut feat);
+            d.trust(&feat).2
+        };
+        assert!(d.radius > 0.0, "{}", d.radius);
+        let same = repeat(0.1 * crate::data::configuration::SAME_CONFIGURATION);
+        assert_eq!(weight(&same, &mut ws), 1.0);
+        let mut one_joint = q.to_vec();
+        one_joint[2] -= crate::data::configuration::SAME_CONFIGURATION;
+        assert_eq!(weight(&one_joint, &mut ws), 1.0);
+        let other = repeat(3.0 * crate::data::configuration::SAME_CONFIGURATION);
+        assert_eq!(weight(&other, &mut ws), 0.0);
     }
 }

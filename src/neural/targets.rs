@@ -100,6 +100,18 @@ const ROTATION_SCALE_FLOOR_RAD: f64 = 1e-9;
 /// by.
 const JOINT_SCALE_FLOOR: f64 = 1e-9;
 
+/// Refuses a set with a row that has no measured position, naming the first such row's line
+/// and its `x` column: training learns the position error of every row.
+pub fn check_positions(set: &MeasurementSet) -> Result<()> {
+    match set.rows.iter().find(|m| m.position.is_none()) {
+        Some(m) => Err(Error::input(
+            Location::at(&set.source, m.line, "x"),
+            "training needs a measured position in every row",
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Builds the training problem of `form` for `robot` on `set`.
 pub fn build(
     robot: &Robot,
@@ -114,15 +126,12 @@ pub fn build(
             set.source.display()
         )));
     }
+    check_positions(set)?;
     let mut ws = Frames::new(robot);
     let mut errors = Vec::with_capacity(set.rows.len());
     for m in &set.rows {
-        errors.push(model_error(robot, m, &mut ws).ok_or_else(|| {
-            Error::input(
-                Location::at(&set.source, m.line, "x"),
-                "training needs a measured position in every row",
-            )
-        })?);
+        // (Every row has a position: checked above.)
+        errors.extend(model_error(robot, m, &mut ws));
     }
     let rms = |v: &mut dyn Iterator<Item = Vector3<f64>>| {
         let (sum, n) = v.fold((0.0, 0usize), |(s, n), e| (s + e.norm_squared(), n + 3));

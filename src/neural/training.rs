@@ -58,6 +58,9 @@ impl Compensator {
         // Positions in metres or inches, refused as `identify` and `evaluate` refuse them: a
         // network would learn the factor, and its file would write metres as mm.
         check_position_scale(robot, set)?;
+        // Here, for the file's first row without a position: the folds' fits would each name
+        // their own first one.
+        super::targets::check_positions(set)?;
         // A row that carries another configuration's reading is no measurement of its own
         // joints: it scores no candidate and trains no network (unless outliers are kept).
         let shared = shared_readings(robot, set);

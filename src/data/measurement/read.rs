@@ -417,10 +417,12 @@ fn parse_row(
         if let Some(d) = m.distance {
             bound(t, r, i, lu.to_mm(d), MAX_LENGTH_MM, "a distance (100 m)")?;
         }
-        if m.distance.is_some_and(|d| d < 0.0) {
+        // A zero distance between two tool positions is one point measured twice: fitted,
+        // it shrinks the arm toward nothing.
+        if m.distance.is_some_and(|d| d <= 0.0) {
             return Err(Error::input(
                 t.location(r, i),
-                "a distance cannot be negative",
+                "a distance must be positive",
             ));
         }
         m.distance = m.distance.map(|d| lu.to_mm(d));
