@@ -1231,8 +1231,20 @@ fn edge_inputs_of_train_and_evaluate() {
         ));
     }
     let once_path = common::tmp("edge_once.csv");
-    std::fs::write(&once_path, once).unwrap();
+    std::fs::write(&once_path, &once).unwrap();
     let o = common::train_fanuc(once_path.to_str().unwrap(), out, common::CHEAP_TRAIN);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        common::stdout(&o).contains("are one configuration: the network can learn only a constant"),
+        "{}",
+        common::stdout(&o)
+    );
+    // The same with a row pasted twice (the repeats' summary leaves the copy out, and the
+    // note was lost).
+    let pasted = format!("{once}10,20,30,40,50,60,1200,500,1500\n");
+    let pasted_path = common::tmp("edge_once_pasted.csv");
+    std::fs::write(&pasted_path, pasted).unwrap();
+    let o = common::train_fanuc(pasted_path.to_str().unwrap(), out, common::CHEAP_TRAIN);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         common::stdout(&o).contains("are one configuration: the network can learn only a constant"),

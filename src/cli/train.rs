@@ -373,15 +373,6 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     for w in (report.warnings.iter()).chain(report.selection.iter().flat_map(|s| &s.warnings)) {
         warnings.say(w.clone());
     }
-    if c.has_network() && c.domain.radius == 0.0 {
-        warnings.say(format!(
-            "the training rows hold one configuration (every joint within {} rad of one \
-             another's, or a whole turn from it): the training domain's radius is 0, so the \
-             network corrects nothing away from that configuration; measure configurations \
-             spread over the workspace",
-            robocal::neural::repeats::SAME_CONFIGURATION
-        ));
-    }
     // The rows cross-validation saw: the training rows but those left out for carrying
     // another configuration's reading, and the outliers of a first choice made again without
     // them.

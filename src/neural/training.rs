@@ -286,16 +286,19 @@ impl Compensator {
             report.notes.extend(s.notes.iter().cloned());
         }
         // One configuration measured again and again gives the network one input: it can
-        // learn a constant only, whatever it is told.
-        if report
-            .repeats
-            .as_ref()
-            .is_some_and(|r| r.configurations == 1 && r.rows == fit_set.rows.len())
+        // learn a constant only, whatever it is told. (Counted on the rows, not on the
+        // repeats' summary, which leaves pasted copies of a row out.)
+        if fit_set.rows.len() > 1
+            && super::repeats::group_count(&configuration_groups(robot, fit_set)) == 1
         {
             report.notes.push(format!(
                 "the {} training rows are one configuration: the network can learn only a \
-                 constant correction; measure configurations spread over the workspace",
-                fit_set.rows.len()
+                 constant correction, and the compensator applies it at that configuration \
+                 alone (it fades to nothing within twice the reach of the rows, every joint \
+                 within {} rad of theirs: the training domain); measure configurations spread \
+                 over the workspace",
+                fit_set.rows.len(),
+                super::repeats::SAME_CONFIGURATION
             ));
         }
         report.selection = selection;
