@@ -246,13 +246,16 @@ fn runs(
     })
 }
 
-/// Distance (rad) from `a` to `b` with each revolute joint's difference wrapped to [-pi, pi]:
-/// whether two joint vectors are one configuration of the controller.
-fn wrapped_distance(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| {
-            let d = (x - y + PI).rem_euclid(2.0 * PI) - PI;
+/// Distance (rad, mm) from `a` to `b`, joints of `robot`, with each revolute joint's
+/// difference wrapped to [-pi, pi] (a prismatic joint's taken as it is): whether two joint
+/// vectors are one configuration of the controller.
+fn wrapped_distance(robot: &Robot, a: &[f64], b: &[f64]) -> f64 {
+    (robot.joints().iter().zip(a.iter().zip(b)))
+        .map(|(joint, (x, y))| {
+            let d = match joint.joint_type {
+                JointType::Revolute => (x - y + PI).rem_euclid(2.0 * PI) - PI,
+                JointType::Prismatic => x - y,
+            };
             d * d
         })
         .sum::<f64>()
@@ -386,7 +389,8 @@ impl<'a> FakeTargetSolver<'a> {
         closed.solve_branches(&f, &mut self.sols);
         let mut found: Vec<Branch> = (self.sols.iter())
             .filter(|(_, s)| {
-                wrapped_distance(&closed.wrist_split_nearest(s, q), q) < SAME_JOINTS_RAD
+                wrapped_distance(self.nominal, &closed.wrist_split_nearest(s, q), q)
+                    < SAME_JOINTS_RAD
             })
             .map(|(b, _)| *b)
             .collect();
@@ -799,7 +803,7 @@ fn settle(
             ))
         };
         let mut next = ik.from_start(&target, &run).map_err(differs)?;
-        if wrapped_distance(&next.q, &sol.q) < SAME_JOINTS_RAD {
+        if wrapped_distance(nominal, &next.q, &sol.q) < SAME_JOINTS_RAD {
             let beyond: Vec<f64> = (run.iter().zip(&sol.q)).map(|(r, q)| 2.0 * r - q).collect();
             if let Ok(other) = ik.from_start(&target, &beyond) {
                 next = other;
@@ -896,5 +900,29 @@ mod tests {
         b = a;
         b[5] += 2e-6;
         assert_eq!(joints_apart(&r, &a, &b), "up to 1.146e-4 deg (joint 6)");
+    }
+
+    #[test]
+    fn a_whole_turn_is_no_distance_for_a_revolute_joint_only() {
+        let robot = crate::model::Robot::from_toml(
+            r#"
+[[joint]]
+convention = "dh"
+d = 100.0
+alpha = 90.0
+limits = [-360, 360]
+[[joint]]
+convention = "dh"
+type = "prismatic"
+limits = [-1000, 1000]
+"#,
+        )
+        .unwrap();
+        let turn = 2.0 * std::f64::consts::PI;
+        let d = |a: [f64; 2], b: [f64; 2]| super::wrapped_distance(&robot, &a, &b);
+        assert!(d([0.3, 5.0], [0.3 + turn, 5.0]) < 1e-12);
+        // The prismatic joint 2 pi mm on is 2 pi mm away (it was wrapped to nothing).
+        assert!((d([0.3, 5.0], [0.3, 5.0 + turn]) - turn).abs() < 1e-12);
+        assert!((d([0.3, 5.0], [0.4, 5.0]) - 0.1).abs() < 1e-12);
     }
 }
