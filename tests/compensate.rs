@@ -1061,3 +1061,47 @@ fn a_compensator_with_angle_inputs_is_reached_at_its_commands() {
     assert_eq!(moved, 9);
     assert!(solved >= 7, "{solved} of 9 solved");
 }
+
+/// A nominal model with joint compliances (as `identify --params full,compliance` writes
+/// them) is its own calibration: every target's command is the target, on the seed's
+/// configuration. Its own closed form (the deflected arm's) returned no branch for any
+/// configuration, and every target of the FANUC was branch-changed; the UR10's
+/// controller-differs where the deflection was large.
+#[test]
+fn a_compliant_nominal_model_is_its_own_calibration() {
+    for (file, compliance) in [
+        (
+            "datasets/nongeometric_robot/nominal_masses.toml",
+            [0.0, 0.0566, 0.0766, 0.262, 0.527, 0.0],
+        ),
+        (
+            "datasets/robots/ur10_published_masses.toml",
+            [0.0, 20.0, 20.0, 20.0, 0.0, 0.0],
+        ),
+    ] {
+        let nominal = read_robot(root().join(file))
+            .unwrap()
+            .with_compliance(Some(robocal::model::Compliance::from_file_units(
+                &compliance,
+            )))
+            .unwrap();
+        assert!(nominal.is_compliant(), "{file}");
+        let mut solver =
+            FakeTargetSolver::new(&nominal, CalibratedModel::identified(&nominal)).unwrap();
+        let deg = |v: [f64; 6]| v.map(f64::to_radians);
+        for q in [
+            deg([10.0, 20.0, -10.0, 15.0, -50.0, 5.0]),
+            deg([-30.0, -40.0, 40.0, -80.0, 70.0, 10.0]),
+            deg([40.0, 10.0, 20.0, 30.0, -90.0, 30.0]),
+        ] {
+            let desired = tool_pose(&nominal, &q);
+            let c = solver
+                .solve(&Target::Pose(desired), Some(&q))
+                .unwrap_or_else(|e| panic!("{file} {q:?}: {e:?}"));
+            let moved = (c.fake.translation.vector - desired.translation.vector).norm();
+            assert!(moved < 1e-6, "{file}: the command moved {moved} mm");
+            let apart = (c.q.iter().zip(&q)).fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(apart < 1e-6, "{file}: {:?} against {q:?}", c.q);
+        }
+    }
+}

@@ -168,6 +168,9 @@ impl std::fmt::Display for Failure {
 /// calibrated model, with reused buffers.
 pub struct FakeTargetSolver<'a> {
     nominal: &'a Robot,
+    /// The nominal model without its joint compliances (the nominal itself where it has
+    /// none): the geometry whose closed form names a configuration's branch.
+    rigid_nominal: Robot,
     controller: Controller<'a>,
     ik: IkSolver<CalibratedModel<'a>>,
     sols: Vec<(Branch, [f64; 6])>,
@@ -288,7 +291,12 @@ impl<'a> FakeTargetSolver<'a> {
     /// same joints. For a controller solving near the seed (a UR-class nominal, or one
     /// without a closed form) every target needs seed joints.
     pub fn new(nominal: &'a Robot, model: CalibratedModel<'a>) -> Result<Self> {
-        let closed = ClosedFormIk::new(nominal);
+        // A branch (configuration flags) is the arm's geometry's: a nominal model with joint
+        // compliances has its rigid arm's closed form, and solves its deflected poses from it
+        // (the deflection turns the joints by far less than a branch lies away). Its own
+        // closed form missed them: every target was branch-changed.
+        let rigid_nominal = nominal.rigid();
+        let closed = ClosedFormIk::new(&rigid_nominal);
         if !model.robot().same_joints(nominal) {
             return Err(Error::Invalid(
                 "the calibrated model's joints differ from the nominal model's".into(),
@@ -309,18 +317,24 @@ impl<'a> FakeTargetSolver<'a> {
             // The starts in the calibrated model's world frame, the controller's view in the
             // nominal's.
             Ok(c) if !c.is_ur_class() => (
-                IkStart::Nominal(c.placed_as(nominal, model.robot())),
+                IkStart::Nominal(c.placed_as(&rigid_nominal, model.robot())),
                 Controller::ClosedForm(c),
             ),
             Ok(c) => (
-                IkStart::Nominal(c.placed_as(nominal, model.robot())),
+                IkStart::Nominal(c.placed_as(&rigid_nominal, model.robot())),
                 Controller::Nearest {
                     why: "a UR-class arm (axes 2, 3 and 4 parallel), whose controller takes no \
                           configuration flags"
                         .into(),
                     ik: IkSolver::new(
                         CalibratedModel::identified(nominal),
-                        IkStart::Exact(c),
+                        // The rigid arm's closed form is exact for the nominal only
+                        // without compliances; with them it starts the solves.
+                        if nominal.is_compliant() {
+                            IkStart::Nominal(c)
+                        } else {
+                            IkStart::Exact(c)
+                        },
                         IkOptions::default(),
                     ),
                 },
@@ -339,6 +353,7 @@ impl<'a> FakeTargetSolver<'a> {
         };
         Ok(FakeTargetSolver {
             nominal,
+            rigid_nominal,
             ik: IkSolver::new(model, start, opts),
             controller,
             sols: Vec::with_capacity(8),
@@ -378,11 +393,12 @@ impl<'a> FakeTargetSolver<'a> {
     }
 
     /// Every branch of the nominal closed form that returns `q` (mod 2 pi) for
-    /// FK_nominal(q): one, or more at a singularity where branches merge (none without a
-    /// closed form). At a wrist singularity, where the closed form splits q4 + s q6 as its
-    /// arithmetic falls, a solution counts as `q` where it is `q` split otherwise.
+    /// FK_nominal(q) (of the rigid nominal, where it has joint compliances): one, or more at
+    /// a singularity where branches merge (none without a closed form). At a wrist
+    /// singularity, where the closed form splits q4 + s q6 as its arithmetic falls, a
+    /// solution counts as `q` where it is `q` split otherwise.
     pub fn branches_of(&mut self, q: &[f64]) -> Vec<Branch> {
-        let f = tool_pose(self.nominal, q);
+        let f = tool_pose(&self.rigid_nominal, q);
         let Controller::ClosedForm(closed) = &self.controller else {
             return Vec::new();
         };
