@@ -1,8 +1,9 @@
 //! Nelder-Mead simplex search (thesis 4.1, after Lagarias et al. 1998), derivative free.
 //! Coefficients: reflection 1, expansion 2, contraction 0.5, shrink 0.5 (eq. 4.5).
 //!
-//! Parameters are searched in scaled coordinates, one unit being 1 mm for lengths and 1 mrad
-//! for angles (the size of typical deviations): the starting simplex is the start plus one
+//! Parameters are searched in scaled coordinates, one unit being 1 mm for lengths, 1 mrad
+//! for angles, 0.1 mrad per kN m for joint compliances and 10 times kg or kg m for their
+//! mass-free coefficients (the size of typical deviations): the starting simplex is the start plus one
 //! unit along each axis. The search stops when the simplex has collapsed (every vertex within
 //! `xtol` units of the best and the costs within `ftol` relative) or after the iteration limit;
 //! it restarts once from the best vertex, as is customary, to guard against a degenerate
@@ -32,6 +33,9 @@ pub fn solve_nelder_mead(
         ids.iter().map(|id| match id.field {
             // 0.1 mrad per kN m: a typical joint compliance (rad per N m).
             Field::C => 1e-7,
+            // 10 mrad per kN m times kg (or kg m): a typical mass-free compliance coefficient
+            // (its 1.0 was a million file units, and the search crept down to it).
+            Field::K { .. } => 1e-5,
             f if f.is_angle() => 1e-3,
             _ => 1.0,
         }),
