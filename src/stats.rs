@@ -20,9 +20,12 @@ pub fn median(v: &[f64]) -> f64 {
 /// no outlier, and 3 robust sigmas of rounding would name one.
 pub const ROBUST_SIGMA_FLOOR: f64 = 1e-6;
 
-/// The robust sigma of non-negative errors `v`: 1.4826 x their median (the standard
-/// deviation for normal errors), at least [`ROBUST_SIGMA_FLOOR`]; the scale of the outlier
-/// tests of identification and of the compensator's training.
+/// The robust sigma of non-negative errors `v`: 1.4826 x their median, at least
+/// [`ROBUST_SIGMA_FLOOR`]; the scale of the outlier tests of identification and of the
+/// compensator's training. For the absolute values of normal errors it is their standard
+/// deviation s; for the RMS over d coordinates of normal errors (sqrt(chi2_d / d) s) it is
+/// 1.317 s (d = 3) or 1.400 s (d = 6), so that 3 such sigmas lie at 3.95 s (4.20 s) of each
+/// coordinate: the cut of a position or pose row is wider than that of a single number.
 pub fn robust_sigma(v: &[f64]) -> f64 {
     (1.4826 * median(v)).max(ROBUST_SIGMA_FLOOR)
 }
@@ -35,6 +38,28 @@ mod tests {
     fn robust_sigma_is_floored() {
         assert!((robust_sigma(&[1.0, 2.0, 3.0]) - 2.9652).abs() < 1e-12);
         assert_eq!(robust_sigma(&[1e-12, 2e-12, 5e-12]), ROBUST_SIGMA_FLOOR);
+    }
+
+    #[test]
+    fn robust_sigma_of_normal_errors_and_of_their_rms_over_coordinates() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for (d, want) in [(1, 1.0), (3, 1.317), (6, 1.400)] {
+            let e: Vec<f64> = (0..200_000)
+                .map(|_| {
+                    let sum: f64 = (0..d)
+                        .map(|_| {
+                            let x: f64 = StandardNormal.sample(&mut rng);
+                            x * x
+                        })
+                        .sum();
+                    (sum / d as f64).sqrt()
+                })
+                .collect();
+            let got = robust_sigma(&e);
+            assert!((got - want).abs() < 0.01, "{d} coordinates: {got}");
+        }
     }
 
     #[test]
