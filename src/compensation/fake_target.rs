@@ -920,25 +920,12 @@ mod tests {
 
     #[test]
     fn a_whole_turn_is_no_distance_for_a_revolute_joint_only() {
-        let robot = crate::model::Robot::from_toml(
-            r#"
-[[joint]]
-convention = "dh"
-d = 100.0
-alpha = 90.0
-limits = [-360, 360]
-[[joint]]
-convention = "dh"
-type = "prismatic"
-limits = [-1000, 1000]
-"#,
-        )
-        .unwrap();
+        let robot = crate::model::test_rpr_arm();
         let turn = 2.0 * std::f64::consts::PI;
-        let d = |a: [f64; 2], b: [f64; 2]| super::wrapped_distance(&robot, &a, &b);
-        assert!(d([0.3, 5.0], [0.3 + turn, 5.0]) < 1e-12);
+        let d = |a: [f64; 3], b: [f64; 3]| super::wrapped_distance(&robot, &a, &b);
+        assert!(d([0.3, 5.0, -1.0], [0.3 + turn, 5.0, -1.0 - turn]) < 1e-12);
         // The prismatic joint 2 pi mm on is 2 pi mm away (it was wrapped to nothing).
-        assert!((d([0.3, 5.0], [0.3, 5.0 + turn]) - turn).abs() < 1e-12);
-        assert!((d([0.3, 5.0], [0.4, 5.0]) - 0.1).abs() < 1e-12);
+        assert!((d([0.3, 5.0, -1.0], [0.3, 5.0 + turn, -1.0]) - turn).abs() < 1e-12);
+        assert!((d([0.3, 5.0, -1.0], [0.4, 5.0, -1.0]) - 0.1).abs() < 1e-12);
     }
 }

@@ -28,6 +28,31 @@ pub(crate) fn test_fanuc() -> Robot {
     .unwrap()
 }
 
+/// A three-joint arm whose middle joint is prismatic (revolute, prismatic, revolute; mm and
+/// deg as in a robot file), for the unit tests of what tells the joint types apart.
+#[cfg(test)]
+pub(crate) fn test_rpr_arm() -> Robot {
+    Robot::from_toml(
+        r#"
+[[joint]]
+convention = "dh"
+d = 100.0
+alpha = 90.0
+limits = [-360, 360]
+[[joint]]
+convention = "dh"
+alpha = -90.0
+type = "prismatic"
+limits = [-1000, 1000]
+[[joint]]
+convention = "dh"
+a = 300.0
+limits = [-360, 360]
+"#,
+    )
+    .unwrap()
+}
+
 /// The shipped UR10's nominal model, for the unit tests.
 #[cfg(test)]
 pub(crate) fn test_ur10() -> Robot {

@@ -324,25 +324,7 @@ mod tests {
 
     #[test]
     fn a_revolute_joint_is_one_configuration_a_whole_turn_away_a_prismatic_one_is_not() {
-        let robot = crate::model::Robot::from_toml(
-            r#"
-[[joint]]
-convention = "dh"
-d = 100.0
-alpha = 90.0
-limits = [-360, 360]
-[[joint]]
-convention = "dh"
-alpha = -90.0
-type = "prismatic"
-limits = [-1000, 1000]
-[[joint]]
-convention = "dh"
-a = 300.0
-limits = [-360, 360]
-"#,
-        )
-        .unwrap();
+        let robot = crate::model::test_rpr_arm();
         let turn = 2.0 * PI;
         let set3 = |qs: &[[f64; 3]]| {
             MeasurementSet::from_rows(qs.iter().map(|q| Measurement::new(q.to_vec())).collect())
