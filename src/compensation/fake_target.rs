@@ -185,7 +185,8 @@ enum Controller<'a> {
     /// The nominal closed form, on the seed's branch.
     ClosedForm(ClosedFormIk),
     /// The solution nearest the seed (`why`: a UR-class arm, or no closed form): the
-    /// nominal model solved by `ik`, exactly by its closed form where it has one.
+    /// nominal model solved by `ik`, exactly by its closed form where it has one (a rigid
+    /// nominal; a compliant one is solved from its rigid arm's).
     Nearest {
         why: String,
         ik: IkSolver<CalibratedModel<'a>>,
@@ -699,7 +700,8 @@ const SETTLE_ROUNDS: usize = 3;
 /// [`FakeTargetSolver::solve`] for a controller solving near the seed: q* nearest the seed
 /// by `ik` (the calibrated model). The controller takes the nominal model's solution of F =
 /// FK_nominal(q*) nearest the seed, whole turns included; it must be q*:
-/// - with a closed form (the UR class), `controller` gives exactly that solution;
+/// - with a closed form (the UR class), `controller` gives that solution (exactly, or from
+///   the rigid arm's closed form for a nominal with joint compliances);
 /// - without one, q* within [`SEED_FAR_RAD`] of the seed: `controller` (the nominal model)
 ///   solved for F from the seed must return q* (no other solution lies that near); farther,
 ///   where the solve from the seed may have run past a nearer configuration, the nominal's
@@ -783,8 +785,8 @@ fn settle(
                 Ok(run) => run.solution.q,
                 Err(e) => {
                     return Err(Failure::ControllerDiffers(format!(
-                        "the nominal model's closed form does not solve the command within its \
-                         limits: {e}"
+                        "the nominal model's closed-form solve does not solve the command within \
+                         its limits: {e}"
                     )));
                 }
             }

@@ -173,17 +173,19 @@ impl Robot {
 
     /// A copy with these mass properties (none: massless); properties for another joint
     /// count, or out of their bounds, are an error, and so is removing the masses of a robot
-    /// with joint compliances, or giving it a table without mass (they would have no torque
-    /// to act on).
+    /// with compliances (they would have no torque to act on). A table whose masses are all
+    /// zero is not refused here: a cell without payload holds a payload-only compliant model
+    /// undeflected ([`Robot::with_compliance`], which a robot file goes through, refuses
+    /// compliances without any mass).
     pub fn with_masses(&self, masses: Option<MassProperties>) -> Result<Robot> {
         if let Some(f) = masses.as_ref().and_then(|m| m.fault(self.dof())) {
             return Err(Error::Model(format!("mass properties: {f}")));
         }
-        if !masses.as_ref().is_some_and(MassProperties::has_mass)
+        if masses.is_none()
             && self
                 .compliance
                 .as_ref()
-                .is_some_and(|c| c.joints.iter().any(|&v| v != 0.0))
+                .is_some_and(|c| !c.joints.is_empty())
         {
             return Err(Error::Model(NO_MASS_FOR_COMPLIANCE.into()));
         }

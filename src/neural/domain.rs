@@ -85,10 +85,10 @@ impl DomainCheck {
 
 /// The radius of a domain of one configuration, whose rows leave no gap to measure: the
 /// distance (normalised input units) within which a row of the same configuration lies from
-/// `q` (rad, mm), every joint within [`super::repeats::SAME_CONFIGURATION`] of it: the
-/// root sum of squares over the joints of the distance a move of that size in the joint alone
-/// makes (a move of every joint at once to first order, each joint's part taken at right
-/// angles to the others', as with sin/cos inputs, where each joint has inputs of its own).
+/// `q` (rad, mm), every joint within [`super::repeats::SAME_CONFIGURATION`] of it: the sum
+/// over the joints of the distance a move of that size in the joint alone makes (to first
+/// order a bound on a move of every joint at once, whatever the encoding: gravity inputs
+/// turn with the sum of parallel joints).
 /// Without it the radius was 0, and a row measured again at that configuration, its joints a
 /// few encoder counts off the training rows', had its correction faded to nothing.
 fn one_configuration_radius(
@@ -110,12 +110,11 @@ fn one_configuration_radius(
     (0..q.len())
         .map(|j| {
             moved[j] = q[j] + super::repeats::SAME_CONFIGURATION;
-            let d2 = distance2(&x0, &at(&moved));
+            let d = distance2(&x0, &at(&moved)).sqrt();
             moved[j] = q[j];
-            d2
+            d
         })
-        .sum::<f64>()
-        .sqrt()
+        .sum()
 }
 
 fn distance2(a: &[f64], b: &[f64]) -> f64 {
@@ -195,7 +194,16 @@ impl Domain {
         let inputs: Vec<Vec<f64>> = points.into_iter().map(|(x, _)| x).collect();
         gaps.sort_by(f64::total_cmp);
         let radius = match (gaps.len(), qs.first()) {
-            (0, Some(q)) => one_configuration_radius(robot, encoding, norm, q, &mut ws),
+            (0, Some(q)) => {
+                // One configuration: its rows' ranges are a point (or the encoder counts
+                // between them), which a row measured again leaves; a row of the
+                // configuration lies within the tolerance of them.
+                for j in 0..n {
+                    joint_min[j] -= super::repeats::SAME_CONFIGURATION;
+                    joint_max[j] += super::repeats::SAME_CONFIGURATION;
+                }
+                one_configuration_radius(robot, encoding, norm, q, &mut ws)
+            }
             (0, None) => 0.0,
             (n, _) => gaps[((0.99 * n as f64).ceil() as usize).clamp(1, n) - 1].sqrt(),
         };
@@ -529,7 +537,7 @@ mod tests {
         };
         let q = [0.1, -0.4, 0.3, 0.8, -0.5, 1.2];
         // Repeats a few encoder counts apart, and a row of that configuration and one of
-        // another (each joint moved by a tenth, and by three times, the tolerance).
+        // another (each joint moved by a tenth, and by ten times, the tolerance).
         let repeat = |by: f64| -> Vec<f64> { q.iter().map(|v| v + by).collect() };
         let rows = [repeat(0.0), repeat(2e-6), repeat(-3e-6)];
         let rows: Vec<&[f64]> = rows.iter().map(Vec::as_slice).collect();
@@ -546,7 +554,11 @@ mod tests {
         let mut one_joint = q.to_vec();
         one_joint[2] -= crate::data::configuration::SAME_CONFIGURATION;
         assert_eq!(weight(&one_joint, &mut ws), 1.0);
-        let other = repeat(3.0 * crate::data::configuration::SAME_CONFIGURATION);
+        let other = repeat(10.0 * crate::data::configuration::SAME_CONFIGURATION);
         assert_eq!(weight(&other, &mut ws), 0.0);
+        // Every joint of a row of the configuration lies within its range; the other's not.
+        assert!(d.joints_outside(&same, |_| true).is_empty());
+        assert!(d.joints_outside(&one_joint, |_| true).is_empty());
+        assert_eq!(d.joints_outside(&other, |_| true).len(), 6);
     }
 }

@@ -288,7 +288,8 @@ impl Compensator {
         // One configuration measured again and again gives the network one input: it can
         // learn a constant only, whatever it is told. (Counted on the rows, not on the
         // repeats' summary, which leaves pasted copies of a row out.)
-        if fit_set.rows.len() > 1
+        if c.has_network()
+            && fit_set.rows.len() > 1
             && super::repeats::group_count(&configuration_groups(robot, fit_set)) == 1
         {
             report.notes.push(format!(
