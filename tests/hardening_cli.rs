@@ -1230,27 +1230,24 @@ fn edge_inputs_of_train_and_evaluate() {
             1200.0 + 0.01 * k as f64
         ));
     }
-    let once_path = common::tmp("edge_once.csv");
-    std::fs::write(&once_path, &once).unwrap();
-    let o = common::train_fanuc(once_path.to_str().unwrap(), out, common::CHEAP_TRAIN);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(
-        common::stdout(&o).contains("are one configuration: the network can learn only a constant"),
-        "{}",
-        common::stdout(&o)
-    );
     // The same with a row pasted twice (the repeats' summary leaves the copy out, and the
     // note was lost).
     let pasted = format!("{once}10,20,30,40,50,60,1200,500,1500\n");
-    let pasted_path = common::tmp("edge_once_pasted.csv");
-    std::fs::write(&pasted_path, pasted).unwrap();
-    let o = common::train_fanuc(pasted_path.to_str().unwrap(), out, common::CHEAP_TRAIN);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(
-        common::stdout(&o).contains("are one configuration: the network can learn only a constant"),
-        "{}",
-        common::stdout(&o)
-    );
+    let once_path = common::tmp("edge_once.csv");
+    for (path, text) in [
+        (once_path.clone(), &once),
+        (common::tmp("edge_once_pasted.csv"), &pasted),
+    ] {
+        std::fs::write(&path, text).unwrap();
+        let o = common::train_fanuc(path.to_str().unwrap(), out, common::CHEAP_TRAIN);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(
+            common::stdout(&o)
+                .contains("are one configuration: the network can learn only a constant"),
+            "{}",
+            common::stdout(&o)
+        );
+    }
     // That constant applies where the configuration is measured again, its joints a few
     // hundredths of a degree off (the domain's radius was 0 and faded it to nothing there).
     let again = common::tmp("edge_once_again.csv");

@@ -2,9 +2,9 @@
 //! Coefficients: reflection 1, expansion 2, contraction 0.5, shrink 0.5 (eq. 4.5).
 //!
 //! Parameters are searched in scaled coordinates, one unit being 1 mm for lengths, 1 mrad
-//! for angles, 0.1 mrad per kN m for joint compliances and 10 mrad per kN m times kg (or kg m)
-//! for their mass-free coefficients (the size of typical deviations): the starting simplex is the start plus one
-//! unit along each axis. The search stops when the simplex has collapsed (every vertex within
+//! for angles, 0.1 mrad per kN m for joint compliances and 10 mrad per kN m times kg (or
+//! kg m) for their mass-free coefficients (the size of typical deviations): the starting
+//! simplex is the start plus one unit along each axis. The search stops when the simplex has collapsed (every vertex within
 //! `xtol` units of the best and the costs within `ftol` relative) or after the iteration limit;
 //! it restarts once from the best vertex, as is customary, to guard against a degenerate
 //! simplex.

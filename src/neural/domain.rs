@@ -98,13 +98,8 @@ fn one_configuration_radius(
     q: &[f64],
     ws: &mut crate::kinematics::Frames,
 ) -> f64 {
-    let mut at = |q: &[f64]| {
-        let mut feat = Vec::new();
-        encoding.features(robot, q, ws, &mut feat);
-        let mut x = vec![0.0; feat.len()];
-        norm.apply(&feat, &mut x);
-        x
-    };
+    let mut feat = Vec::new();
+    let mut at = |q: &[f64]| normalised_input(robot, encoding, norm, q, ws, &mut feat);
     let x0 = at(q);
     let mut moved = q.to_vec();
     (0..q.len())
@@ -115,6 +110,22 @@ fn one_configuration_radius(
             d
         })
         .sum()
+}
+
+/// The network input of joints `q` (rad, mm): the encoding's features (into the scratch
+/// `feat`) under the input normalisation.
+fn normalised_input(
+    robot: &Robot,
+    encoding: Encoding,
+    norm: &Affine,
+    q: &[f64],
+    ws: &mut crate::kinematics::Frames,
+    feat: &mut Vec<f64>,
+) -> Vec<f64> {
+    encoding.features(robot, q, ws, feat);
+    let mut x = vec![0.0; feat.len()];
+    norm.apply(feat, &mut x);
+    x
 }
 
 fn distance2(a: &[f64], b: &[f64]) -> f64 {
@@ -145,9 +156,7 @@ impl Domain {
                 joint_min[j] = joint_min[j].min(q[j]);
                 joint_max[j] = joint_max[j].max(q[j]);
             }
-            encoding.features(robot, q, &mut ws, &mut feat);
-            let mut x = vec![0.0; feat.len()];
-            norm.apply(&feat, &mut x);
+            let x = normalised_input(robot, encoding, norm, q, &mut ws, &mut feat);
             points.push((x, group));
         }
         points.sort_by(|a, b| {
