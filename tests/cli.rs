@@ -96,7 +96,7 @@ fn ik_all_solutions_as_json() {
 }
 
 #[test]
-fn ik_of_a_ur_arm_is_closed_form_and_without_one_needs_a_seed() {
+fn ik_of_a_ur_arm_is_closed_form_and_without_one_numerical() {
     // The UR10 has a closed form (the UR class): without a seed, its solution nearest the
     // middle of the ranges; with one, the configuration the pose came from, exactly.
     let ur = "datasets/robots/ur10.toml";
@@ -134,7 +134,8 @@ fn ik_of_a_ur_arm_is_closed_form_and_without_one_needs_a_seed() {
         "{}",
         stdout(&o)
     );
-    // Axis 3 tilted by 0.1 deg: no closed form, so the numerical solve needs a seed.
+    // Axis 3 tilted by 0.1 deg: no closed form, so numerical solves from the seed, or
+    // without one from starts spread around the middle of the ranges.
     let text = std::fs::read_to_string(ur).unwrap();
     let at = text.find("# elbow").unwrap();
     let tilted = format!(
@@ -149,13 +150,19 @@ fn ik_of_a_ur_arm_is_closed_form_and_without_one_needs_a_seed() {
     let line = stdout(&o).lines().nth(1).unwrap().to_string();
     let pose: Vec<&str> = line.split(',').skip(6).collect();
     let pose = pose.join(",");
-    let o = robocal(&["ik", "--robot", tilted, "--pose", &pose]);
-    assert!(!o.status.success());
+    let o = robocal(&["ik", "--robot", tilted, "--pose", &pose, "--decimals", "3"]);
+    assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains("no spherical wrist, nor is it of the UR class")
-            && stderr(&o).contains("seed"),
+            && stderr(&o).contains("without one, from starts spread around the middle"),
         "{}",
         stderr(&o)
+    );
+    // The elbow's other solution, as on the untilted arm (it was "no-seed" before).
+    assert!(
+        stdout(&o).contains(",1,10.007,-12.664,-70.053,12.723,-80.106,19.958,ok"),
+        "{}",
+        stdout(&o)
     );
     let o = robocal(&[
         "ik",

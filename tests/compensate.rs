@@ -269,6 +269,29 @@ fn geometric_deviations_are_compensated_to_the_noise_floor_without_seeds() {
 }
 
 #[test]
+fn a_ur_target_past_the_nominal_reach_is_unreachable_with_a_seed() {
+    // A UR10 (the nominal its own calibration, a controller solving near the seed): targets
+    // along x from the reach of the arm to its reach bound. The nominal's closed form has no
+    // solution past 1300 mm here, and the solve from the seed stalls: unreachable, as `ik`
+    // says it (from 1500 mm on, where no pulled pose gave a start either, they were
+    // "not-converged"; a reviewer's).
+    let ur10 = read_robot(root().join("datasets/robots/ur10.toml")).unwrap();
+    let mut solver = FakeTargetSolver::new(&ur10, CalibratedModel::identified(&ur10)).unwrap();
+    let seed: Vec<f64> = [0.0, -90.0, 90.0, -90.0, -90.0, 0.0_f64]
+        .iter()
+        .map(|d| d.to_radians())
+        .collect();
+    let at = |x: f64| Target::Pose(Pose::translation(x, 0.0, 127.3));
+    assert!(solver.solve(&at(1300.0), Some(&seed)).is_ok());
+    for x in [1400.0, 1450.0, 1500.0, 1543.0, 1600.0, 1690.0] {
+        match solver.solve(&at(x), Some(&seed)) {
+            Err(Failure::Unreachable(_)) => {}
+            other => panic!("x {x} mm: {other:?}"),
+        }
+    }
+}
+
+#[test]
 fn impossible_targets_are_failures_not_commands() {
     let s = load("case_d", None);
     let robot = identified(&s);

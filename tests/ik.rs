@@ -1929,3 +1929,42 @@ fn an_arm_of_four_joints_meets_the_position_and_nears_the_orientation() {
         assert!(sol.rotation_error_rad <= 1e-12 && sol.position_error_mm <= 1e-9);
     }
 }
+
+#[test]
+fn a_model_without_a_closed_form_is_solved_without_a_seed() {
+    use robocal::kinematics::{IkSolver, IkStart, RobotModel, joint_distance};
+    // A calibrated UR10 with no nominal given has no start but the seed; without one, the
+    // starts spread around the middle of the ranges solve it. Each solution must reach the
+    // pose within the limits, and be (nearly always) as near the middle of the ranges as the
+    // one the nominal's closed-form starts give.
+    let nominal = robot_file("ur10.toml");
+    let calibrated = ur10_calibrated();
+    let seedless = IkStart::choose(&calibrated, None).unwrap();
+    assert!(matches!(seedless, IkStart::Seed(_)));
+    let mut solver = IkSolver::new(RobotModel::new(&calibrated), seedless, IkOptions::default());
+    let start = IkStart::choose(&calibrated, Some(&nominal)).unwrap();
+    let mut started = IkSolver::new(RobotModel::new(&calibrated), start, IkOptions::default());
+    let mid: Vec<f64> = (calibrated.joints().iter())
+        .map(|j| {
+            let [lo, hi] = j.limits_internal();
+            0.5 * (lo + hi)
+        })
+        .collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let (mut as_near, mut n) = (0, 0);
+    for _ in 0..100 {
+        let q = random_q(&calibrated, &mut rng);
+        let target = tool_pose(&calibrated, &q);
+        let sol = solver.nearest(&target, None).unwrap().solution;
+        let (dp, dr) = pose_errors(&tool_pose(&calibrated, &sol.q), &target);
+        assert!(dp < 1e-6 && dr < 1e-9, "{dp} mm {dr} rad");
+        assert!(sol.outside_limits.is_empty());
+        let best = started.nearest(&target, None).unwrap().solution.q;
+        n += 1;
+        if joint_distance(&sol.q, &mid) <= joint_distance(&best, &mid) + 1e-6 {
+            as_near += 1;
+        }
+    }
+    eprintln!("seedless nearest as near the middle as the nominal-started one: {as_near} of {n}");
+    assert!(as_near * 10 >= n * 9, "{as_near} of {n}");
+}

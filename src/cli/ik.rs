@@ -83,7 +83,10 @@ pub fn run(a: IkArgs) -> Result<bool> {
             .map_or_else(String::new, |p| p.display().to_string())
     })?;
     if let IkStart::Seed(why) = &start {
-        eprintln!("note: {why}; solving numerically from the seed");
+        eprintln!(
+            "note: {why}; solving numerically from the seed (without one, from starts spread \
+             around the middle of the ranges; --nominal gives a closed form's starts)"
+        );
     }
 
     let mut written = vec!["solution".to_string()];

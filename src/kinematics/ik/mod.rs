@@ -28,7 +28,9 @@
 //!    the pulled and nearest ones), or where they found fewer distinct solutions than the
 //!    nominal has branches at the pose, starts spread over the joints' turns around the
 //!    reference ([`super::spread::around`]) are tried too: next to a singularity a
-//!    calibrated arm can have solutions no branch's start leads to.
+//!    calibrated arm can have solutions no branch's start leads to. Where there is neither a
+//!    closed form nor a seed, more of them (64) around the middle of the ranges are the only
+//!    starts.
 //!
 //! The reference is the seed when one is given, else the middle of the joint ranges.
 //! [`IkSolver::nearest`] (`robocal ik`) refines the seed and every start and returns the
