@@ -824,3 +824,65 @@ fn nelder_mead_steps_mass_free_coefficients_by_a_typical_size() {
     assert!(collapsed, "Nelder-Mead ran out of iterations");
     assert!((nm_m3 - lm_m3).abs() < 1e-3 && (nm_mp - lm_mp).abs() < 1e-3);
 }
+
+/// A regrouping's coefficients are in file units (kept per dropped: mm/deg for theta6 with
+/// tool.y): moving the dropped parameter by 0.5 in its file unit and each kept one by minus
+/// its coefficient times that leaves the poses nearly unchanged. They were printed in
+/// internal units (mm per rad), 57.3 times too large read as mm per deg (a reviewer's).
+#[test]
+fn regroupings_are_in_file_units() {
+    use robocal::kinematics::tool_pose;
+    use robocal::model::read_robot;
+    let (out, report) = (tmp("regroup.toml"), tmp("regroup.json"));
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        FANUC,
+        "--data",
+        "datasets/case_b_sim/calibration.csv",
+        "--out",
+        out.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("tool.y (mm/deg)"), "{}", stdout(&o));
+    let r = common::json(&report);
+    let robot = read_robot(&out).unwrap();
+    let theta6 = (r["dropped"].as_array().unwrap().iter())
+        .find(|d| d["name"] == "theta6")
+        .unwrap();
+    let step: f64 = 0.5; // deg
+    let id = robot.find_param("theta6").unwrap();
+    let mut moves = vec![(id, robot.param(id) + step.to_radians())];
+    let mut mixed = false;
+    for g in theta6["regroups_with"].as_array().unwrap() {
+        let k = robot.find_param(g["name"].as_str().unwrap()).unwrap();
+        let c = g["coefficient"].as_f64().unwrap();
+        let unit = g["unit"].as_str().unwrap();
+        let change = -c * step;
+        let internal = match unit {
+            "mm/deg" => {
+                mixed = true;
+                change
+            }
+            "deg/deg" => change.to_radians(),
+            other => panic!("{other}"),
+        };
+        moves.push((k, robot.param(k) + internal));
+    }
+    assert!(mixed, "{theta6}");
+    let alone = robot.with_params(&moves[..1]).unwrap();
+    let regrouped = robot.with_params(&moves).unwrap();
+    let (mut worst_alone, mut worst) = (0.0_f64, 0.0_f64);
+    for k in 0..20 {
+        let q: Vec<f64> = (0..6).map(|j| 0.3 * ((k * 6 + j) as f64).sin()).collect();
+        let p = tool_pose(&robot, &q).translation.vector;
+        worst_alone = worst_alone.max((tool_pose(&alone, &q).translation.vector - p).norm());
+        worst = worst.max((tool_pose(&regrouped, &q).translation.vector - p).norm());
+    }
+    assert!(
+        worst < 0.01 * worst_alone,
+        "{worst} mm against {worst_alone} mm"
+    );
+}

@@ -316,7 +316,15 @@ fn print_identified(r: &IdentifyReport) {
                 "regroups with {}",
                 d.regroups_with
                     .iter()
-                    .map(|g| format!("{:+.4} {}", g.coefficient, g.name))
+                    .map(|g| {
+                        // A unit only where it is not one per one (mm/mm, deg/deg).
+                        let same = g.unit.split_once('/').is_some_and(|(a, b)| a == b);
+                        if same {
+                            format!("{:+.4} {}", g.coefficient, g.name)
+                        } else {
+                            format!("{:+.4} {} ({})", g.coefficient, g.name, g.unit)
+                        }
+                    })
                     .collect::<Vec<_>>()
                     .join(" ")
             )

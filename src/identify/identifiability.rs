@@ -33,7 +33,8 @@ pub enum DropReason {
     /// Its column is zero: it does not change what is measured.
     NoEffect,
     /// Its column is a combination of kept ones: `(parameter index, coefficient)`, with
-    /// coefficient in units of the kept parameter per unit of the dropped one.
+    /// coefficient in internal units of the kept parameter per internal unit of the dropped
+    /// one (mm per rad for a length regrouped with an angle; the report gives file units).
     Regroups(Vec<(usize, f64)>),
     /// A compliance the data do not distinguish from zero: its estimate over its standard
     /// deviation when dropped (below [`super::run::SIGNIFICANCE`] in magnitude).

@@ -6,6 +6,7 @@ use crate::identify::identifiability::DropReason;
 use crate::identify::outliers::Outlier;
 use crate::identify::run::{ParamReport, file_value};
 use crate::identify::{Identified, Measure, Method, Options, RobustLoss, StopReason};
+use crate::model::Field;
 use crate::neural::repeats::Repeats;
 use serde::{Deserialize, Serialize};
 
@@ -33,14 +34,17 @@ pub struct DroppedParam {
     pub unit: String,
 }
 
-/// One term of a regrouping: the dropped parameter's column equals the sum of coefficient
-/// times these columns (column-scaled).
+/// One term of a regrouping: a change of the dropped parameter acts as coefficient times
+/// that change of each of these kept parameters.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Regroup {
     /// The kept parameter.
     pub name: String,
-    /// Its coefficient (no unit: columns are scaled).
+    /// Its coefficient in file units: the kept parameter's per the dropped one's (`unit`).
     pub coefficient: f64,
+    /// The coefficient's unit, kept over dropped (`mm/deg`, `deg/deg`, ...).
+    #[serde(default)]
+    pub unit: String,
 }
 
 /// Two identified parameters whose estimates are strongly correlated (|r| > 0.9).
@@ -197,10 +201,17 @@ impl IdentifyReport {
                     }
                     DropReason::Regroups(g) => {
                         dropped.reason = "regroups".into();
+                        // Internal units (mm per rad) to file units (mm per deg): the
+                        // kept parameter's file units per the dropped one's.
+                        let per_file = |f: Field| f.to_file(1.0);
                         dropped.regroups_with = (g.iter())
-                            .map(|(q, c)| Regroup {
-                                name: params[*q].name(),
-                                coefficient: *c,
+                            .map(|(q, c)| {
+                                let kept = params[*q].field;
+                                Regroup {
+                                    name: params[*q].name(),
+                                    coefficient: c * per_file(kept) / per_file(p.field),
+                                    unit: format!("{}/{}", kept.file_unit(), p.field.file_unit()),
+                                }
                             })
                             .collect();
                     }
