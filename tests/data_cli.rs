@@ -97,6 +97,22 @@ fn line_numbers_count_every_line() {
     assert!(err.contains("lines.csv:4") && err.contains("`x`"), "{err}");
 }
 
+/// Several empty orientation cells: the error names the first in the file (rz), not the last
+/// read (rx: the angles are read about x, y, z).
+#[test]
+fn the_first_bad_cell_of_a_row_is_named() {
+    let text = "id,q1,q2,q3,q4,q5,q6,x,y,z,rz,ry,rx\na,0,0,0,0,0,0,2032,-182,1970,0,90,0\n\
+                b,0,0,0,0,0,0,2032,-182,1970,,,\nc,0,0,0,0,0,0,2032,-182,1970,0,,x\n";
+    let (o, _) = import_text("first_bad_cell", text, &[]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(err.contains(":3: field `rz`"), "{err}");
+    let text = text.replace("b,0,0,0,0,0,0,2032,-182,1970,,,\n", "");
+    let (o, _) = import_text("first_bad_cell", &text, &[]);
+    let err = stderr(&o);
+    assert!(err.contains(":3: field `ry`"), "{err}");
+}
+
 /// Imports a whole file text (header included) written as `name`.csv, with `extra` flags,
 /// into `name`.out: the run and the output's path.
 fn import_text(
@@ -690,7 +706,7 @@ fn simulate_measures_given_joints_in_their_order() {
     // Refused, nothing written: a row beyond the limits, no rows, --count beside --joints.
     let limits_line = format!("q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n0,0,{},0,0,0\n", 400.0);
     for (text, extra, said) in [
-        (limits_line.as_str(), None, "line 3: joint 3 at 400"),
+        (limits_line.as_str(), None, ":3: field `q3`: joint 3 at 400"),
         ("q1,q2,q3,q4,q5,q6\n", None, "no data rows"),
         (
             "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n",

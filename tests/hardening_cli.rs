@@ -1043,6 +1043,17 @@ fn edge_inputs_of_train_and_evaluate() {
             data,
         ]);
         assert!(!stdout(&o).contains(&note), "{}", stdout(&o));
+        // Its rows are the file's own: their figures are not held out where it trained the
+        // model (as `train --validate` says of such rows; a reviewer's).
+        assert!(
+            stderr(&o).contains(&format!(
+                "warning: {data}: every data row (150) is a row of {data} too, the same joints \
+                 and reading: where that file trained the model or the compensator, their \
+                 figures are fitted ones"
+            )),
+            "{}",
+            stderr(&o)
+        );
         // `identify` says it among its notes, and in its report.
         let report = common::tmp("edge_position_only.json");
         let o = robocal(&[
@@ -1939,7 +1950,7 @@ fn edge_inputs_of_the_twenty_fifth_session() {
     );
     refused(
         &["plan", "--robot", FANUC, "--evaluate", &beyond],
-        "s25_plan_beyond.csv: line 13: joint 1 at 200.0000 deg, beyond [-150, 150]",
+        "s25_plan_beyond.csv:13: field `q1`: joint 1 at 200.0000 deg, beyond [-150, 150]",
     );
     let list = file("s25_plan_list.csv", &list);
     let o = robocal(&[

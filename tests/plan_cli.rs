@@ -248,6 +248,17 @@ fn bad_plans_are_refused_with_the_reason() {
         assert!(stderr(&o).contains(want), "{args:?}: {}", stderr(&o));
         assert!(!out.exists(), "{args:?} left a file");
     }
+    // More units than the pool holds: a flag's value at odds with another (exit code 2).
+    let o = robocal(&[
+        "plan", "--robot", FANUC, "--pool", "300", "--count", "301", "--out", o_,
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--count 301: the candidates hold 300 units"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
     // A list to evaluate with a row beyond the limits: named, not dropped.
     let beyond = tmp("beyond.csv");
     std::fs::write(
@@ -264,7 +275,8 @@ fn bad_plans_are_refused_with_the_reason() {
     ]);
     assert!(!o.status.success());
     assert!(
-        stderr(&o).contains("beyond.csv: line 3: joint 1 at 400.0000 deg, beyond [-150, 150]"),
+        stderr(&o)
+            .contains("beyond.csv:3: field `q1`: joint 1 at 400.0000 deg, beyond [-150, 150]"),
         "{}",
         stderr(&o)
     );

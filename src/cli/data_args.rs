@@ -200,15 +200,16 @@ pub struct FitInputs {
     pub read_warnings: Vec<String>,
 }
 
-/// The model and the data of a fit on measurements (`identify`, `train`), after refusing
-/// outputs that name one of its inputs or each other ([`super::paths::guard`]).
 /// The warning for validation rows (`val`, read from `val_path`) that are rows of the
-/// training data too (`set`, from `data`): their figures are not held out.
-fn shared_rows_warning(
+/// training data too (`set`, from `data`): their figures are not held out. `kind` names the
+/// rows (`validation`, `data`), `held` says when they are fitted ones (`train`'s validation
+/// rows always; `evaluate`'s where the other file trained the model or the compensator).
+pub(super) fn shared_rows_warning(
     val_path: &Path,
     val: &MeasurementSet,
     data: &Path,
     set: &MeasurementSet,
+    (kind, held): (&str, &str),
 ) -> Option<String> {
     let lines = lines_also_in(val, set);
     if lines.is_empty() {
@@ -216,13 +217,13 @@ fn shared_rows_warning(
     }
     let what = if lines.len() == val.rows.len() {
         format!(
-            "every validation row ({}) is a row of {} too",
+            "every {kind} row ({}) is a row of {} too",
             lines.len(),
             data.display()
         )
     } else {
         format!(
-            "{} of {} validation rows (lines {}) are rows of {} too",
+            "{} of {} {kind} rows (lines {}) are rows of {} too",
             lines.len(),
             val.rows.len(),
             list_lines(&lines),
@@ -230,12 +231,14 @@ fn shared_rows_warning(
         )
     };
     Some(format!(
-        "{}: {what}, the same joints and reading: their validation figures are fitted ones, \
-         not held out (split the rows with `robocal split` for a held-out check)",
+        "{}: {what}, the same joints and reading: {held}their figures are fitted ones, not \
+         held out (split the rows with `robocal split` for a held-out check)",
         val_path.display()
     ))
 }
 
+/// The model and the data of a fit on measurements (`identify`, `train`), after refusing
+/// outputs that name one of its inputs or each other ([`super::paths::guard`]).
 pub fn open_fit(
     robot: &Path,
     data: &Path,
@@ -266,7 +269,7 @@ pub fn open_fit(
         Some(p) => {
             let (v, w) = read.read_noted(p, &joints)?;
             read_warnings.extend(w);
-            if let Some(w) = shared_rows_warning(p, &v, data, &set) {
+            if let Some(w) = shared_rows_warning(p, &v, data, &set, ("validation", "")) {
                 eprintln!("warning: {w}");
                 read_warnings.push(w);
             }

@@ -108,6 +108,14 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         Some(p) => {
             let (r, read) = a.read.read_noted(p, &joints)?;
             warnings.printed_too(read);
+            // The file checked against is most often the training file (the README's).
+            let held = (
+                "data",
+                "where that file trained the model or the compensator, ",
+            );
+            warnings.say_some(super::data_args::shared_rows_warning(
+                &a.data, &set, p, &r, held,
+            ));
             Some(r)
         }
         None => None,

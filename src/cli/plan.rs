@@ -239,10 +239,13 @@ fn evaluated_list(
     let beyond = refused_lines(robot, &qs, &t, &Constraints::default());
     if let Some(&(line, r)) = beyond.first() {
         // Both judge the limits with one tolerance: a row refused has a joint to name.
-        let why = robocal::data::measurement::JointInfo::first_outside(&joints, &qs[r])
-            .unwrap_or_else(|| "beyond the joint limits".into());
+        let at = robocal::data::measurement::JointInfo::first_outside_at(&joints, &qs[r]);
+        let (field, why) = match at {
+            Some((j, why)) => (format!(" field `q{}`:", j + 1), why),
+            None => (String::new(), "beyond the joint limits".into()),
+        };
         bail!(
-            "{}: line {line}: {why}: the prediction is for configurations the robot can reach \
+            "{}:{line}:{field} {why}: the prediction is for configurations the robot can reach \
              ({} row(s) beyond the limits of its robot file: lines {})",
             path.display(),
             beyond.len(),
@@ -745,6 +748,13 @@ pub fn run(a: PlanArgs) -> Result<()> {
             (c.units.clone(), Some(c))
         }
         (None, None, Some(n)) => {
+            if n > design.units() {
+                usage!(
+                    "--count {n}: the candidates hold {} units (--pool, or the rows of \
+                     --candidates)",
+                    design.units()
+                );
+            }
             let c = choose(&design, n, criterion, &[])?;
             (c.units.clone(), Some(c))
         }

@@ -286,11 +286,12 @@ impl Given {
         let info = JointInfo::of(robot);
         let q: Vec<Vec<f64>> = (0..t.joints.len()).map(|r| t.internal(r, robot)).collect();
         for (r, q) in q.iter().enumerate() {
-            if let Some(why) = JointInfo::first_outside(&info, q) {
+            if let Some((j, why)) = JointInfo::first_outside_at(&info, q) {
                 anyhow::bail!(
-                    "{}: line {}: {why}: the robot cannot be measured there",
+                    "{}:{}: field `q{}`: {why}: the robot cannot be measured there",
                     path.display(),
-                    t.table.lines[r]
+                    t.table.lines[r],
+                    j + 1
                 );
             }
         }

@@ -404,9 +404,23 @@ impl Table {
         }
     }
 
-    /// Several cells of one row as finite numbers.
+    /// Several cells of one row as finite numbers; where some are not, the error of the
+    /// leftmost in the file (the columns may be asked in another order: orientation angles
+    /// about x, y, z from columns rz, ry, rx).
     pub fn numbers(&self, row: usize, cols: &[usize]) -> Result<Vec<f64>> {
-        cols.iter().map(|&c| self.number(row, c)).collect()
+        let mut out = Vec::with_capacity(cols.len());
+        let mut first: Option<(usize, Error)> = None;
+        for &c in cols {
+            match self.number(row, c) {
+                Ok(v) => out.push(v),
+                Err(e) if first.as_ref().is_none_or(|(k, _)| c < *k) => first = Some((c, e)),
+                Err(_) => {}
+            }
+        }
+        match first {
+            Some((_, e)) => Err(e),
+            None => Ok(out),
+        }
     }
 }
 

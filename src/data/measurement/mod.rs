@@ -229,6 +229,12 @@ impl JointInfo {
     /// The first joint of `q` beyond its limits, in words (file units: deg, mm): "joint 2 at
     /// 75 deg, beyond [-50, 70]".
     pub fn first_outside(joints: &[JointInfo], q: &[f64]) -> Option<String> {
+        Self::first_outside_at(joints, q).map(|(_, why)| why)
+    }
+
+    /// [`Self::first_outside`] with the joint's index (0-based), for a message naming its
+    /// column.
+    pub fn first_outside_at(joints: &[JointInfo], q: &[f64]) -> Option<(usize, String)> {
         (joints.iter().zip(q).enumerate()).find_map(|(i, (j, &v))| {
             let [lo, hi] = j.limits?;
             (v < lo - 1e-9 || v > hi + 1e-9).then(|| {
@@ -253,7 +259,10 @@ impl JointInfo {
                 if read(&at) >= read(&low) && read(&at) <= read(&high) {
                     at = f(v).to_string();
                 }
-                format!("joint {} at {at} {unit}, beyond [{low}, {high}]", i + 1)
+                (
+                    i,
+                    format!("joint {} at {at} {unit}, beyond [{low}, {high}]", i + 1),
+                )
             })
         })
     }
