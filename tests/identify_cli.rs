@@ -825,7 +825,7 @@ fn nelder_mead_steps_mass_free_coefficients_by_a_typical_size() {
     assert!((nm_m3 - lm_m3).abs() < 1e-3 && (nm_mp - lm_mp).abs() < 1e-3);
 }
 
-/// A regrouping's coefficients are in file units (kept per dropped: mm/deg for theta6 with
+/// A regrouping's coefficients are in file units (kept per dropped: mm per deg for theta6 with
 /// tool.y): moving the dropped parameter by 0.5 in its file unit and each kept one by minus
 /// its coefficient times that leaves the poses nearly unchanged. They were printed in
 /// internal units (mm per rad), 57.3 times too large read as mm per deg (a reviewer's).
@@ -846,7 +846,7 @@ fn regroupings_are_in_file_units() {
         report.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stdout(&o).contains("tool.y (mm/deg)"), "{}", stdout(&o));
+    assert!(stdout(&o).contains("tool.y (mm per deg)"), "{}", stdout(&o));
     let r = common::json(&report);
     let robot = read_robot(&out).unwrap();
     let theta6 = (r["dropped"].as_array().unwrap().iter())
@@ -862,11 +862,11 @@ fn regroupings_are_in_file_units() {
         let unit = g["unit"].as_str().unwrap();
         let change = -c * step;
         let internal = match unit {
-            "mm/deg" => {
+            "mm per deg" => {
                 mixed = true;
                 change
             }
-            "deg/deg" => change.to_radians(),
+            "deg per deg" => change.to_radians(),
             other => panic!("{other}"),
         };
         moves.push((k, robot.param(k) + internal));
@@ -884,5 +884,27 @@ fn regroupings_are_in_file_units() {
     assert!(
         worst < 0.01 * worst_alone,
         "{worst} mm against {worst_alone} mm"
+    );
+    // Compliance units hold slashes of their own: a coefficient of one unit per the same
+    // unit is unmarked, a link's mass regrouped with a first moment is in m.
+    let o = robocal(&[
+        "identify",
+        "--robot",
+        FANUC,
+        "--data",
+        "datasets/nongeometric_robot/calibration.csv",
+        "--params",
+        "full,compliance",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let said = stdout(&o);
+    assert!(
+        said.contains("k2.mz4       regroups with +1.0000 k2.my3\n")
+            && said.contains(
+                "k2.m3        regroups with +1.0750 k2.mx2 (mrad/kNm*kg*m per mrad/kNm*kg)\n"
+            ),
+        "{said}"
     );
 }

@@ -317,8 +317,8 @@ fn print_identified(r: &IdentifyReport) {
                 d.regroups_with
                     .iter()
                     .map(|g| {
-                        // A unit only where it is not one per one (mm/mm, deg/deg).
-                        let same = g.unit.split_once('/').is_some_and(|(a, b)| a == b);
+                        // A unit only where it is not one per one (mm per mm).
+                        let same = g.unit.split_once(" per ").is_some_and(|(a, b)| a == b);
                         if same {
                             format!("{:+.4} {}", g.coefficient, g.name)
                         } else {

@@ -2,7 +2,8 @@
 //!
 //! The strategy is the library's (`kinematics::ik`): the closed form when the robot has one;
 //! else the nominal model's closed form (`--nominal`) refined numerically on the robot; else
-//! numerical IK from a seed (`--seed`, or the row's own q1..qN columns).
+//! numerical IK from a seed (`--seed`, or the row's own q1..qN columns), and from starts
+//! spread around it, or without one around the middle of the ranges.
 
 use super::output::{OutputArgs, joints_arg, num, pose_arg};
 use anyhow::{Context, Result, bail};
@@ -43,7 +44,6 @@ pub struct IkArgs {
 /// `compensate`'s statuses), then what to do.
 fn explain(f: &IkFailure) -> String {
     let text = match f {
-        IkFailure::NoSeed => "give --seed or q1..qN columns".into(),
         IkFailure::TooMany => format!("{f}: leave out --all for the one nearest the seed"),
         IkFailure::BadSeed(m) => format!("{m} (--seed or the q1..qN columns)"),
         other => other.to_string(),
@@ -85,7 +85,12 @@ pub fn run(a: IkArgs) -> Result<bool> {
     if let IkStart::Seed(why) = &start {
         eprintln!(
             "note: {why}; solving numerically from the seed (without one, from starts spread \
-             around the middle of the ranges; --nominal gives a closed form's starts)"
+             around the middle of the ranges; --nominal gives a closed form's starts){}",
+            if a.all {
+                ": --all lists the solutions these solves find, which can miss some"
+            } else {
+                ""
+            }
         );
     }
 

@@ -42,7 +42,8 @@ pub struct Regroup {
     pub name: String,
     /// Its coefficient in file units: the kept parameter's per the dropped one's (`unit`).
     pub coefficient: f64,
-    /// The coefficient's unit, kept over dropped (`mm/deg`, `deg/deg`, ...).
+    /// The coefficient's unit, the kept parameter's per the dropped one's (`mm per deg`,
+    /// `mrad/kNm*kg*m per mrad/kNm*kg`).
     #[serde(default)]
     pub unit: String,
 }
@@ -210,7 +211,11 @@ impl IdentifyReport {
                                 Regroup {
                                     name: params[*q].name(),
                                     coefficient: c * per_file(kept) / per_file(p.field),
-                                    unit: format!("{}/{}", kept.file_unit(), p.field.file_unit()),
+                                    unit: format!(
+                                        "{} per {}",
+                                        kept.file_unit(),
+                                        p.field.file_unit()
+                                    ),
                                 }
                             })
                             .collect();

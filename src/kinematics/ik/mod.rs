@@ -13,10 +13,9 @@
 //!    not reach at the pose (the calibrated arm reaches millimetres farther) starts from its
 //!    nearest, carried the same way. Numerical IK of the model ([`solve_model`]) refines
 //!    them, each solution in its whole-turn copy nearest the reference.
-//! 3. The caller's seed joints start a numerical solve too, and the only one where no closed
-//!    form gives a start ([`IkStart::Seed`], or a pose out of the nominal's reach on every
-//!    branch, where its solutions of the pose pulled a little toward the base start them
-//!    too).
+//! 3. The caller's seed joints start a numerical solve too (where no closed form gives a
+//!    start, [`IkStart::Seed`], the first; a pose out of the nominal's reach on every branch
+//!    has its solutions of the pose pulled a little toward the base as starts too).
 //! 4. Each solution found within [`super::fold::FOLD_NEAR_RAD`] of a fold of the model (a
 //!    straight elbow, the shoulder's cylinder) starts a solve from its reflection across the
 //!    fold ([`across_fold`](super::fold::across_fold)): the pose's other solution there, which the nominal's starts
@@ -28,9 +27,10 @@
 //!    the pulled and nearest ones), or where they found fewer distinct solutions than the
 //!    nominal has branches at the pose, starts spread over the joints' turns around the
 //!    reference ([`super::spread::around`]) are tried too: next to a singularity a
-//!    calibrated arm can have solutions no branch's start leads to. Where there is neither a
-//!    closed form nor a seed, more of them (64) around the middle of the ranges are the only
-//!    starts.
+//!    calibrated arm can have solutions no branch's start leads to. Where no closed form
+//!    gives a start, more of them (64) are tried before steps 4 and 5: around the middle of
+//!    the ranges, the only starts without a seed; around the seed, where its solve found no
+//!    solution within the limits.
 //!
 //! The reference is the seed when one is given, else the middle of the joint ranges.
 //! [`IkSolver::nearest`] (`robocal ik`) refines the seed and every start and returns the
@@ -62,8 +62,9 @@ pub enum IkStart {
     /// (placed at the model's base and tool), or for a compliant robot its own without the
     /// compliances.
     Nominal(ClosedFormIk),
-    /// Only the caller's seed starts the numerical solve; the text says why the model has no
-    /// closed form.
+    /// No closed form: the caller's seed starts the numerical solve, and starts spread around
+    /// it (or the middle of the ranges) where it finds no solution; the text says why the
+    /// model has no closed form.
     Seed(String),
 }
 

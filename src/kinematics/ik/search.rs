@@ -43,11 +43,12 @@ fn same_solution(a: &[f64], b: &[f64]) -> bool {
 /// of each range beyond its limits, 2940 such poses of 5000 took 1.7 s instead of 0.5 s.
 const SEARCH_STARTS: usize = 16;
 
-/// Starts of the search where they are the only ones (no closed form, no seed), around the
-/// middle of the ranges. On 100 random poses of a calibrated UR10 (the tests'), the solution
-/// nearest the middle was as near as the one the nominal's closed-form starts give for all
-/// 100 with 64 starts, 96 with 32, 86 with 16 ([`SEARCH_STARTS`]).
-const SEEDLESS_STARTS: usize = 64;
+/// Starts of the search where no closed form gives any: around the middle of the ranges,
+/// the only starts without a seed; around the seed, where its solve found no solution within
+/// the limits. On 100 random poses of a calibrated UR10 (the tests') without a seed, the
+/// solution nearest the middle was as near as the one the nominal's closed-form starts give
+/// for 100 with 64 starts, 96 with 32, 86 with 16 ([`SEARCH_STARTS`]).
+const SPREAD_ONLY_STARTS: usize = 64;
 
 /// Iterations of a search solve at most: from the spread starts, solves that converged took 8
 /// to 34 iterations but for 2 of 74 (72 and 74), on the UR10 with four times a calibration's
@@ -86,7 +87,9 @@ impl<M: ToolModel> IkSolver<M> {
     /// form gave starts and none converged within the limits, where no branch of it reaches
     /// the pose, or where the solves found fewer distinct solutions than it has branches
     /// there, from [`SEARCH_STARTS`] starts spread over the turn around the reference too.
-    /// The failure when none.
+    /// Without a closed form's starts, where there is no seed or its solve found no solution
+    /// within the limits, from [`SPREAD_ONLY_STARTS`] such starts (before the reflections and
+    /// the moves within the limits). The failure when none.
     pub(super) fn refined(
         &mut self,
         target: &Pose,
@@ -121,9 +124,6 @@ impl<M: ToolModel> IkSolver<M> {
         } else {
             None
         };
-        // No closed form gives a start and no seed was given: the spread starts around the
-        // middle of the ranges (step 6) are the only ones.
-        let seedless = starts.is_empty() && !nominal;
         let mut found = Found {
             sols: Vec::new(),
             nearest_outside: f64::INFINITY,
@@ -133,6 +133,24 @@ impl<M: ToolModel> IkSolver<M> {
         let all = self.opts.max_iterations;
         for q0 in &starts {
             self.solve_start(target, q0, reference, all, &mut found);
+        }
+        // No closed form gave a start: where there is no seed, or its solve found no solution
+        // within the limits, starts spread over the joints' turns around the reference (step
+        // 6, more of them: they are the only ones), before the reflections and the moves
+        // within the limits below, which start from what they find too.
+        let spread = !nominal && found.sols.is_empty();
+        if spread {
+            let outside = found.nearest_outside;
+            let failure = std::mem::replace(&mut found.failure, self.no_start());
+            for k in 0..SPREAD_ONLY_STARTS {
+                let q0 = around(self.model.robot(), reference, k);
+                self.solve_start(target, &q0, reference, SEARCH_ITERATIONS, &mut found);
+            }
+            // The seed's failure stands unless the search found a solution outside the limits
+            // nearer the reference; without a seed, a search solve's.
+            if found.nearest_outside == outside && seed.is_some() {
+                found.failure = failure;
+            }
         }
         // Fewer distinct solutions than the nominal has branches at the pose: two branches'
         // starts led to one solution, as where a calibrated arm's solutions crowd next to a
@@ -160,37 +178,35 @@ impl<M: ToolModel> IkSolver<M> {
                 self.solve_start(target, &q0, reference, all, &mut found);
             }
         }
-        let searched =
-            seedless || nominal && (crowded || present.is_empty() || found.sols.is_empty());
+        let searched = nominal && (crowded || present.is_empty() || found.sols.is_empty());
         if searched {
             let outside = found.nearest_outside;
             let failure = std::mem::replace(&mut found.failure, self.no_start());
-            let count = if seedless {
-                SEEDLESS_STARTS
-            } else {
-                SEARCH_STARTS
-            };
-            for k in 0..count {
+            for k in 0..SEARCH_STARTS {
                 let q0 = around(self.model.robot(), reference, k);
                 self.solve_start(target, &q0, reference, SEARCH_ITERATIONS, &mut found);
             }
             // Where the search found a solution outside the limits nearer the reference than
             // any before, it names the failure; else the structured starts' failure stands
-            // (not a search solve's that did not converge); without any, a search solve's.
-            if found.nearest_outside == outside && !seedless {
+            // (not a search solve's that did not converge).
+            if found.nearest_outside == outside {
                 found.failure = failure;
             }
         }
-        let search_note = if seedless {
+        let search_note = if spread && seed.is_none() {
             format!(
-                " (from each of {SEEDLESS_STARTS} starts spread over the joints' turns around \
-                 the middle of the ranges, the only starts without a seed or a closed form; \
-                 seed joints near a solution start a solve there)"
+                " (from each of {SPREAD_ONLY_STARTS} starts spread over the joints' turns \
+                 around the middle of the ranges, the only starts without a seed or a closed \
+                 form; seed joints near a solution start a solve there)"
             )
-        } else if searched {
+        } else if spread || searched {
             format!(
-                "; nor do solves from {SEARCH_STARTS} starts spread over the joints' turns \
-                 around the {}",
+                "; nor do solves from {} starts spread over the joints' turns around the {}",
+                if spread {
+                    SPREAD_ONLY_STARTS
+                } else {
+                    SEARCH_STARTS
+                },
                 if seed.is_some() {
                     "seed"
                 } else {
