@@ -740,6 +740,31 @@ fn the_robot_files_joint_limits_hold_with_a_compensator() {
         )),
         "{said}"
     );
+    // A robot file with a tool 300 mm longer (a new gripper): the compensator takes its tool,
+    // and the note on the tool's gap from the nominal's names that file, not the compensator
+    // (a reviewer's: the compensator was named for a tool only the robot file had).
+    let at = text.find("[tool]").unwrap();
+    let (head, tail) = text.split_at(at);
+    let z_line = tail.lines().find(|l| l.starts_with("z = ")).unwrap();
+    let z: f64 = z_line[4..].trim().parse().unwrap();
+    let long = tmp("limits_long_tool.toml");
+    std::fs::write(
+        &long,
+        format!(
+            "{head}{}",
+            tail.replacen(z_line, &format!("z = {}", z - 300.0), 1)
+        ),
+    )
+    .unwrap();
+    let (_, said) = status(&long);
+    assert!(
+        said.contains(&format!("the tool of {} holds", long.display()))
+            && said.contains(&format!(
+                "mm between {FANUC} and {}, beyond a calibration's millimetres",
+                long.display()
+            )),
+        "{said}"
+    );
 }
 
 #[test]

@@ -843,4 +843,40 @@ fn deviations_far_beyond_a_robots_errors_are_warned_of() {
         "{err}"
     );
     assert!(!run("datasets/deviations/table_6_1.toml").contains("warning"));
+    // A joint compliance is read in the robot file's unit (mrad per kN m): 0.5 is written
+    // back as 0.5 in the true robot, 500 is warned of (it was read in rad per N m, a million
+    // times larger, and warned of as 0.0005 mm at most; a reviewer's).
+    let ur = "datasets/robots/ur10_published_masses.toml";
+    let truth = tmp("compliance_dev_truth.toml");
+    for (value, warned) in [("0.5", false), ("500", true)] {
+        std::fs::write(&dev, format!("c2 = {value}\n")).unwrap();
+        let o = robocal(&[
+            "simulate",
+            "--robot",
+            ur,
+            "--deviations",
+            dev.to_str().unwrap(),
+            "--count",
+            "2",
+            "--seed",
+            "1",
+            "--out",
+            out.to_str().unwrap(),
+            "--true-robot",
+            truth.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(
+            stderr(&o).contains(&format!("c2 {value} mrad/kNm")),
+            warned,
+            "{}",
+            stderr(&o)
+        );
+        let text = std::fs::read_to_string(&truth).unwrap();
+        assert!(
+            text.contains(&format!("joints = [0.0, {value}.0, 0.0"))
+                || text.contains(&format!("joints = [0.0, {value}, 0.0")),
+            "{text}"
+        );
+    }
 }

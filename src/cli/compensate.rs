@@ -105,6 +105,13 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
     let calibrated = comp.as_ref().map_or(&robot, |c| &c.robot);
     let tool_gap = robocal::kinematics::tool_gap(&nominal, calibrated, TOOL_GAP_MM);
     if let Some(gap) = tool_gap {
+        // The file whose tool the calibrated model holds: the robot file's where the
+        // compensator took it (a new gripper), else the compensator's own (a reviewer's: the
+        // compensator was named for a tool 50 mm longer that only the robot file had).
+        let whose = match &a.compensator {
+            Some(p) if calibrated.tool() != robot.tool() => p,
+            _ => &a.robot,
+        };
         eprintln!(
             "note: the distances between the tool positions at the same joints differ by up to \
              {gap:.1} mm between {} and {}, beyond a calibration's millimetres (the flanges' \
@@ -112,7 +119,7 @@ pub fn run(a: CompensateArgs) -> Result<Option<String>> {
              one file only); the commands are poses of the nominal's tool, which the \
              controller must run as its TCP",
             a.nominal.display(),
-            a.compensator.as_ref().unwrap_or(&a.robot).display()
+            whose.display()
         );
     }
     let picks = "still pick the branch and the turns (and, for a position-only target, the \

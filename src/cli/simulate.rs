@@ -236,25 +236,34 @@ pub fn run(a: SimulateArgs) -> Result<()> {
 const LARGE_DEVIATION_MRAD: f64 = 100.0;
 /// The same for lengths (mm): 100 mm is a wrong link, not a calibration's error.
 const LARGE_DEVIATION_MM: f64 = 100.0;
+/// The same for a joint's compliance (mrad per kN m): 100 bends a joint 5.7 deg under 1 kN m,
+/// where the compliant arms simulated in the tests take 0.02 to 20. The mass-free
+/// coefficients (compliance times kg or kg m) have no such scale and are not checked.
+const LARGE_DEVIATION_COMPLIANCE: f64 = 100.0;
 
-/// A warning naming the deviations beyond [`LARGE_DEVIATION_MRAD`] or
-/// [`LARGE_DEVIATION_MM`], if any (each with its file value: mm, or mrad for an angle).
+/// A warning naming the deviations beyond [`LARGE_DEVIATION_MRAD`],
+/// [`LARGE_DEVIATION_MM`] or [`LARGE_DEVIATION_COMPLIANCE`], if any (each with its file
+/// value: mm, mrad for an angle, mrad per kN m for a compliance).
 fn large_deviations(d: &Deviations) -> Option<String> {
+    use robocal::model::Field;
     let large: Vec<String> = (d.0.iter())
         .filter_map(|(id, v)| {
-            let (value, unit, bound) = if id.field.is_angle() {
-                (v * 1e3, "mrad", LARGE_DEVIATION_MRAD)
-            } else {
-                (*v, "mm", LARGE_DEVIATION_MM)
+            let (unit, _) = robocal::sim::deviations::file_unit(id.field);
+            let bound = match id.field {
+                Field::C => LARGE_DEVIATION_COMPLIANCE,
+                Field::K { .. } => return None,
+                f if f.is_angle() => LARGE_DEVIATION_MRAD,
+                _ => LARGE_DEVIATION_MM,
             };
+            let value = robocal::sim::deviations::to_file(id.field, *v);
             (value.abs() > bound).then(|| format!("{} {value} {unit}", id.name()))
         })
         .collect();
     (!large.is_empty()).then(|| {
         format!(
-            "deviations beyond {LARGE_DEVIATION_MRAD} mrad ({:.1} deg) or {LARGE_DEVIATION_MM} \
-             mm, far beyond a robot's manufacturing errors: {} (angles are read in mrad: \
-             degrees given as mrad?); simulated as given",
+            "deviations beyond {LARGE_DEVIATION_MRAD} mrad ({:.1} deg), {LARGE_DEVIATION_MM} \
+             mm or {LARGE_DEVIATION_COMPLIANCE} mrad/kNm, far beyond a robot's manufacturing \
+             errors: {} (angles are read in mrad: degrees given as mrad?); simulated as given",
             (LARGE_DEVIATION_MRAD * 1e-3).to_degrees(),
             large.join(", ")
         )

@@ -1,19 +1,54 @@
 //! Parameter deviations of a virtual robot: a TOML table of the model's parameter names with
-//! lengths in mm and angles in mrad (as thesis Table 6.1).
+//! lengths in mm and angles in mrad (as thesis Table 6.1), joint compliances in the robot
+//! file's units (mrad per kN m; the mass-free coefficients in mrad per kN m times kg, or kg m).
 //!
 //! ```toml
 //! a1 = 1.41          # mm
 //! alpha1 = -1.72     # mrad
 //! "base.d" = -0.02   # or, as a table: [base] d = -0.02
+//! c2 = 0.5           # mrad per kN m
 //! ```
 
 use crate::error::{Error, Location, Result};
-use crate::model::{ParamId, Robot};
+use crate::model::compliance::{FILE_PER_INTERNAL, MAX_COMPLIANCE_FILE, MAX_MOMENT_FILE};
+use crate::model::{Field, ParamId, Robot};
 use std::path::Path;
 
-/// Deviations in internal units (mm, rad), one per named parameter.
+/// Deviations in internal units (mm, rad; a compliance in rad per N m), one per named
+/// parameter.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Deviations(pub Vec<(ParamId, f64)>);
+
+/// A deviation's unit in a deviations file and the bound on it there: the robot file's bound
+/// on the parameter itself (100 m, 2 turns, its compliance bounds), so a deviated robot stays
+/// loadable.
+pub fn file_unit(field: Field) -> (&'static str, f64) {
+    match field {
+        Field::C => (field.file_unit(), MAX_COMPLIANCE_FILE),
+        Field::K { .. } => (field.file_unit(), MAX_MOMENT_FILE),
+        f if f.is_angle() => ("mrad", crate::model::file::MAX_ANGLE_DEG.to_radians() * 1e3),
+        _ => ("mm", crate::model::file::MAX_LENGTH_MM),
+    }
+}
+
+/// A deviation `v` of `field` from file units ([`file_unit`]) to internal ones (mm, rad, rad
+/// per N m).
+pub fn to_internal(field: Field, v: f64) -> f64 {
+    match field {
+        Field::C | Field::K { .. } => v / FILE_PER_INTERNAL,
+        f if f.is_angle() => v * 1e-3,
+        _ => v,
+    }
+}
+
+/// A deviation `v` of `field` from internal units to file ones ([`file_unit`]).
+pub fn to_file(field: Field, v: f64) -> f64 {
+    match field {
+        Field::C | Field::K { .. } => v * FILE_PER_INTERNAL,
+        f if f.is_angle() => v * 1e3,
+        _ => v,
+    }
+}
 
 fn flatten(prefix: &str, table: &toml::Table, out: &mut Vec<(String, toml::Value)>) {
     for (k, v) in table {
@@ -71,17 +106,12 @@ impl Deviations {
                 _ => {
                     return Err(Error::input(
                         at(),
-                        "a deviation must be a finite number (mm or mrad)",
+                        "a deviation must be a finite number (mm, mrad, or a compliance's \
+                         unit)",
                     ));
                 }
             };
-            // A deviation is small against its parameter: at most the robot file's bound on
-            // the parameter itself (100 m, 2 turns), so a deviated robot stays loadable.
-            let (max, unit) = if id.field.is_angle() {
-                (crate::model::file::MAX_ANGLE_DEG.to_radians() * 1e3, "mrad")
-            } else {
-                (crate::model::file::MAX_LENGTH_MM, "mm")
-            };
+            let (unit, max) = file_unit(id.field);
             if v.abs() > max {
                 return Err(Error::input(
                     at(),
@@ -91,7 +121,7 @@ impl Deviations {
             if out.iter().any(|(o, _)| *o == id) {
                 return Err(Error::input(at(), "this parameter is given twice"));
             }
-            out.push((id, if id.field.is_angle() { v * 1e-3 } else { v }));
+            out.push((id, to_internal(id.field, v)));
         }
         Ok(Deviations(out))
     }
