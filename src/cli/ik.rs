@@ -11,6 +11,7 @@ use clap::Args;
 use robocal::data::{POSE_COLUMNS, Target, TargetTable, joint_columns};
 use robocal::kinematics::{IkFailure, IkOptions, IkSolver, IkStart, RobotModel, pose_from_file};
 use robocal::model::read_robot;
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 #[derive(Args)]
@@ -132,7 +133,15 @@ pub fn run(a: IkArgs) -> Result<bool> {
     let mut out_rows = Vec::new();
     let mut failed = Vec::new();
     let mut unchecked = super::unchecked::UncheckedRows::new(&robot);
+    // A model without a closed form solved from spread starts takes about 1 ms a pose: as
+    // compensate, a bar from 1000 rows.
+    let bar = if std::io::stderr().is_terminal() && rows.len() >= 1000 {
+        indicatif::ProgressBar::new(rows.len() as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
     for (k, (cells, target)) in rows.iter().zip(&targets).enumerate() {
+        bar.inc(1);
         let seed = row_seeds[k].as_deref().or(global_seed.as_deref());
         let solved = if a.all {
             solver.all(target, seed)
@@ -163,6 +172,7 @@ pub fn run(a: IkArgs) -> Result<bool> {
             }
         }
     }
+    bar.finish_and_clear();
     if a.pose.is_some() {
         if let Some((_, why)) = failed.first() {
             bail!("no solution for the pose: {why}");
