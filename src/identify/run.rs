@@ -801,6 +801,11 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         .then(|| super::plausibility::another_arm_warning(nominal, &solution.robot))
         .flatten();
     warnings.extend(misfit);
+    // A model far off its rows says so already (the misfit warning).
+    if unmodelled.describe().is_none() && !misfit_far {
+        let dof = obs.len().saturating_sub(cols.len());
+        warnings.extend(super::plausibility::variance_factor_warning(s2, dof));
+    }
     warnings.extend(super::plausibility::copied_warning(set));
     let candidate_ids: Vec<ParamId> = candidates.iter().map(|&c| params[c]).collect();
     warnings.extend(super::plausibility::held_joints_warning(

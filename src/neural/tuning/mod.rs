@@ -486,7 +486,7 @@ fn cross_validate(
             "the network's cross-validated error is {} the model alone's ({model}{}), {}",
             below_or_above(raw),
             with_margin(judged(t.ratio)),
-            paired_rows(t)
+            paired_rows(t, NETWORK_Z)
         );
         // A few rows of a network's huge errors keep the paired z low (a reviewer's fixed
         // network at 55 times the model's RMS had z 1.4, and missed held-out rows by 65 mm):

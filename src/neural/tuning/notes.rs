@@ -111,12 +111,23 @@ pub(super) fn repeated(rows: usize, configurations: usize) -> Option<usize> {
     (configurations > 0 && configurations < rows).then_some(configurations)
 }
 
-/// A test's row-by-row figures as the notes give them.
-pub(super) fn paired_rows(t: &NetworkTest) -> String {
+/// A paired z as the notes give it, to one decimal, or more where one would put it on the
+/// other side of the test's level `-level` (z = -2.454 against 2.5 read "-2.5", a pass, in
+/// a test it failed; a helper's).
+pub(super) fn z_shown(z: f64, level: f64) -> String {
+    let passes = z <= -level;
+    (1..=6)
+        .map(|d| format!("{z:.d$}"))
+        .find(|s| s.parse::<f64>().is_ok_and(|v| (v <= -level) == passes))
+        .unwrap_or_else(|| z.to_string())
+}
+
+/// A test's row-by-row figures as the notes give them, its z against `level`.
+pub(super) fn paired_rows(t: &NetworkTest, level: f64) -> String {
     if t.rows > 0 {
         format!(
-            "paired z {:.1} over {}",
-            t.z,
+            "paired z {} over {}",
+            z_shown(t.z, level),
             rows_of(t.rows, t.configurations)
         )
     } else {
@@ -133,7 +144,7 @@ pub(super) fn refinement_test_note(t: &NetworkTest, candidates: &[Candidate]) ->
         &candidates[t.alone].settings,
     );
     let by = below_or_above(t.ratio);
-    let rows = paired_rows(t);
+    let rows = paired_rows(t, REFINEMENT_Z);
     let verdict = if t.kept {
         "the refinement is kept".to_string()
     } else {
@@ -187,7 +198,7 @@ pub(super) fn network_note(
 ) -> String {
     let by = below_or_above;
     let model = alone_model(&candidates[t.alone].settings);
-    let rows = paired_rows(t);
+    let rows = paired_rows(t, NETWORK_Z);
     let (raw, judged) = raw_ratio(t, candidates);
     let mut test = format!(
         "{network}'s cross-validated error is {} the best model alone's ({model}{}), {rows}",
@@ -200,20 +211,20 @@ pub(super) fn network_note(
         test.push_str(&if u.by == Unseen::Folds {
             format!(
                 "searched on each fold's training rows alone (no search seeing the rows it is \
-                 judged on), {}{}, paired z {:.1} over {}",
+                 judged on), {}{}, paired z {} over {}",
                 by(u.ratio * raw / t.ratio),
                 judged(u.ratio).map_or(String::new(), |j| format!(" ({j})")),
-                u.z,
+                z_shown(u.z, NETWORK_Z),
                 rows_of(u.rows, u.configurations)
             )
         } else {
             format!(
                 "on the {} held-out rows of configurations that search did not draw, {}{}, \
-                 paired z {:.1}{}",
+                 paired z {}{}",
                 u.rows,
                 by(u.ratio * raw / t.ratio),
                 judged(u.ratio).map_or(String::new(), |j| format!(" ({j})")),
-                u.z,
+                z_shown(u.z, NETWORK_Z),
                 repeated(u.rows, u.configurations).map_or(String::new(), |c| {
                     format!(" over their {c} configurations (each weighed once)")
                 })
@@ -272,6 +283,18 @@ mod tests {
     use crate::neural::encoding::Encoding;
     use crate::neural::selection::Score;
     use crate::neural::settings::Network;
+
+    #[test]
+    fn a_z_is_shown_on_its_side_of_the_level() {
+        // One decimal where it keeps the verdict; more where rounding would cross the level.
+        assert_eq!(z_shown(-8.93, 2.5), "-8.9");
+        assert_eq!(z_shown(-1.36, 2.5), "-1.4");
+        assert_eq!(z_shown(-2.454, 2.5), "-2.45");
+        assert_eq!(z_shown(-2.4999, 2.5), "-2.4999");
+        assert_eq!(z_shown(-2.5, 2.5), "-2.5");
+        assert_eq!(z_shown(-2.46, 2.0), "-2.5");
+        assert_eq!(z_shown(-1.96, 2.0), "-1.96");
+    }
 
     #[test]
     fn refinement_notes_say_what_changed_and_what_was_kept() {

@@ -122,10 +122,26 @@ pub fn outliers_of(
         .collect()
 }
 
+/// The number of distinct configurations among rows' configuration ids `clusters` (a subset
+/// of rows holds fewer than the largest id + 1: the unseen test's 90 rows read 146, a
+/// helper's).
+pub(super) fn distinct(clusters: &[usize]) -> usize {
+    let mut ids = clusters.to_vec();
+    ids.sort_unstable();
+    ids.dedup();
+    ids.len()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::data::Measurement;
+
+    #[test]
+    fn distinct_counts_ids_not_the_largest() {
+        assert_eq!(distinct(&[7, 3, 7, 146, 3]), 3);
+        assert_eq!(distinct(&[]), 0);
+    }
 
     #[test]
     fn folds_keep_repeated_configurations_together_and_balance() {

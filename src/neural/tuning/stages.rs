@@ -13,7 +13,6 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::evaluate::RowError;
-use crate::neural::repeats::group_count;
 use crate::neural::selection::{Candidate, NetworkTest, Unseen, UnseenTest};
 use crate::neural::settings::{CompensatorOptions, Form, Network, Settings};
 
@@ -493,9 +492,17 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
                 Ok(t) if t.kept => test = t,
                 Ok(t) => {
                     let fixed = self.space.rbf_only || self.space.mix_only;
+                    // Refined as the network tested or not at all: another refinement did
+                    // not pass its test (stage 4 tests the leader's alone; a helper's).
+                    let refine = self.candidates[test.network].settings.refine.clone();
                     let other = best_where(
                         &self.candidates,
-                        |c| !fixed && c.has_network() && !c.has_rbf(),
+                        |c| {
+                            !fixed
+                                && c.has_network()
+                                && !c.has_rbf()
+                                && (c.refine.is_none() || c.refine == refine)
+                        },
                         |c, i| self.judged(c, i),
                     )
                     .filter(|&i| self.judged(&self.candidates, i).is_finite());
@@ -567,7 +574,11 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
             ratio,
             z,
             rows,
-            configurations: if rows > 0 { group_count(&clusters) } else { 0 },
+            configurations: if rows > 0 {
+                super::rows::distinct(&clusters)
+            } else {
+                0
+            },
             kept,
             unseen: None,
         };
@@ -634,7 +645,7 @@ impl<'r, 'a, 'c> Search<'r, 'a, 'c> {
                 ratio,
                 z,
                 rows: rows.len(),
-                configurations: group_count(&clusters),
+                configurations: super::rows::distinct(&clusters),
             }),
             ..t
         })
