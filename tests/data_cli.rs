@@ -819,43 +819,15 @@ fn deviations_far_beyond_a_robots_errors_are_warned_of() {
     let dev = tmp("large_dev.toml");
     std::fs::write(&dev, "alpha1 = 5000\na2 = 1.5\n").unwrap();
     let out = tmp("large_dev_sim.csv");
-    let run = |dev: &str| {
+    let truth = tmp("large_dev_truth.toml");
+    // Simulates `robot` with the deviations of `dev`: its stderr; the true robot in `truth`.
+    let run = |robot: &str, dev: &str| {
         let o = robocal(&[
             "simulate",
             "--robot",
-            FANUC,
+            robot,
             "--deviations",
             dev,
-            "--count",
-            "2",
-            "--seed",
-            "1",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", stderr(&o));
-        stderr(&o)
-    };
-    let err = run(dev.to_str().unwrap());
-    assert!(
-        err.contains("far beyond a robot's manufacturing errors: alpha1 5000 mrad")
-            && !err.contains("a2"),
-        "{err}"
-    );
-    assert!(!run("datasets/deviations/table_6_1.toml").contains("warning"));
-    // A joint compliance is read in the robot file's unit (mrad per kN m): 0.5 is written
-    // back as 0.5 in the true robot, 500 is warned of (it was read in rad per N m, a million
-    // times larger, and warned of as 0.0005 mm at most; a reviewer's).
-    let ur = "datasets/robots/ur10_published_masses.toml";
-    let truth = tmp("compliance_dev_truth.toml");
-    for (value, warned) in [("0.5", false), ("500", true)] {
-        std::fs::write(&dev, format!("c2 = {value}\n")).unwrap();
-        let o = robocal(&[
-            "simulate",
-            "--robot",
-            ur,
-            "--deviations",
-            dev.to_str().unwrap(),
             "--count",
             "2",
             "--seed",
@@ -866,11 +838,26 @@ fn deviations_far_beyond_a_robots_errors_are_warned_of() {
             truth.to_str().unwrap(),
         ]);
         assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
+    let err = run(FANUC, dev.to_str().unwrap());
+    assert!(
+        err.contains("far beyond a robot's manufacturing errors: alpha1 5000 mrad")
+            && !err.contains("a2"),
+        "{err}"
+    );
+    assert!(!run(FANUC, "datasets/deviations/table_6_1.toml").contains("warning"));
+    // A joint compliance is read in the robot file's unit (mrad per kN m): 0.5 is written
+    // back as 0.5 in the true robot, 500 is warned of (it was read in rad per N m, a million
+    // times larger, and warned of as 0.0005 mm at most; a reviewer's).
+    let ur = "datasets/robots/ur10_published_masses.toml";
+    for (value, warned) in [("0.5", false), ("500", true)] {
+        std::fs::write(&dev, format!("c2 = {value}\n")).unwrap();
+        let err = run(ur, dev.to_str().unwrap());
         assert_eq!(
-            stderr(&o).contains(&format!("c2 {value} mrad/kNm")),
+            err.contains(&format!("c2 {value} mrad/kNm")),
             warned,
-            "{}",
-            stderr(&o)
+            "{err}"
         );
         let text = std::fs::read_to_string(&truth).unwrap();
         assert!(

@@ -837,17 +837,11 @@ fn regroupings_are_in_file_units() {
     use robocal::kinematics::tool_pose;
     use robocal::model::read_robot;
     let (out, report) = (tmp("regroup.toml"), tmp("regroup.json"));
-    let o = robocal(&[
-        "identify",
-        "--robot",
-        FANUC,
-        "--data",
+    let o = identify_fanuc(
         "datasets/case_b_sim/calibration.csv",
-        "--out",
         out.to_str().unwrap(),
-        "--report",
-        report.to_str().unwrap(),
-    ]);
+        &["--report", report.to_str().unwrap()],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("tool.y (mm per deg)"), "{}", stdout(&o));
     let r = common::json(&report);
@@ -890,17 +884,11 @@ fn regroupings_are_in_file_units() {
     );
     // Compliance units hold slashes of their own: a coefficient of one unit per the same
     // unit is unmarked, a link's mass regrouped with a first moment is in m.
-    let o = robocal(&[
-        "identify",
-        "--robot",
-        FANUC,
-        "--data",
+    let o = identify_fanuc(
         "datasets/nongeometric_robot/calibration.csv",
-        "--params",
-        "full,compliance",
-        "--out",
         out.to_str().unwrap(),
-    ]);
+        &["--params", "full,compliance"],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let said = stdout(&o);
     assert!(
@@ -924,15 +912,7 @@ fn a_model_that_leaves_out_errors_is_warned_of() {
         ("datasets/nongeometric_robot/calibration.csv", true),
         ("datasets/case_b_sim/calibration.csv", false),
     ] {
-        let o = robocal(&[
-            "identify",
-            "--robot",
-            FANUC,
-            "--data",
-            data,
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = identify_fanuc(data, out.to_str().unwrap(), &[]);
         assert!(o.status.success(), "{}", stderr(&o));
         assert_eq!(
             stderr(&o).contains("warning: the variance factor s^2 = 37.17 lies above 1.35"),
@@ -941,6 +921,10 @@ fn a_model_that_leaves_out_errors_is_warned_of() {
             stderr(&o)
         );
         assert!(!warned || stderr(&o).contains("6.1 times their sigmas"));
-        assert!(warned || !stderr(&o).contains("variance factor"), "{}", stderr(&o));
+        assert!(
+            warned || !stderr(&o).contains("variance factor"),
+            "{}",
+            stderr(&o)
+        );
     }
 }

@@ -140,17 +140,9 @@ impl<M: ToolModel> IkSolver<M> {
         // within the limits below, which start from what they find too.
         let spread = !nominal && found.sols.is_empty();
         if spread {
-            let outside = found.nearest_outside;
-            let failure = std::mem::replace(&mut found.failure, self.no_start());
-            for k in 0..SPREAD_ONLY_STARTS {
-                let q0 = around(self.model.robot(), reference, k);
-                self.solve_start(target, &q0, reference, SEARCH_ITERATIONS, &mut found);
-            }
-            // The seed's failure stands unless the search found a solution outside the limits
-            // nearer the reference; without a seed, a search solve's.
-            if found.nearest_outside == outside && seed.is_some() {
-                found.failure = failure;
-            }
+            // Without a seed, a search solve's failure is the only one.
+            let keep = seed.is_some();
+            self.search(target, reference, SPREAD_ONLY_STARTS, keep, &mut found);
         }
         // Fewer distinct solutions than the nominal has branches at the pose: two branches'
         // starts led to one solution, as where a calibrated arm's solutions crowd next to a
@@ -180,18 +172,7 @@ impl<M: ToolModel> IkSolver<M> {
         }
         let searched = nominal && (crowded || present.is_empty() || found.sols.is_empty());
         if searched {
-            let outside = found.nearest_outside;
-            let failure = std::mem::replace(&mut found.failure, self.no_start());
-            for k in 0..SEARCH_STARTS {
-                let q0 = around(self.model.robot(), reference, k);
-                self.solve_start(target, &q0, reference, SEARCH_ITERATIONS, &mut found);
-            }
-            // Where the search found a solution outside the limits nearer the reference than
-            // any before, it names the failure; else the structured starts' failure stands
-            // (not a search solve's that did not converge).
-            if found.nearest_outside == outside {
-                found.failure = failure;
-            }
+            self.search(target, reference, SEARCH_STARTS, true, &mut found);
         }
         let search_note = if spread && seed.is_none() {
             format!(
@@ -250,6 +231,30 @@ impl<M: ToolModel> IkSolver<M> {
                 Err(IkFailure::Unreachable(format!("{why}{search_note}")))
             }
             (failure, _) => Err(failure),
+        }
+    }
+
+    /// Solves of `target` from `count` starts spread over the joints' turns around
+    /// `reference` ([`around`]), at most [`SEARCH_ITERATIONS`] each, into `found`. Where the
+    /// search finds a solution outside the limits nearer the reference than any before, it
+    /// names the failure; else, with `keep`, the earlier starts' failure stands (not a search
+    /// solve's that did not converge).
+    fn search(
+        &mut self,
+        target: &Pose,
+        reference: &[f64],
+        count: usize,
+        keep: bool,
+        found: &mut Found,
+    ) {
+        let outside = found.nearest_outside;
+        let failure = std::mem::replace(&mut found.failure, self.no_start());
+        for k in 0..count {
+            let q0 = around(self.model.robot(), reference, k);
+            self.solve_start(target, &q0, reference, SEARCH_ITERATIONS, found);
+        }
+        if keep && found.nearest_outside == outside {
+            found.failure = failure;
         }
     }
 
