@@ -855,7 +855,7 @@ fn deviations_far_beyond_a_robots_errors_are_warned_of() {
         std::fs::write(&dev, format!("c2 = {value}\n")).unwrap();
         let err = run(ur, dev.to_str().unwrap());
         assert_eq!(
-            err.contains(&format!("c2 {value} mrad/kNm")),
+            err.contains(&format!("c2 {value} mrad/kNm;")),
             warned,
             "{err}"
         );

@@ -246,6 +246,7 @@ const LARGE_DEVIATION_COMPLIANCE: f64 = 100.0;
 /// value: mm, mrad for an angle, mrad per kN m for a compliance).
 fn large_deviations(d: &Deviations) -> Option<String> {
     use robocal::model::Field;
+    let mut angle = false;
     let large: Vec<String> = (d.0.iter())
         .filter_map(|(id, v)| {
             let (unit, _) = robocal::sim::deviations::file_unit(id.field);
@@ -256,16 +257,28 @@ fn large_deviations(d: &Deviations) -> Option<String> {
                 _ => LARGE_DEVIATION_MM,
             };
             let value = robocal::sim::deviations::to_file(id.field, *v);
-            (value.abs() > bound).then(|| format!("{} {value} {unit}", id.name()))
+            (value.abs() > bound).then(|| {
+                angle |= id.field.is_angle();
+                // As typed: the trip through internal units leaves float dust (123.4 read
+                // back as 123.40000000000002).
+                let shown = format!("{value:.9}");
+                let shown = shown.trim_end_matches('0').trim_end_matches('.');
+                format!("{} {shown} {unit}", id.name())
+            })
         })
         .collect();
     (!large.is_empty()).then(|| {
         format!(
             "deviations beyond {LARGE_DEVIATION_MRAD} mrad ({:.1} deg), {LARGE_DEVIATION_MM} \
              mm or {LARGE_DEVIATION_COMPLIANCE} mrad/kNm, far beyond a robot's manufacturing \
-             errors: {} (angles are read in mrad: degrees given as mrad?); simulated as given",
+             errors: {}{}; simulated as given",
             (LARGE_DEVIATION_MRAD * 1e-3).to_degrees(),
-            large.join(", ")
+            large.join(", "),
+            if angle {
+                " (angles are read in mrad: degrees given as mrad?)"
+            } else {
+                ""
+            }
         )
     })
 }

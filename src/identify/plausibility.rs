@@ -47,12 +47,14 @@ pub const VARIANCE_FACTOR_SIGMAS: f64 = 3.0;
 
 /// The warning for a variance factor `s2` (with `dof` degrees of freedom, residual components
 /// less parameters) above 1 by more than [`VARIANCE_FACTOR_SIGMAS`] of its standard
-/// deviations, where no unmodelled error was added to the sigmas (which brings s^2 to 1 and
-/// has its own note): the model misses the rows by more than their noise, and its
-/// standard deviations, scaled by s, take that miss for noise. On the FANUC with the shipped
-/// gravity compliance and gear errors (50 rows, s^2 = 22) a helper found 6 of 30 estimates
-/// more than 3 reported standard deviations from the truth over 200 seeds, with no word said.
-pub fn variance_factor_warning(s2: f64, dof: usize) -> Option<String> {
+/// deviations: the model misses the rows by more than their noise, and its standard
+/// deviations, scaled by s, take that miss for noise. The caller leaves it out where an
+/// unmodelled error was added to the sigmas, whose note says the same. With `compliance`
+/// (joint compliances among the parameters) it does not suggest them. On the FANUC with the
+/// shipped gravity compliance and gear errors (50 rows, s^2 = 22) a helper found 6 of 30
+/// estimates more than 3 reported standard deviations from the truth over 200 seeds, with
+/// no word said.
+pub fn variance_factor_warning(s2: f64, dof: usize, compliance: bool) -> Option<String> {
     if dof == 0 || !s2.is_finite() {
         return None;
     }
@@ -64,10 +66,14 @@ pub fn variance_factor_warning(s2: f64, dof: usize) -> Option<String> {
              noise): the model misses the rows by {:.1} times their sigmas, from errors it \
              leaves out (joint compliance under gravity, gear errors), rows far off, or sigmas \
              set too small. The standard deviations are scaled by s, but an error of the model \
-             is not noise: the estimates can be off by more than they say \
-             (`--params full,compliance` where gravity bends the joints; `train` learns what \
-             the model leaves)",
-            s2.sqrt()
+             is not noise: the estimates can be off by more than they say ({}`train` learns \
+             what the model leaves)",
+            s2.sqrt(),
+            if compliance {
+                ""
+            } else {
+                "`--params full,compliance` where gravity bends the joints; "
+            }
         )
     })
 }

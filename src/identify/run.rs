@@ -109,6 +109,10 @@ pub struct Identified {
     pub solution: Solution,
     /// a-posteriori variance factor s^2 = cost / (m - n); near 1 when the sigmas are right.
     pub variance_factor: f64,
+    /// The warning where s^2 lies far above 1 and nothing else says so
+    /// ([`super::plausibility::variance_factor_warning`]); `identify` gives it with
+    /// [`Identified::warnings`].
+    pub variance_warning: Option<String>,
     /// The solved parameters, in the order of the identifiable subset.
     pub parameters: Vec<ParamReport>,
     /// Pairs of parameters with |correlation| > 0.9.
@@ -801,11 +805,16 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         .then(|| super::plausibility::another_arm_warning(nominal, &solution.robot))
         .flatten();
     warnings.extend(misfit);
-    // A model far off its rows says so already (the misfit warning).
-    if unmodelled.describe().is_none() && !misfit_far {
-        let dof = obs.len().saturating_sub(cols.len());
-        warnings.extend(super::plausibility::variance_factor_warning(s2, dof));
-    }
+    // A model far off its rows says so already (the misfit warning), and an unmodelled
+    // error added to the sigmas has its note. Apart from the warnings: a refinement in
+    // `train` (which learns what the model leaves) does not pass it on.
+    let variance_warning = (unmodelled.describe().is_none() && !misfit_far)
+        .then(|| {
+            let dof = obs.len().saturating_sub(cols.len());
+            let compliance = cols.iter().any(|&c| is_compliance(&params[c]));
+            super::plausibility::variance_factor_warning(s2, dof, compliance)
+        })
+        .flatten();
     warnings.extend(super::plausibility::copied_warning(set));
     let candidate_ids: Vec<ParamId> = candidates.iter().map(|&c| params[c]).collect();
     warnings.extend(super::plausibility::held_joints_warning(
@@ -862,6 +871,7 @@ pub fn identify(nominal: &Robot, set: &MeasurementSet, opts: &Options) -> Result
         identifiability: ident,
         solution,
         variance_factor: s2,
+        variance_warning,
         parameters,
         correlations,
         outliers,

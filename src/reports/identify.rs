@@ -267,7 +267,10 @@ impl IdentifyReport {
             robust_rounds: id.effort.robust_rounds,
             singular_values: ident.singular_values.clone(),
             notes: id.notes.clone(),
-            warnings: id.warnings.clone(),
+            warnings: (id.warnings.iter())
+                .chain(&id.variance_warning)
+                .cloned()
+                .collect(),
             output: files.output,
         }
     }

@@ -112,13 +112,14 @@ pub(super) fn repeated(rows: usize, configurations: usize) -> Option<usize> {
 }
 
 /// A paired z as the notes give it, to one decimal, or more where one would put it on the
-/// other side of the test's level `-level` (z = -2.454 against 2.5 read "-2.5", a pass, in
-/// a test it failed; a helper's).
+/// other side of the test's level, -`level` (a network or refinement kept) or +`level` (a
+/// fixed network warned of): z = -2.454 against 2.5 read "-2.5", a pass, in a test it failed
+/// (a helper's).
 pub(super) fn z_shown(z: f64, level: f64) -> String {
-    let passes = z <= -level;
+    let side = |v: f64| (v <= -level, v >= level);
     (1..=6)
         .map(|d| format!("{z:.d$}"))
-        .find(|s| s.parse::<f64>().is_ok_and(|v| (v <= -level) == passes))
+        .find(|s| s.parse::<f64>().is_ok_and(|v| side(v) == side(z)))
         .unwrap_or_else(|| z.to_string())
 }
 
@@ -294,6 +295,8 @@ mod tests {
         assert_eq!(z_shown(-2.5, 2.5), "-2.5");
         assert_eq!(z_shown(-2.46, 2.0), "-2.5");
         assert_eq!(z_shown(-1.96, 2.0), "-1.96");
+        assert_eq!(z_shown(2.46, 2.5), "2.46");
+        assert_eq!(z_shown(2.56, 2.5), "2.6");
     }
 
     #[test]
