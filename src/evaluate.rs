@@ -2,7 +2,7 @@
 //!
 //! - Position error: the Euclidean norm of measured minus predicted position (mm), as ISO 9283.
 //!   The thesis's tables match the mean of |dx|, |dy|, |dz| over all coordinates better (about
-//!   half the Euclidean mean); it is reported too, as `per_coordinate_mean`.
+//!   half the Euclidean mean); it is reported too, as `position_per_coordinate_mean_mm`.
 //! - Orientation error: the angle of R_meas R_pred^T (deg).
 //! - Relative and distance data: the error of the displacement's length,
 //!   | |p_a - p_b|_meas - |p_a - p_b|_pred | (mm), as thesis Table 6.5 compares distances.

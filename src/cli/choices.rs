@@ -86,7 +86,8 @@ choice! {
     /// What kind of network a compensator carries.
     Network => robocal::neural::settings::Network {
         /// The thesis's multilayer perceptron: one logistic hidden layer, trained by momentum
-        /// then L-BFGS (an ensemble of them where it helps).
+        /// then Levenberg-Marquardt where its normal matrix is small, else L-BFGS (--phase2; an
+        /// ensemble of them where it helps).
         Mlp,
         /// A radial-basis-function network with one unit per training row, at most
         /// --rbf-units (a Gaussian process's posterior mean); pose form only.

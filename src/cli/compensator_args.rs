@@ -82,8 +82,9 @@ pub struct CompensatorArgs {
     /// not with --network, --form, --encoding, --hidden, --penalty, the training flags
     /// --momentum-epochs, --max-epochs, --phase2, --goal, --max-fail, --validation-fraction,
     /// or --rbf-*).
-    /// Default: 1 or 4, or none where no network lowers the error by 2 % or more and
-    /// significantly row by row, by cross-validation.
+    /// Default: 1 or 4 (2 blended with an RBF network, as cross-validation judged them), or
+    /// none where no network lowers the error by 2 % or more and significantly row by row,
+    /// by cross-validation.
     #[arg(long, allow_negative_numbers = true)]
     pub members: Option<usize>,
     /// Model parameters re-estimated on the training rows before the network is trained
@@ -138,9 +139,9 @@ pub struct CompensatorArgs {
     #[arg(long, conflicts_with = "drop_outliers")]
     pub keep_outliers: bool,
     /// Keep the choice of settings made with the outliers it lists, where they weigh in it
-    /// (default: where their held-out errors make more than 4 % of the chosen settings'
-    /// cross-validated squared position error, the settings are chosen again without them,
-    /// for twice the cross-validation's time).
+    /// (default: where one outlier's held-out error alone makes more than 4 % of the chosen
+    /// settings' cross-validated squared position error, the settings are chosen again
+    /// without the outliers, for twice the cross-validation's time).
     #[arg(long, conflicts_with = "keep_outliers")]
     pub first_choice: bool,
     /// The RBF network's likelihood search start, 1-3: widths of 1, 0.2 or 0.05 standard

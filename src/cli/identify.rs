@@ -34,7 +34,8 @@ pub struct IdentifyArgs {
     /// else the mass-free coefficients k<joint>.<part><link>, e.g. k2.mx3).
     #[arg(long, default_value = "full")]
     params: String,
-    /// How to compare measurements (default: pose if the data has orientations, else position).
+    /// How to compare measurements (default: what the data hold: pose with positions and
+    /// orientations, position or orientation with one of them, distance with neither).
     #[arg(long, value_enum)]
     measure: Option<Measure>,
     #[arg(long, value_enum, default_value_t = Method::Lm)]

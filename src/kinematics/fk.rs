@@ -12,8 +12,8 @@ use crate::model::chain::{Motion, apply_motion};
 /// mm); for a compliant robot, the pose it reaches under gravity.
 ///
 /// Runs through the robot's compiled chain: one constant transform and one RotZ TransZ per
-/// joint (a compliant robot: three passes, for the masses, the torques and the deflected
-/// chain). Does not allocate. Panics if `q.len()` differs from the robot's joint count.
+/// joint (a compliant robot: two passes, one for the masses, one for the torques and the
+/// deflected chain). Does not allocate. Panics if `q.len()` differs from the robot's joint count.
 pub fn tool_pose(robot: &Robot, q: &[f64]) -> Pose {
     let chain = robot.chain();
     assert_eq!(

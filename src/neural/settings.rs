@@ -73,7 +73,8 @@ impl Form {
 #[serde(rename_all = "lowercase")]
 pub enum Network {
     /// The thesis's multilayer perceptron: one logistic hidden layer, trained by momentum
-    /// then L-BFGS (an ensemble of them where it helps).
+    /// then Levenberg-Marquardt where its normal matrix is small, else L-BFGS
+    /// ([`crate::neural::train::auto_phase2`]; an ensemble of them where it helps).
     #[default]
     Mlp,
     /// A radial-basis-function network with one unit per training row (at most
