@@ -68,10 +68,25 @@ fn plots_are_png_and_svg_with_axis_titles() {
         assert!(!f["title"].as_str().unwrap().is_empty());
     }
     let svg = std::fs::read_to_string(dir.join("identify_calibration_position.svg")).unwrap();
-    assert!(
-        svg.contains("position error (mm)") && svg.contains("measurement (order in the data file)")
-    );
+    assert!(svg.contains("position error (mm)") && svg.contains("line in the data file"));
     assert!(svg.contains("identified: mean"), "legend with means");
+    // Distance data: one length error per pair, titled so (they were position errors per
+    // measurement, a helper's).
+    let pairs = tmp("plots_pairs");
+    std::fs::create_dir_all(&pairs).unwrap();
+    let out = identify_case_d(
+        &pairs.join("robot.toml"),
+        &["--measure", "distance", "--plot", pairs.to_str().unwrap()],
+    );
+    assert!(out.contains("plots:"), "{out}");
+    let titles: Vec<String> = (figures(&pairs).iter())
+        .map(|f| f["title"].as_str().unwrap().to_string())
+        .collect();
+    assert!(
+        titles.contains(&"Length error per pair, calibration data".to_string())
+            && !titles.iter().any(|t| t.contains("Position error")),
+        "{titles:?}"
+    );
 }
 
 /// The Chromium to run: `ROBOCAL_CHROMIUM`, else the first of the usual names on PATH, else
@@ -335,6 +350,13 @@ fn a_second_run_into_a_plot_folder_replaces_the_listing_of_the_first() {
     assert!(o.status.success(), "{}", stderr(&o));
     let trained = figures(&dir).len() - 8;
     assert!(trained > 0);
+    // Nothing held out (--validation-fraction 0): the curve beside the training MSE is the
+    // penalised objective, not a validation error (it was labelled so, a helper's).
+    let svg = std::fs::read_to_string(dir.join("train_training.svg")).unwrap();
+    assert!(
+        svg.contains("penalised objective") && !svg.contains(">validation"),
+        "{svg}"
+    );
     let out = identify_case_d(&dir.join("robot2.toml"), &["--plot", dir.to_str().unwrap()]);
     assert!(out.contains("plots: 4 pictures"), "{out}");
     let figs = figures(&dir);

@@ -66,7 +66,8 @@ const LOG_RATIO: f64 = 20.0;
 pub struct Series {
     /// Legend name, e.g. "nominal" or "identified".
     pub label: String,
-    /// 1-based position of each value in its data (the x of per-measurement plots).
+    /// The data file's line of each value (of a pair's second row): the x of per-measurement
+    /// plots, the line the commands' messages name.
     pub rows: Vec<usize>,
     /// The values, in the unit of the chart that shows them (e.g. mm or deg).
     pub values: Vec<f64>,
@@ -91,6 +92,8 @@ pub struct ErrorSeries {
     pub title: String,
     /// Axis title with unit, e.g. "position error (mm)".
     pub y_label: String,
+    /// The x axis's title, e.g. "line in the data file".
+    pub x_label: String,
     /// Unit for the legend's means, e.g. "mm".
     pub unit: String,
     /// One line per series.
@@ -124,7 +127,7 @@ impl Chart for ErrorSeries {
             let top = hi * (hi / lo).powf(0.35);
             let mut c = b.build_cartesian_2d(x, (lo..top).log_scale())?;
             c.configure_mesh()
-                .x_desc("measurement (order in the data file)")
+                .x_desc(self.x_label.as_str())
                 .x_label_formatter(&|x| format!("{x:.0}"))
                 .y_desc(format!("{} (log scale)", self.y_label))
                 .y_label_formatter(&|v| short(*v))
@@ -135,7 +138,7 @@ impl Chart for ErrorSeries {
         } else {
             let mut c = b.build_cartesian_2d(x, 0.0..hi * 1.4)?;
             c.configure_mesh()
-                .x_desc("measurement (order in the data file)")
+                .x_desc(self.x_label.as_str())
                 .x_label_formatter(&|x| format!("{x:.0}"))
                 .y_desc(self.y_label.as_str())
                 .axis_desc_style(font(17))
@@ -245,8 +248,12 @@ impl Chart for Histograms {
 pub struct TrainingCurve {
     /// Title drawn above the chart.
     pub title: String,
-    /// (epoch, training MSE, validation MSE) (normalised outputs).
+    /// (epoch, training MSE, tracked value) (normalised outputs): the tracked value is the
+    /// held-out part's MSE with `held_out`, else the penalised training objective (MSE plus
+    /// the L2 penalty per residual component), what the best weights are chosen by.
     pub curve: Vec<(usize, f64, f64)>,
+    /// Whether a part of the training rows was held out (`--validation-fraction`).
+    pub held_out: bool,
     /// Epochs of the first (momentum) phase.
     pub momentum_epochs: usize,
     /// The second phase's method (its steps follow the momentum epochs on the x axis).
@@ -295,7 +302,14 @@ impl Chart for TrainingCurve {
         ))?
         .label("end of phase 1")
         .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.mix(0.4)));
-        for (k, name) in ["training", "validation"].iter().enumerate() {
+        // Without a held-out part the second line is the training rows' penalised objective,
+        // not a validation error (it was labelled so: a gap that did not exist, a helper's).
+        let tracked = if self.held_out {
+            "validation (held-out part)"
+        } else {
+            "penalised objective (training MSE + L2 penalty)"
+        };
+        for (k, name) in ["training", tracked].iter().enumerate() {
             let col = COLOURS[k + 1];
             let pts = self.curve.iter().filter_map(|c| {
                 let v = if k == 0 { c.1 } else { c.2 };

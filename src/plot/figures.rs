@@ -16,7 +16,7 @@ pub struct ErrorRun<'a> {
     pub errors: &'a [RowError],
 }
 
-/// One series per run of the values `get` finds, each with its 1-based row position; rows
+/// One series per run of the values `get` finds, each at its row's line in the data file; rows
 /// without a (finite) value are left out, not shifted.
 fn series(runs: &[ErrorRun], get: impl Fn(&RowError) -> Option<f64>) -> Vec<Series> {
     runs.iter()
@@ -24,8 +24,7 @@ fn series(runs: &[ErrorRun], get: impl Fn(&RowError) -> Option<f64>) -> Vec<Seri
             let (rows, values) = r
                 .errors
                 .iter()
-                .enumerate()
-                .filter_map(|(i, e)| get(e).filter(|v| v.is_finite()).map(|v| (i + 1, v)))
+                .filter_map(|e| get(e).filter(|v| v.is_finite()).map(|v| (e.line, v)))
                 .unzip();
             Series {
                 label: r.label.to_string(),
@@ -50,19 +49,40 @@ pub fn error_figures(
 ) -> Result<Vec<Figure>> {
     let mut figs = Vec::new();
     let names = runs.iter().map(|r| r.label).collect::<Vec<_>>().join(", ");
+    // Relative and distance data give one error per pair of rows, the error of the
+    // displacement's length (they were titled position errors per measurement).
+    let pairs = runs
+        .first()
+        .is_some_and(|r| r.errors.len() != set.rows.len());
+    let (kind, per, x_label) = if pairs {
+        (
+            "Length error",
+            "pair",
+            "line of the pair's second row in the data file",
+        )
+    } else {
+        ("Position error", "measurement", "line in the data file")
+    };
+    let lower = kind.to_lowercase();
     let pos = series(runs, |e| e.position_mm);
     if !pos.is_empty() {
         figs.push(save(
             dir,
             &format!("{prefix}_position"),
-            &format!("Position error per measurement, {what}"),
+            &format!("{kind} per {per}, {what}"),
             &format!(
-                "Euclidean position error (mm) of every measurement of {what} ({}): {names}.",
+                "{} (mm) of every {per} of {what} ({}): {names}.",
+                if pairs {
+                    "Error of the displacement's length"
+                } else {
+                    "Euclidean position error"
+                },
                 set.source.display()
             ),
             &ErrorSeries {
-                title: format!("Position error per measurement, {what}"),
-                y_label: "position error (mm)".into(),
+                title: format!("{kind} per {per}, {what}"),
+                y_label: format!("{lower} (mm)"),
+                x_label: x_label.into(),
                 unit: "mm".into(),
                 series: pos.clone(),
             },
@@ -70,11 +90,11 @@ pub fn error_figures(
         figs.push(save(
             dir,
             &format!("{prefix}_histogram"),
-            &format!("Position error histograms, {what}"),
-            &format!("How the position errors (mm) of {what} are distributed: {names}."),
+            &format!("{kind} histograms, {what}"),
+            &format!("How the {lower}s (mm) of {what} are distributed: {names}."),
             &Histograms {
-                title: format!("Position error histograms, {what}"),
-                x_label: "position error (mm)".into(),
+                title: format!("{kind} histograms, {what}"),
+                x_label: format!("{lower} (mm)"),
                 unit: "mm".into(),
                 series: pos,
             },
@@ -93,6 +113,7 @@ pub fn error_figures(
             &ErrorSeries {
                 title: format!("Orientation error per measurement, {what}"),
                 y_label: "orientation error (deg)".into(),
+                x_label: "line in the data file".into(),
                 unit: "deg".into(),
                 series: rot,
             },
@@ -155,15 +176,22 @@ pub fn training_figure(
         &format!("Training curve, {what}"),
         &format!(
             "Mean squared error of the normalised network outputs by epoch, {what} (its first \
-             network): {} SGD momentum epochs, then {} {}; stopped: {}.",
+             network): {} SGD momentum epochs, then {} {}; stopped: {}. {}",
             report.momentum_epochs,
             report.lm_epochs,
             phase2_steps(report.phase2),
-            report.stop.describe()
+            report.stop.describe(),
+            if report.validation_mse.is_some() {
+                "Beside the training rows', the held-out part's."
+            } else {
+                "Beside it, the penalised objective (MSE plus the L2 penalty) the best weights \
+                 are chosen by: no rows were held out (--validation-fraction 0)."
+            }
         ),
         &TrainingCurve {
             title: format!("Training curve, {what}"),
             curve: report.curve.clone(),
+            held_out: report.validation_mse.is_some(),
             momentum_epochs: report.momentum_epochs,
             phase2: report.phase2,
         },
