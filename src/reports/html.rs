@@ -5,7 +5,8 @@
 //! `figures.json`). Each report's accuracy rows ([`Report::accuracy`]) make its accuracy
 //! table; its other fields follow in the order the type declares them: lists of records
 //! (parameters, correlations, ...) as tables, other values in a key-value table, absent
-//! values as "none", infinite ones as "inf", numbers to 5 significant digits. Pictures are
+//! values as "none", infinite ones as "inf", numbers to 5 significant digits and at least 4
+//! decimals below 1e6, lists of sentences one a line. Pictures are
 //! embedded as base64 PNG, so the page needs no other file and no network. A JSON file that
 //! is not a robocal report is an error naming it.
 
@@ -24,8 +25,10 @@ fn esc(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// A number to 5 significant digits; integers as integers; |x| < 1e-12 (float noise in mm,
-/// rad or a coefficient) as 0.
+/// A number to 5 significant digits, and at least 4 decimals below 1e6 (as the terminal gives
+/// mm and deg: a link of 1074.871985 mm read 1074.9, hiding an identified change of 0.04 mm,
+/// a helper's); integers as integers; |x| < 1e-12 (float noise in mm, rad or a coefficient)
+/// as 0.
 fn number(x: f64) -> String {
     if x.abs() < 1e-12 {
         "0".into()
@@ -38,7 +41,7 @@ fn number(x: f64) -> String {
             .and_then(|(_, e)| e.parse::<i32>().ok())
             .unwrap_or(0);
         if (-3..6).contains(&decade) {
-            let digits = (4 - decade).clamp(0, 8) as usize;
+            let digits = (4 - decade).clamp(4, 8) as usize;
             format!("{x:.digits$}")
         } else {
             scientific
@@ -46,10 +49,10 @@ fn number(x: f64) -> String {
     }
 }
 
-/// A cell: "none" for an absent value, numbers to 5 significant digits, lists joined (lists
-/// of records: each record's fields with their names, records separated by semicolons;
-/// a list of more than 12 numbers or records cut there with its count, a list of names
-/// given whole).
+/// A cell: "none" for an absent value, numbers as [`number`] gives them, lists joined (lists
+/// of sentences one a line; lists of records: each record's fields with their names,
+/// records separated by semicolons; a list of more than 12 numbers or records cut there
+/// with its count, a list of names given whole).
 fn cell(v: &Node) -> String {
     match v {
         Node::Null => "none".into(),
@@ -70,7 +73,11 @@ fn cell(v: &Node) -> String {
                     other => cell(other),
                 })
                 .collect();
-            let sep = if a.iter().any(|x| matches!(x, Node::Record(_))) {
+            // Sentences (notes, warnings) hold commas and semicolons of their own: one a line.
+            let sentences = (a.iter()).any(|x| matches!(x, Node::Text(t) if t.contains(' ')));
+            let sep = if sentences {
+                "<br>"
+            } else if a.iter().any(|x| matches!(x, Node::Record(_))) {
                 "; "
             } else {
                 ", "
@@ -451,13 +458,22 @@ mod tests {
         assert_eq!(number(-2.5105e-14), "0");
         assert_eq!(number(30.0), "30");
         assert_eq!(number(0.45381234), "0.45381");
-        assert_eq!(number(12.7709), "12.771");
+        assert_eq!(number(12.7709), "12.7709");
+        assert_eq!(number(1074.871985), "1074.8720");
         assert_eq!(number(-2.3592e-4), "-2.3592e-4");
         assert_eq!(number(1.23456789e7), "1.2346e7");
         assert_eq!(number(1.23e7), "12300000");
         // Rounding that carries into the next decade keeps 5 significant digits.
         assert_eq!(number(0.9999953529), "1.0000");
-        assert_eq!(number(-9.99996), "-10.000");
+        // Sentences one a line; names joined with commas.
+        let notes = Node::List(vec![
+            Node::Text("a note, with a comma".into()),
+            Node::Text("another".into()),
+        ]);
+        assert_eq!(cell(&notes), "a note, with a comma<br>another");
+        let names = Node::List(vec![Node::Text("a1".into()), Node::Text("d2".into())]);
+        assert_eq!(cell(&names), "a1, d2");
+        assert_eq!(number(-9.99996), "-10.0000");
         assert_eq!(number(999999.7), "1.0000e6");
         assert_eq!(number(9.99996e-4), "0.0010000");
         let terms = Node::List(vec![
