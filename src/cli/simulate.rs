@@ -259,10 +259,7 @@ fn large_deviations(d: &Deviations) -> Option<String> {
             let value = robocal::sim::deviations::to_file(id.field, *v);
             (value.abs() > bound).then(|| {
                 angle |= id.field.is_angle();
-                // As typed: the trip through internal units leaves float dust (123.4 read
-                // back as 123.40000000000002).
-                let shown = format!("{value:.9}");
-                let shown = shown.trim_end_matches('0').trim_end_matches('.');
+                let shown = robocal::data::measurement::as_typed(value);
                 format!("{} {shown} {unit}", id.name())
             })
         })

@@ -10,7 +10,7 @@
 //! ```
 
 use crate::error::{Error, Location, Result};
-use crate::model::compliance::{FILE_PER_INTERNAL, MAX_COMPLIANCE_FILE, MAX_MOMENT_FILE};
+use crate::model::compliance::{MAX_COMPLIANCE_FILE, MAX_MOMENT_FILE};
 use crate::model::{Field, ParamId, Robot};
 use std::path::Path;
 
@@ -35,7 +35,8 @@ pub fn file_unit(field: Field) -> (&'static str, f64) {
 /// per N m).
 pub fn to_internal(field: Field, v: f64) -> f64 {
     match field {
-        Field::C | Field::K { .. } => v / FILE_PER_INTERNAL,
+        // A compliance as in robot files; only angles differ from them (mrad, not deg).
+        Field::C | Field::K { .. } => field.to_internal(v),
         f if f.is_angle() => v * 1e-3,
         _ => v,
     }
@@ -44,7 +45,7 @@ pub fn to_internal(field: Field, v: f64) -> f64 {
 /// A deviation `v` of `field` from internal units to file ones ([`file_unit`]).
 pub fn to_file(field: Field, v: f64) -> f64 {
     match field {
-        Field::C | Field::K { .. } => v * FILE_PER_INTERNAL,
+        Field::C | Field::K { .. } => field.to_file(v),
         f if f.is_angle() => v * 1e3,
         _ => v,
     }

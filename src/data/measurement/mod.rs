@@ -240,18 +240,8 @@ impl JointInfo {
             (v < lo - 1e-9 || v > hi + 1e-9).then(|| {
                 let f = |x: f64| j.joint_type.to_file(x);
                 let unit = j.joint_type.file_unit();
-                // The limits as the robot file gives them: the trip through radians leaves
-                // float dust (60 read back as 59.99999999999999).
-                let tidy = |x: f64| {
-                    let s = format!("{:.9}", f(x));
-                    let s = s.trim_end_matches('0').trim_end_matches('.');
-                    if s == "-0" {
-                        "0".to_string()
-                    } else {
-                        s.to_string()
-                    }
-                };
-                let (low, high) = (tidy(lo), tidy(hi));
+                // The limits as the robot file gives them.
+                let (low, high) = (as_typed(f(lo)), as_typed(f(hi)));
                 // 4 decimals, unless they would read as inside the range as printed
                 // (70.00000006 beyond [-50, 70] printed as 70.0000): then every digit.
                 let mut at = format!("{:.4}", f(v));
@@ -266,6 +256,15 @@ impl JointInfo {
             })
         })
     }
+}
+
+/// A value in file units as a file gives it: the trip through internal units leaves float
+/// dust (60 deg read back as 59.99999999999999, 123.4 mrad as 123.40000000000002), so 9
+/// decimals, trailing zeros dropped, -0 as 0.
+pub fn as_typed(x: f64) -> String {
+    let s = format!("{x:.9}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".into() } else { s.into() }
 }
 
 /// "2, 5, 9" (at most 20 lines, then "...").
