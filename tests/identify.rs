@@ -744,6 +744,101 @@ fn cost_only_and_normal_equation_passes_give_the_same_cost_bits() {
     }
 }
 
+/// The residual's model Jacobian of every measure against central differences of the
+/// residual itself (r = y - f, so dr/dp = -J): the pair measures' differences (Relative),
+/// their projection on the modelled direction (Distance) and the rows moved for
+/// Orientation, which only the tool pose's Jacobian beneath them was checked for. At the
+/// nominal FANUC against Table 6.1's robot's data the residuals are millimetres and
+/// milliradians, so a slip of sign, scale or row shows. Position and distance rows are exact
+/// derivatives. Rotation rows are the tool's angular velocity, the derivative of
+/// log(M R^-1) at a zero residual only (Gauss-Newton's approximation): row by row they
+/// differ by O(|r|), and the gradient r^T dr/dp they give is exact (J^-1(r)^T r = r).
+#[test]
+fn residual_jacobians_of_every_measure_match_central_differences() {
+    use robocal::identify::problem::{IdentifyWorkspace, Observations, residual, residuals};
+    let robot = fanuc();
+    let (set, _) = simulate(&table_6_1(&robot), 12, 17, true, Observe::Pose);
+    let params = robot.parameters();
+    let cols: Vec<usize> = robocal::identify::select::select(&robot, "full").unwrap();
+    assert!(cols.len() >= 20);
+    for measure in [
+        Measure::Pose,
+        Measure::Position,
+        Measure::Orientation,
+        Measure::Relative,
+        Measure::Distance,
+    ] {
+        let obs = Observations::new(&set, measure, Default::default()).unwrap();
+        let dim = obs.dim();
+        let rotation_rows = match measure {
+            Measure::Pose => 3..6,
+            Measure::Orientation => 0..3,
+            _ => 0..0,
+        };
+        let mut ws = IdentifyWorkspace::new(&robot);
+        let mut jac = nalgebra::Matrix6xX::zeros(cols.len());
+        let at = residuals(&robot, &obs);
+        let (mut worst_rot, mut largest_r) = (0.0f64, 0.0f64);
+        for (i, o) in obs.items.iter().enumerate() {
+            let mut r = [0.0; 6];
+            residual(&robot, &obs, o, Some(&cols), &mut ws, &mut r, &mut jac);
+            assert_eq!(
+                r, at[i],
+                "{measure:?}: the residual with and without the Jacobian"
+            );
+            let r_rot: f64 = rotation_rows
+                .clone()
+                .map(|k| r[k] * r[k])
+                .sum::<f64>()
+                .sqrt();
+            largest_r = largest_r.max(r_rot);
+            for (c, &col) in cols.iter().enumerate() {
+                let id = params[col];
+                let h = if id.field.is_angle() { 1e-6 } else { 1e-4 };
+                let v = robot.param(id);
+                let plus = residuals(&robot.with_param(id, v + h).unwrap(), &obs)[i];
+                let minus = residuals(&robot.with_param(id, v - h).unwrap(), &obs)[i];
+                let fd: Vec<f64> = (0..dim).map(|k| (plus[k] - minus[k]) / (2.0 * h)).collect();
+                let col_norm = (0..dim).map(|k| jac[(k, c)].powi(2)).sum::<f64>().sqrt();
+                let scale = col_norm.max(if rotation_rows.is_empty() { 1.0 } else { 1e-3 });
+                for k in 0..dim {
+                    let off = (fd[k] + jac[(k, c)]).abs() / scale;
+                    if rotation_rows.contains(&k) {
+                        worst_rot = worst_rot.max(off);
+                    } else {
+                        assert!(
+                            off < 1e-6,
+                            "{measure:?} row {i} component {k}, {}: {} vs {}",
+                            id.name(),
+                            -jac[(k, c)],
+                            fd[k]
+                        );
+                    }
+                }
+                if !rotation_rows.is_empty() {
+                    // The gradient of |r_rot|^2 / 2 is exact.
+                    let g_fd: f64 = rotation_rows.clone().map(|k| r[k] * fd[k]).sum();
+                    let g: f64 = rotation_rows.clone().map(|k| -r[k] * jac[(k, c)]).sum();
+                    assert!(
+                        (g - g_fd).abs() <= 1e-6 * (r_rot * col_norm).max(1e-12),
+                        "{measure:?} row {i}, {}: gradient {g} vs {g_fd}",
+                        id.name()
+                    );
+                }
+            }
+        }
+        if !rotation_rows.is_empty() {
+            // Row by row the angular velocity misses the log's derivative by O(|r|) (a
+            // milliradian here), and no more.
+            assert!(largest_r > 1e-4, "{measure:?}: residuals too small to tell");
+            assert!(
+                worst_rot <= largest_r,
+                "{measure:?}: {worst_rot} off against residuals up to {largest_r} rad"
+            );
+        }
+    }
+}
+
 #[test]
 fn positions_in_metres_or_inches_are_refused_and_a_moved_frame_is_not() {
     let nominal = fanuc();

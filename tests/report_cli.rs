@@ -254,9 +254,20 @@ fn report_refuses_empty_folders_and_bad_json() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("broken.json:3:"), "{}", stderr(&o));
     assert!(!out.exists());
-    // A page under a picture's or a report's name: refused before any work (usage, 2).
-    for name in ["new.png", "new.SVG", "new.json"] {
+    // A page under any name but .html (a picture's, a report's, the run's data, robot or
+    // compensator): refused before any work (usage, 2), an existing file untouched.
+    std::fs::write(empty.join("calibration.csv"), "q1\n1\n").unwrap();
+    for name in [
+        "new.png",
+        "new.SVG",
+        "new.json",
+        "calibration.csv",
+        "cal.toml",
+        "comp.rcal",
+        "page",
+    ] {
         let out = empty.join(name);
+        let before = std::fs::read(&out).ok();
         let o = robocal(&[
             "report",
             empty.to_str().unwrap(),
@@ -265,7 +276,7 @@ fn report_refuses_empty_folders_and_bad_json() {
         ]);
         assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
         assert!(stderr(&o).contains("give an .html name"), "{}", stderr(&o));
-        assert!(!out.exists());
+        assert_eq!(std::fs::read(&out).ok(), before, "{name}");
     }
 }
 

@@ -15,14 +15,16 @@ pub struct ReportArgs {
 
 pub fn run(a: ReportArgs) -> Result<()> {
     use super::paths::{files_under, guard, req};
-    // A page under a report's or a picture's name would pass for one in a run folder (a
-    // reviewer's `--out run/new.png` left HTML among the pictures).
-    if let Some(e) = (a.out.extension().and_then(|e| e.to_str()))
-        .filter(|e| ["json", "png", "svg"].contains(&e.to_ascii_lowercase().as_str()))
-    {
+    // The page only ever goes to an .html name: under a report's or a picture's name it
+    // would pass for one in a run folder (a reviewer's `--out run/new.png` left HTML among the
+    // pictures), and under any other it could replace the run's own files, its robot, data or
+    // compensator (a reviewer's `--out calibration.csv`, the data its identify report names,
+    // was written over with HTML).
+    let ext = (a.out.extension().and_then(|e| e.to_str())).map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("html" | "htm")) {
         usage!(
-            "--out {}: the page is HTML; a .{e} name would pass for a run folder's report or \
-             picture (give an .html name)",
+            "--out {}: the page is HTML; give an .html name (only such a name is written, so \
+             no report, picture, robot, data or compensator file is replaced by the page)",
             a.out.display()
         );
     }

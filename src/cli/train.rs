@@ -324,6 +324,15 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
              frame or a tool, never another robot"
         ));
     }
+    // And far off the validation rows, as `evaluate` on them would say (a reviewer's rows
+    // moved 500 mm, or another robot's, 4 m off, passed with their figures alone).
+    if let Some(v) = &val
+        && let Some(w) = misplaced_model_warning(&a.robot.display().to_string(), &robot, v)
+    {
+        warnings.say(format!(
+            "{w} Its validation figures are no check of the compensator on this robot"
+        ));
+    }
     let terminal = std::io::stderr().is_terminal();
     let opts = a.build.options(a.sigma.sigmas(), terminal)?;
     // A selection that names no parameter of this robot is a flag's value refused.

@@ -197,6 +197,48 @@ pub struct Histograms {
 /// Bins of a histogram panel.
 const BINS: usize = 20;
 
+/// A histogram panel's bins: [`BINS`] of `width` from 0 to `hi`. The range ends at the
+/// largest value, unless that lies more than [`OUTLIER_SPAN`] times beyond the 99th
+/// percentile: one outlier of 60 mm among errors of 0.3 mm put 299 of 300 rows in the first
+/// bin. The range then ends at that percentile, the last bin also counts the values above it,
+/// and `beyond` says how many and how far (count, largest value). Values that are not finite
+/// are not counted (errors are finite; a chart draws what it can).
+struct Bins {
+    hi: f64,
+    width: f64,
+    counts: [usize; BINS],
+    beyond: Option<(usize, f64)>,
+}
+
+/// How far beyond the 99th percentile the largest value may lie before the range stops there.
+const OUTLIER_SPAN: f64 = 2.0;
+
+impl Bins {
+    fn of(values: &[f64]) -> Bins {
+        let mut sorted: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+        sorted.sort_by(f64::total_cmp);
+        let max = sorted.last().copied().unwrap_or(0.0).max(0.0);
+        let p99 = sorted
+            .get(((sorted.len() as f64 * 0.99).ceil() as usize).saturating_sub(1))
+            .copied()
+            .unwrap_or(0.0);
+        let clipped = p99 > 0.0 && max > OUTLIER_SPAN * p99;
+        let hi = if clipped { p99 } else { max }.max(1e-12) * 1.0001;
+        let width = hi / BINS as f64;
+        let mut counts = [0usize; BINS];
+        for v in &sorted {
+            counts[((v / width).max(0.0) as usize).min(BINS - 1)] += 1;
+        }
+        let beyond = clipped.then(|| (sorted.iter().filter(|&&v| v >= hi).count(), max));
+        Bins {
+            hi,
+            width,
+            counts,
+            beyond,
+        }
+    }
+}
+
 impl Chart for Histograms {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
         let (top, body) = root.split_vertically(40);
@@ -206,19 +248,12 @@ impl Chart for Histograms {
         let panels = body.split_evenly((rows, k.div_ceil(rows)));
         for (k, (s, area)) in self.series.iter().zip(&panels).enumerate() {
             let col = COLOURS[k % COLOURS.len()];
-            let hi = s
-                .values
-                .iter()
-                .copied()
-                .filter(|v| v.is_finite())
-                .fold(0.0f64, f64::max)
-                .max(1e-12)
-                * 1.0001;
-            let width = hi / BINS as f64;
-            let mut counts = [0usize; BINS];
-            for v in &s.values {
-                counts[((v / width) as usize).min(BINS - 1)] += 1;
-            }
+            let Bins {
+                hi,
+                width,
+                counts,
+                beyond,
+            } = Bins::of(&s.values);
             let top_count = counts.iter().copied().max().unwrap_or(1).max(1);
             let mut c = ChartBuilder::on(area)
                 .caption(&s.label, font(15))
@@ -227,7 +262,16 @@ impl Chart for Histograms {
                 .y_label_area_size(55)
                 .build_cartesian_2d(0.0..hi, 0.0..top_count as f64 * 1.1)?;
             c.configure_mesh()
-                .x_desc(format!("{}; mean {:.4}", self.x_label, mean(&s.values)))
+                .x_desc(format!(
+                    "{}; mean {:.4}{}",
+                    self.x_label,
+                    mean(&s.values),
+                    beyond.map_or(String::new(), |(n, max)| format!(
+                        "; last bin also {n} above {}, max {}",
+                        short(hi),
+                        short(max)
+                    ))
+                ))
                 .y_desc("measurements")
                 .axis_desc_style(font(14))
                 .label_style(font(12))
@@ -516,7 +560,34 @@ impl Chart for Curves {
 
 #[cfg(test)]
 mod tests {
-    use super::COLOURS;
+    use super::{BINS, Bins, COLOURS};
+
+    #[test]
+    fn one_outlier_does_not_squash_a_histogram() {
+        // 299 errors of 0.001..0.299 mm and one of 60 mm: the range ends at the 99th
+        // percentile (0.297 mm), the outlier counted in the last bin and told.
+        let mut v: Vec<f64> = (1..300).map(|i| i as f64 * 1e-3).collect();
+        v.push(60.0);
+        let b = Bins::of(&v);
+        assert!((b.hi - 0.297 * 1.0001).abs() < 1e-12, "{}", b.hi);
+        assert_eq!(b.counts.iter().sum::<usize>(), 300);
+        assert!(
+            b.counts[..BINS - 1].iter().all(|&n| n <= 15),
+            "{:?}",
+            b.counts
+        );
+        assert_eq!(b.counts[BINS - 1], 15 + 3);
+        assert_eq!(b.beyond, Some((3, 60.0)));
+        // Without an outlier the range ends at the largest value, nothing beyond.
+        v.pop();
+        let b = Bins::of(&v);
+        assert!((b.hi - 0.299 * 1.0001).abs() < 1e-12);
+        assert_eq!((b.beyond, b.counts[0], b.counts[BINS - 1]), (None, 14, 15));
+        // Not finite: not counted; nothing at all: an empty panel.
+        let b = Bins::of(&[f64::NAN, 1.0, f64::INFINITY]);
+        assert_eq!((b.counts.iter().sum::<usize>(), b.beyond), (1, None));
+        assert_eq!(Bins::of(&[]).counts, [0; BINS]);
+    }
 
     #[test]
     fn the_eight_series_of_case_d_have_eight_colours() {

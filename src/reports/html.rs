@@ -226,18 +226,29 @@ fn section(title: &str, m: &[(String, Node)], depth: usize, html: &mut String) {
                         }
                     }
                 }
+                // A record's own values before its parts' (a candidate's label before its
+                // settings' fields, which for the model alone still name the network it was
+                // held against).
+                let (own, parts): (Vec<String>, Vec<String>) =
+                    cols.into_iter().partition(|c| !c.contains('.'));
+                let cols: Vec<String> = own.into_iter().chain(parts).collect();
                 let h2 = (h + 1).min(6);
                 let _ = write!(html, "<h{h2}>{}</h{h2}>", esc(k));
                 if !cols.is_empty() {
-                    html.push_str("<table class=\"records\"><thead><tr>");
+                    // The row's index as the JSON's indices count (`chosen`, a test's
+                    // `network` and `alone`): from 0.
+                    html.push_str(
+                        "<table class=\"records\"><thead><tr><th title=\"from 0, as the JSON \
+                         report's indices\">#</th>",
+                    );
                     for c in &cols {
                         let _ = write!(html, "<th>{}</th>", esc(c));
                     }
                     html.push_str("</tr></thead><tbody>");
-                    for r in a {
+                    for (i, r) in a.iter().enumerate() {
                         let mut l = Vec::new();
                         leaves(r, "", &mut l);
-                        html.push_str("<tr>");
+                        let _ = write!(html, "<tr><td>{i}</td>");
                         for c in &cols {
                             let v = l
                                 .iter()
@@ -498,6 +509,33 @@ mod tests {
             cell(&numbers).ends_with("11 ... (15 values)"),
             "{}",
             cell(&numbers)
+        );
+    }
+
+    #[test]
+    fn record_tables_put_own_values_first_and_count_rows_from_zero() {
+        let candidate = |label: &str| {
+            Node::Record(vec![
+                ("stage".into(), Node::Number(5.0)),
+                (
+                    "settings".into(),
+                    Node::Record(vec![("network".into(), Node::Text("mlp".into()))]),
+                ),
+                ("label".into(), Node::Text(label.into())),
+            ])
+        };
+        let list = Node::List(vec![candidate("pose/sincos/32"), candidate("model alone")]);
+        let mut html = String::new();
+        section("selection", &[("candidates".into(), list)], 0, &mut html);
+        let mut heads: Vec<&str> = html
+            .split("</th>")
+            .map(|t| &t[t.rfind('>').map_or(0, |i| i + 1)..])
+            .collect();
+        heads.pop();
+        assert_eq!(heads, ["#", "stage", "label", "settings.network"], "{html}");
+        assert!(
+            html.contains("<tr><td>1</td><td>5</td><td>model alone</td><td>mlp</td></tr>"),
+            "{html}"
         );
     }
 }

@@ -134,6 +134,14 @@ pub struct Row {
     /// Every test row's error against the truth (for plots).
     #[serde(skip)]
     pub truth_errors: Vec<RowError>,
+    /// The set's calibration rows (identification), as read: the protocol's 30 in the
+    /// shipped files. 0 in reports written before it.
+    #[serde(default)]
+    pub calibration_rows: usize,
+    /// The set's training rows (compensators), as read: the protocol's 150 in the shipped
+    /// files. 0 in reports written before it.
+    #[serde(default)]
+    pub training_rows: usize,
 }
 
 /// The shipped files of one set.
@@ -203,6 +211,8 @@ pub fn run_set(
             measured,
             training,
             truth_errors,
+            calibration_rows: data.calibration.rows.len(),
+            training_rows: data.training.rows.len(),
         })
     };
     push(Stage::Nominal, stats(&mut |q| tool_pose(nominal, q))?, None);

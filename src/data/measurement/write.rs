@@ -4,7 +4,9 @@ use super::{JointInfo, Measurement, MeasurementSet};
 use crate::data::joint_columns;
 use crate::data::table::CsvOut;
 use crate::error::{Error, Result};
-use crate::geometry::rotation::rotation_to_zyx;
+use crate::geometry::rotation::{rotation_to_zyx, zyx_to_rotation};
+use crate::model::JointType;
+use nalgebra::Rotation3;
 use std::path::Path;
 
 /// The columns of a canonical measurement CSV: which optional groups it has, and the
@@ -105,7 +107,18 @@ impl Layout {
     }
 
     /// The cells of one row (mm, deg), blank where the row lacks a group the layout has.
+    /// A row read from a file (`line` set) has its angles written as read, to the bit
+    /// ([`degrees_cell`], [`rotation_cells`]); a row built in code (`line` 0: simulated) as
+    /// the shortest texts of its degrees, as it always was (the shipped simulated files).
     pub fn cells(&self, m: &Measurement, joints: &[JointInfo]) -> Vec<String> {
+        let read = m.line > 0;
+        let angle = |rad: f64| {
+            if read {
+                degrees_cell(rad)
+            } else {
+                number_cell(rad.to_degrees())
+            }
+        };
         // -0 (an angle of an exact rotation, say) is written 0.
         let num = number_cell;
         let mut c: Vec<String> = Vec::new();
@@ -119,11 +132,10 @@ impl Layout {
         if self.pair {
             c.push(text(&m.pair));
         }
-        c.extend(
-            m.q.iter()
-                .zip(joints)
-                .map(|(&v, j)| num(j.joint_type.to_file(v))),
-        );
+        c.extend(m.q.iter().zip(joints).map(|(&v, j)| match j.joint_type {
+            JointType::Revolute => angle(v),
+            JointType::Prismatic => num(v),
+        }));
         let opt3 = |c: &mut Vec<String>, on: bool, v: Option<[f64; 3]>| {
             if on {
                 match v {
@@ -133,11 +145,13 @@ impl Layout {
             }
         };
         opt3(&mut c, self.position, m.position.map(|p| [p.x, p.y, p.z]));
-        opt3(
-            &mut c,
-            self.rotation,
-            m.rotation.map(|r| rotation_to_zyx(&r).map(f64::to_degrees)),
-        );
+        if self.rotation {
+            c.extend(match &m.rotation {
+                Some(r) if read => rotation_cells(r),
+                Some(r) => rotation_to_zyx(r).map(|a| number_cell(a.to_degrees())),
+                None => Default::default(),
+            });
+        }
         if self.distance {
             c.push(m.distance.map(num).unwrap_or_default());
         }
@@ -146,12 +160,12 @@ impl Layout {
             self.sigma_position,
             m.sigma_position.map(|s| [s.x, s.y, s.z]),
         );
-        opt3(
-            &mut c,
-            self.sigma_rotation,
-            m.sigma_rotation
-                .map(|s| [s.x, s.y, s.z].map(f64::to_degrees)),
-        );
+        if self.sigma_rotation {
+            c.extend(match &m.sigma_rotation {
+                Some(s) => [s.x, s.y, s.z].map(angle),
+                None => Default::default(),
+            });
+        }
         c.extend(m.extra.iter().cloned());
         c
     }
@@ -236,4 +250,163 @@ impl MeasurementWriter {
 /// say) written 0.
 fn number_cell(v: f64) -> String {
     format!("{}", if v == 0.0 { 0.0 } else { v })
+}
+
+/// `v` (file units) with `d` decimals, trailing zeros dropped, -0 as 0.
+fn fixed(v: f64, d: usize) -> String {
+    let s = format!("{v:.d$}");
+    let s = if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.')
+    } else {
+        &s
+    };
+    if s == "-0" { "0".into() } else { s.into() }
+}
+
+/// An internal value (rad) as a cell in degrees that reads back to the same bits: the
+/// fewest decimals of its degrees whose radians are it, else the shortest text of a double
+/// within [`NEAR_ULPS`] of its degrees whose radians are it (the trip through radians moves
+/// a value by an ulp or two: -86.30847727262889 deg comes back as -86.3084772726289, which
+/// no rounding of it reads back from). A row read from a file is so written as the file
+/// gave it (15 deg reads as 0.2617993877991494 rad, whose degrees are 14.999999999999998:
+/// written 15), and a subset `split` or `import` writes is rows of its source to the last
+/// bit. A value no such text reads back to (computed, not read) is its degrees' shortest
+/// text, as [`number_cell`].
+fn degrees_cell(rad: f64) -> String {
+    let deg = rad.to_degrees();
+    let reads_back = |x: f64| x.to_radians().to_bits() == rad.to_bits();
+    // -0 is written 0, as every cell.
+    if !deg.is_finite() || deg == 0.0 {
+        return number_cell(deg);
+    }
+    (0..=17)
+        .map(|d| fixed(deg, d))
+        .find(|s| s.parse::<f64>().is_ok_and(reads_back))
+        .or_else(|| {
+            (1..=NEAR_ULPS)
+                .flat_map(|k| [ulps(deg, k), ulps(deg, -k)])
+                .find(|&x| reads_back(x))
+                .map(number_cell)
+        })
+        .unwrap_or_else(|| number_cell(deg))
+}
+
+/// How many doubles either side of a value's degrees [`degrees_cell`] looks at.
+const NEAR_ULPS: i64 = 8;
+
+/// The double `k` steps (ulps) from the finite `x` (negative: down).
+fn ulps(x: f64, k: i64) -> f64 {
+    (0..k.unsigned_abs()).fold(x, |y, _| if k > 0 { y.next_up() } else { y.next_down() })
+}
+
+/// A rotation as its cells `rz, ry, rx` (deg, R = Rz Ry Rx) that read back to the same
+/// matrix bits where some text does: the angles (rad) within [`ANGLE_ULPS`] of those `r`
+/// gives, which the file's angles are after their trip through the matrix, as
+/// [`degrees_cell`] writes them (a row read from a file is so written as the file gave it:
+/// 105.9 stays 105.9); else the fewest decimals, the same for the three angles, whose
+/// rotation is `r`; else (computed, not read) the angles' shortest texts.
+fn rotation_cells(r: &Rotation3<f64>) -> [String; 3] {
+    let rad = rotation_to_zyx(r);
+    let same = |b: Rotation3<f64>| {
+        (b.matrix().iter().zip(r.matrix().iter())).all(|(x, y)| x.to_bits() == y.to_bits())
+    };
+    if rad.iter().all(|a| a.is_finite()) {
+        let near = -ANGLE_ULPS..=ANGLE_ULPS;
+        for i in near.clone() {
+            let z = ulps(rad[0], i);
+            for j in near.clone() {
+                let y = ulps(rad[1], j);
+                for k in near.clone() {
+                    let x = ulps(rad[2], k);
+                    if same(zyx_to_rotation(z, y, x)) {
+                        return [z, y, x].map(degrees_cell);
+                    }
+                }
+            }
+        }
+    }
+    let deg = rad.map(f64::to_degrees);
+    let read = |cells: &[String; 3]| -> Option<Rotation3<f64>> {
+        let [z, y, x] = [&cells[0], &cells[1], &cells[2]].map(|c| c.parse::<f64>().ok());
+        Some(zyx_to_rotation(
+            z?.to_radians(),
+            y?.to_radians(),
+            x?.to_radians(),
+        ))
+    };
+    (0..=17)
+        .map(|d| deg.map(|v| fixed(v, d)))
+        .find(|cells| read(cells).is_some_and(same))
+        .unwrap_or_else(|| deg.map(number_cell))
+}
+
+/// How many doubles either side of each angle [`rotation_cells`] looks at (the angles of a
+/// matrix come back within a few of those it was built from).
+const ANGLE_ULPS: i64 = 4;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Angles read from a file are written as the file gave them, or as a text that reads
+    /// back to the same bits (before, 15 deg was written 14.999999999999998, and
+    /// -86.30847727262889 as -86.3084772726289, another angle: a subset of a file was not
+    /// rows of it to the last bit).
+    #[test]
+    fn angles_read_from_a_file_are_written_back_to_the_bit() {
+        for text in [
+            "15",
+            "6",
+            "17.6",
+            "-86.30847727262889",
+            "3.9990329537813993",
+            "0.1",
+            "1e-7",
+            "359.99999999999994",
+            "-0.000001",
+        ] {
+            let rad = text.parse::<f64>().unwrap().to_radians();
+            let cell = degrees_cell(rad);
+            let back = cell.parse::<f64>().unwrap().to_radians();
+            assert_eq!(back.to_bits(), rad.to_bits(), "{text} written {cell}");
+            // A text of at most 15 significant digits comes back as it was.
+            if text.trim_start_matches('-').len() <= 16 && !text.contains('e') {
+                assert_eq!(cell, text);
+            }
+        }
+        // Three angles of a row, through the matrix and back.
+        for [z, y, x] in [
+            ["105.9", "17.6", "70.4"],
+            [
+                "95.23904333917534",
+                "-9.116044244936985",
+                "149.34282054108016",
+            ],
+            [
+                "-12.164149475426916",
+                "46.99282469856163",
+                "-142.74172182340675",
+            ],
+            ["0", "0", "0"],
+        ] {
+            let a = [z, y, x].map(|t| t.parse::<f64>().unwrap().to_radians());
+            let r = zyx_to_rotation(a[0], a[1], a[2]);
+            let cells = rotation_cells(&r);
+            let b = cells
+                .clone()
+                .map(|c| c.parse::<f64>().unwrap().to_radians());
+            assert_eq!(zyx_to_rotation(b[0], b[1], b[2]), r, "{cells:?}");
+            if z.len() < 10 {
+                assert_eq!(cells, [z, y, x], "short texts stay");
+            }
+        }
+        // A computed rotation no text reads back to exactly: its angles, within rounding.
+        let r = Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), 0.3)
+            * Rotation3::from_axis_angle(&nalgebra::Vector3::x_axis(), 1.1);
+        let cells = rotation_cells(&r);
+        let b = cells
+            .clone()
+            .map(|c| c.parse::<f64>().unwrap().to_radians());
+        assert!((zyx_to_rotation(b[0], b[1], b[2]).matrix() - r.matrix()).norm() < 1e-14);
+    }
 }
