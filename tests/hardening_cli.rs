@@ -214,7 +214,7 @@ fn outputs_never_overwrite_an_input_or_each_other() {
             "--out",
             id.to_str().unwrap(),
         ],
-        "give an .html name",
+        "give an .html (or .htm) name",
     );
     assert_eq!(std::fs::read_to_string(&id).unwrap(), "{}");
 }
@@ -3132,21 +3132,25 @@ fn split_and_import_write_rows_as_read() {
             assert_eq!(m.sigma_rotation, s.sigma_rotation);
         }
     }
-    // Short texts stay as typed.
+    // Short texts stay as typed; -0 is written 0, the same value.
     let typed = common::tmp("rows_as_read_typed.csv");
     std::fs::write(
         &typed,
         "id,q1,q2,q3,q4,q5,q6,x,y,z,rz,ry,rx,srx,sry,srz\n\
-         a,10,20,-10,15,-50,6,2305.7,320,1430.8,105.9,17.6,70.4,0.01,0.01,0.03\n",
+         a,10,20,-10,15,-50,6,2305.7,320,1430.8,105.9,17.6,70.4,0.01,0.01,0.03\n\
+         b,-0,20,-10,15,-50,6,2305.7,320,1430.8,-0,-0,-0,0.01,0.01,0.03\n",
     )
     .unwrap();
     let o = robocal(&["import", typed.to_str().unwrap(), "--out", &i_s]);
     assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&i).unwrap();
     assert!(
-        std::fs::read_to_string(&i)
-            .unwrap()
-            .ends_with("\na,10,20,-10,15,-50,6,2305.7,320,1430.8,105.9,17.6,70.4,0.01,0.01,0.03\n"),
-        "{}",
-        std::fs::read_to_string(&i).unwrap()
+        text.contains("\na,10,20,-10,15,-50,6,2305.7,320,1430.8,105.9,17.6,70.4,0.01,0.01,0.03\n"),
+        "{text}"
     );
+    let (written, typed) = (
+        read_canonical(&i, &fanuc).unwrap(),
+        read_canonical(&typed, &fanuc).unwrap(),
+    );
+    assert_eq!(lines_also_in(&written, &typed).len(), 2, "{text}");
 }

@@ -275,7 +275,11 @@ fn report_refuses_empty_folders_and_bad_json() {
             out.to_str().unwrap(),
         ]);
         assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-        assert!(stderr(&o).contains("give an .html name"), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("give an .html (or .htm) name"),
+            "{}",
+            stderr(&o)
+        );
         assert_eq!(std::fs::read(&out).ok(), before, "{name}");
     }
 }

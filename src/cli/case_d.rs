@@ -152,6 +152,9 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
         .options(a.sigma.sigmas(), std::io::stderr().is_terminal())?;
     let rows = run(&a.datasets, &opts)
         .with_context(|| super::paths::datasets_context(&a.datasets, "Case D"))?;
+    for w in robocal::studies::case_d::copied_warnings(&a.datasets)? {
+        eprintln!("warning: {w}");
+    }
     // The rows as read (the protocol's 30 and 150 in the shipped files; a reviewer's
     // shortened files were still said to hold them).
     let mut counts: Vec<(String, usize, usize)> = Vec::new();

@@ -23,7 +23,7 @@ pub fn run(a: ReportArgs) -> Result<()> {
     let ext = (a.out.extension().and_then(|e| e.to_str())).map(str::to_ascii_lowercase);
     if !matches!(ext.as_deref(), Some("html" | "htm")) {
         usage!(
-            "--out {}: the page is HTML; give an .html name (only such a name is written, so \
+            "--out {}: the page is HTML; give an .html (or .htm) name (only such a name is written, so \
              no report, picture, robot, data or compensator file is replaced by the page)",
             a.out.display()
         );

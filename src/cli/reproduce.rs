@@ -35,6 +35,12 @@ pub fn run(a: ReproduceArgs) -> Result<()> {
     let mut cases = Vec::new();
     for case in Case::ALL {
         let data = load_shipped(&a.datasets, case, &nominal)?;
+        // Rows pasted twice count one reading twice, as identify warns.
+        for set in [&data.calibration, &data.validation] {
+            if let Some(w) = robocal::identify::plausibility::copied_warning(set) {
+                eprintln!("warning: {w}");
+            }
+        }
         let run = run_case(&nominal, case, &data)?;
         let c = ReproduceCase::new(&data, &run);
         say!(

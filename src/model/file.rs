@@ -28,7 +28,7 @@
 //! `unobserved` lists the parameters the calibration's measurements did not observe (no
 //! effect on them: a position-only tracker does not see the tool's rotation); they keep the
 //! values the calibration started from, and results that depend on them are flagged
-//! ([`crate::kinematics::unobserved`]).
+//! (`kinematics::unobserved`, which reads it).
 //!
 //! A field the convention has but the file omits is 0 (the thesis's "-"); a field the
 //! convention does not have is an error. Writing uses the shortest decimal form that reads

@@ -1,6 +1,6 @@
 //! Mass properties of a robot, for the gravity torques that bend compliant joints (issue 14):
 //! per joint, the mass (kg) of the link it moves and that link's centre of mass (mm) in the
-//! joint's frame (z on its axis, moved by it; [`crate::kinematics::Frames::joint`]); the
+//! joint's frame (z on its axis, moved by it; `kinematics::Frames::joint`); the
 //! payload's mass and centre of mass (mm) in the tool frame; gravity (m/s^2) in the robot's
 //! base frame: the frame after the base row, so that a base row holding a tracker's
 //! placement does not tilt gravity (-z for a floor mount; +z for a ceiling mount, a horizontal

@@ -230,7 +230,7 @@ impl Robot {
 
     /// The parameters its calibration did not observe (no effect on the measurements), in
     /// [`Robot::parameters`] order; they keep the values the calibration started from, and
-    /// what depends on them is unchecked ([`crate::kinematics::unobserved`]). Empty for a
+    /// what depends on them is unchecked (`kinematics::unobserved`, which reads it). Empty for a
     /// model no calibration marked.
     pub fn unobserved(&self) -> &[ParamId] {
         &self.unobserved

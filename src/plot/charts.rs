@@ -199,7 +199,7 @@ const BINS: usize = 20;
 
 /// A histogram panel's bins: [`BINS`] of `width` from 0 to `hi`. The range ends at the
 /// largest value, unless that lies more than [`OUTLIER_SPAN`] times beyond the 99th
-/// percentile: one outlier of 60 mm among errors of 0.3 mm put 299 of 300 rows in the first
+/// percentile (below the largest value however few the values): one outlier of 60 mm among errors of 0.3 mm put 299 of 300 rows in the first
 /// bin. The range then ends at that percentile, the last bin also counts the values above it,
 /// and `beyond` says how many and how far (count, largest value). Values that are not finite
 /// are not counted (errors are finite; a chart draws what it can).
@@ -218,10 +218,10 @@ impl Bins {
         let mut sorted: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
         sorted.sort_by(f64::total_cmp);
         let max = sorted.last().copied().unwrap_or(0.0).max(0.0);
-        let p99 = sorted
-            .get(((sorted.len() as f64 * 0.99).ceil() as usize).saturating_sub(1))
-            .copied()
-            .unwrap_or(0.0);
+        // The 99th percentile, below the largest value however few the rows (one outlier
+        // among 20 squashed the other 19 too).
+        let below = (sorted.len() / 100).max(1);
+        let p99 = (sorted.len().checked_sub(1 + below)).map_or(0.0, |i| sorted[i]);
         let clipped = p99 > 0.0 && max > OUTLIER_SPAN * p99;
         let hi = if clipped { p99 } else { max }.max(1e-12) * 1.0001;
         let width = hi / BINS as f64;
@@ -587,6 +587,12 @@ mod tests {
         let b = Bins::of(&[f64::NAN, 1.0, f64::INFINITY]);
         assert_eq!((b.counts.iter().sum::<usize>(), b.beyond), (1, None));
         assert_eq!(Bins::of(&[]).counts, [0; BINS]);
+        // Few rows: the range ends below the one outlier too.
+        let mut v: Vec<f64> = (1..20).map(|i| i as f64 * 0.01).collect();
+        v.push(60.0);
+        let b = Bins::of(&v);
+        assert!((b.hi - 0.19 * 1.0001).abs() < 1e-12, "{}", b.hi);
+        assert_eq!(b.beyond, Some((1, 60.0)));
     }
 
     #[test]

@@ -170,6 +170,21 @@ pub fn load(datasets: &Path, set: Robotset, nominal: &Robot) -> Result<SetData> 
     Ok(data)
 }
 
+/// The warnings of reading every set's files from `datasets` as [`run`] does: rows that
+/// repeat an earlier row to the last digit ([`crate::identify::plausibility::copied_warning`]),
+/// which count one reading twice, as `identify` and `train` warn.
+pub fn copied_warnings(datasets: &Path) -> Result<Vec<String>> {
+    let nominal = thesis::fanuc(datasets)?;
+    let mut out = Vec::new();
+    for set in Robotset::ALL {
+        let data = load(datasets, set, &nominal)?;
+        for s in [&data.calibration, &data.training, &data.test] {
+            out.extend(crate::identify::plausibility::copied_warning(s));
+        }
+    }
+    Ok(out)
+}
+
 /// Runs the protocol on one set; `opts.refine` is set per row (the parameters the model was
 /// identified with, kept where cross-validation favours them; the geometric ones for the
 /// compliant model). `with_masses`, for the non-geometric robot, is the nominal with the

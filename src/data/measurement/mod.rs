@@ -90,7 +90,7 @@ pub struct MeasurementSet {
     pub chain_breaks: Vec<usize>,
     /// The pair label's column name (first) or the distance's (second), with a header name
     /// that differs from it in letter case only and is read as absent: the pair measures that
-    /// would read that column refuse it ([`crate::identify::problem::Observations::new`]);
+    /// would read that column refuse it (`identify::problem::Observations::new`);
     /// the other measures read no such column.
     pub other_case_pair_columns: [Option<(String, String)>; 2],
 }
@@ -304,9 +304,9 @@ pub fn copied_rows(set: &MeasurementSet) -> Vec<(usize, usize)> {
     out
 }
 
-/// A row's joints and reading to the last bit ([`copied_rows`]); None for a row with nothing
-/// measured or with a pair label (a labelled chain repeats each inner row under two pair
-/// labels by design).
+/// A row's joints and reading to the last bit ([`copied_rows`]), -0 as 0 (files write -0 as
+/// 0, and the two are one value); None for a row with nothing measured or with a pair label
+/// (a labelled chain repeats each inner row under two pair labels by design).
 fn reading_key(m: &Measurement) -> Option<Vec<u64>> {
     let measured = m.position.is_some() || m.rotation.is_some() || m.distance.is_some();
     if !measured || m.pair.is_some() {
@@ -317,7 +317,7 @@ fn reading_key(m: &Measurement) -> Option<Vec<u64>> {
         .chain(m.position.iter().flat_map(|p| p.iter().copied()))
         .chain(rot.iter().flat_map(|r| r.iter().copied()))
         .chain(m.distance);
-    Some(values.map(f64::to_bits).collect())
+    Some(values.map(|v| (v + 0.0).to_bits()).collect())
 }
 
 /// The 1-based file lines of the rows of `set` that are rows of `other` too, joints and

@@ -27,6 +27,33 @@ fn lm_step(
     min_grad: f64,
     lambda: f64,
 ) -> LmOutcome {
+    let (a, g) = lm_system(w, s, lambda);
+    if g.amax() < min_grad {
+        return LmOutcome::MinGradient;
+    }
+    let (p, v, mask) = (w.len(), w.to_vector(), penalty_mask(w));
+    while *mu <= 1e10 {
+        let mut mat = a.clone();
+        for i in 0..p {
+            mat[(i, i)] += *mu + lambda * mask[i];
+        }
+        if let Some(ch) = mat.cholesky() {
+            let cand = w.from_vector(&(&v + ch.solve(&g)));
+            let c = penalised_sum(&cand, s, lambda);
+            if c.is_finite() && c < perf {
+                *mu *= 0.1;
+                return LmOutcome::Step(cand, c);
+            }
+        }
+        *mu *= 10.0;
+    }
+    LmOutcome::MuMax
+}
+
+/// LM's normal matrix J^T J and right-hand side J^T e - lambda D w at `w`, J the Jacobian of
+/// every sample's mapped outputs A_k y by every weight, e the residuals: the right-hand side
+/// is minus half the gradient of [`penalised_sum`].
+fn lm_system(w: &Weights, s: &Samples, lambda: f64) -> (DMatrix<f64>, DVector<f64>) {
     let (no, p, nr) = (w.outputs(), w.len(), s.rows());
     let rows = s.len() * nr;
     let mut jac = DMatrix::<f64>::zeros(rows, p);
@@ -45,29 +72,8 @@ fn lm_step(
         s.residual(k, &out, &mut r);
         e.rows_mut(k * nr, nr).copy_from_slice(&r);
     }
-    let v = w.to_vector();
-    let mask = penalty_mask(w);
-    let a = jac.tr_mul(&jac);
-    let g = jac.tr_mul(&e) - mask.component_mul(&v) * lambda;
-    if g.amax() < min_grad {
-        return LmOutcome::MinGradient;
-    }
-    while *mu <= 1e10 {
-        let mut mat = a.clone();
-        for i in 0..p {
-            mat[(i, i)] += *mu + lambda * mask[i];
-        }
-        if let Some(ch) = mat.cholesky() {
-            let cand = w.from_vector(&(&v + ch.solve(&g)));
-            let c = penalised_sum(&cand, s, lambda);
-            if c.is_finite() && c < perf {
-                *mu *= 0.1;
-                return LmOutcome::Step(cand, c);
-            }
-        }
-        *mu *= 10.0;
-    }
-    LmOutcome::MuMax
+    let g = jac.tr_mul(&e) - penalty_mask(w).component_mul(&w.to_vector()) * lambda;
+    (jac.tr_mul(&jac), g)
 }
 
 /// Relative held-out gain below which an L-BFGS iteration counts as a failure: its iterations
@@ -181,4 +187,78 @@ pub(super) fn phase2_lbfgs(
         LbfgsStop::LineSearch => TrainStop::MuMax,
         LbfgsStop::MaxIterations | LbfgsStop::Callback => TrainStop::MaxEpochs,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::neural::samples::objective;
+
+    /// LM's right-hand side is minus half the gradient of the penalised sum, which the
+    /// objective's own gradient (checked against central differences in `batch`) gives:
+    /// with and without maps, the penalty on the weights alone. And J^T J is the
+    /// Gauss-Newton matrix: along a direction d, d^T J^T J d is |J d|^2, |J d| the residuals'
+    /// change per unit step by central differences.
+    #[test]
+    fn lm_system_is_the_penalised_sums_gradient_and_gauss_newton_matrix() {
+        let w = Weights {
+            w1: DMatrix::from_fn(4, 3, |i, j| ((i * 7 + j * 3) as f64 * 0.37).sin()),
+            b1: DVector::from_fn(4, |i, _| (i as f64 * 0.9).cos()),
+            w2: DMatrix::from_fn(2, 4, |i, j| ((i * 5 + j) as f64 * 0.53).sin()),
+            b2: DVector::from_fn(2, |i, _| i as f64 * 0.1 - 0.2),
+        };
+        for with_maps in [false, true] {
+            let mut s = Samples::default();
+            let mut maps = Vec::new();
+            for k in 0..6 {
+                let t = k as f64;
+                s.x.push(vec![(t * 0.7).sin(), (t * 1.3).cos(), t * 0.1 - 0.2]);
+                if with_maps {
+                    s.b.push(vec![t * 0.2, -0.3, 0.5 - t * 0.1]);
+                    maps.push(DMatrix::from_fn(3, 2, |i, j| {
+                        ((k + i * 2 + j) as f64).cos()
+                    }));
+                } else {
+                    s.b.push(vec![t * 0.2, -0.3]);
+                }
+            }
+            s.maps = with_maps.then_some(maps);
+            let lambda = 0.7;
+            let (a, g) = lm_system(&w, &s, lambda);
+            let mut grad = DVector::zeros(w.len());
+            objective(&s, &w, lambda, &mut grad);
+            // The objective is the penalised sum over M components.
+            let half = grad * (s.components() as f64 / 2.0);
+            assert!(
+                (&g + &half).amax() < 1e-10 * (1.0 + half.amax()),
+                "maps {with_maps}"
+            );
+            // d^T A d against |J d|^2 from the residuals' central differences.
+            let d = DVector::from_fn(w.len(), |i, _| ((i * 3) as f64 * 0.41).cos());
+            let residuals = |v: &DVector<f64>| {
+                let wv = w.from_vector(v);
+                let mut r = vec![0.0; s.rows()];
+                let mut out = vec![0.0; wv.outputs()];
+                let mut h = vec![0.0; wv.hidden()];
+                let mut blk = DMatrix::zeros(wv.outputs(), wv.len());
+                (0..s.len())
+                    .flat_map(|k| {
+                        wv.jacobian_into(&s.x[k], &mut h, &mut out, &mut blk, 0);
+                        s.residual(k, &out, &mut r);
+                        r.clone()
+                    })
+                    .collect::<Vec<f64>>()
+            };
+            let (v, e) = (w.to_vector(), 1e-6);
+            let (rp, rm) = (residuals(&(&v + &d * e)), residuals(&(&v - &d * e)));
+            let jd2: f64 = (rp.iter().zip(&rm))
+                .map(|(p, m)| ((p - m) / (2.0 * e)).powi(2))
+                .sum();
+            let dad = d.dot(&(&a * &d));
+            assert!(
+                (dad - jd2).abs() < 1e-6 * jd2,
+                "maps {with_maps}: {dad} vs {jd2}"
+            );
+        }
+    }
 }
