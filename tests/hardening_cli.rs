@@ -3154,3 +3154,149 @@ fn split_and_import_write_rows_as_read() {
     );
     assert_eq!(lines_also_in(&written, &typed).len(), 2, "{text}");
 }
+
+/// A region file in radians (every range within +-6.3 deg) is warned of by `simulate` and
+/// `plan`, as joint files are (before: 5 configurations drawn within 1 deg, no word); a
+/// region in degrees is not. A noise flag the measure does not report is said unused.
+#[test]
+fn a_region_in_radians_is_warned_of() {
+    let region = common::tmp("radian_region.toml");
+    std::fs::write(
+        &region,
+        "ranges = [[-0.1,0.1],[0,0.3],[-0.1,0.1],[-0.3,0.3],[0.5,1],[-0.5,0.5]]\n",
+    )
+    .unwrap();
+    let out = common::tmp("radian_region_sim.csv");
+    let said = "one turn in radians: the ranges are read in degrees";
+    for (file, warned) in [
+        (region.to_str().unwrap(), true),
+        ("datasets/regions/case_d_focused.toml", false),
+    ] {
+        let o = robocal(&[
+            "simulate",
+            "--robot",
+            common::FANUC,
+            "--region",
+            file,
+            "--count",
+            "5",
+            "--seed",
+            "1",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(stderr(&o).contains(said), warned, "{file}: {}", stderr(&o));
+    }
+    // A noise the measure does not report is said to be unused (it was dropped silently).
+    for (measure, flag, unused) in [
+        ("orientation", "--sigma-pos", true),
+        ("position", "--sigma-rot", true),
+        ("pose", "--sigma-pos", false),
+    ] {
+        let o = robocal(&[
+            "simulate",
+            "--robot",
+            common::FANUC,
+            "--count",
+            "3",
+            "--seed",
+            "1",
+            "--measure",
+            measure,
+            flag,
+            "5",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let note = format!("note: {flag} is unused");
+        assert_eq!(
+            stderr(&o).contains(&note),
+            unused,
+            "{measure}: {}",
+            stderr(&o)
+        );
+    }
+}
+
+/// `case-d` says the rows it read (it said 30 and 150 for shortened files) and, as
+/// `reproduce` does, warns once of a row pasted twice, before the training.
+#[test]
+fn studies_say_the_rows_they_read_and_rows_pasted_twice() {
+    let dir = tempfile::Builder::new()
+        .prefix("studies")
+        .tempdir()
+        .unwrap();
+    let root = common::root().join("datasets");
+    let copy = dir.path().join("datasets");
+    for entry in [
+        "robots",
+        "deviations",
+        "regions",
+        "case_a",
+        "case_b_sim",
+        "case_c",
+        "case_d",
+    ]
+    .iter()
+    .chain(&["nongeometric_robot"])
+    {
+        let to = copy.join(entry);
+        std::fs::create_dir_all(&to).unwrap();
+        for f in std::fs::read_dir(root.join(entry)).unwrap() {
+            let f = f.unwrap().path();
+            if f.is_file() {
+                std::fs::copy(&f, to.join(f.file_name().unwrap())).unwrap();
+            }
+        }
+    }
+    let head = |file: &str, lines: usize, paste: Option<usize>| {
+        let text = std::fs::read_to_string(root.join(file)).unwrap();
+        let all: Vec<&str> = text.lines().collect();
+        let mut kept: Vec<&str> = all[..lines].to_vec();
+        kept.extend(paste.map(|l| all[l - 1]));
+        std::fs::write(copy.join(file), kept.join("\n") + "\n").unwrap();
+    };
+    head("case_d/calibration.csv", 21, None);
+    head("case_d/training.csv", 101, Some(5));
+    let o = robocal(&[
+        "case-d",
+        "--datasets",
+        copy.to_str().unwrap(),
+        "--members",
+        "0",
+        "--refine",
+        "none",
+    ]);
+    let (out, err) = (stdout(&o), stderr(&o));
+    assert!(o.status.success(), "{err}");
+    assert!(
+        out.contains("calibration poses (20 in case_d, 30 in nongeometric_robot)")
+            && out.contains("training poses (101 in case_d, 150 in nongeometric_robot)"),
+        "{out}"
+    );
+    assert_eq!(err.matches("repeat an earlier row").count(), 1, "{err}");
+    assert!(
+        err.contains("training.csv: 1 row(s) repeat") && err.contains("line 102 repeats line 5"),
+        "{err}"
+    );
+    let text = std::fs::read_to_string(root.join("case_a/calibration.csv")).unwrap();
+    let second = text.lines().nth(1).unwrap();
+    std::fs::write(
+        copy.join("case_a/calibration.csv"),
+        format!("{text}{second}\n"),
+    )
+    .unwrap();
+    let o = robocal(&[
+        "reproduce",
+        "--datasets",
+        copy.to_str().unwrap(),
+        "--seeds",
+        "1",
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(err.matches("repeat an earlier row").count(), 1, "{err}");
+    assert!(err.contains("line 22 repeats line 2"), "{err}");
+}

@@ -150,31 +150,24 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
     let opts = a
         .build
         .options(a.sigma.sigmas(), std::io::stderr().is_terminal())?;
-    let rows = run(&a.datasets, &opts)
+    // Said before the training's minutes (the files are read again by the run: a few ms).
+    let copied = robocal::studies::case_d::copied_warnings(&a.datasets)
         .with_context(|| super::paths::datasets_context(&a.datasets, "Case D"))?;
-    for w in robocal::studies::case_d::copied_warnings(&a.datasets)? {
+    for w in copied {
         eprintln!("warning: {w}");
     }
+    let rows = run(&a.datasets, &opts)
+        .with_context(|| super::paths::datasets_context(&a.datasets, "Case D"))?;
+    let report = CaseDReport::new(a.build.seed, &rows);
     // The rows as read (the protocol's 30 and 150 in the shipped files; a reviewer's
     // shortened files were still said to hold them).
-    let mut counts: Vec<(String, usize, usize)> = Vec::new();
-    for r in &rows {
-        let c = (
-            r.set.folder().to_string(),
-            r.calibration_rows,
-            r.training_rows,
-        );
-        if !counts.contains(&c) {
-            counts.push(c);
-        }
-    }
-    let poses = |kind: &str, f: &dyn Fn(&(String, usize, usize)) -> usize| {
-        let n: Vec<usize> = counts.iter().map(f).collect();
+    let poses = |kind: &str, count: &dyn Fn(&robocal::reports::studies::CaseDSet) -> usize| {
+        let n: Vec<usize> = report.sets.iter().map(count).collect();
         if n.windows(2).all(|w| w[0] == w[1]) {
             format!("the {} {kind} poses", n.first().copied().unwrap_or(0))
         } else {
-            let each: Vec<String> = (counts.iter().zip(&n))
-                .map(|(c, k)| format!("{k} in {}", c.0))
+            let each: Vec<String> = (report.sets.iter().zip(&n))
+                .map(|(s, k)| format!("{k} in {}", s.set.folder()))
                 .collect();
             format!("the {kind} poses ({})", each.join(", "))
         }
@@ -183,11 +176,10 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
         "Case D (thesis 6.4): identification on {}, then a compensator trained on {} (seed \
          {}; settings and the refinement of the identified parameters chosen by \
          cross-validation unless fixed by flags).",
-        poses("calibration", &|c| c.1),
-        poses("training", &|c| c.2),
+        poses("calibration", &|s| s.calibration_rows),
+        poses("training", &|s| s.training_rows),
         a.build.seed
     );
-    let report = CaseDReport::new(a.build.seed, &rows);
     for s in &report.sets {
         for r in &s.rows {
             if let Some(settings) = &r.settings {

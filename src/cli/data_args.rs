@@ -204,6 +204,23 @@ pub struct FitInputs {
 /// training data too (`set`, from `data`): their figures are not held out. `kind` names the
 /// rows (`validation`, `data`), `held` says when they are fitted ones (`train`'s validation
 /// rows always; `evaluate`'s where the other file trained the model or the compensator).
+/// Warns of rows of `set` (read from `path`) whose pair label no other row carries
+/// ([`robocal::data::measurement::lone_pair_lines`]), which `import` and `split` write as
+/// read: the relative and distance measures cannot use them.
+pub(super) fn warn_lone_pairs(path: &Path, set: &robocal::data::MeasurementSet) {
+    let lines = robocal::data::measurement::lone_pair_lines(set);
+    if !lines.is_empty() {
+        eprintln!(
+            "warning: {}: {} row(s) carry a pair label no other row carries (lines {}): their \
+             partner was dropped (a bad row) or is missing, and the relative and distance \
+             measures cannot pair them; written as read",
+            path.display(),
+            lines.len(),
+            robocal::data::measurement::list_lines(&lines)
+        );
+    }
+}
+
 pub(super) fn shared_rows_warning(
     val_path: &Path,
     val: &MeasurementSet,

@@ -50,6 +50,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
         .as_ref()
         .map_or_else(|| JointInfo::revolute(n), JointInfo::of);
     let set = a.data.read(&a.input, &joints)?;
+    super::data_args::warn_lone_pairs(&a.input, &set);
     // Positions in metres or inches: `identify` and `train` refuse them, and the canonical
     // file written here would carry the mistake on (a reviewer's metres were written as mm
     // without a word).

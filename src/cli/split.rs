@@ -54,6 +54,7 @@ pub fn run(a: SplitArgs) -> Result<()> {
     }
     let joints = joints_of(a.robot.as_ref(), n)?;
     let set = a.data.read(&a.input, &joints)?;
+    super::data_args::warn_lone_pairs(&a.input, &set);
     let (x, y) = split(&set, a.fraction, a.seed);
     for (part, flag) in [(&x, "--out-a"), (&y, "--out-b")] {
         if part.rows.is_empty() {

@@ -198,8 +198,8 @@ pub struct Histograms {
 const BINS: usize = 20;
 
 /// A histogram panel's bins: [`BINS`] of `width` from 0 to `hi`. The range ends at the
-/// largest value, unless that lies more than [`OUTLIER_SPAN`] times beyond the 99th
-/// percentile (below the largest value however few the values): one outlier of 60 mm among errors of 0.3 mm put 299 of 300 rows in the first
+/// largest value, unless that is more than [`OUTLIER_SPAN`] times the 99th percentile (one
+/// value below the largest however few, from [`MIN_CLIPPED`] values on): one outlier of 60 mm among errors of 0.3 mm put 299 of 300 rows in the first
 /// bin. The range then ends at that percentile, the last bin also counts the values above it,
 /// and `beyond` says how many and how far (count, largest value). Values that are not finite
 /// are not counted (errors are finite; a chart draws what it can).
@@ -210,8 +210,11 @@ struct Bins {
     beyond: Option<(usize, f64)>,
 }
 
-/// How far beyond the 99th percentile the largest value may lie before the range stops there.
+/// How many times the 99th percentile the largest value may be before the range stops there.
 const OUTLIER_SPAN: f64 = 2.0;
+
+/// The fewest values whose range may stop below the largest.
+const MIN_CLIPPED: usize = 20;
 
 impl Bins {
     fn of(values: &[f64]) -> Bins {
@@ -222,7 +225,9 @@ impl Bins {
         // among 20 squashed the other 19 too).
         let below = (sorted.len() / 100).max(1);
         let p99 = (sorted.len().checked_sub(1 + below)).map_or(0.0, |i| sorted[i]);
-        let clipped = p99 > 0.0 && max > OUTLIER_SPAN * p99;
+        // Fewer values are too few to call one an outlier ([0.1, 0.5] would be all in the
+        // last bin).
+        let clipped = sorted.len() >= MIN_CLIPPED && p99 > 0.0 && max > OUTLIER_SPAN * p99;
         let hi = if clipped { p99 } else { max }.max(1e-12) * 1.0001;
         let width = hi / BINS as f64;
         let mut counts = [0usize; BINS];
@@ -593,6 +598,8 @@ mod tests {
         let b = Bins::of(&v);
         assert!((b.hi - 0.19 * 1.0001).abs() < 1e-12, "{}", b.hi);
         assert_eq!(b.beyond, Some((1, 60.0)));
+        // Two values are no outlier and its rest.
+        assert_eq!(Bins::of(&[0.1, 0.5]).beyond, None);
     }
 
     #[test]

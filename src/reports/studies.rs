@@ -41,6 +41,14 @@ pub struct CaseDSet {
     pub title: String,
     /// Its unseen test poses.
     pub test_rows: usize,
+    /// Its calibration poses (identification), as read: the protocol's 30 in the shipped
+    /// files. 0 in reports written before it.
+    #[serde(default)]
+    pub calibration_rows: usize,
+    /// Its training poses (compensators), as read: the protocol's 150 in the shipped files.
+    /// 0 in reports written before it.
+    #[serde(default)]
+    pub training_rows: usize,
     /// Every model, nominal to full geometric + network.
     pub rows: Vec<CaseDRow>,
     /// Mean position error vs truth, offsets over offsets + network (times).
@@ -103,6 +111,8 @@ impl CaseDReport {
                     set,
                     title: set.title().into(),
                     test_rows: mine.first().map_or(0, |r| r.truth.count),
+                    calibration_rows: mine.first().map_or(0, |r| r.calibration_rows),
+                    training_rows: mine.first().map_or(0, |r| r.training_rows),
                     rows: mine
                         .iter()
                         .map(|r| CaseDRow {

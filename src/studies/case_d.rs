@@ -135,12 +135,12 @@ pub struct Row {
     #[serde(skip)]
     pub truth_errors: Vec<RowError>,
     /// The set's calibration rows (identification), as read: the protocol's 30 in the
-    /// shipped files. 0 in reports written before it.
-    #[serde(default)]
+    /// shipped files.
+    #[serde(skip)]
     pub calibration_rows: usize,
     /// The set's training rows (compensators), as read: the protocol's 150 in the shipped
-    /// files. 0 in reports written before it.
-    #[serde(default)]
+    /// files.
+    #[serde(skip)]
     pub training_rows: usize,
 }
 

@@ -398,6 +398,15 @@ pub fn pair_units(set: &MeasurementSet) -> Vec<Vec<usize>> {
     units
 }
 
+/// The 1-based file lines of the rows whose pair label no other row carries: a pair's partner
+/// dropped (a bad row skipped) or missing, which the pair measures cannot use.
+pub fn lone_pair_lines(set: &MeasurementSet) -> Vec<usize> {
+    (pair_units(set).iter())
+        .filter(|u| u.len() == 1 && set.rows[u[0]].pair.is_some())
+        .map(|u| set.rows[u[0]].line)
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
