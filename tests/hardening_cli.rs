@@ -3300,3 +3300,51 @@ fn studies_say_the_rows_they_read_and_rows_pasted_twice() {
     assert_eq!(err.matches("repeat an earlier row").count(), 1, "{err}");
     assert!(err.contains("line 22 repeats line 2"), "{err}");
 }
+
+/// A pair whose partner was skipped as a bad row: `import` and `split` write the lone row as
+/// read and say so (before: no word, and `identify --measure relative` failed later).
+#[test]
+fn a_pair_label_left_alone_is_warned_of() {
+    let data = common::tmp("lone_pair.csv");
+    std::fs::write(
+        &data,
+        "pair,q1,q2,q3,q4,q5,q6,x,y,z\na,0,10,20,30,40,50,1,2,3\na,1,11,21,31,41,51,1,2,4\n\
+         b,2,12,22,32,42,52,1,2,5\nb,3,13,23,33,43,53,nan,2,6\n",
+    )
+    .unwrap();
+    let data = data.to_str().unwrap();
+    let [out, a, b] = ["lone_out.csv", "lone_a.csv", "lone_b.csv"]
+        .map(|n| common::tmp(n).to_str().unwrap().to_string());
+    let said = "1 row(s) carry a pair label no other row carries (lines 4)";
+    for args in [
+        vec!["import", data, "--skip-bad-rows", "--out", &out],
+        vec![
+            "split",
+            data,
+            "--skip-bad-rows",
+            "--seed",
+            "1",
+            "--out-a",
+            &a,
+            "--out-b",
+            &b,
+        ],
+    ] {
+        let o = robocal(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(stderr(&o).contains(said), "{args:?}: {}", stderr(&o));
+    }
+    // Whole pairs: no word.
+    let whole = common::tmp("whole_pairs.csv");
+    std::fs::write(
+        &whole,
+        "pair,q1,q2,q3,q4,q5,q6,x,y,z\na,0,10,20,30,40,50,1,2,3\na,1,11,21,31,41,51,1,2,4\n",
+    )
+    .unwrap();
+    let o = robocal(&["import", whole.to_str().unwrap(), "--out", &out]);
+    assert!(
+        o.status.success() && !stderr(&o).contains("no other row"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -349,7 +349,7 @@ pub fn residuals(robot: &Robot, obs: &Observations) -> Vec<[f64; 6]> {
 ///
 /// Position, displacement and distance rows are exact derivatives of f. A rotation residual
 /// is log(M R^-1) (rad) and its rows are the tool's angular velocity per parameter, the
-/// derivative of the log at a zero residual only (the inverse Jacobian of SO(3), I + [r]x/2 +
+/// derivative of the log at a zero residual only (the inverse Jacobian of SO(3), I + \[r\]x/2 +
 /// ..., left out): Gauss-Newton's approximation, off by O(|r|) row by row. The gradient it
 /// gives is exact where a row's three rotation sigmas are equal (J^-1(r)^T r = r), so the
 /// solve stops at the exact minimum; only the step's curvature is approximate.

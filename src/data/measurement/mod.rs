@@ -5,6 +5,7 @@
 //! used (full pose, position, orientation, relative position, distance) is chosen by the
 //! consumer; [`pairs`](super::pairs) groups rows for relative and distance use.
 
+mod cells;
 mod read;
 mod write;
 
