@@ -3230,27 +3230,7 @@ fn studies_say_the_rows_they_read_and_rows_pasted_twice() {
         .unwrap();
     let root = common::root().join("datasets");
     let copy = dir.path().join("datasets");
-    for entry in [
-        "robots",
-        "deviations",
-        "regions",
-        "case_a",
-        "case_b_sim",
-        "case_c",
-        "case_d",
-    ]
-    .iter()
-    .chain(&["nongeometric_robot"])
-    {
-        let to = copy.join(entry);
-        std::fs::create_dir_all(&to).unwrap();
-        for f in std::fs::read_dir(root.join(entry)).unwrap() {
-            let f = f.unwrap().path();
-            if f.is_file() {
-                std::fs::copy(&f, to.join(f.file_name().unwrap())).unwrap();
-            }
-        }
-    }
+    common::copy_studies_datasets(&copy);
     let head = |file: &str, lines: usize, paste: Option<usize>| {
         let text = std::fs::read_to_string(root.join(file)).unwrap();
         let all: Vec<&str> = text.lines().collect();

@@ -219,21 +219,7 @@ fn reproduce_prints_the_thesis_beside_ours() {
     // A truth file that lost rows is refused, not read as the truth of the rows it kept.
     let copy = tmp("reproduce_datasets");
     std::fs::remove_dir_all(&copy).ok();
-    for dir in [
-        "robots",
-        "deviations",
-        "regions",
-        "case_a",
-        "case_b_sim",
-        "case_c",
-        "case_d",
-    ] {
-        std::fs::create_dir_all(copy.join(dir)).unwrap();
-        for f in std::fs::read_dir(common::root().join("datasets").join(dir)).unwrap() {
-            let f = f.unwrap().path();
-            std::fs::copy(&f, copy.join(dir).join(f.file_name().unwrap())).unwrap();
-        }
-    }
+    common::copy_studies_datasets(&copy);
     let truth = copy.join("case_a/validation_truth.csv");
     let body = std::fs::read_to_string(&truth).unwrap();
     std::fs::write(

@@ -550,28 +550,8 @@ mod tests {
     /// passes (plain and projected) against the per-sample objective.
     #[test]
     fn gradient_matches_central_differences_with_maps_and_penalty() {
-        let w = Weights {
-            w1: DMatrix::from_fn(4, 3, |i, j| ((i * 7 + j * 3) as f64 * 0.37).sin()),
-            b1: DVector::from_fn(4, |i, _| (i as f64 * 0.9).cos()),
-            w2: DMatrix::from_fn(2, 4, |i, j| ((i * 5 + j) as f64 * 0.53).sin()),
-            b2: DVector::from_fn(2, |i, _| i as f64 * 0.1 - 0.2),
-        };
         for with_maps in [false, true] {
-            let mut s = Samples::default();
-            let mut maps = Vec::new();
-            for k in 0..5 {
-                let t = k as f64;
-                s.x.push(vec![(t * 0.7).sin(), (t * 1.3).cos(), t * 0.1 - 0.2]);
-                if with_maps {
-                    s.b.push(vec![t * 0.2, -0.3, 0.5 - t * 0.1]);
-                    maps.push(DMatrix::from_fn(3, 2, |i, j| {
-                        ((k + i * 2 + j) as f64).cos()
-                    }));
-                } else {
-                    s.b.push(vec![t * 0.2, -0.3]);
-                }
-            }
-            s.maps = with_maps.then_some(maps);
+            let (w, s) = crate::neural::samples::test_fixture(with_maps, 5);
             let lambda = 0.7;
             let mut g = DVector::zeros(w.len());
             let f = objective(&s, &w, lambda, &mut g);

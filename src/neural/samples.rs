@@ -207,3 +207,31 @@ pub fn objective(s: &Samples, w: &Weights, lambda: f64, grad: &mut DVector<f64>)
     }
     (sum + lambda * weight_norm2(w)) / m
 }
+
+/// A small network (3 inputs, 4 hidden, 2 outputs, every weight nonzero) and `count` samples
+/// for it, with maps to 3 residual rows where `with_maps`: the fixture of the gradient tests.
+#[cfg(test)]
+pub(crate) fn test_fixture(with_maps: bool, count: usize) -> (Weights, Samples) {
+    let w = Weights {
+        w1: DMatrix::from_fn(4, 3, |i, j| ((i * 7 + j * 3) as f64 * 0.37).sin()),
+        b1: DVector::from_fn(4, |i, _| (i as f64 * 0.9).cos()),
+        w2: DMatrix::from_fn(2, 4, |i, j| ((i * 5 + j) as f64 * 0.53).sin()),
+        b2: DVector::from_fn(2, |i, _| i as f64 * 0.1 - 0.2),
+    };
+    let mut s = Samples::default();
+    let mut maps = Vec::new();
+    for k in 0..count {
+        let t = k as f64;
+        s.x.push(vec![(t * 0.7).sin(), (t * 1.3).cos(), t * 0.1 - 0.2]);
+        if with_maps {
+            s.b.push(vec![t * 0.2, -0.3, 0.5 - t * 0.1]);
+            maps.push(DMatrix::from_fn(3, 2, |i, j| {
+                ((k + i * 2 + j) as f64).cos()
+            }));
+        } else {
+            s.b.push(vec![t * 0.2, -0.3]);
+        }
+    }
+    s.maps = with_maps.then_some(maps);
+    (w, s)
+}

@@ -259,3 +259,27 @@ pub fn compliant_start(name: &str) -> PathBuf {
     .unwrap();
     start
 }
+
+/// Copies the shipped data sets the studies read (`reproduce`, `case-d`: robots, deviations,
+/// regions, the cases and the non-geometric robot; not the tracker series) into `to`, a
+/// `datasets` folder a test may edit.
+pub fn copy_studies_datasets(to: &Path) {
+    for dir in [
+        "robots",
+        "deviations",
+        "regions",
+        "case_a",
+        "case_b_sim",
+        "case_c",
+        "case_d",
+        "nongeometric_robot",
+    ] {
+        std::fs::create_dir_all(to.join(dir)).unwrap();
+        for f in std::fs::read_dir(root().join("datasets").join(dir)).unwrap() {
+            let f = f.unwrap().path();
+            if f.is_file() {
+                std::fs::copy(&f, to.join(dir).join(f.file_name().unwrap())).unwrap();
+            }
+        }
+    }
+}
