@@ -3240,6 +3240,7 @@ fn studies_say_the_rows_they_read_and_rows_pasted_twice() {
     };
     head("case_d/calibration.csv", 21, None);
     head("case_d/training.csv", 101, Some(5));
+    let report = dir.path().join("case_d.json");
     let o = robocal(&[
         "case-d",
         "--datasets",
@@ -3248,8 +3249,19 @@ fn studies_say_the_rows_they_read_and_rows_pasted_twice() {
         "0",
         "--refine",
         "none",
+        "--report",
+        report.to_str().unwrap(),
     ]);
     let (out, err) = (stdout(&o), stderr(&o));
+    // The report holds the counts the sentence gives, set by set.
+    let sets = common::json(&report)["sets"].clone();
+    let counts: Vec<(u64, u64)> = (sets.as_array().unwrap().iter())
+        .map(|s| {
+            let n = |k: &str| s[k].as_u64().unwrap();
+            (n("calibration_rows"), n("training_rows"))
+        })
+        .collect();
+    assert_eq!(counts, [(20, 101), (30, 150)]);
     assert!(o.status.success(), "{err}");
     assert!(
         out.contains("calibration poses (20 in case_d, 30 in nongeometric_robot)")

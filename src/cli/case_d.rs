@@ -9,7 +9,9 @@ use clap::Args;
 use robocal::plot::{ErrorRun, error_figures, training_figure};
 use robocal::reports::studies::CaseDSet;
 use robocal::reports::{CaseDReport, Report};
-use robocal::studies::case_d::{Robotset, Row, Stage, load, run};
+use robocal::studies::case_d::{
+    Robotset, Row, SetData, Stage, copied_warnings, load_all, run_loaded,
+};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
@@ -89,12 +91,10 @@ fn print_set(s: &CaseDSet) {
 }
 
 /// Per set: the test errors of every stage, and the training curves of the network stages.
-fn plot(dir: &Path, datasets: &Path, rows: &[Row]) -> Result<usize> {
+fn plot(dir: &Path, sets: &[(Robotset, SetData)], rows: &[Row]) -> Result<usize> {
     robocal::plot::forget_earlier(dir, "case_d")?;
-    let nominal = robocal::studies::thesis::fanuc(datasets)?;
     let mut figs = 0;
-    for set in Robotset::ALL {
-        let data = load(datasets, set, &nominal)?;
+    for &(set, ref data) in sets {
         // Picture names: case_d_test, case_d_nongeometric_test, ...
         let (tag, name) = match set {
             Robotset::CaseD => ("case_d", "Case D"),
@@ -150,14 +150,13 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
     let opts = a
         .build
         .options(a.sigma.sigmas(), std::io::stderr().is_terminal())?;
-    // Said before the training's minutes (the files are read again by the run: a few ms).
-    let copied = robocal::studies::case_d::copied_warnings(&a.datasets)
-        .with_context(|| super::paths::datasets_context(&a.datasets, "Case D"))?;
-    for w in copied {
+    let context = || super::paths::datasets_context(&a.datasets, "Case D");
+    let sets = load_all(&a.datasets).with_context(context)?;
+    // Said before the training's minutes.
+    for w in sets.iter().flat_map(|(_, data)| copied_warnings(data)) {
         eprintln!("warning: {w}");
     }
-    let rows = run(&a.datasets, &opts)
-        .with_context(|| super::paths::datasets_context(&a.datasets, "Case D"))?;
+    let rows = run_loaded(&a.datasets, &sets, &opts).with_context(context)?;
     let report = CaseDReport::new(a.build.seed, &rows);
     // The rows as read (the protocol's 30 and 150 in the shipped files; a reviewer's
     // shortened files were still said to hold them).
@@ -201,7 +200,7 @@ pub fn run_case_d(a: CaseDArgs) -> Result<()> {
         print_set(s);
     }
     if let Some(dir) = &a.plot {
-        let figs = plot(dir, &a.datasets, &rows)?;
+        let figs = plot(dir, &sets, &rows)?;
         told_after!("\nplots: {figs} pictures in {}", dir.display());
     }
     if let Some(p) = &a.report {

@@ -200,10 +200,6 @@ pub struct FitInputs {
     pub read_warnings: Vec<String>,
 }
 
-/// The warning for validation rows (`val`, read from `val_path`) that are rows of the
-/// training data too (`set`, from `data`): their figures are not held out. `kind` names the
-/// rows (`validation`, `data`), `held` says when they are fitted ones (`train`'s validation
-/// rows always; `evaluate`'s where the other file trained the model or the compensator).
 /// Warns of rows of `set` (read from `path`) whose pair label no other row carries
 /// ([`robocal::data::measurement::lone_pair_lines`]), which `import` and `split` write as
 /// read: the relative and distance measures cannot use them.
@@ -221,6 +217,10 @@ pub(super) fn warn_lone_pairs(path: &Path, set: &robocal::data::MeasurementSet) 
     }
 }
 
+/// The warning for validation rows (`val`, read from `val_path`) that are rows of the
+/// training data too (`set`, from `data`): their figures are not held out. `kind` names the
+/// rows (`validation`, `data`), `held` says when they are fitted ones (`train`'s validation
+/// rows always; `evaluate`'s where the other file trained the model or the compensator).
 pub(super) fn shared_rows_warning(
     val_path: &Path,
     val: &MeasurementSet,

@@ -6,6 +6,7 @@ use clap::Args;
 use robocal::data::{JointTable, POSE_COLUMNS, TargetTable, joint_columns};
 use robocal::kinematics::{pose_to_file, tool_pose};
 use robocal::model::{Robot, read_robot};
+use robocal::sim::Region;
 use std::path::{Path, PathBuf};
 
 #[derive(Args)]
@@ -29,6 +30,28 @@ pub struct FkArgs {
 pub(super) fn warn_if_radians(path: &std::path::Path, robot: &Robot, t: &JointTable) {
     if t.looks_like_radians(robot) {
         warn_radians(path, "every joint angle", "the columns are read");
+    }
+}
+
+/// Warns (stderr) where every bound of the revolute joints' ranges of region file `path`
+/// lies within +-6.3 (a turn in radians), not all 0: read as degrees they hold every joint
+/// within a few degrees, which radians typed into the file give (a reviewer's region of
+/// +-0.1 to 1 drew 5 configurations within 1 deg, without a word). Not
+/// [`JointTable::looks_like_radians`]'s rule, which asks some value to pass 1: a region of
+/// wrist turns within +-1 rad is one.
+pub(super) fn warn_if_radian_region(path: &std::path::Path, robot: &Robot, region: &Region) {
+    let max = (region.0.iter().zip(robot.joints()))
+        .filter(|(_, j)| j.joint_type == robocal::model::JointType::Revolute)
+        .flat_map(|(r, _)| r.map(|v| v.to_degrees().abs()))
+        .fold(0.0f64, f64::max);
+    if max > 0.0 && max <= std::f64::consts::TAU {
+        eprintln!(
+            "warning: {}: every revolute joint's range lies within +-{:.2} deg, one turn in \
+             radians: the ranges are read in degrees; if they hold radians, convert them to \
+             degrees",
+            path.display(),
+            std::f64::consts::TAU
+        );
     }
 }
 

@@ -541,8 +541,9 @@ pub fn run(a: PlanArgs) -> Result<()> {
     let per = per_unit(measure);
     let limits = constraints(&a)?;
     let region = match &a.region {
-        Some(p) => Region::read(p, &robot)
-            .inspect(|r| super::simulate::warn_if_radian_region(p, &robot, r))?,
+        Some(p) => {
+            Region::read(p, &robot).inspect(|r| super::fk::warn_if_radian_region(p, &robot, r))?
+        }
         None => Region::limits(&robot),
     };
     // A list evaluated or chosen from is taken as given: the margin only refuses its rows.

@@ -94,7 +94,8 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         None => NonGeometric::default(),
     };
     let region = match &a.region {
-        Some(p) => Region::read(p, &nominal).inspect(|r| warn_if_radian_region(p, &nominal, r))?,
+        Some(p) => Region::read(p, &nominal)
+            .inspect(|r| super::fk::warn_if_radian_region(p, &nominal, r))?,
         None => Region::limits(&nominal),
     };
     let given = match &a.joints {
@@ -353,27 +354,5 @@ impl Given {
         m.set = text(self.set);
         m.pair = text(self.pair);
         m.extra = self.extra.iter().map(|&c| cells[c].clone()).collect();
-    }
-}
-
-/// Warns where every bound of the revolute joints' ranges of region file `path` lies within
-/// +-6.3 (a turn in radians), not all 0: the ranges read as degrees hold every joint within a
-/// few degrees, which radians typed into the file give (a reviewer's region of +-0.1 to 1
-/// drew 5 configurations within 1 deg, without a word).
-pub(super) fn warn_if_radian_region(path: &std::path::Path, robot: &Robot, region: &Region) {
-    let bounds = || {
-        (region.0.iter().zip(robot.joints()))
-            .filter(|(_, j)| j.joint_type == robocal::model::JointType::Revolute)
-            .flat_map(|(r, _)| r.map(f64::to_degrees))
-    };
-    let max = bounds().fold(0.0f64, |m, v| m.max(v.abs()));
-    if max > 0.0 && max <= std::f64::consts::TAU {
-        eprintln!(
-            "warning: {}: every revolute joint's range lies within +-{:.2} deg, one turn in \
-             radians: the ranges are read in degrees; if they hold radians, convert them to \
-             degrees",
-            path.display(),
-            std::f64::consts::TAU
-        );
     }
 }

@@ -197,15 +197,14 @@ pub struct Histograms {
 /// Bins of a histogram panel.
 const BINS: usize = 20;
 
-/// A histogram panel's bins: [`BINS`] of `width` from 0 to `hi`. The range ends at the
+/// A histogram panel's bins: [`BINS`] of equal width from 0 to `hi`. The range ends at the
 /// largest value, unless that is more than [`OUTLIER_SPAN`] times the 99th percentile (one
-/// value below the largest however few, from [`MIN_CLIPPED`] values on): one outlier of 60 mm among errors of 0.3 mm put 299 of 300 rows in the first
-/// bin. The range then ends at that percentile, the last bin also counts the values above it,
+/// value below the largest however few, from [`MIN_CLIPPED`] values on): one outlier of 60
+/// mm among errors of 0.3 mm put 299 of 300 rows in the first bin. The range then ends at that percentile, the last bin also counts the values above it,
 /// and `beyond` says how many and how far (count, largest value). Values that are not finite
 /// are not counted (errors are finite; a chart draws what it can).
 struct Bins {
     hi: f64,
-    width: f64,
     counts: [usize; BINS],
     beyond: Option<(usize, f64)>,
 }
@@ -235,12 +234,7 @@ impl Bins {
             counts[((v / width).max(0.0) as usize).min(BINS - 1)] += 1;
         }
         let beyond = clipped.then(|| (sorted.iter().filter(|&&v| v >= hi).count(), max));
-        Bins {
-            hi,
-            width,
-            counts,
-            beyond,
-        }
+        Bins { hi, counts, beyond }
     }
 }
 
@@ -253,12 +247,8 @@ impl Chart for Histograms {
         let panels = body.split_evenly((rows, k.div_ceil(rows)));
         for (k, (s, area)) in self.series.iter().zip(&panels).enumerate() {
             let col = COLOURS[k % COLOURS.len()];
-            let Bins {
-                hi,
-                width,
-                counts,
-                beyond,
-            } = Bins::of(&s.values);
+            let Bins { hi, counts, beyond } = Bins::of(&s.values);
+            let width = hi / BINS as f64;
             let top_count = counts.iter().copied().max().unwrap_or(1).max(1);
             let mut c = ChartBuilder::on(area)
                 .caption(&s.label, font(15))

@@ -100,6 +100,7 @@ pub fn error_figures(
             },
         )?);
     }
+    // Orientation errors come of single rows only: their x is the line, as `x_label` says.
     let rot = series(runs, |e| e.orientation_deg);
     if !rot.is_empty() {
         figs.push(save(
@@ -113,7 +114,7 @@ pub fn error_figures(
             &ErrorSeries {
                 title: format!("Orientation error per measurement, {what}"),
                 y_label: "orientation error (deg)".into(),
-                x_label: "line in the data file".into(),
+                x_label: x_label.into(),
                 unit: "deg".into(),
                 series: rot,
             },

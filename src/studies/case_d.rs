@@ -170,19 +170,14 @@ pub fn load(datasets: &Path, set: Robotset, nominal: &Robot) -> Result<SetData> 
     Ok(data)
 }
 
-/// The warnings of reading every set's files from `datasets` as [`run`] does: rows that
-/// repeat an earlier row to the last digit ([`crate::identify::plausibility::copied_warning`]),
-/// which count one reading twice, as `identify` and `train` warn.
-pub fn copied_warnings(datasets: &Path) -> Result<Vec<String>> {
-    let nominal = thesis::fanuc(datasets)?;
-    let mut out = Vec::new();
-    for set in Robotset::ALL {
-        let data = load(datasets, set, &nominal)?;
-        for s in [&data.calibration, &data.training, &data.test] {
-            out.extend(crate::identify::plausibility::copied_warning(s));
-        }
-    }
-    Ok(out)
+/// The warnings of a set's files as [`load`] read them: rows that repeat an earlier row to
+/// the last digit ([`crate::identify::plausibility::copied_warning`]), which count one
+/// reading twice, as `identify` and `train` warn.
+pub fn copied_warnings(data: &SetData) -> Vec<String> {
+    [&data.calibration, &data.training, &data.test]
+        .into_iter()
+        .filter_map(crate::identify::plausibility::copied_warning)
+        .collect()
 }
 
 /// Runs the protocol on one set; `opts.refine` is set per row (the parameters the model was
@@ -270,15 +265,31 @@ pub fn run_set(
     Ok(rows)
 }
 
+/// Both shipped sets' files, as [`load`] reads them.
+pub fn load_all(datasets: &Path) -> Result<Vec<(Robotset, SetData)>> {
+    let nominal = thesis::fanuc(datasets)?;
+    (Robotset::ALL.into_iter())
+        .map(|set| Ok((set, load(datasets, set, &nominal)?)))
+        .collect()
+}
+
 /// Runs the protocol on both shipped sets; the nominal robot is [`thesis::FANUC`].
 pub fn run(datasets: &Path, opts: &CompensatorOptions) -> Result<Vec<Row>> {
+    run_loaded(datasets, &load_all(datasets)?, opts)
+}
+
+/// [`run`] on the sets [`load_all`] read from `datasets`.
+pub fn run_loaded(
+    datasets: &Path,
+    sets: &[(Robotset, SetData)],
+    opts: &CompensatorOptions,
+) -> Result<Vec<Row>> {
     let nominal = thesis::fanuc(datasets)?;
     let with_masses = crate::model::read_robot(datasets.join(thesis::NONGEOMETRIC_MASSES))?;
     let mut rows = Vec::new();
-    for set in Robotset::ALL {
-        let data = load(datasets, set, &nominal)?;
-        let masses = (set == Robotset::NonGeometric).then_some(&with_masses);
-        rows.extend(run_set(&nominal, set, &data, opts, masses)?);
+    for (set, data) in sets {
+        let masses = (*set == Robotset::NonGeometric).then_some(&with_masses);
+        rows.extend(run_set(&nominal, *set, data, opts, masses)?);
     }
     Ok(rows)
 }

@@ -137,36 +137,40 @@ impl Layout {
             JointType::Revolute => angle(v),
             JointType::Prismatic => num(v),
         }));
-        let opt3 = |c: &mut Vec<String>, on: bool, v: Option<[f64; 3]>| {
+        let opt3 = |c: &mut Vec<String>, on: bool, v: Option<[String; 3]>| {
             if on {
-                match v {
-                    Some(v) => c.extend(v.map(num)),
-                    None => c.extend([String::new(), String::new(), String::new()]),
-                }
+                c.extend(v.unwrap_or_default());
             }
         };
-        opt3(&mut c, self.position, m.position.map(|p| [p.x, p.y, p.z]));
-        if self.rotation {
-            c.extend(match &m.rotation {
-                Some(r) if read => rotation_cells(r),
-                Some(r) => rotation_to_zyx(r).map(|a| number_cell(a.to_degrees())),
-                None => Default::default(),
-            });
-        }
+        opt3(
+            &mut c,
+            self.position,
+            m.position.map(|p| [p.x, p.y, p.z].map(num)),
+        );
+        opt3(
+            &mut c,
+            self.rotation,
+            m.rotation.map(|r| {
+                if read {
+                    rotation_cells(&r)
+                } else {
+                    rotation_to_zyx(&r).map(angle)
+                }
+            }),
+        );
         if self.distance {
             c.push(m.distance.map(num).unwrap_or_default());
         }
         opt3(
             &mut c,
             self.sigma_position,
-            m.sigma_position.map(|s| [s.x, s.y, s.z]),
+            m.sigma_position.map(|s| [s.x, s.y, s.z].map(num)),
         );
-        if self.sigma_rotation {
-            c.extend(match &m.sigma_rotation {
-                Some(s) => [s.x, s.y, s.z].map(angle),
-                None => Default::default(),
-            });
-        }
+        opt3(
+            &mut c,
+            self.sigma_rotation,
+            m.sigma_rotation.map(|s| [s.x, s.y, s.z].map(angle)),
+        );
         c.extend(m.extra.iter().cloned());
         c
     }
