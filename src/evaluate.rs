@@ -11,6 +11,7 @@
 //! given the truth file: say which one a figure uses.
 
 use crate::data::MeasurementSet;
+use crate::data::measurement::list_lines;
 use crate::data::pairs::{Pair, distance, pairs};
 use crate::error::Result;
 use crate::geometry::rotation::angle_between;
@@ -306,22 +307,112 @@ pub fn misplaced_median(robot: &Robot, set: &MeasurementSet) -> Option<(f64, usi
     (!errors.is_empty() && median > MISPLACED_MEDIAN_MM).then_some((median, errors.len()))
 }
 
-/// The warning `evaluate` and `train` give where [`misplaced_median`] finds the model `robot`
-/// (named so) far off the rows of `set`.
+/// Fewer rows than this fraction within [`MISPLACED_MEDIAN_MM`] make a model misplaced
+/// ([`Misfit::Misplaced`]); from it on, the rows beyond are the set's, not the model's
+/// ([`Misfit::FarRows`]). A quarter, not a half: a model in another frame can still pass near
+/// a few rows, and a set whose every other row is off (two set-ups mixed) holds half its rows
+/// that fit, which the median alone called "not a model of this robot".
+pub const MISPLACED_FIT_FRACTION: f64 = 0.25;
+
+/// How a model misses a set's rows by more than [`MISPLACED_MEDIAN_MM`] ([`misfit`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Misfit {
+    /// Most rows are missed by more (fewer than [`MISPLACED_FIT_FRACTION`] of them fit): the
+    /// model is not one of the robot in the rows' frame.
+    Misplaced {
+        /// Median position error (mm) over the rows with a position.
+        median_mm: f64,
+        /// Rows with a position.
+        rows: usize,
+    },
+    /// The model fits the other rows but misses these by more: rows of another set-up, tool
+    /// or robot mixed in, or mis-measured.
+    FarRows {
+        /// The far rows: (file line, 0 for a row built in code; row index), in file order.
+        far: Vec<(usize, usize)>,
+        /// Rows with a position.
+        rows: usize,
+        /// Median position error (mm) of the other rows.
+        near_median_mm: f64,
+    },
+}
+
+/// Whether `robot` misses rows of `set` by more than [`MISPLACED_MEDIAN_MM`] in position, and
+/// how ([`Misfit`]); None where it misses none so (or the set has no positions).
+pub fn misfit(robot: &Robot, set: &MeasurementSet) -> Option<Misfit> {
+    let errors: Vec<(usize, f64)> = (set.rows.iter().enumerate())
+        .filter_map(|(i, m)| {
+            Some((
+                i,
+                (m.position? - tool_pose(robot, &m.q).translation.vector).norm(),
+            ))
+        })
+        .collect();
+    // A NaN error (joints the model cannot place) is not a distance: it counts as far.
+    let far = |e: f64| e.is_nan() || e > MISPLACED_MEDIAN_MM;
+    let near: Vec<f64> = errors.iter().map(|e| e.1).filter(|&e| !far(e)).collect();
+    if near.len() == errors.len() {
+        return None;
+    }
+    let rows = errors.len();
+    if (near.len() as f64) < MISPLACED_FIT_FRACTION * rows as f64 {
+        let all: Vec<f64> = errors.iter().map(|e| e.1).collect();
+        return Some(Misfit::Misplaced {
+            median_mm: crate::stats::median(&all),
+            rows,
+        });
+    }
+    Some(Misfit::FarRows {
+        far: (errors.iter().filter(|e| far(e.1)))
+            .map(|&(i, _)| (set.rows[i].line, i))
+            .collect(),
+        rows,
+        near_median_mm: crate::stats::median(&near),
+    })
+}
+
+/// The warning `evaluate` and `train` give where [`misfit`] finds that the model `robot`
+/// (named so) misses rows of `set` by more than [`MISPLACED_MEDIAN_MM`], and the misfit.
 pub fn misplaced_model_warning(
     robot_name: &str,
     robot: &Robot,
     set: &MeasurementSet,
-) -> Option<String> {
-    let (median, n) = misplaced_median(robot, set)?;
-    Some(format!(
-        "{robot_name} misses the positions of {} by {median:.1} mm (median over {n} rows), \
-         more than {MISPLACED_MEDIAN_MM} mm, ten times what a nominal model misses by: it is \
-         not a model of this robot in the rows' frame. Is it this robot's file, does it carry \
-         the tool (the reflector's offset), and are the rows in its base frame (a model \
-         identified with the base selected registers the tracker's frame)?",
-        set.source.display()
-    ))
+) -> Option<(String, Misfit)> {
+    let found = misfit(robot, set)?;
+    let text = match &found {
+        Misfit::Misplaced { median_mm, rows } => format!(
+            "{robot_name} misses the positions of {} by {median_mm:.1} mm (median over {rows} \
+             rows), more than {MISPLACED_MEDIAN_MM} mm, ten times what a nominal model misses \
+             by: it is not a model of this robot in the rows' frame. Is it this robot's file, \
+             does it carry the tool (the reflector's offset), and are the rows in its base \
+             frame (a model identified with the base selected registers the tracker's frame)?",
+            set.source.display()
+        ),
+        Misfit::FarRows {
+            far,
+            rows,
+            near_median_mm,
+        } => {
+            let which = if far.iter().all(|f| f.0 > 0) {
+                let lines: Vec<usize> = far.iter().map(|f| f.0).collect();
+                format!("lines {}", list_lines(&lines))
+            } else {
+                let rows: Vec<usize> = far.iter().map(|f| f.1 + 1).collect();
+                format!("rows {}", list_lines(&rows))
+            };
+            format!(
+                "{robot_name} misses {} of the {rows} rows of {} with a position by more than \
+                 {MISPLACED_MEDIAN_MM} mm ({which}), and the other {} by {near_median_mm:.1} mm \
+                 (median): those rows are not readings of their joints in the frame the others \
+                 share (another set-up, tool or robot mixed in, or mis-measured); fix or remove \
+                 them",
+                far.len(),
+                set.source.display(),
+                rows - far.len()
+            )
+        }
+    };
+    Some((text, found))
 }
 
 /// Statistics of a kinematic model on a set.
@@ -335,6 +426,74 @@ pub fn evaluate_model(robot: &Robot, set: &MeasurementSet, measure: Measure) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A set of `n` rows of the FANUC's model at seeded joints, row k moved `shift(k)` mm along
+    /// x, read from lines 2.. of a file.
+    fn moved_rows(n: usize, shift: impl Fn(usize) -> f64) -> (Robot, MeasurementSet) {
+        use rand::{Rng, SeedableRng};
+        let robot = crate::model::test_fanuc();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let rows = (0..n)
+            .map(|k| {
+                let q: Vec<f64> = (0..6).map(|_| rng.random_range(-1.0..1.0)).collect();
+                let mut m = crate::data::Measurement::new(q);
+                let p = tool_pose(&robot, &m.q).translation.vector;
+                m.position = Some(p + nalgebra::Vector3::new(0.5 + shift(k), 0.0, 0.0));
+                m.line = k + 2;
+                m
+            })
+            .collect();
+        (robot, MeasurementSet::from_rows(rows))
+    }
+
+    #[test]
+    fn a_model_off_most_rows_is_misplaced_and_rows_off_a_fitting_model_are_named() {
+        // Every row 0.5 mm off: nothing to say.
+        let (robot, set) = moved_rows(40, |_| 0.0);
+        assert_eq!(misfit(&robot, &set), None);
+        // One row 100.5 mm off, or every other row 500 mm: those rows, by line; the others'
+        // median is theirs alone (0.5 mm). The median of all had called the second a
+        // misplaced model.
+        for (every, far) in [(40, vec![2]), (2, (2..42).step_by(2).collect::<Vec<_>>())] {
+            let (robot, set) = moved_rows(40, |k| if k % every == 0 { 100.0 } else { 0.0 });
+            let lines = |f: &[(usize, usize)]| f.iter().map(|r| r.0).collect::<Vec<_>>();
+            match misfit(&robot, &set) {
+                Some(Misfit::FarRows {
+                    far: f,
+                    rows: 40,
+                    near_median_mm,
+                }) => {
+                    assert_eq!(lines(&f), far);
+                    assert!((near_median_mm - 0.5).abs() < 1e-9, "{near_median_mm}");
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+        // 100 mm itself is not beyond.
+        let (robot, set) = moved_rows(40, |k| if k == 3 { 99.5 } else { 0.0 });
+        assert_eq!(misfit(&robot, &set), None);
+        // Fewer than a quarter of the rows fit (9 of 40): misplaced, by the median of all.
+        let (robot, set) = moved_rows(40, |k| if k < 31 { 1000.0 } else { 0.0 });
+        match misfit(&robot, &set) {
+            Some(Misfit::Misplaced {
+                median_mm,
+                rows: 40,
+            }) => {
+                assert!((median_mm - 1000.5).abs() < 1e-9, "{median_mm}")
+            }
+            other => panic!("{other:?}"),
+        }
+        // A quarter fits (10 of 40): the rows beyond are named.
+        let (robot, set) = moved_rows(40, |k| if k < 30 { 1000.0 } else { 0.0 });
+        assert!(
+            matches!(misfit(&robot, &set), Some(Misfit::FarRows { ref far, .. }) if far.len() == 30)
+        );
+        let (w, _) = misplaced_model_warning("m.toml", &robot, &set).unwrap();
+        assert!(
+            w.contains("misses 30 of the 40 rows of") && w.contains("(lines 2, 3, 4,"),
+            "{w}"
+        );
+    }
 
     #[test]
     fn a_summary_of_a_nan_is_nan_throughout() {

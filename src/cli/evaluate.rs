@@ -9,9 +9,7 @@ use super::summary::{
 use anyhow::Result;
 use clap::Args;
 use robocal::data::shared_readings::rows_checked;
-use robocal::evaluate::{
-    misplaced_median, misplaced_model_warning, row_errors, summarize, worst_rows,
-};
+use robocal::evaluate::{Misfit, misplaced_model_warning, row_errors, summarize, worst_rows};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
 use robocal::model::read_robot;
@@ -229,32 +227,40 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     // Measures of single rows only: a pair's displacement or length does not see the frame.
     // With a compensator, said where the model it runs (refined or not) misses too.
     let single_rows = matches!(m, Measure::Pose | Measure::Position);
-    let embedded_off = single_rows
-        && comp
-            .as_ref()
-            .is_some_and(|c| misplaced_median(&c.robot, &set).is_some());
+    let mut embedded_off = false;
     if single_rows {
-        if let Some(w) = misplaced_model_warning(&a.robot.display().to_string(), &robot, &set)
-            && (comp.is_none() || embedded_off)
-        {
-            warnings.say(w);
-        } else if embedded_off
-            && let (Some(c), Some(path)) = (&comp, &a.compensator)
-            && let Some(w) = misplaced_model_warning(
-                &format!("the model embedded in {}", path.display()),
-                &c.robot,
-                &set,
-            )
-        {
+        let file_name = a.robot.display().to_string();
+        let file = misplaced_model_warning(&file_name, &robot, &set);
+        // With a compensator, the model it runs (refined or not) is the one that counts.
+        let embedded = comp
+            .as_ref()
+            .zip(a.compensator.as_ref())
+            .and_then(|(c, path)| {
+                let name = format!("the model embedded in {}", path.display());
+                misplaced_model_warning(&name, &c.robot, &set)
+            });
+        embedded_off = embedded.is_some();
+        let said = match (&comp, file, embedded) {
+            (None, file, _) => file.map(|f| f.0),
+            (Some(_), _, None) => None,
+            // Both off the rows alike: the robot file is the one to look at.
+            (Some(_), Some((w, Misfit::Misplaced { .. })), Some((_, Misfit::Misplaced { .. })))
+            | (Some(_), Some((w, Misfit::FarRows { .. })), Some((_, Misfit::FarRows { .. }))) => {
+                Some(w)
+            }
             // The robot file fits the rows, the compensator's own model does not: trained in
             // another frame (another tracker set-up) or with another tool. A reviewer's
             // compensator trained on Series B, evaluated on Series A rows: 3.5 m off, and only
             // the note that it runs its own model.
-            warnings.say(format!(
+            (Some(_), _, Some((w, Misfit::Misplaced { .. }))) => Some(format!(
                 "{w} (The compensator runs in series with its own model, not with {}: train it \
                  on rows in this frame.)",
                 a.robot.display()
-            ));
+            )),
+            (Some(_), _, Some((w, Misfit::FarRows { .. }))) => Some(w),
+        };
+        if let Some(w) = said {
+            warnings.say(w);
         }
     }
     for row in report.accuracy.iter().filter(|r| r.data == "data") {
@@ -270,8 +276,8 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     if let Some(w) = &report.worst_rows {
         print_worst("data", "the model", m, w);
     }
-    // Not where the compensator's own model misses the rows by metres (said above): its
-    // figures then say nothing of the network.
+    // Not where the compensator's own model misses rows by more than a misplaced model
+    // would (said above): those rows' errors then make the figures, not the network.
     let suspects: Vec<usize> = report.shared_readings.iter().map(|r| r.line).collect();
     if let Some(w) = (net_rows.as_deref())
         .filter(|_| !embedded_off)

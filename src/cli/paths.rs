@@ -47,6 +47,20 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
         if !dir.exists() {
             robocal::io::create_dir_all(dir)?;
         }
+        // A folder under a name a picture may take is found now, not after the work (which
+        // then stopped on "is a folder", without naming the flag).
+        for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+            let name = entry.file_name().to_string_lossy().to_ascii_lowercase();
+            let picture = name.ends_with(".png") || name.ends_with(".svg") || name == PLOT_LIST;
+            if picture && entry.path().is_dir() {
+                bail!(
+                    "{flag} {}: {} is a folder, under a name its pictures may take (*.png, \
+                     *.svg, {PLOT_LIST}): remove it or choose another folder",
+                    dir.display(),
+                    entry.path().display()
+                );
+            }
+        }
     }
     // Where each output file lands, through its links (a link elsewhere to a picture's name
     // in a `--plot` folder clashes; a link in the folder to a file elsewhere does not).
@@ -101,6 +115,27 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
             bail!(
                 "{flag} {}: the folder {} {}",
                 path.display(),
+                parent.display(),
+                if parent.exists() {
+                    "is a file, not a folder"
+                } else {
+                    "does not exist"
+                }
+            );
+        }
+        // A link to a file whose folder does not exist: found now too, and said as such
+        // (the write had failed after the work with "No such file or directory" alone).
+        if !folder
+            && let Some(target) = robocal::io::output_file(path)
+            && target != *path
+            && let Some(parent) = target.parent()
+            && !parent.as_os_str().is_empty()
+            && !parent.is_dir()
+        {
+            bail!(
+                "{flag} {} is a link to {}, whose folder {} {}",
+                path.display(),
+                target.display(),
                 parent.display(),
                 if parent.exists() {
                     "is a file, not a folder"
@@ -270,6 +305,46 @@ mod tests {
                 .unwrap_err()
                 .to_string();
             assert!(e.contains("name the same file"), "{e}");
+            // A link to a file in a folder that does not exist (or is a file): refused before
+            // the work, the flag and the link named.
+            let dangling = dir.path().join("dangling.rcal");
+            std::os::unix::fs::symlink("gone/x.rcal", &dangling).unwrap();
+            let e = guard(&[], &[req("--out", &dangling)])
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.starts_with("--out ")
+                    && e.contains("is a link to")
+                    && e.contains("gone/x.rcal, whose folder")
+                    && e.ends_with("gone does not exist"),
+                "{e}"
+            );
+            let into_file = dir.path().join("into_file.rcal");
+            std::os::unix::fs::symlink("later.csv/x.rcal", &into_file).unwrap();
+            std::fs::write(dir.path().join("later.csv"), "x\n").unwrap();
+            let e = guard(&[], &[req("--report", &into_file)])
+                .unwrap_err()
+                .to_string();
+            assert!(e.ends_with("is a file, not a folder"), "{e}");
+            // A link to a file not there yet in a folder that is: fine.
+            assert!(guard(&[], &[req("--out", &link)]).is_ok());
+        }
+        // A folder in the `--plot` folder under a picture's or the list's name: refused
+        // before the work, naming the flag (upper case too).
+        for name in ["identify_position.png", "a.SVG", "figures.json"] {
+            let plots = dir.path().join(format!("plots_{name}"));
+            std::fs::create_dir_all(plots.join(name)).unwrap();
+            let e = guard(&[], &[req("--plot", &plots)])
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.starts_with("--plot ") && e.contains(&format!("{name} is a folder")),
+                "{e}"
+            );
+            // A folder under another name is no picture's.
+            std::fs::remove_dir(plots.join(name)).unwrap();
+            std::fs::create_dir_all(plots.join("old_runs")).unwrap();
+            assert!(guard(&[], &[req("--plot", &plots)]).is_ok());
         }
     }
 }
