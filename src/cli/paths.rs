@@ -20,6 +20,20 @@ fn resolved(p: &Path) -> Option<PathBuf> {
     Some(dir.canonicalize().ok()?.join(name))
 }
 
+/// "F does not exist" or "F is a file, not a folder" where a file cannot be written into the
+/// folder `parent` (None for the current folder or a folder that is there).
+fn unwritable_folder(parent: &Path) -> Option<String> {
+    if parent.as_os_str().is_empty() || parent.is_dir() {
+        return None;
+    }
+    let why = if parent.exists() {
+        "is a file, not a folder"
+    } else {
+        "does not exist"
+    };
+    Some(format!("{} {why}", parent.display()))
+}
+
 /// A flag and its path; None for an optional path not given.
 pub type Named<'a> = Option<(&'a str, &'a Path)>;
 
@@ -106,43 +120,22 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
             bail!("{flag} {} is a folder: give a file path", path.display());
         }
         // Found now, not after the work: the file is written into an existing folder (a
-        // `--plot` folder is made above).
-        if !folder
-            && let Some(parent) = path.parent()
-            && !parent.as_os_str().is_empty()
-            && !parent.is_dir()
-        {
-            bail!(
-                "{flag} {}: the folder {} {}",
-                path.display(),
-                parent.display(),
-                if parent.exists() {
-                    "is a file, not a folder"
-                } else {
-                    "does not exist"
-                }
-            );
-        }
-        // A link to a file whose folder does not exist: found now too, and said as such
-        // (the write had failed after the work with "No such file or directory" alone).
-        if !folder
-            && let Some(target) = robocal::io::output_file(path)
-            && target != *path
-            && let Some(parent) = target.parent()
-            && !parent.as_os_str().is_empty()
-            && !parent.is_dir()
-        {
-            bail!(
-                "{flag} {} is a link to {}, whose folder {} {}",
-                path.display(),
-                target.display(),
-                parent.display(),
-                if parent.exists() {
-                    "is a file, not a folder"
-                } else {
-                    "does not exist"
-                }
-            );
+        // `--plot` folder is made above), also through a link (the write had failed after
+        // the work with "No such file or directory" alone).
+        if !folder {
+            if let Some(why) = path.parent().and_then(unwritable_folder) {
+                bail!("{flag} {}: the folder {why}", path.display());
+            }
+            if let Some(target) = robocal::io::output_file(path)
+                && target != *path
+                && let Some(why) = target.parent().and_then(unwritable_folder)
+            {
+                bail!(
+                    "{flag} {} is a link to {}, whose folder {why}",
+                    path.display(),
+                    target.display()
+                );
+            }
         }
         // Where the write lands, through its links (also to a file not there yet). None for
         // a device or a pipe (`/dev/null`, `/dev/stdout`), which takes every output given
