@@ -72,6 +72,30 @@ fn fk_batch_carries_columns_and_ik_batch_round_trips() {
             assert!((x - y).abs() < 1e-6, "row {r}: {a:?} vs {b:?}");
         }
     }
+    // The IK output fed to IK again: its solutions are the seeds now, and its own seeds are
+    // carried as input_seed_q1.. (they were refused as a column written twice).
+    let o = robocal(&["ik", "--robot", FANUC, "--poses", ik_out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let again = stdout(&o);
+    let header: Vec<&str> = again.lines().next().unwrap().split(',').collect();
+    assert_eq!(&header[..3], ["id", "input_seed_q1", "input_seed_q2"]);
+    let at = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    assert!(
+        at("input_seed_q6") < at("seed_q1") && at("seed_q1") < at("q1"),
+        "{header:?}"
+    );
+    let rows: Vec<Vec<&str>> = again
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    for (r, row) in rows.iter().enumerate() {
+        for i in 1..=6 {
+            let seed: f64 = row[at(&format!("seed_q{i}"))].parse().unwrap();
+            let was: f64 = t.rows[r][sol[i - 1]].parse().unwrap();
+            assert_eq!(seed, was, "row {r}: q{i} read as the seed");
+        }
+    }
 }
 
 #[test]
@@ -93,6 +117,37 @@ fn ik_all_solutions_as_json() {
         rows.iter()
             .all(|r| r["status"] == "ok" && r["q1"].is_number())
     );
+}
+
+/// Joints of four turns each way give the UR10 more than 10,000 solutions of a pose: `--all`
+/// fails as too many, and says so without calling the pose unsolvable ("no solution for the
+/// pose: too-many", before); one solution is still found.
+#[test]
+fn ik_all_with_too_many_solutions_says_so() {
+    let ur10 = std::fs::read_to_string(common::root().join("datasets/robots/ur10.toml")).unwrap();
+    let wide = tmp("ur10_wide.toml");
+    std::fs::write(
+        &wide,
+        ur10.replace("limits = [-360.0, 360.0]", "limits = [-1440.0, 1440.0]"),
+    )
+    .unwrap();
+    let pose = ["--pose", "-402.7,-520.9,1162.1,-120,15,-95"];
+    let args = |all: bool| {
+        let mut v = vec!["ik", "--robot", wide.to_str().unwrap()];
+        v.extend(pose);
+        v.extend(all.then_some("--all"));
+        v
+    };
+    let o = robocal(&args(true));
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(
+        err.contains("the pose is not solved: too-many: more than 10000 solutions")
+            && !err.contains("no solution"),
+        "{err}"
+    );
+    let o = robocal(&args(false));
+    assert!(o.status.success(), "{}", stderr(&o));
 }
 
 #[test]

@@ -453,6 +453,60 @@ fn radians_of_a_joint_wider_than_a_turn_warn() {
                 stderr(&o)
             );
         }
+        // The last row as --seed or --q on the command line (`compensate` reads it with the
+        // nominal FANUC's +-180 deg, where 6.5 is no radian), and the file as the
+        // configurations `plan` evaluates or chooses from: the same rule (they went without a
+        // word).
+        let first = body.lines().last().unwrap();
+        let j = joints.to_str().unwrap();
+        let planned = tmp(&format!("wide_{warns}_planned.csv"));
+        let planned = planned.to_str().unwrap();
+        let pose = ["--pose", "1842,0,1652,0,90,0", "--seed", first];
+        for args in [
+            [&["ik", "--robot", robot][..], &pose].concat(),
+            [
+                &[
+                    "compensate",
+                    "--nominal",
+                    FANUC,
+                    "--robot",
+                    robot,
+                    "--targets",
+                    t,
+                ],
+                &pose[2..],
+            ]
+            .concat(),
+            vec!["fk", "--robot", robot, "--q", first],
+            vec![
+                "plan",
+                "--robot",
+                robot,
+                "--evaluate",
+                j,
+                "--validation",
+                "20",
+            ],
+            vec![
+                "plan",
+                "--robot",
+                robot,
+                "--candidates",
+                j,
+                "--count",
+                "2",
+                "--out",
+                planned,
+            ],
+        ] {
+            let o = robocal(&args);
+            assert_eq!(
+                stderr(&o).contains("every joint angle lies within +-6.28, one turn in radians"),
+                warns,
+                "{args:?}: {}",
+                stderr(&o)
+            );
+        }
     }
 }
 

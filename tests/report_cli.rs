@@ -424,3 +424,41 @@ fn report_refuses_pictures_that_are_not_whole_pngs() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// Pictures copied into a run folder without the figure list that names them (or beside it)
+/// are not on the page, which shows a picture with the title and caption its list gives:
+/// `report` names them in a warning (it had said "0 figure(s)" and nothing else).
+#[test]
+fn report_names_the_pictures_its_list_leaves_out() {
+    let dir = run_dir("unlisted");
+    let page = dir.join("page.html");
+    let report = || {
+        robocal(&[
+            "report",
+            dir.to_str().unwrap(),
+            "--out",
+            page.to_str().unwrap(),
+        ])
+    };
+    let o = report();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("does not list"), "{}", stderr(&o));
+    let png = dir.join("identify_calibration_position.png");
+    std::fs::copy(&png, dir.join("extra.png")).unwrap();
+    std::fs::copy(&png, dir.join("old.SVG")).unwrap();
+    let o = report();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let said =
+        "2 picture(s) that figures.json does not list are not on the page: extra.png, old.SVG";
+    assert!(stderr(&o).contains(said), "{}", stderr(&o));
+    // Without the list, every picture is named (8 drawn as PNG and SVG, and the two copies;
+    // the report is still shown).
+    std::fs::remove_file(dir.join("figures.json")).unwrap();
+    let o = report();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("18 picture(s) that figures.json does not list"),
+        "{}",
+        stderr(&o)
+    );
+}

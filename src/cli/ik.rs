@@ -175,11 +175,12 @@ pub fn run(a: IkArgs) -> Result<bool> {
     bar.finish_and_clear();
     if a.pose.is_some() {
         if let Some((_, why)) = failed.first() {
-            bail!("no solution for the pose: {why}");
+            // Not "no solution": too many (--all on limits of many turns) is a failure too.
+            bail!("the pose is not solved: {why}");
         }
     } else if !failed.is_empty() {
         eprintln!(
-            "warning: {} of {} poses have no solution (marked in the status column):",
+            "warning: {} of {} poses are not solved (marked in the status column):",
             failed.len(),
             rows.len()
         );

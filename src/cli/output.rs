@@ -107,6 +107,20 @@ pub fn joints_arg(robot: &robocal::model::Robot, s: &str, what: &str) -> Result<
             );
         }
     }
+    // As a joint file's columns are checked (`fk::warn_if_radians`): a seed typed in radians
+    // solves for another branch, or each target's orientation at the wrong joints, without
+    // a word. One vector typed by hand is less evidence than a file's rows: whole numbers
+    // (`--q 1,2,3,4,5,6`) are taken for degrees, as radians are seldom typed so.
+    if robocal::data::joints::look_like_radians(robot, std::iter::once(q.as_slice()))
+        && q.iter().any(|v| v.fract() != 0.0)
+    {
+        eprintln!(
+            "warning: {what}: every joint angle lies within +-{:.2}, one turn in radians (or \
+             its joint's range in radians, where that is wider): the values are read in \
+             degrees; if they hold radians, convert them to degrees",
+            std::f64::consts::TAU
+        );
+    }
     Ok(q)
 }
 

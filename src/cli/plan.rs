@@ -167,6 +167,7 @@ fn configurations(path: &PathBuf, robot: &Robot) -> Result<(Vec<Vec<f64>>, Joint
     if t.joints.is_empty() {
         bail!("{}: no rows", path.display());
     }
+    super::fk::warn_if_radians(path, robot, &t);
     Ok((
         (0..t.joints.len()).map(|r| t.internal(r, robot)).collect(),
         t,

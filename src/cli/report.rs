@@ -51,5 +51,22 @@ pub fn run(a: ReportArgs) -> Result<()> {
     let html = robocal::reports::html::render(&a.run_dir)?;
     super::output::writing(robocal::io::write_atomic(&a.out, html.as_bytes()), &a.out)?;
     told_after!("wrote {} ({} kB)", a.out.display(), html.len() / 1024);
+    // Pictures copied into the folder without their list: left out of the page, by name.
+    let unlisted = robocal::reports::html::unlisted_pictures(&a.run_dir)?;
+    if !unlisted.is_empty() {
+        let mut names: Vec<String> = unlisted.iter().take(20).cloned().collect();
+        if unlisted.len() > 20 {
+            names.push(format!("... ({} more)", unlisted.len() - 20));
+        }
+        eprintln!(
+            "warning: {}: {} picture(s) that {} does not list are not on the page: {} (the \
+             page shows the pictures a command listed there, with their titles and captions; \
+             copy the list with them, or draw them into this folder with --plot)",
+            a.run_dir.display(),
+            unlisted.len(),
+            robocal::plot::MANIFEST,
+            names.join(", ")
+        );
+    }
     Ok(())
 }

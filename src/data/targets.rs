@@ -165,18 +165,26 @@ impl TargetTable {
 
     /// The output's header: the carried columns (seed columns renamed seed_q1..seed_qN),
     /// then `written` (see [`output_headers`]).
+    /// A previous output fed back in carries seed_q1.. of its own beside the q1.. it solved,
+    /// which are now the seeds: its own are kept as `input_seed_q1`.. (as a carried column
+    /// whose name is written is).
     pub fn output_headers(&self, written: &[String]) -> Result<Vec<String>> {
         let qcols = joint_columns(self.dof);
-        let carried = self
-            .table
-            .headers
-            .iter()
-            .map(|h| {
-                if self.with_seeds && qcols.contains(h) {
-                    format!("seed_{h}")
-                } else {
-                    h.clone()
+        let headers = &self.table.headers;
+        let seed = |h: &String| (self.with_seeds && qcols.contains(h)).then(|| format!("seed_{h}"));
+        let seeds: Vec<String> = headers.iter().filter_map(seed).collect();
+        let taken = |n: &String| headers.contains(n) || seeds.contains(n) || written.contains(n);
+        let carried = (headers.iter())
+            .map(|h| match seed(h) {
+                Some(s) => s,
+                None if seeds.contains(h) => {
+                    let mut name = format!("input_{h}");
+                    while taken(&name) {
+                        name = format!("input_{name}");
+                    }
+                    name
                 }
+                None => h.clone(),
             })
             .collect();
         output_headers(&self.table, carried, written)

@@ -15,7 +15,7 @@
 //! - A dropped column's regrouping: the least-squares combination of kept columns that
 //!   reproduces it, in parameter units (`theta_R = 1.000 theta1`).
 
-use super::problem::{IdentifyWorkspace, Observations, observation_r};
+use super::problem::{IdentifyWorkspace, Observations, for_each_block, observation_r};
 use crate::model::Robot;
 use nalgebra::{DMatrix, DVector};
 
@@ -93,6 +93,19 @@ fn condition_of(ncols: usize, sv: &DVector<f64>) -> (Vec<f64>, f64) {
     (s, cond)
 }
 
+/// The longest column of the weighted observation matrix Phi_w (eq. 4.41) over every
+/// parameter of `robot`: the scale against which a candidate's column is zero ([`ZERO_TOL`]).
+fn longest_column(robot: &Robot, obs: &Observations, ws: &mut IdentifyWorkspace) -> f64 {
+    let all: Vec<usize> = (0..robot.parameters().len()).collect();
+    let mut squares = vec![0.0; all.len()];
+    for_each_block(robot, obs, Some(&all), ws, |jb, _, rows| {
+        for (j, s) in squares.iter_mut().enumerate() {
+            *s += jb.column(j).rows(0, rows).norm_squared();
+        }
+    });
+    squares.into_iter().fold(0.0, f64::max).sqrt()
+}
+
 /// Analyses the candidate parameters (indices into `Robot::parameters`, in priority order).
 /// A candidate joins the identifiable subset when the sine of the angle between its scaled
 /// column and the span of those kept before it exceeds `tolerance` ([`RANK_TOL`] for plain
@@ -117,7 +130,14 @@ pub fn analyse_with(
     let r = observation_r(robot, obs, candidates, &mut ws);
     let k = candidates.len();
     let norms: Vec<f64> = (0..k).map(|j| r.column(j).norm()).collect();
-    let max_norm = norms.iter().cloned().fold(0.0, f64::max);
+    // Zero against the longest column of every parameter of the model, not of the candidates
+    // alone: where none of them has an effect (the base under the distance measure), their
+    // columns are rounding noise, and against each other that noise looked identifiable (a
+    // reviewer's plan predicted 1e14 mm, identify moved the base by degrees at 1e15 deg std).
+    let max_norm = norms
+        .iter()
+        .cloned()
+        .fold(longest_column(robot, obs, &mut ws), f64::max);
     let nonzero: Vec<usize> = (0..k)
         .filter(|&j| norms[j] > ZERO_TOL * max_norm && max_norm > 0.0)
         .collect();

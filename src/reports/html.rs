@@ -373,6 +373,27 @@ vertical-align:top}table.records{display:block;overflow-x:auto}td{font-variant-n
 figure{margin:1.5em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption{font-size:.9em;\
 color:#444;margin-top:.3em}.file,.note{color:#777;font-size:.85em}";
 
+/// The pictures (`*.png`, `*.svg`, any letter case) in run folder `dir` that its figure list
+/// does not name, by name: the page leaves them out (it shows a picture with the title and
+/// caption its list gives), and `report` says so rather than drop them silently.
+pub fn unlisted_pictures(dir: &Path) -> Result<Vec<String>> {
+    let listed: Vec<String> = (crate::plot::read_manifest(dir)?.into_iter())
+        .flat_map(|f| [f.png, f.svg])
+        .collect();
+    let mut unlisted: Vec<String> = std::fs::read_dir(dir)
+        .map_err(|e| Error::io(dir, e))?
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().is_file())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| {
+            let lower = n.to_ascii_lowercase();
+            (lower.ends_with(".png") || lower.ends_with(".svg")) && !listed.contains(n)
+        })
+        .collect();
+    unlisted.sort();
+    Ok(unlisted)
+}
+
 /// The page for run folder `dir`: every `*.json` report (but `figures.json`) and every
 /// listed picture. An empty folder is an error.
 pub fn render(dir: &Path) -> Result<String> {
