@@ -18,6 +18,7 @@ use crate::geometry::rotation::angle_between;
 use crate::identify::problem::Measure;
 use crate::kinematics::{Pose, tool_pose};
 use crate::model::Robot;
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 /// Mean, RMS, 95th percentile and max of a list of errors.
@@ -314,19 +315,43 @@ pub fn misplaced_median(robot: &Robot, set: &MeasurementSet) -> Option<(f64, usi
 /// that fit, which the median alone called "not a model of this robot".
 pub const MISPLACED_FIT_FRACTION: f64 = 0.25;
 
+/// Largest position error (mm) of every row after one rigid motion of the rows' frame under
+/// which a model that misses some rows by more than [`MISPLACED_MEDIAN_MM`] is in a turned
+/// frame ([`Misfit::Frame`]): twice what a nominal model misses by. Not the 100 mm itself: a
+/// least-squares motion spreads one row 100.5 mm off over the others, and brought it to 93.
+/// Also the median error within which the rows a model fits make the others the rows' own
+/// ([`Misfit::FarRows`]).
+pub const FRAME_FIT_MM: f64 = 20.0;
+
 /// How a model misses a set's rows by more than [`MISPLACED_MEDIAN_MM`] ([`misfit`]).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Misfit {
-    /// Most rows are missed by more (fewer than [`MISPLACED_FIT_FRACTION`] of them fit): the
-    /// model is not one of the robot in the rows' frame.
+    /// Most rows are missed by more (fewer than [`MISPLACED_FIT_FRACTION`] of them fit), or
+    /// the rows that fit are missed by more than [`FRAME_FIT_MM`] too (median): the model is
+    /// not one of the robot in the rows' frame.
     Misplaced {
         /// Median position error (mm) over the rows with a position.
         median_mm: f64,
+        /// Rows missed by more than [`MISPLACED_MEDIAN_MM`].
+        far: usize,
         /// Rows with a position.
         rows: usize,
     },
-    /// The model fits the other rows but misses these by more: rows of another set-up, tool
-    /// or robot mixed in, or mis-measured.
+    /// The model misses some rows by more, but one rigid motion of the rows' frame brings
+    /// every row within [`FRAME_FIT_MM`]: a frame turned against the model's (which misses
+    /// the far-reaching rows most), not rows of their own.
+    Frame {
+        /// Rows missed by more than [`MISPLACED_MEDIAN_MM`].
+        far: usize,
+        /// Rows with a position.
+        rows: usize,
+        /// Largest position error (mm) after the rigid motion (Kabsch, least squares).
+        registered_max_mm: f64,
+    },
+    /// The model fits the other rows (their median error within [`FRAME_FIT_MM`]) but misses
+    /// these by more than [`MISPLACED_MEDIAN_MM`], and no rigid motion of the frame fits every
+    /// row within [`FRAME_FIT_MM`]: rows of another set-up, tool or robot mixed in, or
+    /// mis-measured.
     FarRows {
         /// The far rows: (file line, 0 for a row built in code; row index), in file order.
         far: Vec<(usize, usize)>,
@@ -335,6 +360,13 @@ pub enum Misfit {
         /// Median position error (mm) of the other rows.
         near_median_mm: f64,
     },
+}
+
+impl Misfit {
+    /// Whether the model, not some of the rows, is off: misplaced, or in a turned frame.
+    pub fn is_the_model(&self) -> bool {
+        !matches!(self, Misfit::FarRows { .. })
+    }
 }
 
 /// Whether `robot` misses rows of `set` by more than [`MISPLACED_MEDIAN_MM`] in position, and
@@ -355,19 +387,53 @@ pub fn misfit(robot: &Robot, set: &MeasurementSet) -> Option<Misfit> {
         return None;
     }
     let rows = errors.len();
-    if (near.len() as f64) < MISPLACED_FIT_FRACTION * rows as f64 {
+    let far_rows = rows - near.len();
+    let misplaced = || {
         let all: Vec<f64> = errors.iter().map(|e| e.1).collect();
-        return Some(Misfit::Misplaced {
+        Some(Misfit::Misplaced {
             median_mm: crate::stats::median(&all),
+            far: far_rows,
             rows,
-        });
+        })
+    };
+    if (near.len() as f64) < MISPLACED_FIT_FRACTION * rows as f64 {
+        return misplaced();
+    }
+    // A frame turned by a few degrees misses the rows far from its origin by more, the
+    // others by less: one rigid motion (as registration finds it) then fits every row.
+    let placed: Vec<(Vector3<f64>, Vector3<f64>)> = (errors.iter().filter(|e| !e.1.is_nan()))
+        .filter_map(|&(i, _)| {
+            let m = &set.rows[i];
+            Some((tool_pose(robot, &m.q).translation.vector, m.position?))
+        })
+        .collect();
+    if placed.len() == rows && rows >= 3 {
+        let (model, measured): (Vec<_>, Vec<_>) = placed.into_iter().unzip();
+        let (r, t) = crate::identify::register::kabsch(&model, &measured);
+        let registered_max_mm = (model.iter().zip(&measured))
+            .map(|(a, b)| (r * a + t - b).norm())
+            .fold(0.0, f64::max);
+        if registered_max_mm <= FRAME_FIT_MM {
+            return Some(Misfit::Frame {
+                far: far_rows,
+                rows,
+                registered_max_mm,
+            });
+        }
+    }
+    // The rows beyond are the rows' own only where the others fit: a model off everywhere
+    // by about 100 mm (a tool 100 mm off) splits its rows at random, and those named rows
+    // were good ones.
+    let near_median_mm = crate::stats::median(&near);
+    if near_median_mm > FRAME_FIT_MM {
+        return misplaced();
     }
     Some(Misfit::FarRows {
         far: (errors.iter().filter(|e| far(e.1)))
             .map(|&(i, _)| (set.rows[i].line, i))
             .collect(),
         rows,
-        near_median_mm: crate::stats::median(&near),
+        near_median_mm,
     })
 }
 
@@ -380,12 +446,29 @@ pub fn misplaced_model_warning(
 ) -> Option<(String, Misfit)> {
     let found = misfit(robot, set)?;
     let text = match &found {
-        Misfit::Misplaced { median_mm, rows } => format!(
+        Misfit::Misplaced {
+            median_mm,
+            far,
+            rows,
+        } => format!(
             "{robot_name} misses the positions of {} by {median_mm:.1} mm (median over {rows} \
-             rows), more than {MISPLACED_MEDIAN_MM} mm, ten times what a nominal model misses \
-             by: it is not a model of this robot in the rows' frame. Is it this robot's file, \
-             does it carry the tool (the reflector's offset), and are the rows in its base \
-             frame (a model identified with the base selected registers the tracker's frame)?",
+             rows; {far} of them by more than {MISPLACED_MEDIAN_MM} mm, ten times what a \
+             nominal model misses by): it is not a model of this robot in the rows' frame. Is \
+             it this robot's file, does it carry the tool (the reflector's offset), and are the \
+             rows in its base frame (a model identified with the base selected registers the \
+             tracker's frame)?",
+            set.source.display()
+        ),
+        Misfit::Frame {
+            far,
+            rows,
+            registered_max_mm,
+        } => format!(
+            "{robot_name} misses {far} of the {rows} rows of {} with a position by more than \
+             {MISPLACED_MEDIAN_MM} mm, but one rigid motion of their frame brings every row \
+             within {registered_max_mm:.1} mm: the rows are in a frame turned against the \
+             model's, which misses the far-reaching rows most. Are the rows in its base frame \
+             (a model identified with the base selected registers the tracker's frame)?",
             set.source.display()
         ),
         Misfit::FarRows {
@@ -477,6 +560,7 @@ mod tests {
         match misfit(&robot, &set) {
             Some(Misfit::Misplaced {
                 median_mm,
+                far: 31,
                 rows: 40,
             }) => {
                 assert!((median_mm - 1000.5).abs() < 1e-9, "{median_mm}")
@@ -493,6 +577,60 @@ mod tests {
             w.contains("misses 30 of the 40 rows of") && w.contains("(lines 2, 3, 4,"),
             "{w}"
         );
+    }
+
+    /// Rows in a frame turned by a few degrees about their centre: the model misses the rows
+    /// far from it by more than 100 mm and fits the near ones, as rows mixed in would look,
+    /// but one rigid motion fits them all: the frame is said to be off, not the rows.
+    #[test]
+    fn rows_in_a_turned_frame_are_the_frames_doing_not_the_rows() {
+        let (robot, mut set) = moved_rows(60, |_| 0.0);
+        let centre = set
+            .rows
+            .iter()
+            .map(|m| m.position.unwrap())
+            .sum::<Vector3<f64>>()
+            / 60.0;
+        let turn = nalgebra::Rotation3::from_euler_angles(0.0, 0.0, 6f64.to_radians());
+        for m in &mut set.rows {
+            m.position = Some(centre + turn * (m.position.unwrap() - centre));
+        }
+        match misfit(&robot, &set) {
+            Some(Misfit::Frame {
+                far,
+                rows: 60,
+                registered_max_mm,
+            }) => {
+                assert!((1..45).contains(&far), "{far} rows far");
+                // The rows' own 0.5 mm, turned: a rigid motion fits them to well within it.
+                assert!(registered_max_mm < 1.0, "{registered_max_mm}");
+            }
+            other => panic!("{other:?}"),
+        }
+        let (w, found) = misplaced_model_warning("m.toml", &robot, &set).unwrap();
+        assert!(
+            found.is_the_model() && w.contains("one rigid motion of their frame"),
+            "{w}"
+        );
+        // A model off every row by about 100 mm, this way or that (a tool 100 mm off, not a
+        // motion of the frame): the rows within 100 mm do not fit either, so the model is
+        // misplaced, not the rows beyond (which were named before).
+        let (robot, set) = moved_rows(60, |k| if k % 2 == 0 { 99.0 } else { -101.0 });
+        assert!(
+            matches!(
+                misfit(&robot, &set),
+                Some(Misfit::Misplaced {
+                    far: 30,
+                    rows: 60,
+                    ..
+                })
+            ),
+            "{:?}",
+            misfit(&robot, &set)
+        );
+        // Rows moved one by one are not a frame: still named.
+        let (robot, set) = moved_rows(60, |k| if k % 3 == 0 { 500.0 } else { 0.0 });
+        assert!(matches!(misfit(&robot, &set), Some(Misfit::FarRows { .. })));
     }
 
     #[test]

@@ -449,15 +449,16 @@ fn report_names_the_pictures_its_list_leaves_out() {
     let o = report();
     assert!(o.status.success(), "{}", stderr(&o));
     let said =
-        "2 picture(s) that figures.json does not list are not on the page: extra.png, old.SVG";
+        "2 picture(s) that figures.json does not list are not on the page: extra.png, old.SVG (";
     assert!(stderr(&o).contains(said), "{}", stderr(&o));
-    // Without the list, every picture is named (8 drawn as PNG and SVG, and the two copies;
-    // the report is still shown).
+    // Without the list, every picture is named, a picture's PNG and SVG as one (8 drawn,
+    // and the two copies; the report is still shown).
     std::fs::remove_file(dir.join("figures.json")).unwrap();
     let o = report();
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("18 picture(s) that figures.json does not list"),
+        stderr(&o).contains("10 picture(s) that figures.json does not list")
+            && stderr(&o).contains("identify_validation_position.png/.svg,"),
         "{}",
         stderr(&o)
     );

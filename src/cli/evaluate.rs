@@ -9,7 +9,9 @@ use super::summary::{
 use anyhow::Result;
 use clap::Args;
 use robocal::data::shared_readings::rows_checked;
-use robocal::evaluate::{Misfit, misplaced_model_warning, row_errors, summarize, worst_rows};
+use robocal::evaluate::{
+    Misfit, RowError, misplaced_model_warning, row_errors, summarize, worst_rows,
+};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
 use robocal::model::read_robot;
@@ -227,7 +229,11 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     // Measures of single rows only: a pair's displacement or length does not see the frame.
     // With a compensator, said where the model it runs (refined or not) misses too.
     let single_rows = matches!(m, Measure::Pose | Measure::Position);
+    // Where the compensator's own model is off the rows (misplaced, or in a turned frame),
+    // their errors make the figures, not the network; where it misses some rows only, those
+    // lines are left out of the comparison with the model alone.
     let mut embedded_off = false;
+    let mut far_lines: Vec<usize> = Vec::new();
     if single_rows {
         let file_name = a.robot.display().to_string();
         let file = misplaced_model_warning(&file_name, &robot, &set);
@@ -239,25 +245,31 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
                 let name = format!("the model embedded in {}", path.display());
                 misplaced_model_warning(&name, &c.robot, &set)
             });
-        embedded_off = embedded.is_some();
+        if let Some((_, e)) = &embedded {
+            embedded_off = e.is_the_model();
+            if let Misfit::FarRows { far, .. } = e {
+                far_lines = far.iter().map(|f| f.0).collect();
+            }
+        }
         let said = match (&comp, file, embedded) {
             (None, file, _) => file.map(|f| f.0),
             (Some(_), _, None) => None,
-            // Both off the rows alike: the robot file is the one to look at.
-            (Some(_), Some((w, Misfit::Misplaced { .. })), Some((_, Misfit::Misplaced { .. })))
-            | (Some(_), Some((w, Misfit::FarRows { .. })), Some((_, Misfit::FarRows { .. }))) => {
+            // Both off the rows: the robot file is the one to look at.
+            (Some(_), Some((w, f)), Some((_, e))) if f.is_the_model() && e.is_the_model() => {
                 Some(w)
             }
             // The robot file fits the rows, the compensator's own model does not: trained in
             // another frame (another tracker set-up) or with another tool. A reviewer's
             // compensator trained on Series B, evaluated on Series A rows: 3.5 m off, and only
             // the note that it runs its own model.
-            (Some(_), _, Some((w, Misfit::Misplaced { .. }))) => Some(format!(
+            (Some(_), _, Some((w, e))) if e.is_the_model() => Some(format!(
                 "{w} (The compensator runs in series with its own model, not with {}: train it \
                  on rows in this frame.)",
                 a.robot.display()
             )),
-            (Some(_), _, Some((w, Misfit::FarRows { .. }))) => Some(w),
+            // Rows the model the compensator runs misses: named as it misses them (the robot
+            // file, another model, may miss others).
+            (Some(_), _, Some((w, _))) => Some(w),
         };
         if let Some(w) = said {
             warnings.say(w);
@@ -276,12 +288,18 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     if let Some(w) = &report.worst_rows {
         print_worst("data", "the model", m, w);
     }
-    // Not where the compensator's own model misses rows by more than a misplaced model
-    // would (said above): those rows' errors then make the figures, not the network.
     let suspects: Vec<usize> = report.shared_readings.iter().map(|r| r.line).collect();
+    let near = |rows: &[RowError]| -> Vec<RowError> {
+        (rows.iter())
+            .filter(|r| !far_lines.contains(&r.line))
+            .cloned()
+            .collect()
+    };
     if let Some(w) = (net_rows.as_deref())
         .filter(|_| !embedded_off)
-        .and_then(|n| super::summary::worse_than_model(&a.data, &model_rows, n, m, &suspects))
+        .and_then(|n| {
+            super::summary::worse_than_model(&a.data, &near(&model_rows), &near(n), m, &suspects)
+        })
     {
         warnings.say(w);
     }

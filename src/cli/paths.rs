@@ -64,14 +64,15 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
         // A folder under a name a picture may take is found now, not after the work (which
         // then stopped on "is a folder", without naming the flag).
         for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
-            let name = entry.file_name().to_string_lossy().to_ascii_lowercase();
-            let picture = name.ends_with(".png") || name.ends_with(".svg") || name == PLOT_LIST;
-            if picture && entry.path().is_dir() {
+            if robocal::plot::may_draw(&entry.file_name().to_string_lossy())
+                && entry.path().is_dir()
+            {
                 bail!(
-                    "{flag} {}: {} is a folder, under a name its pictures may take (*.png, \
-                     *.svg, {PLOT_LIST}): remove it or choose another folder",
+                    "{flag} {}: {} is a folder, under a name its pictures may take ({}): \
+                     remove it or choose another folder",
                     dir.display(),
-                    entry.path().display()
+                    entry.path().display(),
+                    picture_names()
                 );
             }
         }
@@ -88,18 +89,16 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
     for (pf, dir) in plots() {
         let Some(dir_r) = resolved(dir) else { continue };
         let clash = ins.iter().chain(&outs).find(|(_, _, r)| {
-            let name = (r.file_name().and_then(|n| n.to_str()))
-                .unwrap_or("")
-                .to_ascii_lowercase();
-            let picture = name.ends_with(".png") || name.ends_with(".svg");
-            (picture || name == PLOT_LIST) && r.parent() == Some(dir_r.as_path())
+            let name = r.file_name().and_then(|n| n.to_str()).unwrap_or("");
+            robocal::plot::may_draw(name) && r.parent() == Some(dir_r.as_path())
         });
         if let Some((f, p, _)) = clash {
             usage!(
-                "{f} {} lies in the {pf} folder {} under a name its pictures may take (*.png, \
-                 *.svg, {PLOT_LIST}): choose another folder or file name",
+                "{f} {} lies in the {pf} folder {} under a name its pictures may take ({}): \
+                 choose another folder or file name",
                 p.display(),
-                dir.display()
+                dir.display(),
+                picture_names()
             );
         }
     }
@@ -165,7 +164,19 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
 }
 
 /// The list of pictures a `--plot` folder holds (read by `robocal report`).
-const PLOT_LIST: &str = robocal::plot::MANIFEST;
+/// The names [`robocal::plot::may_draw`] takes, for messages: `case_d_*, ... .png or .svg,
+/// figures.json`.
+fn picture_names() -> String {
+    let prefixes: Vec<String> = robocal::plot::COMMANDS
+        .iter()
+        .map(|c| format!("{c}_*"))
+        .collect();
+    format!(
+        "{} .png or .svg, {}",
+        prefixes.join(", "),
+        robocal::plot::MANIFEST
+    )
+}
 
 /// A required path for [`guard`]'s lists.
 pub fn req<'a>(flag: &'a str, p: &'a Path) -> Named<'a> {
@@ -324,7 +335,7 @@ mod tests {
         }
         // A folder in the `--plot` folder under a picture's or the list's name: refused
         // before the work, naming the flag (upper case too).
-        for name in ["identify_position.png", "a.SVG", "figures.json"] {
+        for name in ["identify_position.png", "Train_a.SVG", "figures.json"] {
             let plots = dir.path().join(format!("plots_{name}"));
             std::fs::create_dir_all(plots.join(name)).unwrap();
             let e = guard(&[], &[req("--plot", &plots)])
@@ -334,9 +345,10 @@ mod tests {
                 e.starts_with("--plot ") && e.contains(&format!("{name} is a folder")),
                 "{e}"
             );
-            // A folder under another name is no picture's.
+            // A folder under another name is no picture's, nor one no command draws.
             std::fs::remove_dir(plots.join(name)).unwrap();
             std::fs::create_dir_all(plots.join("old_runs")).unwrap();
+            std::fs::create_dir_all(plots.join("backup.png")).unwrap();
             assert!(guard(&[], &[req("--plot", &plots)]).is_ok());
         }
     }

@@ -59,9 +59,10 @@ pub fn run(a: ReportArgs) -> Result<()> {
             names.push(format!("... ({} more)", unlisted.len() - 20));
         }
         eprintln!(
-            "warning: {}: {} picture(s) that {} does not list are not on the page: {} (the \
-             page shows the pictures a command listed there, with their titles and captions; \
-             copy the list with them, or draw them into this folder with --plot)",
+            "warning: {}: {} picture(s) that {} does not list are not on the page: {} (an \
+             earlier run's, which a later run of the same command there took off the list, or \
+             pictures copied in without it; the page shows the listed pictures, with the \
+             titles and captions the list gives)",
             a.run_dir.display(),
             unlisted.len(),
             robocal::plot::MANIFEST,

@@ -6,7 +6,7 @@ use super::summary::{clean_accuracy, print_shared, print_stats, shared_under, wr
 use anyhow::{Context, Result};
 use clap::Args;
 use robocal::data::measurement::subset;
-use robocal::evaluate::{Misfit, misplaced_model_warning, row_errors, summarize, worst_rows};
+use robocal::evaluate::{misplaced_model_warning, row_errors, summarize, worst_rows};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
 use robocal::neural::compensator::{Compensator, Network, Refine};
@@ -320,18 +320,19 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     // A model far off its rows is said before the training, not after it.
     if let Some((w, found)) = misplaced_model_warning(&a.robot.display().to_string(), &robot, &set)
     {
-        warnings.say(match found {
-            Misfit::Misplaced { .. } => format!(
+        warnings.say(if found.is_the_model() {
+            format!(
                 "{w} The compensator is trained and written as asked: its refinement may take up \
                  a frame or a tool, never another robot"
-            ),
+            )
+        } else {
             // A reviewer's rows, 40 % of them moved 500 mm: no row stood out from the others'
             // spread, a refinement followed them to 228 mm of mean error, and nothing was said.
-            Misfit::FarRows { .. } => format!(
+            format!(
                 "{w}. The compensator is trained on them as asked, unless cross-validation lists \
                  them as outliers (many such rows widen the spread it judges by): a refinement \
                  and a network bend toward them"
-            ),
+            )
         });
     }
     // And far off the validation rows, as `evaluate` on them would say (a reviewer's rows
@@ -339,11 +340,10 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
     if let Some(v) = &val
         && let Some((w, found)) = misplaced_model_warning(&a.robot.display().to_string(), &robot, v)
     {
-        warnings.say(match found {
-            Misfit::Misplaced { .. } => {
-                format!("{w} Its validation figures are no check of the compensator on this robot")
-            }
-            Misfit::FarRows { .. } => format!("{w}. They weigh on its validation figures"),
+        warnings.say(if found.is_the_model() {
+            format!("{w} Its validation figures are no check of the compensator on this robot")
+        } else {
+            format!("{w}. They weigh on its validation figures")
         });
     }
     let terminal = std::io::stderr().is_terminal();

@@ -125,6 +125,23 @@ pub fn read_manifest(dir: &Path) -> Result<Vec<Figure>> {
         .map_err(|e| Error::Invalid(format!("{}: not a figure list: {e}", path.display())))
 }
 
+/// The commands that draw into a `--plot` folder, each picture named `{command}_*` (as
+/// [`forget_earlier`] is called with).
+pub const COMMANDS: [&str; 5] = ["case_d", "evaluate", "identify", "plan", "train"];
+
+/// Whether a command may write a file named `name` in a `--plot` folder: a picture
+/// `{command}_*.png` or `.svg` of one of [`COMMANDS`], or the list [`MANIFEST`]; in any letter
+/// case, as a case-insensitive file system takes `X.PNG` for `x.png`.
+pub fn may_draw(name: &str) -> bool {
+    let name = name.to_ascii_lowercase();
+    let picture = name.ends_with(".png") || name.ends_with(".svg");
+    name == MANIFEST
+        || picture
+            && COMMANDS
+                .iter()
+                .any(|c| name.strip_prefix(c).is_some_and(|r| r.starts_with('_')))
+}
+
 /// Takes the pictures named `{command}_*` off the manifest of `dir`: called once before a
 /// command draws its own, so that its run replaces the listing of its earlier run in the
 /// folder (a run with validation rows, then one without: the report showed the first run's

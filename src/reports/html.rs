@@ -374,13 +374,16 @@ figure{margin:1.5em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption
 color:#444;margin-top:.3em}.file,.note{color:#777;font-size:.85em}";
 
 /// The pictures (`*.png`, `*.svg`, any letter case) in run folder `dir` that its figure list
-/// does not name, by name: the page leaves them out (it shows a picture with the title and
-/// caption its list gives), and `report` says so rather than drop them silently.
+/// does not name, one entry per name without its extension (`extra.png`, or
+/// `identify_validation_position.png/.svg`): the page leaves them out (it shows a picture
+/// with the title and caption its list gives), and `report` says so rather than drop them
+/// silently. They are an earlier run's (a command's later run in the folder takes its
+/// earlier pictures off the list, [`crate::plot::forget_earlier`]) or copied in without it.
 pub fn unlisted_pictures(dir: &Path) -> Result<Vec<String>> {
     let listed: Vec<String> = (crate::plot::read_manifest(dir)?.into_iter())
         .flat_map(|f| [f.png, f.svg])
         .collect();
-    let mut unlisted: Vec<String> = std::fs::read_dir(dir)
+    let mut names: Vec<String> = std::fs::read_dir(dir)
         .map_err(|e| Error::io(dir, e))?
         .filter_map(|e| e.ok())
         .filter(|e| e.path().is_file())
@@ -390,8 +393,20 @@ pub fn unlisted_pictures(dir: &Path) -> Result<Vec<String>> {
             (lower.ends_with(".png") || lower.ends_with(".svg")) && !listed.contains(n)
         })
         .collect();
-    unlisted.sort();
-    Ok(unlisted)
+    names.sort();
+    // Extensions are 4 bytes (".png", ".svg"): a picture's two files are one entry.
+    let mut grouped: Vec<(String, Vec<String>)> = Vec::new();
+    for n in names {
+        let (stem, ext) = n.split_at(n.len() - 4);
+        match grouped.last_mut() {
+            Some((s, exts)) if s == stem => exts.push(ext.to_string()),
+            _ => grouped.push((stem.to_string(), vec![ext.to_string()])),
+        }
+    }
+    Ok(grouped
+        .into_iter()
+        .map(|(stem, exts)| format!("{stem}{}", exts.join("/")))
+        .collect())
 }
 
 /// The page for run folder `dir`: every `*.json` report (but `figures.json`) and every
