@@ -433,17 +433,18 @@ fn radians_of_a_joint_wider_than_a_turn_warn() {
         )
         .unwrap();
         let t = targets.to_str().unwrap();
+        let compensate = [
+            "compensate",
+            "--nominal",
+            FANUC,
+            "--robot",
+            robot,
+            "--targets",
+            t,
+        ];
         for args in [
             vec!["ik", "--robot", robot, "--poses", t],
-            vec![
-                "compensate",
-                "--nominal",
-                FANUC,
-                "--robot",
-                robot,
-                "--targets",
-                t,
-            ],
+            compensate.to_vec(),
         ] {
             let o = robocal(&args);
             assert_eq!(
@@ -464,19 +465,7 @@ fn radians_of_a_joint_wider_than_a_turn_warn() {
         let pose = ["--pose", "1842,0,1652,0,90,0", "--seed", first];
         for args in [
             [&["ik", "--robot", robot][..], &pose].concat(),
-            [
-                &[
-                    "compensate",
-                    "--nominal",
-                    FANUC,
-                    "--robot",
-                    robot,
-                    "--targets",
-                    t,
-                ],
-                &pose[2..],
-            ]
-            .concat(),
+            [&compensate[..], &pose[2..]].concat(),
             vec!["fk", "--robot", robot, "--q", first],
             vec![
                 "plan",
