@@ -15,6 +15,18 @@ pub fn median(v: &[f64]) -> f64 {
     }
 }
 
+/// The `p`-th percentile of `v` by nearest rank: the smallest value that at least `p` % of
+/// the values do not exceed (0 for none). NaN sorts last.
+pub fn percentile(v: &[f64], p: f64) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(|a, b| a.total_cmp(b));
+    if s.is_empty() {
+        return 0.0;
+    }
+    let rank = ((p / 100.0 * s.len() as f64).ceil() as usize).clamp(1, s.len());
+    s[rank - 1]
+}
+
 /// The least robust sigma [`robust_sigma`] gives (the unit of its values: measurement
 /// sigmas, mm or deg): values of rounding alone (noise-free simulated data, near 1e-12) have
 /// no outlier, and 3 robust sigmas of rounding would name one.
@@ -32,7 +44,17 @@ pub fn robust_sigma(v: &[f64]) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{ROBUST_SIGMA_FLOOR, median, robust_sigma};
+    use super::{ROBUST_SIGMA_FLOOR, median, percentile, robust_sigma};
+
+    #[test]
+    fn percentiles_by_nearest_rank() {
+        let v = [5.0, 1.0, 4.0, 2.0, 3.0, 10.0, 9.0, 8.0, 7.0, 6.0];
+        assert_eq!(percentile(&v, 90.0), 9.0);
+        assert_eq!(percentile(&v, 91.0), 10.0);
+        assert_eq!(percentile(&v, 10.0), 1.0);
+        assert_eq!(percentile(&v, 0.0), 1.0);
+        assert_eq!(percentile(&[], 50.0), 0.0);
+    }
 
     #[test]
     fn robust_sigma_is_floored() {

@@ -9,9 +9,7 @@ use super::summary::{
 use anyhow::Result;
 use clap::Args;
 use robocal::data::shared_readings::rows_checked;
-use robocal::evaluate::{
-    Misfit, RowError, misplaced_model_warning, row_errors, summarize, worst_rows,
-};
+use robocal::evaluate::{misplaced_model_warning, row_errors, summarize, worst_rows};
 use robocal::identify::Measure;
 use robocal::kinematics::tool_pose;
 use robocal::model::read_robot;
@@ -229,11 +227,10 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     // Measures of single rows only: a pair's displacement or length does not see the frame.
     // With a compensator, said where the model it runs (refined or not) misses too.
     let single_rows = matches!(m, Measure::Pose | Measure::Position);
-    // Where the compensator's own model is off the rows (misplaced, or in a turned frame),
+    // Where the compensator's own model is off the rows (misplaced, or in a moved frame),
     // their errors make the figures, not the network; where it misses some rows only, those
-    // lines are left out of the comparison with the model alone.
+    // are left out of the comparison with the model alone.
     let mut embedded_off = false;
-    let mut far_lines: Vec<usize> = Vec::new();
     if single_rows {
         let file_name = a.robot.display().to_string();
         let file = misplaced_model_warning(&file_name, &robot, &set);
@@ -245,12 +242,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
                 let name = format!("the model embedded in {}", path.display());
                 misplaced_model_warning(&name, &c.robot, &set)
             });
-        if let Some((_, e)) = &embedded {
-            embedded_off = e.is_the_model();
-            if let Misfit::FarRows { far, .. } = e {
-                far_lines = far.iter().map(|f| f.0).collect();
-            }
-        }
+        embedded_off = embedded.as_ref().is_some_and(|(_, e)| e.is_the_model());
         let said = match (&comp, file, embedded) {
             (None, file, _) => file.map(|f| f.0),
             (Some(_), _, None) => None,
@@ -289,16 +281,14 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
         print_worst("data", "the model", m, w);
     }
     let suspects: Vec<usize> = report.shared_readings.iter().map(|r| r.line).collect();
-    let near = |rows: &[RowError]| -> Vec<RowError> {
-        (rows.iter())
-            .filter(|r| !far_lines.contains(&r.line))
-            .cloned()
-            .collect()
-    };
     if let Some(w) = (net_rows.as_deref())
+        .zip(comp.as_ref())
         .filter(|_| !embedded_off)
-        .and_then(|n| {
-            super::summary::worse_than_model(&a.data, &near(&model_rows), &near(n), m, &suspects)
+        .and_then(|(n, c)| {
+            let rows = (&model_rows[..], n);
+            super::summary::worse_than_model_without_far(
+                &a.data, &c.robot, &set, rows, m, &suspects,
+            )
         })
     {
         warnings.say(w);

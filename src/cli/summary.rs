@@ -5,7 +5,7 @@ use robocal::data::MeasurementSet;
 use robocal::data::shared_readings::{
     SEPARATION_MM, SharedReading, shared_readings, shared_readings_with, suspect_rows,
 };
-use robocal::evaluate::{ErrorStats, RowError, WorstRows, summarize};
+use robocal::evaluate::{ErrorStats, Misfit, RowError, WorstRows, summarize};
 use robocal::identify::Measure;
 use robocal::model::Robot;
 use robocal::neural::repeats::Repeats;
@@ -287,6 +287,41 @@ pub fn unit_width<'a>(units: impl IntoIterator<Item = &'a str>) -> usize {
 /// How many times the model's largest position error the compensated rows' largest may be
 /// before [`worse_than_model`] speaks: issue 11's bound on held-out data (10 %).
 const MAX_RATIO: f64 = 1.1;
+
+/// [`worse_than_model`] on the rows of `path` but those at file lines `far` (rows the
+/// compensator's model misses by more than [`robocal::evaluate::MISPLACED_MEDIAN_MM`], named
+/// by the misfit warning: their errors would make the figures), said so in the warning. The
+/// far rows are the model's [`Misfit::FarRows`] where it has them.
+pub fn worse_than_model_without_far(
+    path: &Path,
+    compensator_model: &Robot,
+    set: &MeasurementSet,
+    rows: (&[RowError], &[RowError]),
+    measure: Measure,
+    suspects: &[usize],
+) -> Option<String> {
+    let far: Vec<usize> = match robocal::evaluate::misfit(compensator_model, set) {
+        Some(Misfit::FarRows { far, .. }) => far.iter().map(|f| f.0).collect(),
+        _ => Vec::new(),
+    };
+    let near = |rows: &[RowError]| -> Vec<RowError> {
+        (rows.iter())
+            .filter(|r| !far.contains(&r.line))
+            .cloned()
+            .collect()
+    };
+    let w = worse_than_model(path, &near(rows.0), &near(rows.1), measure, suspects)?;
+    Some(if far.is_empty() {
+        w
+    } else {
+        format!(
+            "{w} (without the {} row(s) the compensator's model misses by more than {} mm, \
+             named above)",
+            far.len(),
+            robocal::evaluate::MISPLACED_MEDIAN_MM
+        )
+    })
+}
 
 /// Where the compensator (`net`) does worse than the model alone (`model`) on the rows of
 /// `path` under `measure`: its RMS above the model's, or its largest error more than

@@ -513,7 +513,8 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
         if name == "validation" {
             let suspects: Vec<usize> = shared.iter().map(|r| r.line).collect();
             val_worse = (a.validate.as_ref()).and_then(|p| {
-                super::summary::worse_than_model(p, &before_rows, &after_rows, m, &suspects)
+                let rows = (&before_rows[..], &after_rows[..]);
+                super::summary::worse_than_model_without_far(p, &c.robot, s, rows, m, &suspects)
             });
             val_worst = worst_rows(&before_rows, Some(&after_rows))?;
             val_outside = (s.rows.iter().zip(&inside))

@@ -394,14 +394,15 @@ pub fn unlisted_pictures(dir: &Path) -> Result<Vec<String>> {
         })
         .collect();
     names.sort();
-    // Extensions are 4 bytes (".png", ".svg"): a picture's two files are one entry.
-    let mut grouped: Vec<(String, Vec<String>)> = Vec::new();
+    // Extensions are 4 ASCII bytes (".png", ".svg", the filter's): a picture's files are one
+    // entry, by name (sorted, `x.q.png` falls between `x.png` and `x.svg`).
+    let mut grouped: std::collections::BTreeMap<String, Vec<String>> = Default::default();
     for n in names {
         let (stem, ext) = n.split_at(n.len() - 4);
-        match grouped.last_mut() {
-            Some((s, exts)) if s == stem => exts.push(ext.to_string()),
-            _ => grouped.push((stem.to_string(), vec![ext.to_string()])),
-        }
+        grouped
+            .entry(stem.to_string())
+            .or_default()
+            .push(ext.to_string());
     }
     Ok(grouped
         .into_iter()
