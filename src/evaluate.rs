@@ -301,11 +301,33 @@ pub const MISPLACED_MEDIAN_MM: f64 = 100.0;
 /// lacks, or rows in a frame it does not know. The median, not the RMS, so that a few rows
 /// far off (listed elsewhere as such) do not raise it; None within it or without positions.
 pub fn misplaced_median(robot: &Robot, set: &MeasurementSet) -> Option<(f64, usize)> {
-    let errors: Vec<f64> = (set.rows.iter())
-        .filter_map(|m| Some((m.position? - tool_pose(robot, &m.q).translation.vector).norm()))
-        .collect();
+    let errors: Vec<f64> = placed(robot, set).iter().map(Placed::error).collect();
     let median = crate::stats::median(&errors);
     (!errors.is_empty() && median > MISPLACED_MEDIAN_MM).then_some((median, errors.len()))
+}
+
+/// A row with a position as a model places it: (row index, the model's tool position, the
+/// measured position), mm.
+struct Placed(usize, Vector3<f64>, Vector3<f64>);
+
+impl Placed {
+    /// The position error (mm).
+    fn error(&self) -> f64 {
+        (self.2 - self.1).norm()
+    }
+}
+
+/// The rows of `set` with a position, placed by `robot` (each row's FK once).
+fn placed(robot: &Robot, set: &MeasurementSet) -> Vec<Placed> {
+    (set.rows.iter().enumerate())
+        .filter_map(|(i, m)| {
+            Some(Placed(
+                i,
+                tool_pose(robot, &m.q).translation.vector,
+                m.position?,
+            ))
+        })
+        .collect()
 }
 
 /// Fewer rows than this fraction within [`MISPLACED_MEDIAN_MM`] make a model misplaced
@@ -342,9 +364,11 @@ pub enum Misfit {
         /// Rows with a position.
         rows: usize,
     },
-    /// The model misses some rows by more, but one rigid motion of the rows' frame brings
-    /// every row within [`FRAME_FIT_MM`]: a frame turned against the model's (which misses
-    /// the far-reaching rows most), not rows of their own.
+    /// The model misses some rows by more, but the rigid motion of the rows' frame that fits
+    /// the rows within [`MISPLACED_MEDIAN_MM`] brings some of them, and every other row but
+    /// those still beyond it, within [`FRAME_FIT_MM`]: a frame moved or turned against the
+    /// model's (which misses the far-reaching rows most), and the rows still beyond, rows of
+    /// their own.
     Frame {
         /// Rows missed by more than [`MISPLACED_MEDIAN_MM`].
         far: usize,
@@ -382,27 +406,25 @@ impl Misfit {
 /// Whether `robot` misses rows of `set` by more than [`MISPLACED_MEDIAN_MM`] in position, and
 /// how ([`Misfit`]); None where it misses none so (or the set has no positions).
 pub fn misfit(robot: &Robot, set: &MeasurementSet) -> Option<Misfit> {
-    let errors: Vec<(usize, f64)> = (set.rows.iter().enumerate())
-        .filter_map(|(i, m)| {
-            Some((
-                i,
-                (m.position? - tool_pose(robot, &m.q).translation.vector).norm(),
-            ))
-        })
-        .collect();
+    let points = placed(robot, set);
+    let errors: Vec<f64> = points.iter().map(Placed::error).collect();
     // A NaN error (joints the model cannot place) is not a distance: it counts as far.
     let far = |e: f64| e.is_nan() || e > MISPLACED_MEDIAN_MM;
-    let near: Vec<f64> = errors.iter().map(|e| e.1).filter(|&e| !far(e)).collect();
+    let near: Vec<f64> = errors.iter().copied().filter(|&e| !far(e)).collect();
     if near.len() == errors.len() {
         return None;
     }
     let rows = errors.len();
-    let far_rows: Vec<(usize, usize)> = (errors.iter().filter(|e| far(e.1)))
-        .map(|&(i, _)| (set.rows[i].line, i))
-        .collect();
-    let all: Vec<f64> = errors.iter().map(|e| e.1).collect();
+    // (file line, row index) of the points whose error `e` is far.
+    let named = |e: &[f64]| -> Vec<(usize, usize)> {
+        (points.iter().zip(e))
+            .filter(|(_, e)| far(**e))
+            .map(|(p, _)| (set.rows[p.0].line, p.0))
+            .collect()
+    };
+    let far_rows = named(&errors);
     let misplaced = Misfit::Misplaced {
-        median_mm: crate::stats::median(&all),
+        median_mm: crate::stats::median(&errors),
         far: far_rows.clone(),
         rows,
     };
@@ -414,28 +436,18 @@ pub fn misfit(robot: &Robot, set: &MeasurementSet) -> Option<Misfit> {
     // finds it) then fits every row. Fitted to the near rows alone, so that a row far off is
     // not spread over the others (a cluster of three rows and one 150 mm off had passed for
     // a turned frame).
-    let placed = |i: usize| {
-        let m = &set.rows[i];
-        Some((tool_pose(robot, &m.q).translation.vector, m.position?))
-    };
-    let (model, measured): (Vec<Vector3<f64>>, Vec<Vector3<f64>>) = (errors.iter())
-        .filter(|e| !far(e.1))
-        .filter_map(|e| placed(e.0))
+    let (model, measured): (Vec<Vector3<f64>>, Vec<Vector3<f64>>) = (points.iter().zip(&errors))
+        .filter(|(_, e)| !far(**e))
+        .map(|(p, _)| (p.1, p.2))
         .unzip();
     if model.len() >= 3 {
         let (r, t) = crate::identify::register::kabsch(&model, &measured);
-        let moved: Vec<f64> = (errors.iter())
-            .map(|e| placed(e.0).map_or(f64::NAN, |(a, b)| (r * a + t - b).norm()))
-            .collect();
+        let moved: Vec<f64> = points.iter().map(|p| (r * p.1 + t - p.2).norm()).collect();
         // After the motion, every row fits within FRAME_FIT_MM or is still far off (a row of
         // its own), and some far row came within: the frame, not the rows, was off.
         let fits = |e: f64| e <= FRAME_FIT_MM;
-        let still_far: Vec<(usize, usize)> = (errors.iter().zip(&moved))
-            .filter(|(_, m)| far(**m))
-            .map(|(e, _)| (set.rows[e.0].line, e.0))
-            .collect();
-        let clean = moved.iter().all(|&m| fits(m) || far(m));
-        if clean && still_far.len() < far_rows.len() {
+        let still_far = named(&moved);
+        if moved.iter().all(|&m| fits(m) || far(m)) && still_far.len() < far_rows.len() {
             return Some(Misfit::Frame {
                 far: far_rows.len(),
                 rows,

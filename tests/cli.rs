@@ -89,6 +89,7 @@ fn fk_batch_carries_columns_and_ik_batch_round_trips() {
         .skip(1)
         .map(|l| l.split(',').collect())
         .collect();
+    assert_eq!(rows.len(), t.rows.len());
     for (r, row) in rows.iter().enumerate() {
         for i in 1..=6 {
             let seed: f64 = row[at(&format!("seed_q{i}"))].parse().unwrap();

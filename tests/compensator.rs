@@ -517,7 +517,7 @@ fn fade_zone_jacobian_matches_differences(c: &Compensator, start: &[f64]) {
         (&jac - &model_jac).abs().max() > 1e-3,
         "the network part must show"
     );
-    // The correction at q (position mm, rotation rad), which the fade scales.
+    // The correction at q (position mm, rotation mrad), which the fade scales.
     let (at, model) = (
         c.predict(&q, &mut ws),
         robocal::kinematics::tool_pose(&c.robot, &q),

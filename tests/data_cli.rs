@@ -363,9 +363,10 @@ fn radians_in_a_degree_file_warn() {
 
 /// A joint of +-400 deg holds radians up to 6.98: a radian file with a value beyond 6.3 in
 /// it was read as degrees without a word (a helper's finding on an ABB IRB 140). The
-/// warning now takes each joint's range in radians where it is wider than 6.3, for `import`
-/// (and `identify`), for joint files (`fk`, `predict`) and for the seed columns of target
-/// files (`ik`, `compensate`); a degree file stays quiet.
+/// warning now takes each joint's range in radians where it is wider than 6.3, for `import`,
+/// for joint files (`fk`, and `plan --evaluate`, `--candidates`), for the seed columns of
+/// target files (`ik`, `compensate`) and for `--seed` and `--q` on the command line; degrees
+/// stay quiet.
 #[test]
 fn radians_of_a_joint_wider_than_a_turn_warn() {
     let fanuc = std::fs::read_to_string(common::root().join(FANUC)).unwrap();
@@ -442,59 +443,59 @@ fn radians_of_a_joint_wider_than_a_turn_warn() {
             "--targets",
             t,
         ];
-        for args in [
-            vec!["ik", "--robot", robot, "--poses", t],
-            compensate.to_vec(),
-        ] {
-            let o = robocal(&args);
-            assert_eq!(
-                stderr(&o).contains("every seed joint angle lies within +-6.28"),
-                warns,
-                "{args:?}: {}",
-                stderr(&o)
-            );
-        }
-        // The last row as --seed or --q on the command line (`compensate` reads it with the
-        // nominal FANUC's +-180 deg, where 6.5 is no radian), and the file as the
-        // configurations `plan` evaluates or chooses from: the same rule (they went without a
-        // word).
-        let first = body.lines().last().unwrap();
+        // The last row as --seed or --q on the command line (the first's 6.5 is no radian
+        // for the nominal FANUC's +-180 deg, which `compensate --seed` reads with; the
+        // degrees given a fraction, as whole numbers are taken for degrees anyway), and the
+        // file as the configurations `plan` evaluates or chooses from: the same rule (they
+        // went without a word). Both plans then fail for too few units, after the warning.
+        let last = if warns {
+            body.lines().last().unwrap()
+        } else {
+            "30.5,30,10,-100,11,200"
+        };
         let j = joints.to_str().unwrap();
         let planned = tmp(&format!("wide_{warns}_planned.csv"));
         let planned = planned.to_str().unwrap();
-        let pose = ["--pose", "1842,0,1652,0,90,0", "--seed", first];
-        for args in [
-            [&["ik", "--robot", robot][..], &pose].concat(),
-            [&compensate[..], &pose[2..]].concat(),
-            vec!["fk", "--robot", robot, "--q", first],
-            vec![
-                "plan",
-                "--robot",
-                robot,
-                "--evaluate",
-                j,
-                "--validation",
-                "20",
-            ],
-            vec![
-                "plan",
-                "--robot",
-                robot,
-                "--candidates",
-                j,
-                "--count",
-                "2",
-                "--out",
-                planned,
-            ],
+        let pose = ["--pose", "1842,0,1652,0,90,0", "--seed", last];
+        let (seed_columns, joints_said) = (
+            "every seed joint angle lies within +-6.28",
+            "every joint angle lies within +-6.28, one turn in radians",
+        );
+        for (args, said) in [
+            (vec!["ik", "--robot", robot, "--poses", t], seed_columns),
+            (compensate.to_vec(), seed_columns),
+            ([&["ik", "--robot", robot][..], &pose].concat(), joints_said),
+            ([&compensate[..], &pose[2..]].concat(), joints_said),
+            (vec!["fk", "--robot", robot, "--q", last], joints_said),
+            (
+                vec![
+                    "plan",
+                    "--robot",
+                    robot,
+                    "--evaluate",
+                    j,
+                    "--validation",
+                    "20",
+                ],
+                joints_said,
+            ),
+            (
+                vec![
+                    "plan",
+                    "--robot",
+                    robot,
+                    "--candidates",
+                    j,
+                    "--count",
+                    "2",
+                    "--out",
+                    planned,
+                ],
+                joints_said,
+            ),
         ] {
             let o = robocal(&args);
-            assert_eq!(
-                stderr(&o).contains("every joint angle lies within +-6.28, one turn in radians"),
-                warns,
-                "{args:?}: {}",
-                stderr(&o)
-            );
+            assert_eq!(stderr(&o).contains(said), warns, "{args:?}: {}", stderr(&o));
         }
     }
 }

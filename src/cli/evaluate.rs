@@ -231,6 +231,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     // their errors make the figures, not the network; where it misses some rows only, those
     // are left out of the comparison with the model alone.
     let mut embedded_off = false;
+    let mut far = Vec::new();
     if single_rows {
         let file_name = a.robot.display().to_string();
         let file = misplaced_model_warning(&file_name, &robot, &set);
@@ -243,6 +244,7 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
                 misplaced_model_warning(&name, &c.robot, &set)
             });
         embedded_off = embedded.as_ref().is_some_and(|(_, e)| e.is_the_model());
+        far = super::summary::far_lines(embedded.as_ref().map(|e| &e.1));
         let said = match (&comp, file, embedded) {
             (None, file, _) => file.map(|f| f.0),
             (Some(_), _, None) => None,
@@ -282,13 +284,10 @@ pub fn run_evaluate(a: EvaluateArgs) -> Result<()> {
     }
     let suspects: Vec<usize> = report.shared_readings.iter().map(|r| r.line).collect();
     if let Some(w) = (net_rows.as_deref())
-        .zip(comp.as_ref())
         .filter(|_| !embedded_off)
-        .and_then(|(n, c)| {
+        .and_then(|n| {
             let rows = (&model_rows[..], n);
-            super::summary::worse_than_model_without_far(
-                &a.data, &c.robot, &set, rows, m, &suspects,
-            )
+            super::summary::worse_than_model_without(&a.data, rows, m, &suspects, &far)
         })
     {
         warnings.say(w);

@@ -163,7 +163,6 @@ pub fn guard(inputs: &[Named], outputs: &[Named]) -> Result<()> {
     Ok(())
 }
 
-/// The list of pictures a `--plot` folder holds (read by `robocal report`).
 /// The names [`robocal::plot::may_draw`] takes, for messages: `case_d_*, ... .png or .svg,
 /// figures.json`.
 fn picture_names() -> String {

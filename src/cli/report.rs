@@ -54,10 +54,6 @@ pub fn run(a: ReportArgs) -> Result<()> {
     // Pictures copied into the folder without their list: left out of the page, by name.
     let unlisted = robocal::reports::html::unlisted_pictures(&a.run_dir)?;
     if !unlisted.is_empty() {
-        let mut names: Vec<String> = unlisted.iter().take(20).cloned().collect();
-        if unlisted.len() > 20 {
-            names.push(format!("... ({} more)", unlisted.len() - 20));
-        }
         eprintln!(
             "warning: {}: {} picture(s) that {} does not list are not on the page: {} (an \
              earlier run's, which a later run of the same command there took off the list, or \
@@ -66,7 +62,7 @@ pub fn run(a: ReportArgs) -> Result<()> {
             a.run_dir.display(),
             unlisted.len(),
             robocal::plot::MANIFEST,
-            names.join(", ")
+            robocal::data::measurement::list_lines(&unlisted)
         );
     }
     Ok(())

@@ -290,20 +290,15 @@ const MAX_RATIO: f64 = 1.1;
 
 /// [`worse_than_model`] on the rows of `path` but those at file lines `far` (rows the
 /// compensator's model misses by more than [`robocal::evaluate::MISPLACED_MEDIAN_MM`], named
-/// by the misfit warning: their errors would make the figures), said so in the warning. The
-/// far rows are the model's [`Misfit::FarRows`] where it has them.
-pub fn worse_than_model_without_far(
+/// by the misfit warning, [`far_lines`]: their errors would make the figures), said so in the
+/// warning.
+pub fn worse_than_model_without(
     path: &Path,
-    compensator_model: &Robot,
-    set: &MeasurementSet,
     rows: (&[RowError], &[RowError]),
     measure: Measure,
     suspects: &[usize],
+    far: &[usize],
 ) -> Option<String> {
-    let far: Vec<usize> = match robocal::evaluate::misfit(compensator_model, set) {
-        Some(Misfit::FarRows { far, .. }) => far.iter().map(|f| f.0).collect(),
-        _ => Vec::new(),
-    };
     let near = |rows: &[RowError]| -> Vec<RowError> {
         (rows.iter())
             .filter(|r| !far.contains(&r.line))
@@ -321,6 +316,15 @@ pub fn worse_than_model_without_far(
             robocal::evaluate::MISPLACED_MEDIAN_MM
         )
     })
+}
+
+/// The file lines of the rows a misfit names as the rows' own ([`Misfit::FarRows`]); none
+/// for a model that is off, or no misfit.
+pub fn far_lines(misfit: Option<&Misfit>) -> Vec<usize> {
+    match misfit {
+        Some(Misfit::FarRows { far, .. }) => far.iter().map(|f| f.0).collect(),
+        _ => Vec::new(),
+    }
 }
 
 /// Where the compensator (`net`) does worse than the model alone (`model`) on the rows of

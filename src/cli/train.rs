@@ -514,7 +514,12 @@ pub fn run_train(a: TrainArgs) -> Result<()> {
             let suspects: Vec<usize> = shared.iter().map(|r| r.line).collect();
             val_worse = (a.validate.as_ref()).and_then(|p| {
                 let rows = (&before_rows[..], &after_rows[..]);
-                super::summary::worse_than_model_without_far(p, &c.robot, s, rows, m, &suspects)
+                // As `evaluate`: measures of single rows only (a pair's rows are its lines).
+                let misfit = matches!(m, Measure::Pose | Measure::Position)
+                    .then(|| robocal::evaluate::misfit(&c.robot, s))
+                    .flatten();
+                let far = super::summary::far_lines(misfit.as_ref());
+                super::summary::worse_than_model_without(p, rows, m, &suspects, &far)
             });
             val_worst = worst_rows(&before_rows, Some(&after_rows))?;
             val_outside = (s.rows.iter().zip(&inside))

@@ -129,14 +129,20 @@ pub fn read_manifest(dir: &Path) -> Result<Vec<Figure>> {
 /// [`forget_earlier`] is called with).
 pub const COMMANDS: [&str; 5] = ["case_d", "evaluate", "identify", "plan", "train"];
 
+/// Whether a file named `name` is a picture by its extension (`.png`, `.svg`, any letter
+/// case).
+pub fn is_picture(name: &str) -> bool {
+    let name = name.to_ascii_lowercase();
+    name.ends_with(".png") || name.ends_with(".svg")
+}
+
 /// Whether a command may write a file named `name` in a `--plot` folder: a picture
 /// `{command}_*.png` or `.svg` of one of [`COMMANDS`], or the list [`MANIFEST`]; in any letter
 /// case, as a case-insensitive file system takes `X.PNG` for `x.png`.
 pub fn may_draw(name: &str) -> bool {
     let name = name.to_ascii_lowercase();
-    let picture = name.ends_with(".png") || name.ends_with(".svg");
     name == MANIFEST
-        || picture
+        || is_picture(&name)
             && COMMANDS
                 .iter()
                 .any(|c| name.strip_prefix(c).is_some_and(|r| r.starts_with('_')))

@@ -388,14 +388,11 @@ pub fn unlisted_pictures(dir: &Path) -> Result<Vec<String>> {
         .filter_map(|e| e.ok())
         .filter(|e| e.path().is_file())
         .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| {
-            let lower = n.to_ascii_lowercase();
-            (lower.ends_with(".png") || lower.ends_with(".svg")) && !listed.contains(n)
-        })
+        .filter(|n| crate::plot::is_picture(n) && !listed.contains(n))
         .collect();
     names.sort();
-    // Extensions are 4 ASCII bytes (".png", ".svg", the filter's): a picture's files are one
-    // entry, by name (sorted, `x.q.png` falls between `x.png` and `x.svg`).
+    // Extensions are 4 ASCII bytes (".png", ".svg", `is_picture`'s): a picture's files are
+    // one entry, by name (sorted, `x.q.png` falls between `x.png` and `x.svg`).
     let mut grouped: std::collections::BTreeMap<String, Vec<String>> = Default::default();
     for n in names {
         let (stem, ext) = n.split_at(n.len() - 4);

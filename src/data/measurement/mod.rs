@@ -268,8 +268,8 @@ pub fn as_typed(x: f64) -> String {
     if s == "-0" { "0".into() } else { s.into() }
 }
 
-/// "2, 5, 9" (at most 20 lines, then "...").
-pub fn list_lines(lines: &[usize]) -> String {
+/// "2, 5, 9" (at most 20 lines, or other items, then "... (N more)").
+pub fn list_lines<T: std::fmt::Display>(lines: &[T]) -> String {
     let mut s: Vec<String> = lines.iter().take(20).map(|l| l.to_string()).collect();
     if lines.len() > 20 {
         s.push(format!("... ({} more)", lines.len() - 20));
